@@ -1,0 +1,108 @@
+/* file.h: the in-memory form of an opened, validated cbvh file, shared by the loader and the query kernels. */
+#ifndef CBVH_COMMON_FILE_H
+#define CBVH_COMMON_FILE_H
+
+#include "cbvh.h"
+#include "common/format.h"
+
+/* Everything here was validated by the loader: node links, leaf ranges,
+ * indices and encodings are in range, so the query kernels do not check. */
+struct cbvh_file {
+    cbvh_allocator allocator;
+
+    /* The bytes the file was opened from: a read-only mapping (mapped = 1) or the caller's buffer. */
+    const uint8_t *bytes;
+    size_t size;
+    int mapped;
+
+    cbvh_file_info info;
+    cbvh_section_info sections[CBVH_MAX_SECTIONS];
+
+    const cbvh_node *nodes;      /* info.node_count, depth-first order, root at 0 */
+    const void *triangles;       /* info.triangle_count entries in cooked (leaf) order */
+    uint32_t triangle_encoding;  /* CBVH_TRIS_* */
+    const void *vertices;        /* info.vertex_count entries */
+    uint32_t vertex_encoding;    /* CBVH_VERTS_* */
+    const void *remap;           /* cooked -> original triangle id; NULL = identity */
+    uint32_t remap_encoding;     /* CBVH_REMAP_* */
+    const uint32_t *unmap;       /* original -> cooked id (owned, built at open when remap is present) */
+    const void *materials;       /* per cooked triangle; NULL = all 0 */
+    uint32_t material_encoding;  /* CBVH_MATS_* */
+
+    float grid_origin[3];
+    float grid_scale[3];
+
+    /* Memory owned by the file (inflated or realigned sections, unmap), freed at close. */
+    void *owned[CBVH_MAX_SECTIONS + 1];
+    uint32_t owned_count;
+};
+
+/* Cooked triangle index -> its three vertex indices. */
+static inline void cbvh_triangle_indices(const struct cbvh_file *f, uint32_t tri, uint32_t idx[3])
+{
+    switch (f->triangle_encoding) {
+    case CBVH_TRIS_U16: {
+        const uint16_t *t = (const uint16_t *)f->triangles + 3u * (size_t)tri;
+        idx[0] = t[0]; idx[1] = t[1]; idx[2] = t[2];
+        break;
+    }
+    case CBVH_TRIS_U32: {
+        const uint32_t *t = (const uint32_t *)f->triangles + 3u * (size_t)tri;
+        idx[0] = t[0]; idx[1] = t[1]; idx[2] = t[2];
+        break;
+    }
+    default: { /* CBVH_TRIS_DELTA16: u32 base, i16 d1, i16 d2 */
+        const uint8_t *t = (const uint8_t *)f->triangles + 8u * (size_t)tri;
+        uint32_t base = *(const uint32_t *)t;
+        const int16_t *d = (const int16_t *)(t + 4);
+        idx[0] = base;
+        idx[1] = base + (uint32_t)(int32_t)d[0];
+        idx[2] = base + (uint32_t)(int32_t)d[1];
+        break;
+    }
+    }
+}
+
+/* Vertex index -> position, decoded exactly as the cooker decoded it. */
+static inline void cbvh_vertex_position(const struct cbvh_file *f, uint32_t v, float p[3])
+{
+    if (f->vertex_encoding == CBVH_VERTS_F32) {
+        const float *q = (const float *)f->vertices + 3u * (size_t)v;
+        p[0] = q[0]; p[1] = q[1]; p[2] = q[2];
+    } else {
+        const uint16_t *q = (const uint16_t *)f->vertices + 3u * (size_t)v;
+        p[0] = cbvh_dequantize(q[0], f->grid_origin[0], f->grid_scale[0]);
+        p[1] = cbvh_dequantize(q[1], f->grid_origin[1], f->grid_scale[1]);
+        p[2] = cbvh_dequantize(q[2], f->grid_origin[2], f->grid_scale[2]);
+    }
+}
+
+static inline void cbvh_triangle_vertices(const struct cbvh_file *f, uint32_t tri, float v0[3], float v1[3], float v2[3])
+{
+    uint32_t idx[3];
+    cbvh_triangle_indices(f, tri, idx);
+    cbvh_vertex_position(f, idx[0], v0);
+    cbvh_vertex_position(f, idx[1], v1);
+    cbvh_vertex_position(f, idx[2], v2);
+}
+
+/* Cooked triangle index -> original id as queries report it. */
+static inline uint32_t cbvh_original_id(const struct cbvh_file *f, uint32_t tri)
+{
+    if (!f->remap)
+        return tri;
+    if (f->remap_encoding == CBVH_REMAP_U16)
+        return ((const uint16_t *)f->remap)[tri];
+    return ((const uint32_t *)f->remap)[tri];
+}
+
+/* A node's box, dequantized on the file's grid. */
+static inline void cbvh_node_box(const struct cbvh_file *f, const cbvh_node *n, float lo[3], float hi[3])
+{
+    for (int a = 0; a < 3; a++) {
+        lo[a] = cbvh_dequantize(n->qmin[a], f->grid_origin[a], f->grid_scale[a]);
+        hi[a] = cbvh_dequantize(n->qmax[a], f->grid_origin[a], f->grid_scale[a]);
+    }
+}
+
+#endif
