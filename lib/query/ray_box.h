@@ -1,0 +1,77 @@
+/* ray_box.h: the slab test of a ray against a dequantized node box, robust to 0, -0, inf and NaN. */
+#ifndef CBVH_QUERY_RAY_BOX_H
+#define CBVH_QUERY_RAY_BOX_H
+
+#include <stdint.h>
+
+#include "common/format.h"
+#include "query/ray_setup.h"
+
+/* Ize 2013 ("Robust BVH ray traversal"): scaling the far distance by
+ * 1 + 2*gamma(3) (gamma(n) = n*u/(1-n*u), u = 2^-24) covers the rounding of
+ * (plane - org) * rcp, so no box that the ray touches is missed. 2*gamma(3) is
+ * about 3.6e-7; 2^-21 (4.8e-7) is the next power of two above it. */
+#define CBVH_BOX_PAD 0x1.00001p0f
+
+/* The node's six grid coordinates as one array: qmin x,y,z then qmax x,y,z. */
+static inline const uint16_t *cbvh_node_q(const cbvh_node *n)
+{
+    /* qmin and qmax are adjacent uint16_t[3] arrays at offsets 0 and 6 (format.h, spec section 5) */
+    return (const uint16_t *)(const void *)n;
+}
+
+/* For each axis, the index into cbvh_node_q() of the plane the ray meets first
+ * (near) and last (far): the minimum for a positive reciprocal, else the maximum. */
+struct cbvh_slab_select {
+    uint32_t near_x, near_y, near_z, far_x, far_y, far_z;
+};
+
+static inline struct cbvh_slab_select cbvh_slab_select_of(uint32_t octant)
+{
+    struct cbvh_slab_select s;
+    s.near_x = octant & 1u ? 3u : 0u;
+    s.near_y = octant & 2u ? 4u : 1u;
+    s.near_z = octant & 4u ? 5u : 2u;
+    s.far_x = 3u - s.near_x;
+    s.far_y = 5u - s.near_y;
+    s.far_z = 7u - s.near_z;
+    return s;
+}
+
+/* Slab test on an already dequantized near/far plane set. Ordered compares:
+ * a NaN distance (0 * inf, an origin on a slab plane with a zero direction
+ * component) fails both and never decides anything. Returns 1 on overlap of
+ * [tmin, tmax] with the box, and the entry distance in *entry. */
+static inline int cbvh_slab_test(float nx, float ny, float nz, float fx, float fy, float fz,
+                                 const float org[3], const float rcp[3], float tmin, float tmax,
+                                 float *entry)
+{
+    float tnx = (nx - org[0]) * rcp[0], tny = (ny - org[1]) * rcp[1], tnz = (nz - org[2]) * rcp[2];
+    float tfx = (fx - org[0]) * rcp[0], tfy = (fy - org[1]) * rcp[1], tfz = (fz - org[2]) * rcp[2];
+    float tnear = tmin, tfar = tmax;
+    tnear = tnx > tnear ? tnx : tnear;
+    tnear = tny > tnear ? tny : tnear;
+    tnear = tnz > tnear ? tnz : tnear;
+    tfar = tfx < tfar ? tfx : tfar;
+    tfar = tfy < tfar ? tfy : tfar;
+    tfar = tfz < tfar ? tfz : tfar;
+    *entry = tnear;
+    return tnear <= tfar * CBVH_BOX_PAD;
+}
+
+/* Ray against node n's box on the grid (origin, scale), dequantizing only
+ * the six values the test needs with the normative arithmetic. */
+static inline int cbvh_ray_node(const cbvh_node *n, const float origin[3], const float scale[3],
+                                struct cbvh_slab_select sel, const float org[3], const float rcp[3],
+                                float tmin, float tmax, float *entry)
+{
+    const uint16_t *q = cbvh_node_q(n);
+    return cbvh_slab_test(cbvh_dequantize(q[sel.near_x], origin[0], scale[0]),
+                          cbvh_dequantize(q[sel.near_y], origin[1], scale[1]),
+                          cbvh_dequantize(q[sel.near_z], origin[2], scale[2]),
+                          cbvh_dequantize(q[sel.far_x], origin[0], scale[0]),
+                          cbvh_dequantize(q[sel.far_y], origin[1], scale[1]),
+                          cbvh_dequantize(q[sel.far_z], origin[2], scale[2]), org, rcp, tmin, tmax, entry);
+}
+
+#endif

@@ -1,0 +1,91 @@
+/* ray_setup.h: per-ray validation and precomputation (reciprocal, octant, watertight shear), done once per ray. */
+#ifndef CBVH_QUERY_RAY_SETUP_H
+#define CBVH_QUERY_RAY_SETUP_H
+
+#include <float.h>
+#include <math.h>
+#include <stdint.h>
+
+#include "cbvh.h"
+#include "common/format.h"
+
+/* Kernels are written once with constant flags (any-hit, counting) and
+ * instantiated per flag set; forcing inlining makes each instance lose the
+ * code its flags switch off. */
+#if defined(__GNUC__)
+#define CBVH_KERNEL static inline __attribute__((always_inline))
+#else
+#define CBVH_KERNEL static inline
+#endif
+
+/* What the triangle test needs from a ray: the origin and the shear of
+ * Woop, Benthin & Wald 2013 ("Watertight ray/triangle intersection"). */
+struct cbvh_ray_shear {
+    float org[3];
+    float sx, sy, sz;  /* dir[kx]/dir[kz], dir[ky]/dir[kz], 1/dir[kz] */
+    uint32_t kx, ky, kz; /* kz: dominant axis of dir; kx, ky keep the winding */
+};
+
+/* A validated ray, ready for traversal. */
+struct cbvh_ray_ctx {
+    struct cbvh_ray_shear shear;
+    float rcp[3];         /* 1/dir: 0 and -0 give +inf and -inf, which the box test handles */
+    float tmin, tmax;     /* tmax clamped to FLT_MAX so that an overflowed t never counts as a hit */
+    uint32_t octant;      /* bit a set when rcp[a] has its sign bit set (so -0 counts as negative) */
+    uint32_t sort_mask;   /* (1 << octant) << CBVH_NODE_SORT_SHIFT: one AND with the node word */
+};
+
+/* The octant of a reciprocal direction, from its sign bits. Every kernel
+ * takes the octant from here so the sort byte and the box test agree. */
+static inline uint32_t cbvh_octant_of(const float rcp[3])
+{
+    return (uint32_t)(signbit(rcp[0]) != 0) | (uint32_t)(signbit(rcp[1]) != 0) << 1 |
+           (uint32_t)(signbit(rcp[2]) != 0) << 2;
+}
+
+static inline void cbvh_shear_setup(struct cbvh_ray_shear *s, const float org[3], const float dir[3])
+{
+    float ax = fabsf(dir[0]), ay = fabsf(dir[1]), az = fabsf(dir[2]);
+    uint32_t kz = ax > ay ? (ax > az ? 0u : 2u) : (ay > az ? 1u : 2u);
+    uint32_t kx = kz == 2u ? 0u : kz + 1u;
+    uint32_t ky = kx == 2u ? 0u : kx + 1u;
+    if (dir[kz] < 0.0f) { /* swapping keeps the winding, so the sign test stays the same */
+        uint32_t tmp = kx;
+        kx = ky;
+        ky = tmp;
+    }
+    s->kx = kx;
+    s->ky = ky;
+    s->kz = kz;
+    s->sx = dir[kx] / dir[kz];
+    s->sy = dir[ky] / dir[kz];
+    s->sz = 1.0f / dir[kz];
+    s->org[0] = org[0];
+    s->org[1] = org[1];
+    s->org[2] = org[2];
+}
+
+/* Returns 1 and fills ctx when the ray is valid (cbvh.h: finite org and dir,
+ * dir not all zero, 0 <= tmin <= tmax, tmax finite or +inf), else 0. */
+static inline int cbvh_ray_setup(struct cbvh_ray_ctx *ctx, const cbvh_ray *ray)
+{
+    const float *o = ray->org, *d = ray->dir;
+    if (!(isfinite(o[0]) && isfinite(o[1]) && isfinite(o[2]) && isfinite(d[0]) && isfinite(d[1]) &&
+          isfinite(d[2]) && isfinite(ray->tmin)))
+        return 0;
+    if (d[0] == 0.0f && d[1] == 0.0f && d[2] == 0.0f)
+        return 0;
+    /* Ordered compares: a NaN tmax fails them and is rejected. */
+    if (!(ray->tmin >= 0.0f && ray->tmin <= ray->tmax))
+        return 0;
+    for (int a = 0; a < 3; a++)
+        ctx->rcp[a] = 1.0f / d[a];
+    ctx->tmin = ray->tmin;
+    ctx->tmax = ray->tmax < FLT_MAX ? ray->tmax : FLT_MAX;
+    ctx->octant = cbvh_octant_of(ctx->rcp);
+    ctx->sort_mask = (1u << ctx->octant) << CBVH_NODE_SORT_SHIFT;
+    cbvh_shear_setup(&ctx->shear, o, d);
+    return 1;
+}
+
+#endif

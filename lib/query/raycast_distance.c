@@ -1,0 +1,103 @@
+/* raycast_distance.c: closest-hit and any-hit walks ordering children by their box entry distance at run time. */
+#include "query/ray_box.h"
+#include "query/raycast.h"
+#include "query/tree.h"
+
+/* The comparison point for the precomputed sort byte: both children's boxes
+ * are dequantized and tested at the parent, the nearer entry is visited
+ * first and the farther one is pushed with its entry distance, so a popped
+ * node is skipped without a second box test when the ray has since become
+ * shorter than that entry. */
+CBVH_KERNEL int distance_walk(const struct cbvh_file *restrict f, const struct cbvh_ray_ctx *restrict ray,
+                              const int any, const int counting, struct cbvh_best_hit *restrict best,
+                              cbvh_query_stats *restrict stats)
+{
+    const cbvh_node *restrict nodes = f->nodes;
+    const float origin[3] = {f->grid_origin[0], f->grid_origin[1], f->grid_origin[2]};
+    const float scale[3] = {f->grid_scale[0], f->grid_scale[1], f->grid_scale[2]};
+    const float org[3] = {ray->shear.org[0], ray->shear.org[1], ray->shear.org[2]};
+    const float rcp[3] = {ray->rcp[0], ray->rcp[1], ray->rcp[2]};
+    const struct cbvh_slab_select sel = cbvh_slab_select_of(ray->octant);
+    const float tmin = ray->tmin;
+    float tmax = ray->tmax;
+    struct {
+        uint32_t node;
+        float entry;
+    } stack[CBVH_MAX_DEPTH];
+    uint32_t sp = 0, i = 0;
+    uint64_t visited = 1, tested = 0;
+    int hit = 0;
+    float entry0, entry1;
+
+    if (!cbvh_ray_node(&nodes[0], origin, scale, sel, org, rcp, tmin, tmax, &entry0))
+        goto done;
+    for (;;) {
+        const uint32_t word = nodes[i].word;
+        if (!cbvh_node_is_leaf(word)) {
+            uint32_t near = i + 1u, far = cbvh_second_child(nodes, i);
+            int h0 = cbvh_ray_node(&nodes[near], origin, scale, sel, org, rcp, tmin, tmax, &entry0);
+            int h1 = cbvh_ray_node(&nodes[far], origin, scale, sel, org, rcp, tmin, tmax, &entry1);
+            if (counting)
+                visited += 2;
+            if (h0 && h1) {
+                if (entry1 < entry0) {
+                    uint32_t tmp = near;
+                    near = far;
+                    far = tmp;
+                    entry1 = entry0;
+                }
+                stack[sp].node = far;
+                stack[sp].entry = entry1;
+                sp++;
+                i = near;
+                continue;
+            }
+            if (h0 || h1) {
+                i = h0 ? near : far;
+                continue;
+            }
+        } else if (any) {
+            uint32_t count;
+            int h = cbvh_leaf_any(f, word, &ray->shear, tmin, tmax, &count);
+            if (counting)
+                tested += count;
+            if (h) {
+                hit = 1;
+                break;
+            }
+        } else {
+            uint32_t count = cbvh_leaf_closest(f, word, &ray->shear, tmin, &tmax, best);
+            if (counting)
+                tested += count;
+        }
+        /* Pop the next node still in reach: the padded test of ray_box.h with the current tmax. */
+        do {
+            if (sp == 0)
+                goto done;
+            sp--;
+        } while (!(stack[sp].entry <= tmax * CBVH_BOX_PAD));
+        i = stack[sp].node;
+    }
+done:
+    if (counting) {
+        stats->nodes_visited += visited;
+        stats->triangles_tested += tested;
+    }
+    return hit;
+}
+
+void cbvh_closest_distance(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray, struct cbvh_best_hit *best,
+                           cbvh_query_stats *stats)
+{
+    if (stats)
+        distance_walk(f, ray, 0, 1, best, stats);
+    else
+        distance_walk(f, ray, 0, 0, best, NULL);
+}
+
+int cbvh_any_distance(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray, cbvh_query_stats *stats)
+{
+    if (stats)
+        return distance_walk(f, ray, 1, 1, NULL, stats);
+    return distance_walk(f, ray, 1, 0, NULL, NULL);
+}
