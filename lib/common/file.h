@@ -25,12 +25,14 @@ struct cbvh_file {
     uint32_t vertex_encoding;    /* CBVH_VERTS_* */
     const void *remap;           /* cooked -> original triangle id; NULL = identity */
     uint32_t remap_encoding;     /* CBVH_REMAP_* */
-    const uint32_t *unmap;       /* original -> cooked id (owned, built at open when remap is present) */
+    const uint32_t *unmap;       /* cooked ids sorted by original id, triangle_count entries (owned, built
+                                  * at open when remap is present); cbvh_file_get_triangle binary-searches it */
     const void *materials;       /* per cooked triangle; NULL = all 0 */
     uint32_t material_encoding;  /* CBVH_MATS_* */
 
     float grid_origin[3];
     float grid_scale[3];
+    uint32_t original_triangle_count; /* original ids are below it (= triangle_count without remap) */
 
     /* Memory owned by the file (inflated or realigned sections, unmap), freed at close. */
     void *owned[CBVH_MAX_SECTIONS + 1];

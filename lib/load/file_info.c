@@ -1,0 +1,70 @@
+/* file_info.c: what an opened file says about itself: info, sections, triangles and materials by original id. */
+#include <string.h>
+
+#include "load/load.h"
+
+void cbvh_file_get_info(const cbvh_file *file, cbvh_file_info *info)
+{
+    if (!info)
+        return;
+    if (!file) {
+        memset(info, 0, sizeof *info);
+        return;
+    }
+    *info = file->info;
+}
+
+int cbvh_file_get_section(const cbvh_file *file, uint32_t index, cbvh_section_info *section)
+{
+    if (!file || !section || index >= file->info.section_count)
+        return 0;
+    *section = file->sections[index];
+    return 1;
+}
+
+/* Original id -> cooked index: a binary search of the unmap table (cooked ids sorted by original id).
+ * Returns 0 for an id the cooker dropped (a degenerate triangle) or one out of range. */
+static int cooked_index(const struct cbvh_file *f, uint32_t tri, uint32_t *cooked)
+{
+    if (tri >= f->original_triangle_count)
+        return 0;
+    if (!f->remap) {
+        *cooked = tri;
+        return 1;
+    }
+    uint32_t lo = 0, hi = f->info.triangle_count;
+    while (lo < hi) {
+        uint32_t mid = lo + (hi - lo) / 2;
+        uint32_t id = cbvh_original_id(f, f->unmap[mid]);
+        if (id == tri) {
+            *cooked = f->unmap[mid];
+            return 1;
+        }
+        if (id < tri)
+            lo = mid + 1;
+        else
+            hi = mid;
+    }
+    return 0;
+}
+
+int cbvh_file_get_triangle(const cbvh_file *file, uint32_t tri, float v0[3], float v1[3], float v2[3])
+{
+    uint32_t cooked;
+    if (!file || !cooked_index(file, tri, &cooked))
+        return 0;
+    cbvh_triangle_vertices(file, cooked, v0, v1, v2);
+    return 1;
+}
+
+uint32_t cbvh_file_get_material(const cbvh_file *file, uint32_t tri)
+{
+    uint32_t cooked;
+    if (!file || !file->materials || !cooked_index(file, tri, &cooked))
+        return 0;
+    switch (file->material_encoding) {
+    case CBVH_MATS_U8: return ((const uint8_t *)file->materials)[cooked];
+    case CBVH_MATS_U16: return ((const uint16_t *)file->materials)[cooked];
+    default: return ((const uint32_t *)file->materials)[cooked];
+    }
+}

@@ -1,0 +1,91 @@
+/* load.c: the loading pipeline: header, table and CRCs, section placement (in place, copied or inflated), tree, mesh. */
+#include <assert.h>
+#include <string.h>
+
+#include "common/alloc.h"
+#include "common/endian.h"
+#include "common/error.h"
+#include "load/load.h"
+
+void cbvh_file_own(struct cbvh_file *f, void *p)
+{
+    /* At most the five known sections, the unmap table and a read() buffer: the table cannot fill up. */
+    assert(f->owned_count < sizeof f->owned / sizeof f->owned[0]);
+    f->owned[f->owned_count++] = p;
+}
+
+/* Where a known section's decoded bytes are: in place when raw and the bytes are 4-byte aligned
+ * (sections sit at multiples of 64), else in an owned 64-byte aligned copy or inflated buffer. */
+static cbvh_result place_section(struct cbvh_file *f, uint32_t index, const void **out, cbvh_error *err)
+{
+    const cbvh_section_info *s = &f->sections[index];
+    const uint8_t *src = f->bytes + s->offset;
+    void *owned = NULL;
+    if (s->codec == CBVH_CODEC_ZLIB) {
+        cbvh_result r = cbvh_inflate_section(&f->allocator, src, s->stored_size, s->size, index, &owned, err);
+        if (r != CBVH_OK)
+            return r;
+    } else if ((uintptr_t)f->bytes % 4 == 0) {
+        *out = src;
+        return CBVH_OK;
+    } else {
+        owned = cbvh_alloc(&f->allocator, (size_t)s->size, 64);
+        if (!owned)
+            return cbvh_fail(err, CBVH_ERROR_OUT_OF_MEMORY, "section %u: cannot allocate %llu bytes for an aligned copy",
+                             index, (unsigned long long)s->size);
+        memcpy(owned, src, (size_t)s->size);
+    }
+    cbvh_file_own(f, owned);
+    *out = owned;
+    return CBVH_OK;
+}
+
+static cbvh_result place_sections(struct cbvh_file *f, const cbvh_section_map *map, cbvh_error *err)
+{
+    const void *where[CBVH_KNOWN_SECTIONS] = { NULL };
+    for (int t = 0; t < CBVH_KNOWN_SECTIONS; t++) {
+        if (map->index[t] < 0)
+            continue;
+        cbvh_result r = place_section(f, (uint32_t)map->index[t], &where[t], err);
+        if (r != CBVH_OK)
+            return r;
+    }
+    f->nodes = where[CBVH_SECTION_NODES - 1];
+    f->triangles = where[CBVH_SECTION_TRIANGLES - 1];
+    f->vertices = where[CBVH_SECTION_VERTICES - 1];
+    f->remap = where[CBVH_SECTION_REMAP - 1];
+    f->materials = where[CBVH_SECTION_MATERIALS - 1];
+    f->triangle_encoding = f->sections[map->index[CBVH_SECTION_TRIANGLES - 1]].encoding;
+    f->vertex_encoding = f->sections[map->index[CBVH_SECTION_VERTICES - 1]].encoding;
+    if (f->remap)
+        f->remap_encoding = f->sections[map->index[CBVH_SECTION_REMAP - 1]].encoding;
+    if (f->materials)
+        f->material_encoding = f->sections[map->index[CBVH_SECTION_MATERIALS - 1]].encoding;
+    f->info.has_remap = f->remap != NULL;
+    f->info.has_materials = f->materials != NULL;
+    f->info.vertex_format = f->vertex_encoding;
+    f->info.index_encoding = f->triangle_encoding;
+    return CBVH_OK;
+}
+
+cbvh_result cbvh_load(struct cbvh_file *f, cbvh_error *err)
+{
+    if (!cbvh_host_is_little_endian())
+        return cbvh_fail(err, CBVH_ERROR_UNSUPPORTED,
+                         "this reader uses sections in place and runs on little-endian hosts only");
+    cbvh_section_map map;
+    cbvh_result r = cbvh_validate_header(f, err);
+    if (r == CBVH_OK)
+        r = cbvh_validate_table(f, &map, err);
+    if (r == CBVH_OK)
+        r = place_sections(f, &map, err);
+    if (r == CBVH_OK)
+        r = cbvh_validate_tree(f, err);
+    if (r == CBVH_OK)
+        r = cbvh_validate_indices(f, err);
+    if (r == CBVH_OK)
+        r = cbvh_validate_vertices(f, err);
+    if (r == CBVH_OK)
+        r = cbvh_validate_remap(f, err);
+    return r;
+}

@@ -1,0 +1,84 @@
+/* validate_remap.c: checks REMAP values (in range, unique) by radix-sorting them, which also yields the unmap table. */
+#include <string.h>
+
+#include "common/alloc.h"
+#include "common/error.h"
+#include "load/load.h"
+
+#define CORRUPT(...) cbvh_fail(err, CBVH_ERROR_CORRUPT, __VA_ARGS__)
+#define DIGIT_BITS 11
+#define DIGIT_VALUES (1u << DIGIT_BITS)
+
+/* LSD radix sort of (original id << 32 | cooked id) on the original id, `passes` digits; returns the
+ * buffer holding the result. Memory stays proportional to triangle_count whatever
+ * original_triangle_count says, which a bitmap or a dense table indexed by original id would not. */
+static uint64_t *radix_sort(uint64_t *restrict a, uint64_t *restrict b, size_t n, int passes)
+{
+    for (int p = 0; p < passes; p++) {
+        const int shift = 32 + p * DIGIT_BITS;
+        size_t offset[DIGIT_VALUES];
+        memset(offset, 0, sizeof offset);
+        for (size_t i = 0; i < n; i++)
+            offset[(a[i] >> shift) & (DIGIT_VALUES - 1)]++;
+        size_t sum = 0;
+        for (uint32_t d = 0; d < DIGIT_VALUES; d++) {
+            size_t c = offset[d];
+            offset[d] = sum;
+            sum += c;
+        }
+        for (size_t i = 0; i < n; i++)
+            b[offset[(a[i] >> shift) & (DIGIT_VALUES - 1)]++] = a[i];
+        uint64_t *t = a;
+        a = b;
+        b = t;
+    }
+    return a;
+}
+
+static int digits_for(uint32_t max_key)
+{
+    int passes = 1;
+    while (passes * DIGIT_BITS < 32 && (max_key >> (passes * DIGIT_BITS)) != 0)
+        passes++;
+    return passes;
+}
+
+cbvh_result cbvh_validate_remap(struct cbvh_file *f, cbvh_error *err)
+{
+    if (!f->remap)
+        return CBVH_OK;
+    const uint32_t n = f->info.triangle_count;
+    const uint32_t original = f->original_triangle_count;
+    uint64_t *pairs = cbvh_alloc_array(&f->allocator, 2u * (size_t)n, sizeof(uint64_t), 64);
+    if (!pairs)
+        return cbvh_fail(err, CBVH_ERROR_OUT_OF_MEMORY, "cannot allocate %u remap entries to check them", n);
+    cbvh_result r = CBVH_OK;
+    for (uint32_t t = 0; t < n && r == CBVH_OK; t++) {
+        uint32_t id = cbvh_original_id(f, t);
+        if (id >= original)
+            r = CORRUPT("REMAP entry %u: original id %u, original_triangle_count is %u", t, id, original);
+        pairs[t] = (uint64_t)id << 32 | t;
+    }
+    const uint64_t *sorted = NULL;
+    if (r == CBVH_OK) {
+        sorted = radix_sort(pairs, pairs + n, n, digits_for(original - 1));
+        for (uint32_t k = 1; k < n && r == CBVH_OK; k++)
+            if (sorted[k] >> 32 == sorted[k - 1] >> 32)
+                r = CORRUPT("REMAP entries %u and %u both hold original id %u", (uint32_t)sorted[k - 1],
+                            (uint32_t)sorted[k], (uint32_t)(sorted[k] >> 32));
+    }
+    uint32_t *unmap = NULL;
+    if (r == CBVH_OK) {
+        unmap = cbvh_alloc_array(&f->allocator, n, sizeof(uint32_t), 64);
+        if (!unmap)
+            r = cbvh_fail(err, CBVH_ERROR_OUT_OF_MEMORY, "cannot allocate the %u-entry unmap table", n);
+    }
+    if (r == CBVH_OK) {
+        for (uint32_t k = 0; k < n; k++)
+            unmap[k] = (uint32_t)sorted[k];
+        cbvh_file_own(f, unmap);
+        f->unmap = unmap;
+    }
+    cbvh_free(&f->allocator, pairs);
+    return r;
+}

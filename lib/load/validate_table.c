@@ -1,0 +1,135 @@
+/* validate_table.c: checks the section table, the file layout and every section's CRC (format spec sections 2, 4). */
+#include <string.h>
+
+#include "common/endian.h"
+#include "common/error.h"
+#include "load/load.h"
+
+#define CORRUPT(...) cbvh_fail(err, CBVH_ERROR_CORRUPT, __VA_ARGS__)
+
+/* What the reader knows of each section type: element size per encoding (0 = unknown encoding). */
+typedef struct known_section {
+    const char *name;
+    int required;
+    uint8_t element_size[3];
+} known_section;
+
+static const known_section known[CBVH_KNOWN_SECTIONS] = {
+    { "NODES", 1, { 16, 0, 0 } },
+    { "TRIANGLES", 1, { 6, 12, 8 } },
+    { "VERTICES", 1, { 12, 6, 0 } },
+    { "REMAP", 0, { 2, 4, 0 } },
+    { "MATERIALS", 0, { 1, 2, 4 } },
+};
+
+static uint64_t element_count(const cbvh_file_info *in, uint32_t type)
+{
+    switch (type) {
+    case CBVH_SECTION_NODES: return in->node_count;
+    case CBVH_SECTION_VERTICES: return in->vertex_count;
+    default: return in->triangle_count; /* TRIANGLES, REMAP, MATERIALS: one per cooked triangle */
+    }
+}
+
+/* Bounds, alignment, order, zero padding before it, then the CRC of its stored bytes. */
+static cbvh_result check_layout(const uint8_t *b, uint64_t file_size, const cbvh_section_info *s, uint32_t i,
+                                uint64_t *prev_end, cbvh_error *err)
+{
+    if (s->offset % CBVH_SECTION_ALIGN != 0)
+        return CORRUPT("section %u (type 0x%x): offset %llu is not a multiple of %d", i, s->type,
+                       (unsigned long long)s->offset, CBVH_SECTION_ALIGN);
+    if (s->offset < *prev_end)
+        return CORRUPT("section %u (type 0x%x): offset %llu overlaps %s ending at byte %llu", i, s->type,
+                       (unsigned long long)s->offset, i == 0 ? "the section table" : "the previous section",
+                       (unsigned long long)*prev_end);
+    if (s->offset > file_size || s->stored_size > file_size - s->offset)
+        return CORRUPT("section %u (type 0x%x): bytes %llu + %llu run past the end of the file (%llu bytes)", i,
+                       s->type, (unsigned long long)s->offset, (unsigned long long)s->stored_size,
+                       (unsigned long long)file_size);
+    for (uint64_t p = *prev_end; p < s->offset; p++)
+        if (b[p] != 0)
+            return CORRUPT("byte %llu: padding before section %u is 0x%02x, must be 0", (unsigned long long)p, i,
+                           b[p]);
+    uint32_t crc = cbvh_crc32(b + s->offset, s->stored_size);
+    if (crc != s->crc32)
+        return CORRUPT("section %u (type 0x%x) at byte %llu: CRC mismatch (stored 0x%08x, computed 0x%08x)", i,
+                       s->type, (unsigned long long)s->offset, s->crc32, crc);
+    *prev_end = s->offset + s->stored_size;
+    return CBVH_OK;
+}
+
+/* Type, codec, encoding and sizes of a known section; unknown ancillary ones are skipped whatever they hold. */
+static cbvh_result check_content(const cbvh_file_info *in, const cbvh_section_info *s, uint32_t i,
+                                 cbvh_section_map *map, cbvh_error *err)
+{
+    if (s->type < 1 || s->type > CBVH_KNOWN_SECTIONS) {
+        if (s->type & CBVH_SECTION_ANCILLARY_BIT)
+            return CBVH_OK;
+        return cbvh_fail(err, CBVH_ERROR_UNSUPPORTED, "section %u: critical section type %u is unknown to this reader",
+                         i, s->type);
+    }
+    const known_section *k = &known[s->type - 1];
+    if (map->index[s->type - 1] >= 0)
+        return CORRUPT("section %u: second %s section (the first is section %d)", i, k->name, map->index[s->type - 1]);
+    map->index[s->type - 1] = (int)i;
+    if (s->codec != CBVH_CODEC_RAW && s->codec != CBVH_CODEC_ZLIB)
+        return cbvh_fail(err, CBVH_ERROR_UNSUPPORTED, "section %u (%s): codec %u is unknown to this reader", i,
+                         k->name, s->codec);
+    if (s->encoding >= 3 || k->element_size[s->encoding] == 0)
+        return cbvh_fail(err, CBVH_ERROR_UNSUPPORTED, "section %u (%s): encoding %u is unknown to this reader", i,
+                         k->name, s->encoding);
+    uint64_t expected = element_count(in, s->type) * k->element_size[s->encoding];
+    if (s->size != expected)
+        return CORRUPT("section %u (%s): size %llu, expected %llu (%llu elements of %u bytes)", i, k->name,
+                       (unsigned long long)s->size, (unsigned long long)expected,
+                       (unsigned long long)element_count(in, s->type), k->element_size[s->encoding]);
+    if (s->codec == CBVH_CODEC_RAW && s->stored_size != s->size)
+        return CORRUPT("section %u (%s): raw section with stored_size %llu != size %llu", i, k->name,
+                       (unsigned long long)s->stored_size, (unsigned long long)s->size);
+    return CBVH_OK;
+}
+
+cbvh_result cbvh_validate_table(struct cbvh_file *f, cbvh_section_map *map, cbvh_error *err)
+{
+    const uint8_t *b = f->bytes;
+    const uint64_t file_size = f->size;
+    const uint32_t count = f->info.section_count;
+    const uint64_t table_end = CBVH_HEADER_SIZE + (uint64_t)count * CBVH_SECTION_ENTRY_SIZE;
+    if (table_end > file_size)
+        return CORRUPT("truncated: the section table ends at byte %llu, the file has %llu bytes",
+                       (unsigned long long)table_end, (unsigned long long)file_size);
+    uint32_t stored = cbvh_read_u32(b + CBVH_HDR_TABLE_CRC);
+    uint32_t actual = cbvh_crc32(b + CBVH_HEADER_SIZE, table_end - CBVH_HEADER_SIZE);
+    if (stored != actual)
+        return CORRUPT("section table CRC mismatch (stored 0x%08x, computed 0x%08x)", stored, actual);
+
+    for (int t = 0; t < CBVH_KNOWN_SECTIONS; t++)
+        map->index[t] = -1;
+    uint64_t prev_end = table_end;
+    for (uint32_t i = 0; i < count; i++) {
+        const uint8_t *e = b + CBVH_HEADER_SIZE + (size_t)i * CBVH_SECTION_ENTRY_SIZE;
+        cbvh_section_info *s = &f->sections[i];
+        s->type = cbvh_read_u32(e + CBVH_SEC_TYPE);
+        s->codec = cbvh_read_u32(e + CBVH_SEC_CODEC);
+        s->offset = cbvh_read_u64(e + CBVH_SEC_OFFSET);
+        s->stored_size = cbvh_read_u64(e + CBVH_SEC_STORED_SIZE);
+        s->size = cbvh_read_u64(e + CBVH_SEC_SIZE);
+        s->crc32 = cbvh_read_u32(e + CBVH_SEC_CRC);
+        s->encoding = cbvh_read_u32(e + CBVH_SEC_ENCODING);
+        cbvh_result r = check_layout(b, file_size, s, i, &prev_end, err);
+        if (r == CBVH_OK)
+            r = check_content(&f->info, s, i, map, err);
+        if (r != CBVH_OK)
+            return r;
+    }
+    if (prev_end != file_size)
+        return CORRUPT("trailing bytes: the last section ends at byte %llu but the file has %llu bytes",
+                       (unsigned long long)prev_end, (unsigned long long)file_size);
+    for (int t = 0; t < CBVH_KNOWN_SECTIONS; t++)
+        if (known[t].required && map->index[t] < 0)
+            return CORRUPT("required section %s is missing", known[t].name);
+    if (map->index[CBVH_SECTION_REMAP - 1] < 0 && f->original_triangle_count != f->info.triangle_count)
+        return CORRUPT("header byte %d: original_triangle_count %u != triangle_count %u without a REMAP section",
+                       CBVH_HDR_RESERVED0, f->original_triangle_count, f->info.triangle_count);
+    return CBVH_OK;
+}
