@@ -1,0 +1,204 @@
+/* stream.c: batched ray streams: one traversal per batch of same-octant rays, live rays partitioned in place. */
+#include <string.h>
+
+#include "query/ray_box.h"
+#include "query/raycast.h"
+#include "query/stream.h"
+#include "query/tree.h"
+
+/* Rays are grouped by octant within windows of this many input rays, so a
+ * batch shares one sort-byte mask and one near/far plane selection. */
+#define CBVH_STREAM_WINDOW 2048
+
+/* Walks the tree once for the batch. At each node the box is dequantized
+ * once and all live rays [0, n) of `live` are tested and partitioned (the
+ * survivors move to the front); the children are visited with the survivors
+ * only. A child's walk only permutes the prefix it gets, so the parent's
+ * prefix still holds the same rays when the second child is popped, and the
+ * box test there sees each ray's current tmax. The triangle test and the tie
+ * rule are those of the single-ray walks, so every ray gets the same hit. */
+CBVH_KERNEL void stream_walk(const struct cbvh_file *restrict f, struct cbvh_stream_batch *restrict b, uint32_t octant,
+                             cbvh_stream_box_fn box_test, const int any, uint8_t *restrict occluded,
+                             uint64_t *restrict visited, uint64_t *restrict tested)
+{
+    const cbvh_node *restrict nodes = f->nodes;
+    const float origin[3] = {f->grid_origin[0], f->grid_origin[1], f->grid_origin[2]};
+    const float scale[3] = {f->grid_scale[0], f->grid_scale[1], f->grid_scale[2]};
+    const struct cbvh_slab_select sel = cbvh_slab_select_of(octant);
+    const uint32_t mask = (1u << octant) << CBVH_NODE_SORT_SHIFT;
+    uint16_t live[CBVH_STREAM_BATCH];
+    struct {
+        uint32_t node, count;
+    } stack[CBVH_MAX_DEPTH];
+    uint32_t sp = 0, i = 0, n = b->count;
+    uint64_t nv = 0, nt = 0;
+
+    for (uint32_t j = 0; j < n; j++)
+        live[j] = (uint16_t)j;
+    for (;;) {
+        const cbvh_node *node = &nodes[i];
+        const uint16_t *q = cbvh_node_q(node);
+        const float near[3] = {cbvh_dequantize(q[sel.near_x], origin[0], scale[0]),
+                               cbvh_dequantize(q[sel.near_y], origin[1], scale[1]),
+                               cbvh_dequantize(q[sel.near_z], origin[2], scale[2])};
+        const float far[3] = {cbvh_dequantize(q[sel.far_x], origin[0], scale[0]),
+                              cbvh_dequantize(q[sel.far_y], origin[1], scale[1]),
+                              cbvh_dequantize(q[sel.far_z], origin[2], scale[2])};
+        const uint32_t word = node->word;
+        nv += n;
+        uint32_t m = box_test(b, live, n, near, far);
+        if (m > 0 && !cbvh_node_is_leaf(word)) {
+            uint32_t first = i + 1u, second = cbvh_second_child(nodes, i);
+            if (word & mask) {
+                uint32_t tmp = first;
+                first = second;
+                second = tmp;
+            }
+            stack[sp].node = second;
+            stack[sp].count = m;
+            sp++;
+            i = first;
+            n = m;
+            continue;
+        }
+        if (m > 0) {
+            const uint32_t tri0 = cbvh_leaf_first(word), tri_end = tri0 + cbvh_leaf_count(word);
+            float a[3], v1[3], v2[3], t, u, v;
+            nt += (uint64_t)m * (tri_end - tri0);
+            /* Triangles outside, rays inside: each triangle is fetched once per batch visit. */
+            for (uint32_t k = tri0; k < tri_end; k++) {
+                cbvh_triangle_vertices(f, k, a, v1, v2);
+                for (uint32_t j = 0; j < m; j++) {
+                    const uint32_t r = live[j];
+                    float *box_ray = b->box_ray[r];
+                    const float tmin = box_ray[CBVH_LANE_TMIN], tmax = box_ray[CBVH_LANE_TMAX];
+                    if (!cbvh_ray_triangle(&b->shear[r], a, v1, v2, tmin, tmax, &t, &u, &v))
+                        continue;
+                    if (any) {
+                        /* Occluded: a negative tmax fails every later box and triangle test. */
+                        occluded[b->ray_index[r]] = 1;
+                        box_ray[CBVH_LANE_TMAX] = -1.0f;
+                    } else if (cbvh_hit_better(t, k, tmax, b->best[r].tri)) {
+                        box_ray[CBVH_LANE_TMAX] = t;
+                        b->best[r].tri = k;
+                        b->best[r].t = t;
+                        b->best[r].u = u;
+                        b->best[r].v = v;
+                    }
+                }
+            }
+        }
+        if (sp == 0)
+            break;
+        sp--;
+        i = stack[sp].node;
+        n = stack[sp].count;
+    }
+    *visited += nv;
+    *tested += nt;
+}
+
+/* Adds a validated ray to the batch. */
+static void batch_add(struct cbvh_stream_batch *b, const struct cbvh_ray_ctx *ctx, size_t ray_index)
+{
+    const uint32_t r = b->count++;
+    float *box_ray = b->box_ray[r];
+    box_ray[CBVH_LANE_OX] = ctx->shear.org[0];
+    box_ray[CBVH_LANE_OY] = ctx->shear.org[1];
+    box_ray[CBVH_LANE_OZ] = ctx->shear.org[2];
+    box_ray[CBVH_LANE_TMIN] = ctx->tmin;
+    box_ray[CBVH_LANE_RX] = ctx->rcp[0];
+    box_ray[CBVH_LANE_RY] = ctx->rcp[1];
+    box_ray[CBVH_LANE_RZ] = ctx->rcp[2];
+    box_ray[CBVH_LANE_TMAX] = ctx->tmax;
+    b->shear[r] = ctx->shear;
+    b->best[r].tri = UINT32_MAX;
+    b->ray_index[r] = ray_index;
+}
+
+/* Traverses the batch and writes its results, then empties it. */
+static void batch_flush(const struct cbvh_file *f, struct cbvh_stream_batch *b, uint32_t octant,
+                        cbvh_stream_box_fn box_test, cbvh_hit *hits, uint8_t *occluded, uint64_t *visited,
+                        uint64_t *tested)
+{
+    if (b->count == 0)
+        return;
+    if (hits) {
+        stream_walk(f, b, octant, box_test, 0, NULL, visited, tested);
+        for (uint32_t r = 0; r < b->count; r++)
+            cbvh_hit_output(f, &b->best[r], &hits[b->ray_index[r]]);
+    } else {
+        stream_walk(f, b, octant, box_test, 1, occluded, visited, tested);
+    }
+    b->count = 0;
+}
+
+/* Splits the stream into windows, each window into same-octant batches.
+ * Exactly one of hits / occluded is given. Invalid rays are misses. */
+static void stream_run(const struct cbvh_file *f, const cbvh_ray *rays, size_t count, cbvh_hit *hits,
+                       uint8_t *occluded, cbvh_query_stats *stats)
+{
+    const cbvh_stream_box_fn box_test = cbvh_stream_box_kernel();
+    struct cbvh_stream_batch batch;
+    uint8_t octant[CBVH_STREAM_WINDOW];
+    struct cbvh_ray_ctx ctx;
+    uint64_t visited = 0, tested = 0;
+
+    batch.count = 0;
+    for (size_t start = 0; start < count; start += CBVH_STREAM_WINDOW) {
+        const uint32_t window = (uint32_t)(count - start < CBVH_STREAM_WINDOW ? count - start : CBVH_STREAM_WINDOW);
+        uint32_t present = 0; /* octants that occur in the window */
+        for (uint32_t j = 0; j < window; j++) {
+            const size_t r = start + j;
+            if (hits)
+                hits[r].tri = CBVH_NO_HIT;
+            else
+                occluded[r] = 0;
+            octant[j] = cbvh_ray_setup(&ctx, &rays[r]) ? (uint8_t)ctx.octant : UINT8_MAX;
+            if (octant[j] != UINT8_MAX)
+                present |= 1u << octant[j];
+        }
+        for (uint32_t o = 0; o < 8; o++) {
+            if (!(present >> o & 1u))
+                continue;
+            for (uint32_t j = 0; j < window; j++) {
+                if (octant[j] != o)
+                    continue;
+                cbvh_ray_setup(&ctx, &rays[start + j]);
+                batch_add(&batch, &ctx, start + j);
+                if (batch.count == CBVH_STREAM_BATCH)
+                    batch_flush(f, &batch, o, box_test, hits, occluded, &visited, &tested);
+            }
+            batch_flush(f, &batch, o, box_test, hits, occluded, &visited, &tested);
+        }
+    }
+    if (stats) {
+        stats->nodes_visited += visited;
+        stats->triangles_tested += tested;
+    }
+}
+
+CBVH_API void cbvh_raycast_stream(const cbvh_file *file, const cbvh_ray *rays, size_t count, cbvh_hit *hits,
+                                  cbvh_query_stats *stats)
+{
+    if (!hits)
+        return;
+    if (!file || !rays) {
+        for (size_t r = 0; r < count; r++)
+            hits[r].tri = CBVH_NO_HIT;
+        return;
+    }
+    stream_run(file, rays, count, hits, NULL, stats);
+}
+
+CBVH_API void cbvh_occluded_stream(const cbvh_file *file, const cbvh_ray *rays, size_t count, uint8_t *occluded,
+                                   cbvh_query_stats *stats)
+{
+    if (!occluded)
+        return;
+    if (!file || !rays) {
+        memset(occluded, 0, count);
+        return;
+    }
+    stream_run(file, rays, count, NULL, occluded, stats);
+}
