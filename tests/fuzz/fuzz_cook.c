@@ -1,0 +1,259 @@
+/* fuzz_cook.c: libFuzzer target: cook a mesh decoded from the bytes (NaN, inf, huge values, bad indices included); a clean error or a file that opens and answers like brute force. */
+#include <math.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "cbvh.h"
+#include "fuzz_support.h"
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
+
+/* Input layout (see README.md):
+ *   byte 0: bit 0 quantized vertices, bits 1-2 zlib level {0,1,6,9}, bit 3 cooked ids
+ *           (keep_remap = 0), bit 4 material ids present, bit 5 int8 coordinates,
+ *           bit 6 keep_materials = 0, bit 7 vertex stride 16 instead of 12
+ *   byte 1: low nibble max_leaf_size - 1, high nibble sah_bins = 4 + 16 * nibble
+ *   byte 2: vertex count
+ *   int8 mode: byte 3 a power-of-two scale 2^(b3 - 128), bytes 4-7 a float added
+ *   to every coordinate, then one signed byte per coordinate;
+ *   float mode: 4 bytes per coordinate, little-endian binary32.
+ *   then per triangle 3 index bytes (an index >= vertex count is bad) and,
+ *   with materials, one byte m giving the id m << 8 * (m & 3). */
+typedef struct decoded {
+    cbvh_cook_options opt;
+    float positions[256 * 4];
+    uint32_t indices[3 * 8192];
+    uint32_t materials[8192];
+    cbvh_mesh mesh;
+} decoded;
+
+static float read_f32(const uint8_t *p)
+{
+    uint32_t u = (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24;
+    float f;
+    memcpy(&f, &u, 4);
+    return f;
+}
+
+static int decode(decoded *d, const uint8_t *data, size_t size)
+{
+    static const int levels[4] = { 0, 1, 6, 9 };
+    if (size < 3)
+        return 0;
+    uint8_t flags = data[0];
+    cbvh_cook_options_init(&d->opt);
+    d->opt.vertex_format = (flags & 1) ? CBVH_VERTEX_QUANTIZED16 : CBVH_VERTEX_FLOAT32;
+    d->opt.compress_level = levels[(flags >> 1) & 3];
+    d->opt.keep_remap = !(flags & 8);
+    d->opt.keep_materials = !(flags & 64);
+    d->opt.max_leaf_size = 1u + (data[1] & 15u);
+    d->opt.sah_bins = 4u + 16u * (data[1] >> 4);
+    size_t stride = (flags & 128) ? 4 : 3, nv = data[2], pos = 3;
+    memset(d->positions, 0, sizeof d->positions);
+    if (flags & 32) {
+        if (size < 8)
+            return 0;
+        float scale = ldexpf(1.0f, (int)data[3] - 128), offset = read_f32(data + 4);
+        pos = 8;
+        if (size - pos < 3 * nv)
+            nv = (size - pos) / 3;
+        for (size_t v = 0; v < nv; v++)
+            for (int a = 0; a < 3; a++)
+                d->positions[v * stride + a] = (float)(int8_t)data[pos++] * scale + offset;
+    } else {
+        if ((size - pos) / 12 < nv)
+            nv = (size - pos) / 12;
+        for (size_t v = 0; v < nv; v++)
+            for (int a = 0; a < 3; a++, pos += 4)
+                d->positions[v * stride + a] = read_f32(data + pos);
+    }
+    size_t per = (flags & 16) ? 4 : 3, nt = (size - pos) / per;
+    if (nt > 8192)
+        nt = 8192;
+    for (size_t t = 0; t < nt; t++, pos += per) {
+        for (int k = 0; k < 3; k++)
+            d->indices[3 * t + k] = data[pos + k];
+        if (per == 4)
+            d->materials[t] = (uint32_t)data[pos + 3] << (8 * (data[pos + 3] & 3));
+    }
+    d->mesh.positions = d->positions;
+    d->mesh.vertex_count = nv;
+    d->mesh.position_stride = stride * sizeof(float);
+    d->mesh.indices = d->indices;
+    d->mesh.triangle_count = nt;
+    d->mesh.material_ids = (flags & 16) ? d->materials : NULL;
+    return 1;
+}
+
+/* What the input deserves: 2 a bad index, 1 a non-finite coordinate, 0 fine. */
+static int mesh_fault(const decoded *d)
+{
+    const cbvh_mesh *m = &d->mesh;
+    size_t stride = m->position_stride / sizeof(float);
+    int fault = 0;
+    for (size_t i = 0; i < 3 * m->triangle_count; i++) {
+        if (m->indices[i] >= m->vertex_count)
+            return 2;
+        for (int a = 0; a < 3; a++)
+            if (!isfinite(m->positions[m->indices[i] * stride + a]))
+                fault = 1;
+    }
+    return fault;
+}
+
+/* Ray/triangle in double: the hit distance when the ray crosses the triangle
+ * at least `margin` (barycentric) inside every edge, else -1. */
+static double clear_hit(const double o[3], const double dir[3], const float *v0, const float *v1, const float *v2, double margin)
+{
+    double e1[3], e2[3], s[3], p[3], q[3];
+    for (int a = 0; a < 3; a++) {
+        e1[a] = (double)v1[a] - v0[a];
+        e2[a] = (double)v2[a] - v0[a];
+        s[a] = o[a] - v0[a];
+    }
+    p[0] = dir[1] * e2[2] - dir[2] * e2[1]; p[1] = dir[2] * e2[0] - dir[0] * e2[2]; p[2] = dir[0] * e2[1] - dir[1] * e2[0];
+    double det = e1[0] * p[0] + e1[1] * p[1] + e1[2] * p[2];
+    if (det == 0 || !isfinite(det))
+        return -1;
+    double u = (s[0] * p[0] + s[1] * p[1] + s[2] * p[2]) / det;
+    q[0] = s[1] * e1[2] - s[2] * e1[1]; q[1] = s[2] * e1[0] - s[0] * e1[2]; q[2] = s[0] * e1[1] - s[1] * e1[0];
+    double v = (dir[0] * q[0] + dir[1] * q[1] + dir[2] * q[2]) / det;
+    double t = (e2[0] * q[0] + e2[1] * q[1] + e2[2] * q[2]) / det;
+    if (u < margin || v < margin || u + v > 1 - margin || !(t > 0))
+        return -1;
+    return t;
+}
+
+/* Rays from outside the bounds through points of random triangles: the cooked
+ * file's closest hit may never lie clearly behind a triangle the brute force
+ * sees clearly in front, and clear hits are never missed. */
+static void compare_with_brute_force(const cbvh_file *f, const decoded *d, uint64_t seed)
+{
+    const cbvh_mesh *m = &d->mesh;
+    size_t stride = m->position_stride / sizeof(float);
+    cbvh_file_info info;
+    cbvh_file_get_info(f, &info);
+    for (int i = 0; i < 16; i++) {
+        seed = seed * 6364136223846793005ull + 1442695040888963407ull;
+        size_t t = (size_t)(seed >> 33) % m->triangle_count;
+        const float *v[3];
+        for (int k = 0; k < 3; k++)
+            v[k] = m->positions + m->indices[3 * t + k] * stride;
+        double a = (double)((seed >> 8) & 255) / 256.0, b = (double)((seed >> 16) & 255) / 256.0 * (1 - a);
+        cbvh_ray r;
+        double o[3], dir[3], ext = 0;
+        for (int k = 0; k < 3; k++)
+            ext = fmax(ext, (double)info.bounds_max[k] - info.bounds_min[k]);
+        for (int k = 0; k < 3; k++) {
+            double target = (1 - a - b) * v[0][k] + a * v[1][k] + b * v[2][k];
+            double off = (double)((int)((seed >> (20 + 8 * k)) & 255) - 128) / 64.0;
+            r.org[k] = (float)(target + (off == 0 ? 1 : off) * (ext + 1));
+            r.dir[k] = (float)(target - r.org[k]);
+            o[k] = r.org[k];
+            dir[k] = r.dir[k];
+        }
+        r.tmin = 0;
+        r.tmax = INFINITY;
+        double best = INFINITY;
+        for (size_t u = 0; u < m->triangle_count; u++) {
+            const float *w0 = m->positions + m->indices[3 * u] * stride, *w1 = m->positions + m->indices[3 * u + 1] * stride,
+                        *w2 = m->positions + m->indices[3 * u + 2] * stride;
+            double th = clear_hit(o, dir, w0, w1, w2, 1e-3);
+            if (th >= 0 && th < best)
+                best = th;
+        }
+        if (d->opt.vertex_format == CBVH_VERTEX_QUANTIZED16 || !isfinite(best))
+            continue; /* quantized vertices move: no brute-force claim on the input mesh */
+        cbvh_hit h;
+        int got = cbvh_raycast(f, &r, CBVH_TRAVERSAL_SORTED, &h, NULL);
+        FUZZ_CHECK(got, "ray %d misses, brute force hits clearly at t %.9g", i, best);
+        FUZZ_CHECK(h.t <= best * (1 + 1e-4) + 1e-30, "ray %d: hit at t %.9g behind the clear hit at %.9g", i, h.t, best);
+    }
+}
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
+{
+    static decoded d;
+    if (!decode(&d, data, size))
+        return 0;
+    void *out = NULL;
+    size_t out_size = 0;
+    cbvh_cook_stats stats;
+    cbvh_error err;
+    memset(&err, 0, sizeof err);
+    cbvh_result r = cbvh_cook(&d.mesh, &d.opt, NULL, &out, &out_size, &stats, &err);
+    int fault = mesh_fault(&d);
+    if (r != CBVH_OK) {
+        fuzz_check_error(r, &err);
+        FUZZ_CHECK(out == NULL, "failed cook returned a buffer");
+        FUZZ_CHECK(r == CBVH_ERROR_BAD_MESH || r == CBVH_ERROR_EMPTY_MESH || r == CBVH_ERROR_LIMIT,
+                   "cook failed with %s: %s", cbvh_result_string(r), err.message);
+        FUZZ_CHECK(r != CBVH_ERROR_EMPTY_MESH || fault == 0 || d.mesh.triangle_count == 0,
+                   "bad mesh reported as empty: %s", err.message);
+        return 0;
+    }
+    FUZZ_CHECK(fault == 0, "cook accepted a mesh with %s", fault == 2 ? "an index out of range" : "a non-finite coordinate");
+    FUZZ_CHECK(out != NULL && out_size == stats.file_size, "cook returned %zu bytes, stats say %llu", out_size,
+               (unsigned long long)stats.file_size);
+    FUZZ_CHECK(stats.input_triangles == d.mesh.triangle_count && stats.triangles + stats.dropped_degenerate == stats.input_triangles,
+               "stats: %llu in, %llu kept, %llu dropped", (unsigned long long)stats.input_triangles,
+               (unsigned long long)stats.triangles, (unsigned long long)stats.dropped_degenerate);
+
+    /* deterministic */
+    void *again = NULL;
+    size_t again_size = 0;
+    FUZZ_CHECK(cbvh_cook(&d.mesh, &d.opt, NULL, &again, &again_size, NULL, NULL) == CBVH_OK, "second cook failed");
+    FUZZ_CHECK(again_size == out_size && memcmp(again, out, out_size) == 0, "two cooks of one mesh differ");
+    cbvh_buffer_free(NULL, again);
+
+    guard_buffer g;
+    guard_copy(&g, out, out_size);
+    cbvh_buffer_free(NULL, out);
+    cbvh_file *f = NULL;
+    r = cbvh_open_memory(g.data, g.size, NULL, &f, &err);
+    FUZZ_CHECK(r == CBVH_OK, "the cooker's own file does not open: %s", err.message);
+    cbvh_file_info info;
+    cbvh_file_get_info(f, &info);
+    FUZZ_CHECK(info.triangle_count == stats.triangles && info.node_count == stats.nodes && info.depth == stats.depth,
+               "header and stats disagree");
+
+    /* every kept triangle is the input triangle (exactly when lossless,
+     * within the reported error when quantized); dropped ones are absent */
+    size_t stride = d.mesh.position_stride / sizeof(float), present = 0;
+    /* when every kept triangle has the same id the file stores none and reports 0 */
+    int all_equal = 1;
+    uint32_t first_material = 0;
+    for (size_t t = 0, seen = 0; t < d.mesh.triangle_count; t++) {
+        float v[3][3];
+        if (!d.opt.keep_remap || !cbvh_file_get_triangle(f, (uint32_t)t, v[0], v[1], v[2]))
+            continue;
+        if (seen++ == 0)
+            first_material = d.materials[t];
+        all_equal &= d.materials[t] == first_material;
+    }
+    if (d.opt.keep_remap) {
+        for (size_t t = 0; t < d.mesh.triangle_count; t++) {
+            float v[3][3];
+            if (!cbvh_file_get_triangle(f, (uint32_t)t, v[0], v[1], v[2]))
+                continue;
+            present++;
+            for (int k = 0; k < 3; k++)
+                for (int a = 0; a < 3; a++) {
+                    float in = d.positions[d.indices[3 * t + k] * stride + a];
+                    double tol = d.opt.vertex_format == CBVH_VERTEX_QUANTIZED16 ? stats.vertex_max_error : 0;
+                    FUZZ_CHECK(fabs((double)v[k][a] - in) <= tol, "triangle %zu vertex %d axis %d: %.9g stored as %.9g (error %g)",
+                               t, k, a, in, v[k][a], tol);
+                }
+            uint32_t want = d.mesh.material_ids && d.opt.keep_materials && !all_equal ? d.materials[t] : 0;
+            FUZZ_CHECK(cbvh_file_get_material(f, (uint32_t)t) == want, "triangle %zu material %u, expected %u", t,
+                       cbvh_file_get_material(f, (uint32_t)t), want);
+        }
+        FUZZ_CHECK(present == stats.triangles, "%zu triangles readable, %llu kept", present, (unsigned long long)stats.triangles);
+        compare_with_brute_force(f, &d, size);
+    }
+    fuzz_check_queries(f, g.data, g.size, size, 1);
+    cbvh_close(f);
+    guard_release(&g);
+    return 0;
+}

@@ -1,0 +1,198 @@
+/* make_corpus.c: writes the fuzz seed corpora (tests/fuzz/corpus/open, tests/fuzz/corpus/cook); run once by hand, its output is checked in. */
+#include <errno.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+#include "cbvh.h"
+#include "file_edit.h"
+#include "support/scene_gen.h"
+
+static const char *out_dir;
+
+static void write_file(const char *sub, const char *name, const void *data, size_t size)
+{
+    char path[4096];
+    snprintf(path, sizeof path, "%s/%s", out_dir, sub);
+    if (mkdir(path, 0777) != 0 && errno != EEXIST) {
+        perror(path);
+        exit(1);
+    }
+    snprintf(path, sizeof path, "%s/%s/%s", out_dir, sub, name);
+    FILE *fp = fopen(path, "wb");
+    if (!fp || fwrite(data, 1, size, fp) != size || fclose(fp) != 0) {
+        perror(path);
+        exit(1);
+    }
+    printf("%s/%s: %zu bytes\n", sub, name, size);
+}
+
+static uint8_t *cook(const scene *s, int quantized, int level, int keep_remap, size_t *size)
+{
+    cbvh_mesh m = { s->positions, s->vertex_count, 0, s->indices, s->triangle_count, s->material_ids };
+    cbvh_cook_options o;
+    cbvh_cook_options_init(&o);
+    o.vertex_format = quantized ? CBVH_VERTEX_QUANTIZED16 : CBVH_VERTEX_FLOAT32;
+    o.compress_level = level;
+    o.keep_remap = keep_remap;
+    void *out = NULL;
+    cbvh_error err;
+    if (cbvh_cook(&m, &o, NULL, &out, size, NULL, &err) != CBVH_OK) {
+        fprintf(stderr, "cook failed: %s\n", err.message);
+        exit(1);
+    }
+    uint8_t *copy = malloc(*size);
+    memcpy(copy, out, *size);
+    cbvh_buffer_free(NULL, out);
+    return copy;
+}
+
+static void put16(uint8_t *p, uint32_t v) { p[0] = (uint8_t)v; p[1] = (uint8_t)(v >> 8); }
+static void put32(uint8_t *p, uint32_t v) { for (int i = 0; i < 4; i++) p[i] = (uint8_t)(v >> (8 * i)); }
+static uint32_t get16(const uint8_t *p) { return (uint32_t)p[0] | (uint32_t)p[1] << 8; }
+
+/* Re-encodes a u16 TRIANGLES (and REMAP) section of a raw file as `tris`
+ * (1 = u32, 2 = DELTA16) and REMAP as u32, then writes it. */
+static void write_transcoded(const uint8_t *file, size_t size, int tris, int remap32, int zlib, const char *name)
+{
+    edit_file e;
+    if (!edit_parse(&e, file, size)) {
+        fprintf(stderr, "cannot parse the cooked file\n");
+        exit(1);
+    }
+    int ti = edit_find(&e, 2), ri = edit_find(&e, 4);
+    if (ti >= 0 && e.s[ti].encoding == 0 && tris) {
+        size_t n = e.s[ti].size / 6;
+        uint8_t *d = calloc(n, tris == 1 ? 12 : 8);
+        for (size_t t = 0; t < n; t++) {
+            uint32_t i0 = get16(e.s[ti].data + 6 * t), i1 = get16(e.s[ti].data + 6 * t + 2), i2 = get16(e.s[ti].data + 6 * t + 4);
+            if (tris == 1) {
+                put32(d + 12 * t, i0); put32(d + 12 * t + 4, i1); put32(d + 12 * t + 8, i2);
+            } else {
+                put32(d + 8 * t, i0); put16(d + 8 * t + 4, (uint32_t)(int32_t)(i1 - i0)); put16(d + 8 * t + 6, (uint32_t)(int32_t)(i2 - i0));
+            }
+        }
+        edit_replace(&e, ti, d, n * (tris == 1 ? 12 : 8), (uint32_t)tris);
+    }
+    if (ri >= 0 && e.s[ri].encoding == 0 && remap32) {
+        size_t n = e.s[ri].size / 2;
+        uint8_t *d = malloc(4 * n);
+        for (size_t t = 0; t < n; t++)
+            put32(d + 4 * t, get16(e.s[ri].data + 2 * t));
+        edit_replace(&e, ri, d, 4 * n, 1);
+    }
+    for (uint32_t i = 0; i < e.count; i++)
+        e.s[i].codec = zlib ? 1 : 0;
+    size_t out_size;
+    uint8_t *out = edit_build(&e, &out_size);
+    write_file("open", name, out, out_size);
+    free(out);
+    edit_free(&e);
+}
+
+/* The fuzz_cook input format (see fuzz_cook.c): int8 coordinates. */
+static void write_cook_seed(const char *name, uint8_t flags, const int8_t *coords, size_t nv, const uint8_t *tris, size_t nt, int materials)
+{
+    uint8_t buf[4096];
+    size_t n = 0;
+    buf[n++] = (uint8_t)(flags | 32);
+    buf[n++] = 0x13;
+    buf[n++] = (uint8_t)nv;
+    buf[n++] = 128; /* scale 1 */
+    memset(buf + n, 0, 4); /* offset 0.0f */
+    n += 4;
+    memcpy(buf + n, coords, 3 * nv);
+    n += 3 * nv;
+    for (size_t t = 0; t < nt; t++) {
+        memcpy(buf + n, tris + 3 * t, 3);
+        n += 3;
+        if (materials)
+            buf[n++] = (uint8_t)(t * 37 + 1);
+    }
+    write_file("cook", name, buf, n);
+}
+
+/* The fuzz_cook input format with float coordinates, for a generated scene of at most 255 vertices. */
+static void write_cook_seed_float(const char *name, uint8_t flags, const scene *sc)
+{
+    static uint8_t buf[65536];
+    size_t n = 0;
+    buf[n++] = flags;
+    buf[n++] = 0x23;
+    buf[n++] = (uint8_t)sc->vertex_count;
+    memcpy(buf + n, sc->positions, 12 * sc->vertex_count); /* little-endian host */
+    n += 12 * sc->vertex_count;
+    for (size_t i = 0; i < 3 * sc->triangle_count; i++)
+        buf[n++] = (uint8_t)sc->indices[i];
+    write_file("cook", name, buf, n);
+}
+
+int main(int argc, char **argv)
+{
+    if (argc != 2) {
+        fprintf(stderr, "usage: %s OUT_DIR (e.g. $srcdir/tests/fuzz/corpus)\n", argv[0]);
+        return 2;
+    }
+    out_dir = argv[1];
+    mkdir(out_dir, 0777);
+    scene sphere, cube, soup;
+    float c[3] = { 0.5f, -1.0f, 2.0f }, lo[3] = { -1, -1, -1 }, hi[3] = { 1, 2, 3 };
+    if (!scene_sphere(&sphere, 40, c, 1.5f) || !scene_cube(&cube, lo, hi) || !scene_soup(&soup, 24, 0.3f, 7))
+        return 1;
+    soup.material_ids = malloc(soup.triangle_count * sizeof(uint32_t));
+    for (size_t t = 0; t < soup.triangle_count; t++)
+        soup.material_ids[t] = (uint32_t)(t % 3) * 70000u; /* needs u32 materials */
+
+    size_t n;
+    uint8_t *raw = cook(&sphere, 0, 0, 1, &n);
+    write_file("open", "good-sphere-raw.cbvh", raw, n);
+    write_transcoded(raw, n, 1, 1, 0, "good-sphere-tris-u32-remap-u32.cbvh");
+    write_transcoded(raw, n, 2, 0, 0, "good-sphere-tris-delta16.cbvh");
+    write_transcoded(raw, n, 2, 1, 1, "good-sphere-delta16-zlib.cbvh");
+    uint8_t *bad = malloc(n);
+    memcpy(bad, raw, n);
+    write_file("open", "bad-truncated.cbvh", bad, n - 1);
+    bad[n / 2] ^= 0x40; /* CRC catches it */
+    write_file("open", "bad-crc.cbvh", bad, n);
+    memcpy(bad, raw, n);
+    bad[8] = 2;         /* newer version: unsupported */
+    write_file("open", "unsupported-version2.cbvh", bad, n);
+    free(bad);
+    free(raw);
+    raw = cook(&sphere, 0, 6, 1, &n);
+    write_file("open", "good-sphere-zlib.cbvh", raw, n);
+    free(raw);
+    raw = cook(&sphere, 1, 0, 1, &n);
+    write_file("open", "good-sphere-q16.cbvh", raw, n);
+    free(raw);
+    raw = cook(&cube, 0, 0, 0, &n);
+    write_file("open", "good-cube-noremap.cbvh", raw, n);
+    free(raw);
+    raw = cook(&soup, 1, 9, 1, &n);
+    write_file("open", "good-soup-materials-q16-zlib.cbvh", raw, n);
+    free(raw);
+
+    /* cook seeds: a tetrahedron, a cube with a degenerate and a duplicated
+     * triangle, a bad index, a sliver */
+    static const int8_t tet[] = { 0, 0, 0, 100, 0, 0, 0, 100, 0, 0, 0, 100 };
+    static const uint8_t tet_t[] = { 0, 2, 1, 0, 1, 3, 1, 2, 3, 0, 3, 2 };
+    write_cook_seed("tetra.bin", 0, tet, 4, tet_t, 4, 0);
+    write_cook_seed("tetra-q16-zlib-materials.bin", 1 | 4, tet, 4, tet_t, 4, 1);
+    static const int8_t box[] = { -50, -50, -50, 50, -50, -50, 50, 50, -50, -50, 50, -50, -50, -50, 50, 50, -50, 50, 50, 50, 50, -50, 50, 50 };
+    static const uint8_t box_t[] = { 0, 2, 1, 0, 3, 2, 4, 5, 6, 4, 6, 7, 0, 1, 5, 0, 5, 4, 1, 2, 6, 1, 6, 5,
+                                     2, 3, 7, 2, 7, 6, 3, 0, 4, 3, 4, 7, 0, 0, 1, 4, 5, 6 };
+    write_cook_seed("cube-degenerate-duplicate.bin", 8, box, 8, box_t, 14, 0);
+    static const uint8_t bad_t[] = { 0, 1, 2, 0, 1, 9 };
+    write_cook_seed("bad-index.bin", 0, tet, 4, bad_t, 2, 0);
+    static const int8_t sliver[] = { -127, 0, 0, 127, 0, 0, 0, 1, 0, 0, -1, 0 };
+    static const uint8_t sliver_t[] = { 0, 1, 2, 1, 0, 3 };
+    write_cook_seed("sliver.bin", 2, sliver, 4, sliver_t, 2, 0);
+    if (sphere.vertex_count <= 255)
+        write_cook_seed_float("sphere-float.bin", 0, &sphere);
+    write_cook_seed_float("cube-float-q16.bin", 1, &cube);
+    scene_free(&sphere);
+    scene_free(&cube);
+    scene_free(&soup);
+    return 0;
+}
