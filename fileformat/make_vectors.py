@@ -1,0 +1,898 @@
+#!/usr/bin/env python3
+"""make_vectors.py: an independent cbvh v1 writer, written from cbvh-format.md alone, that generates the test vectors.
+
+Usage: python3 make_vectors.py [output folder]      (default: the folder of this script)
+       python3 make_vectors.py --table              (prints the README's vector table)
+       python3 make_vectors.py --am                 (prints fileformat/local.am)
+
+Standard library only (struct, zlib). It does not call the C library: it proves
+the spec is implementable and gives the loader files it did not write itself.
+The vectors are committed; rerunning this script must reproduce them byte for byte.
+"""
+import math
+import os
+import struct
+import sys
+import zlib
+
+MAGIC = b"\x89CBVH\r\n\x1a"
+HEADER_SIZE = 128
+ENTRY_SIZE = 40
+ALIGN = 64
+NODES, TRIANGLES, VERTICES, REMAP, MATERIALS = 1, 2, 3, 4, 5
+RAW, ZLIB = 0, 1
+TRIS_U16, TRIS_U32, TRIS_DELTA16 = 0, 1, 2
+VERTS_F32, VERTS_Q16 = 0, 1
+LEAF_BIT = 0x80000000
+
+# ---------------------------------------------------------------- binary32 arithmetic
+
+
+def f32(x):
+    """Rounds a Python float (binary64) to binary32. A binary32 sum or product computed
+    in binary64 and then rounded is correctly rounded (53 >= 2 x 24 + 2)."""
+    return struct.unpack("<f", struct.pack("<f", x))[0]
+
+
+def f32_from_bits(u):
+    return struct.unpack("<f", struct.pack("<I", u))[0]
+
+
+def deq(q, origin, scale):
+    """Spec section 1: scaled = (float)q * scale; value = origin + scaled, each rounded to binary32."""
+    return f32(origin + f32(float(q) * scale))
+
+
+def grid_for(lo, hi):
+    """Spec section 6: origin = bounds_min, scale = smallest binary32 with deq(65535) >= bounds_max."""
+    a, b = 0, 0x7F7FFFFF  # non-negative binary32 bit patterns are ordered like their values
+    while a < b:
+        mid = (a + b) // 2
+        if deq(65535, lo, f32_from_bits(mid)) >= hi:
+            b = mid
+        else:
+            a = mid + 1
+    return lo, f32_from_bits(a)
+
+
+def largest_at_most(v, origin, scale):
+    a, b = 0, 65535
+    while a < b:
+        mid = (a + b + 1) // 2
+        if deq(mid, origin, scale) <= v:
+            a = mid
+        else:
+            b = mid - 1
+    return a
+
+
+def smallest_at_least(v, origin, scale, start=0):
+    a, b = start, 65535
+    while a < b:
+        mid = (a + b) // 2
+        if deq(mid, origin, scale) >= v:
+            b = mid
+        else:
+            a = mid + 1
+    return a
+
+
+def nearest_q(v, origin, scale):
+    up = smallest_at_least(v, origin, scale)
+    if up > 0 and v - deq(up - 1, origin, scale) < deq(up, origin, scale) - v:
+        return up - 1
+    return up
+
+
+# ---------------------------------------------------------------- cooking
+
+
+def triangle_area(p):
+    u = [p[1][a] - p[0][a] for a in range(3)]
+    v = [p[2][a] - p[0][a] for a in range(3)]
+    c = (u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0])
+    return math.sqrt(sum(x * x for x in c)) / 2
+
+
+def box_of(points):
+    return [min(p[a] for p in points) for a in range(3)], [max(p[a] for p in points) for a in range(3)]
+
+
+def surface(lo, hi):
+    d = [hi[a] - lo[a] for a in range(3)]
+    return d[0] * d[1] + d[1] * d[2] + d[2] * d[0]
+
+
+def build(tris, pos, max_leaf):
+    """Median split on the longest centroid axis; returns a nested tree: ('leaf', [tri ids]) or ('node', a, b)
+    with the child of larger surface area first (spec section 5)."""
+    if len(tris) <= max_leaf:
+        return ("leaf", tris)
+    cent = {t: [sum(pos[v][a] for v in tri) / 3 for a in range(3)] for t, tri in tris}
+    lo, hi = box_of(list(cent.values()))
+    axis = max(range(3), key=lambda a: hi[a] - lo[a])
+    order = sorted(tris, key=lambda t: (cent[t[0]][axis], t[0]))
+    half = len(order) // 2
+    a, b = build(order[:half], pos, max_leaf), build(order[half:], pos, max_leaf)
+    area = lambda n: surface(*box_of([pos[v] for _, tri in leaves(n) for v in tri]))
+    return ("node", a, b) if area(a) >= area(b) else ("node", b, a)
+
+
+def leaves(n):
+    return n[1] if n[0] == "leaf" else leaves(n[1]) + leaves(n[2])
+
+
+def depth_of(n):
+    return 1 if n[0] == "leaf" else 1 + max(depth_of(n[1]), depth_of(n[2]))
+
+
+def cook(positions, triangles, max_leaf=4, vertex_format=VERTS_F32, tri_encoding=None, keep_remap=True,
+         materials=None, remap_encoding=None, material_encoding=None, codec=RAW, compat_flags=0):
+    """Returns (header fields, section list) for a mesh, following the spec's cooking rules."""
+    kept = [(i, t) for i, t in enumerate(triangles) if triangle_area([positions[v] for v in t]) > 0]
+    tree = build(kept, positions, max_leaf)
+    cooked = leaves(tree)  # depth-first leaf order
+    # vertices by first use in cooked order
+    vmap, verts = {}, []
+    for _, tri in cooked:
+        for v in tri:
+            if v not in vmap:
+                vmap[v] = len(verts)
+                verts.append(positions[v])
+    ctris = [[vmap[v] for v in tri] for _, tri in cooked]
+    lo, hi = box_of(verts)
+    grid = [grid_for(lo[a], hi[a]) for a in range(3)]
+    if vertex_format == VERTS_Q16:
+        qverts = [[nearest_q(p[a], *grid[a]) for a in range(3)] for p in verts]
+        decoded = [[deq(q[a], *grid[a]) for a in range(3)] for q in qverts]
+        vdata = b"".join(struct.pack("<3H", *q) for q in qverts)
+    else:
+        decoded = verts
+        vdata = b"".join(struct.pack("<3f", *p) for p in verts)
+    bmin, bmax = box_of(decoded)
+
+    # nodes, depth-first, with conservative boxes of the decoded vertices
+    nodes, next_tri = [], [0]
+
+    def emit(n):
+        lo_, hi_ = box_of([decoded[v] for t in leaves_c(n) for v in ctris[t]])
+        qmin = [largest_at_most(lo_[a], *grid[a]) for a in range(3)]
+        qmax = [smallest_at_least(hi_[a], *grid[a], qmin[a]) for a in range(3)]
+        index = len(nodes)
+        nodes.append([qmin, qmax, 0])
+        if n[0] == "leaf":
+            nodes[index][2] = LEAF_BIT | (len(n[1]) - 1) << 27 | next_tri[0]
+            next_tri[0] += len(n[1])
+            return (qmin, qmax)
+        ba = emit(n[1])
+        bb = emit(n[2])
+        sort = 0
+        for k in range(8):
+            d = [-1 if k >> a & 1 else 1 for a in range(3)]
+            ca = [deq(ba[0][a], *grid[a]) + deq(ba[1][a], *grid[a]) for a in range(3)]
+            cb = [deq(bb[0][a], *grid[a]) + deq(bb[1][a], *grid[a]) for a in range(3)]
+            if sum((ca[a] - cb[a]) * d[a] for a in range(3)) > 0:
+                sort |= 1 << k
+        nodes[index][2] = sort << 23 | (len(nodes) - index)
+        return (qmin, qmax)
+
+    # the tree over cooked triangle positions: leaf i holds consecutive cooked ids
+    pos_iter = iter(range(len(cooked)))
+
+    def relabel(n):
+        if n[0] == "leaf":
+            return ("leaf", [next(pos_iter) for _ in n[1]])
+        return ("node", relabel(n[1]), relabel(n[2]))
+
+    def leaves_c(n):
+        return n[1] if n[0] == "leaf" else leaves_c(n[1]) + leaves_c(n[2])
+
+    emit(relabel(tree))
+    ndata = b"".join(struct.pack("<3H3HI", *q0, *q1, w) for q0, q1, w in nodes)
+
+    if tri_encoding is None:
+        tri_encoding = TRIS_U16 if len(verts) <= 65536 else TRIS_U32
+    if tri_encoding == TRIS_U16:
+        tdata = b"".join(struct.pack("<3H", *t) for t in ctris)
+    elif tri_encoding == TRIS_U32:
+        tdata = b"".join(struct.pack("<3I", *t) for t in ctris)
+    else:
+        tdata = b"".join(struct.pack("<Ihh", t[0], t[1] - t[0], t[2] - t[0]) for t in ctris)
+
+    original = len(triangles) if keep_remap else len(cooked)
+    sections = [
+        Section(NODES, 0, ndata, codec),
+        Section(TRIANGLES, tri_encoding, tdata, codec),
+        Section(VERTICES, vertex_format, vdata, codec),
+    ]
+    if keep_remap and ([i for i, _ in cooked] != list(range(len(triangles))) or remap_encoding is not None):
+        enc = remap_encoding if remap_encoding is not None else (0 if original <= 65536 else 1)
+        sections.append(Section(REMAP, enc, b"".join(struct.pack("<" + "HI"[enc], i) for i, _ in cooked), codec))
+    elif keep_remap:
+        original = len(cooked)
+    if materials is not None:
+        ids = [materials[i] for i, _ in cooked]
+        enc = material_encoding
+        if enc is None:
+            enc = 0 if max(ids) < 256 else 1 if max(ids) < 65536 else 2
+        sections.append(Section(MATERIALS, enc, b"".join(struct.pack("<" + "BHI"[enc], m) for m in ids), codec))
+    header = dict(version=1, header_size=HEADER_SIZE, compat=compat_flags, incompat=0,
+                  triangle_count=len(cooked), vertex_count=len(verts), node_count=len(nodes), depth=depth_of(tree),
+                  max_leaf_size=max_leaf, original_triangle_count=original,
+                  grid_origin=[g[0] for g in grid], grid_scale=[g[1] for g in grid], bounds_min=bmin, bounds_max=bmax,
+                  reserved=bytes(12))
+    return header, sections
+
+
+# ---------------------------------------------------------------- serialization
+
+
+class Section:
+    """One section: its decoded bytes plus optional overrides of what the writer would put in its table entry.
+    The stored bytes always go at the next multiple of 64: an overridden offset only changes the entry."""
+
+    def __init__(self, type_, encoding, data, codec=RAW):
+        self.type, self.encoding, self.data, self.codec = type_, encoding, data, codec
+        self.stored = None  # stored bytes (default: data, or its zlib stream)
+        self.offset = None  # table entry overrides (default: what the writer computes)
+        self.size = None
+        self.stored_size = None
+        self.crc = None
+
+    def stored_bytes(self):
+        if self.stored is not None:
+            return self.stored
+        return zlib.compress(self.data, 9) if self.codec == ZLIB else self.data
+
+
+def align(n):
+    return (n + ALIGN - 1) // ALIGN * ALIGN
+
+
+def serialize(header, sections, section_count=None, table_crc=None, header_crc=None, file_size=None):
+    count = len(sections) if section_count is None else section_count
+    out = bytearray(HEADER_SIZE + ENTRY_SIZE * len(sections))
+    entries = []
+    for s in sections:
+        stored = s.stored_bytes()
+        offset = align(len(out))
+        out += bytes(offset - len(out)) + stored
+        entries.append(struct.pack("<IIQQQII", s.type, s.codec, offset if s.offset is None else s.offset,
+                                   len(stored) if s.stored_size is None else s.stored_size,
+                                   len(s.data) if s.size is None else s.size,
+                                   zlib.crc32(stored) if s.crc is None else s.crc, s.encoding))
+    table = b"".join(entries)
+    h = header
+    raw = MAGIC + struct.pack("<IIIIII", h["version"], h["header_size"], h["compat"], h["incompat"], count,
+                              zlib.crc32(table) if table_crc is None else table_crc)
+    raw += struct.pack("<6I", h["triangle_count"], h["vertex_count"], h["node_count"], h["depth"],
+                       h["max_leaf_size"], h["original_triangle_count"])
+    for key in ("grid_origin", "grid_scale", "bounds_min", "bounds_max"):
+        raw += struct.pack("<3f", *h[key])
+    raw += struct.pack("<Q", len(out) if file_size is None else file_size) + h["reserved"]
+    raw += struct.pack("<I", zlib.crc32(raw) if header_crc is None else header_crc)
+    assert len(raw) == HEADER_SIZE
+    out[:HEADER_SIZE + len(table)] = raw + table
+    return bytes(out)
+
+
+# ---------------------------------------------------------------- meshes
+
+SINGLE = ([(0.0, 0.0, 0.0), (1.0, 0.0, 0.0), (0.0, 1.0, 0.5)], [(0, 1, 2)])
+
+
+def box_mesh(offset=0.0):
+    xs, ys, zs = (-1.5 + offset, 2.25 + offset), (0.0, 3.0), (1.0, 5.0)
+    v = [(xs[i & 1], ys[i >> 1 & 1], zs[i >> 2 & 1]) for i in range(8)]
+    faces = [(0, 2, 3, 1), (4, 5, 7, 6), (0, 1, 5, 4), (2, 6, 7, 3), (0, 4, 6, 2), (1, 3, 7, 5)]
+    t = []
+    for a, b, c, d in faces:
+        t += [(a, b, c), (a, c, d)]
+    return v, t
+
+
+BOX = box_mesh()
+BOX_FAR = box_mesh(70000.0)
+QUAD = ([(0.0, 0.0, 2.5), (4.0, 0.0, 2.5), (4.0, 2.0, 2.5), (0.0, 2.0, 2.5)], [(0, 1, 2), (0, 2, 3)])
+# The box with two degenerate triangles (dropped by the cooker) at original ids 3 and 9.
+BOX_DEGENERATE = (BOX[0], BOX[1][:3] + [(0, 0, 1)] + BOX[1][3:8] + [(2, 5, 2)] + BOX[1][8:])
+
+
+def materials_for(mesh, base):
+    return [base + 7 * i for i in range(len(mesh[1]))]
+
+
+# ---------------------------------------------------------------- vectors
+
+VECTORS = []  # (name, expected result, check that fires, description, builder returning bytes)
+
+
+def vector(name, expected, check, description):
+    def register(fn):
+        VECTORS.append((name, expected, check, description, fn))
+        return fn
+    return register
+
+
+def box(**kw):
+    return cook(*BOX, max_leaf=2, **kw)
+
+
+def find(sections, type_):
+    return next(s for s in sections if s.type == type_)
+
+
+def patched(sec, offset, fmt, value):
+    data = bytearray(sec.data)
+    struct.pack_into(fmt, data, offset, value)
+    sec.data = bytes(data)
+
+
+@vector("good-single-triangle", "OK", "-", "1 triangle, 3 f32 vertices, a single leaf as root (node_count 1, depth 1)")
+def _():
+    return serialize(*cook(*SINGLE))
+
+
+@vector("good-box-raw", "OK", "-", "box, 12 triangles, leaves of at most 2: 15 nodes, depth 4, u16 indices, f32 vertices, raw")
+def _():
+    return serialize(*box())
+
+
+@vector("good-box-zlib", "OK", "-", "good-box-raw with every section zlib-compressed")
+def _():
+    return serialize(*box(codec=ZLIB))
+
+
+@vector("good-box-u32", "OK", "-", "good-box-raw with u32 vertex indices")
+def _():
+    return serialize(*box(tri_encoding=TRIS_U32))
+
+
+@vector("good-box-delta16", "OK", "-", "good-box-raw with DELTA16 triangles (negative deltas included)")
+def _():
+    return serialize(*box(tri_encoding=TRIS_DELTA16))
+
+
+@vector("good-box-q16", "OK", "-", "good-box-raw with 16-bit grid vertices (lossy: within half a grid step)")
+def _():
+    return serialize(*box(vertex_format=VERTS_Q16))
+
+
+@vector("good-box-far-q16", "OK", "-", "the box moved 70 km along x, grid vertices, zlib")
+def _():
+    return serialize(*cook(*BOX_FAR, max_leaf=2, vertex_format=VERTS_Q16, codec=ZLIB))
+
+
+@vector("good-quad-flat", "OK", "-", "2 triangles in the plane z = 2.5: grid_scale z is 0, all qmin/qmax z are 65535")
+def _():
+    return serialize(*cook(*QUAD, max_leaf=1))
+
+
+@vector("good-remap-materials", "OK", "-",
+        "box with 2 degenerate triangles (original ids 3 and 9) dropped: REMAP u16, MATERIALS u8 (id 1 + 7 x original id)")
+def _():
+    return serialize(*cook(*BOX_DEGENERATE, max_leaf=2, materials=materials_for(BOX_DEGENERATE, 1)))
+
+
+@vector("good-remap-u32-materials-u32-zlib", "OK", "-",
+        "as good-remap-materials with REMAP u32, MATERIALS u32 (id 70000 + 7 x original id), zlib, DELTA16")
+def _():
+    return serialize(*cook(*BOX_DEGENERATE, max_leaf=2, materials=materials_for(BOX_DEGENERATE, 70000),
+                           remap_encoding=1, tri_encoding=TRIS_DELTA16, codec=ZLIB))
+
+
+@vector("good-materials-u16-cooked-ids", "OK", "-",
+        "box without REMAP (ids are cooked ids), MATERIALS u16 (id 1000 + 7 x original id, in cooked order)")
+def _():
+    return serialize(*box(keep_remap=False, materials=materials_for(BOX, 1000)))
+
+
+@vector("good-ancillary", "OK", "-",
+        "good-box-raw plus two unknown ancillary sections (type 0x80000007 raw; 0x80000009 with codec 9, encoding 42): skipped")
+def _():
+    h, s = box()
+    a = Section(0x80000007, 0, b"future data", RAW)
+    b = Section(0x80000009, 42, b"\x01\x02\x03", RAW)
+    b.codec = 9
+    return serialize(h, s[:2] + [a] + s[2:] + [b])
+
+
+@vector("good-compat-flags", "OK", "-", "good-box-raw with compat_flags 0x80000005 (unknown compatible features)")
+def _():
+    return serialize(*box(compat_flags=0x80000005))
+
+
+def good_box():
+    return serialize(*box())
+
+
+def entry_offset(data, i):
+    """The offset in table entry i of a serialized file."""
+    return struct.unpack_from("<Q", data, HEADER_SIZE + ENTRY_SIZE * i + 8)[0]
+
+
+@vector("bad-empty", "CORRUPT", "empty", "0 bytes")
+def _():
+    return b""
+
+
+@vector("bad-magic", "CORRUPT", "bad magic", "good-box-raw with magic byte 1 ('C') changed to 'c'")
+def _():
+    d = bytearray(good_box())
+    d[1] = ord("c")
+    return bytes(d)
+
+
+@vector("bad-text-mode", "CORRUPT", "text-mode", "good-box-raw after a text-mode transfer turned CR LF into LF")
+def _():
+    return good_box().replace(b"\r\n", b"\n")
+
+
+@vector("bad-version-0", "CORRUPT", "format version 0", "format_version 0 (header CRC valid)")
+def _():
+    h, s = box()
+    h["version"] = 0
+    return serialize(h, s)
+
+
+@vector("bad-truncated-header", "CORRUPT", "truncated", "good-box-raw cut to 100 bytes")
+def _():
+    return good_box()[:100]
+
+
+@vector("bad-header-crc", "CORRUPT", "header CRC", "good-box-raw with a wrong header_crc32")
+def _():
+    h, s = box()
+    return serialize(h, s, header_crc=0x12345678)
+
+
+@vector("bad-header-size", "CORRUPT", "header_size", "header_size 64")
+def _():
+    h, s = box()
+    h["header_size"] = 64
+    return serialize(h, s)
+
+
+@vector("bad-reserved", "CORRUPT", "reserved byte", "reserved header byte 115 set to 1")
+def _():
+    h, s = box()
+    h["reserved"] = bytes(3) + b"\x01" + bytes(8)
+    return serialize(h, s)
+
+
+@vector("bad-section-count", "CORRUPT", "section_count", "section_count 2")
+def _():
+    h, s = box()
+    return serialize(h, s[:2], section_count=2)
+
+
+@vector("bad-triangle-count", "CORRUPT", "triangle_count", "triangle_count 0")
+def _():
+    h, s = box()
+    h["triangle_count"] = 0
+    return serialize(h, s)
+
+
+@vector("bad-vertex-count", "CORRUPT", "vertex_count", "vertex_count 37, more than 3 x triangle_count (36)")
+def _():
+    h, s = box()
+    h["vertex_count"] = 37
+    return serialize(h, s)
+
+
+@vector("bad-node-count", "CORRUPT", "node_count", "node_count 0")
+def _():
+    h, s = box()
+    h["node_count"] = 0
+    return serialize(h, s)
+
+
+@vector("bad-depth-limit", "CORRUPT", "depth 65", "depth 65, beyond the limit of 64")
+def _():
+    h, s = box()
+    h["depth"] = 65
+    return serialize(h, s)
+
+
+@vector("bad-max-leaf-size", "CORRUPT", "max_leaf_size 17", "max_leaf_size 17")
+def _():
+    h, s = box()
+    h["max_leaf_size"] = 17
+    return serialize(h, s)
+
+
+@vector("bad-original-count", "CORRUPT", "original_triangle_count 11 is below",
+        "original_triangle_count 11 < triangle_count 12")
+def _():
+    h, s = box()
+    h["original_triangle_count"] = 11
+    return serialize(h, s)
+
+
+@vector("bad-grid-nan", "CORRUPT", "grid on axis y", "grid_origin y is NaN")
+def _():
+    h, s = box()
+    h["grid_origin"][1] = float("nan")
+    return serialize(h, s)
+
+
+@vector("bad-grid-overflow", "CORRUPT", "overflows", "grid_scale x 1e36: coordinate 65535 dequantizes to infinity")
+def _():
+    h, s = box()
+    h["grid_scale"][0] = 1e36
+    return serialize(h, s)
+
+
+@vector("bad-bounds-inverted", "CORRUPT", "bounds on axis z", "bounds_min z > bounds_max z")
+def _():
+    h, s = box()
+    h["bounds_min"][2], h["bounds_max"][2] = h["bounds_max"][2], h["bounds_min"][2]
+    return serialize(h, s)
+
+
+@vector("bad-truncated", "CORRUPT", "(truncated)", "good-box-raw without its last byte")
+def _():
+    return good_box()[:-1]
+
+
+@vector("bad-trailing-byte", "CORRUPT", "(trailing bytes)", "good-box-raw plus one zero byte")
+def _():
+    return good_box() + b"\0"
+
+
+@vector("bad-trailing-section-gap", "CORRUPT", "trailing bytes: the last section ends",
+        "64 zero bytes after the last section, counted in file_size")
+def _():
+    h, s = box()
+    n = len(serialize(h, s))
+    d = bytearray(serialize(h, s, file_size=n + 64) + bytes(64))
+    return bytes(d)
+
+
+@vector("bad-table-crc", "CORRUPT", "section table CRC", "wrong table_crc32")
+def _():
+    h, s = box()
+    return serialize(h, s, table_crc=1)
+
+
+@vector("bad-table-past-end", "CORRUPT", "section table ends", "single triangle with section_count 16: the table would end at byte 768 of 420")
+def _():
+    h, s = cook(*SINGLE)
+    return serialize(h, s, section_count=16)
+
+
+@vector("bad-section-crc", "CORRUPT", "CRC mismatch", "one byte of the NODES section changed, CRC left alone")
+def _():
+    h, s = box()
+    s[0].crc = zlib.crc32(s[0].data)
+    patched(s[0], 12, "<I", struct.unpack_from("<I", s[0].data, 12)[0] ^ 0x100)
+    return serialize(h, s)
+
+
+@vector("bad-section-misaligned", "CORRUPT", "not a multiple of 64", "TRIANGLES section at offset 580 = 64 x 9 + 4")
+def _():
+    h, s = box()
+    s[1].offset = entry_offset(good_box(), 1) + 4
+    assert s[1].offset == 580
+    return serialize(h, s)
+
+
+@vector("bad-section-overlap", "CORRUPT", "overlaps", "TRIANGLES section at offset 384, inside NODES [320, 560)")
+def _():
+    h, s = box()
+    s[1].offset = 384
+    assert entry_offset(good_box(), 0) == 320  # NODES: bytes [320, 560)
+    return serialize(h, s)
+
+
+@vector("bad-section-over-table", "CORRUPT", "overlaps the section table", "NODES section at offset 256, inside the table [128, 288)")
+def _():
+    h, s = box()
+    s[0].offset = 256
+    return serialize(h, s)
+
+
+@vector("bad-section-past-end", "CORRUPT", "run past the end", "VERTICES stored_size 2^64 - 1 (offset + size wraps)")
+def _():
+    h, s = box()
+    s[2].stored_size = 2 ** 64 - 1
+    return serialize(h, s)
+
+
+@vector("bad-padding", "CORRUPT", "byte 575: padding before section 1", "byte 575, in the padding between NODES [320, 560) and TRIANGLES (576), is 1")
+def _():
+    d = bytearray(good_box())
+    assert entry_offset(d, 1) == 576
+    d[575] = 1
+    return bytes(d)
+
+
+@vector("bad-duplicate-section", "CORRUPT", "second VERTICES", "two VERTICES sections")
+def _():
+    h, s = box()
+    return serialize(h, s + [Section(VERTICES, 0, s[2].data)])
+
+
+@vector("bad-missing-nodes", "CORRUPT", "required section NODES", "the NODES section typed as an ancillary section")
+def _():
+    h, s = box()
+    s[0].type = 0x80000001
+    return serialize(h, s)
+
+
+@vector("bad-section-size", "CORRUPT", "size 132, expected 144", "u32 TRIANGLES section of 132 bytes (11 triangles) for triangle_count 12")
+def _():
+    h, s = cook(*BOX, max_leaf=2, tri_encoding=TRIS_U32)
+    s[1].data = s[1].data[:132]
+    return serialize(h, s)
+
+
+@vector("bad-raw-stored-size", "CORRUPT", "stored_size", "raw NODES section with stored_size 256 != size 240")
+def _():
+    h, s = box()
+    s[0].stored = s[0].data + bytes(16)
+    s[0].size = len(s[0].data)
+    return serialize(h, s)
+
+
+@vector("bad-zlib-short", "CORRUPT", "inflates to 66 bytes", "zlib TRIANGLES stream inflating to 66 bytes, size 72")
+def _():
+    h, s = box(codec=ZLIB)
+    s[1].stored = zlib.compress(s[1].data[:-6], 9)
+    return serialize(h, s)
+
+
+@vector("bad-zlib-long", "CORRUPT", "more than its size", "zlib TRIANGLES stream inflating to 6 bytes more than its size")
+def _():
+    h, s = box(codec=ZLIB)
+    s[1].stored = zlib.compress(s[1].data + s[1].data[:6], 9)
+    return serialize(h, s)
+
+
+@vector("bad-zlib-trailing", "CORRUPT", "ends at stored byte", "zlib NODES stream followed by 2 stored bytes")
+def _():
+    h, s = box(codec=ZLIB)
+    s[0].stored = zlib.compress(s[0].data, 9) + b"\0\0"
+    return serialize(h, s)
+
+
+@vector("bad-zlib-cut", "CORRUPT", "cut short", "zlib VERTICES stream without its last 5 bytes")
+def _():
+    h, s = box(codec=ZLIB)
+    s[2].stored = zlib.compress(s[2].data, 9)[:-5]
+    return serialize(h, s)
+
+
+@vector("bad-zlib-garbage", "CORRUPT", "bad zlib stream", "zlib NODES section holding bytes that are not a zlib stream")
+def _():
+    h, s = box(codec=ZLIB)
+    s[0].stored = bytes(range(40, 80))
+    return serialize(h, s)
+
+
+def box_nodes():
+    h, s = box()
+    return h, s, s[0]
+
+
+@vector("bad-root-size", "CORRUPT", "node 0: subtree size 9", "root subtree size 9 != node_count 11")
+def _():
+    h, s, n = box_nodes()
+    w = struct.unpack_from("<I", n.data, 12)[0]
+    patched(n, 12, "<I", (w & ~0x7FFFFF) | 9)
+    return serialize(h, s)
+
+
+@vector("bad-escape-self", "CORRUPT", "has subtree size 0", "node 1 (internal) with subtree size 0: its escape link would loop")
+def _():
+    h, s, n = box_nodes()
+    w = struct.unpack_from("<I", n.data, 16 + 12)[0]
+    patched(n, 16 + 12, "<I", w & ~0x7FFFFF)
+    return serialize(h, s)
+
+
+@vector("bad-escape-past-parent", "CORRUPT", "leaving no room", "node 1 with subtree size 14: no room is left for the root's second child")
+def _():
+    h, s, n = box_nodes()
+    w = struct.unpack_from("<I", n.data, 16 + 12)[0]
+    patched(n, 16 + 12, "<I", (w & ~0x7FFFFF) | 14)
+    return serialize(h, s)
+
+
+def second_child_of_root(n):
+    w1 = struct.unpack_from("<I", n.data, 16 + 12)[0]
+    return 1 + (1 if w1 & LEAF_BIT else w1 & 0x7FFFFF)
+
+
+@vector("bad-second-child", "CORRUPT", "but its parent leaves it nodes", "root's second child (node 8) with subtree size 3 instead of 7: its escape link is not the root's")
+def _():
+    h, s, n = box_nodes()
+    c = second_child_of_root(n)
+    w = struct.unpack_from("<I", n.data, 16 * c + 12)[0]
+    patched(n, 16 * c + 12, "<I", (w & ~0x7FFFFF) | 3)
+    return serialize(h, s)
+
+
+def leaf_nodes(n):
+    return [i for i in range(len(n.data) // 16) if struct.unpack_from("<I", n.data, 16 * i + 12)[0] & LEAF_BIT]
+
+
+@vector("bad-leaf-past-end", "CORRUPT", "run past triangle_count", "last leaf holds triangles [11, 14) (max_leaf_size raised to 4)")
+def _():
+    h, s, n = box_nodes()
+    h["max_leaf_size"] = 4
+    last = leaf_nodes(n)[-1]
+    patched(n, 16 * last + 12, "<I", LEAF_BIT | 2 << 27 | 11)
+    return serialize(h, s)
+
+
+@vector("bad-leaf-gap", "CORRUPT", "previous leaf ended at 1", "second leaf starts at triangle 2 instead of 1")
+def _():
+    h, s, n = box_nodes()
+    second = leaf_nodes(n)[1]
+    patched(n, 16 * second + 12, "<I", LEAF_BIT | 1 << 27 | 2)
+    return serialize(h, s)
+
+
+@vector("bad-leaves-short", "CORRUPT", "leaves cover triangles [0, 12), triangle_count is 13",
+        "a 13th triangle in TRIANGLES (triangle_count 13) that no leaf covers")
+def _():
+    h, s = box(keep_remap=False)
+    h["triangle_count"] = h["original_triangle_count"] = 13
+    s[1].data += s[1].data[:6]
+    return serialize(h, s)
+
+
+@vector("bad-leaf-too-big", "CORRUPT", "more than max_leaf_size", "max_leaf_size 1 with leaves of 2")
+def _():
+    h, s = box()
+    h["max_leaf_size"] = 1
+    return serialize(h, s)
+
+
+@vector("bad-depth-mismatch", "CORRUPT", "the tree's depth is 4", "header depth 5, tree depth 4")
+def _():
+    h, s = box()
+    h["depth"] += 1
+    return serialize(h, s)
+
+
+@vector("bad-depth-exceeded", "CORRUPT", "deeper than the header", "header depth 3, tree depth 4")
+def _():
+    h, s = box()
+    h["depth"] -= 1
+    return serialize(h, s)
+
+
+@vector("bad-qmin-gt-qmax", "CORRUPT", "node 2: qmin 100 > qmax 50 on axis 1", "node 2 with qmin y 100 > qmax y 50")
+def _():
+    h, s, n = box_nodes()
+    patched(n, 32 + 2, "<H", 100)
+    patched(n, 32 + 8, "<H", 50)
+    return serialize(h, s)
+
+
+@vector("bad-index-u16", "CORRUPT", "triangle 5 (cooked order): vertex indices", "u16 index of triangle 5 = vertex_count (8)")
+def _():
+    h, s = box()
+    patched(s[1], 5 * 6 + 2, "<H", 8)
+    return serialize(h, s)
+
+
+@vector("bad-index-u32", "CORRUPT", "triangle 11 (cooked order): vertex indices", "u32 index of the last triangle = 2^32 - 1")
+def _():
+    h, s = box(tri_encoding=TRIS_U32)
+    patched(s[1], 11 * 12 + 8, "<I", 0xFFFFFFFF)
+    return serialize(h, s)
+
+
+@vector("bad-delta16-negative", "CORRUPT", "DELTA16", "DELTA16 triangle 0: base 0, d1 -1 (index -1, no wrap-around)")
+def _():
+    h, s = box(tri_encoding=TRIS_DELTA16)
+    patched(s[1], 0, "<I", 0)
+    patched(s[1], 4, "<h", -1)
+    return serialize(h, s)
+
+
+@vector("bad-delta16-wrap", "CORRUPT", "DELTA16", "DELTA16 triangle 1: base 2^32 - 1, d1 = d2 = 1 (wraps to 0 in 32 bits)")
+def _():
+    h, s = box(tri_encoding=TRIS_DELTA16)
+    d = bytearray(s[1].data)
+    struct.pack_into("<Ihh", d, 8, 0xFFFFFFFF, 1, 1)
+    s[1].data = bytes(d)
+    return serialize(h, s)
+
+
+@vector("bad-vertex-nan", "CORRUPT", "vertex 3: coordinate 2", "f32 vertex 3's z is NaN")
+def _():
+    h, s = box()
+    patched(s[2], 3 * 12 + 8, "<f", float("nan"))
+    return serialize(h, s)
+
+
+@vector("bad-bounds-mismatch", "CORRUPT", "differ from the vertices' bounds", "bounds_max x 2.5, the vertices reach 2.25")
+def _():
+    h, s = box()
+    h["bounds_max"][0] = 2.5
+    return serialize(h, s)
+
+
+@vector("bad-remap-duplicate", "CORRUPT", "both hold original id", "REMAP entry 5 equal to entry 4")
+def _():
+    h, s = cook(*BOX_DEGENERATE, max_leaf=2, materials=materials_for(BOX_DEGENERATE, 1))
+    r = find(s, REMAP)
+    patched(r, 10, "<H", struct.unpack_from("<H", r.data, 8)[0])
+    return serialize(h, s)
+
+
+@vector("bad-remap-range", "CORRUPT", "original_triangle_count is 14", "REMAP entry 0 = 14 = original_triangle_count")
+def _():
+    h, s = cook(*BOX_DEGENERATE, max_leaf=2, materials=materials_for(BOX_DEGENERATE, 1))
+    patched(find(s, REMAP), 0, "<H", 14)
+    return serialize(h, s)
+
+
+@vector("bad-remap-missing", "CORRUPT", "without a REMAP section", "original_triangle_count 14 != triangle_count 12 and no REMAP")
+def _():
+    h, s = cook(*BOX_DEGENERATE, max_leaf=2)
+    return serialize(h, [x for x in s if x.type != REMAP])
+
+
+@vector("unsupported-version-2", "UNSUPPORTED", "format version 2",
+        "format_version 2 with a 256-byte header and a header CRC a v1 reader would call wrong: version comes first")
+def _():
+    d = bytearray(good_box())
+    struct.pack_into("<II", d, 8, 2, 256)
+    return bytes(d)
+
+
+@vector("unsupported-incompat-flag", "UNSUPPORTED", "incompatible feature flags", "incompat_flags 0x1")
+def _():
+    h, s = box()
+    h["incompat"] = 1
+    return serialize(h, s)
+
+
+@vector("unsupported-codec", "UNSUPPORTED", "codec 2", "NODES section with codec 2")
+def _():
+    h, s = box()
+    s[0].codec = 2
+    return serialize(h, s)
+
+
+@vector("unsupported-encoding", "UNSUPPORTED", "encoding 3", "TRIANGLES section with encoding 3")
+def _():
+    h, s = box()
+    s[1].encoding = 3
+    return serialize(h, s)
+
+
+@vector("unsupported-critical-section", "UNSUPPORTED", "critical section type 6", "an extra section of unknown type 6 (bit 31 clear)")
+def _():
+    h, s = box()
+    return serialize(h, s + [Section(6, 0, b"new critical data")])
+
+
+def main(argv):
+    if argv[1:] == ["--table"]:
+        print("| file | expected | check (message contains) | content |")
+        print("|---|---|---|---|")
+        for name, expected, check, description, _ in VECTORS:
+            print(f"| `{name}.cbvh` | {expected} | {check} | {description} |")
+        return 0
+    if argv[1:] == ["--am"]:
+        print("# fileformat: the normative spec and the test vectors (list regenerated with: "
+              "python3 fileformat/make_vectors.py --am).")
+        print("EXTRA_DIST += fileformat/cbvh-format.md fileformat/README.md fileformat/make_vectors.py")
+        print("EXTRA_DIST +=" + "".join(f" \\\n\tfileformat/{name}.cbvh" for name in sorted(v[0] for v in VECTORS)))
+        return 0
+    out = argv[1] if len(argv) > 1 else os.path.dirname(os.path.abspath(__file__))
+    for name, _, _, _, fn in VECTORS:
+        with open(os.path.join(out, name + ".cbvh"), "wb") as f:
+            f.write(fn())
+    print(f"wrote {len(VECTORS)} vectors to {out}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv))
