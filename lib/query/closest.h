@@ -1,0 +1,23 @@
+/* closest.h: closest points between a point, a segment and a triangle, in double precision. */
+#ifndef CBVH_QUERY_CLOSEST_H
+#define CBVH_QUERY_CLOSEST_H
+
+#include "query/vec3d.h"
+
+/* The point of triangle (a, b, c) nearest to p (Ericson, Real-Time Collision
+ * Detection, 5.1.5: Voronoi regions of vertices, edges and face). Works for
+ * degenerate triangles too (then a point of an edge). */
+cbvh_v3 cbvh_closest_point_triangle(cbvh_v3 p, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c);
+
+/* Closest points of segments p0-p1 and q0-q1 (Ericson 5.1.9), degenerate
+ * segments included; returns the squared distance, writes the points. */
+double cbvh_closest_segments(cbvh_v3 p0, cbvh_v3 p1, cbvh_v3 q0, cbvh_v3 q1, cbvh_v3 *on_p, cbvh_v3 *on_q);
+
+/* Closest points of segment p0-p1 and triangle (a, b, c): 0 when the segment
+ * crosses the triangle, else the nearest of endpoint-to-triangle and
+ * segment-to-edge pairs (a positive minimum is always attained by one of
+ * them). Returns the squared distance. */
+double cbvh_closest_segment_triangle(cbvh_v3 p0, cbvh_v3 p1, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, cbvh_v3 *on_seg,
+                                     cbvh_v3 *on_tri);
+
+#endif

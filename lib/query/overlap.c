@@ -1,0 +1,121 @@
+/* overlap.c: box and sphere overlap queries: stackless walk, exact per-triangle tests, callback and/or output array. */
+#include <math.h>
+
+#include "query/closest.h"
+#include "query/sweep_walk.h"
+#include "query/tree.h"
+#include "query/triangle_box.h"
+
+/* Where overlapping triangles go. */
+struct overlap_sink {
+    cbvh_overlap_fn callback;
+    void *user;
+    uint32_t *out;
+    size_t capacity;
+    size_t reported;
+};
+
+/* Reports a triangle; returns 1 when the query must stop (the callback asked,
+ * or out is full). */
+static int sink_report(struct overlap_sink *s, uint32_t tri)
+{
+    if (s->out)
+        s->out[s->reported] = tri;
+    s->reported++;
+    if (s->callback && s->callback(s->user, tri))
+        return 1;
+    return s->out && s->reported >= s->capacity;
+}
+
+/* The region tested against node boxes (an AABB) and against triangles. */
+struct overlap_region {
+    float lo[3], hi[3];  /* conservative bounds of the region, for node culling */
+    int sphere;          /* 0: the box [lo, hi] itself; 1: the ball below */
+    cbvh_v3 center;
+    double radius;
+};
+
+static int region_triangle(const struct overlap_region *r, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c)
+{
+    if (r->sphere) {
+        const cbvh_v3 q = cbvh_closest_point_triangle(r->center, a, b, c);
+        return v3_len2(v3_sub(q, r->center)) <= r->radius * r->radius;
+    }
+    const cbvh_v3 lo = v3_from_f(r->lo), hi = v3_from_f(r->hi);
+    double t;
+    cbvh_v3 n;
+    return cbvh_triangle_box_sweep(a, b, c, v3_scale(v3_add(lo, hi), 0.5), v3_scale(v3_sub(hi, lo), 0.5),
+                                   v3(0, 0, 0), 0.0, &t, &n);
+}
+
+/* Stackless walk: the order does not matter when every overlap is reported.
+ * Node boxes are closed, so a region touching a box is not culled. */
+static size_t overlap_walk(const struct cbvh_file *f, const struct overlap_region *region, struct overlap_sink *sink)
+{
+    const cbvh_node *nodes = f->nodes;
+    const uint32_t end = f->info.node_count;
+    if (sink->out && sink->capacity == 0)
+        return 0; /* out is full before the first report */
+    uint32_t i = 0;
+    while (i < end) {
+        const uint32_t word = nodes[i].word;
+        float lo[3], hi[3];
+        cbvh_node_box(f, &nodes[i], lo, hi);
+        if (lo[0] > region->hi[0] || hi[0] < region->lo[0] || lo[1] > region->hi[1] || hi[1] < region->lo[1] ||
+            lo[2] > region->hi[2] || hi[2] < region->lo[2]) {
+            i += cbvh_node_span(word);
+            continue;
+        }
+        if (cbvh_node_is_leaf(word)) {
+            const uint32_t tri0 = cbvh_leaf_first(word), tri_end = tri0 + cbvh_leaf_count(word);
+            for (uint32_t k = tri0; k < tri_end; k++) {
+                float a[3], b[3], c[3];
+                cbvh_triangle_vertices(f, k, a, b, c);
+                if (region_triangle(region, v3_from_f(a), v3_from_f(b), v3_from_f(c)) &&
+                    sink_report(sink, cbvh_original_id(f, k)))
+                    return sink->reported;
+            }
+        }
+        i++;
+    }
+    return sink->reported;
+}
+
+CBVH_API size_t cbvh_overlap_box(const cbvh_file *file, const float box_min[3], const float box_max[3],
+                                 cbvh_overlap_fn callback, void *user, uint32_t *out, size_t capacity)
+{
+    struct overlap_sink sink = {callback, user, out, capacity, 0};
+    struct overlap_region region = {{0, 0, 0}, {0, 0, 0}, 0, {0, 0, 0}, 0.0};
+    if (!file || !box_min || !box_max || !cbvh_all_finite(box_min, 3) || !cbvh_all_finite(box_max, 3))
+        return 0;
+    for (int a = 0; a < 3; a++) {
+        if (!(box_min[a] <= box_max[a]))
+            return 0;
+        region.lo[a] = box_min[a];
+        region.hi[a] = box_max[a];
+    }
+    return overlap_walk(file, &region, &sink);
+}
+
+CBVH_API size_t cbvh_overlap_sphere(const cbvh_file *file, const float center[3], float radius,
+                                    cbvh_overlap_fn callback, void *user, uint32_t *out, size_t capacity)
+{
+    struct overlap_sink sink = {callback, user, out, capacity, 0};
+    struct overlap_region region;
+    if (!file || !center || !cbvh_all_finite(center, 3) || !isfinite(radius) || !(radius >= 0.0f))
+        return 0;
+    region.sphere = 1;
+    region.center = v3_from_f(center);
+    region.radius = radius;
+    float box_center[3], extent[3];
+    cbvh_sweep_bounds(v3_madd(region.center, v3(1, 1, 1), -region.radius),
+                      v3_madd(region.center, v3(1, 1, 1), region.radius), box_center, extent);
+    for (int a = 0; a < 3; a++) {
+        /* Widened by 2^-22 relative, more than the rounding of the two additions. */
+        region.lo[a] = box_center[a] - extent[a];
+        region.hi[a] = box_center[a] + extent[a];
+        region.lo[a] -= fabsf(region.lo[a]) * 0x1p-22f + 0x1p-126f;
+        region.hi[a] += fabsf(region.hi[a]) * 0x1p-22f + 0x1p-126f;
+    }
+    return overlap_walk(file, &region, &sink);
+}
