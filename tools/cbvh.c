@@ -1,0 +1,91 @@
+/* cbvh.c: the cbvh command's main: global options and dispatch to the subcommands. */
+#include <stdio.h>
+#include <string.h>
+
+#include "cli.h"
+#include "commands.h"
+
+typedef struct command {
+    const char *name;
+    int (*run)(int argc, char **argv);
+    const char *summary;
+} command;
+
+static const command commands[] = {
+    { "cook", cmd_cook, "cook a mesh file (or a generated scene) into a .cbvh file" },
+    { "info", cmd_info, "describe a .cbvh file: sections, tree statistics, quantization error" },
+    { "verify", cmd_verify, "validate a .cbvh file completely" },
+    { "raycast", cmd_raycast, "cast rays read from stdin, print hits on stdout" },
+};
+
+static const char usage[] =
+    "Usage: cbvh COMMAND [ARGS...]\n"
+    "       cbvh COMMAND --help\n"
+    "       cbvh --version\n"
+    "\n"
+    "Cooks triangle meshes into quantized BVH files and queries them.\n"
+    "\n"
+    "Commands:\n";
+
+static void print_usage(FILE *out)
+{
+    fputs(usage, out);
+    for (size_t i = 0; i < sizeof commands / sizeof commands[0]; i++)
+        fprintf(out, "  %-9s %s\n", commands[i].name, commands[i].summary);
+    fputs("\n"
+          "Exit status: 0 success, 1 invalid or corrupt input, 2 usage or I/O error.\n"
+          "See cbvh(1) for details.\n",
+          out);
+}
+
+static const command *find_command(const char *name)
+{
+    for (size_t i = 0; i < sizeof commands / sizeof commands[0]; i++)
+        if (!strcmp(commands[i].name, name))
+            return &commands[i];
+    return NULL;
+}
+
+int main(int argc, char **argv)
+{
+    if (argc < 2) {
+        print_usage(stderr);
+        return CLI_EXIT_USAGE;
+    }
+    const char *name = argv[1];
+    if (!strcmp(name, "--help") || !strcmp(name, "-h")) {
+        print_usage(stdout);
+        return CLI_EXIT_OK;
+    }
+    if (!strcmp(name, "--version")) {
+        cli_print_version();
+        return CLI_EXIT_OK;
+    }
+    if (!strcmp(name, "help")) {
+        /* "cbvh help COMMAND" is "cbvh COMMAND --help". */
+        if (argc < 3) {
+            print_usage(stdout);
+            return CLI_EXIT_OK;
+        }
+        const command *c = find_command(argv[2]);
+        if (!c) {
+            fprintf(stderr, "cbvh: unknown command '%s'; try 'cbvh --help'\n", argv[2]);
+            return CLI_EXIT_USAGE;
+        }
+        static char help_option[] = "--help";
+        char *help_argv[] = { argv[2], help_option, NULL };
+        return c->run(2, help_argv);
+    }
+    const command *c = find_command(name);
+    if (!c) {
+        fprintf(stderr, "cbvh: unknown command '%s'; try 'cbvh --help'\n", name);
+        return CLI_EXIT_USAGE;
+    }
+    int status = c->run(argc - 1, argv + 1);
+    /* A full disk or a closed pipe shows up only when stdout is flushed. */
+    if (fflush(stdout) != 0 || ferror(stdout)) {
+        fprintf(stderr, "cbvh %s: error writing to standard output\n", name);
+        return status ? status : CLI_EXIT_USAGE;
+    }
+    return status;
+}

@@ -1,0 +1,265 @@
+/* import_assimp.c: loads a mesh file with assimp and merges its node hierarchy into one triangle list. */
+#include <errno.h>
+#include <limits.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <assimp/cimport.h>
+#include <assimp/postprocess.h>
+#include <assimp/scene.h>
+#include <zlib.h>
+
+#include "import_assimp.h"
+
+/* Node hierarchies deeper than this are refused rather than risking the C stack. */
+#define IMPORT_MAX_NODE_DEPTH 4096
+
+typedef struct import_state {
+    const struct aiScene *scene;
+    imported_mesh *out;
+    int counting;           /* first pass: count only; second pass: fill */
+    uint64_t vertex_total;  /* vertices counted or written so far */
+    uint64_t triangle_total;
+    char *message;
+    size_t message_size;
+} import_state;
+
+/* Row-major 4x4 affine transform acting on column vectors (assimp's convention). */
+typedef struct dmat4 {
+    double m[4][4];
+} dmat4;
+
+static dmat4 dmat4_from_ai(const struct aiMatrix4x4 *a)
+{
+    dmat4 r = { { { a->a1, a->a2, a->a3, a->a4 },
+                  { a->b1, a->b2, a->b3, a->b4 },
+                  { a->c1, a->c2, a->c3, a->c4 },
+                  { a->d1, a->d2, a->d3, a->d4 } } };
+    return r;
+}
+
+static dmat4 dmat4_mul(const dmat4 *a, const dmat4 *b)
+{
+    dmat4 r;
+    for (int i = 0; i < 4; i++)
+        for (int j = 0; j < 4; j++)
+            r.m[i][j] = a->m[i][0] * b->m[0][j] + a->m[i][1] * b->m[1][j] + a->m[i][2] * b->m[2][j] +
+                        a->m[i][3] * b->m[3][j];
+    return r;
+}
+
+/* Appends (or, in the counting pass, counts) one mesh reference under `xf`. */
+static int import_mesh_instance(import_state *s, const struct aiMesh *mesh, const dmat4 *xf)
+{
+    imported_mesh *out = s->out;
+    uint64_t base = s->vertex_total;
+    if (!s->counting) {
+        float *p = out->positions + 3 * base;
+        for (unsigned v = 0; v < mesh->mNumVertices; v++) {
+            double x = mesh->mVertices[v].x, y = mesh->mVertices[v].y, z = mesh->mVertices[v].z;
+            for (int r = 0; r < 3; r++)
+                p[3 * v + r] = (float)(xf->m[r][0] * x + xf->m[r][1] * y + xf->m[r][2] * z + xf->m[r][3]);
+        }
+    }
+    s->vertex_total += mesh->mNumVertices;
+    for (unsigned f = 0; f < mesh->mNumFaces; f++) {
+        const struct aiFace *face = &mesh->mFaces[f];
+        if (face->mNumIndices == 1) {
+            out->dropped_points += s->counting;
+            continue;
+        }
+        if (face->mNumIndices == 2) {
+            out->dropped_lines += s->counting;
+            continue;
+        }
+        if (face->mNumIndices != 3) {
+            snprintf(s->message, s->message_size,
+                     "mesh '%s': face %u has %u indices after triangulation", mesh->mName.data, f,
+                     face->mNumIndices);
+            return 1;
+        }
+        if (s->counting) {
+            for (int k = 0; k < 3; k++) {
+                if (face->mIndices[k] >= mesh->mNumVertices) {
+                    snprintf(s->message, s->message_size,
+                             "mesh '%s': face %u uses vertex %u of %u", mesh->mName.data, f,
+                             face->mIndices[k], mesh->mNumVertices);
+                    return 1;
+                }
+            }
+        } else {
+            uint32_t *ix = out->indices + 3 * s->triangle_total;
+            for (int k = 0; k < 3; k++)
+                ix[k] = (uint32_t)(base + face->mIndices[k]);
+            out->material_ids[s->triangle_total] = mesh->mMaterialIndex;
+        }
+        s->triangle_total++;
+    }
+    out->mesh_instances += s->counting;
+    return 0;
+}
+
+static int import_node(import_state *s, const struct aiNode *node, const dmat4 *parent, int depth)
+{
+    if (depth > IMPORT_MAX_NODE_DEPTH) {
+        snprintf(s->message, s->message_size, "node hierarchy deeper than %d levels", IMPORT_MAX_NODE_DEPTH);
+        return 1;
+    }
+    dmat4 local = dmat4_from_ai(&node->mTransformation);
+    dmat4 xf = dmat4_mul(parent, &local);
+    for (unsigned i = 0; i < node->mNumMeshes; i++) {
+        unsigned m = node->mMeshes[i];
+        if (m >= s->scene->mNumMeshes) {
+            snprintf(s->message, s->message_size, "node '%s' refers to mesh %u of %u", node->mName.data, m,
+                     s->scene->mNumMeshes);
+            return 1;
+        }
+        if (import_mesh_instance(s, s->scene->mMeshes[m], &xf))
+            return 1;
+    }
+    for (unsigned c = 0; c < node->mNumChildren; c++)
+        if (import_node(s, node->mChildren[c], &xf, depth + 1))
+            return 1;
+    return 0;
+}
+
+static int import_scene(const struct aiScene *scene, imported_mesh *out, char *message, size_t message_size)
+{
+    static const dmat4 identity = { { { 1, 0, 0, 0 }, { 0, 1, 0, 0 }, { 0, 0, 1, 0 }, { 0, 0, 0, 1 } } };
+    import_state s = { scene, out, 1, 0, 0, message, message_size };
+    if (!scene->mRootNode) {
+        snprintf(message, message_size, "the scene has no node hierarchy");
+        return 1;
+    }
+    if (import_node(&s, scene->mRootNode, &identity, 0))
+        return 1;
+    if (s.triangle_total == 0) {
+        snprintf(message, message_size, "no triangles (%llu points and %llu lines dropped)",
+                 (unsigned long long)out->dropped_points, (unsigned long long)out->dropped_lines);
+        return 1;
+    }
+    /* Indices are 32-bit in cbvh_mesh. */
+    if (s.vertex_total > UINT32_MAX || s.triangle_total > UINT32_MAX) {
+        snprintf(message, message_size, "too large: %llu vertices, %llu triangles (at most 2^32-1 each)",
+                 (unsigned long long)s.vertex_total, (unsigned long long)s.triangle_total);
+        return 1;
+    }
+    out->vertex_count = (size_t)s.vertex_total;
+    out->triangle_count = (size_t)s.triangle_total;
+    out->positions = malloc(out->vertex_count * 3 * sizeof(float));
+    out->indices = malloc(out->triangle_count * 3 * sizeof(uint32_t));
+    out->material_ids = malloc(out->triangle_count * sizeof(uint32_t));
+    if (!out->positions || !out->indices || !out->material_ids) {
+        snprintf(message, message_size, "out of memory for %zu vertices and %zu triangles", out->vertex_count,
+                 out->triangle_count);
+        return 2;
+    }
+    s.counting = 0;
+    s.vertex_total = 0;
+    s.triangle_total = 0;
+    out->material_count = scene->mNumMaterials;
+    return import_node(&s, scene->mRootNode, &identity, 0);
+}
+
+/* Inflates a gzip file whole (assimp has no stream interface in its C API). */
+static int read_gzip(const char *path, char **out_data, size_t *out_size, char *message, size_t message_size)
+{
+    gzFile gz = gzopen(path, "rb");
+    if (!gz) {
+        snprintf(message, message_size, "cannot open: %s", strerror(errno ? errno : ENOMEM));
+        return 2;
+    }
+    size_t size = 0, cap = 1 << 20;
+    char *data = malloc(cap);
+    for (;;) {
+        if (!data) {
+            gzclose(gz);
+            snprintf(message, message_size, "out of memory inflating");
+            return 2;
+        }
+        int n = gzread(gz, data + size, (unsigned)(cap - size));
+        if (n < 0) {
+            int zerr = 0;
+            const char *what = gzerror(gz, &zerr);
+            snprintf(message, message_size, "bad gzip data: %s", what);
+            free(data);
+            gzclose(gz);
+            return zerr == Z_ERRNO ? 2 : 1;
+        }
+        if (n == 0)
+            break;
+        size += (size_t)n;
+        if (size == cap) {
+            if (cap >= UINT_MAX / 2) {
+                snprintf(message, message_size, "inflates to more than 2 GiB, too large for assimp");
+                free(data);
+                gzclose(gz);
+                return 1;
+            }
+            cap *= 2;
+            char *grown = realloc(data, cap);
+            if (!grown)
+                free(data);
+            data = grown;
+        }
+    }
+    gzclose(gz);
+    *out_data = data;
+    *out_size = size;
+    return 0;
+}
+
+int import_assimp(const char *path, imported_mesh *out, char *message, size_t message_size)
+{
+    memset(out, 0, sizeof *out);
+    /* assimp reports "file not found" and "unknown format" alike; tell I/O errors apart first. */
+    FILE *probe = fopen(path, "rb");
+    if (!probe) {
+        snprintf(message, message_size, "cannot open: %s", strerror(errno));
+        return 2;
+    }
+    fclose(probe);
+
+    const unsigned flags = aiProcess_Triangulate | aiProcess_JoinIdenticalVertices | aiProcess_SortByPType;
+    const struct aiScene *scene;
+    size_t len = strlen(path);
+    if (len > 3 && !strcmp(path + len - 3, ".gz")) {
+        char *data = NULL;
+        size_t size = 0;
+        int rc = read_gzip(path, &data, &size, message, message_size);
+        if (rc)
+            return rc;
+        /* The format hint is the extension before ".gz". */
+        char hint[16] = "";
+        const char *dot = NULL;
+        for (const char *c = path; c < path + len - 3; c++)
+            if (*c == '.')
+                dot = c;
+        if (dot && (size_t)(path + len - 3 - dot - 1) < sizeof hint)
+            memcpy(hint, dot + 1, (size_t)(path + len - 3 - dot - 1));
+        scene = aiImportFileFromMemory(data, (unsigned)size, flags, hint);
+        free(data);
+    } else {
+        scene = aiImportFile(path, flags);
+    }
+    if (!scene) {
+        snprintf(message, message_size, "assimp cannot read it: %s", aiGetErrorString());
+        return 1;
+    }
+    int rc = import_scene(scene, out, message, message_size);
+    aiReleaseImport(scene);
+    if (rc)
+        imported_mesh_free(out);
+    return rc;
+}
+
+void imported_mesh_free(imported_mesh *m)
+{
+    free(m->positions);
+    free(m->indices);
+    free(m->material_ids);
+    m->positions = NULL;
+    m->indices = NULL;
+    m->material_ids = NULL;
+}

@@ -1,0 +1,36 @@
+/* import_assimp.h: reading any mesh file assimp understands into one merged triangle list. */
+#ifndef CBVH_TOOLS_IMPORT_ASSIMP_H
+#define CBVH_TOOLS_IMPORT_ASSIMP_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+/* A merged triangle mesh, owned by the importer (free with imported_mesh_free).
+ *
+ * Order (this defines the "original triangle ids" queries report): depth-first over the node
+ * hierarchy from the root, a node's own meshes in order before its children, children in order;
+ * for each mesh reference its triangles in the mesh's face order (after assimp's triangulation
+ * of polygons). A mesh referenced by several nodes is emitted once per reference, each time
+ * with that node's accumulated transform (computed in double precision, stored as float).
+ * Material id = assimp's material index of the mesh. Points and lines are dropped and counted. */
+typedef struct imported_mesh {
+    float *positions; /* vertex_count x 3 */
+    size_t vertex_count;
+    uint32_t *indices;      /* triangle_count x 3 */
+    uint32_t *material_ids; /* triangle_count */
+    size_t triangle_count;
+    uint64_t dropped_points; /* point primitives dropped */
+    uint64_t dropped_lines;  /* line primitives dropped */
+    uint32_t mesh_instances; /* mesh references emitted */
+    uint32_t material_count; /* materials in the scene */
+} imported_mesh;
+
+/* Reads `path` with assimp (aiProcess_Triangulate | aiProcess_JoinIdenticalVertices |
+ * aiProcess_SortByPType). A name ending in ".gz" is inflated first and read by the format of
+ * the name without ".gz" (e.g. mesh.ply.gz). Returns 0 on success; otherwise writes a message to
+ * `message` and returns 2 when the file cannot be read, 1 when it is not a usable mesh. */
+int import_assimp(const char *path, imported_mesh *out, char *message, size_t message_size);
+
+void imported_mesh_free(imported_mesh *m);
+
+#endif

@@ -1,0 +1,40 @@
+/* tree_stats.h: statistics of an opened file's tree: exact node boxes, quantization inflation, SAH cost, leaf sizes. */
+#ifndef CBVH_TOOLS_TREE_STATS_H
+#define CBVH_TOOLS_TREE_STATS_H
+
+#include <stdint.h>
+
+#include "common/file.h"
+
+/* Escape link of node i: the node after its subtree (for an internal node's first child, the second child). */
+uint32_t tree_escape(const struct cbvh_file *f, uint32_t i);
+
+/* Surface area of the box [lo, hi]. */
+double tree_box_area(const float lo[3], const float hi[3]);
+
+/* Fills boxes[6*i .. 6*i+6) (min xyz, max xyz) with the exact float bounds of the decoded vertices
+ * of every triangle below node i. Needs 6 * node_count floats. */
+void tree_exact_boxes(const struct cbvh_file *f, float *boxes);
+
+/* Surface-area inflation of node i's dequantized box over its exact box: area(q) / area(exact) - 1,
+ * 0 when the exact box has no area. */
+double tree_node_inflation(const struct cbvh_file *f, uint32_t i, const float *exact_boxes);
+
+typedef struct tree_stats {
+    uint32_t nodes, leaves, depth;
+    uint64_t leaf_histogram[CBVH_MAX_LEAF_SIZE + 1]; /* [k]: leaves holding k triangles */
+    double mean_leaf_size;
+    /* SAH cost relative to the root's area: traversal_cost per internal node plus intersection_cost
+     * per triangle of each leaf, each weighted by its box area over the root's area. */
+    double sah_cost;       /* with the dequantized boxes (what queries see) */
+    double sah_cost_exact; /* with the exact boxes (what quantization costs: the difference) */
+    double inflation_mean, inflation_max; /* over all nodes, see tree_node_inflation */
+    double leaf_inflation_mean, internal_inflation_mean;
+    uint32_t inflation_max_node;
+} tree_stats;
+
+/* Computes everything above in O(nodes + triangles). Returns 0 when out of memory. */
+int tree_stats_compute(const struct cbvh_file *f, double traversal_cost, double intersection_cost,
+                       tree_stats *out);
+
+#endif
