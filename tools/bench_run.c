@@ -1,0 +1,162 @@
+/* bench_run.c: timing a batch of ray queries split across threads, the median of repetitions, and answer agreement. */
+#include <math.h>
+#include <pthread.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "bench_run.h"
+#include "cli.h"
+
+#define BENCH_MAX_THREADS 256
+
+typedef struct slice {
+    const bench_job *job;
+    size_t begin, end;
+    cbvh_query_stats *stats;
+} slice;
+
+static void run_slice(const slice *s)
+{
+    const bench_job *j = s->job;
+    j->kernel(j->engine, j->rays + s->begin, s->end - s->begin, j->hits ? j->hits + s->begin : NULL,
+              j->occluded ? j->occluded + s->begin : NULL, s->stats);
+}
+
+static void *slice_thread(void *arg)
+{
+    run_slice(arg);
+    return NULL;
+}
+
+double bench_run_once(const bench_job *job, unsigned threads, cbvh_query_stats *stats)
+{
+    if (threads < 1)
+        threads = 1;
+    if (threads > BENCH_MAX_THREADS)
+        threads = BENCH_MAX_THREADS;
+    slice slices[BENCH_MAX_THREADS];
+    cbvh_query_stats counters[BENCH_MAX_THREADS];
+    pthread_t ids[BENCH_MAX_THREADS];
+    memset(counters, 0, sizeof(counters[0]) * threads);
+    for (unsigned k = 0; k < threads; k++) {
+        slices[k].job = job;
+        slices[k].begin = job->count * k / threads;
+        slices[k].end = job->count * (k + 1) / threads;
+        slices[k].stats = stats ? &counters[k] : NULL;
+    }
+    double start = cli_now();
+    if (threads == 1) {
+        run_slice(&slices[0]);
+    } else {
+        unsigned started = 0;
+        for (; started < threads; started++)
+            if (pthread_create(&ids[started], NULL, slice_thread, &slices[started]) != 0)
+                break;
+        for (unsigned k = 0; k < started; k++)
+            pthread_join(ids[k], NULL);
+        if (started < threads)
+            return -1.0;
+    }
+    double seconds = cli_now() - start;
+    if (stats)
+        for (unsigned k = 0; k < threads; k++) {
+            stats->nodes_visited += counters[k].nodes_visited;
+            stats->triangles_tested += counters[k].triangles_tested;
+        }
+    return seconds;
+}
+
+static int compare_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+double bench_run_median(const bench_job *job, unsigned threads, unsigned reps)
+{
+    if (reps < 1)
+        reps = 1;
+    double *times = malloc(reps * sizeof *times);
+    if (!times)
+        return -1.0;
+    for (unsigned r = 0; r < reps; r++) {
+        times[r] = bench_run_once(job, threads, NULL);
+        if (times[r] < 0.0) {
+            free(times);
+            return -1.0;
+        }
+    }
+    qsort(times, reps, sizeof *times, compare_double);
+    double median = reps % 2 ? times[reps / 2] : 0.5 * (times[reps / 2 - 1] + times[reps / 2]);
+    free(times);
+    return median;
+}
+
+void bench_cbvh_variant(bench_cbvh *e, const cbvh_file *file, int k)
+{
+    static const struct {
+        const char *name;
+        cbvh_traversal traversal;
+        int stream;
+    } variants[BENCH_CBVH_VARIANTS] = {
+        { "sorted", CBVH_TRAVERSAL_SORTED, 0 },       { "unsorted", CBVH_TRAVERSAL_UNSORTED, 0 },
+        { "stackless", CBVH_TRAVERSAL_STACKLESS, 0 }, { "distance", CBVH_TRAVERSAL_DISTANCE, 0 },
+        { "stream", CBVH_TRAVERSAL_SORTED, 1 },
+    };
+    e->file = file;
+    e->traversal = variants[k].traversal;
+    e->stream = variants[k].stream;
+    e->name = variants[k].name;
+}
+
+void bench_cbvh_kernel(const void *engine, const cbvh_ray *rays, size_t count, cbvh_hit *hits, uint8_t *occluded,
+                       cbvh_query_stats *stats)
+{
+    const bench_cbvh *e = engine;
+    if (e->stream) {
+        if (hits)
+            cbvh_raycast_stream(e->file, rays, count, hits, stats);
+        else
+            cbvh_occluded_stream(e->file, rays, count, occluded, stats);
+        return;
+    }
+    if (hits)
+        for (size_t i = 0; i < count; i++)
+            cbvh_raycast(e->file, &rays[i], e->traversal, &hits[i], stats);
+    else
+        for (size_t i = 0; i < count; i++)
+            occluded[i] = (uint8_t)cbvh_occluded(e->file, &rays[i], e->traversal, stats);
+}
+
+void bench_agree_closest(bench_agreement *a, const cbvh_ray *rays, const cbvh_hit *ref, const cbvh_hit *other,
+                         size_t count, double tolerance)
+{
+    for (size_t i = 0; i < count; i++) {
+        int hit_ref = ref[i].tri != CBVH_NO_HIT, hit_other = other[i].tri != CBVH_NO_HIT;
+        if (!hit_ref && !hit_other) {
+            a->both_miss++;
+            continue;
+        }
+        if (hit_ref != hit_other) {
+            a->disagree++;
+            continue;
+        }
+        const float *d = rays[i].dir;
+        double len = sqrt((double)d[0] * d[0] + (double)d[1] * d[1] + (double)d[2] * d[2]);
+        int close = fabs((double)ref[i].t - (double)other[i].t) * len <= tolerance;
+        if (!close)
+            a->disagree++;
+        else if (ref[i].tri == other[i].tri)
+            a->same_triangle++;
+        else
+            a->t_close++;
+    }
+}
+
+uint64_t bench_disagree_any(const uint8_t *ref, const uint8_t *other, size_t count)
+{
+    uint64_t n = 0;
+    for (size_t i = 0; i < count; i++)
+        n += (ref[i] != 0) != (other[i] != 0);
+    return n;
+}

@@ -1,0 +1,66 @@
+/* bench_run.h: timing a batch of ray queries split across threads, the median of repetitions, and answer agreement. */
+#ifndef CBVH_TOOLS_BENCH_RUN_H
+#define CBVH_TOOLS_BENCH_RUN_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "cbvh.h"
+
+/* Runs rays[0..count) through one engine: closest hits into hits[], or any-hit
+ * flags into occluded[] (the other pointer is NULL). stats is NULL on timed
+ * runs; counted runs pass one per thread. */
+typedef void (*bench_kernel)(const void *engine, const cbvh_ray *rays, size_t count, cbvh_hit *hits,
+                             uint8_t *occluded, cbvh_query_stats *stats);
+
+typedef struct bench_job {
+    bench_kernel kernel;
+    const void *engine;
+    const cbvh_ray *rays;
+    size_t count;
+    cbvh_hit *hits;     /* closest hit queries, else NULL */
+    uint8_t *occluded;  /* any-hit queries, else NULL */
+} bench_job;
+
+/* Runs the job once with its rays split into `threads` contiguous slices, one
+ * thread each (inline when threads is 1). Returns the wall time in seconds, or
+ * a negative value when a thread cannot be started. With stats non-NULL the
+ * kernel counts and the per-thread counters are summed into *stats. */
+double bench_run_once(const bench_job *job, unsigned threads, cbvh_query_stats *stats);
+
+/* The median wall time of `reps` timed runs (reps >= 1); negative on failure. */
+double bench_run_median(const bench_job *job, unsigned threads, unsigned reps);
+
+/* cbvh as an engine: one traversal of an opened file, or its batched streams. */
+typedef struct bench_cbvh {
+    const cbvh_file *file;
+    cbvh_traversal traversal;
+    int stream;
+    const char *name; /* "sorted", "unsorted", "stackless", "distance", "stream" */
+} bench_cbvh;
+
+#define BENCH_CBVH_VARIANTS 5
+
+/* Sets *e to variant k (0 <= k < BENCH_CBVH_VARIANTS; 0 is sorted, the default traversal) of file. */
+void bench_cbvh_variant(bench_cbvh *e, const cbvh_file *file, int k);
+
+/* A bench_kernel whose engine is a bench_cbvh. */
+void bench_cbvh_kernel(const void *engine, const cbvh_ray *rays, size_t count, cbvh_hit *hits, uint8_t *occluded,
+                       cbvh_query_stats *stats);
+
+/* How a peer's (or variant's) answers compare with the reference answers, ray by ray. */
+typedef struct bench_agreement {
+    uint64_t same_triangle; /* both hit the same triangle at t within the tolerance */
+    uint64_t both_miss;
+    uint64_t t_close;       /* both hit, other triangles, t within the tolerance (a shared edge or vertex) */
+    uint64_t disagree;      /* hit against miss, or t apart by more than the tolerance */
+} bench_agreement;
+
+/* Adds the comparison of count answers; tolerance is a distance (|t - t_ref| * |dir|). */
+void bench_agree_closest(bench_agreement *a, const cbvh_ray *rays, const cbvh_hit *ref, const cbvh_hit *other,
+                         size_t count, double tolerance);
+
+/* Rays whose any-hit flags differ. */
+uint64_t bench_disagree_any(const uint8_t *ref, const uint8_t *other, size_t count);
+
+#endif

@@ -1,0 +1,76 @@
+/* peers.h: a C interface to the libraries cbvh is benchmarked against (Embree 3, Bullet 3), when configure found them. */
+#ifndef CBVH_PEERS_H
+#define CBVH_PEERS_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "cbvh.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* The triangles every peer is built on: tightly packed xyz positions, 3 indices
+ * per triangle. The peers keep pointers into these arrays (shared, not copied)
+ * until they are destroyed. Embree reads vertices with 16-byte loads: positions
+ * must stay readable for 4 bytes past the last vertex. */
+typedef struct peer_mesh {
+    const float *positions;
+    size_t vertex_count;
+    const uint32_t *indices;
+    size_t triangle_count;
+} peer_mesh;
+
+/* What building a peer cost. memory_bytes counts what the peer allocated for its
+ * acceleration structure; mesh_bytes the vertex and index arrays it shares with
+ * the caller (which a user of that library must keep alive too). */
+typedef struct peer_build_info {
+    double seconds;
+    uint64_t memory_bytes;
+    uint64_t mesh_bytes;
+} peer_build_info;
+
+/* Include config.h before this header: HAVE_EMBREE and HAVE_BULLET come from configure.
+ *
+ * Query results use cbvh's types: hits[i].tri is the triangle index in the mesh,
+ * or CBVH_NO_HIT; t is in units of the ray's dir. Every ray must have a finite tmax.
+ * All query functions are thread-safe on one built peer. */
+
+#if defined(HAVE_EMBREE)
+typedef struct embree_peer embree_peer;
+
+/* Builds an Embree scene. robust selects RTC_SCENE_FLAG_ROBUST (watertight
+ * triangles); threads is the build thread count (0: Embree's default).
+ * Returns NULL and writes a message into err on failure. */
+embree_peer *embree_peer_create(const peer_mesh *mesh, int robust, int threads, peer_build_info *info,
+                                char *err, size_t err_size);
+void embree_peer_destroy(embree_peer *peer);
+
+/* Single rays (rtcIntersect1 / rtcOccluded1). */
+void embree_peer_raycast(const embree_peer *peer, const cbvh_ray *rays, size_t count, cbvh_hit *hits);
+void embree_peer_occluded(const embree_peer *peer, const cbvh_ray *rays, size_t count, uint8_t *occluded);
+
+/* The same rays in packets of 16 (rtcIntersect16 / rtcOccluded16), consecutive rays per packet. */
+void embree_peer_raycast16(const embree_peer *peer, const cbvh_ray *rays, size_t count, cbvh_hit *hits);
+void embree_peer_occluded16(const embree_peer *peer, const cbvh_ray *rays, size_t count, uint8_t *occluded);
+#endif
+
+#if defined(HAVE_BULLET)
+typedef struct bullet_peer bullet_peer;
+
+/* Builds a btBvhTriangleMeshShape with quantized AABB compression over the mesh. */
+bullet_peer *bullet_peer_create(const peer_mesh *mesh, peer_build_info *info, char *err, size_t err_size);
+void bullet_peer_destroy(bullet_peer *peer);
+
+/* Closest hit through performRaycast with a btTriangleRaycastCallback. */
+void bullet_peer_raycast(const bullet_peer *peer, const cbvh_ray *rays, size_t count, cbvh_hit *hits);
+/* Any hit: the callback clamps the hit fraction to 0 at the first hit so every
+ * later triangle is rejected at once (Bullet's walk itself cannot stop early). */
+void bullet_peer_occluded(const bullet_peer *peer, const cbvh_ray *rays, size_t count, uint8_t *occluded);
+#endif
+
+#ifdef __cplusplus
+}
+#endif
+#endif
