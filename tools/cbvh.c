@@ -16,6 +16,7 @@ static const command commands[] = {
     { "info", cmd_info, "describe a .cbvh file: sections, tree statistics, quantization error" },
     { "verify", cmd_verify, "validate a .cbvh file completely" },
     { "raycast", cmd_raycast, "cast rays read from stdin, print hits on stdout" },
+    { "demo", cmd_demo, "cook, open and query the built-in scene; check answers by brute force" },
 };
 
 static const char usage[] =

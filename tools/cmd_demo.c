@@ -1,0 +1,614 @@
+/* cmd_demo.c: `cbvh demo`: cook, open and query the built-in scene with every query kind; check answers by brute force. */
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "brute_force.h"
+#include "cli.h"
+#include "commands.h"
+#include "common/file.h"
+#include "support/scene_gen.h"
+
+static const char usage[] =
+    "Usage: cbvh demo [--quiet]\n"
+    "\n"
+    "Runs the whole pipeline on the built-in scene (a terrain with spheres, several materials),\n"
+    "with no input files: generates it, cooks it into a temporary file (removed afterwards),\n"
+    "opens it, and runs every query kind on generated queries: closest-hit and any-hit raycasts\n"
+    "with the sorted, stackless and stream traversals, sphere, capsule and box sweeps, box and\n"
+    "sphere overlaps. The traversals are compared with each other ray by ray, and a sample of\n"
+    "each kind against a double-precision brute-force loop over all triangles (sweeps by sampling\n"
+    "the motion). Prints what it did, counts, hits and speed.\n"
+    "\n"
+    "Options:\n"
+    "  --quiet      print only the final line\n"
+    "  -h, --help   show this help\n"
+    "\n"
+    "Exit status: 0 when everything worked and agreed, 1 when an answer disagreed, 2 on an\n"
+    "I/O error (e.g. no writable temporary folder; set TMPDIR).\n";
+
+#define DEMO_RAYS 200000
+#define DEMO_SHAPES 20000
+#define DEMO_RAY_SAMPLE 400
+#define DEMO_SHAPE_SAMPLE 50
+#define DEMO_SWEEP_STEPS 24
+#define DEMO_OVERLAP_CAP 65536
+
+/* The opened scene plus its triangles in double precision for the brute-force checks. */
+typedef struct demo {
+    const cbvh_file *file;
+    uint32_t tri_count; /* original ids are below it */
+    double *tris;       /* 9 per original id */
+    uint8_t *valid;     /* 0 for ids the cooker dropped (degenerate) */
+    float lo[3], hi[3];
+    double diag, tol;
+    int failures;
+    int quiet;
+    uint64_t rng;
+} demo;
+
+static double unit(demo *d) { return scene_rand_unit(&d->rng); }
+static float in_range(demo *d, float a, float b) { return a + (b - a) * (float)unit(d); }
+
+static void random_direction(demo *d, float dir[3])
+{
+    double z = 2 * unit(d) - 1, phi = 6.283185307179586 * unit(d), r = sqrt(1 - z * z);
+    dir[0] = (float)(r * cos(phi));
+    dir[1] = (float)(r * sin(phi));
+    dir[2] = (float)z;
+}
+
+static void to_double(double out[3], const float in[3])
+{
+    out[0] = in[0];
+    out[1] = in[1];
+    out[2] = in[2];
+}
+
+/* Prints the first mismatch of a check on stderr (the table row says how many there were). */
+static void report_failure(const char *fmt, ...)
+#ifdef __GNUC__
+    __attribute__((format(printf, 1, 2)))
+#endif
+    ;
+static void report_failure(const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    fprintf(stderr, "cbvh demo: mismatch: ");
+    vfprintf(stderr, fmt, ap);
+    fputc('\n', stderr);
+    va_end(ap);
+}
+
+static void print_row(const demo *d, const char *what, size_t count, size_t hits, double seconds, const char *unit_name,
+                      const char *check)
+{
+    if (d->quiet)
+        return;
+    double rate = seconds > 0 ? count / seconds : 0;
+    if (!strcmp(unit_name, "MRays/s"))
+        printf("  %-26s %8zu %8zu %10.2f %-10s %s\n", what, count, hits, rate / 1e6, unit_name, check);
+    else
+        printf("  %-26s %8zu %8zu %10.0f %-10s %s\n", what, count, hits, rate, unit_name, check);
+}
+
+static void sample_check(char *buf, size_t size, int sample, int bad)
+{
+    snprintf(buf, size, "%d of %d vs brute force: %s", sample - bad, sample, bad ? "FAILED" : "ok");
+}
+
+/* ---- raycasts ---- */
+
+/* Half incoherent rays (origins in the bounds, uniform directions), half rays from above the
+ * scene towards random ground points. */
+static void make_rays(demo *d, cbvh_ray *rays, size_t n)
+{
+    for (size_t i = 0; i < n; i++) {
+        cbvh_ray *r = &rays[i];
+        if (i % 2 == 0) {
+            for (int a = 0; a < 3; a++)
+                r->org[a] = in_range(d, d->lo[a], d->hi[a]);
+            random_direction(d, r->dir);
+        } else {
+            float target[3] = { in_range(d, d->lo[0], d->hi[0]), d->lo[1], in_range(d, d->lo[2], d->hi[2]) };
+            r->org[0] = in_range(d, d->lo[0], d->hi[0]);
+            r->org[1] = d->hi[1] + 0.25f * (float)d->diag;
+            r->org[2] = in_range(d, d->lo[2], d->hi[2]);
+            for (int a = 0; a < 3; a++)
+                r->dir[a] = target[a] - r->org[a];
+        }
+        r->tmin = 0;
+        r->tmax = INFINITY;
+    }
+}
+
+/* Closest hit over all triangles in double precision; returns the id or CBVH_NO_HIT. */
+static uint32_t brute_raycast(const demo *d, const cbvh_ray *r, double *t_out, double *margin_out)
+{
+    double o[3], dir[3], best = INFINITY, best_margin = 1;
+    to_double(o, r->org);
+    to_double(dir, r->dir);
+    uint32_t best_tri = CBVH_NO_HIT;
+    for (uint32_t i = 0; i < d->tri_count; i++) {
+        if (!d->valid[i])
+            continue;
+        const double *t9 = d->tris + 9 * (size_t)i;
+        double t, u, v, margin;
+        if (bf_ray_triangle(o, dir, r->tmin, fmin(best, (double)r->tmax), t9, t9 + 3, t9 + 6, &t, &u, &v,
+                            &margin) &&
+            t < best) {
+            best = t;
+            best_tri = i;
+            best_margin = margin;
+        }
+    }
+    *t_out = best;
+    *margin_out = best_margin;
+    return best_tri;
+}
+
+/* Compares a library hit with the brute force; grazing hits (near an edge) may go either way. */
+static int ray_agrees(const demo *d, const cbvh_ray *r, const cbvh_hit *h)
+{
+    const double graze = 1e-4;
+    double t_bf, margin;
+    uint32_t tri = brute_raycast(d, r, &t_bf, &margin);
+    double lib_margin = fmin(fmin(h->u, h->v), 1.0 - h->u - h->v);
+    if (tri == CBVH_NO_HIT)
+        return h->tri == CBVH_NO_HIT || lib_margin < graze;
+    if (h->tri == CBVH_NO_HIT)
+        return margin < graze;
+    if (fabs(h->t - t_bf) <= 1e-4 * fmax(1.0, t_bf))
+        return 1;
+    /* A different triangle: acceptable only when one of the two hits grazes an edge. */
+    return margin < graze || lib_margin < graze;
+}
+
+static int same_hit(const cbvh_hit *a, const cbvh_hit *b)
+{
+    if (a->tri == CBVH_NO_HIT || b->tri == CBVH_NO_HIT)
+        return a->tri == b->tri;
+    return a->tri == b->tri || fabs(a->t - b->t) <= 1e-5f * fmaxf(1.0f, a->t);
+}
+
+static void demo_raycasts(demo *d)
+{
+    size_t n = DEMO_RAYS;
+    cbvh_ray *rays = malloc(n * sizeof *rays);
+    cbvh_hit *ref = malloc(n * sizeof *ref), *hits = malloc(n * sizeof *hits);
+    uint8_t *occ = malloc(n);
+    if (!rays || !ref || !hits || !occ) {
+        d->failures++;
+        fprintf(stderr, "cbvh demo: out of memory\n");
+        goto out;
+    }
+    make_rays(d, rays, n);
+
+    /* Sorted closest hit is the reference the other traversals are compared with. */
+    double t0 = cli_now();
+    size_t hit_count = 0;
+    for (size_t i = 0; i < n; i++)
+        hit_count += (size_t)cbvh_raycast(d->file, &rays[i], CBVH_TRAVERSAL_SORTED, &ref[i], NULL);
+    double sec = cli_now() - t0;
+    int bad = 0;
+    for (size_t i = 0; i < n; i += n / DEMO_RAY_SAMPLE)
+        if (!ray_agrees(d, &rays[i], &ref[i]) && bad++ == 0)
+            report_failure("sorted raycast: ray %zu: triangle %u at t %g disagrees with brute force", i,
+                           (unsigned)ref[i].tri, ref[i].t);
+    d->failures += bad != 0;
+    char check[64];
+    sample_check(check, sizeof check, DEMO_RAY_SAMPLE, bad);
+    print_row(d, "raycast closest sorted", n, hit_count, sec, "MRays/s", check);
+
+    static const struct {
+        const char *name;
+        int traversal; /* -1 = stream */
+    } variants[] = { { "stackless", CBVH_TRAVERSAL_STACKLESS }, { "stream", -1 } };
+    for (size_t k = 0; k < 2; k++) {
+        t0 = cli_now();
+        if (variants[k].traversal < 0)
+            cbvh_raycast_stream(d->file, rays, n, hits, NULL);
+        else
+            for (size_t i = 0; i < n; i++)
+                cbvh_raycast(d->file, &rays[i], (cbvh_traversal)variants[k].traversal, &hits[i], NULL);
+        sec = cli_now() - t0;
+        size_t h = 0, differ = 0;
+        for (size_t i = 0; i < n; i++) {
+            h += hits[i].tri != CBVH_NO_HIT;
+            if (!same_hit(&hits[i], &ref[i]) && differ++ == 0)
+                report_failure("raycast %s: ray %zu: t %g differs from the sorted traversal's t %g",
+                               variants[k].name, i, hits[i].t, ref[i].t);
+        }
+        d->failures += differ != 0;
+        char name[40];
+        snprintf(name, sizeof name, "raycast closest %s", variants[k].name);
+        snprintf(check, sizeof check, "%s", differ ? "DIFFERS from sorted" : "= sorted, all rays");
+        print_row(d, name, n, h, sec, "MRays/s", check);
+    }
+
+    /* Any hit must agree with "the closest hit exists", traversal by traversal. */
+    static const struct {
+        const char *name;
+        int traversal;
+    } any[] = { { "sorted", CBVH_TRAVERSAL_SORTED }, { "stackless", CBVH_TRAVERSAL_STACKLESS }, { "stream", -1 } };
+    for (size_t k = 0; k < 3; k++) {
+        t0 = cli_now();
+        if (any[k].traversal < 0)
+            cbvh_occluded_stream(d->file, rays, n, occ, NULL);
+        else
+            for (size_t i = 0; i < n; i++)
+                occ[i] = (uint8_t)cbvh_occluded(d->file, &rays[i], (cbvh_traversal)any[k].traversal, NULL);
+        sec = cli_now() - t0;
+        size_t h = 0, differ = 0;
+        for (size_t i = 0; i < n; i++) {
+            h += occ[i] != 0;
+            if ((occ[i] != 0) != (ref[i].tri != CBVH_NO_HIT) && differ++ == 0)
+                report_failure("occluded %s: ray %zu: answer %d differs from the closest hit's", any[k].name, i,
+                               occ[i]);
+        }
+        d->failures += differ != 0;
+        char name[40];
+        snprintf(name, sizeof name, "raycast any %s", any[k].name);
+        print_row(d, name, n, h, sec, "MRays/s", differ ? "DIFFERS from closest" : "= closest hit, all rays");
+    }
+out:
+    free(rays);
+    free(ref);
+    free(hits);
+    free(occ);
+}
+
+/* ---- sweeps and overlaps ---- */
+
+typedef enum shape_kind { SHAPE_SPHERE, SHAPE_CAPSULE, SHAPE_BOX } shape_kind;
+
+typedef struct shape {
+    float center[3], axis[3]; /* capsule: segment center +- axis */
+    float radius;             /* sphere, capsule */
+    float half[3];            /* box */
+    float delta[3];
+} shape;
+
+static void make_shape(demo *d, shape_kind kind, shape *s)
+{
+    float size = (float)d->diag;
+    for (int a = 0; a < 3; a++)
+        s->center[a] = in_range(d, d->lo[a], d->hi[a]);
+    random_direction(d, s->delta);
+    float len = in_range(d, 0.02f, 0.2f) * size;
+    random_direction(d, s->axis);
+    for (int a = 0; a < 3; a++) {
+        s->delta[a] *= len;
+        s->axis[a] *= 0.01f * size;
+        s->half[a] = in_range(d, 0.002f, 0.015f) * size;
+    }
+    s->radius = in_range(d, 0.002f, 0.015f) * size;
+    (void)kind;
+}
+
+/* Box around the shape over the motion fractions [f0, f1], grown by `margin`. */
+static void shape_bounds(shape_kind kind, const shape *s, double f0, double f1, double margin, double lo[3],
+                         double hi[3])
+{
+    for (int a = 0; a < 3; a++) {
+        double ext = kind == SHAPE_BOX ? s->half[a] : s->radius + (kind == SHAPE_CAPSULE ? fabs(s->axis[a]) : 0);
+        double c0 = s->center[a] + f0 * s->delta[a], c1 = s->center[a] + f1 * s->delta[a];
+        lo[a] = fmin(c0, c1) - ext - margin;
+        hi[a] = fmax(c0, c1) + ext + margin;
+    }
+}
+
+/* Can triangle i touch the box [lo, hi]? (a quick reject before the exact tests) */
+static int triangle_near(const demo *d, uint32_t i, const double lo[3], const double hi[3])
+{
+    const double *t9 = d->tris + 9 * (size_t)i;
+    for (int a = 0; a < 3; a++)
+        if (fmax(t9[a], fmax(t9[3 + a], t9[6 + a])) < lo[a] || fmin(t9[a], fmin(t9[3 + a], t9[6 + a])) > hi[a])
+            return 0;
+    return d->valid[i];
+}
+
+/* Does the shape, moved by fraction f of its motion and shrunk by `shrink`, touch triangle i? */
+static int shape_touches(const demo *d, shape_kind kind, const shape *s, double f, double shrink, uint32_t i)
+{
+    const double *t9 = d->tris + 9 * (size_t)i;
+    double c[3];
+    for (int a = 0; a < 3; a++)
+        c[a] = s->center[a] + f * s->delta[a];
+    if (kind == SHAPE_BOX) {
+        double half[3] = { s->half[0] - shrink, s->half[1] - shrink, s->half[2] - shrink };
+        return half[0] >= 0 && half[1] >= 0 && half[2] >= 0 && bf_box_triangle_overlap(c, half, t9, t9 + 3, t9 + 6);
+    }
+    double r = s->radius - shrink;
+    if (r < 0)
+        return 0;
+    double d2;
+    if (kind == SHAPE_SPHERE) {
+        d2 = bf_point_triangle_dist2(c, t9, t9 + 3, t9 + 6);
+    } else {
+        double p0[3], p1[3];
+        for (int a = 0; a < 3; a++) {
+            p0[a] = c[a] - s->axis[a];
+            p1[a] = c[a] + s->axis[a];
+        }
+        d2 = bf_segment_triangle_dist2(p0, p1, t9, t9 + 3, t9 + 6);
+    }
+    return d2 <= r * r;
+}
+
+static int run_sweep(const demo *d, shape_kind kind, const shape *s, cbvh_sweep_hit *h)
+{
+    if (kind == SHAPE_SPHERE)
+        return cbvh_sweep_sphere(d->file, s->center, s->radius, s->delta, h);
+    if (kind == SHAPE_BOX)
+        return cbvh_sweep_box(d->file, s->center, s->half, s->delta, h);
+    float p0[3], p1[3];
+    for (int a = 0; a < 3; a++) {
+        p0[a] = s->center[a] - s->axis[a];
+        p1[a] = s->center[a] + s->axis[a];
+    }
+    return cbvh_sweep_capsule(d->file, p0, p1, s->radius, s->delta, h);
+}
+
+/* A sweep's answer against sampling: no triangle is penetrated (beyond the tolerance) before the
+ * reported contact (or anywhere along a missed motion), and the reported triangle is touched
+ * at the contact (within the tolerance). */
+static int sweep_agrees(const demo *d, shape_kind kind, const shape *s, int hit, const cbvh_sweep_hit *h)
+{
+    double end = hit ? h->t : 1.0, lo[3], hi[3];
+    if (hit && (h->tri >= d->tri_count || !d->valid[h->tri] || !shape_touches(d, kind, s, h->t, -d->tol, h->tri)))
+        return 0;
+    if (end == 0)
+        return 1; /* overlapping at the start: the reported triangle touches, nothing else to check */
+    shape_bounds(kind, s, 0, end, d->tol, lo, hi);
+    for (uint32_t i = 0; i < d->tri_count; i++) {
+        if (!triangle_near(d, i, lo, hi))
+            continue;
+        /* The contact itself is excluded: just before it nothing may be penetrated. */
+        for (int k = 0; k < DEMO_SWEEP_STEPS + !hit; k++)
+            if (shape_touches(d, kind, s, end * k / DEMO_SWEEP_STEPS, d->tol, i))
+                return 0;
+    }
+    return 1;
+}
+
+static void demo_sweeps(demo *d)
+{
+    static const char *const names[] = { "sweep sphere", "sweep capsule", "sweep box" };
+    shape *shapes = malloc(DEMO_SHAPES * sizeof *shapes);
+    cbvh_sweep_hit *hits = malloc(DEMO_SHAPES * sizeof *hits);
+    int *hit = malloc(DEMO_SHAPES * sizeof *hit);
+    if (!shapes || !hits || !hit) {
+        d->failures++;
+        fprintf(stderr, "cbvh demo: out of memory\n");
+        goto out;
+    }
+    for (int kind = SHAPE_SPHERE; kind <= SHAPE_BOX; kind++) {
+        for (size_t i = 0; i < DEMO_SHAPES; i++)
+            make_shape(d, (shape_kind)kind, &shapes[i]);
+        double t0 = cli_now();
+        size_t count = 0;
+        for (size_t i = 0; i < DEMO_SHAPES; i++)
+            count += (size_t)(hit[i] = run_sweep(d, (shape_kind)kind, &shapes[i], &hits[i]));
+        double sec = cli_now() - t0;
+        int bad = 0;
+        for (size_t i = 0; i < DEMO_SHAPES; i += DEMO_SHAPES / DEMO_SHAPE_SAMPLE)
+            if (!sweep_agrees(d, (shape_kind)kind, &shapes[i], hit[i], &hits[i]) && bad++ == 0)
+                report_failure("%s: query %zu (hit %d, t %g) disagrees with sampling the motion", names[kind], i,
+                               hit[i], hit[i] ? hits[i].t : 1.0);
+        d->failures += bad != 0;
+        char check[64];
+        sample_check(check, sizeof check, DEMO_SHAPE_SAMPLE, bad);
+        print_row(d, names[kind], DEMO_SHAPES, count, sec, "queries/s", check);
+    }
+out:
+    free(shapes);
+    free(hits);
+    free(hit);
+}
+
+static int cmp_u32(const void *a, const void *b)
+{
+    uint32_t x = *(const uint32_t *)a, y = *(const uint32_t *)b;
+    return x < y ? -1 : x > y;
+}
+
+/* Every triangle the shape clearly touches is reported, none it clearly misses is. */
+static int overlap_agrees(const demo *d, shape_kind kind, const shape *s, uint32_t *found, size_t n)
+{
+    double lo[3], hi[3];
+    shape_bounds(kind, s, 0, 0, d->tol, lo, hi);
+    qsort(found, n, sizeof *found, cmp_u32);
+    for (size_t k = 0; k < n; k++)
+        if (found[k] >= d->tri_count || !d->valid[found[k]] || (k > 0 && found[k] == found[k - 1]))
+            return 0;
+    for (uint32_t i = 0; i < d->tri_count; i++) {
+        if (!triangle_near(d, i, lo, hi))
+            continue;
+        int reported = bsearch(&i, found, n, sizeof *found, cmp_u32) != NULL;
+        if (reported && !shape_touches(d, kind, s, 0, -d->tol, i))
+            return 0;
+        if (!reported && shape_touches(d, kind, s, 0, d->tol, i))
+            return 0;
+    }
+    return 1;
+}
+
+static size_t run_overlap(const demo *d, shape_kind kind, const shape *s, uint32_t *found)
+{
+    if (kind == SHAPE_SPHERE)
+        return cbvh_overlap_sphere(d->file, s->center, s->radius, NULL, NULL, found, DEMO_OVERLAP_CAP);
+    float lo[3], hi[3];
+    for (int a = 0; a < 3; a++) {
+        lo[a] = s->center[a] - s->half[a];
+        hi[a] = s->center[a] + s->half[a];
+    }
+    return cbvh_overlap_box(d->file, lo, hi, NULL, NULL, found, DEMO_OVERLAP_CAP);
+}
+
+static void demo_overlaps(demo *d)
+{
+    static const char *const names[] = { "overlap sphere", "overlap box" };
+    uint32_t *found = malloc(DEMO_OVERLAP_CAP * sizeof *found);
+    shape *shapes = malloc(DEMO_SHAPES * sizeof *shapes);
+    if (!found || !shapes) {
+        d->failures++;
+        fprintf(stderr, "cbvh demo: out of memory\n");
+        goto out;
+    }
+    for (int k = 0; k < 2; k++) {
+        shape_kind kind = k == 0 ? SHAPE_SPHERE : SHAPE_BOX;
+        for (size_t i = 0; i < DEMO_SHAPES; i++) {
+            make_shape(d, kind, &shapes[i]);
+            shapes[i].radius *= 4; /* a little larger than the swept shapes, to gather several triangles */
+            for (int a = 0; a < 3; a++)
+                shapes[i].half[a] *= 4;
+        }
+        double t0 = cli_now();
+        size_t hits = 0;
+        for (size_t i = 0; i < DEMO_SHAPES; i++)
+            hits += run_overlap(d, kind, &shapes[i], found) != 0;
+        double sec = cli_now() - t0;
+        int bad = 0;
+        for (size_t i = 0; i < DEMO_SHAPES; i += DEMO_SHAPES / DEMO_SHAPE_SAMPLE) {
+            size_t n = run_overlap(d, kind, &shapes[i], found);
+            if (n < DEMO_OVERLAP_CAP && !overlap_agrees(d, kind, &shapes[i], found, n) && bad++ == 0)
+                report_failure("%s: query %zu (%zu triangles) disagrees with brute force", names[k], i, n);
+        }
+        d->failures += bad != 0;
+        char check[64];
+        sample_check(check, sizeof check, DEMO_SHAPE_SAMPLE, bad);
+        print_row(d, names[k], DEMO_SHAPES, hits, sec, "queries/s", check);
+    }
+out:
+    free(found);
+    free(shapes);
+}
+
+/* ---- the demo ---- */
+
+static int demo_load(demo *d, const cbvh_file *f)
+{
+    cbvh_file_info info;
+    cbvh_file_get_info(f, &info);
+    d->file = f;
+    d->tri_count = f->original_triangle_count;
+    d->tris = malloc(9 * (size_t)d->tri_count * sizeof(double));
+    d->valid = malloc(d->tri_count);
+    if (!d->tris || !d->valid)
+        return 0;
+    for (uint32_t i = 0; i < d->tri_count; i++) {
+        float v[3][3];
+        d->valid[i] = (uint8_t)cbvh_file_get_triangle(f, i, v[0], v[1], v[2]);
+        for (int k = 0; k < 3; k++)
+            to_double(d->tris + 9 * (size_t)i + 3 * k, d->valid[i] ? v[k] : info.bounds_min);
+    }
+    double diag2 = 0;
+    for (int a = 0; a < 3; a++) {
+        d->lo[a] = info.bounds_min[a];
+        d->hi[a] = info.bounds_max[a];
+        diag2 += ((double)d->hi[a] - d->lo[a]) * ((double)d->hi[a] - d->lo[a]);
+    }
+    d->diag = sqrt(diag2);
+    d->tol = 1e-4 * d->diag;
+    return 1;
+}
+
+int cmd_demo(int argc, char **argv)
+{
+    static const cli_option options[] = { { "quiet", CLI_ARG_NONE, 1 }, { NULL, 0, 0 } };
+    demo d;
+    memset(&d, 0, sizeof d);
+    d.rng = 20240601;
+    cli_parser p;
+    cli_init(&p, "demo", usage, argc, argv);
+    const char *value;
+    int id;
+    while ((id = cli_next(&p, options, &value)) != CLI_END) {
+        if (id == CLI_DONE)
+            return CLI_EXIT_OK;
+        if (id == CLI_ERROR)
+            return CLI_EXIT_USAGE;
+        if (id == CLI_POSITIONAL)
+            return cli_usage_error("demo", "unexpected argument '%s'", value);
+        d.quiet = 1;
+    }
+
+    scene s;
+    if (!scene_demo(&s)) {
+        cli_error("demo", NULL, "out of memory generating the scene");
+        return CLI_EXIT_USAGE;
+    }
+    uint32_t materials = 0;
+    for (size_t i = 0; i < s.triangle_count; i++)
+        if (s.material_ids && s.material_ids[i] + 1 > materials)
+            materials = s.material_ids[i] + 1;
+
+    const char *tmp = getenv("TMPDIR");
+    char dir[4096], path[4200];
+    snprintf(dir, sizeof dir, "%s/cbvh-demo-XXXXXX", tmp && *tmp ? tmp : "/tmp");
+    if (!mkdtemp(dir)) {
+        cli_error("demo", dir, "cannot create a temporary folder");
+        scene_free(&s);
+        return CLI_EXIT_USAGE;
+    }
+    snprintf(path, sizeof path, "%s/demo.cbvh", dir);
+
+    cbvh_mesh mesh = { s.positions, s.vertex_count, 0, s.indices, s.triangle_count, s.material_ids };
+    cbvh_cook_options opt;
+    cbvh_cook_options_init(&opt);
+    cbvh_cook_stats st;
+    cbvh_error err;
+    double t0 = cli_now();
+    cbvh_result res = cbvh_cook_to_path(&mesh, &opt, NULL, path, &st, &err);
+    double cook_sec = cli_now() - t0;
+    scene_free(&s);
+    int rc = CLI_EXIT_OK;
+    cbvh_file *file = NULL;
+    if (res != CBVH_OK) {
+        rc = cli_report("demo", path, &err);
+        goto out;
+    }
+    t0 = cli_now();
+    res = cbvh_open_path(path, NULL, &file, &err);
+    double open_sec = cli_now() - t0;
+    if (res != CBVH_OK) {
+        rc = cli_report("demo", path, &err);
+        goto out;
+    }
+    if (!demo_load(&d, file)) {
+        cli_error("demo", NULL, "out of memory");
+        rc = CLI_EXIT_USAGE;
+        goto out;
+    }
+    if (!d.quiet) {
+        printf("cbvh demo: built-in scene (terrain and 12 spheres, %u materials): %llu triangles, %llu vertices\n",
+               (unsigned)materials, (unsigned long long)st.triangles, (unsigned long long)st.vertices);
+        printf("  cook  %8.3f s  %llu nodes, depth %u, SAH cost %.1f\n", cook_sec, (unsigned long long)st.nodes,
+               (unsigned)st.depth, st.sah_cost);
+        printf("  file  %8llu bytes, %.2f bytes/triangle\n", (unsigned long long)st.file_size,
+               (double)st.file_size / (double)st.triangles);
+        printf("  open  %8.3f ms (mapped and fully validated)\n\n", open_sec * 1e3);
+        printf("  %-26s %8s %8s %10s %-10s %s\n", "query", "count", "hits", "speed", "", "check");
+    }
+    demo_raycasts(&d);
+    demo_sweeps(&d);
+    demo_overlaps(&d);
+    if (d.failures) {
+        printf("cbvh demo: FAILED: %d check%s disagreed (details on stderr)\n", d.failures, d.failures == 1 ? "" : "s");
+        rc = CLI_EXIT_BAD_INPUT;
+    } else {
+        printf("cbvh demo: ok: every query kind ran and agreed with the brute-force checks\n");
+    }
+out:
+    cbvh_close(file);
+    free(d.tris);
+    free(d.valid);
+    unlink(path);
+    rmdir(dir);
+    return rc;
+}
