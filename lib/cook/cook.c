@@ -1,0 +1,228 @@
+/* cook.c: the cooker's entry points: argument and option checks, the phases in order, statistics and timing. */
+#include <math.h>
+#include <stdint.h>
+#include <string.h>
+#include <time.h>
+
+#include "common/alloc.h"
+#include "common/error.h"
+#include "common/format.h"
+#include "cook/cook_internal.h"
+
+CBVH_API void cbvh_cook_options_init(cbvh_cook_options *options)
+{
+    if (!options)
+        return;
+    memset(options, 0, sizeof *options);
+    options->max_leaf_size = 4;
+    options->sah_bins = 32;
+    options->traversal_cost = 1.0f;
+    options->intersection_cost = 1.0f;
+    options->vertex_format = CBVH_VERTEX_FLOAT32;
+    options->compress_level = 0;
+    options->keep_remap = 1;
+    options->keep_materials = 1;
+}
+
+CBVH_API void cbvh_buffer_free(const cbvh_allocator *allocator, void *data)
+{
+    cbvh_allocator a = cbvh_allocator_resolve(allocator);
+    cbvh_free(&a, data);
+}
+
+static cbvh_result check_options(const cbvh_cook_options *o, cbvh_error *err)
+{
+    const cbvh_result bad = CBVH_ERROR_INVALID_ARGUMENT;
+    if (o->max_leaf_size < 1 || o->max_leaf_size > CBVH_MAX_LEAF_SIZE)
+        return cbvh_fail(err, bad, "options->max_leaf_size is %u; it must be 1 to %u", o->max_leaf_size,
+                         CBVH_MAX_LEAF_SIZE);
+    if (o->sah_bins < 4 || o->sah_bins > 256)
+        return cbvh_fail(err, bad, "options->sah_bins is %u; it must be 4 to 256", o->sah_bins);
+    if (!isfinite(o->traversal_cost) || !(o->traversal_cost >= 0.0f))
+        return cbvh_fail(err, bad, "options->traversal_cost is %g; it must be finite and >= 0",
+                         (double)o->traversal_cost);
+    if (!isfinite(o->intersection_cost) || !(o->intersection_cost > 0.0f))
+        return cbvh_fail(err, bad, "options->intersection_cost is %g; it must be finite and > 0",
+                         (double)o->intersection_cost);
+    if (o->vertex_format != CBVH_VERTEX_FLOAT32 && o->vertex_format != CBVH_VERTEX_QUANTIZED16)
+        return cbvh_fail(err, bad, "options->vertex_format is %d; it must be CBVH_VERTEX_FLOAT32 (0) or "
+                         "CBVH_VERTEX_QUANTIZED16 (1)", (int)o->vertex_format);
+    if (o->compress_level < 0 || o->compress_level > 9)
+        return cbvh_fail(err, bad, "options->compress_level is %d; it must be 0 (raw) to 9", o->compress_level);
+    if (o->keep_remap != 0 && o->keep_remap != 1)
+        return cbvh_fail(err, bad, "options->keep_remap is %d; it must be 0 or 1", o->keep_remap);
+    if (o->keep_materials != 0 && o->keep_materials != 1)
+        return cbvh_fail(err, bad, "options->keep_materials is %d; it must be 0 or 1", o->keep_materials);
+    return CBVH_OK;
+}
+
+static cbvh_result check_mesh(const cbvh_mesh *m, cbvh_error *err)
+{
+    const cbvh_result bad = CBVH_ERROR_INVALID_ARGUMENT;
+    if (!m)
+        return cbvh_fail(err, bad, "mesh is NULL");
+    if (!m->positions && m->vertex_count > 0)
+        return cbvh_fail(err, bad, "mesh->positions is NULL but vertex_count is %zu", m->vertex_count);
+    if (!m->indices && m->triangle_count > 0)
+        return cbvh_fail(err, bad, "mesh->indices is NULL but triangle_count is %zu", m->triangle_count);
+    if (m->position_stride != 0 && m->position_stride < 3 * sizeof(float))
+        return cbvh_fail(err, bad, "mesh->position_stride is %zu; it must be 0 (packed) or at least 12",
+                         m->position_stride);
+    const size_t stride = m->position_stride ? m->position_stride : 3 * sizeof(float);
+    if (m->vertex_count > 0 && m->vertex_count - 1 > (SIZE_MAX - 3 * sizeof(float)) / stride)
+        return cbvh_fail(err, bad, "mesh->vertex_count %zu times position_stride %zu overflows the address space",
+                         m->vertex_count, stride);
+    if (m->triangle_count > SIZE_MAX / 3)
+        return cbvh_fail(err, bad, "mesh->triangle_count %zu overflows the address space", m->triangle_count);
+    return CBVH_OK;
+}
+
+static double now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* Everything a cook owns between phases, freed in one place. */
+typedef struct cook_state {
+    cbvh_allocator a;
+    cook_mesh mesh;
+    uint16_t *quantized;
+    cook_grid grid;
+    cook_tree tree;
+    cook_layout layout;
+    cook_sections sections;
+} cook_state;
+
+static void state_free(cook_state *s)
+{
+    cook_sections_free(&s->a, &s->sections);
+    cook_layout_free(&s->a, &s->layout);
+    cook_tree_free(&s->a, &s->tree);
+    cbvh_free(&s->a, s->quantized);
+    cook_mesh_free(&s->a, &s->mesh);
+}
+
+/* Grid from the kept mesh's bounds; with quantized vertices the positions move onto it, and
+ * the tree is then built from what readers decode, so every box stays conservative. */
+static cbvh_result make_grid(cook_state *s, const cbvh_cook_options *o, cbvh_cook_stats *st, cbvh_error *err)
+{
+    cbvh_result r = cook_grid_init(&s->grid, s->mesh.bounds_min, s->mesh.bounds_max, err);
+    if (r != CBVH_OK || o->vertex_format != CBVH_VERTEX_QUANTIZED16)
+        return r;
+    s->quantized = cbvh_alloc_array(&s->a, s->mesh.vertex_count, 3 * sizeof(uint16_t), 64);
+    if (!s->quantized)
+        return cbvh_fail(err, CBVH_ERROR_OUT_OF_MEMORY, "out of memory while quantizing %u vertices",
+                         s->mesh.vertex_count);
+    st->vertex_max_error = cook_quantize_vertices(&s->grid, s->mesh.positions, s->quantized, s->mesh.vertex_count);
+    return cook_mesh_bounds(&s->mesh, err);
+}
+
+static cbvh_result write_file(cook_state *s, const cbvh_mesh *mesh, const cbvh_cook_options *o,
+                              const cook_progress *progress, uint8_t **out, size_t *out_size, cbvh_cook_stats *st,
+                              cbvh_error *err)
+{
+    cbvh_result r = cook_sections_encode(&s->layout, &s->mesh, s->quantized, mesh, o, &s->a, &s->sections, err);
+    if (r != CBVH_OK)
+        return r;
+    cook_header h;
+    memset(&h, 0, sizeof h);
+    h.triangle_count = s->layout.triangle_count;
+    h.vertex_count = s->layout.vertex_count;
+    h.node_count = s->layout.node_count;
+    h.depth = s->layout.depth;
+    h.max_leaf_size = s->layout.max_leaf_count;
+    h.original_triangle_count = s->sections.original_triangle_count;
+    memcpy(h.grid_origin, s->grid.origin, sizeof h.grid_origin);
+    memcpy(h.grid_scale, s->grid.scale, sizeof h.grid_scale);
+    memcpy(h.bounds_min, s->mesh.bounds_min, sizeof h.bounds_min);
+    memcpy(h.bounds_max, s->mesh.bounds_max, sizeof h.bounds_max);
+    return cook_write_file(&h, &s->sections, o->compress_level, &s->a, progress, out, out_size,
+                           st->section_stored_size, st->section_size, err);
+}
+
+static void fill_stats(const cook_state *s, cbvh_cook_stats *st)
+{
+    st->input_triangles = s->mesh.input_triangle_count;
+    st->dropped_degenerate = s->mesh.dropped_degenerate;
+    st->triangles = s->layout.triangle_count;
+    st->vertices = s->layout.vertex_count;
+    st->nodes = s->layout.node_count;
+    st->leaves = s->layout.leaf_count;
+    st->depth = s->layout.depth;
+    st->sah_cost = s->layout.sah_cost;
+}
+
+CBVH_API cbvh_result cbvh_cook(const cbvh_mesh *mesh, const cbvh_cook_options *options,
+                               const cbvh_allocator *allocator, void **out_data, size_t *out_size,
+                               cbvh_cook_stats *stats, cbvh_error *err)
+{
+    cbvh_error_clear(err);
+    if (!out_data || !out_size)
+        return cbvh_fail(err, CBVH_ERROR_INVALID_ARGUMENT, "out_data and out_size must not be NULL");
+    *out_data = NULL;
+    *out_size = 0;
+    cbvh_cook_options defaults;
+    cbvh_cook_options_init(&defaults);
+    const cbvh_cook_options *o = options ? options : &defaults;
+    cbvh_result r = check_mesh(mesh, err);
+    if (r == CBVH_OK)
+        r = check_options(o, err);
+    if (r != CBVH_OK)
+        return r;
+
+    cbvh_cook_stats st;
+    memset(&st, 0, sizeof st);
+    st.input_vertices = mesh->vertex_count;
+    cook_state s;
+    memset(&s, 0, sizeof s);
+    s.a = cbvh_allocator_resolve(allocator);
+    cook_progress progress = { o->progress, o->progress_user, CBVH_PHASE_PREPARE };
+    const cook_build_params params = { o->max_leaf_size, o->sah_bins, o->traversal_cost, o->intersection_cost };
+    uint8_t *file = NULL;
+    size_t file_size = 0;
+
+    double t0 = now();
+    cook_report(&progress, 0.0);
+    r = cook_prepare(mesh, &s.a, &progress, &s.mesh, err);
+    if (r == CBVH_OK)
+        r = make_grid(&s, o, &st, err);
+    double t1 = now();
+    st.seconds[CBVH_PHASE_PREPARE] = t1 - t0;
+    if (r == CBVH_OK) {
+        progress.phase = CBVH_PHASE_BUILD;
+        cook_report(&progress, 0.0);
+        r = cook_build(&s.mesh, &params, &s.a, &progress, &s.tree, err);
+    }
+    double t2 = now();
+    st.seconds[CBVH_PHASE_BUILD] = t2 - t1;
+    if (r == CBVH_OK) {
+        progress.phase = CBVH_PHASE_LAYOUT;
+        cook_report(&progress, 0.0);
+        r = cook_layout_build(&s.tree, &s.mesh, &s.grid, o->traversal_cost, o->intersection_cost, &s.a, &s.layout,
+                              err);
+        cook_tree_free(&s.a, &s.tree);
+        if (r == CBVH_OK)
+            cook_report(&progress, 1.0);
+    }
+    double t3 = now();
+    st.seconds[CBVH_PHASE_LAYOUT] = t3 - t2;
+    if (r == CBVH_OK) {
+        progress.phase = CBVH_PHASE_WRITE;
+        cook_report(&progress, 0.0);
+        r = write_file(&s, mesh, o, &progress, &file, &file_size, &st, err);
+    }
+    st.seconds[CBVH_PHASE_WRITE] = now() - t3;
+
+    if (r == CBVH_OK) {
+        fill_stats(&s, &st);
+        st.file_size = file_size;
+        *out_data = file;
+        *out_size = file_size;
+    }
+    state_free(&s);
+    if (stats)
+        *stats = st;
+    return r;
+}

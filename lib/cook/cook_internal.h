@@ -1,0 +1,149 @@
+/* cook_internal.h: the data handed from one cooking phase to the next (prepare, build, quantize, layout, write). */
+#ifndef CBVH_COOK_INTERNAL_H
+#define CBVH_COOK_INTERNAL_H
+
+#include <stdint.h>
+
+#include "cbvh.h"
+#include "common/format.h"
+
+/* The user's progress callback, bound to the phase being reported. */
+typedef struct cook_progress {
+    cbvh_progress_fn fn;
+    void *user;
+    cbvh_phase phase;
+} cook_progress;
+
+static inline void cook_report(const cook_progress *p, double fraction)
+{
+    if (p && p->fn)
+        p->fn(p->user, p->phase, fraction);
+}
+
+/* ---- prepare: validated, welded mesh without degenerate triangles or unused vertices ---- */
+
+typedef struct cook_mesh {
+    float *positions;           /* vertex_count xyz; replaced by decoded grid positions for quantized vertices */
+    uint32_t vertex_count;
+    uint32_t *indices;          /* 3 per kept triangle, in the input's corner order */
+    uint32_t *original_ids;     /* per kept triangle, its index in the input mesh (increasing) */
+    uint32_t triangle_count;
+    uint32_t input_triangle_count;
+    uint64_t dropped_degenerate;
+    float bounds_min[3], bounds_max[3];
+} cook_mesh;
+
+/* Validates and cleans `mesh` (see mesh_prepare.c). On failure `out` holds nothing. */
+cbvh_result cook_prepare(const cbvh_mesh *mesh, const cbvh_allocator *a, const cook_progress *progress,
+                         cook_mesh *out, cbvh_error *err);
+void cook_mesh_free(const cbvh_allocator *a, cook_mesh *m);
+
+/* Sets m->bounds_min/max from the positions; CBVH_ERROR_BAD_MESH when an extent overflows a float. */
+cbvh_result cook_mesh_bounds(cook_mesh *m, cbvh_error *err);
+
+/* ---- quantize: the file's 16-bit grid (spec section 6) ---- */
+
+typedef struct cook_grid {
+    float origin[3];
+    float scale[3];
+} cook_grid;
+
+/* grid_origin = bmin, grid_scale = smallest float with deq(65535) >= bmax.
+ * Fails with CBVH_ERROR_BAD_MESH when no finite scale reaches bmax. */
+cbvh_result cook_grid_init(cook_grid *g, const float bmin[3], const float bmax[3], cbvh_error *err);
+
+/* Conservative box: qmin the largest q with deq(q) <= lo, qmax the smallest q >= qmin with deq(q) >= hi.
+ * Precondition: bmin <= lo <= hi <= bmax of the grid's bounds. */
+void cook_quantize_box(const cook_grid *g, const float lo[3], const float hi[3], uint16_t qmin[3], uint16_t qmax[3]);
+
+/* Moves every position to its nearest grid point: writes the grid coordinates to q (3 per vertex)
+ * and the decoded values back into positions. Returns the largest |decoded - input|. */
+double cook_quantize_vertices(const cook_grid *g, float *positions, uint16_t *q, uint32_t count);
+
+/* ---- build: binned SAH tree over the prepared triangles ---- */
+
+typedef struct cook_build_params {
+    uint32_t max_leaf_size;
+    uint32_t bins;
+    float traversal_cost;
+    float intersection_cost;
+} cook_build_params;
+
+/* A build node. Internal: count == 0 and the children are nodes child and child + 1.
+ * Leaf: count triangles tree.prims[child .. child + count). Boxes are exact float bounds. */
+typedef struct cook_bnode {
+    float lo[3], hi[3];
+    uint32_t child;
+    uint32_t count;
+} cook_bnode;
+
+typedef struct cook_tree {
+    cook_bnode *nodes;          /* root at 0; a parent's index is below its children's */
+    uint32_t node_count;
+    uint32_t leaf_count;
+    uint32_t *prims;            /* prepared triangle ids, leaves' ranges index this */
+} cook_tree;
+
+cbvh_result cook_build(const cook_mesh *m, const cook_build_params *params, const cbvh_allocator *a,
+                       const cook_progress *progress, cook_tree *out, cbvh_error *err);
+void cook_tree_free(const cbvh_allocator *a, cook_tree *t);
+
+/* ---- layout: depth-first file order ---- */
+
+typedef struct cook_layout {
+    cbvh_node *nodes;           /* node_count, depth-first, words and quantized boxes final */
+    uint32_t node_count;
+    uint32_t leaf_count;
+    uint32_t depth;
+    uint32_t max_leaf_count;    /* largest leaf */
+    uint32_t triangle_count;
+    uint32_t *triangles;        /* 3 per cooked triangle, new vertex ids (first-use order) */
+    uint32_t *triangle_source;  /* cooked triangle -> prepared triangle id */
+    uint32_t vertex_count;
+    uint32_t *vertex_source;    /* new vertex id -> prepared vertex id */
+    double sah_cost;            /* of the quantized tree, relative to the root's area */
+} cook_layout;
+
+cbvh_result cook_layout_build(const cook_tree *t, const cook_mesh *m, const cook_grid *g,
+                              float traversal_cost, float intersection_cost, const cbvh_allocator *a,
+                              cook_layout *out, cbvh_error *err);
+void cook_layout_free(const cbvh_allocator *a, cook_layout *l);
+
+/* ---- sections: little-endian payloads in the narrowest encoding the spec allows ---- */
+
+enum { COOK_SLOT_NODES, COOK_SLOT_TRIANGLES, COOK_SLOT_VERTICES, COOK_SLOT_REMAP, COOK_SLOT_MATERIALS, COOK_SLOTS };
+
+typedef struct cook_section {
+    uint32_t type;              /* cbvh_section_type */
+    uint32_t encoding;
+    uint8_t *data;              /* owned, `size` bytes */
+    uint64_t size;
+} cook_section;
+
+typedef struct cook_sections {
+    cook_section s[COOK_SLOTS];
+    uint32_t count;             /* present sections, s[0 .. count) in file order */
+    uint32_t original_triangle_count;
+} cook_sections;
+
+/* quantized: the 3 grid coordinates per prepared vertex, or NULL for float vertices. */
+cbvh_result cook_sections_encode(const cook_layout *l, const cook_mesh *m, const uint16_t *quantized,
+                                 const cbvh_mesh *input, const cbvh_cook_options *o, const cbvh_allocator *a,
+                                 cook_sections *out, cbvh_error *err);
+void cook_sections_free(const cbvh_allocator *a, cook_sections *s);
+
+/* ---- write: header, table, aligned (optionally zlib) sections, CRCs ---- */
+
+typedef struct cook_header {
+    uint32_t triangle_count, vertex_count, node_count, depth, max_leaf_size, original_triangle_count;
+    float grid_origin[3], grid_scale[3];
+    float bounds_min[3], bounds_max[3];
+} cook_header;
+
+/* Writes the whole file into one buffer from `a` (64-byte aligned). stored_size[type] and
+ * size[type] receive each section's sizes (indexed by section type, 6 entries). */
+cbvh_result cook_write_file(const cook_header *h, const cook_sections *s, int compress_level,
+                            const cbvh_allocator *a, const cook_progress *progress, uint8_t **out,
+                            size_t *out_size, uint64_t stored_size[6], uint64_t size[6], cbvh_error *err);
+
+#endif

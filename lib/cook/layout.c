@@ -1,0 +1,231 @@
+/* layout.c: depth-first file order of the built tree: quantized boxes, subtree sizes, sort bytes, triangle and vertex order. */
+#include <string.h>
+
+#include "common/alloc.h"
+#include "common/error.h"
+#include "common/format.h"
+#include "cook/cook_internal.h"
+
+#define UNSET UINT32_MAX
+
+/* Per build node, what the depth-first placement needs. */
+typedef struct node_info {
+    uint16_t qmin[3], qmax[3];
+    uint32_t size;   /* nodes in the subtree */
+    uint32_t tris;   /* triangles in the subtree */
+    uint32_t first;  /* build index of the child placed first (larger area) */
+    uint32_t out;    /* index in the file */
+    uint32_t start;  /* first cooked triangle of the subtree */
+    uint32_t depth;  /* nodes from the root, root = 1 */
+} node_info;
+
+static double quantized_half_area(const cook_grid *g, const uint16_t qmin[3], const uint16_t qmax[3])
+{
+    double d[3];
+    for (int a = 0; a < 3; a++)
+        d[a] = (double)cbvh_dequantize(qmax[a], g->origin[a], g->scale[a]) -
+               (double)cbvh_dequantize(qmin[a], g->origin[a], g->scale[a]);
+    return d[0] * d[1] + d[1] * d[2] + d[2] * d[0];
+}
+
+/* Spec section 5: bit k set when dot(center(first) - center(second), octant_direction(k)) > 0,
+ * with d[a] = (qmin + qmax of first - qmin - qmax of second) x grid_scale[a] in double (exact:
+ * 18-bit integer times binary32) and the sum taken x, y, z in that order. */
+static uint32_t sort_byte(const cook_grid *g, const node_info *first, const node_info *second)
+{
+    double d[3];
+    for (int a = 0; a < 3; a++) {
+        int32_t diff = (int32_t)first->qmin[a] + first->qmax[a] - (int32_t)second->qmin[a] - second->qmax[a];
+        d[a] = (double)diff * (double)g->scale[a];
+    }
+    uint32_t byte = 0;
+    for (uint32_t k = 0; k < 8; k++) {
+        double dot = (k & 1 ? -d[0] : d[0]) + (k & 2 ? -d[1] : d[1]);
+        dot += k & 4 ? -d[2] : d[2];
+        if (dot > 0.0)
+            byte |= 1u << k;
+    }
+    return byte;
+}
+
+/* Children always come after their parent in build order, so one backward pass sums subtrees. */
+static void measure_subtrees(const cook_tree *t, const cook_grid *g, node_info *restrict info)
+{
+    for (uint32_t i = 0; i < t->node_count; i++)
+        cook_quantize_box(g, t->nodes[i].lo, t->nodes[i].hi, info[i].qmin, info[i].qmax);
+    for (uint32_t i = t->node_count; i-- > 0;) {
+        const cook_bnode *n = &t->nodes[i];
+        if (n->count) {
+            info[i].size = 1;
+            info[i].tris = n->count;
+            continue;
+        }
+        const node_info *l = &info[n->child], *r = &info[n->child + 1];
+        info[i].size = 1 + l->size + r->size;
+        info[i].tris = l->tris + r->tris;
+        /* Larger surface area first: more rays enter it, and ties keep the build order. */
+        info[i].first = quantized_half_area(g, r->qmin, r->qmax) > quantized_half_area(g, l->qmin, l->qmax)
+                            ? n->child + 1 : n->child;
+    }
+}
+
+/* One forward pass places every node: a first child right after its parent, the second after
+ * the first's subtree; leaves take consecutive cooked triangles in that order. */
+static void place(const cook_tree *t, const cook_grid *g, node_info *restrict info, cook_layout *l)
+{
+    info[0].out = 0;
+    info[0].start = 0;
+    info[0].depth = 1;
+    uint32_t depth = 0, max_leaf = 0;
+    for (uint32_t i = 0; i < t->node_count; i++) {
+        const cook_bnode *n = &t->nodes[i];
+        const node_info *me = &info[i];
+        cbvh_node *out = &l->nodes[me->out];
+        memcpy(out->qmin, me->qmin, sizeof out->qmin);
+        memcpy(out->qmax, me->qmax, sizeof out->qmax);
+        depth = me->depth > depth ? me->depth : depth;
+        if (n->count) {
+            out->word = cbvh_make_leaf(me->start, n->count);
+            for (uint32_t k = 0; k < n->count; k++)
+                l->triangle_source[me->start + k] = t->prims[n->child + k];
+            max_leaf = n->count > max_leaf ? n->count : max_leaf;
+            continue;
+        }
+        node_info *f = &info[me->first], *s = &info[me->first == n->child ? n->child + 1 : n->child];
+        f->out = me->out + 1;
+        s->out = me->out + 1 + f->size;
+        f->start = me->start;
+        s->start = me->start + f->tris;
+        f->depth = s->depth = me->depth + 1;
+        out->word = cbvh_make_internal(me->size, sort_byte(g, f, s));
+    }
+    l->depth = depth;
+    l->max_leaf_count = max_leaf;
+}
+
+static int delta16_fits(uint32_t base, uint32_t v)
+{
+    int64_t d = (int64_t)v - (int64_t)base;
+    return d >= INT16_MIN && d <= INT16_MAX;
+}
+
+/* Vertices numbered by first use in cooked triangle order: neighbouring triangles get
+ * neighbouring indices, which keeps DELTA16 deltas small and compresses well. With `copies`,
+ * a triangle whose deltas would not fit in i16 (it reuses a vertex first used long before, as
+ * across the root's split plane) gets fresh copies of its stale vertices, bit-identical
+ * positions, so every triangle fits DELTA16 (8 bytes instead of 12 for u32). */
+static cbvh_result order_vertices(const cook_mesh *m, cook_layout *l, int copies, const cbvh_allocator *a)
+{
+    const size_t capacity = copies ? 3 * (size_t)l->triangle_count : m->vertex_count;
+    uint32_t *latest = cbvh_alloc_array(a, m->vertex_count, sizeof(uint32_t), 64);
+    uint32_t *vsrc = cbvh_alloc_array(a, capacity, sizeof(uint32_t), 64);
+    if (!latest || !vsrc) {
+        cbvh_free(a, latest);
+        cbvh_free(a, vsrc);
+        return CBVH_ERROR_OUT_OF_MEMORY;
+    }
+    memset(latest, 0xFF, (size_t)m->vertex_count * sizeof(uint32_t));
+    const uint32_t *restrict idx = m->indices;
+    const uint32_t *restrict src = l->triangle_source;
+    uint32_t *restrict tris = l->triangles;
+    uint32_t count = 0;
+    for (uint32_t t = 0; t < l->triangle_count; t++) {
+        uint32_t v[3], id[3];
+        for (int c = 0; c < 3; c++) {
+            v[c] = idx[3 * (size_t)src[t] + (size_t)c];
+            if (latest[v[c]] == UNSET) {
+                latest[v[c]] = count;
+                vsrc[count++] = v[c];
+            }
+            id[c] = latest[v[c]];
+        }
+        if (copies && (!delta16_fits(id[0], id[1]) || !delta16_fits(id[0], id[2]))) {
+            /* Afterwards every id lies in [count - 32000, count + 3): deltas fit. */
+            for (int c = 0; c < 3; c++)
+                if (id[c] + 32000 < count) {
+                    latest[v[c]] = id[c] = count;
+                    vsrc[count++] = v[c];
+                }
+        }
+        for (int c = 0; c < 3; c++)
+            tris[3 * (size_t)t + (size_t)c] = id[c];
+    }
+    cbvh_free(a, latest);
+    cbvh_free(a, l->vertex_source);
+    l->vertex_source = vsrc;
+    l->vertex_count = count;
+    return CBVH_OK;
+}
+
+/* True when some triangle's deltas do not fit DELTA16 while u16 indices do not fit either. */
+static int needs_copies(const cook_layout *l)
+{
+    if (l->vertex_count <= 65536)
+        return 0;
+    for (size_t i = 0; i < 3 * (size_t)l->triangle_count; i += 3)
+        if (!delta16_fits(l->triangles[i], l->triangles[i + 1]) || !delta16_fits(l->triangles[i], l->triangles[i + 2]))
+            return 1;
+    return 0;
+}
+
+/* Ct x internal areas + Ci x leaf areas x triangles, over the root's area, on the decoded boxes. */
+static double sah_cost(const cbvh_node *nodes, uint32_t count, const cook_grid *g, double ct, double ci)
+{
+    double sum = 0.0;
+    for (uint32_t i = 0; i < count; i++) {
+        double area = quantized_half_area(g, nodes[i].qmin, nodes[i].qmax);
+        sum += cbvh_node_is_leaf(nodes[i].word) ? ci * cbvh_leaf_count(nodes[i].word) * area : ct * area;
+    }
+    double root = quantized_half_area(g, nodes[0].qmin, nodes[0].qmax);
+    return root > 0.0 ? sum / root : 0.0;
+}
+
+void cook_layout_free(const cbvh_allocator *a, cook_layout *l)
+{
+    cbvh_free(a, l->nodes);
+    cbvh_free(a, l->triangles);
+    cbvh_free(a, l->triangle_source);
+    cbvh_free(a, l->vertex_source);
+    memset(l, 0, sizeof *l);
+}
+
+cbvh_result cook_layout_build(const cook_tree *t, const cook_mesh *m, const cook_grid *g,
+                              float traversal_cost, float intersection_cost, const cbvh_allocator *a,
+                              cook_layout *out, cbvh_error *err)
+{
+    memset(out, 0, sizeof *out);
+    if (t->node_count > CBVH_MAX_NODES)
+        return cbvh_fail(err, CBVH_ERROR_LIMIT,
+                         "the tree has %u nodes; a file holds at most %u (raise max_leaf_size or split the mesh)",
+                         t->node_count, CBVH_MAX_NODES);
+    node_info *info = cbvh_alloc_array(a, t->node_count, sizeof(node_info), 64);
+    out->nodes = cbvh_alloc_array(a, t->node_count, sizeof(cbvh_node), 64);
+    out->triangles = cbvh_alloc_array(a, m->triangle_count, 3 * sizeof(uint32_t), 64);
+    out->triangle_source = cbvh_alloc_array(a, m->triangle_count, sizeof(uint32_t), 64);
+    if (!info || !out->nodes || !out->triangles || !out->triangle_source) {
+        cbvh_free(a, info);
+        cook_layout_free(a, out);
+        return cbvh_fail(err, CBVH_ERROR_OUT_OF_MEMORY, "out of memory while laying out %u nodes", t->node_count);
+    }
+    out->node_count = t->node_count;
+    out->leaf_count = t->leaf_count;
+    out->triangle_count = m->triangle_count;
+    measure_subtrees(t, g, info);
+    place(t, g, info, out);
+    cbvh_free(a, info);
+    if (out->depth > CBVH_MAX_DEPTH) {
+        uint32_t depth = out->depth;
+        cook_layout_free(a, out);
+        return cbvh_fail(err, CBVH_ERROR_LIMIT, "the tree is %u nodes deep; a file allows at most %u", depth,
+                         CBVH_MAX_DEPTH);
+    }
+    cbvh_result r = order_vertices(m, out, 0, a);
+    if (r == CBVH_OK && needs_copies(out))
+        r = order_vertices(m, out, 1, a);
+    if (r != CBVH_OK) {
+        cook_layout_free(a, out);
+        return cbvh_fail(err, CBVH_ERROR_OUT_OF_MEMORY, "out of memory while ordering %u vertices", m->vertex_count);
+    }
+    out->sah_cost = sah_cost(out->nodes, out->node_count, g, traversal_cost, intersection_cost);
+    return CBVH_OK;
+}

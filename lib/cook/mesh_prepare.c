@@ -1,0 +1,280 @@
+/* mesh_prepare.c: validating the caller's mesh, welding equal positions, dropping degenerate triangles and unused vertices. */
+#include <float.h>
+#include <math.h>
+#include <stdint.h>
+#include <string.h>
+
+#include "common/alloc.h"
+#include "common/error.h"
+#include "cook/cook_internal.h"
+
+#define NO_VERTEX UINT32_MAX
+
+static const char axis_name[3] = { 'x', 'y', 'z' };
+
+/* The caller's array may be unaligned or strided: copy rather than cast. */
+static void read_position(const cbvh_mesh *m, size_t stride, size_t v, float p[3])
+{
+    memcpy(p, (const unsigned char *)m->positions + v * stride, 3 * sizeof(float));
+}
+
+/* Welding compares bit patterns, so that it is exact and deterministic; -0 and +0 are one point. */
+static uint32_t weld_bits(float f)
+{
+    uint32_t u;
+    if (f == 0.0f)
+        f = 0.0f;
+    memcpy(&u, &f, sizeof u);
+    return u;
+}
+
+static uint32_t weld_hash(const float p[3])
+{
+    uint32_t h = weld_bits(p[0]) * 0x9E3779B1u;
+    h = (h ^ (h >> 15)) + weld_bits(p[1]) * 0x85EBCA77u;
+    h = (h ^ (h >> 13)) + weld_bits(p[2]) * 0xC2B2AE3Du;
+    return h ^ (h >> 16);
+}
+
+static int same_point(const float *a, const float *b)
+{
+    return weld_bits(a[0]) == weld_bits(b[0]) && weld_bits(a[1]) == weld_bits(b[1]) &&
+           weld_bits(a[2]) == weld_bits(b[2]);
+}
+
+/* Exact enough zero-area test: float differences and their cross product in double. */
+static int zero_area(const float *p0, const float *p1, const float *p2)
+{
+    double e1[3], e2[3];
+    for (int k = 0; k < 3; k++) {
+        e1[k] = (double)p1[k] - (double)p0[k];
+        e2[k] = (double)p2[k] - (double)p0[k];
+    }
+    double cx = e1[1] * e2[2] - e1[2] * e2[1];
+    double cy = e1[2] * e2[0] - e1[0] * e2[2];
+    double cz = e1[0] * e2[1] - e1[1] * e2[0];
+    return cx == 0.0 && cy == 0.0 && cz == 0.0;
+}
+
+/* Marks every referenced vertex in `map` (0 = used) after checking the index is in range. */
+static cbvh_result check_indices(const cbvh_mesh *mesh, uint32_t *restrict map, cbvh_error *err)
+{
+    const uint32_t *restrict idx = mesh->indices;
+    const size_t tris = mesh->triangle_count, verts = mesh->vertex_count;
+    for (size_t t = 0; t < tris; t++) {
+        for (int c = 0; c < 3; c++) {
+            uint32_t i = idx[3 * t + (size_t)c];
+            if (i >= verts)
+                return cbvh_fail(err, CBVH_ERROR_BAD_MESH,
+                                 "triangle %zu, corner %d: vertex index %u is out of range (the mesh has %zu vertices)",
+                                 t, c, i, verts);
+            map[i] = 0;
+        }
+    }
+    return CBVH_OK;
+}
+
+/* Checks every referenced vertex is finite and counts them. */
+static cbvh_result check_positions(const cbvh_mesh *mesh, size_t stride, const uint32_t *restrict map,
+                                   size_t map_count, size_t *used, cbvh_error *err)
+{
+    size_t n = 0;
+    for (size_t v = 0; v < map_count; v++) {
+        if (map[v] == NO_VERTEX)
+            continue;
+        float p[3];
+        read_position(mesh, stride, v, p);
+        for (int k = 0; k < 3; k++)
+            if (!isfinite(p[k]))
+                return cbvh_fail(err, CBVH_ERROR_BAD_MESH, "vertex %zu: %c coordinate is %s", v, axis_name[k],
+                                 isnan(p[k]) ? "NaN" : "infinite");
+        n++;
+    }
+    *used = n;
+    return CBVH_OK;
+}
+
+/* Gives each used vertex in `map` the id of the first used vertex with the same position,
+ * numbering distinct positions in input order; writes the distinct positions to `out`. */
+static cbvh_result weld(const cbvh_mesh *mesh, size_t stride, uint32_t *restrict map, size_t map_count,
+                        size_t used, float *restrict out, uint32_t *welded, const cbvh_allocator *a)
+{
+    size_t cap = 16;
+    while (cap < 2 * used)
+        cap *= 2;
+    uint32_t *table = cbvh_alloc_array(a, cap, sizeof(uint32_t), 64);
+    if (!table)
+        return CBVH_ERROR_OUT_OF_MEMORY;
+    memset(table, 0xFF, cap * sizeof(uint32_t));
+    const size_t mask = cap - 1;
+    uint32_t count = 0;
+    for (size_t v = 0; v < map_count; v++) {
+        if (map[v] == NO_VERTEX)
+            continue;
+        float p[3];
+        read_position(mesh, stride, v, p);
+        size_t slot = weld_hash(p) & mask;
+        while (table[slot] != NO_VERTEX && !same_point(out + 3 * (size_t)table[slot], p))
+            slot = (slot + 1) & mask;
+        if (table[slot] == NO_VERTEX) {
+            table[slot] = count;
+            memcpy(out + 3 * (size_t)count, p, sizeof p);
+            count++;
+        }
+        map[v] = table[slot];
+    }
+    cbvh_free(a, table);
+    *welded = count;
+    return CBVH_OK;
+}
+
+/* Keeps the triangles with three distinct welded vertices and a nonzero area. */
+static void drop_degenerate(const cbvh_mesh *mesh, const uint32_t *restrict map, cook_mesh *m)
+{
+    const uint32_t *restrict idx = mesh->indices;
+    const float *restrict pos = m->positions;
+    uint32_t *restrict out = m->indices;
+    uint32_t *restrict ids = m->original_ids;
+    const size_t tris = mesh->triangle_count;
+    size_t kept = 0;
+    for (size_t t = 0; t < tris; t++) {
+        uint32_t w0 = map[idx[3 * t]], w1 = map[idx[3 * t + 1]], w2 = map[idx[3 * t + 2]];
+        if (w0 == w1 || w1 == w2 || w0 == w2 ||
+            zero_area(pos + 3 * (size_t)w0, pos + 3 * (size_t)w1, pos + 3 * (size_t)w2))
+            continue;
+        out[3 * kept] = w0;
+        out[3 * kept + 1] = w1;
+        out[3 * kept + 2] = w2;
+        ids[kept] = (uint32_t)t;
+        kept++;
+    }
+    m->dropped_degenerate = tris - kept;
+    m->triangle_count = kept > UINT32_MAX ? UINT32_MAX : (uint32_t)kept;
+}
+
+/* Renumbers the welded vertices that kept triangles use, in welded order, compacting positions. */
+static cbvh_result drop_unused(cook_mesh *m, uint32_t welded, const cbvh_allocator *a)
+{
+    uint32_t *renumber = cbvh_alloc_array(a, welded, sizeof(uint32_t), 64);
+    if (!renumber)
+        return CBVH_ERROR_OUT_OF_MEMORY;
+    memset(renumber, 0xFF, (size_t)welded * sizeof(uint32_t));
+    const size_t corners = 3 * (size_t)m->triangle_count;
+    for (size_t i = 0; i < corners; i++)
+        renumber[m->indices[i]] = 0;
+    uint32_t count = 0;
+    for (uint32_t w = 0; w < welded; w++) {
+        if (renumber[w] == NO_VERTEX)
+            continue;
+        memmove(m->positions + 3 * (size_t)count, m->positions + 3 * (size_t)w, 3 * sizeof(float));
+        renumber[w] = count++;
+    }
+    for (size_t i = 0; i < corners; i++)
+        m->indices[i] = renumber[m->indices[i]];
+    m->vertex_count = count;
+    cbvh_free(a, renumber);
+    return CBVH_OK;
+}
+
+cbvh_result cook_mesh_bounds(cook_mesh *m, cbvh_error *err)
+{
+    const float *p = m->positions;
+    for (int k = 0; k < 3; k++)
+        m->bounds_min[k] = m->bounds_max[k] = p[k];
+    for (uint32_t v = 1; v < m->vertex_count; v++)
+        for (int k = 0; k < 3; k++) {
+            float x = p[3 * (size_t)v + (size_t)k];
+            m->bounds_min[k] = x < m->bounds_min[k] ? x : m->bounds_min[k];
+            m->bounds_max[k] = x > m->bounds_max[k] ? x : m->bounds_max[k];
+        }
+    for (int k = 0; k < 3; k++) {
+        double extent = (double)m->bounds_max[k] - (double)m->bounds_min[k];
+        if (extent > (double)FLT_MAX)
+            return cbvh_fail(err, CBVH_ERROR_BAD_MESH,
+                             "the mesh's extent on the %c axis (%g to %g) overflows a float", axis_name[k],
+                             (double)m->bounds_min[k], (double)m->bounds_max[k]);
+    }
+    return CBVH_OK;
+}
+
+void cook_mesh_free(const cbvh_allocator *a, cook_mesh *m)
+{
+    cbvh_free(a, m->positions);
+    cbvh_free(a, m->indices);
+    cbvh_free(a, m->original_ids);
+    memset(m, 0, sizeof *m);
+}
+
+static cbvh_result out_of_memory(cbvh_error *err, const char *what)
+{
+    return cbvh_fail(err, CBVH_ERROR_OUT_OF_MEMORY, "out of memory while preparing the mesh (%s)", what);
+}
+
+cbvh_result cook_prepare(const cbvh_mesh *mesh, const cbvh_allocator *a, const cook_progress *progress,
+                         cook_mesh *out, cbvh_error *err)
+{
+    memset(out, 0, sizeof *out);
+    const size_t tris = mesh->triangle_count;
+    const size_t stride = mesh->position_stride ? mesh->position_stride : 3 * sizeof(float);
+    if (tris == 0)
+        return cbvh_fail(err, CBVH_ERROR_EMPTY_MESH, "the mesh has no triangles");
+    if ((uint64_t)tris > UINT32_MAX)
+        return cbvh_fail(err, CBVH_ERROR_LIMIT,
+                         "the mesh has %zu triangles; original triangle ids are 32-bit (at most 4294967295)", tris);
+    out->input_triangle_count = (uint32_t)tris;
+
+    /* Indices are 32-bit, so vertices past 2^32 can never be used. */
+    const uint64_t map_count64 = (uint64_t)mesh->vertex_count > 0x100000000ull ? 0x100000000ull : mesh->vertex_count;
+    const size_t map_count = (size_t)map_count64;
+    uint32_t *map = cbvh_alloc_array(a, map_count ? map_count : 1, sizeof(uint32_t), 64);
+    if (!map)
+        return out_of_memory(err, "vertex map");
+    memset(map, 0xFF, map_count * sizeof(uint32_t));
+
+    cbvh_result r = check_indices(mesh, map, err);
+    size_t used = 0;
+    if (r == CBVH_OK)
+        r = check_positions(mesh, stride, map, map_count, &used, err);
+    if (r != CBVH_OK) {
+        cbvh_free(a, map);
+        return r;
+    }
+    cook_report(progress, 0.25);
+
+    uint32_t welded = 0;
+    out->positions = cbvh_alloc_array(a, used, 3 * sizeof(float), 64);
+    if (!out->positions || weld(mesh, stride, map, map_count, used, out->positions, &welded, a) != CBVH_OK) {
+        cbvh_free(a, map);
+        cook_mesh_free(a, out);
+        return out_of_memory(err, "welding");
+    }
+    cook_report(progress, 0.5);
+
+    out->indices = cbvh_alloc_array(a, tris, 3 * sizeof(uint32_t), 64);
+    out->original_ids = cbvh_alloc_array(a, tris, sizeof(uint32_t), 64);
+    if (!out->indices || !out->original_ids) {
+        cbvh_free(a, map);
+        cook_mesh_free(a, out);
+        return out_of_memory(err, "triangles");
+    }
+    drop_degenerate(mesh, map, out);
+    cbvh_free(a, map);
+    cook_report(progress, 0.75);
+
+    if (out->triangle_count == 0)
+        r = cbvh_fail(err, CBVH_ERROR_EMPTY_MESH,
+                      "all %zu triangles are degenerate (zero area or a repeated vertex)", tris);
+    else if (out->triangle_count > CBVH_MAX_TRIANGLES)
+        r = cbvh_fail(err, CBVH_ERROR_LIMIT, "%u triangles remain after dropping degenerate ones; a file holds at most %u",
+                      out->triangle_count, CBVH_MAX_TRIANGLES);
+    else if (drop_unused(out, welded, a) != CBVH_OK)
+        r = out_of_memory(err, "vertex renumbering");
+    else
+        r = cook_mesh_bounds(out, err);
+    if (r != CBVH_OK) {
+        cook_mesh_free(a, out);
+        return r;
+    }
+    cook_report(progress, 1.0);
+    return CBVH_OK;
+}

@@ -1,0 +1,428 @@
+/* sah_build.c: binned SAH BVH builder, with median splits to stay within the format's depth limit. */
+#include <float.h>
+#include <string.h>
+
+#include "common/alloc.h"
+#include "common/error.h"
+#include "common/format.h"
+#include "cook/cook_internal.h"
+
+#define MAX_BINS 256
+
+/* A triangle's box and id; 32 bytes so the partitions move whole cache-friendly records. */
+typedef struct prim_ref {
+    float lo[3];
+    uint32_t id;
+    float hi[3];
+    uint32_t pad;
+} prim_ref;
+
+typedef struct box {
+    float lo[3], hi[3];
+} box;
+
+/* A node still to split: its prims are refs[begin, end), depth counts nodes from the root (1). */
+typedef struct task {
+    uint32_t node, begin, end, depth;
+    box cent; /* bounds of the prims' centroids */
+} task;
+
+typedef struct workspace {
+    /* Two sets of bins, for even and odd prims: neighbouring prims often share a bin, and
+     * alternating sets halves the store-to-load chains through one bin's box. */
+    box bins[2][3][MAX_BINS];
+    uint32_t counts[2][3][MAX_BINS];
+    box right_box[MAX_BINS];
+    box left_box[MAX_BINS];
+    double right_area[MAX_BINS];
+    uint32_t right_count[MAX_BINS];
+} workspace;
+
+typedef struct split {
+    int axis;       /* -1: none found */
+    uint32_t bin;   /* prims in bins below go left */
+    double cost;    /* sum of area x count over both sides */
+    uint32_t left_count;
+    box left, right;
+} split;
+
+static inline float centroid(const prim_ref *r, int a)
+{
+    /* Halves first: lo + hi could overflow near FLT_MAX. */
+    return r->lo[a] * 0.5f + r->hi[a] * 0.5f;
+}
+
+static void box_empty(box *b)
+{
+    for (int a = 0; a < 3; a++) {
+        b->lo[a] = FLT_MAX;
+        b->hi[a] = -FLT_MAX;
+    }
+}
+
+static inline void box_grow(box *restrict b, const float lo[3], const float hi[3])
+{
+    for (int a = 0; a < 3; a++) {
+        b->lo[a] = lo[a] < b->lo[a] ? lo[a] : b->lo[a];
+        b->hi[a] = hi[a] > b->hi[a] ? hi[a] : b->hi[a];
+    }
+}
+
+static inline void box_grow_point(box *restrict b, const float p[3])
+{
+    box_grow(b, p, p);
+}
+
+/* Half the surface area, in double: float products could overflow for huge meshes. */
+static double half_area(const float lo[3], const float hi[3])
+{
+    double dx = (double)hi[0] - lo[0], dy = (double)hi[1] - lo[1], dz = (double)hi[2] - lo[2];
+    return dx * dy + dy * dz + dz * dx;
+}
+
+/* Fewest levels (nodes on a path) a subtree of m prims needs with balanced splits. */
+static uint32_t levels_needed(uint64_t m, uint32_t leaf_size)
+{
+    uint64_t leaves = (m + leaf_size - 1) / leaf_size, reach = 1;
+    uint32_t levels = 1;
+    while (reach < leaves) {
+        reach *= 2;
+        levels++;
+    }
+    return levels;
+}
+
+/* The bin of a centroid; the partition must use exactly this to agree with the bin counts. */
+static inline uint32_t bin_of(float c, float c_lo, float scale, uint32_t bins)
+{
+    float k = (c - c_lo) * scale;
+    return k >= (float)bins ? bins - 1 : (uint32_t)k;
+}
+
+/* Per axis, bins / centroid extent. 0 puts every prim in bin 0, so no plane is found on an axis
+ * whose extent is zero or too small for a finite float scale. */
+static void bin_scales(const box *cent, uint32_t bins, float scale[3])
+{
+    for (int a = 0; a < 3; a++) {
+        double extent = (double)cent->hi[a] - (double)cent->lo[a];
+        double s = extent > 0.0 ? (double)bins / extent : 0.0;
+        scale[a] = s < (double)FLT_MAX ? (float)s : 0.0f;
+    }
+}
+
+/* Bins the prims on all three axes at once and sweeps each axis for the cheapest plane. */
+static split find_split(workspace *restrict w, const prim_ref *restrict refs, const task *t, uint32_t bins)
+{
+    split best;
+    best.axis = -1;
+    best.cost = 0.0;
+    float scale[3];
+    bin_scales(&t->cent, bins, scale);
+    for (int h = 0; h < 2; h++)
+        for (int a = 0; a < 3; a++) {
+            for (uint32_t b = 0; b < bins; b++)
+                box_empty(&w->bins[h][a][b]);
+            memset(w->counts[h][a], 0, bins * sizeof(uint32_t));
+        }
+    const float c_lo[3] = { t->cent.lo[0], t->cent.lo[1], t->cent.lo[2] };
+    for (uint32_t i = t->begin; i < t->end; i++) {
+        const prim_ref *r = &refs[i];
+        const uint32_t h = i & 1;
+        const uint32_t b0 = bin_of(centroid(r, 0), c_lo[0], scale[0], bins);
+        const uint32_t b1 = bin_of(centroid(r, 1), c_lo[1], scale[1], bins);
+        const uint32_t b2 = bin_of(centroid(r, 2), c_lo[2], scale[2], bins);
+        w->counts[h][0][b0]++;
+        w->counts[h][1][b1]++;
+        w->counts[h][2][b2]++;
+        box_grow(&w->bins[h][0][b0], r->lo, r->hi);
+        box_grow(&w->bins[h][1][b1], r->lo, r->hi);
+        box_grow(&w->bins[h][2][b2], r->lo, r->hi);
+    }
+    for (int a = 0; a < 3; a++) {
+        if (scale[a] == 0.0f)
+            continue;
+        box *restrict bin = w->bins[0][a];
+        uint32_t *restrict count = w->counts[0][a];
+        for (uint32_t b = 0; b < bins; b++) {
+            box_grow(&bin[b], w->bins[1][a][b].lo, w->bins[1][a][b].hi);
+            count[b] += w->counts[1][a][b];
+        }
+        /* Prefix boxes first, areas after: the area loops have no carried dependency. */
+        box acc;
+        box_empty(&acc);
+        uint32_t n = 0;
+        for (uint32_t b = bins; b-- > 1;) {
+            box_grow(&acc, bin[b].lo, bin[b].hi);
+            n += count[b];
+            w->right_box[b] = acc;
+            w->right_count[b] = n;
+        }
+        for (uint32_t b = 1; b < bins; b++)
+            w->right_area[b] = half_area(w->right_box[b].lo, w->right_box[b].hi) * w->right_count[b];
+        box_empty(&acc);
+        for (uint32_t b = 1; b < bins; b++) {
+            box_grow(&acc, bin[b - 1].lo, bin[b - 1].hi);
+            w->left_box[b] = acc;
+        }
+        n = 0;
+        for (uint32_t b = 1; b < bins; b++) {
+            n += count[b - 1];
+            if (n == 0 || w->right_count[b] == 0)
+                continue;
+            double cost = half_area(w->left_box[b].lo, w->left_box[b].hi) * n + w->right_area[b];
+            /* Strictly cheaper only: ties keep the lowest axis and plane, deterministically. */
+            if (best.axis < 0 || cost < best.cost) {
+                best.axis = a;
+                best.bin = b;
+                best.cost = cost;
+                best.left_count = n;
+                best.left = w->left_box[b];
+                best.right = w->right_box[b];
+            }
+        }
+    }
+    return best;
+}
+
+/* Moves the prims of bins below s.bin to the front; returns the first right prim. */
+static uint32_t partition_bins(prim_ref *restrict refs, const task *t, const split *s, uint32_t bins,
+                               box *left_cent, box *right_cent)
+{
+    float scale[3];
+    bin_scales(&t->cent, bins, scale);
+    const int a = s->axis;
+    const float c_lo = t->cent.lo[a];
+    const float sc = scale[a];
+    const uint32_t split_bin = s->bin;
+    box_empty(left_cent);
+    box_empty(right_cent);
+    uint32_t i = t->begin, j = t->end;
+    while (i < j) {
+        float c[3] = { centroid(&refs[i], 0), centroid(&refs[i], 1), centroid(&refs[i], 2) };
+        if (bin_of(c[a], c_lo, sc, bins) < split_bin) {
+            box_grow_point(left_cent, c);
+            i++;
+        } else {
+            box_grow_point(right_cent, c);
+            j--;
+            prim_ref tmp = refs[i];
+            refs[i] = refs[j];
+            refs[j] = tmp;
+        }
+    }
+    return i;
+}
+
+/* Total order for median splits: centroid on the axis, then triangle id. */
+static inline int key_less(const prim_ref *x, const prim_ref *y, int a)
+{
+    float cx = centroid(x, a), cy = centroid(y, a);
+    if (cx != cy)
+        return cx < cy;
+    return x->id < y->id;
+}
+
+static inline void swap_refs(prim_ref *x, prim_ref *y)
+{
+    prim_ref tmp = *x;
+    *x = *y;
+    *y = tmp;
+}
+
+/* Quickselect: puts the k-th smallest prim of r[0, n) at k, smaller ones before it. The key is a
+ * total order, so the two sides are the same sets on every run. */
+static void select_nth(prim_ref *r, size_t n, size_t k, int a)
+{
+    size_t lo = 0, hi = n - 1;
+    while (hi > lo) {
+        size_t mid = lo + (hi - lo) / 2;
+        if (key_less(&r[mid], &r[lo], a))
+            swap_refs(&r[mid], &r[lo]);
+        if (key_less(&r[hi], &r[lo], a))
+            swap_refs(&r[hi], &r[lo]);
+        if (key_less(&r[hi], &r[mid], a))
+            swap_refs(&r[hi], &r[mid]);
+        const prim_ref pivot = r[mid];
+        size_t i = lo, j = hi;
+        for (;;) {
+            while (key_less(&r[i], &pivot, a))
+                i++;
+            while (key_less(&pivot, &r[j], a))
+                j--;
+            if (i >= j)
+                break;
+            swap_refs(&r[i], &r[j]);
+            i++;
+            j--;
+        }
+        /* Now r[lo, j] <= pivot <= r[j + 1, hi] (Hoare); recurse into the side holding k. */
+        if (k <= j)
+            hi = j;
+        else
+            lo = j + 1;
+    }
+}
+
+static void bounds_of(const prim_ref *restrict refs, uint32_t begin, uint32_t end, box *b, box *cent)
+{
+    box_empty(b);
+    box_empty(cent);
+    for (uint32_t i = begin; i < end; i++) {
+        box_grow(b, refs[i].lo, refs[i].hi);
+        float c[3] = { centroid(&refs[i], 0), centroid(&refs[i], 1), centroid(&refs[i], 2) };
+        box_grow_point(cent, c);
+    }
+}
+
+/* Object median along the widest centroid axis: halves the prims, so each level of the
+ * remaining subtree halves its leaf count and the depth limit holds. */
+static uint32_t split_median(prim_ref *refs, const task *t, box *left, box *right, box *left_cent,
+                             box *right_cent)
+{
+    int axis = 0;
+    float widest = t->cent.hi[0] - t->cent.lo[0];
+    for (int a = 1; a < 3; a++)
+        if (t->cent.hi[a] - t->cent.lo[a] > widest) {
+            widest = t->cent.hi[a] - t->cent.lo[a];
+            axis = a;
+        }
+    uint32_t n = t->end - t->begin, half = n / 2;
+    select_nth(refs + t->begin, n, half, axis);
+    uint32_t mid = t->begin + half;
+    bounds_of(refs, t->begin, mid, left, left_cent);
+    bounds_of(refs, mid, t->end, right, right_cent);
+    return mid;
+}
+
+static void init_refs(const cook_mesh *m, prim_ref *restrict refs, box *root, box *cent)
+{
+    const float *restrict pos = m->positions;
+    const uint32_t *restrict idx = m->indices;
+    box_empty(root);
+    box_empty(cent);
+    for (uint32_t t = 0; t < m->triangle_count; t++) {
+        prim_ref *r = &refs[t];
+        const float *p0 = pos + 3 * (size_t)idx[3 * (size_t)t];
+        const float *p1 = pos + 3 * (size_t)idx[3 * (size_t)t + 1];
+        const float *p2 = pos + 3 * (size_t)idx[3 * (size_t)t + 2];
+        for (int a = 0; a < 3; a++) {
+            float lo = p0[a] < p1[a] ? p0[a] : p1[a], hi = p0[a] > p1[a] ? p0[a] : p1[a];
+            r->lo[a] = p2[a] < lo ? p2[a] : lo;
+            r->hi[a] = p2[a] > hi ? p2[a] : hi;
+        }
+        r->id = t;
+        r->pad = 0;
+        box_grow(root, r->lo, r->hi);
+        float c[3] = { centroid(r, 0), centroid(r, 1), centroid(r, 2) };
+        box_grow_point(cent, c);
+    }
+}
+
+void cook_tree_free(const cbvh_allocator *a, cook_tree *t)
+{
+    cbvh_free(a, t->nodes);
+    cbvh_free(a, t->prims);
+    memset(t, 0, sizeof *t);
+}
+
+static void set_box(cook_bnode *n, const box *b)
+{
+    memcpy(n->lo, b->lo, sizeof n->lo);
+    memcpy(n->hi, b->hi, sizeof n->hi);
+}
+
+cbvh_result cook_build(const cook_mesh *m, const cook_build_params *params, const cbvh_allocator *a,
+                       const cook_progress *progress, cook_tree *out, cbvh_error *err)
+{
+    memset(out, 0, sizeof *out);
+    const uint32_t tris = m->triangle_count;
+    const uint32_t leaf_size = params->max_leaf_size, bins = params->bins;
+    const double ct = params->traversal_cost, ci = params->intersection_cost;
+    const size_t node_capacity = 2 * (size_t)tris - 1;
+
+    prim_ref *refs = cbvh_alloc_array(a, tris, sizeof(prim_ref), 64);
+    workspace *w = cbvh_alloc(a, sizeof(workspace), 64);
+    out->nodes = cbvh_alloc_array(a, node_capacity, sizeof(cook_bnode), 64);
+    out->prims = cbvh_alloc_array(a, tris, sizeof(uint32_t), 64);
+    if (!refs || !w || !out->nodes || !out->prims) {
+        cbvh_free(a, refs);
+        cbvh_free(a, w);
+        cook_tree_free(a, out);
+        return cbvh_fail(err, CBVH_ERROR_OUT_OF_MEMORY, "out of memory while building the tree (%u triangles)", tris);
+    }
+
+    box root;
+    task stack[2 * CBVH_MAX_DEPTH + 2];
+    uint32_t top = 0;
+    init_refs(m, refs, &root, &stack[0].cent);
+    set_box(&out->nodes[0], &root);
+    stack[0].node = 0;
+    stack[0].begin = 0;
+    stack[0].end = tris;
+    stack[0].depth = 1;
+    top = 1;
+    uint32_t node_count = 1, leaf_count = 0;
+    uint64_t done = 0, next_report = tris / 64 + 1;
+
+    while (top > 0) {
+        const task t = stack[--top];
+        cook_bnode *node = &out->nodes[t.node];
+        const uint32_t n = t.end - t.begin;
+        split s;
+        s.axis = -1;
+        /* A node of n prims fills at most n bins; fewer bins keep small nodes cheap. */
+        const uint32_t node_bins = n < bins ? (n < 4 ? 4 : n) : bins;
+        if (n > 1)
+            s = find_split(w, refs, &t, node_bins);
+        const double area = half_area(node->lo, node->hi);
+        const int may_be_leaf = n <= leaf_size;
+        if (may_be_leaf && (s.axis < 0 || t.depth >= CBVH_MAX_DEPTH || ci * n * area <= ct * area + ci * s.cost)) {
+            node->child = t.begin;
+            node->count = n;
+            leaf_count++;
+            done += n;
+            if (done >= next_report) {
+                cook_report(progress, (double)done / tris);
+                next_report = done + tris / 64 + 1;
+            }
+            continue;
+        }
+        box left, right;
+        task lt, rt;
+        uint32_t mid;
+        const uint32_t budget = CBVH_MAX_DEPTH - t.depth;
+        if (s.axis >= 0 && levels_needed(s.left_count > n - s.left_count ? s.left_count : n - s.left_count,
+                                         leaf_size) <= budget) {
+            mid = partition_bins(refs, &t, &s, node_bins, &lt.cent, &rt.cent);
+            left = s.left;
+            right = s.right;
+        } else {
+            mid = split_median(refs, &t, &left, &right, &lt.cent, &rt.cent);
+        }
+        const uint32_t child = node_count;
+        node_count += 2;
+        node->child = child;
+        node->count = 0;
+        set_box(&out->nodes[child], &left);
+        set_box(&out->nodes[child + 1], &right);
+        lt.node = child;
+        lt.begin = t.begin;
+        lt.end = mid;
+        lt.depth = t.depth + 1;
+        rt.node = child + 1;
+        rt.begin = mid;
+        rt.end = t.end;
+        rt.depth = t.depth + 1;
+        stack[top++] = rt;
+        stack[top++] = lt;
+    }
+
+    for (uint32_t i = 0; i < tris; i++)
+        out->prims[i] = refs[i].id;
+    out->node_count = node_count;
+    out->leaf_count = leaf_count;
+    cbvh_free(a, refs);
+    cbvh_free(a, w);
+    cook_report(progress, 1.0);
+    return CBVH_OK;
+}

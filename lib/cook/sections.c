@@ -1,0 +1,196 @@
+/* sections.c: section payloads in the narrowest encoding the spec allows (section 4), little-endian. */
+#include <string.h>
+
+#include "common/alloc.h"
+#include "common/endian.h"
+#include "common/error.h"
+#include "common/format.h"
+#include "cook/cook_internal.h"
+
+static inline void put_u16(uint8_t *p, uint32_t v)
+{
+    p[0] = (uint8_t)v;
+    p[1] = (uint8_t)(v >> 8);
+}
+
+static uint8_t *section_alloc(const cbvh_allocator *a, cook_sections *out, uint32_t type, uint32_t encoding,
+                              size_t count, size_t elem)
+{
+    cook_section *s = &out->s[out->count];
+    s->data = cbvh_alloc_array(a, count, elem, 64);
+    if (!s->data)
+        return NULL;
+    s->type = type;
+    s->encoding = encoding;
+    s->size = (uint64_t)count * elem;
+    out->count++;
+    return s->data;
+}
+
+static int encode_nodes(const cook_layout *l, const cbvh_allocator *a, cook_sections *out)
+{
+    uint8_t *p = section_alloc(a, out, CBVH_SECTION_NODES, CBVH_NODES_Q16, l->node_count, 16);
+    if (!p)
+        return 0;
+    for (uint32_t i = 0; i < l->node_count; i++, p += 16) {
+        const cbvh_node *n = &l->nodes[i];
+        for (int k = 0; k < 3; k++) {
+            put_u16(p + 2 * k, n->qmin[k]);
+            put_u16(p + 6 + 2 * k, n->qmax[k]);
+        }
+        cbvh_write_u32(p + 12, n->word);
+    }
+    return 1;
+}
+
+static int delta_fits(int64_t d)
+{
+    return d >= INT16_MIN && d <= INT16_MAX;
+}
+
+/* u16 when every index fits, else DELTA16 when every triangle's deltas fit in i16, else u32. */
+static uint32_t triangle_encoding(const cook_layout *l)
+{
+    if (l->vertex_count <= 65536)
+        return CBVH_TRIS_U16;
+    const uint32_t *t = l->triangles;
+    for (size_t i = 0; i < (size_t)l->triangle_count; i++, t += 3)
+        if (!delta_fits((int64_t)t[1] - t[0]) || !delta_fits((int64_t)t[2] - t[0]))
+            return CBVH_TRIS_U32;
+    return CBVH_TRIS_DELTA16;
+}
+
+static int encode_triangles(const cook_layout *l, const cbvh_allocator *a, cook_sections *out)
+{
+    static const size_t elem[3] = { 6, 12, 8 };
+    const uint32_t enc = triangle_encoding(l);
+    uint8_t *p = section_alloc(a, out, CBVH_SECTION_TRIANGLES, enc, l->triangle_count, elem[enc]);
+    if (!p)
+        return 0;
+    const uint32_t *t = l->triangles;
+    for (uint32_t i = 0; i < l->triangle_count; i++, t += 3, p += elem[enc]) {
+        if (enc == CBVH_TRIS_U16) {
+            put_u16(p, t[0]);
+            put_u16(p + 2, t[1]);
+            put_u16(p + 4, t[2]);
+        } else if (enc == CBVH_TRIS_U32) {
+            cbvh_write_u32(p, t[0]);
+            cbvh_write_u32(p + 4, t[1]);
+            cbvh_write_u32(p + 8, t[2]);
+        } else {
+            cbvh_write_u32(p, t[0]);
+            put_u16(p + 4, (uint32_t)(t[1] - t[0]));
+            put_u16(p + 6, (uint32_t)(t[2] - t[0]));
+        }
+    }
+    return 1;
+}
+
+static int encode_vertices(const cook_layout *l, const cook_mesh *m, const uint16_t *quantized,
+                           const cbvh_allocator *a, cook_sections *out)
+{
+    const uint32_t enc = quantized ? CBVH_VERTS_Q16 : CBVH_VERTS_F32;
+    const size_t elem = quantized ? 6 : 12;
+    uint8_t *p = section_alloc(a, out, CBVH_SECTION_VERTICES, enc, l->vertex_count, elem);
+    if (!p)
+        return 0;
+    for (uint32_t v = 0; v < l->vertex_count; v++, p += elem) {
+        const size_t src = 3 * (size_t)l->vertex_source[v];
+        for (int k = 0; k < 3; k++) {
+            if (quantized)
+                put_u16(p + 2 * k, quantized[src + (size_t)k]);
+            else
+                cbvh_write_f32(p + 4 * k, m->positions[src + (size_t)k]);
+        }
+    }
+    return 1;
+}
+
+/* Values of `count` u32 as u16 (small) or u32. */
+static int encode_ids(const cbvh_allocator *a, cook_sections *out, uint32_t type, uint32_t enc16, uint32_t enc32,
+                      int narrow, const uint32_t *values, uint32_t count)
+{
+    uint8_t *p = section_alloc(a, out, type, narrow ? enc16 : enc32, count, narrow ? 2 : 4);
+    if (!p)
+        return 0;
+    for (uint32_t i = 0; i < count; i++) {
+        if (narrow)
+            put_u16(p + 2 * (size_t)i, values[i]);
+        else
+            cbvh_write_u32(p + 4 * (size_t)i, values[i]);
+    }
+    return 1;
+}
+
+/* REMAP: cooked triangle -> input id. Left out when asked, or when it would be the identity. */
+static int encode_remap(const cook_layout *l, const cook_mesh *m, const cbvh_cook_options *o, uint32_t *scratch,
+                        const cbvh_allocator *a, cook_sections *out)
+{
+    out->original_triangle_count = l->triangle_count;
+    if (!o->keep_remap)
+        return 1;
+    int identity = m->input_triangle_count == l->triangle_count;
+    for (uint32_t t = 0; t < l->triangle_count; t++) {
+        scratch[t] = m->original_ids[l->triangle_source[t]];
+        identity &= scratch[t] == t;
+    }
+    if (identity)
+        return 1;
+    out->original_triangle_count = m->input_triangle_count;
+    return encode_ids(a, out, CBVH_SECTION_REMAP, CBVH_REMAP_U16, CBVH_REMAP_U32,
+                      m->input_triangle_count <= 65536, scratch, l->triangle_count);
+}
+
+/* MATERIALS: left out when not given, not wanted, or all equal; u8, u16 or u32 by the largest id. */
+static int encode_materials(const cook_layout *l, const cook_mesh *m, const cbvh_mesh *input,
+                            const cbvh_cook_options *o, uint32_t *scratch, const cbvh_allocator *a,
+                            cook_sections *out)
+{
+    if (!input->material_ids || !o->keep_materials)
+        return 1;
+    uint32_t largest = 0;
+    int all_equal = 1;
+    for (uint32_t t = 0; t < l->triangle_count; t++) {
+        scratch[t] = input->material_ids[m->original_ids[l->triangle_source[t]]];
+        largest = scratch[t] > largest ? scratch[t] : largest;
+        all_equal &= scratch[t] == scratch[0];
+    }
+    if (all_equal)
+        return 1;
+    if (largest > 0xFFFF)
+        return encode_ids(a, out, CBVH_SECTION_MATERIALS, CBVH_MATS_U16, CBVH_MATS_U32, 0, scratch,
+                          l->triangle_count);
+    if (largest > 0xFF)
+        return encode_ids(a, out, CBVH_SECTION_MATERIALS, CBVH_MATS_U16, CBVH_MATS_U32, 1, scratch,
+                          l->triangle_count);
+    uint8_t *p = section_alloc(a, out, CBVH_SECTION_MATERIALS, CBVH_MATS_U8, l->triangle_count, 1);
+    if (!p)
+        return 0;
+    for (uint32_t t = 0; t < l->triangle_count; t++)
+        p[t] = (uint8_t)scratch[t];
+    return 1;
+}
+
+void cook_sections_free(const cbvh_allocator *a, cook_sections *s)
+{
+    for (uint32_t i = 0; i < s->count; i++)
+        cbvh_free(a, s->s[i].data);
+    memset(s, 0, sizeof *s);
+}
+
+cbvh_result cook_sections_encode(const cook_layout *l, const cook_mesh *m, const uint16_t *quantized,
+                                 const cbvh_mesh *input, const cbvh_cook_options *o, const cbvh_allocator *a,
+                                 cook_sections *out, cbvh_error *err)
+{
+    memset(out, 0, sizeof *out);
+    uint32_t *scratch = cbvh_alloc_array(a, l->triangle_count, sizeof(uint32_t), 64);
+    int ok = scratch && encode_nodes(l, a, out) && encode_triangles(l, a, out) &&
+             encode_vertices(l, m, quantized, a, out) && encode_remap(l, m, o, scratch, a, out) &&
+             encode_materials(l, m, input, o, scratch, a, out);
+    cbvh_free(a, scratch);
+    if (!ok) {
+        cook_sections_free(a, out);
+        return cbvh_fail(err, CBVH_ERROR_OUT_OF_MEMORY, "out of memory while encoding the sections");
+    }
+    return CBVH_OK;
+}
