@@ -21,12 +21,15 @@ static void release(struct cbvh_file *f)
     cbvh_free(&a, f);
 }
 
-static cbvh_result new_file(const cbvh_allocator *allocator, cbvh_file **out_file, struct cbvh_file **f,
-                            cbvh_error *err)
+/* Checks the arguments every open takes (clearing *out_file first) and allocates the zeroed handle. */
+static cbvh_result new_file(const void *source, const char *what, const cbvh_allocator *allocator,
+                            cbvh_file **out_file, struct cbvh_file **f, cbvh_error *err)
 {
     if (!out_file)
         return cbvh_fail(err, CBVH_ERROR_INVALID_ARGUMENT, "out_file is NULL");
     *out_file = NULL;
+    if (!source)
+        return cbvh_fail(err, CBVH_ERROR_INVALID_ARGUMENT, "%s is NULL", what);
     cbvh_allocator a = cbvh_allocator_resolve(allocator);
     *f = cbvh_alloc(&a, sizeof **f, 64);
     if (!*f)
@@ -52,10 +55,9 @@ static cbvh_result finish(struct cbvh_file *f, cbvh_file **out_file, cbvh_error 
 cbvh_result cbvh_open_memory(const void *data, size_t size, const cbvh_allocator *allocator, cbvh_file **out_file,
                              cbvh_error *err)
 {
-    if (!data && size > 0)
-        return cbvh_fail(err, CBVH_ERROR_INVALID_ARGUMENT, "data is NULL with size %zu", size);
     struct cbvh_file *f;
-    cbvh_result r = new_file(allocator, out_file, &f, err);
+    static const uint8_t nothing;
+    cbvh_result r = new_file(data || size > 0 ? data : &nothing, "data", allocator, out_file, &f, err);
     if (r != CBVH_OK)
         return r;
     f->bytes = data;
@@ -108,10 +110,8 @@ static cbvh_result map_file(struct cbvh_file *f, int fd, const char *path, cbvh_
 
 cbvh_result cbvh_open_path(const char *path, const cbvh_allocator *allocator, cbvh_file **out_file, cbvh_error *err)
 {
-    if (!path)
-        return cbvh_fail(err, CBVH_ERROR_INVALID_ARGUMENT, "path is NULL");
     struct cbvh_file *f;
-    cbvh_result r = new_file(allocator, out_file, &f, err);
+    cbvh_result r = new_file(path, "path", allocator, out_file, &f, err);
     if (r != CBVH_OK)
         return r;
     int fd = open(path, O_RDONLY | O_CLOEXEC);

@@ -1,0 +1,680 @@
+/* test_load.c: the loader on valid, truncated, corrupted and cooked files, with allocation failures and leak counting. */
+#include <errno.h>
+#include <math.h>
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+#include <zlib.h>
+
+#include <cmocka.h>
+
+#include "cbvh.h"
+
+/* ------------------------------------------------------------------ a counting, failing allocator */
+
+typedef struct counting {
+    long live;         /* allocations not yet freed */
+    size_t live_bytes;
+    long calls;
+    long fail_at;      /* the call that fails (0-based); -1: none */
+} counting;
+
+#define PREFIX 64 /* room for the size, keeping the caller's alignment (at most 64) */
+
+static void *counting_alloc(void *user, size_t size, size_t align)
+{
+    counting *c = user;
+    assert_true(align >= 1 && align <= 64 && (align & (align - 1)) == 0);
+    if (c->calls++ == c->fail_at)
+        return NULL;
+    void *p = NULL;
+    if (posix_memalign(&p, 64, size + PREFIX) != 0)
+        return NULL;
+    memcpy(p, &size, sizeof size);
+    c->live++;
+    c->live_bytes += size;
+    return (uint8_t *)p + PREFIX;
+}
+
+static void counting_free(void *user, void *ptr)
+{
+    counting *c = user;
+    assert_non_null(ptr);
+    uint8_t *p = (uint8_t *)ptr - PREFIX;
+    size_t size;
+    memcpy(&size, p, sizeof size);
+    c->live--;
+    c->live_bytes -= size;
+    free(p);
+}
+
+static cbvh_allocator counting_allocator(counting *c, long fail_at)
+{
+    memset(c, 0, sizeof *c);
+    c->fail_at = fail_at;
+    cbvh_allocator a = { counting_alloc, counting_free, c };
+    return a;
+}
+
+/* ------------------------------------------------------------------ inputs */
+
+typedef struct input {
+    const char *name;
+    uint8_t *data; /* 64-byte aligned */
+    size_t size;
+} input;
+
+static const char *vectors_dir(void)
+{
+    const char *d = getenv("CBVH_FILEFORMAT_DIR");
+    return d && *d ? d : CBVH_TEST_FILEFORMAT_DIR;
+}
+
+static char *vector_path(const char *name)
+{
+    static char path[4096];
+    snprintf(path, sizeof path, "%s/%s.cbvh", vectors_dir(), name);
+    return path;
+}
+
+static input load_vector(const char *name)
+{
+    input in = { name, NULL, 0 };
+    FILE *fp = fopen(vector_path(name), "rb");
+    if (!fp)
+        fail_msg("cannot open %s", vector_path(name));
+    assert_int_equal(posix_memalign((void **)&in.data, 64, 1 << 16), 0);
+    in.size = fread(in.data, 1, 1 << 16, fp);
+    assert_true(feof(fp));
+    fclose(fp);
+    return in;
+}
+
+/* A random mesh: positions in a box, random indices (a few triangles come out degenerate and are dropped). */
+typedef struct random_mesh {
+    float *positions;
+    uint32_t *indices, *materials;
+    cbvh_mesh mesh;
+} random_mesh;
+
+static uint32_t next_random(uint64_t *s)
+{
+    *s = *s * 6364136223846793005ull + 1442695040888963407ull;
+    return (uint32_t)(*s >> 33);
+}
+
+static random_mesh make_random_mesh(uint64_t seed, size_t vertices, size_t triangles)
+{
+    random_mesh m;
+    m.positions = malloc(vertices * 3 * sizeof(float));
+    m.indices = malloc(triangles * 3 * sizeof(uint32_t));
+    m.materials = malloc(triangles * sizeof(uint32_t));
+    assert_true(m.positions && m.indices && m.materials);
+    for (size_t i = 0; i < vertices * 3; i++)
+        m.positions[i] = (float)(next_random(&seed) % 200000) * 0.001f - 100.0f + (i % 3 == 0 ? 5000.0f : 0.0f);
+    for (size_t t = 0; t < triangles; t++) {
+        /* mostly local triangles (as real meshes are), a few spanning the mesh */
+        uint32_t base = next_random(&seed) % (uint32_t)vertices;
+        for (int k = 0; k < 3; k++)
+            m.indices[3 * t + k] = t % 17 == 0 ? next_random(&seed) % (uint32_t)vertices
+                                               : (base + next_random(&seed) % 8) % (uint32_t)vertices;
+        m.materials[t] = next_random(&seed) % 1000;
+    }
+    m.mesh = (cbvh_mesh){ m.positions, vertices, 0, m.indices, triangles, m.materials };
+    return m;
+}
+
+static void free_random_mesh(random_mesh *m)
+{
+    free(m->positions);
+    free(m->indices);
+    free(m->materials);
+}
+
+static input cook_input(const char *name, const random_mesh *m, int compress, cbvh_vertex_format format,
+                        int keep_remap)
+{
+    cbvh_cook_options o;
+    cbvh_cook_options_init(&o);
+    o.compress_level = compress;
+    o.vertex_format = format;
+    o.keep_remap = keep_remap;
+    void *data = NULL;
+    size_t size = 0;
+    cbvh_error err;
+    cbvh_result r = cbvh_cook(&m->mesh, &o, NULL, &data, &size, NULL, &err);
+    if (r != CBVH_OK)
+        fail_msg("cook %s: %s", name, err.message);
+    input in = { name, NULL, size };
+    assert_int_equal(posix_memalign((void **)&in.data, 64, size), 0);
+    memcpy(in.data, data, size);
+    cbvh_buffer_free(NULL, data);
+    return in;
+}
+
+static const char *const valid_vectors[] = { "good-box-raw", "good-box-zlib", "good-box-q16",
+                                             "good-remap-u32-materials-u32-zlib", "good-single-triangle" };
+#define VALID_VECTOR_COUNT (sizeof valid_vectors / sizeof valid_vectors[0])
+
+/* ------------------------------------------------------------------ comparisons */
+
+static void assert_same_info(const cbvh_file *a, const cbvh_file *b)
+{
+    cbvh_file_info x, y;
+    cbvh_file_get_info(a, &x);
+    cbvh_file_get_info(b, &y);
+    assert_int_equal(x.format_version, y.format_version);
+    assert_int_equal(x.section_count, y.section_count);
+    assert_int_equal(x.triangle_count, y.triangle_count);
+    assert_int_equal(x.vertex_count, y.vertex_count);
+    assert_int_equal(x.node_count, y.node_count);
+    assert_int_equal(x.depth, y.depth);
+    assert_int_equal(x.max_leaf_size, y.max_leaf_size);
+    assert_int_equal(x.has_remap, y.has_remap);
+    assert_int_equal(x.has_materials, y.has_materials);
+    assert_int_equal(x.vertex_format, y.vertex_format);
+    assert_int_equal(x.index_encoding, y.index_encoding);
+    assert_int_equal(x.file_size, y.file_size);
+    assert_memory_equal(x.bounds_min, y.bounds_min, sizeof x.bounds_min);
+    assert_memory_equal(x.bounds_max, y.bounds_max, sizeof x.bounds_max);
+    assert_memory_equal(x.grid_origin, y.grid_origin, sizeof x.grid_origin);
+    assert_memory_equal(x.grid_scale, y.grid_scale, sizeof x.grid_scale);
+    for (uint32_t i = 0; i < x.section_count; i++) {
+        cbvh_section_info s, t;
+        assert_true(cbvh_file_get_section(a, i, &s) && cbvh_file_get_section(b, i, &t));
+        assert_memory_equal(&s, &t, sizeof s);
+    }
+    /* every id up to the largest original one, and one past it */
+    for (uint32_t id = 0; id <= x.triangle_count + 64; id++) {
+        float u[3][3], v[3][3];
+        int got_a = cbvh_file_get_triangle(a, id, u[0], u[1], u[2]);
+        int got_b = cbvh_file_get_triangle(b, id, v[0], v[1], v[2]);
+        assert_int_equal(got_a, got_b);
+        if (got_a)
+            assert_memory_equal(u, v, sizeof u);
+        assert_int_equal(cbvh_file_get_material(a, id), cbvh_file_get_material(b, id));
+    }
+}
+
+/* Every getter on every id: run under valgrind, this proves an accepted file reads nothing out of bounds. */
+static void touch_everything(const cbvh_file *f)
+{
+    cbvh_file_info info;
+    cbvh_file_get_info(f, &info);
+    double sum = 0;
+    for (uint32_t id = 0; id < info.triangle_count * 2u + 2u; id++) {
+        float v[3][3];
+        if (cbvh_file_get_triangle(f, id, v[0], v[1], v[2]))
+            sum += v[0][0] + v[1][1] + v[2][2];
+        sum += cbvh_file_get_material(f, id);
+    }
+    assert_false(isnan(sum));
+}
+
+static cbvh_result open_counted(const uint8_t *data, size_t size, long fail_at, counting *c, cbvh_file **f,
+                                cbvh_error *err)
+{
+    cbvh_allocator a = counting_allocator(c, fail_at);
+    cbvh_result r = cbvh_open_memory(data, size, &a, f, err);
+    assert_int_equal(err->code, r);
+    if (r != CBVH_OK) {
+        assert_null(*f);
+        assert_int_equal(c->live, 0);
+    }
+    return r;
+}
+
+/* ------------------------------------------------------------------ tests on the vectors */
+
+static void test_path_and_memory_agree(void **state)
+{
+    (void)state;
+    for (size_t i = 0; i < VALID_VECTOR_COUNT; i++) {
+        input in = load_vector(valid_vectors[i]);
+        cbvh_file *by_path = NULL, *by_memory = NULL;
+        cbvh_error err;
+        assert_int_equal(cbvh_open_path(vector_path(in.name), NULL, &by_path, &err), CBVH_OK);
+        assert_int_equal(err.code, CBVH_OK);
+        assert_string_equal(err.message, "");
+        assert_int_equal(cbvh_open_memory(in.data, in.size, NULL, &by_memory, &err), CBVH_OK);
+        assert_same_info(by_path, by_memory);
+        cbvh_close(by_path);
+        cbvh_close(by_memory);
+        free(in.data);
+    }
+}
+
+/* Raw sections are used in place from a 4-byte aligned buffer and copied from any other. */
+static void test_unaligned_buffer(void **state)
+{
+    (void)state;
+    input in = load_vector("good-box-raw");
+    uint8_t *shifted = malloc(in.size + 8);
+    assert_non_null(shifted);
+    counting c;
+    cbvh_error err;
+    cbvh_file *aligned = NULL;
+    assert_int_equal(open_counted(in.data, in.size, -1, &c, &aligned, &err), CBVH_OK);
+    size_t in_place_bytes = c.live_bytes;
+    cbvh_file_info info;
+    cbvh_file_get_info(aligned, &info);
+    uint64_t known = 0;
+    for (uint32_t i = 0; i < info.section_count; i++) {
+        cbvh_section_info s;
+        cbvh_file_get_section(aligned, i, &s);
+        known += s.size;
+    }
+    for (size_t shift = 1; shift < 8; shift++) {
+        memcpy(shifted + shift, in.data, in.size);
+        counting d;
+        cbvh_file *f = NULL;
+        assert_int_equal(open_counted(shifted + shift, in.size, -1, &d, &f, &err), CBVH_OK);
+        if (shift % 4 != 0)
+            assert_true(d.live_bytes >= in_place_bytes + known); /* copies of every known section */
+        else
+            assert_int_equal(d.live_bytes, in_place_bytes);
+        assert_same_info(aligned, f);
+        cbvh_close(f);
+        assert_int_equal(d.live, 0);
+    }
+    cbvh_close(aligned);
+    assert_int_equal(c.live, 0);
+    free(shifted);
+    free(in.data);
+}
+
+/* Every prefix of a valid file is corrupt, cleanly, without leaks. */
+static void check_truncations(const input *in, size_t step)
+{
+    for (size_t n = 0; n < in->size; n += (n < 512 ? 1 : step)) {
+        uint8_t *copy = malloc(n ? n : 1);
+        assert_non_null(copy);
+        memcpy(copy, in->data, n); /* an exact-size buffer, so valgrind sees any read past n */
+        counting c;
+        cbvh_file *f = NULL;
+        cbvh_error err;
+        cbvh_result r = open_counted(copy, n, -1, &c, &f, &err);
+        if (r != CBVH_ERROR_CORRUPT)
+            fail_msg("%s cut to %zu bytes: %s (%s)", in->name, n, cbvh_result_string(r), err.message);
+        free(copy);
+    }
+}
+
+static void test_truncations(void **state)
+{
+    (void)state;
+    for (size_t i = 0; i < VALID_VECTOR_COUNT; i++) {
+        input in = load_vector(valid_vectors[i]);
+        check_truncations(&in, 1);
+        free(in.data);
+    }
+}
+
+/* Every flipped byte is caught by a CRC, or by the version check for the version field. */
+static void test_flipped_bytes(void **state)
+{
+    (void)state;
+    input in = load_vector("good-box-raw");
+    for (size_t i = 0; i < in.size; i++) {
+        for (int bit = 0; bit < 8; bit += 7) {
+            in.data[i] ^= (uint8_t)(1u << bit);
+            counting c;
+            cbvh_file *f = NULL;
+            cbvh_error err;
+            cbvh_result r = open_counted(in.data, in.size, -1, &c, &f, &err);
+            cbvh_result want = i >= 8 && i < 12 && (i > 8 || bit > 0) ? CBVH_ERROR_UNSUPPORTED : CBVH_ERROR_CORRUPT;
+            if (r != want)
+                fail_msg("byte %zu bit %d: %s (%s)", i, bit, cbvh_result_string(r), err.message);
+            in.data[i] ^= (uint8_t)(1u << bit);
+        }
+    }
+    free(in.data);
+}
+
+/* Recomputes every CRC of a file, so a change reaches the structural checks behind them. */
+static void repair_crcs(uint8_t *d, size_t size)
+{
+    uint32_t count;
+    memcpy(&count, d + 24, 4);
+    if (count > 16 || 128 + (size_t)count * 40 > size)
+        count = 0;
+    for (uint32_t i = 0; i < count; i++) {
+        uint8_t *e = d + 128 + 40 * i;
+        uint64_t offset, stored;
+        memcpy(&offset, e + 8, 8);
+        memcpy(&stored, e + 16, 8);
+        if (offset <= size && stored <= size - offset) {
+            uint32_t crc = (uint32_t)crc32(0, d + offset, (uInt)stored);
+            memcpy(e + 32, &crc, 4);
+        }
+    }
+    uint32_t crc = (uint32_t)crc32(0, d + 128, (uInt)count * 40);
+    memcpy(d + 28, &crc, 4);
+    crc = (uint32_t)crc32(0, d, 124);
+    memcpy(d + 124, &crc, 4);
+}
+
+/* Changed bytes behind repaired CRCs: whatever the loader accepts must be safe to read everywhere. */
+static void check_changes(const input *in, size_t from)
+{
+    static const uint8_t xors[] = { 0x01, 0x02, 0x10, 0x80, 0xFF };
+    uint8_t *copy = malloc(in->size);
+    assert_non_null(copy);
+    for (size_t i = from; i < in->size; i++) {
+        for (size_t k = 0; k < sizeof xors; k++) {
+            memcpy(copy, in->data, in->size);
+            copy[i] ^= xors[k];
+            repair_crcs(copy, in->size);
+            counting c;
+            cbvh_file *f = NULL;
+            cbvh_error err;
+            cbvh_result r = open_counted(copy, in->size, -1, &c, &f, &err);
+            assert_true(r == CBVH_OK || r == CBVH_ERROR_CORRUPT || r == CBVH_ERROR_UNSUPPORTED);
+            assert_true(strlen(err.message) > 0 || r == CBVH_OK);
+            if (r == CBVH_OK) {
+                touch_everything(f);
+                cbvh_close(f);
+                assert_int_equal(c.live, 0);
+            }
+        }
+    }
+    free(copy);
+}
+
+static void test_changes_behind_crcs(void **state)
+{
+    (void)state;
+    static const char *const names[] = { "good-box-raw", "good-remap-u32-materials-u32-zlib", "good-box-delta16" };
+    for (size_t i = 0; i < sizeof names / sizeof names[0]; i++) {
+        input in = load_vector(names[i]);
+        check_changes(&in, 12); /* everything after the magic and the version */
+        free(in.data);
+    }
+}
+
+/* Failing allocation N, for N = 0, 1, 2 ... until the open succeeds: each failure is clean. */
+static void check_allocation_failures(const uint8_t *data, size_t size, const char *path)
+{
+    long n;
+    for (n = 0;; n++) {
+        counting c;
+        cbvh_allocator a = counting_allocator(&c, n);
+        cbvh_file *f = NULL;
+        cbvh_error err;
+        cbvh_result r = path ? cbvh_open_path(path, &a, &f, &err) : cbvh_open_memory(data, size, &a, &f, &err);
+        if (r == CBVH_OK) {
+            assert_true(c.live > 0);
+            touch_everything(f);
+            cbvh_close(f);
+            assert_int_equal(c.live, 0);
+            assert_int_equal(c.live_bytes, 0);
+            break;
+        }
+        if (r != CBVH_ERROR_OUT_OF_MEMORY)
+            fail_msg("allocation %ld failing: %s (%s)", n, cbvh_result_string(r), err.message);
+        assert_null(f);
+        assert_int_equal(c.live, 0);
+        assert_true(n < 1000);
+    }
+    assert_true(n >= 1); /* at least the handle is allocated */
+}
+
+static void test_allocation_failures(void **state)
+{
+    (void)state;
+    for (size_t i = 0; i < VALID_VECTOR_COUNT; i++) {
+        input in = load_vector(valid_vectors[i]);
+        check_allocation_failures(in.data, in.size, NULL);
+        check_allocation_failures(NULL, 0, vector_path(in.name));
+        uint8_t *shifted = malloc(in.size + 1);
+        assert_non_null(shifted);
+        memcpy(shifted + 1, in.data, in.size);
+        check_allocation_failures(shifted + 1, in.size, NULL);
+        free(shifted);
+        free(in.data);
+    }
+}
+
+static void test_arguments(void **state)
+{
+    (void)state;
+    input in = load_vector("good-box-raw");
+    cbvh_file *f = (cbvh_file *)&in; /* must be overwritten with NULL on failure */
+    cbvh_error err;
+    assert_int_equal(cbvh_open_memory(in.data, in.size, NULL, NULL, &err), CBVH_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(cbvh_open_memory(NULL, 10, NULL, &f, &err), CBVH_ERROR_INVALID_ARGUMENT);
+    assert_null(f);
+    f = (cbvh_file *)&in;
+    assert_int_equal(cbvh_open_path(NULL, NULL, &f, &err), CBVH_ERROR_INVALID_ARGUMENT);
+    assert_null(f);
+    assert_int_equal(cbvh_open_path(vector_path("good-box-raw"), NULL, NULL, NULL), CBVH_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(cbvh_open_memory(NULL, 0, NULL, &f, &err), CBVH_ERROR_CORRUPT);
+    assert_null(f);
+    assert_int_equal(cbvh_open_memory(in.data, in.size, NULL, &f, NULL), CBVH_OK); /* err may be NULL */
+    cbvh_close(f);
+    cbvh_close(NULL);
+    cbvh_file_info info;
+    cbvh_file_get_info(NULL, &info);
+    assert_int_equal(info.triangle_count, 0);
+    float v[3][3];
+    assert_int_equal(cbvh_file_get_triangle(NULL, 0, v[0], v[1], v[2]), 0);
+    assert_int_equal(cbvh_file_get_material(NULL, 0), 0);
+    assert_int_equal(cbvh_file_get_section(NULL, 0, NULL), 0);
+    free(in.data);
+}
+
+static void test_path_errors(void **state)
+{
+    (void)state;
+    char dir[] = "/tmp/cbvh-test-load-XXXXXX";
+    assert_non_null(mkdtemp(dir));
+    char path[256];
+    cbvh_file *f = NULL;
+    cbvh_error err;
+    snprintf(path, sizeof path, "%s/missing.cbvh", dir);
+    assert_int_equal(cbvh_open_path(path, NULL, &f, &err), CBVH_ERROR_IO);
+    assert_non_null(strstr(err.message, "missing.cbvh"));
+    assert_int_equal(cbvh_open_path(dir, NULL, &f, &err), CBVH_ERROR_IO);
+    assert_non_null(strstr(err.message, "not a regular file"));
+    snprintf(path, sizeof path, "%s/empty.cbvh", dir);
+    FILE *fp = fopen(path, "wb");
+    assert_non_null(fp);
+    fclose(fp);
+    assert_int_equal(cbvh_open_path(path, NULL, &f, &err), CBVH_ERROR_CORRUPT);
+    assert_non_null(strstr(err.message, "empty"));
+    assert_null(f);
+    unlink(path);
+    rmdir(dir);
+}
+
+/* ------------------------------------------------------------------ tests on cooked files */
+
+static int degenerate_input(const random_mesh *m, size_t t)
+{
+    const uint32_t *i = m->indices + 3 * t;
+    return i[0] == i[1] || i[1] == i[2] || i[0] == i[2];
+}
+
+/* Exact for float vertices; within a grid step (and an ulp of the coordinate) for 16-bit ones. */
+static int near(float got, float want, float scale)
+{
+    return fabsf(got - want) <= scale + 2.0f * (nextafterf(fabsf(want), INFINITY) - fabsf(want));
+}
+
+static int same_as_input(const random_mesh *m, size_t t, float v[3][3], const cbvh_file_info *info)
+{
+    for (int k = 0; k < 3; k++)
+        for (int a = 0; a < 3; a++) {
+            float want = m->positions[3 * m->indices[3 * t + k] + a];
+            float scale = info->vertex_format == CBVH_VERTEX_FLOAT32 ? 0.0f : info->grid_scale[a];
+            if (!near(v[k][a], want, scale))
+                return 0;
+        }
+    return 1;
+}
+
+/* Cooked keeping original ids, triangle id t is input triangle t (degenerate ones, dropped, are absent);
+ * the cooker may leave REMAP out when the cooked order is the input order. */
+static void check_round_trip(const cbvh_file *f, const random_mesh *m)
+{
+    cbvh_file_info info;
+    cbvh_file_get_info(f, &info);
+    size_t kept = 0;
+    uint32_t first_material = CBVH_NO_HIT;
+    int all_equal = 1;
+    for (size_t t = 0; t < m->mesh.triangle_count; t++) {
+        float v[3][3];
+        int got = cbvh_file_get_triangle(f, (uint32_t)t, v[0], v[1], v[2]);
+        if (degenerate_input(m, t)) {
+            assert_int_equal(got, 0);
+            continue;
+        }
+        kept++;
+        assert_int_equal(got, 1);
+        if (!same_as_input(m, t, v, &info))
+            fail_msg("triangle %zu differs from the input", t);
+        /* MATERIALS is left out when all kept ids are equal; the reader then reports 0 */
+        assert_int_equal(cbvh_file_get_material(f, (uint32_t)t), info.has_materials ? m->materials[t] : 0);
+        if (first_material == CBVH_NO_HIT)
+            first_material = m->materials[t];
+        all_equal &= m->materials[t] == first_material;
+    }
+    assert_int_equal(info.triangle_count, kept);
+    assert_int_equal(info.has_materials, !all_equal);
+}
+
+/* A triangle as 9 coordinates and its material, ordered bitwise, to compare two sets of triangles. */
+typedef struct record {
+    float v[9];
+    uint32_t material;
+} record;
+
+static int compare_records(const void *a, const void *b)
+{
+    return memcmp(a, b, sizeof(record));
+}
+
+/* Without REMAP, the ids are cooked ids: the triangles are the kept input triangles in some order. */
+static void check_cooked_ids(const cbvh_file *f, const random_mesh *m)
+{
+    cbvh_file_info info;
+    cbvh_file_get_info(f, &info);
+    assert_int_equal(info.has_remap, 0);
+    assert_int_equal(info.vertex_format, CBVH_VERTEX_FLOAT32); /* exact comparison */
+    record *got = calloc(info.triangle_count, sizeof *got);
+    record *want = calloc(m->mesh.triangle_count, sizeof *want);
+    assert_true(got && want);
+    for (uint32_t id = 0; id < info.triangle_count; id++) {
+        float v[3][3];
+        assert_int_equal(cbvh_file_get_triangle(f, id, v[0], v[1], v[2]), 1);
+        memcpy(got[id].v, v, sizeof v);
+        got[id].material = cbvh_file_get_material(f, id);
+    }
+    size_t kept = 0;
+    for (size_t t = 0; t < m->mesh.triangle_count; t++) {
+        if (degenerate_input(m, t))
+            continue;
+        for (int k = 0; k < 9; k++)
+            want[kept].v[k] = m->positions[3 * m->indices[3 * t + k / 3] + k % 3];
+        want[kept++].material = m->materials[t];
+    }
+    assert_int_equal(kept, info.triangle_count);
+    qsort(got, kept, sizeof *got, compare_records);
+    qsort(want, kept, sizeof *want, compare_records);
+    assert_memory_equal(got, want, kept * sizeof *got);
+    free(got);
+    free(want);
+}
+
+static void test_cooked_files(void **state)
+{
+    (void)state;
+    random_mesh m = make_random_mesh(42, 3000, 5000);
+    for (int keep_remap = 1; keep_remap >= 0; keep_remap--)
+        for (int compress = 0; compress <= 6; compress += 6)
+            for (int format = 0; format <= keep_remap; format++) {
+                input in = cook_input("random", &m, compress, (cbvh_vertex_format)format, keep_remap);
+                counting c;
+                cbvh_file *f = NULL;
+                cbvh_error err;
+                if (open_counted(in.data, in.size, -1, &c, &f, &err) != CBVH_OK)
+                    fail_msg("cooked file (compress %d, format %d, remap %d): %s", compress, format, keep_remap,
+                             err.message);
+                if (keep_remap)
+                    check_round_trip(f, &m);
+                else
+                    check_cooked_ids(f, &m);
+                cbvh_close(f);
+                assert_int_equal(c.live, 0);
+                free(in.data);
+            }
+    free_random_mesh(&m);
+}
+
+/* Meshes of many sizes (one triangle to a few thousand, u16 and u32 indices), through a file on disk. */
+static void test_cooked_sizes_by_path(void **state)
+{
+    (void)state;
+    char dir[] = "/tmp/cbvh-test-load-XXXXXX";
+    assert_non_null(mkdtemp(dir));
+    char path[256];
+    snprintf(path, sizeof path, "%s/mesh.cbvh", dir);
+    static const size_t sizes[][2] = { { 3, 1 }, { 4, 2 }, { 10, 7 }, { 100, 300 }, { 100000, 60000 } };
+    for (size_t i = 0; i < sizeof sizes / sizeof sizes[0]; i++) {
+        random_mesh m = make_random_mesh(1000 + i, sizes[i][0], sizes[i][1]);
+        if (sizes[i][1] <= 2) /* no degenerate triangle: all have distinct corners */
+            for (size_t k = 0; k < 3 * sizes[i][1]; k++)
+                m.indices[k] = (uint32_t)(k % 3 + k / 3);
+        cbvh_cook_options o;
+        cbvh_cook_options_init(&o);
+        o.compress_level = (int)(i % 2) * 9;
+        cbvh_error err;
+        if (cbvh_cook_to_path(&m.mesh, &o, NULL, path, NULL, &err) != CBVH_OK)
+            fail_msg("cook: %s", err.message);
+        cbvh_file *f = NULL;
+        if (cbvh_open_path(path, NULL, &f, &err) != CBVH_OK)
+            fail_msg("open %zu triangles: %s", sizes[i][1], err.message);
+        check_round_trip(f, &m);
+        cbvh_close(f);
+        free_random_mesh(&m);
+    }
+    unlink(path);
+    rmdir(dir);
+}
+
+static void test_cooked_truncations_and_allocations(void **state)
+{
+    (void)state;
+    random_mesh m = make_random_mesh(7, 400, 600);
+    for (int compress = 0; compress <= 6; compress += 6) {
+        input in = cook_input("small cooked", &m, compress, CBVH_VERTEX_FLOAT32, 1);
+        check_truncations(&in, 61);
+        check_allocation_failures(in.data, in.size, NULL);
+        free(in.data);
+    }
+    free_random_mesh(&m);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_path_and_memory_agree),
+        cmocka_unit_test(test_unaligned_buffer),
+        cmocka_unit_test(test_truncations),
+        cmocka_unit_test(test_flipped_bytes),
+        cmocka_unit_test(test_changes_behind_crcs),
+        cmocka_unit_test(test_allocation_failures),
+        cmocka_unit_test(test_arguments),
+        cmocka_unit_test(test_path_errors),
+        cmocka_unit_test(test_cooked_files),
+        cmocka_unit_test(test_cooked_sizes_by_path),
+        cmocka_unit_test(test_cooked_truncations_and_allocations),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
