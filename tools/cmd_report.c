@@ -1,0 +1,852 @@
+/* cmd_report.c: `cbvh report`: every precision and layout choice of the format, error and run time side by side. */
+#include <ctype.h>
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "bench_input.h"
+#include "bench_run.h"
+#include "brute_force.h"
+#include "cli.h"
+#include "commands.h"
+#include "json.h"
+#include "progress.h"
+#include "report_exact.h"
+#include "support/rays.h"
+#include "svg_plot.h"
+#include "tree_stats.h"
+
+static const char usage[] =
+    "Usage: cbvh report [OPTIONS] MESH...\n"
+    "\n"
+    "For each MESH (a mesh file assimp reads, or gen:SPEC; --gen SPEC adds a generated scene)\n"
+    "cooks every precision and layout choice the format offers and measures error and run\n"
+    "time side by side:\n"
+    "  - node boxes: exact float boxes (an in-memory reference layout of the same tree) against\n"
+    "    the file's 16-bit quantized boxes;\n"
+    "  - vertices: lossless float against 16-bit quantized;\n"
+    "  - leaf sizes 1, 2, 4, 8, 16;\n"
+    "  - traversals: sorted by the precomputed sort byte, unsorted, distance-sorted at run time,\n"
+    "    stackless, batched streams.\n"
+    "Error columns: box inflation (surface area over the exact box, mean and worst), extra nodes\n"
+    "and triangles visited per ray against the exact-float reference, hit/miss flips and wrong\n"
+    "triangles against a double-precision brute force on a sample of the rays, distance error\n"
+    "(max and RMS of |t - t_ref| over the scene diagonal), vertex error, and rays leaked through\n"
+    "shared edges and vertices (rays from inside a closed mesh aimed exactly at its vertices and\n"
+    "edge midpoints that miss; closed meshes only). Run time: MRays/s closest and any hit on\n"
+    "incoherent rays (one thread, median of the repetitions), open time, bytes per triangle.\n"
+    "A markdown table goes to stdout.\n"
+    "\n"
+    "Options:\n"
+    "  --gen SPEC      add a generated scene (sphere:N, terrain:N, soup:N, cube, demo)\n"
+    "  --rays N        timed incoherent rays per configuration (default 200000)\n"
+    "  --sample N      of which the first N are checked by brute force (default 2000)\n"
+    "  --seed S        ray generator seed (default 1)\n"
+    "  --reps R        timed repetitions, the median is reported (default 3)\n"
+    "  --out DIR       write report.md, report.json, report.svg and the cooked files into DIR\n"
+    "  --json FILE     write the figures as JSON to FILE\n"
+    "  --svg FILE      write a plot of error against run time to FILE\n"
+    "  --quiet         no progress display\n"
+    "  -h, --help      show this help\n"
+    "\n"
+    "Exit status: 0 done, 1 an input is not a usable mesh, 2 usage or I/O error.\n";
+
+enum { OPT_GEN = 1, OPT_RAYS, OPT_SAMPLE, OPT_SEED, OPT_REPS, OPT_OUT, OPT_JSON, OPT_SVG, OPT_QUIET };
+
+static const cli_option options[] = {
+    { "gen", CLI_ARG_REQUIRED, OPT_GEN },   { "rays", CLI_ARG_REQUIRED, OPT_RAYS },
+    { "sample", CLI_ARG_REQUIRED, OPT_SAMPLE }, { "seed", CLI_ARG_REQUIRED, OPT_SEED },
+    { "reps", CLI_ARG_REQUIRED, OPT_REPS }, { "out", CLI_ARG_REQUIRED, OPT_OUT },
+    { "json", CLI_ARG_REQUIRED, OPT_JSON }, { "svg", CLI_ARG_REQUIRED, OPT_SVG },
+    { "quiet", CLI_ARG_NONE, OPT_QUIET },   { NULL, 0, 0 },
+};
+
+/* A hit on another triangle within this fraction of the diagonal is a tie on a shared edge, not a wrong triangle. */
+#define TIE_TOLERANCE 1e-5
+/* Vertices and edge midpoints aimed at by the leak test, at most, each. */
+#define LEAK_TARGETS 5000
+
+/* The cooks of one mesh: every leaf size with lossless vertices, and quantized vertices at the default leaf size. */
+static const struct {
+    uint32_t leaf;
+    int quantized_vertices;
+} cook_configs[] = { { 1, 0 }, { 2, 0 }, { 4, 0 }, { 8, 0 }, { 16, 0 }, { 4, 1 } };
+#define COOK_COUNT (sizeof cook_configs / sizeof cook_configs[0])
+#define DEFAULT_LEAF 4
+
+typedef struct report_row {
+    const char *mesh;
+    char config[64];
+    uint32_t leaf;
+    int quantized_vertices, float_boxes;
+    const char *traversal;
+    double bytes_per_triangle, open_seconds;
+    double closest_mrays, any_mrays;
+    double nodes_per_ray, tris_per_ray, extra_nodes, extra_tris;
+    double inflation_mean, inflation_worst;
+    uint64_t compared, flips, wrong_triangle;
+    double t_err_max, t_err_rms;
+    double vertex_error;
+    int64_t leaks; /* -1: the mesh is not closed */
+    uint64_t leak_rays;
+} report_row;
+
+typedef struct report_state {
+    const char *command;
+    size_t rays, sample;
+    uint64_t seed;
+    unsigned reps;
+    const char *out_dir, *json_path, *svg_path;
+    progress prog;
+    report_row *rows;
+    size_t row_count, row_capacity;
+} report_state;
+
+/* What one mesh's rows are measured with. */
+typedef struct mesh_ctx {
+    bench_mesh mesh;
+    const char *label; /* short name for the plot */
+    double diagonal;
+    cbvh_ray *rays;    /* rays incoherent rays; the first `sample` are checked by brute force */
+    cbvh_hit *hits;
+    uint8_t *occluded;
+    uint32_t *ref_tri; /* brute-force answers for the sample */
+    double *ref_t;
+    int closed;
+    cbvh_ray *leak;
+    size_t leak_count;
+} mesh_ctx;
+
+/* ------------------------------------------------------------------ */
+/* Double-precision brute force                                        */
+/* ------------------------------------------------------------------ */
+
+static void load_triangle(const bench_mesh *m, size_t tri, double v[3][3])
+{
+    for (int k = 0; k < 3; k++) {
+        const float *p = m->positions + 3 * (size_t)m->indices[3 * tri + k];
+        for (int a = 0; a < 3; a++)
+            v[k][a] = p[a];
+    }
+}
+
+/* Closest hit over every triangle: O(triangles). Returns the triangle or CBVH_NO_HIT. */
+static uint32_t brute_closest(const bench_mesh *m, const double org[3], const double dir[3], double tmin, double tmax,
+                              double *t_out)
+{
+    uint32_t best = CBVH_NO_HIT;
+    double best_t = tmax;
+    for (size_t i = 0; i < m->triangle_count; i++) {
+        double v[3][3], t, u, w, margin;
+        load_triangle(m, i, v);
+        if (bf_ray_triangle(org, dir, tmin, best_t, v[0], v[1], v[2], &t, &u, &w, &margin) &&
+            (t < best_t || best == CBVH_NO_HIT)) {
+            best_t = t;
+            best = (uint32_t)i;
+        }
+    }
+    *t_out = best_t;
+    return best;
+}
+
+typedef struct brute_engine {
+    const bench_mesh *mesh;
+    const cbvh_ray *base; /* the sample: answers go to the same index in ref_tri / ref_t */
+    uint32_t *ref_tri;
+    double *ref_t;
+} brute_engine;
+
+/* A bench_kernel, so the brute force runs on every core. */
+static void brute_kernel(const void *engine, const cbvh_ray *rays, size_t count, cbvh_hit *hits, uint8_t *occluded,
+                         cbvh_query_stats *stats)
+{
+    const brute_engine *e = engine;
+    for (size_t k = 0; k < count; k++) {
+        const cbvh_ray *r = &rays[k];
+        size_t i = (size_t)(r - e->base);
+        double org[3] = { r->org[0], r->org[1], r->org[2] }, dir[3] = { r->dir[0], r->dir[1], r->dir[2] };
+        e->ref_tri[i] = brute_closest(e->mesh, org, dir, r->tmin, r->tmax, &e->ref_t[i]);
+    }
+}
+
+/* ------------------------------------------------------------------ */
+/* Closed meshes: rays aimed at shared vertices and edges from inside  */
+/* ------------------------------------------------------------------ */
+
+static const float *sort_positions; /* qsort has no user pointer */
+
+static int compare_vertex(const void *a, const void *b)
+{
+    const float *p = sort_positions + 3 * (size_t)*(const uint32_t *)a, *q = sort_positions + 3 * (size_t)*(const uint32_t *)b;
+    for (int k = 0; k < 3; k++)
+        if (p[k] != q[k])
+            return p[k] < q[k] ? -1 : 1;
+    return 0;
+}
+
+static int compare_u64(const void *a, const void *b)
+{
+    uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
+    return (x > y) - (x < y);
+}
+
+/* Sorted edges (lower vertex id in the high half) of the mesh with equal positions
+ * welded, degenerate triangles left out; *closed says whether every edge has
+ * exactly two triangles. Returns the unique edges (caller frees) or NULL. */
+static uint64_t *closed_edges(const bench_mesh *m, size_t *unique_count, int *closed)
+{
+    size_t nv = m->vertex_count, nt = m->triangle_count;
+    uint32_t *order = malloc(nv * sizeof *order), *canon = malloc(nv * sizeof *canon);
+    uint64_t *edges = malloc(3 * nt * sizeof *edges);
+    if (!order || !canon || !edges) {
+        free(order);
+        free(canon);
+        free(edges);
+        return NULL;
+    }
+    for (size_t i = 0; i < nv; i++)
+        order[i] = (uint32_t)i;
+    sort_positions = m->positions;
+    qsort(order, nv, sizeof *order, compare_vertex);
+    for (size_t i = 0; i < nv; i++)
+        canon[order[i]] = i > 0 && compare_vertex(&order[i - 1], &order[i]) == 0 ? canon[order[i - 1]] : order[i];
+    free(order);
+    size_t n = 0;
+    for (size_t t = 0; t < nt; t++) {
+        uint32_t v[3];
+        for (int k = 0; k < 3; k++)
+            v[k] = canon[m->indices[3 * t + k]];
+        if (v[0] == v[1] || v[1] == v[2] || v[0] == v[2])
+            continue;
+        for (int k = 0; k < 3; k++) {
+            uint32_t a = v[k], b = v[(k + 1) % 3];
+            edges[n++] = a < b ? (uint64_t)a << 32 | b : (uint64_t)b << 32 | a;
+        }
+    }
+    free(canon);
+    qsort(edges, n, sizeof *edges, compare_u64);
+    size_t u = 0;
+    *closed = n > 0;
+    for (size_t i = 0; i < n;) {
+        size_t j = i;
+        while (j < n && edges[j] == edges[i])
+            j++;
+        if (j - i != 2)
+            *closed = 0;
+        edges[u++] = edges[i];
+        i = j;
+    }
+    *unique_count = u;
+    return edges;
+}
+
+/* A point inside a closed mesh: halfway between where a ray from outside
+ * first enters the mesh and where it next crosses the surface. */
+static int interior_point(const bench_mesh *m, double diagonal, float out[3])
+{
+    static const double tries[][3] = { { 0.5773, 0.5774, 0.5773 }, { -0.2673, 0.5345, 0.8018 },
+                                       { 0.8729, -0.2182, 0.4364 }, { -0.4082, -0.4082, 0.8165 },
+                                       { 0.1, 0.98, -0.17 },         { -0.9, 0.3, -0.316 } };
+    float lo[3], hi[3];
+    rays_mesh rm = { m->positions, m->vertex_count, m->indices, m->triangle_count };
+    rays_mesh_bounds(&rm, lo, hi);
+    for (size_t k = 0; k < sizeof tries / sizeof tries[0]; k++) {
+        double n = sqrt(tries[k][0] * tries[k][0] + tries[k][1] * tries[k][1] + tries[k][2] * tries[k][2]);
+        double dir[3], org[3], t1, t2;
+        for (int a = 0; a < 3; a++) {
+            dir[a] = tries[k][a] / n;
+            org[a] = 0.5 * ((double)lo[a] + hi[a]) - dir[a] * diagonal;
+        }
+        if (brute_closest(m, org, dir, 0.0, 4.0 * diagonal, &t1) == CBVH_NO_HIT)
+            continue;
+        if (brute_closest(m, org, dir, t1 + 1e-7 * diagonal, 4.0 * diagonal, &t2) == CBVH_NO_HIT ||
+            t2 - t1 < 1e-4 * diagonal)
+            continue;
+        for (int a = 0; a < 3; a++)
+            out[a] = (float)(org[a] + 0.5 * (t1 + t2) * dir[a]);
+        return 1;
+    }
+    return 0;
+}
+
+static void leak_ray(cbvh_ray *r, const float from[3], const float to[3])
+{
+    for (int a = 0; a < 3; a++) {
+        r->org[a] = from[a];
+        r->dir[a] = to[a] - from[a];
+    }
+    r->tmin = 0.0f;
+    r->tmax = INFINITY;
+}
+
+/* Rays from inside a closed mesh at its vertices and edge midpoints: every one must hit. */
+static int make_leak_rays(mesh_ctx *c)
+{
+    size_t edge_count;
+    uint64_t *edges = closed_edges(&c->mesh, &edge_count, &c->closed);
+    if (!edges)
+        return 0;
+    float inside[3];
+    if (!c->closed || !interior_point(&c->mesh, c->diagonal, inside)) {
+        c->closed = 0;
+        free(edges);
+        return 1;
+    }
+    size_t nv = edge_count < LEAK_TARGETS ? edge_count : LEAK_TARGETS;
+    c->leak = malloc(2 * nv * sizeof *c->leak);
+    if (!c->leak) {
+        free(edges);
+        return 0;
+    }
+    size_t n = 0;
+    for (size_t k = 0; k < nv; k++) {
+        uint64_t e = edges[k * edge_count / nv];
+        const float *a = c->mesh.positions + 3 * (size_t)(e >> 32), *b = c->mesh.positions + 3 * (size_t)(uint32_t)e;
+        float mid[3];
+        for (int i = 0; i < 3; i++)
+            mid[i] = a[i] + (b[i] - a[i]) * 0.5f;
+        leak_ray(&c->leak[n++], inside, a); /* a vertex (each edge's lower end: spread over the mesh) */
+        leak_ray(&c->leak[n++], inside, mid);
+    }
+    c->leak_count = n;
+    free(edges);
+    return 1;
+}
+
+/* ------------------------------------------------------------------ */
+/* Measuring one configuration                                         */
+/* ------------------------------------------------------------------ */
+
+/* The exact-float reference layout as a bench engine. */
+static void exact_kernel(const void *engine, const cbvh_ray *rays, size_t count, cbvh_hit *hits, uint8_t *occluded,
+                         cbvh_query_stats *stats)
+{
+    if (hits)
+        for (size_t i = 0; i < count; i++)
+            exact_raycast(engine, &rays[i], &hits[i], stats);
+    else
+        for (size_t i = 0; i < count; i++)
+            occluded[i] = (uint8_t)exact_occluded(engine, &rays[i], stats);
+}
+
+static double median_open(const report_state *s, const char *path, int *status)
+{
+    double times[64];
+    unsigned n = s->reps < 64 ? s->reps : 64;
+    for (unsigned r = 0; r < n; r++) {
+        cbvh_file *f = NULL;
+        double start = cli_now();
+        *status = cli_open(s->command, path, &f);
+        times[r] = cli_now() - start;
+        cbvh_close(f);
+        if (*status)
+            return 0.0;
+    }
+    for (unsigned i = 1; i < n; i++)
+        for (unsigned j = i; j > 0 && times[j] < times[j - 1]; j--) {
+            double t = times[j];
+            times[j] = times[j - 1];
+            times[j - 1] = t;
+        }
+    return n % 2 ? times[n / 2] : 0.5 * (times[n / 2 - 1] + times[n / 2]);
+}
+
+/* Times closest and any hit, counts the work, and compares the answers with the brute force and the leak test. */
+static int measure(const report_state *s, mesh_ctx *c, bench_kernel kernel, const void *engine, report_row *row)
+{
+    bench_job job = { kernel, engine, c->rays, s->rays, c->hits, NULL };
+    cbvh_query_stats st = { 0, 0 };
+    double t = bench_run_once(&job, 1, &st);
+    double closest = t >= 0.0 ? bench_run_median(&job, 1, s->reps) : -1.0;
+    job.hits = NULL;
+    job.occluded = c->occluded;
+    double any = closest >= 0.0 ? bench_run_median(&job, 1, s->reps) : -1.0;
+    if (any < 0.0)
+        return 0;
+    row->closest_mrays = (double)s->rays / closest * 1e-6;
+    row->any_mrays = (double)s->rays / any * 1e-6;
+    row->nodes_per_ray = (double)st.nodes_visited / (double)s->rays;
+    row->tris_per_ray = (double)st.triangles_tested / (double)s->rays;
+
+    /* The closest-hit pass left its answers in c->hits; the sample is its first rays. */
+    double sum2 = 0.0, worst = 0.0;
+    uint64_t both = 0;
+    row->compared = s->sample;
+    for (size_t i = 0; i < s->sample; i++) {
+        const cbvh_hit *h = &c->hits[i];
+        int hit = h->tri != CBVH_NO_HIT, ref = c->ref_tri[i] != CBVH_NO_HIT;
+        if (hit != ref) {
+            row->flips++;
+            continue;
+        }
+        if (!hit)
+            continue;
+        const float *d = c->rays[i].dir;
+        double len = sqrt((double)d[0] * d[0] + (double)d[1] * d[1] + (double)d[2] * d[2]);
+        double err = fabs((double)h->t - c->ref_t[i]) * len / c->diagonal;
+        if (h->tri != c->ref_tri[i] && err > TIE_TOLERANCE)
+            row->wrong_triangle++;
+        sum2 += err * err;
+        worst = fmax(worst, err);
+        both++;
+    }
+    row->t_err_max = worst;
+    row->t_err_rms = both ? sqrt(sum2 / (double)both) : 0.0;
+
+    row->leaks = -1;
+    if (c->closed) {
+        bench_job leak = { kernel, engine, c->leak, c->leak_count, c->hits, NULL };
+        bench_run_once(&leak, 1, NULL);
+        row->leaks = 0;
+        for (size_t i = 0; i < c->leak_count; i++)
+            row->leaks += c->hits[i].tri == CBVH_NO_HIT;
+        row->leak_rays = c->leak_count;
+    }
+    return 1;
+}
+
+static report_row *new_row(report_state *s)
+{
+    if (s->row_count == s->row_capacity) {
+        size_t cap = s->row_capacity ? 2 * s->row_capacity : 32;
+        report_row *rows = realloc(s->rows, cap * sizeof *rows);
+        if (!rows)
+            return NULL;
+        s->rows = rows;
+        s->row_capacity = cap;
+    }
+    report_row *r = &s->rows[s->row_count++];
+    memset(r, 0, sizeof *r);
+    return r;
+}
+
+/* A file name for the cooked file of a configuration: the mesh's base name without odd characters. */
+static void cooked_path(const report_state *s, const mesh_ctx *c, uint32_t leaf, int qverts, char *path, size_t size)
+{
+    const char *base = strrchr(c->mesh.name, '/');
+    base = base ? base + 1 : c->mesh.name;
+    char clean[96];
+    size_t n = 0;
+    for (; *base && n + 1 < sizeof clean; base++)
+        clean[n++] = (isalnum((unsigned char)*base) || *base == '_' || *base == '-') ? *base : '_';
+    clean[n] = '\0';
+    snprintf(path, size, "%s/%s-leaf%u%s.cbvh", s->out_dir, clean, (unsigned)leaf, qverts ? "-qverts" : "");
+}
+
+static int measure_cook(report_state *s, mesh_ctx *c, size_t k, int *step, int steps)
+{
+    uint32_t leaf = cook_configs[k].leaf;
+    int qverts = cook_configs[k].quantized_vertices;
+    char label[128];
+    snprintf(label, sizeof label, "%s: cook leaf %u%s", c->label, (unsigned)leaf, qverts ? ", quantized vertices" : "");
+    progress_update(&s->prog, label, (double)(*step)++ / steps);
+
+    cbvh_cook_options opt;
+    cbvh_cook_options_init(&opt);
+    opt.max_leaf_size = leaf;
+    opt.vertex_format = qverts ? CBVH_VERTEX_QUANTIZED16 : CBVH_VERTEX_FLOAT32;
+    cbvh_mesh view = bench_mesh_view(&c->mesh);
+    cbvh_cook_stats stats;
+    cbvh_error err;
+    char path[1024];
+    int status = 0;
+    if (s->out_dir) {
+        cooked_path(s, c, leaf, qverts, path, sizeof path);
+        if (cbvh_cook_to_path(&view, &opt, NULL, path, &stats, &err) != CBVH_OK)
+            status = cli_report(s->command, path, &err);
+    } else {
+        void *data = NULL;
+        size_t bytes = 0;
+        if (cbvh_cook(&view, &opt, NULL, &data, &bytes, &stats, &err) != CBVH_OK)
+            status = cli_report(s->command, c->mesh.name, &err);
+        else
+            status = bench_write_temp(s->command, data, bytes, path, sizeof path);
+        cbvh_buffer_free(NULL, data);
+    }
+    if (status) {
+        progress_done(&s->prog);
+        return status;
+    }
+    uint64_t size = stats.file_size;
+    double open_seconds = median_open(s, path, &status);
+    cbvh_file *file = NULL;
+    if (!status)
+        status = cli_open(s->command, path, &file);
+    if (!s->out_dir)
+        unlink(path);
+    if (status)
+        return status;
+
+    exact_tree exact;
+    tree_stats ts;
+    if (!exact_tree_build(&exact, file) || !tree_stats_compute(file, 1.0, 1.0, &ts)) {
+        cbvh_close(file);
+        cli_error(s->command, NULL, "out of memory");
+        return CLI_EXIT_USAGE;
+    }
+    /* The exact-float reference of this very tree: the baseline of the extra work columns. */
+    report_row base;
+    memset(&base, 0, sizeof base);
+    status = CLI_EXIT_USAGE;
+    if (!measure(s, c, exact_kernel, &exact, &base))
+        goto done;
+    /* One row per traversal for the default cook, the sorted traversal for the others,
+     * and the reference layout itself for the default cook. */
+    int variants = leaf == DEFAULT_LEAF && !qverts ? BENCH_CBVH_VARIANTS : 1;
+    for (int v = -1; v < variants; v++) {
+        if (v < 0 && (leaf != DEFAULT_LEAF || qverts))
+            continue;
+        report_row *row = new_row(s);
+        if (!row)
+            goto done;
+        bench_cbvh engine;
+        if (v >= 0) {
+            bench_cbvh_variant(&engine, file, v);
+            if (v > 0)
+                (*step)++;
+            snprintf(label, sizeof label, "%s: leaf %u%s, %s", c->label, (unsigned)leaf, qverts ? " qverts" : "",
+                     engine.name);
+            progress_update(&s->prog, label, (double)*step / steps);
+            if (!measure(s, c, bench_cbvh_kernel, &engine, row))
+                goto done;
+        } else {
+            *row = base;
+        }
+        row->mesh = c->mesh.name;
+        row->leaf = leaf;
+        row->quantized_vertices = qverts;
+        row->float_boxes = v < 0;
+        row->traversal = v < 0 ? "sorted" : engine.name;
+        snprintf(row->config, sizeof row->config, "leaf %u, %s boxes, %s vertices, %s", (unsigned)leaf,
+                 v < 0 ? "float" : "q16", qverts ? "q16" : "float", row->traversal);
+        row->bytes_per_triangle = (double)size / (double)c->mesh.triangle_count;
+        row->open_seconds = v < 0 ? -1.0 : open_seconds;
+        row->extra_nodes = row->nodes_per_ray - base.nodes_per_ray;
+        row->extra_tris = row->tris_per_ray - base.tris_per_ray;
+        row->inflation_mean = v < 0 ? 0.0 : ts.inflation_mean;
+        row->inflation_worst = v < 0 ? 0.0 : ts.inflation_max;
+        row->vertex_error = stats.vertex_max_error / c->diagonal;
+    }
+    status = 0;
+done:
+    if (status)
+        cli_error(s->command, NULL, "out of memory or cannot start a thread");
+    exact_tree_free(&exact);
+    cbvh_close(file);
+    return status;
+}
+
+static void mesh_ctx_free(mesh_ctx *c)
+{
+    free(c->rays);
+    free(c->hits);
+    free(c->occluded);
+    free(c->ref_tri);
+    free(c->ref_t);
+    free(c->leak);
+    bench_mesh_free(&c->mesh);
+}
+
+static int report_mesh(report_state *s, const char *source, int generated)
+{
+    mesh_ctx c;
+    memset(&c, 0, sizeof c);
+    int status = bench_mesh_load(s->command, source, generated, &c.mesh);
+    if (status)
+        return status;
+    c.label = strrchr(source, '/') ? strrchr(source, '/') + 1 : source;
+    rays_mesh rm = { c.mesh.positions, c.mesh.vertex_count, c.mesh.indices, c.mesh.triangle_count };
+    float lo[3], hi[3];
+    c.diagonal = rays_mesh_bounds(&rm, lo, hi);
+    if (!(c.diagonal > 0.0)) {
+        cli_error(s->command, source, "the mesh has no extent");
+        mesh_ctx_free(&c);
+        return CLI_EXIT_BAD_INPUT;
+    }
+    c.rays = malloc(s->rays * sizeof *c.rays);
+    c.hits = malloc((s->rays > 2 * LEAK_TARGETS ? s->rays : 2 * LEAK_TARGETS) * sizeof *c.hits);
+    c.occluded = malloc(s->rays);
+    c.ref_tri = malloc(s->sample * sizeof *c.ref_tri);
+    c.ref_t = malloc(s->sample * sizeof *c.ref_t);
+    if (!c.rays || !c.hits || !c.occluded || !c.ref_tri || !c.ref_t) {
+        mesh_ctx_free(&c);
+        cli_error(s->command, NULL, "out of memory");
+        return CLI_EXIT_USAGE;
+    }
+    rays_generate(RAYS_INCOHERENT, &rm, s->seed, c.rays, s->rays);
+
+    char label[128];
+    snprintf(label, sizeof label, "%s: brute force on %zu rays", c.label, s->sample);
+    progress_update(&s->prog, label, -1.0);
+    brute_engine be = { &c.mesh, c.rays, c.ref_tri, c.ref_t };
+    bench_job job = { brute_kernel, &be, c.rays, s->sample, NULL, NULL };
+    long cores = sysconf(_SC_NPROCESSORS_ONLN);
+    if (bench_run_once(&job, cores > 0 ? (unsigned)cores : 1u, NULL) < 0.0 || !make_leak_rays(&c)) {
+        progress_done(&s->prog);
+        mesh_ctx_free(&c);
+        cli_error(s->command, NULL, "out of memory or cannot start a thread");
+        return CLI_EXIT_USAGE;
+    }
+    int step = 0, steps = (int)COOK_COUNT + BENCH_CBVH_VARIANTS - 1;
+    for (size_t k = 0; k < COOK_COUNT && !status; k++)
+        status = measure_cook(s, &c, k, &step, steps);
+    progress_done(&s->prog);
+    mesh_ctx_free(&c);
+    return status;
+}
+
+/* ------------------------------------------------------------------ */
+/* Output                                                              */
+/* ------------------------------------------------------------------ */
+
+static void print_table(const report_state *s, FILE *out)
+{
+    fprintf(out, "## cbvh report\n\n");
+    fprintf(out, "%zu incoherent rays per configuration (one thread, median of %u), %zu checked against a "
+                 "double-precision brute force; errors relative to the scene diagonal.\n\n",
+            s->rays, s->reps, s->sample);
+    fprintf(out, "| mesh | configuration | bytes/tri | open ms | closest MRays/s | any MRays/s | nodes/ray | tris/ray "
+                 "| extra nodes/ray | extra tris/ray | box inflation mean | box inflation worst | flips | wrong tri "
+                 "| t err max | t err RMS | vertex err | leaked rays |\n");
+    fprintf(out, "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+    for (size_t i = 0; i < s->row_count; i++) {
+        const report_row *r = &s->rows[i];
+        fprintf(out, "| %s | %s | %.2f | ", r->mesh, r->config, r->bytes_per_triangle);
+        if (r->open_seconds >= 0.0)
+            fprintf(out, "%.3f | ", r->open_seconds * 1e3);
+        else
+            fprintf(out, "- | ");
+        fprintf(out, "%.3f | %.3f | %.1f | %.2f | %+.2f | %+.3f | %.4f | %.3f | %llu | %llu | %.2e | %.2e | %.2e | ",
+                r->closest_mrays, r->any_mrays, r->nodes_per_ray, r->tris_per_ray, r->extra_nodes, r->extra_tris,
+                r->inflation_mean, r->inflation_worst, (unsigned long long)r->flips,
+                (unsigned long long)r->wrong_triangle, r->t_err_max, r->t_err_rms, r->vertex_error);
+        if (r->leaks >= 0)
+            fprintf(out, "%lld / %llu |\n", (long long)r->leaks, (unsigned long long)r->leak_rays);
+        else
+            fprintf(out, "n/a (not closed) |\n");
+    }
+}
+
+static int write_json(const report_state *s, const char *path)
+{
+    FILE *out = fopen(path, "w");
+    if (!out) {
+        cli_error(s->command, path, "cannot write: %s", strerror(errno));
+        return CLI_EXIT_USAGE;
+    }
+    json_writer w;
+    json_init(&w, out);
+    json_begin_object(&w, NULL);
+    json_string(&w, "command", "report");
+    json_uint(&w, "rays", s->rays);
+    json_uint(&w, "sample", s->sample);
+    json_uint(&w, "seed", s->seed);
+    json_uint(&w, "reps", s->reps);
+    json_double(&w, "tie_tolerance", TIE_TOLERANCE);
+    json_begin_array(&w, "rows");
+    for (size_t i = 0; i < s->row_count; i++) {
+        const report_row *r = &s->rows[i];
+        json_begin_object(&w, NULL);
+        json_string(&w, "mesh", r->mesh);
+        json_string(&w, "configuration", r->config);
+        json_uint(&w, "leaf_size", r->leaf);
+        json_string(&w, "boxes", r->float_boxes ? "float" : "q16");
+        json_string(&w, "vertices", r->quantized_vertices ? "q16" : "float");
+        json_string(&w, "traversal", r->traversal);
+        json_double(&w, "bytes_per_triangle", r->bytes_per_triangle);
+        if (r->open_seconds >= 0.0)
+            json_double(&w, "open_seconds", r->open_seconds);
+        else
+            json_null(&w, "open_seconds");
+        json_double(&w, "closest_mrays_per_s", r->closest_mrays);
+        json_double(&w, "any_mrays_per_s", r->any_mrays);
+        json_double(&w, "nodes_per_ray", r->nodes_per_ray);
+        json_double(&w, "triangles_per_ray", r->tris_per_ray);
+        json_double(&w, "extra_nodes_per_ray", r->extra_nodes);
+        json_double(&w, "extra_triangles_per_ray", r->extra_tris);
+        json_double(&w, "box_inflation_mean", r->inflation_mean);
+        json_double(&w, "box_inflation_worst", r->inflation_worst);
+        json_uint(&w, "compared_rays", r->compared);
+        json_uint(&w, "hit_flips", r->flips);
+        json_uint(&w, "wrong_triangle", r->wrong_triangle);
+        json_double(&w, "t_error_max", r->t_err_max);
+        json_double(&w, "t_error_rms", r->t_err_rms);
+        json_double(&w, "vertex_error", r->vertex_error);
+        if (r->leaks >= 0) {
+            json_int(&w, "leaked_rays", r->leaks);
+            json_uint(&w, "leak_test_rays", r->leak_rays);
+        } else {
+            json_null(&w, "leaked_rays");
+        }
+        json_end_object(&w);
+    }
+    json_end_array(&w);
+    json_end_object(&w);
+    json_finish(&w);
+    if (ferror(out) | fclose(out)) {
+        cli_error(s->command, path, "write failed");
+        return CLI_EXIT_USAGE;
+    }
+    return 0;
+}
+
+static int write_svg(const report_state *s, const char *path)
+{
+    size_t n = s->row_count;
+    svg_point *pts = malloc(3 * (n ? n : 1) * sizeof *pts);
+    char (*labels)[160] = malloc((n ? n : 1) * sizeof *labels);
+    if (!pts || !labels) {
+        free(pts);
+        free(labels);
+        cli_error(s->command, NULL, "out of memory");
+        return CLI_EXIT_USAGE;
+    }
+    int many = n > 0 && strcmp(s->rows[0].mesh, s->rows[n - 1].mesh) != 0;
+    for (size_t i = 0; i < n; i++) {
+        const report_row *r = &s->rows[i];
+        const char *base = strrchr(r->mesh, '/') ? strrchr(r->mesh, '/') + 1 : r->mesh;
+        snprintf(labels[i], sizeof labels[i], "%s%sL%u %s%s %s", many ? base : "", many ? " " : "", (unsigned)r->leaf,
+                 r->float_boxes ? "floatbox" : "q16box", r->quantized_vertices ? " q16vert" : "", r->traversal);
+        double ns = r->closest_mrays > 0.0 ? 1e3 / r->closest_mrays : NAN;
+        pts[i] = (svg_point){ ns, r->t_err_rms, labels[i] };
+        pts[n + i] = (svg_point){ ns, r->extra_nodes + r->extra_tris, labels[i] };
+        pts[2 * n + i] = (svg_point){ ns, r->bytes_per_triangle, labels[i] };
+    }
+    const svg_panel panels[3] = {
+        { "Distance error against run time", { "closest hit, ns per ray", 1 }, { "RMS |t - t_ref| / diagonal", 1 }, pts, n },
+        { "Extra work against run time", { "closest hit, ns per ray", 1 },
+          { "extra nodes + triangles per ray vs exact float boxes", 0 }, pts + n, n },
+        { "Size against run time", { "closest hit, ns per ray", 1 }, { "file bytes per triangle", 0 }, pts + 2 * n, n },
+    };
+    FILE *out = fopen(path, "w");
+    int status = 0;
+    if (!out) {
+        cli_error(s->command, path, "cannot write: %s", strerror(errno));
+        status = CLI_EXIT_USAGE;
+    } else if ((svg_plot_write(out, "cbvh report: error and run time per configuration", panels, 3) != 0) |
+               fclose(out)) {
+        cli_error(s->command, path, "write failed");
+        status = CLI_EXIT_USAGE;
+    }
+    free(pts);
+    free(labels);
+    return status;
+}
+
+static int write_outputs(const report_state *s)
+{
+    print_table(s, stdout);
+    fflush(stdout);
+    char path[1024];
+    int status = 0;
+    if (s->out_dir) {
+        snprintf(path, sizeof path, "%s/report.md", s->out_dir);
+        FILE *md = fopen(path, "w");
+        if (!md) {
+            cli_error(s->command, path, "cannot write: %s", strerror(errno));
+            return CLI_EXIT_USAGE;
+        }
+        print_table(s, md);
+        if (ferror(md) | fclose(md)) {
+            cli_error(s->command, path, "write failed");
+            return CLI_EXIT_USAGE;
+        }
+    }
+    const char *json = s->json_path, *svg = s->svg_path;
+    char json_default[1024], svg_default[1024];
+    if (s->out_dir && !json) {
+        snprintf(json_default, sizeof json_default, "%s/report.json", s->out_dir);
+        json = json_default;
+    }
+    if (s->out_dir && !svg) {
+        snprintf(svg_default, sizeof svg_default, "%s/report.svg", s->out_dir);
+        svg = svg_default;
+    }
+    if (json)
+        status = write_json(s, json);
+    if (!status && svg)
+        status = write_svg(s, svg);
+    return status;
+}
+
+int cmd_report(int argc, char **argv)
+{
+    report_state s;
+    memset(&s, 0, sizeof s);
+    s.command = "report";
+    s.rays = 200000;
+    s.sample = 2000;
+    s.seed = 1;
+    s.reps = 3;
+    int quiet = 0;
+    /* Inputs in command-line order; a --gen spec is marked by its option. */
+    const char **inputs = calloc((size_t)argc + 1, sizeof *inputs);
+    int *generated = calloc((size_t)argc + 1, sizeof *generated);
+    int count = 0, status = 0;
+    if (!inputs || !generated) {
+        free(inputs);
+        free(generated);
+        cli_error(s.command, NULL, "out of memory");
+        return CLI_EXIT_USAGE;
+    }
+    cli_parser p;
+    cli_init(&p, s.command, usage, argc, argv);
+    const char *value;
+    int id;
+    uint32_t u;
+    while (!status && (id = cli_next(&p, options, &value)) != CLI_END) {
+        switch (id) {
+        case CLI_DONE: status = -1; break;
+        case CLI_ERROR: status = CLI_EXIT_USAGE; break;
+        case CLI_POSITIONAL:
+        case OPT_GEN:
+            generated[count] = id == OPT_GEN;
+            inputs[count++] = value;
+            break;
+        case OPT_RAYS:
+            if (!cli_parse_u32(s.command, "--rays", value, 1, 100000000u, &u))
+                status = CLI_EXIT_USAGE;
+            s.rays = u;
+            break;
+        case OPT_SAMPLE:
+            if (!cli_parse_u32(s.command, "--sample", value, 0, 10000000u, &u))
+                status = CLI_EXIT_USAGE;
+            s.sample = u;
+            break;
+        case OPT_SEED:
+            if (!cli_parse_u32(s.command, "--seed", value, 0, UINT32_MAX, &u))
+                status = CLI_EXIT_USAGE;
+            s.seed = u;
+            break;
+        case OPT_REPS:
+            if (!cli_parse_u32(s.command, "--reps", value, 1, 1000, &s.reps))
+                status = CLI_EXIT_USAGE;
+            break;
+        case OPT_OUT: s.out_dir = value; break;
+        case OPT_JSON: s.json_path = value; break;
+        case OPT_SVG: s.svg_path = value; break;
+        case OPT_QUIET: quiet = 1; break;
+        }
+    }
+    if (!status && count == 0)
+        status = cli_usage_error(s.command, "no mesh given (give MESH... or --gen SPEC)");
+    if (!status && s.sample > s.rays)
+        s.sample = s.rays;
+    if (!status && s.out_dir && mkdir(s.out_dir, 0777) != 0 && errno != EEXIST) {
+        cli_error(s.command, s.out_dir, "cannot create the folder: %s", strerror(errno));
+        status = CLI_EXIT_USAGE;
+    }
+    progress_init(&s.prog, quiet);
+    for (int i = 0; i < count && !status; i++)
+        status = report_mesh(&s, inputs[i], generated[i]);
+    if (!status)
+        status = write_outputs(&s);
+    free(inputs);
+    free(generated);
+    free(s.rows);
+    return status < 0 ? CLI_EXIT_OK : status;
+}
