@@ -613,6 +613,13 @@ def _():
     return serialize(h, s + [Section(VERTICES, 0, s[2].data)])
 
 
+@vector("bad-duplicate-ancillary", "CORRUPT", "second section of type 0x80000007",
+        "two unknown ancillary sections of the same type 0x80000007")
+def _():
+    h, s = box()
+    return serialize(h, s + [Section(0x80000007, 0, b"one"), Section(0x80000007, 0, b"two")])
+
+
 @vector("bad-missing-nodes", "CORRUPT", "required section NODES", "the NODES section typed as an ancillary section")
 def _():
     h, s = box()

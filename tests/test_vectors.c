@@ -132,6 +132,7 @@ static const expectation expectations[] = {
     BAD("bad-section-past-end", "section 2 (type 0x3): bytes"),
     BAD("bad-padding", "byte 575: padding before section 1"),
     BAD("bad-duplicate-section", "second VERTICES"),
+    BAD("bad-duplicate-ancillary", "second section of type 0x80000007"),
     BAD("bad-missing-nodes", "required section NODES"),
     BAD("bad-section-size", "size 132, expected 144"),
     BAD("bad-raw-stored-size", "stored_size 256 != size 240"),

@@ -59,10 +59,14 @@ static cbvh_result check_layout(const uint8_t *b, uint64_t file_size, const cbvh
 }
 
 /* Type, codec, encoding and sizes of a known section; unknown ancillary ones are skipped whatever they hold. */
-static cbvh_result check_content(const cbvh_file_info *in, const cbvh_section_info *s, uint32_t i,
+static cbvh_result check_content(const cbvh_file_info *in, const cbvh_section_info *sections, uint32_t i,
                                  cbvh_section_map *map, cbvh_error *err)
 {
+    const cbvh_section_info *s = &sections[i];
     if (s->type < 1 || s->type > CBVH_KNOWN_SECTIONS) {
+        for (uint32_t j = 0; j < i; j++)
+            if (sections[j].type == s->type)
+                return CORRUPT("section %u: second section of type 0x%x (the first is section %u)", i, s->type, j);
         if (s->type & CBVH_SECTION_ANCILLARY_BIT)
             return CBVH_OK;
         return cbvh_fail(err, CBVH_ERROR_UNSUPPORTED, "section %u: critical section type %u is unknown to this reader",
@@ -118,7 +122,7 @@ cbvh_result cbvh_validate_table(struct cbvh_file *f, cbvh_section_map *map, cbvh
         s->encoding = cbvh_read_u32(e + CBVH_SEC_ENCODING);
         cbvh_result r = check_layout(b, file_size, s, i, &prev_end, err);
         if (r == CBVH_OK)
-            r = check_content(&f->info, s, i, map, err);
+            r = check_content(&f->info, f->sections, i, map, err);
         if (r != CBVH_OK)
             return r;
     }
