@@ -152,8 +152,13 @@ int cli_exit_for(cbvh_result result)
 int cli_report(const char *command, const char *file, const cbvh_error *err)
 {
     const char *what = cbvh_result_string(err->code);
-    if (err->message[0])
-        cli_error(command, file, "%s: %s", what, err->message);
+    const char *message = err->message;
+    /* The loader may already name the file; say it once. */
+    size_t len = file ? strlen(file) : 0;
+    if (len && !strncmp(message, file, len) && message[len] == ':')
+        message += len + (message[len + 1] == ' ' ? 2 : 1);
+    if (message[0])
+        cli_error(command, file, "%s: %s", what, message);
     else
         cli_error(command, file, "%s", what);
     return cli_exit_for(err->code);
