@@ -297,6 +297,10 @@ QUAD = ([(0.0, 0.0, 2.5), (4.0, 0.0, 2.5), (4.0, 2.0, 2.5), (0.0, 2.0, 2.5)], [(
 # The box with two degenerate triangles (dropped by the cooker) at original ids 3 and 9.
 BOX_DEGENERATE = (BOX[0], BOX[1][:3] + [(0, 0, 1)] + BOX[1][3:8] + [(2, 5, 2)] + BOX[1][8:])
 
+# The quad's two triangles at original ids 1 and 4 of 5, the rest degenerate: original ids are sparse
+# (original_triangle_count 5 > 2 x triangle_count), which a reader may handle differently.
+QUAD_SPARSE = (QUAD[0], [(0, 0, 1), QUAD[1][0], (1, 1, 1), (2, 3, 2), QUAD[1][1]])
+
 
 def materials_for(mesh, base):
     return [base + 7 * i for i in range(len(mesh[1]))]
@@ -379,6 +383,12 @@ def _():
 def _():
     return serialize(*cook(*BOX_DEGENERATE, max_leaf=2, materials=materials_for(BOX_DEGENERATE, 70000),
                            remap_encoding=1, tri_encoding=TRIS_DELTA16, codec=ZLIB))
+
+
+@vector("good-remap-sparse", "OK", "-",
+        "the quad's 2 triangles at original ids 1 and 4 of 5 (ids 0, 2, 3 degenerate), REMAP u16, MATERIALS u8 (3 + 7 x id)")
+def _():
+    return serialize(*cook(*QUAD_SPARSE, max_leaf=1, materials=materials_for(QUAD_SPARSE, 3), remap_encoding=0))
 
 
 @vector("good-materials-u16-cooked-ids", "OK", "-",
@@ -836,6 +846,27 @@ def _():
 def _():
     h, s = cook(*BOX_DEGENERATE, max_leaf=2, materials=materials_for(BOX_DEGENERATE, 1))
     patched(find(s, REMAP), 0, "<H", 14)
+    return serialize(h, s)
+
+
+def sparse_remap():
+    h, s = cook(*QUAD_SPARSE, max_leaf=1, materials=materials_for(QUAD_SPARSE, 3), remap_encoding=0)
+    return h, s, find(s, REMAP)
+
+
+@vector("bad-remap-duplicate-sparse", "CORRUPT", "REMAP entries 0 and 1 both hold original id 4",
+        "good-remap-sparse with both REMAP entries 4")
+def _():
+    h, s, r = sparse_remap()
+    patched(r, 0, "<H", 4)
+    patched(r, 2, "<H", 4)
+    return serialize(h, s)
+
+
+@vector("bad-remap-range-sparse", "CORRUPT", "REMAP entry 1: original id 5", "good-remap-sparse with REMAP entry 1 = 5")
+def _():
+    h, s, r = sparse_remap()
+    patched(r, 2, "<H", 5)
     return serialize(h, s)
 
 

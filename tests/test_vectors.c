@@ -20,7 +20,7 @@ typedef struct mesh {
     uint32_t triangle_count;
 } mesh;
 
-enum { MESH_SINGLE, MESH_BOX, MESH_BOX_FAR, MESH_QUAD, MESH_BOX_DEGENERATE, MESH_COUNT };
+enum { MESH_SINGLE, MESH_BOX, MESH_BOX_FAR, MESH_QUAD, MESH_BOX_DEGENERATE, MESH_QUAD_SPARSE, MESH_COUNT };
 
 static mesh meshes[MESH_COUNT];
 
@@ -66,6 +66,12 @@ static void make_meshes(void)
     const uint32_t qt[2][3] = { { 0, 1, 2 }, { 0, 2, 3 } };
     memcpy(q->t, qt, sizeof qt);
     q->triangle_count = 2;
+    /* the quad's triangles at original ids 1 and 4 of 5, the others degenerate */
+    mesh *p = &meshes[MESH_QUAD_SPARSE];
+    memcpy(p->v, qv, sizeof qv);
+    const uint32_t pt[5][3] = { { 0, 0, 1 }, { 0, 1, 2 }, { 1, 1, 1 }, { 2, 3, 2 }, { 0, 2, 3 } };
+    memcpy(p->t, pt, sizeof pt);
+    p->triangle_count = 5;
 }
 
 /* ------------------------------------------------------------------ expectations (fileformat/README.md) */
@@ -99,6 +105,7 @@ static const expectation expectations[] = {
     { "good-remap-materials", CBVH_OK, "", { MESH_BOX_DEGENERATE, 12, 8, 15, 4, 2, 1, 0, 0, 0, 5, 1 } },
     { "good-remap-u32-materials-u32-zlib", CBVH_OK, "",
       { MESH_BOX_DEGENERATE, 12, 8, 15, 4, 2, 1, 0, 2, 0, 5, 70000 } },
+    { "good-remap-sparse", CBVH_OK, "", { MESH_QUAD_SPARSE, 2, 4, 3, 2, 1, 1, 0, 0, 0, 5, 3 } },
     { "good-materials-u16-cooked-ids", CBVH_OK, "", { MESH_BOX, 12, 8, 15, 4, 2, 0, 0, 0, 0, 4, 1000 } },
     { "good-ancillary", CBVH_OK, "", { MESH_BOX, 12, 8, 15, 4, 2, 1, 0, 0, 0, 6, 0 } },
     { "good-compat-flags", CBVH_OK, "", { MESH_BOX, 12, 8, 15, 4, 2, 1, 0, 0, 0x80000005u, 4, 0 } },
@@ -160,6 +167,8 @@ static const expectation expectations[] = {
     BAD("bad-bounds-mismatch", "differ from the vertices' bounds"),
     BAD("bad-remap-duplicate", "both hold original id"),
     BAD("bad-remap-range", "original_triangle_count is 14"),
+    BAD("bad-remap-duplicate-sparse", "REMAP entries 0 and 1 both hold original id 4"),
+    BAD("bad-remap-range-sparse", "REMAP entry 1: original id 5"),
     BAD("bad-remap-missing", "without a REMAP section"),
     NEWER("unsupported-version-2", "format version 2"),
     NEWER("unsupported-incompat-flag", "incompatible feature flags 0x00000001"),

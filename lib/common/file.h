@@ -25,8 +25,10 @@ struct cbvh_file {
     uint32_t vertex_encoding;    /* CBVH_VERTS_* */
     const void *remap;           /* cooked -> original triangle id; NULL = identity */
     uint32_t remap_encoding;     /* CBVH_REMAP_* */
-    const uint32_t *unmap;       /* cooked ids sorted by original id, triangle_count entries (owned, built
-                                  * at open when remap is present); cbvh_file_get_triangle binary-searches it */
+    const uint32_t *unmap;       /* original -> cooked id (owned, built at open when remap is present): dense,
+                                  * original_triangle_count entries, CBVH_NO_HIT for dropped ids; or, when
+                                  * unmap_sorted, cooked ids sorted by original id (triangle_count entries) */
+    uint32_t unmap_sorted;
     const void *materials;       /* per cooked triangle; NULL = all 0 */
     uint32_t material_encoding;  /* CBVH_MATS_* */
 

@@ -22,8 +22,9 @@ int cbvh_file_get_section(const cbvh_file *file, uint32_t index, cbvh_section_in
     return 1;
 }
 
-/* Original id -> cooked index: a binary search of the unmap table (cooked ids sorted by original id).
- * Returns 0 for an id the cooker dropped (a degenerate triangle) or one out of range. */
+/* Original id -> cooked index through the unmap table: a lookup when dense, else a binary search of the
+ * cooked ids sorted by original id. Returns 0 for an id the cooker dropped (a degenerate triangle) or one
+ * out of range. */
 static int cooked_index(const struct cbvh_file *f, uint32_t tri, uint32_t *cooked)
 {
     if (tri >= f->original_triangle_count)
@@ -31,6 +32,10 @@ static int cooked_index(const struct cbvh_file *f, uint32_t tri, uint32_t *cooke
     if (!f->remap) {
         *cooked = tri;
         return 1;
+    }
+    if (!f->unmap_sorted) {
+        *cooked = f->unmap[tri];
+        return *cooked != CBVH_NO_HIT;
     }
     uint32_t lo = 0, hi = f->info.triangle_count;
     while (lo < hi) {

@@ -1,4 +1,4 @@
-/* validate_remap.c: checks REMAP values (in range, unique) by radix-sorting them, which also yields the unmap table. */
+/* validate_remap.c: checks REMAP values (in range, unique) while building the original -> cooked unmap table. */
 #include <string.h>
 
 #include "common/alloc.h"
@@ -11,7 +11,7 @@
 
 /* LSD radix sort of (original id << 32 | cooked id) on the original id, `passes` digits; returns the
  * buffer holding the result. Memory stays proportional to triangle_count whatever
- * original_triangle_count says, which a bitmap or a dense table indexed by original id would not. */
+ * original_triangle_count says, which a dense table indexed by original id would not. */
 static uint64_t *radix_sort(uint64_t *restrict a, uint64_t *restrict b, size_t n, int passes)
 {
     for (int p = 0; p < passes; p++) {
@@ -43,10 +43,27 @@ static int digits_for(uint32_t max_key)
     return passes;
 }
 
-cbvh_result cbvh_validate_remap(struct cbvh_file *f, cbvh_error *err)
+/* Dense unmap, one scattered write per triangle: used when original ids are at most twice the triangles,
+ * so its memory stays proportional to the file's. A slot already taken is a repeated id. */
+static cbvh_result build_dense(struct cbvh_file *f, uint32_t *restrict unmap, cbvh_error *err)
 {
-    if (!f->remap)
-        return CBVH_OK;
+    const uint32_t n = f->info.triangle_count;
+    const uint32_t original = f->original_triangle_count;
+    memset(unmap, 0xFF, (size_t)original * sizeof *unmap);
+    for (uint32_t t = 0; t < n; t++) {
+        const uint32_t id = cbvh_original_id(f, t);
+        if (id >= original)
+            return CORRUPT("REMAP entry %u: original id %u, original_triangle_count is %u", t, id, original);
+        if (unmap[id] != CBVH_NO_HIT)
+            return CORRUPT("REMAP entries %u and %u both hold original id %u", unmap[id], t, id);
+        unmap[id] = t;
+    }
+    return CBVH_OK;
+}
+
+/* Sorted unmap for sparse original ids: radix-sorts (id, cooked) pairs, then repeated ids are neighbours. */
+static cbvh_result build_sorted(struct cbvh_file *f, uint32_t *restrict unmap, cbvh_error *err)
+{
     const uint32_t n = f->info.triangle_count;
     const uint32_t original = f->original_triangle_count;
     uint64_t *pairs = cbvh_alloc_array(&f->allocator, 2u * (size_t)n, sizeof(uint64_t), 64);
@@ -59,26 +76,35 @@ cbvh_result cbvh_validate_remap(struct cbvh_file *f, cbvh_error *err)
             r = CORRUPT("REMAP entry %u: original id %u, original_triangle_count is %u", t, id, original);
         pairs[t] = (uint64_t)id << 32 | t;
     }
-    const uint64_t *sorted = NULL;
     if (r == CBVH_OK) {
-        sorted = radix_sort(pairs, pairs + n, n, digits_for(original - 1));
+        const uint64_t *sorted = radix_sort(pairs, pairs + n, n, digits_for(original - 1));
         for (uint32_t k = 1; k < n && r == CBVH_OK; k++)
             if (sorted[k] >> 32 == sorted[k - 1] >> 32)
                 r = CORRUPT("REMAP entries %u and %u both hold original id %u", (uint32_t)sorted[k - 1],
                             (uint32_t)sorted[k], (uint32_t)(sorted[k] >> 32));
-    }
-    uint32_t *unmap = NULL;
-    if (r == CBVH_OK) {
-        unmap = cbvh_alloc_array(&f->allocator, n, sizeof(uint32_t), 64);
-        if (!unmap)
-            r = cbvh_fail(err, CBVH_ERROR_OUT_OF_MEMORY, "cannot allocate the %u-entry unmap table", n);
-    }
-    if (r == CBVH_OK) {
         for (uint32_t k = 0; k < n; k++)
             unmap[k] = (uint32_t)sorted[k];
-        cbvh_file_own(f, unmap);
-        f->unmap = unmap;
     }
     cbvh_free(&f->allocator, pairs);
     return r;
+}
+
+cbvh_result cbvh_validate_remap(struct cbvh_file *f, cbvh_error *err)
+{
+    if (!f->remap)
+        return CBVH_OK;
+    const int dense = (uint64_t)f->original_triangle_count <= 2u * (uint64_t)f->info.triangle_count;
+    const uint32_t entries = dense ? f->original_triangle_count : f->info.triangle_count;
+    uint32_t *unmap = cbvh_alloc_array(&f->allocator, entries, sizeof(uint32_t), 64);
+    if (!unmap)
+        return cbvh_fail(err, CBVH_ERROR_OUT_OF_MEMORY, "cannot allocate the %u-entry unmap table", entries);
+    cbvh_result r = dense ? build_dense(f, unmap, err) : build_sorted(f, unmap, err);
+    if (r != CBVH_OK) {
+        cbvh_free(&f->allocator, unmap);
+        return r;
+    }
+    cbvh_file_own(f, unmap);
+    f->unmap = unmap;
+    f->unmap_sorted = !dense;
+    return CBVH_OK;
 }
