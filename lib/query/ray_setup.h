@@ -18,6 +18,9 @@
 #define CBVH_KERNEL static inline
 #endif
 
+/* The largest t a ray reports: FLT_MAX / 2, so tmax * CBVH_BOX_PAD cannot overflow. */
+#define CBVH_T_LIMIT 0x1.fffffep126f
+
 /* What the triangle test needs from a ray: the origin and the shear of
  * Woop, Benthin & Wald 2013 ("Watertight ray/triangle intersection"). */
 struct cbvh_ray_shear {
@@ -30,7 +33,8 @@ struct cbvh_ray_shear {
 struct cbvh_ray_ctx {
     struct cbvh_ray_shear shear;
     float rcp[3];         /* 1/dir: 0 and -0 give +inf and -inf, which the box test handles */
-    float tmin, tmax;     /* tmax clamped to FLT_MAX so that an overflowed t never counts as a hit */
+    float tmin, tmax;     /* tmax clamped to CBVH_T_LIMIT: an overflowed t never counts as a hit, and the
+                           * box test's padded tmax stays finite, so a box at infinity is never entered */
     uint32_t octant;      /* bit a set when rcp[a] has its sign bit set (so -0 counts as negative) */
     uint32_t sort_mask;   /* (1 << octant) << CBVH_NODE_SORT_SHIFT: one AND with the node word */
 };
@@ -81,7 +85,7 @@ static inline int cbvh_ray_setup(struct cbvh_ray_ctx *ctx, const cbvh_ray *ray)
     for (int a = 0; a < 3; a++)
         ctx->rcp[a] = 1.0f / d[a];
     ctx->tmin = ray->tmin;
-    ctx->tmax = ray->tmax < FLT_MAX ? ray->tmax : FLT_MAX;
+    ctx->tmax = ray->tmax < CBVH_T_LIMIT ? ray->tmax : CBVH_T_LIMIT;
     ctx->octant = cbvh_octant_of(ctx->rcp);
     ctx->sort_mask = (1u << ctx->octant) << CBVH_NODE_SORT_SHIFT;
     cbvh_shear_setup(&ctx->shear, o, d);

@@ -44,7 +44,7 @@ static inline int cbvh_ray_triangle(const struct cbvh_ray_shear *restrict s, con
     const float tz = u * (sz * az) + v * (sz * bz) + w * (sz * cz);
     const float inv = 1.0f / det;
     const float t = tz * inv;
-    /* Ordered compares: t is never NaN here, but an overflowed t (inf) fails t <= tmax <= FLT_MAX. */
+    /* Ordered compares: t is never NaN here, but an overflowed t (inf) fails t <= tmax <= CBVH_T_LIMIT. */
     if (!(t >= tmin && t <= tmax))
         return 0;
     *t_out = t;

@@ -1,0 +1,563 @@
+/* test_raycast.c: ray kernels: watertight triangle test, robust slab test, every traversal against brute force. */
+#include <float.h>
+#include <math.h>
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <string.h>
+
+#include <cmocka.h>
+
+#include "cbvh.h"
+#include "query/ray_box.h"
+#include "query/ray_triangle.h"
+#include "support/reference.h"
+#include "support/scene_gen.h"
+
+#define PI 3.14159265358979323846
+
+static const cbvh_traversal traversals[4] = {CBVH_TRAVERSAL_SORTED, CBVH_TRAVERSAL_STACKLESS,
+                                             CBVH_TRAVERSAL_UNSORTED, CBVH_TRAVERSAL_DISTANCE};
+
+/* ------------------------------------------------------------------ */
+/* Primitive tests, no file                                            */
+/* ------------------------------------------------------------------ */
+
+static int tri_hit(const float org[3], const float dir[3], const float *a, const float *b, const float *c, float *t,
+                   float *u, float *v)
+{
+    const cbvh_ray ray = {{org[0], org[1], org[2]}, 0.0f, {dir[0], dir[1], dir[2]}, INFINITY};
+    struct cbvh_ray_ctx ctx;
+    assert_true(cbvh_ray_setup(&ctx, &ray));
+    return cbvh_ray_triangle(&ctx.shear, a, b, c, ctx.tmin, ctx.tmax, t, u, v);
+}
+
+static void test_triangle_basic(void **state)
+{
+    (void)state;
+    const float a[3] = {0, 0, 0}, b[3] = {1, 0, 0}, c[3] = {0, 1, 0};
+    float t, u, v;
+    /* Front and back: both windings hit, t and barycentrics exact for this simple case. */
+    assert_true(tri_hit((float[3]){0.25f, 0.5f, 2.0f}, (float[3]){0, 0, -1}, a, b, c, &t, &u, &v));
+    assert_true(t == 2.0f && u == 0.25f && v == 0.5f);
+    assert_true(tri_hit((float[3]){0.25f, 0.5f, -2.0f}, (float[3]){0, 0, 0.5f}, a, b, c, &t, &u, &v));
+    assert_true(t == 4.0f && u == 0.25f && v == 0.5f);
+    assert_true(tri_hit((float[3]){0.25f, 0.5f, 2.0f}, (float[3]){0, 0, -1}, a, c, b, &t, &u, &v));
+    /* Outside, behind the origin, in the plane (det == 0), degenerate triangle: misses. */
+    assert_false(tri_hit((float[3]){0.75f, 0.5f, 2.0f}, (float[3]){0, 0, -1}, a, b, c, &t, &u, &v));
+    assert_false(tri_hit((float[3]){0.25f, 0.25f, 2.0f}, (float[3]){0, 0, 1}, a, b, c, &t, &u, &v));
+    assert_false(tri_hit((float[3]){-1.0f, 0.25f, 0.0f}, (float[3]){1, 0, 0}, a, b, c, &t, &u, &v));
+    assert_false(tri_hit((float[3]){0.25f, 0.0f, 2.0f}, (float[3]){0, 0, -1}, a, b, (float[3]){2, 0, 0}, &t, &u, &v));
+    /* On the edge and on a vertex: accepted (closed triangle). */
+    assert_true(tri_hit((float[3]){0.5f, 0.0f, 1.0f}, (float[3]){0, 0, -1}, a, b, c, &t, &u, &v));
+    assert_true(tri_hit((float[3]){1.0f, 0.0f, 1.0f}, (float[3]){0, 0, -1}, a, b, c, &t, &u, &v));
+}
+
+/* A fan of triangles around one shared vertex: every ray aimed at the shared
+ * vertex or at a point of a shared edge must hit at least one triangle of the
+ * fan (no leak), from either side and any direction. (Non-planar closed
+ * surfaces are covered by test_closed_mesh_no_leaks.) */
+static void test_watertight_fan(void **state)
+{
+    (void)state;
+    enum { FAN = 13, RAYS = 20000 };
+    float center[3] = {0.3f, 0.2f, 0.1f}, rim[FAN][3];
+    uint64_t st = 12345;
+    for (int k = 0; k < FAN; k++) {
+        const double ang = 2.0 * PI * k / FAN + 0.2 * scene_rand_unit(&st);
+        rim[k][0] = center[0] + (float)(cos(ang) * (1.0 + scene_rand_unit(&st)));
+        rim[k][1] = center[1] + (float)(sin(ang) * (1.0 + scene_rand_unit(&st)));
+        rim[k][2] = center[2]; /* planar: a folded fan can hide its vertex on a silhouette, legitimately */
+    }
+    long leaks = 0;
+    for (int r = 0; r < RAYS; r++) {
+        float target[3], org[3], dir[3];
+        const int edge = (int)(scene_rand_unit(&st) * FAN);
+        /* Half the rays at the shared vertex, half at a float point on a shared edge. */
+        const float s = r % 2 ? (float)(0.05 + 0.85 * scene_rand_unit(&st)) : 0.0f;
+        for (int a = 0; a < 3; a++)
+            target[a] = center[a] + s * (rim[edge][a] - center[a]);
+        const double z = 2.0 * scene_rand_unit(&st) - 1.0, phi = 2.0 * PI * scene_rand_unit(&st);
+        const double dist = 0.5 + 10.0 * scene_rand_unit(&st);
+        org[0] = target[0] + (float)(dist * sqrt(1 - z * z) * cos(phi));
+        org[1] = target[1] + (float)(dist * sqrt(1 - z * z) * sin(phi));
+        org[2] = target[2] + (float)(dist * z);
+        for (int a = 0; a < 3; a++)
+            dir[a] = target[a] - org[a];
+        int hits = 0;
+        for (int k = 0; k < FAN; k++) {
+            float t, u, v;
+            hits += tri_hit(org, dir, center, rim[k], rim[(k + 1) % FAN], &t, &u, &v);
+        }
+        /* The fan is planar and the targets lie in its plane, strictly inside
+         * the union of the triangles: every ray must hit one. */
+        if (hits == 0)
+            leaks++;
+    }
+    assert_int_equal(leaks, 0);
+}
+
+/* Exact answer of "does [tmin, tmax] of the ray meet the closed box", in
+ * double, with each axis handled by cases instead of reciprocals. Returns
+ * the gap: <= 0 when they meet, else how far apart in t-interval terms. */
+static double slab_reference(const double lo[3], const double hi[3], const double o[3], const double d[3], double tmin,
+                             double tmax)
+{
+    double t0 = tmin, t1 = tmax;
+    for (int a = 0; a < 3; a++) {
+        if (d[a] == 0.0) {
+            if (o[a] < lo[a] || o[a] > hi[a])
+                return INFINITY;
+            continue;
+        }
+        double ta = (lo[a] - o[a]) / d[a], tb = (hi[a] - o[a]) / d[a];
+        if (ta > tb) {
+            double x = ta;
+            ta = tb;
+            tb = x;
+        }
+        t0 = fmax(t0, ta);
+        t1 = fmin(t1, tb);
+    }
+    return t0 - t1;
+}
+
+static void test_slab_edge_cases(void **state)
+{
+    (void)state;
+    const float dirs[] = {0.0f, -0.0f, 1e-40f, -1e-40f, 1e30f, -1e30f, 1.0f, -1.0f, 0.37f, -3.0f};
+    const float coords[] = {-2.0f, -1.0f, 0.0f, 0.5f, 1.0f, 1.5f, 3.0f};
+    const float boxes[][6] = {{-1, -1, -1, 1, 1, 1}, {0, 0, 0, 0, 0, 0}, {-1e30f, 0, 0.5f, 1e30f, 1, 0.5f},
+                              {1e-38f, -1e-38f, 0, 2e-38f, 1e-38f, 1}};
+    long checked = 0;
+    for (size_t bx = 0; bx < sizeof(boxes) / sizeof(boxes[0]); bx++)
+        for (size_t i = 0; i < 1000000 && checked < 300000; i++) {
+            uint64_t st = i * 7919u + bx;
+            cbvh_ray ray;
+            for (int a = 0; a < 3; a++) {
+                ray.org[a] = coords[scene_rand_next(&st) % 7];
+                if (scene_rand_next(&st) % 3 == 0) /* origins on the box's own planes */
+                    ray.org[a] = boxes[bx][a + 3 * (int)(scene_rand_next(&st) % 2)];
+                ray.dir[a] = dirs[scene_rand_next(&st) % 10];
+            }
+            ray.tmin = scene_rand_next(&st) % 2 ? 0.0f : 0.5f;
+            ray.tmax = scene_rand_next(&st) % 2 ? INFINITY : 2.0f;
+            struct cbvh_ray_ctx ctx;
+            if (!cbvh_ray_setup(&ctx, &ray))
+                continue;
+            const struct cbvh_slab_select sel = cbvh_slab_select_of(ctx.octant);
+            const float *b = boxes[bx];
+            float entry;
+            const int hit = cbvh_slab_test(b[sel.near_x], b[sel.near_y], b[sel.near_z], b[sel.far_x], b[sel.far_y],
+                                           b[sel.far_z], ctx.shear.org, ctx.rcp, ctx.tmin, ctx.tmax, &entry);
+            const double lo[3] = {b[0], b[1], b[2]}, hi[3] = {b[3], b[4], b[5]};
+            const double o[3] = {ray.org[0], ray.org[1], ray.org[2]}, d[3] = {ray.dir[0], ray.dir[1], ray.dir[2]};
+            const double gap = slab_reference(lo, hi, o, d, ray.tmin, ray.tmax < CBVH_T_LIMIT ? ray.tmax : CBVH_T_LIMIT);
+            if (gap <= 0.0 && !hit) {
+                fprintf(stderr, "box %zu missed: org %g %g %g dir %g %g %g t [%g %g]\n", bx, o[0], o[1], o[2], d[0],
+                        d[1], d[2], ray.tmin, ray.tmax);
+                fail();
+            }
+            /* Clear misses must be misses: a ray that stays away from the box
+             * grown by 1e-5 in space (a direction too small for its reciprocal
+             * to be finite moves the ray by less than that). */
+            double glo[3], ghi[3];
+            for (int a = 0; a < 3; a++) {
+                glo[a] = lo[a] - 1e-5 * (1.0 + fabs(lo[a]));
+                ghi[a] = hi[a] + 1e-5 * (1.0 + fabs(hi[a]));
+            }
+            if (hit && slab_reference(glo, ghi, o, d, ray.tmin, ray.tmax) > 0.0) {
+                fprintf(stderr, "box %zu false hit: org %g %g %g dir %g %g %g t [%g %g]\n", bx, o[0], o[1], o[2],
+                        d[0], d[1], d[2], ray.tmin, ray.tmax);
+                fail();
+            }
+            checked++;
+        }
+    assert_true(checked > 1000);
+}
+
+/* ------------------------------------------------------------------ */
+/* End to end                                                          */
+/* ------------------------------------------------------------------ */
+
+/* Tolerance on t for a ray: float rounding of coordinates of this size, in units of dir. */
+static double t_tolerance(const ref_fixture *fx, const cbvh_ray *ray, double t)
+{
+    double scale = fx->diag, dl = 0.0;
+    for (int a = 0; a < 3; a++) {
+        scale = fmax(scale, fmax(fabs(fx->lo[a]), fabs(fx->hi[a])));
+        scale = fmax(scale, fabs(ray->org[a]));
+        dl += (double)ray->dir[a] * ray->dir[a];
+    }
+    return 2e-5 * scale / sqrt(dl) + 1e-6 * fabs(t);
+}
+
+static long checks_done;
+
+/* A closest hit (or miss) from the kernel against the reference: a robust
+ * hit (well inside a triangle and the t range) must be found; what is found
+ * must be a hit of that triangle within tolerance, no farther than the
+ * robust closest hit and no nearer than any near-hit. */
+static void check_closest(const ref_fixture *fx, const cbvh_ray *ray, int hit, const cbvh_hit *h)
+{
+    ref_ray_hit strict, loose;
+    if (!ref_ray_valid(ray)) {
+        assert_false(hit);
+        assert_int_equal(h->tri, CBVH_NO_HIT);
+        return;
+    }
+    const double tol = t_tolerance(fx, ray, 0.0), slack = 2e-5 * fx->diag;
+    cbvh_ray in = *ray, out = *ray;
+    in.tmin = (float)(ray->tmin + tol);
+    in.tmax = (float)(ray->tmax - tol);
+    out.tmin = (float)fmax(0.0, ray->tmin - tol);
+    out.tmax = (float)(ray->tmax + tol);
+    const int rs = in.tmin <= in.tmax && ref_ray_closest(&fx->tris, &in, -slack, &strict);
+    const int rl = ref_ray_closest(&fx->tris, &out, slack, &loose);
+    checks_done++;
+    if (!hit) {
+        assert_int_equal(h->tri, CBVH_NO_HIT);
+        if (rs)
+            fprintf(stderr, "missed a robust hit: tri %u t %.9g margin %g\n", strict.tri, strict.t, strict.margin);
+        assert_false(rs);
+        return;
+    }
+    assert_true(rl);
+    assert_true(h->tri < fx->id_count);
+    const size_t k = fx->index_of_id[h->tri];
+    assert_true(k != (size_t)-1);
+    /* The reported point must lie on the reported triangle (a distance test:
+     * barycentrics of a plane crossing are ill-conditioned at grazing angles). */
+    const double tol_t = t_tolerance(fx, ray, h->t);
+    double p[3], dl2 = 0.0;
+    for (int a = 0; a < 3; a++) {
+        p[a] = ray->org[a] + (double)h->t * ray->dir[a];
+        dl2 += (double)ray->dir[a] * ray->dir[a];
+    }
+    const double off = sqrt(ref_point_triangle_dist2(fx->tris.v + 9 * k, p));
+    if (!(off <= tol_t * sqrt(dl2))) {
+        fprintf(stderr, "hit tri %u t %.9g: the point is %g off the triangle\n", h->tri, h->t, off);
+        fail();
+    }
+    if (rs && !(h->t <= strict.t + tol_t)) {
+        fprintf(stderr, "hit t %.9g beyond the robust closest %.9g (tri %u)\n", h->t, strict.t, strict.tri);
+        fail();
+    }
+    assert_true(h->t >= loose.t - tol_t);
+    double t, u, v, m;
+    if (ref_ray_triangle(fx->tris.v + 9 * k, ray, &t, &u, &v, &m) && m > slack) {
+        /* well inside the triangle: the barycentrics agree */
+        assert_true(fabs(u - h->u) < 1e-3 && fabs(v - h->v) < 1e-3);
+    }
+}
+
+/* Rays of several kinds for a fixture: uniform, aimed at triangles, aimed at
+ * vertices (shared by several triangles), axis-aligned with 0 and -0
+ * components from origins on vertex coordinates, and short segments. */
+static cbvh_ray make_ray(const ref_fixture *fx, uint64_t *st, int kind)
+{
+    cbvh_ray ray;
+    double lo[3], hi[3];
+    for (int a = 0; a < 3; a++) {
+        lo[a] = fx->lo[a] - 0.25 * fx->diag;
+        hi[a] = fx->hi[a] + 0.25 * fx->diag;
+        ray.org[a] = (float)(lo[a] + (hi[a] - lo[a]) * scene_rand_unit(st));
+    }
+    ray.tmin = 0.0f;
+    ray.tmax = INFINITY;
+    const size_t k = (size_t)(scene_rand_unit(st) * (double)fx->tris.count);
+    const double *tri = fx->tris.v + 9 * k;
+    switch (kind) {
+    case 0: { /* uniform direction */
+        const double z = 2.0 * scene_rand_unit(st) - 1.0, phi = 2.0 * PI * scene_rand_unit(st);
+        ray.dir[0] = (float)(sqrt(1 - z * z) * cos(phi));
+        ray.dir[1] = (float)(sqrt(1 - z * z) * sin(phi));
+        ray.dir[2] = (float)z;
+        break;
+    }
+    case 1:   /* at a random point of a triangle, t about 1 there */
+    case 2: { /* at a vertex */
+        double w0 = scene_rand_unit(st), w1 = scene_rand_unit(st);
+        if (w0 + w1 > 1.0) {
+            w0 = 1.0 - w0;
+            w1 = 1.0 - w1;
+        }
+        if (kind == 2) {
+            const int vtx = (int)(scene_rand_next(st) % 3);
+            w0 = vtx == 1;
+            w1 = vtx == 2;
+        }
+        for (int a = 0; a < 3; a++) {
+            const float target = (float)(tri[a] + w0 * (tri[3 + a] - tri[a]) + w1 * (tri[6 + a] - tri[a]));
+            ray.dir[a] = target - ray.org[a];
+        }
+        break;
+    }
+    case 3: { /* axis-aligned, origin on a vertex's coordinates in the other axes */
+        const int axis = (int)(scene_rand_next(st) % 3);
+        for (int a = 0; a < 3; a++) {
+            ray.dir[a] = scene_rand_next(st) % 2 ? 0.0f : -0.0f;
+            if (a != axis)
+                ray.org[a] = (float)tri[3 * (scene_rand_next(st) % 3) + a];
+        }
+        ray.dir[axis] = scene_rand_next(st) % 2 ? 1.0f : -1.0f;
+        break;
+    }
+    default: { /* short segment with tmin > 0 towards a triangle */
+        for (int a = 0; a < 3; a++)
+            ray.dir[a] = (float)((tri[a] + tri[3 + a] + tri[6 + a]) / 3.0) - ray.org[a];
+        ray.tmin = (float)(0.5 * scene_rand_unit(st));
+        ray.tmax = ray.tmin + (float)scene_rand_unit(st);
+        break;
+    }
+    }
+    if (ray.dir[0] == 0 && ray.dir[1] == 0 && ray.dir[2] == 0)
+        ray.dir[0] = 1.0f;
+    return ray;
+}
+
+/* Casts rays with every traversal: all four give the same hit (triangle, t,
+ * u, v identical thanks to the shared triangle test and tie rule), any-hit
+ * agrees with closest-hit, and the hit matches the reference. */
+static void check_fixture(const ref_fixture *fx, int rays, uint64_t seed)
+{
+    uint64_t st = seed;
+    for (int r = 0; r < rays; r++) {
+        const cbvh_ray ray = make_ray(fx, &st, r % 5);
+        cbvh_hit h[4];
+        int hit[4];
+        for (int k = 0; k < 4; k++) {
+            hit[k] = cbvh_raycast(fx->file, &ray, traversals[k], &h[k], NULL);
+            const int occ = cbvh_occluded(fx->file, &ray, traversals[k], NULL);
+            assert_int_equal(occ, hit[k]);
+        }
+        for (int k = 1; k < 4; k++) {
+            assert_int_equal(hit[k], hit[0]);
+            assert_int_equal(h[k].tri, h[0].tri);
+            if (hit[0])
+                assert_true(h[k].t == h[0].t && h[k].u == h[0].u && h[k].v == h[0].v);
+        }
+        check_closest(fx, &ray, hit[0], &h[0]);
+    }
+}
+
+static void open_scene(ref_fixture *fx, scene *s, const cbvh_cook_options *options)
+{
+    assert_int_equal(ref_fixture_open(fx, s->positions, s->vertex_count, s->indices, s->triangle_count, options),
+                     CBVH_OK);
+}
+
+static void test_soup(void **state)
+{
+    (void)state;
+    scene s;
+    ref_fixture fx;
+    assert_true(scene_soup(&s, 3000, 0.1f, 7));
+    open_scene(&fx, &s, NULL);
+    check_fixture(&fx, 4000, 1);
+    ref_fixture_close(&fx);
+    scene_free(&s);
+}
+
+static void test_sphere_and_terrain(void **state)
+{
+    (void)state;
+    scene s;
+    ref_fixture fx;
+    assert_true(scene_sphere(&s, 4000, (float[3]){0.5f, -0.25f, 2.0f}, 3.0f));
+    open_scene(&fx, &s, NULL);
+    check_fixture(&fx, 3000, 2);
+    ref_fixture_close(&fx);
+    scene_free(&s);
+    assert_true(scene_terrain(&s, 4000, 50.0f));
+    open_scene(&fx, &s, NULL);
+    check_fixture(&fx, 3000, 3);
+    ref_fixture_close(&fx);
+    scene_free(&s);
+}
+
+/* Every cook variant gives files the kernels read alike: quantized vertices,
+ * cooked ids, zlib sections, the smallest and largest leaves. */
+static void test_cook_variants(void **state)
+{
+    (void)state;
+    scene s;
+    assert_true(scene_soup(&s, 1500, 0.15f, 99));
+    for (int variant = 0; variant < 5; variant++) {
+        cbvh_cook_options o;
+        cbvh_cook_options_init(&o);
+        if (variant == 0)
+            o.vertex_format = CBVH_VERTEX_QUANTIZED16;
+        if (variant == 1)
+            o.keep_remap = 0;
+        if (variant == 2)
+            o.compress_level = 6;
+        if (variant == 3)
+            o.max_leaf_size = 1;
+        if (variant == 4)
+            o.max_leaf_size = 16;
+        ref_fixture fx;
+        open_scene(&fx, &s, &o);
+        check_fixture(&fx, 1500, 10 + (uint64_t)variant);
+        ref_fixture_close(&fx);
+    }
+    scene_free(&s);
+}
+
+/* A closed mesh leaks no ray: from inside, aimed at its vertices (shared by
+ * up to dozens of triangles at the poles), at edge points and anywhere. */
+static void test_closed_mesh_no_leaks(void **state)
+{
+    (void)state;
+    scene s;
+    ref_fixture fx;
+    const float c[3] = {0.1f, 0.2f, 0.3f};
+    assert_true(scene_sphere(&s, 20000, c, 1.0f));
+    open_scene(&fx, &s, NULL);
+    uint64_t st = 5;
+    long missed = 0, total = 0;
+    for (size_t vtx = 0; vtx < s.vertex_count; vtx++) {
+        for (int kind = 0; kind < 3; kind++) {
+            cbvh_ray ray = {{c[0], c[1], c[2]}, 0.0f, {0, 0, 0}, INFINITY};
+            const float *p = s.positions + 3 * vtx, *q = s.positions + 3 * ((vtx + 1) % s.vertex_count);
+            for (int a = 0; a < 3; a++) {
+                if (kind == 0)
+                    ray.dir[a] = p[a] - c[a];
+                else if (kind == 1) /* a point on a float edge between neighbouring vertices */
+                    ray.dir[a] = 0.5f * (p[a] + q[a]) - c[a];
+                else
+                    ray.dir[a] = (float)(scene_rand_unit(&st) - 0.5);
+                if (kind != 2) /* from an inner point off the center, too */
+                    ray.org[a] = c[a] + 0.3f * (float)(scene_rand_unit(&st) - 0.5);
+            }
+            if (kind != 2)
+                for (int a = 0; a < 3; a++)
+                    ray.dir[a] = (kind == 0 ? p[a] : 0.5f * (p[a] + q[a])) - ray.org[a];
+            for (int k = 0; k < 4; k++) {
+                cbvh_hit h;
+                missed += !cbvh_raycast(fx.file, &ray, traversals[k], &h, NULL);
+                missed += !cbvh_occluded(fx.file, &ray, traversals[k], NULL);
+                total += 2;
+            }
+        }
+    }
+    assert_int_equal(missed, 0);
+    assert_true(total > 100000);
+    ref_fixture_close(&fx);
+    scene_free(&s);
+}
+
+/* 16-bit boxes are relative to the mesh: far from the origin nothing changes. */
+static void test_far_from_origin(void **state)
+{
+    (void)state;
+    scene s;
+    ref_fixture fx;
+    assert_true(scene_sphere(&s, 3000, (float[3]){70000.0f, -70000.0f, 35000.0f}, 10.0f));
+    open_scene(&fx, &s, NULL);
+    check_fixture(&fx, 2000, 4);
+    ref_fixture_close(&fx);
+    scene_free(&s);
+}
+
+static void test_invalid_rays(void **state)
+{
+    (void)state;
+    scene s;
+    ref_fixture fx;
+    assert_true(scene_sphere(&s, 500, (float[3]){0, 0, 0}, 1.0f));
+    open_scene(&fx, &s, NULL);
+    const cbvh_ray good = {{0, 0, -5}, 0.0f, {0, 0, 1}, INFINITY};
+    cbvh_ray bad[12];
+    for (int k = 0; k < 12; k++)
+        bad[k] = good;
+    bad[0].org[0] = NAN;
+    bad[1].org[1] = INFINITY;
+    bad[2].dir[2] = NAN;
+    bad[3].dir[0] = -INFINITY;
+    bad[4].dir[2] = 0.0f; /* all zero */
+    bad[5].tmin = -1.0f;
+    bad[6].tmin = 3.0f;
+    bad[6].tmax = 2.0f;
+    bad[7].tmax = NAN;
+    bad[8].tmin = NAN;
+    bad[9].tmin = INFINITY;
+    bad[10].tmax = -INFINITY;
+    bad[11].dir[2] = -0.0f;
+    bad[11].dir[0] = -0.0f;
+    for (int b = 0; b < 12; b++) {
+        assert_false(ref_ray_valid(&bad[b]));
+        for (int k = 0; k < 4; k++) {
+            cbvh_hit h = {0, 0, 0, 0};
+            assert_int_equal(cbvh_raycast(fx.file, &bad[b], traversals[k], &h, NULL), 0);
+            assert_int_equal(h.tri, CBVH_NO_HIT);
+            assert_int_equal(cbvh_occluded(fx.file, &bad[b], traversals[k], NULL), 0);
+        }
+    }
+    /* Valid edge cases: infinite tmax, tmin == tmax at the hit, unnormalized tiny direction. */
+    cbvh_hit h;
+    assert_true(cbvh_raycast(fx.file, &good, CBVH_TRAVERSAL_SORTED, &h, NULL));
+    cbvh_ray pinned = good;
+    pinned.tmin = pinned.tmax = h.t;
+    assert_true(cbvh_raycast(fx.file, &pinned, CBVH_TRAVERSAL_SORTED, &h, NULL));
+    cbvh_ray tiny = good;
+    tiny.dir[2] = 1e-30f;
+    assert_true(cbvh_raycast(fx.file, &tiny, CBVH_TRAVERSAL_STACKLESS, &h, NULL));
+    assert_true(fabs(h.t * 1e-30 - 4.0) < 1e-3);
+    /* NULL file / ray / hit and an unknown traversal. */
+    assert_int_equal(cbvh_raycast(NULL, &good, CBVH_TRAVERSAL_SORTED, &h, NULL), 0);
+    assert_int_equal(h.tri, CBVH_NO_HIT);
+    assert_int_equal(cbvh_raycast(fx.file, NULL, CBVH_TRAVERSAL_SORTED, &h, NULL), 0);
+    assert_int_equal(cbvh_raycast(fx.file, &good, CBVH_TRAVERSAL_SORTED, NULL, NULL), 1);
+    assert_int_equal(cbvh_raycast(fx.file, &good, (cbvh_traversal)77, &h, NULL), 0);
+    assert_int_equal(cbvh_occluded(fx.file, &good, (cbvh_traversal)77, NULL), 0);
+    assert_int_equal(cbvh_occluded(NULL, &good, CBVH_TRAVERSAL_SORTED, NULL), 0);
+    ref_fixture_close(&fx);
+    scene_free(&s);
+}
+
+/* Counters: added to, never reset; a hit tests at least one node and triangle;
+ * the sort byte saves work on a closed mesh compared with the fixed order. */
+static void test_stats(void **state)
+{
+    (void)state;
+    scene s;
+    ref_fixture fx;
+    assert_true(scene_sphere(&s, 20000, (float[3]){0, 0, 0}, 1.0f));
+    open_scene(&fx, &s, NULL);
+    cbvh_query_stats st[4];
+    memset(st, 0, sizeof(st));
+    uint64_t rng = 77;
+    for (int r = 0; r < 2000; r++) {
+        const cbvh_ray ray = make_ray(&fx, &rng, 0);
+        for (int k = 0; k < 4; k++) {
+            cbvh_hit h;
+            const cbvh_query_stats before = st[k];
+            const int hit = cbvh_raycast(fx.file, &ray, traversals[k], &h, &st[k]);
+            assert_true(st[k].nodes_visited > before.nodes_visited);
+            if (hit)
+                assert_true(st[k].triangles_tested > before.triangles_tested);
+        }
+    }
+    /* Sorted and distance-ordered walks beat the fixed order of the unsorted and stackless walks. */
+    assert_true(st[0].nodes_visited < st[2].nodes_visited);
+    assert_true(st[3].triangles_tested < st[1].triangles_tested);
+    ref_fixture_close(&fx);
+    scene_free(&s);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_triangle_basic),   cmocka_unit_test(test_watertight_fan),
+        cmocka_unit_test(test_slab_edge_cases),  cmocka_unit_test(test_soup),
+        cmocka_unit_test(test_sphere_and_terrain), cmocka_unit_test(test_cook_variants),
+        cmocka_unit_test(test_closed_mesh_no_leaks), cmocka_unit_test(test_far_from_origin),
+        cmocka_unit_test(test_invalid_rays),     cmocka_unit_test(test_stats),
+    };
+    int failed = cmocka_run_group_tests(tests, NULL, NULL);
+    fprintf(stderr, "test_raycast: %ld reference checks\n", checks_done);
+    return failed;
+}
