@@ -96,9 +96,14 @@ static void print_row(const demo *d, const char *what, size_t count, size_t hits
         printf("  %-26s %8zu %8zu %10.0f %-10s %s\n", what, count, hits, rate, unit_name, check);
 }
 
-static void sample_check(char *buf, size_t size, int sample, int bad)
+/* A table row for a query kind whose sample of `sample` answers had `bad` disagreements. */
+static void sample_row(demo *d, const char *what, size_t count, size_t hits, double seconds, const char *unit_name,
+                       int sample, int bad)
 {
-    snprintf(buf, size, "%d of %d vs brute force: %s", sample - bad, sample, bad ? "FAILED" : "ok");
+    char check[64];
+    snprintf(check, sizeof check, "%d of %d vs brute force: %s", sample - bad, sample, bad ? "FAILED" : "ok");
+    d->failures += bad != 0;
+    print_row(d, what, count, hits, seconds, unit_name, check);
 }
 
 /* ---- raycasts ---- */
@@ -199,10 +204,7 @@ static void demo_raycasts(demo *d)
         if (!ray_agrees(d, &rays[i], &ref[i]) && bad++ == 0)
             report_failure("sorted raycast: ray %zu: triangle %u at t %g disagrees with brute force", i,
                            (unsigned)ref[i].tri, ref[i].t);
-    d->failures += bad != 0;
-    char check[64];
-    sample_check(check, sizeof check, DEMO_RAY_SAMPLE, bad);
-    print_row(d, "raycast closest sorted", n, hit_count, sec, "MRays/s", check);
+    sample_row(d, "raycast closest sorted", n, hit_count, sec, "MRays/s", DEMO_RAY_SAMPLE, bad);
 
     static const struct {
         const char *name;
@@ -226,8 +228,7 @@ static void demo_raycasts(demo *d)
         d->failures += differ != 0;
         char name[40];
         snprintf(name, sizeof name, "raycast closest %s", variants[k].name);
-        snprintf(check, sizeof check, "%s", differ ? "DIFFERS from sorted" : "= sorted, all rays");
-        print_row(d, name, n, h, sec, "MRays/s", check);
+        print_row(d, name, n, h, sec, "MRays/s", differ ? "DIFFERS from sorted" : "= sorted, all rays");
     }
 
     /* Any hit must agree with "the closest hit exists", traversal by traversal. */
@@ -400,10 +401,7 @@ static void demo_sweeps(demo *d)
             if (!sweep_agrees(d, (shape_kind)kind, &shapes[i], hit[i], &hits[i]) && bad++ == 0)
                 report_failure("%s: query %zu (hit %d, t %g) disagrees with sampling the motion", names[kind], i,
                                hit[i], hit[i] ? hits[i].t : 1.0);
-        d->failures += bad != 0;
-        char check[64];
-        sample_check(check, sizeof check, DEMO_SHAPE_SAMPLE, bad);
-        print_row(d, names[kind], DEMO_SHAPES, count, sec, "queries/s", check);
+        sample_row(d, names[kind], DEMO_SHAPES, count, sec, "queries/s", DEMO_SHAPE_SAMPLE, bad);
     }
 out:
     free(shapes);
@@ -479,10 +477,7 @@ static void demo_overlaps(demo *d)
             if (n < DEMO_OVERLAP_CAP && !overlap_agrees(d, kind, &shapes[i], found, n) && bad++ == 0)
                 report_failure("%s: query %zu (%zu triangles) disagrees with brute force", names[k], i, n);
         }
-        d->failures += bad != 0;
-        char check[64];
-        sample_check(check, sizeof check, DEMO_SHAPE_SAMPLE, bad);
-        print_row(d, names[k], DEMO_SHAPES, hits, sec, "queries/s", check);
+        sample_row(d, names[k], DEMO_SHAPES, hits, sec, "queries/s", DEMO_SHAPE_SAMPLE, bad);
     }
 out:
     free(found);
