@@ -253,71 +253,6 @@ static void check_closest(const ref_fixture *fx, const cbvh_ray *ray, int hit, c
     }
 }
 
-/* Rays of several kinds for a fixture: uniform, aimed at triangles, aimed at
- * vertices (shared by several triangles), axis-aligned with 0 and -0
- * components from origins on vertex coordinates, and short segments. */
-static cbvh_ray make_ray(const ref_fixture *fx, uint64_t *st, int kind)
-{
-    cbvh_ray ray;
-    double lo[3], hi[3];
-    for (int a = 0; a < 3; a++) {
-        lo[a] = fx->lo[a] - 0.25 * fx->diag;
-        hi[a] = fx->hi[a] + 0.25 * fx->diag;
-        ray.org[a] = (float)(lo[a] + (hi[a] - lo[a]) * scene_rand_unit(st));
-    }
-    ray.tmin = 0.0f;
-    ray.tmax = INFINITY;
-    const size_t k = (size_t)(scene_rand_unit(st) * (double)fx->tris.count);
-    const double *tri = fx->tris.v + 9 * k;
-    switch (kind) {
-    case 0: { /* uniform direction */
-        const double z = 2.0 * scene_rand_unit(st) - 1.0, phi = 2.0 * PI * scene_rand_unit(st);
-        ray.dir[0] = (float)(sqrt(1 - z * z) * cos(phi));
-        ray.dir[1] = (float)(sqrt(1 - z * z) * sin(phi));
-        ray.dir[2] = (float)z;
-        break;
-    }
-    case 1:   /* at a random point of a triangle, t about 1 there */
-    case 2: { /* at a vertex */
-        double w0 = scene_rand_unit(st), w1 = scene_rand_unit(st);
-        if (w0 + w1 > 1.0) {
-            w0 = 1.0 - w0;
-            w1 = 1.0 - w1;
-        }
-        if (kind == 2) {
-            const int vtx = (int)(scene_rand_next(st) % 3);
-            w0 = vtx == 1;
-            w1 = vtx == 2;
-        }
-        for (int a = 0; a < 3; a++) {
-            const float target = (float)(tri[a] + w0 * (tri[3 + a] - tri[a]) + w1 * (tri[6 + a] - tri[a]));
-            ray.dir[a] = target - ray.org[a];
-        }
-        break;
-    }
-    case 3: { /* axis-aligned, origin on a vertex's coordinates in the other axes */
-        const int axis = (int)(scene_rand_next(st) % 3);
-        for (int a = 0; a < 3; a++) {
-            ray.dir[a] = scene_rand_next(st) % 2 ? 0.0f : -0.0f;
-            if (a != axis)
-                ray.org[a] = (float)tri[3 * (scene_rand_next(st) % 3) + a];
-        }
-        ray.dir[axis] = scene_rand_next(st) % 2 ? 1.0f : -1.0f;
-        break;
-    }
-    default: { /* short segment with tmin > 0 towards a triangle */
-        for (int a = 0; a < 3; a++)
-            ray.dir[a] = (float)((tri[a] + tri[3 + a] + tri[6 + a]) / 3.0) - ray.org[a];
-        ray.tmin = (float)(0.5 * scene_rand_unit(st));
-        ray.tmax = ray.tmin + (float)scene_rand_unit(st);
-        break;
-    }
-    }
-    if (ray.dir[0] == 0 && ray.dir[1] == 0 && ray.dir[2] == 0)
-        ray.dir[0] = 1.0f;
-    return ray;
-}
-
 /* Casts rays with every traversal: all four give the same hit (triangle, t,
  * u, v identical thanks to the shared triangle test and tie rule), any-hit
  * agrees with closest-hit, and the hit matches the reference. */
@@ -325,7 +260,7 @@ static void check_fixture(const ref_fixture *fx, int rays, uint64_t seed)
 {
     uint64_t st = seed;
     for (int r = 0; r < rays; r++) {
-        const cbvh_ray ray = make_ray(fx, &st, r % 5);
+        const cbvh_ray ray = ref_make_ray(fx, &st, r % REF_RAY_KINDS);
         cbvh_hit h[4];
         int hit[4];
         for (int k = 0; k < 4; k++) {
@@ -531,7 +466,7 @@ static void test_stats(void **state)
     memset(st, 0, sizeof(st));
     uint64_t rng = 77;
     for (int r = 0; r < 2000; r++) {
-        const cbvh_ray ray = make_ray(&fx, &rng, 0);
+        const cbvh_ray ray = ref_make_ray(&fx, &rng, 0);
         for (int k = 0; k < 4; k++) {
             cbvh_hit h;
             const cbvh_query_stats before = st[k];

@@ -43,6 +43,14 @@ cbvh_result ref_fixture_open(ref_fixture *fx, const float *positions, size_t ver
                              size_t triangle_count, const cbvh_cook_options *options);
 void ref_fixture_close(ref_fixture *fx);
 
+/* A ray for fixture fx from the generator state st, of kind (0 .. REF_RAY_KINDS-1):
+ * 0 uniform direction from a point around the mesh, 1 aimed at a random point
+ * of a triangle (t about 1 there), 2 aimed at a vertex (shared by several
+ * triangles), 3 axis-aligned with 0 and -0 components from an origin on a
+ * vertex's coordinates, 4 a short segment with tmin > 0. */
+#define REF_RAY_KINDS 5
+cbvh_ray ref_make_ray(const ref_fixture *fx, uint64_t *st, int kind);
+
 /* The validity rule of cbvh.h, restated: 1 when every query must treat the ray as a ray. */
 int ref_ray_valid(const cbvh_ray *ray);
 

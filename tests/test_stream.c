@@ -1,0 +1,223 @@
+/* test_stream.c: ray streams give exactly the single-ray answers, with the scalar, SSE2 and AVX2 box kernels. */
+#ifdef HAVE_CONFIG_H
+#include "config.h"
+#endif
+
+#include <math.h>
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <cmocka.h>
+
+#include "cbvh.h"
+#include "query/stream.h"
+#include "support/reference.h"
+#include "support/scene_gen.h"
+
+/* Kernel settings of cbvh_stream_set_kernel: best, scalar, SSE2, AVX2. */
+static const int kernels[4] = {0, 1, 2, 3};
+
+/* Rays of every kind, with invalid ones mixed in every seventh slot. */
+static cbvh_ray *make_rays(const ref_fixture *fx, size_t count, uint64_t seed, int coherent)
+{
+    cbvh_ray *rays = malloc(sizeof(cbvh_ray) * (count ? count : 1));
+    assert_non_null(rays);
+    uint64_t st = seed;
+    for (size_t r = 0; r < count; r++) {
+        rays[r] = ref_make_ray(fx, &st, coherent ? 1 : (int)(r % REF_RAY_KINDS));
+        if (coherent) { /* one camera position: every ray in the same octant or nearly */
+            for (int a = 0; a < 3; a++) {
+                const float target = rays[r].org[a] + rays[r].dir[a];
+                rays[r].org[a] = (float)(fx->hi[a] + fx->diag);
+                rays[r].dir[a] = target - rays[r].org[a];
+            }
+        }
+        if (r % 7 == 3) {
+            switch ((r / 7) % 4) {
+            case 0: rays[r].org[1] = NAN; break;
+            case 1: rays[r].dir[0] = rays[r].dir[1] = rays[r].dir[2] = 0.0f; break;
+            case 2: rays[r].tmin = -1.0f; break;
+            default: rays[r].tmax = rays[r].tmin - 1.0f; break;
+            }
+        }
+    }
+    return rays;
+}
+
+/* The stream over rays[0, count) equals cbvh_raycast / cbvh_occluded (sorted) ray by ray, bit for bit. */
+static void check_stream(const ref_fixture *fx, const cbvh_ray *rays, size_t count)
+{
+    cbvh_hit *hits = malloc(sizeof(cbvh_hit) * (count + 1));
+    uint8_t *occ = malloc(count + 1);
+    assert_non_null(hits);
+    assert_non_null(occ);
+    for (int k = 0; k < 4; k++) {
+        cbvh_stream_set_kernel(kernels[k]);
+        memset(hits, 0xAB, sizeof(cbvh_hit) * (count + 1));
+        memset(occ, 0xAB, count + 1);
+        cbvh_query_stats st = {0, 0};
+        cbvh_raycast_stream(fx->file, rays, count, hits, &st);
+        cbvh_occluded_stream(fx->file, rays, count, occ, NULL);
+        /* Nothing written past the end. */
+        assert_int_equal(occ[count], 0xAB);
+        assert_int_equal(hits[count].tri, 0xABABABABu);
+        for (size_t r = 0; r < count; r++) {
+            cbvh_hit h;
+            const int hit = cbvh_raycast(fx->file, &rays[r], CBVH_TRAVERSAL_SORTED, &h, NULL);
+            if (hits[r].tri != h.tri || (hit && (hits[r].t != h.t || hits[r].u != h.u || hits[r].v != h.v))) {
+                fprintf(stderr, "kernel %d ray %zu: stream tri %u t %.9g, single tri %u t %.9g\n", kernels[k], r,
+                        hits[r].tri, hits[r].t, h.tri, h.t);
+                fail();
+            }
+            assert_int_equal(occ[r], cbvh_occluded(fx->file, &rays[r], CBVH_TRAVERSAL_SORTED, NULL));
+        }
+        if (count > 0 && ref_ray_valid(&rays[0]))
+            assert_true(st.nodes_visited > 0);
+    }
+    cbvh_stream_set_kernel(0);
+    free(hits);
+    free(occ);
+}
+
+static void open_scene(ref_fixture *fx, scene *s)
+{
+    assert_int_equal(ref_fixture_open(fx, s->positions, s->vertex_count, s->indices, s->triangle_count, NULL), CBVH_OK);
+}
+
+/* Counts around the SIMD widths, the batch size (256) and the octant window (2048). */
+static void test_counts(void **state)
+{
+    (void)state;
+    scene s;
+    ref_fixture fx;
+    assert_true(scene_soup(&s, 2000, 0.1f, 3));
+    open_scene(&fx, &s);
+    const size_t counts[] = {0, 1, 3, 4, 5, 7, 8, 9, 255, 256, 257, 2047, 2048, 2049, 5000};
+    for (size_t c = 0; c < sizeof(counts) / sizeof(counts[0]); c++) {
+        cbvh_ray *rays = make_rays(&fx, counts[c], 100 + c, 0);
+        check_stream(&fx, rays, counts[c]);
+        free(rays);
+    }
+    ref_fixture_close(&fx);
+    scene_free(&s);
+}
+
+/* Closed and open meshes, incoherent and coherent (single-octant) streams. */
+static void test_meshes(void **state)
+{
+    (void)state;
+    for (int m = 0; m < 3; m++) {
+        scene s;
+        ref_fixture fx;
+        if (m == 0)
+            assert_true(scene_sphere(&s, 20000, (float[3]){1, 2, 3}, 2.0f));
+        else if (m == 1)
+            assert_true(scene_terrain(&s, 8000, 100.0f));
+        else
+            assert_true(scene_sphere(&s, 3000, (float[3]){-70000.0f, 70000.0f, 1000.0f}, 5.0f));
+        open_scene(&fx, &s);
+        for (int coherent = 0; coherent < 2; coherent++) {
+            cbvh_ray *rays = make_rays(&fx, 6000, 7 + (uint64_t)m, coherent);
+            check_stream(&fx, rays, 6000);
+            free(rays);
+        }
+        ref_fixture_close(&fx);
+        scene_free(&s);
+    }
+}
+
+/* The batch box kernels agree lane by lane on awkward rays: 0, -0 and
+ * denormal directions, origins on the box planes, dead rays (tmax < 0). */
+static void test_box_kernels_agree(void **state)
+{
+    (void)state;
+    static struct cbvh_stream_batch batch;
+    const float dirs[] = {0.0f, -0.0f, 1e-40f, -1e-40f, 1e30f, -1e30f, 1.0f, -1.0f, 0.37f};
+    const float coords[] = {-2.0f, -1.0f, 0.0f, 0.5f, 1.0f, 3.0f};
+    const cbvh_stream_box_fn fns[] = {cbvh_stream_box_scalar,
+#ifdef CBVH_HAVE_SIMD
+                                      cbvh_stream_box_sse2, cbvh_stream_box_avx2
+#endif
+    };
+    const int nfns = (int)(sizeof(fns) / sizeof(fns[0]));
+#ifdef CBVH_HAVE_SIMD
+    const int have_avx2 = __builtin_cpu_supports("avx2");
+#else
+    const int have_avx2 = 0;
+#endif
+    uint64_t st = 9;
+    for (int round = 0; round < 200; round++) {
+        const uint32_t octant = (uint32_t)(scene_rand_next(&st) % 8);
+        const uint32_t n = (uint32_t)(scene_rand_next(&st) % (CBVH_STREAM_BATCH + 1));
+        for (uint32_t r = 0; r < CBVH_STREAM_BATCH; r++) {
+            float *b = batch.box_ray[r];
+            for (int a = 0; a < 3; a++) {
+                b[CBVH_LANE_OX + a] = coords[scene_rand_next(&st) % 6];
+                float d = dirs[scene_rand_next(&st) % 9];
+                d = (octant >> a & 1u) ? -fabsf(d) : fabsf(d); /* the batch's octant */
+                b[CBVH_LANE_RX + a] = 1.0f / d;
+            }
+            b[CBVH_LANE_TMIN] = scene_rand_next(&st) % 2 ? 0.0f : 0.5f;
+            b[CBVH_LANE_TMAX] = scene_rand_next(&st) % 5 == 0 ? -1.0f : 2.0f;
+        }
+        const float lo[3] = {-1, -1, -1}, hi[3] = {1, 1, 1};
+        float near[3], far[3];
+        for (int a = 0; a < 3; a++) {
+            near[a] = (octant >> a & 1u) ? hi[a] : lo[a];
+            far[a] = (octant >> a & 1u) ? lo[a] : hi[a];
+        }
+        uint8_t expect[CBVH_STREAM_BATCH];
+        for (int f = 0; f < nfns; f++) {
+            if (f == 2 && !have_avx2)
+                continue;
+            uint16_t live[CBVH_STREAM_BATCH];
+            for (uint32_t j = 0; j < n; j++)
+                live[j] = (uint16_t)(n - 1 - j); /* any permutation */
+            const uint32_t m = fns[f](&batch, live, n, near, far);
+            uint8_t got[CBVH_STREAM_BATCH] = {0}, seen[CBVH_STREAM_BATCH] = {0};
+            for (uint32_t j = 0; j < n; j++) {
+                assert_false(seen[live[j]]); /* still a permutation */
+                seen[live[j]] = 1;
+                got[live[j]] = j < m;
+            }
+            for (uint32_t r = 0; r < n; r++) {
+                if (f == 0)
+                    expect[r] = got[r];
+                else
+                    assert_int_equal(got[r], expect[r]);
+            }
+        }
+    }
+}
+
+static void test_null_arguments(void **state)
+{
+    (void)state;
+    cbvh_hit h[2] = {{0, 0, 0, 0}, {0, 0, 0, 0}};
+    uint8_t occ[2] = {1, 1};
+    const cbvh_ray rays[2] = {{{0, 0, 0}, 0, {1, 0, 0}, 1}, {{0, 0, 0}, 0, {1, 0, 0}, 1}};
+    cbvh_raycast_stream(NULL, rays, 2, h, NULL);
+    assert_int_equal(h[0].tri, CBVH_NO_HIT);
+    assert_int_equal(h[1].tri, CBVH_NO_HIT);
+    cbvh_occluded_stream(NULL, rays, 2, occ, NULL);
+    assert_int_equal(occ[0], 0);
+    assert_int_equal(occ[1], 0);
+    cbvh_raycast_stream(NULL, rays, 2, NULL, NULL); /* nowhere to write: nothing happens */
+    cbvh_occluded_stream(NULL, rays, 2, NULL, NULL);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_counts),
+        cmocka_unit_test(test_meshes),
+        cmocka_unit_test(test_box_kernels_agree),
+        cmocka_unit_test(test_null_arguments),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
