@@ -17,6 +17,8 @@ static const command commands[] = {
     { "verify", cmd_verify, "validate a .cbvh file completely" },
     { "raycast", cmd_raycast, "cast rays read from stdin, print hits on stdout" },
     { "demo", cmd_demo, "cook, open and query the built-in scene; check answers by brute force" },
+    { "bench", cmd_bench, "measure cbvh against Embree and Bullet on the same triangles and rays" },
+    { "report", cmd_report, "compare the format's precision and layout choices: error and run time" },
 };
 
 static const char usage[] =
