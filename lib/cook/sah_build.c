@@ -28,13 +28,9 @@ typedef struct task {
 } task;
 
 typedef struct workspace {
-    /* Two sets of bins, for even and odd prims: neighbouring prims often share a bin, and
-     * alternating sets halves the store-to-load chains through one bin's box. */
-    box bins[2][3][MAX_BINS];
-    uint32_t counts[2][3][MAX_BINS];
+    box bins[3][MAX_BINS];
+    uint32_t counts[3][MAX_BINS];
     box right_box[MAX_BINS];
-    box left_box[MAX_BINS];
-    double right_area[MAX_BINS];
     uint32_t right_count[MAX_BINS];
 } workspace;
 
@@ -60,15 +56,29 @@ static void box_empty(box *b)
     }
 }
 
-static inline void box_grow(box *restrict b, const float lo[3], const float hi[3])
+static inline float min_f(float x, float y)
 {
-    for (int a = 0; a < 3; a++) {
-        b->lo[a] = lo[a] < b->lo[a] ? lo[a] : b->lo[a];
-        b->hi[a] = hi[a] > b->hi[a] ? hi[a] : b->hi[a];
-    }
+    return x < y ? x : y;
 }
 
-static inline void box_grow_point(box *restrict b, const float p[3])
+static inline float max_f(float x, float y)
+{
+    return x > y ? x : y;
+}
+
+/* Written out with locals: this is the builder's innermost operation. */
+static inline void box_grow(box *restrict b, const float *restrict lo, const float *restrict hi)
+{
+    const float l0 = lo[0], l1 = lo[1], l2 = lo[2], h0 = hi[0], h1 = hi[1], h2 = hi[2];
+    b->lo[0] = min_f(l0, b->lo[0]);
+    b->lo[1] = min_f(l1, b->lo[1]);
+    b->lo[2] = min_f(l2, b->lo[2]);
+    b->hi[0] = max_f(h0, b->hi[0]);
+    b->hi[1] = max_f(h1, b->hi[1]);
+    b->hi[2] = max_f(h2, b->hi[2]);
+}
+
+static inline void box_grow_point(box *restrict b, const float *restrict p)
 {
     box_grow(b, p, p);
 }
@@ -118,65 +128,58 @@ static split find_split(workspace *restrict w, const prim_ref *restrict refs, co
     best.cost = 0.0;
     float scale[3];
     bin_scales(&t->cent, bins, scale);
-    for (int h = 0; h < 2; h++)
-        for (int a = 0; a < 3; a++) {
-            for (uint32_t b = 0; b < bins; b++)
-                box_empty(&w->bins[h][a][b]);
-            memset(w->counts[h][a], 0, bins * sizeof(uint32_t));
-        }
+    for (int a = 0; a < 3; a++) {
+        for (uint32_t b = 0; b < bins; b++)
+            box_empty(&w->bins[a][b]);
+        memset(w->counts[a], 0, bins * sizeof(uint32_t));
+    }
     const float c_lo[3] = { t->cent.lo[0], t->cent.lo[1], t->cent.lo[2] };
     for (uint32_t i = t->begin; i < t->end; i++) {
         const prim_ref *r = &refs[i];
-        const uint32_t h = i & 1;
         const uint32_t b0 = bin_of(centroid(r, 0), c_lo[0], scale[0], bins);
         const uint32_t b1 = bin_of(centroid(r, 1), c_lo[1], scale[1], bins);
         const uint32_t b2 = bin_of(centroid(r, 2), c_lo[2], scale[2], bins);
-        w->counts[h][0][b0]++;
-        w->counts[h][1][b1]++;
-        w->counts[h][2][b2]++;
-        box_grow(&w->bins[h][0][b0], r->lo, r->hi);
-        box_grow(&w->bins[h][1][b1], r->lo, r->hi);
-        box_grow(&w->bins[h][2][b2], r->lo, r->hi);
+        w->counts[0][b0]++;
+        w->counts[1][b1]++;
+        w->counts[2][b2]++;
+        box_grow(&w->bins[0][b0], r->lo, r->hi);
+        box_grow(&w->bins[1][b1], r->lo, r->hi);
+        box_grow(&w->bins[2][b2], r->lo, r->hi);
     }
     for (int a = 0; a < 3; a++) {
         if (scale[a] == 0.0f)
             continue;
-        box *restrict bin = w->bins[0][a];
-        uint32_t *restrict count = w->counts[0][a];
-        for (uint32_t b = 0; b < bins; b++) {
-            box_grow(&bin[b], w->bins[1][a][b].lo, w->bins[1][a][b].hi);
-            count[b] += w->counts[1][a][b];
-        }
-        /* Prefix boxes first, areas after: the area loops have no carried dependency. */
+        const box *restrict bin = w->bins[a];
+        const uint32_t *restrict count = w->counts[a];
+        /* Empty bins change no box and add no prim, so they are skipped: a plane after an
+         * empty bin splits like the plane before it, which was tried first and wins ties. */
         box acc;
         box_empty(&acc);
         uint32_t n = 0;
         for (uint32_t b = bins; b-- > 1;) {
-            box_grow(&acc, bin[b].lo, bin[b].hi);
-            n += count[b];
+            if (count[b]) {
+                box_grow(&acc, bin[b].lo, bin[b].hi);
+                n += count[b];
+            }
             w->right_box[b] = acc;
             w->right_count[b] = n;
         }
-        for (uint32_t b = 1; b < bins; b++)
-            w->right_area[b] = half_area(w->right_box[b].lo, w->right_box[b].hi) * w->right_count[b];
         box_empty(&acc);
-        for (uint32_t b = 1; b < bins; b++) {
-            box_grow(&acc, bin[b - 1].lo, bin[b - 1].hi);
-            w->left_box[b] = acc;
-        }
         n = 0;
-        for (uint32_t b = 1; b < bins; b++) {
-            n += count[b - 1];
-            if (n == 0 || w->right_count[b] == 0)
+        for (uint32_t b = 1; b < bins && w->right_count[b] > 0; b++) {
+            if (!count[b - 1])
                 continue;
-            double cost = half_area(w->left_box[b].lo, w->left_box[b].hi) * n + w->right_area[b];
+            box_grow(&acc, bin[b - 1].lo, bin[b - 1].hi);
+            n += count[b - 1];
+            double cost = half_area(acc.lo, acc.hi) * n +
+                          half_area(w->right_box[b].lo, w->right_box[b].hi) * w->right_count[b];
             /* Strictly cheaper only: ties keep the lowest axis and plane, deterministically. */
             if (best.axis < 0 || cost < best.cost) {
                 best.axis = a;
                 best.bin = b;
                 best.cost = cost;
                 best.left_count = n;
-                best.left = w->left_box[b];
+                best.left = acc;
                 best.right = w->right_box[b];
             }
         }
@@ -211,6 +214,73 @@ static uint32_t partition_bins(prim_ref *restrict refs, const task *t, const spl
         }
     }
     return i;
+}
+
+/* Nodes this small try every split exactly instead of binning: most nodes are small, and
+ * enumerating their few partitions is both cheaper and better than binning them. */
+#define SMALL_NODE 4
+
+static void centroid_of(const prim_ref *r, float c[3])
+{
+    for (int a = 0; a < 3; a++)
+        c[a] = centroid(r, a);
+}
+
+/* Every split into two nonempty sets, prim 0 always on the left; bin holds the left set's mask. */
+static split find_split_small(const prim_ref *restrict refs, const task *t)
+{
+    split best;
+    best.axis = -1;
+    best.cost = 0.0;
+    const uint32_t n = t->end - t->begin;
+    const prim_ref *r = refs + t->begin;
+    for (uint32_t m = 1; m < (1u << n) - 1; m += 2) {
+        box l, rb;
+        box_empty(&l);
+        box_empty(&rb);
+        uint32_t nl = 0;
+        for (uint32_t i = 0; i < n; i++) {
+            if ((m >> i) & 1) {
+                box_grow(&l, r[i].lo, r[i].hi);
+                nl++;
+            } else {
+                box_grow(&rb, r[i].lo, r[i].hi);
+            }
+        }
+        double cost = half_area(l.lo, l.hi) * nl + half_area(rb.lo, rb.hi) * (n - nl);
+        if (best.axis < 0 || cost < best.cost) {
+            best.axis = 0;
+            best.bin = m;
+            best.cost = cost;
+            best.left_count = nl;
+            best.left = l;
+            best.right = rb;
+        }
+    }
+    return best;
+}
+
+/* Puts the prims of the mask first, each side in its previous order. */
+static uint32_t partition_small(prim_ref *restrict refs, const task *t, const split *s, box *left_cent,
+                                box *right_cent)
+{
+    prim_ref tmp[SMALL_NODE];
+    const uint32_t mask = s->bin;
+    const uint32_t n = t->end - t->begin;
+    memcpy(tmp, refs + t->begin, n * sizeof(prim_ref));
+    box_empty(left_cent);
+    box_empty(right_cent);
+    uint32_t k = t->begin;
+    for (int side = 1; side >= 0; side--)
+        for (uint32_t i = 0; i < n; i++) {
+            if (((mask >> i) & 1) != (uint32_t)side)
+                continue;
+            float c[3];
+            centroid_of(&tmp[i], c);
+            box_grow_point(side ? left_cent : right_cent, c);
+            refs[k++] = tmp[i];
+        }
+    return t->begin + s->left_count;
 }
 
 /* Total order for median splits: centroid on the axis, then triangle id. */
@@ -372,8 +442,9 @@ cbvh_result cook_build(const cook_mesh *m, const cook_build_params *params, cons
         s.axis = -1;
         /* A node of n prims fills at most n bins; fewer bins keep small nodes cheap. */
         const uint32_t node_bins = n < bins ? (n < 4 ? 4 : n) : bins;
+        const int small = n <= SMALL_NODE;
         if (n > 1)
-            s = find_split(w, refs, &t, node_bins);
+            s = small ? find_split_small(refs, &t) : find_split(w, refs, &t, node_bins);
         const double area = half_area(node->lo, node->hi);
         const int may_be_leaf = n <= leaf_size;
         if (may_be_leaf && (s.axis < 0 || t.depth >= CBVH_MAX_DEPTH || ci * n * area <= ct * area + ci * s.cost)) {
@@ -393,7 +464,8 @@ cbvh_result cook_build(const cook_mesh *m, const cook_build_params *params, cons
         const uint32_t budget = CBVH_MAX_DEPTH - t.depth;
         if (s.axis >= 0 && levels_needed(s.left_count > n - s.left_count ? s.left_count : n - s.left_count,
                                          leaf_size) <= budget) {
-            mid = partition_bins(refs, &t, &s, node_bins, &lt.cent, &rt.cent);
+            mid = small ? partition_small(refs, &t, &s, &lt.cent, &rt.cent)
+                        : partition_bins(refs, &t, &s, node_bins, &lt.cent, &rt.cent);
             left = s.left;
             right = s.right;
         } else {
