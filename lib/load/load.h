@@ -13,8 +13,13 @@ typedef struct cbvh_section_map {
     int index[CBVH_KNOWN_SECTIONS];
 } cbvh_section_map;
 
-/* CRC32 (zlib's) of `size` bytes, any size. */
+/* CRC32 (zlib's) of `size` bytes, any size: by carry-less multiplication when the CPU has it, else zlib. */
 uint32_t cbvh_crc32(const uint8_t *data, uint64_t size);
+
+/* The PCLMULQDQ kernel: the running (uninverted) state after `size` more bytes, size >= 64 and a
+ * multiple of 16; callable only when cbvh_crc32_pclmul_available() says so. */
+uint32_t cbvh_crc32_pclmul(uint32_t crc, const uint8_t *data, size_t size);
+int cbvh_crc32_pclmul_available(void);
 
 /* Checks the 128-byte header of f->bytes (f->size bytes) and fills f->info,
  * f->grid_origin, f->grid_scale and f->original_triangle_count. */
