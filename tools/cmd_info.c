@@ -46,7 +46,7 @@ static void json_vec3(json_writer *w, const char *key, const float v[3])
 {
     json_begin_array(w, key);
     for (int a = 0; a < 3; a++)
-        json_double(w, NULL, v[a]);
+        json_float(w, NULL, v[a]);
     json_end_array(w);
 }
 

@@ -130,23 +130,26 @@ void json_int(json_writer *w, const char *key, int64_t v)
     fprintf(w->out, "%" PRId64, v);
 }
 
-void json_double(json_writer *w, const char *key, double v)
+/* The shortest %.Ng that reads back exactly (as a float when `single`); %g never prints
+ * "inf"/"nan" for finite values, and its output ("1e-05", "0.5", "3") is valid JSON. */
+static void json_number(json_writer *w, const char *key, double v, int single)
 {
     json_prefix(w, key);
     if (!isfinite(v)) {
         fputs("null", w->out);
         return;
     }
-    /* The shortest %.Ng that reads back exactly; %g never prints "inf"/"nan" for finite values,
-     * and its output ("1e-05", "0.5", "3") is always a valid JSON number. */
     char buf[40];
-    for (int prec = 6; prec <= 17; prec++) {
+    for (int prec = 1; prec <= 17; prec++) {
         snprintf(buf, sizeof buf, "%.*g", prec, v);
-        if (strtod(buf, NULL) == v)
+        if (single ? strtof(buf, NULL) == (float)v : strtod(buf, NULL) == v)
             break;
     }
     fputs(buf, w->out);
 }
+
+void json_double(json_writer *w, const char *key, double v) { json_number(w, key, v, 0); }
+void json_float(json_writer *w, const char *key, float v) { json_number(w, key, v, 1); }
 
 void json_bool(json_writer *w, const char *key, int v)
 {

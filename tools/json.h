@@ -29,6 +29,8 @@ void json_uint(json_writer *w, const char *key, uint64_t v);
 void json_int(json_writer *w, const char *key, int64_t v);
 /* Shortest decimal that reads back to the same double; NaN and infinities become null. */
 void json_double(json_writer *w, const char *key, double v);
+/* The same for a binary32 value: the shortest decimal that reads back to the same float. */
+void json_float(json_writer *w, const char *key, float v);
 void json_bool(json_writer *w, const char *key, int v);
 void json_null(json_writer *w, const char *key);
 
