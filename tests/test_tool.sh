@@ -3,12 +3,11 @@
 #
 # Environment (set by `make check` through AM_TESTS_ENVIRONMENT):
 #   CBVH_TOOL        the built tools/cbvh
-#   CBVH_TOP_SRCDIR  the source tree (read only)
+#   CBVH_TOP_SRCDIR  the source tree (read only; the tests generate their own inputs and do not need it)
 #   CBVH_ASSIMP_MODELS  optional: folder of Debian's assimp-testmodels (found with dpkg -L otherwise)
 # Writes only into a mktemp folder, removed at exit.
 
 CBVH=${CBVH_TOOL:-./tools/cbvh}
-TOP=${CBVH_TOP_SRCDIR:-${srcdir:-.}}
 [ -x "$CBVH" ] || { echo "test_tool.sh: $CBVH is not built"; exit 99; }
 
 tmp=$(mktemp -d "${TMPDIR:-/tmp}/cbvh-test-tool.XXXXXX") || exit 99
