@@ -1383,53 +1383,69 @@ static void test_cook_to_path(void **state)
 
 /* ------------------------------------------------------------------ round trip through the loader */
 
+static void round_trip(const test_mesh *m, const cbvh_cook_options *o)
+{
+    cooked c;
+    cook_and_check(m, o, &c);
+    cbvh_file *file = NULL;
+    cbvh_error err;
+    if (cbvh_open_memory(c.data, c.size, NULL, &file, &err) != CBVH_OK)
+        fail_msg("the loader rejects a cooked file: %s", err.message);
+    cbvh_file_info info;
+    cbvh_file_get_info(file, &info);
+    assert_int_equal(info.format_version, 1);
+    assert_int_equal(info.triangle_count, c.stats.triangles);
+    assert_int_equal(info.vertex_count, c.stats.vertices);
+    assert_int_equal(info.node_count, c.stats.nodes);
+    assert_int_equal(info.depth, c.stats.depth);
+    assert_int_equal(info.file_size, c.stats.file_size);
+    assert_int_equal(info.has_remap, 1);
+    assert_int_equal(info.vertex_format, o->vertex_format);
+    assert_int_equal(info.section_count, c.p.section_count);
+    for (int k = 0; k < 3; k++) {
+        assert_true(info.grid_origin[k] == c.p.origin[k] && info.grid_scale[k] == c.p.scale[k]);
+        assert_true(info.bounds_min[k] == c.p.bmin[k] && info.bounds_max[k] == c.p.bmax[k]);
+    }
+    for (uint32_t i = 0; i < info.section_count; i++) {
+        cbvh_section_info s;
+        assert_int_equal(cbvh_file_get_section(file, i, &s), 1);
+        assert_int_equal(s.stored_size, c.stats.section_stored_size[s.type]);
+        assert_int_equal(s.size, c.stats.section_size[s.type]);
+    }
+    /* Every kept input triangle reads back by its original id, as the parser decoded it. */
+    for (uint32_t t = 0; t < c.p.tri_count; t++) {
+        uint32_t o_id = c.p.remap[t];
+        float v[3][3];
+        assert_int_equal(cbvh_file_get_triangle(file, o_id, v[0], v[1], v[2]), 1);
+        for (int k = 0; k < 3; k++)
+            assert_memory_equal(v[k], c.p.verts + 3 * (size_t)c.p.tris[3 * (size_t)t + (size_t)k], 12);
+        if (o->vertex_format == CBVH_VERTEX_FLOAT32)
+            for (int k = 0; k < 3; k++)
+                for (int a = 0; a < 3; a++)
+                    assert_true(v[k][a] == m->pos[3 * (size_t)m->idx[3 * (size_t)o_id + (size_t)k] + (size_t)a]);
+    }
+    cbvh_close(file);
+    cooked_free(&c);
+}
+
 static void test_loader_round_trip(void **state)
 {
     (void)state;
-    test_mesh m;
-    make_sphere(&m, 30, 50, 3.0, origin3);
-    for (int variant = 0; variant < 2; variant++) {
-        cbvh_cook_options o;
-        cbvh_cook_options_init(&o);
-        o.compress_level = variant ? 4 : 0;
-        cooked c;
-        cook_and_check(&m, &o, &c);
-        cbvh_file *file = NULL;
-        cbvh_error err;
-        if (cbvh_open_memory(c.data, c.size, NULL, &file, &err) != CBVH_OK)
-            fail_msg("the loader rejects a cooked file: %s", err.message);
-        cbvh_file_info info;
-        cbvh_file_get_info(file, &info);
-        assert_int_equal(info.format_version, 1);
-        assert_int_equal(info.triangle_count, c.stats.triangles);
-        assert_int_equal(info.vertex_count, c.stats.vertices);
-        assert_int_equal(info.node_count, c.stats.nodes);
-        assert_int_equal(info.depth, c.stats.depth);
-        assert_int_equal(info.file_size, c.stats.file_size);
-        assert_int_equal(info.has_remap, 1);
-        assert_int_equal(info.section_count, c.p.section_count);
-        for (int k = 0; k < 3; k++) {
-            assert_true(info.grid_origin[k] == c.p.origin[k] && info.grid_scale[k] == c.p.scale[k]);
-            assert_true(info.bounds_min[k] == c.p.bmin[k] && info.bounds_max[k] == c.p.bmax[k]);
+    const double far[3] = { 1e7, -3e5, 2 };
+    test_mesh meshes[3];
+    make_sphere(&meshes[0], 30, 50, 3.0, origin3);
+    make_grid(&meshes[1], 20, 0.0, 1); /* flat: grid_scale[2] == 0 */
+    make_sphere(&meshes[2], 10, 20, 30.0, far);
+    for (int i = 0; i < 3; i++) {
+        for (int variant = 0; variant < 3; variant++) {
+            cbvh_cook_options o;
+            cbvh_cook_options_init(&o);
+            o.compress_level = variant == 1 ? 4 : 0;
+            o.vertex_format = variant == 2 ? CBVH_VERTEX_QUANTIZED16 : CBVH_VERTEX_FLOAT32;
+            round_trip(&meshes[i], &o);
         }
-        for (uint32_t i = 0; i < info.section_count; i++) {
-            cbvh_section_info s;
-            assert_int_equal(cbvh_file_get_section(file, i, &s), 1);
-            assert_int_equal(s.stored_size, c.stats.section_stored_size[s.type]);
-            assert_int_equal(s.size, c.stats.section_size[s.type]);
-        }
-        /* Every kept input triangle reads back by its original id. */
-        for (uint32_t t = 0; t < c.p.tri_count; t++) {
-            uint32_t o_id = c.p.remap[t];
-            float v[3][3];
-            assert_int_equal(cbvh_file_get_triangle(file, o_id, v[0], v[1], v[2]), 1);
-            for (int k = 0; k < 3; k++)
-                assert_memory_equal(v[k], m.pos + 3 * (size_t)m.idx[3 * (size_t)o_id + (size_t)k], 12);
-        }
-        cbvh_close(file);
-        cooked_free(&c);
+        mesh_free(&meshes[i]);
     }
-    mesh_free(&m);
 }
 
 int main(void)
