@@ -122,6 +122,18 @@ static double clear_hit(const double o[3], const double dir[3], const float *v0,
     double t = (e2[0] * q[0] + e2[1] * q[1] + e2[2] * q[2]) / det;
     if (u < margin || v < margin || u + v > 1 - margin || !(t > 0))
         return -1;
+    /* and at least 1e-5 of the coordinates' magnitude from every edge: a
+     * needle thinner than the float spacing at the ray origin is no clear hit */
+    double n[3] = { e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0] };
+    double area2 = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]), mag = 0, e3[3];
+    for (int a = 0; a < 3; a++) {
+        e3[a] = (double)v2[a] - v1[a];
+        mag = fmax(mag, fmax(fabs(o[a]), fmax(fabs(v0[a]), fmax(fabs(v1[a]), fabs(v2[a])))));
+    }
+    double len1 = sqrt(e1[0] * e1[0] + e1[1] * e1[1] + e1[2] * e1[2]), len2 = sqrt(e2[0] * e2[0] + e2[1] * e2[1] + e2[2] * e2[2]),
+           len3 = sqrt(e3[0] * e3[0] + e3[1] * e3[1] + e3[2] * e3[2]), tol = 1e-5 * mag;
+    if (v * area2 < tol * len1 || u * area2 < tol * len2 || (1 - u - v) * area2 < tol * len3)
+        return -1;
     return t;
 }
 
@@ -132,6 +144,10 @@ static void compare_with_brute_force(const cbvh_file *f, const decoded *d, uint6
 {
     const cbvh_mesh *m = &d->mesh;
     size_t stride = m->position_stride / sizeof(float);
+    for (size_t i = 0; i < 3 * m->triangle_count; i++)
+        for (int a = 0; a < 3; a++)
+            if (fabsf(m->positions[m->indices[i] * stride + a]) > FUZZ_MAX_MAGNITUDE)
+                return;
     cbvh_file_info info;
     cbvh_file_get_info(f, &info);
     for (int i = 0; i < 16; i++) {
