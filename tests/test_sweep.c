@@ -1,0 +1,283 @@
+/* test_sweep.c: sphere, capsule and box sweeps against a distance-based brute force; zero-size sweeps equal raycasts. */
+#include <math.h>
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <string.h>
+
+#include <cmocka.h>
+
+#include "cbvh.h"
+#include "support/reference.h"
+#include "support/scene_gen.h"
+
+static long sweeps_checked, contacts_checked;
+
+static double rnd(uint64_t *st, double lo, double hi) { return lo + (hi - lo) * scene_rand_unit(st); }
+
+/* Runs the kernel for the shape and fills *hit. */
+static int kernel_sweep(const cbvh_file *f, const ref_shape *s, const float delta[3], cbvh_sweep_hit *hit)
+{
+    float p0[3], p1[3], half[3];
+    for (int a = 0; a < 3; a++) {
+        p0[a] = (float)s->p0[a];
+        p1[a] = (float)s->p1[a];
+        half[a] = (float)s->half[a];
+    }
+    switch (s->kind) {
+    case REF_SPHERE: return cbvh_sweep_sphere(f, p0, (float)s->radius, delta, hit);
+    case REF_CAPSULE: return cbvh_sweep_capsule(f, p0, p1, (float)s->radius, delta, hit);
+    default: return cbvh_sweep_box(f, p0, half, delta, hit);
+    }
+}
+
+/* A random shape near the mesh, moving by about a third of the mesh size,
+ * often straight at a point of a triangle. Coordinates are floats, as the
+ * kernels see them. */
+static void random_sweep(const ref_fixture *fx, uint64_t *st, ref_shape_kind kind, ref_shape *s, float delta[3])
+{
+    const double d = fx->diag;
+    memset(s, 0, sizeof(*s));
+    s->kind = kind;
+    const size_t k = (size_t)(scene_rand_unit(st) * (double)fx->tris.count);
+    const double *tri = fx->tris.v + 9 * k;
+    const int aimed = scene_rand_next(st) % 3 != 0;
+    for (int a = 0; a < 3; a++) {
+        s->p0[a] = (float)rnd(st, fx->lo[a] - 0.2 * d, fx->hi[a] + 0.2 * d);
+        const double target = (tri[a] + tri[3 + a] + tri[6 + a]) / 3.0;
+        delta[a] = aimed ? (float)(1.3 * (target - s->p0[a])) : (float)rnd(st, -0.4 * d, 0.4 * d);
+        s->p1[a] = kind == REF_CAPSULE ? (float)(s->p0[a] + rnd(st, -0.08 * d, 0.08 * d)) : s->p0[a];
+        s->half[a] = kind == REF_BOX ? (float)rnd(st, 0.002 * d, 0.05 * d) : 0.0;
+    }
+    s->radius = kind == REF_BOX ? 0.0 : (float)rnd(st, 0.002 * d, 0.05 * d);
+}
+
+/* The kernel's first contact against the reference: same hit or miss, a t no
+ * earlier than the reference's (which is never later than the truth) and no
+ * later than it by more than tol; the contact is real (the shape touches the
+ * reported triangle at t) and the point, normal and t are consistent. */
+static void check_sweep(const ref_fixture *fx, const ref_shape *s, const float delta[3])
+{
+    const double dd[3] = {delta[0], delta[1], delta[2]};
+    const double tol_d = 1e-5 * fx->diag, dlen = sqrt(dd[0] * dd[0] + dd[1] * dd[1] + dd[2] * dd[2]);
+    const double tol_t = dlen > 0.0 ? 2e-5 * fx->diag / dlen + 1e-6 : 0.0;
+    ref_sweep_hit ref;
+    cbvh_sweep_hit h;
+    const int rh = ref_sweep(&fx->tris, s, dd, 1e-9 * fx->diag, &ref);
+    const int kh = kernel_sweep(fx->file, s, delta, &h);
+    sweeps_checked++;
+    if (rh != kh) {
+        fprintf(stderr, "shape %d: kernel %s (t %.9g tri %u), reference %s (t %.9g tri %u)\n", (int)s->kind,
+                kh ? "hit" : "miss", kh ? h.t : 0.0, h.tri, rh ? "hit" : "miss", ref.t, ref.tri);
+        fail();
+    }
+    if (!kh) {
+        assert_int_equal(h.tri, CBVH_NO_HIT);
+        return;
+    }
+    contacts_checked++;
+    assert_true(h.tri < fx->id_count && fx->index_of_id[h.tri] != (size_t)-1);
+    const double *tri = fx->tris.v + 9 * fx->index_of_id[h.tri];
+    if (!(h.t >= ref.t - tol_t && h.t <= ref.t + tol_t && h.t >= 0.0f && h.t <= 1.0f)) {
+        fprintf(stderr, "shape %d: kernel t %.9g (tri %u), reference t %.9g (tri %u), tol %g\n", (int)s->kind, h.t,
+                h.tri, ref.t, ref.tri, tol_t);
+        fail();
+    }
+    /* The shape touches the reported triangle at the reported time. */
+    const double gap = ref_shape_triangle_dist(s, dd, h.t, tri);
+    if (!(gap <= tol_d)) {
+        fprintf(stderr, "shape %d: at t %.9g the shape is %g away from tri %u\n", (int)s->kind, h.t, gap, h.tri);
+        fail();
+    }
+    /* The point is on the triangle, the normal is a unit vector. */
+    const double p[3] = {h.point[0], h.point[1], h.point[2]};
+    assert_true(sqrt(ref_point_triangle_dist2(tri, p)) <= tol_d);
+    const double nl = sqrt((double)h.normal[0] * h.normal[0] + (double)h.normal[1] * h.normal[1] +
+                           (double)h.normal[2] * h.normal[2]);
+    assert_true(fabs(nl - 1.0) < 1e-5);
+    const double nd = h.normal[0] * dd[0] + h.normal[1] * dd[1] + h.normal[2] * dd[2];
+    if (h.t > 0.0f) {
+        /* Moving into the triangle: the normal (triangle to shape) opposes the motion. */
+        assert_true(nd <= 1e-6 * dlen);
+        if (s->kind == REF_SPHERE) { /* the normal points from the contact to the center, one radius away */
+            double q[3], ql = 0.0;
+            for (int a = 0; a < 3; a++) {
+                q[a] = s->p0[a] + h.t * dd[a] - p[a];
+                ql += q[a] * q[a];
+            }
+            ql = sqrt(ql);
+            assert_true(fabs(ql - s->radius) <= 1e-4 * fx->diag);
+            for (int a = 0; a < 3; a++)
+                assert_true(fabs(q[a] / ql - h.normal[a]) < 1e-3);
+        }
+    }
+}
+
+static void run_sweeps(const ref_fixture *fx, int count, uint64_t seed)
+{
+    uint64_t st = seed;
+    for (int r = 0; r < count; r++) {
+        ref_shape s;
+        float delta[3];
+        random_sweep(fx, &st, (ref_shape_kind)(r % 3), &s, delta);
+        check_sweep(fx, &s, delta);
+    }
+}
+
+static void open_scene(ref_fixture *fx, scene *s)
+{
+    assert_int_equal(ref_fixture_open(fx, s->positions, s->vertex_count, s->indices, s->triangle_count, NULL), CBVH_OK);
+}
+
+static void test_random_sweeps(void **state)
+{
+    (void)state;
+    for (int m = 0; m < 3; m++) {
+        scene s;
+        ref_fixture fx;
+        if (m == 0)
+            assert_true(scene_soup(&s, 400, 0.15f, 21));
+        else if (m == 1)
+            assert_true(scene_sphere(&s, 600, (float[3]){0.5f, 0.5f, 0.5f}, 0.5f));
+        else
+            assert_true(scene_terrain(&s, 600, 10.0f));
+        open_scene(&fx, &s);
+        run_sweeps(&fx, 150, 1000 + (uint64_t)m);
+        ref_fixture_close(&fx);
+        scene_free(&s);
+    }
+    fprintf(stderr, "test_sweep: %ld sweeps, %ld contacts checked\n", sweeps_checked, contacts_checked);
+}
+
+/* A zero-size shape is a ray from its center along delta, t in [0, 1]: the
+ * same triangle and the same t as cbvh_raycast, bit for bit. */
+static void test_zero_size_is_raycast(void **state)
+{
+    (void)state;
+    scene s;
+    ref_fixture fx;
+    assert_true(scene_sphere(&s, 2000, (float[3]){0, 0, 0}, 1.0f));
+    open_scene(&fx, &s);
+    uint64_t st = 3;
+    int hits = 0;
+    for (int r = 0; r < 500; r++) {
+        cbvh_ray ray = ref_make_ray(&fx, &st, r % REF_RAY_KINDS);
+        ray.tmin = 0.0f;
+        ray.tmax = 1.0f;
+        const float zero[3] = {0, 0, 0};
+        cbvh_hit h;
+        cbvh_sweep_hit sh[3];
+        const int hit = cbvh_raycast(fx.file, &ray, CBVH_TRAVERSAL_SORTED, &h, NULL);
+        const int a = cbvh_sweep_sphere(fx.file, ray.org, 0.0f, ray.dir, &sh[0]);
+        const int b = cbvh_sweep_capsule(fx.file, ray.org, ray.org, 0.0f, ray.dir, &sh[1]);
+        const int c = cbvh_sweep_box(fx.file, ray.org, zero, ray.dir, &sh[2]);
+        assert_int_equal(a, hit);
+        assert_int_equal(b, hit);
+        assert_int_equal(c, hit);
+        for (int k = 0; k < 3; k++) {
+            assert_int_equal(sh[k].tri, h.tri);
+            if (hit) {
+                assert_true(sh[k].t == h.t);
+                /* The point is the ray's point, the normal the face normal against the motion. */
+                double dot = 0.0;
+                for (int q = 0; q < 3; q++) {
+                    assert_true(fabs(sh[k].point[q] - (ray.org[q] + h.t * ray.dir[q])) < 1e-4);
+                    dot += sh[k].normal[q] * ray.dir[q];
+                }
+                assert_true(dot <= 0.0);
+            }
+        }
+        hits += hit;
+    }
+    assert_true(hits > 100);
+    ref_fixture_close(&fx);
+    scene_free(&s);
+}
+
+/* Shapes that already touch report t = 0, with a point on the triangle and a
+ * unit normal; a shape that does not move reports contact only when touching. */
+static void test_start_overlap_and_no_motion(void **state)
+{
+    (void)state;
+    scene s;
+    ref_fixture fx;
+    const float lo[3] = {0, 0, 0}, hi[3] = {1, 1, 1};
+    assert_true(scene_cube(&s, lo, hi));
+    open_scene(&fx, &s);
+    const float on_face[3] = {0.5f, 0.5f, 1.0f}, above[3] = {0.5f, 0.5f, 1.5f}, down[3] = {0, 0, -1};
+    const float still[3] = {0, 0, 0}, half[3] = {0.1f, 0.1f, 0.1f};
+    cbvh_sweep_hit h;
+    /* Center on the top face: t = 0, point under the center, normal +z (the face normal against the motion). */
+    assert_true(cbvh_sweep_sphere(fx.file, on_face, 0.1f, down, &h));
+    assert_true(h.t == 0.0f);
+    assert_true(fabsf(h.point[2] - 1.0f) < 1e-6f && fabsf(h.point[0] - 0.5f) < 1e-6f);
+    assert_true(h.normal[2] > 0.999f);
+    /* Penetrating from above: the normal still points out of the face towards the center. */
+    const float dipped[3] = {0.5f, 0.5f, 1.05f};
+    assert_true(cbvh_sweep_sphere(fx.file, dipped, 0.1f, still, &h));
+    assert_true(h.t == 0.0f && h.normal[2] > 0.999f);
+    assert_true(cbvh_sweep_capsule(fx.file, dipped, above, 0.1f, still, &h));
+    assert_true(h.t == 0.0f && h.normal[2] > 0.999f);
+    assert_true(cbvh_sweep_box(fx.file, dipped, half, still, &h));
+    assert_true(h.t == 0.0f && h.normal[2] > 0.999f);
+    /* Not moving and not touching: no contact. */
+    assert_false(cbvh_sweep_sphere(fx.file, above, 0.1f, still, &h));
+    assert_int_equal(h.tri, CBVH_NO_HIT);
+    assert_false(cbvh_sweep_box(fx.file, above, half, still, &h));
+    /* Falling onto the top face from above: exact times. */
+    assert_true(cbvh_sweep_sphere(fx.file, above, 0.1f, down, &h));
+    assert_true(fabsf(h.t - 0.4f) < 1e-6f && h.normal[2] > 0.999f);
+    assert_true(cbvh_sweep_box(fx.file, above, half, down, &h));
+    assert_true(fabsf(h.t - 0.4f) < 1e-6f && h.normal[2] > 0.999f);
+    const float tip[3] = {0.5f, 0.5f, 2.0f};
+    assert_true(cbvh_sweep_capsule(fx.file, tip, above, 0.1f, down, &h));
+    assert_true(fabsf(h.t - 0.4f) < 1e-6f && h.normal[2] > 0.999f);
+    /* A thin (radius 0) segment lying flat falls onto the face edge-first: exact time. */
+    const float flat0[3] = {-0.5f, 0.5f, 1.5f}, flat1[3] = {1.5f, 0.25f, 1.5f};
+    assert_true(cbvh_sweep_capsule(fx.file, flat0, flat1, 0.0f, down, &h));
+    assert_true(fabsf(h.t - 0.5f) < 1e-6f && h.normal[2] > 0.999f);
+    ref_fixture_close(&fx);
+    scene_free(&s);
+}
+
+static void test_invalid_input(void **state)
+{
+    (void)state;
+    scene s;
+    ref_fixture fx;
+    assert_true(scene_sphere(&s, 200, (float[3]){0, 0, 0}, 1.0f));
+    open_scene(&fx, &s);
+    const float c[3] = {0, 0, -3}, d[3] = {0, 0, 6}, nan3[3] = {NAN, 0, 0}, inf3[3] = {0, INFINITY, 0};
+    const float half[3] = {0.1f, 0.1f, 0.1f}, bad_half[3] = {0.1f, -0.1f, 0.1f};
+    cbvh_sweep_hit h;
+    assert_true(cbvh_sweep_sphere(fx.file, c, 0.1f, d, &h)); /* the valid baseline hits */
+    h.tri = 0;
+    assert_false(cbvh_sweep_sphere(fx.file, nan3, 0.1f, d, &h));
+    assert_int_equal(h.tri, CBVH_NO_HIT);
+    assert_false(cbvh_sweep_sphere(fx.file, c, -0.1f, d, &h));
+    assert_false(cbvh_sweep_sphere(fx.file, c, NAN, d, &h));
+    assert_false(cbvh_sweep_sphere(fx.file, c, INFINITY, d, &h));
+    assert_false(cbvh_sweep_sphere(fx.file, c, 0.1f, inf3, &h));
+    assert_false(cbvh_sweep_capsule(fx.file, c, nan3, 0.1f, d, &h));
+    assert_false(cbvh_sweep_capsule(fx.file, c, c, -1.0f, d, &h));
+    assert_false(cbvh_sweep_box(fx.file, c, bad_half, d, &h));
+    assert_false(cbvh_sweep_box(fx.file, c, half, nan3, &h));
+    assert_false(cbvh_sweep_sphere(NULL, c, 0.1f, d, &h));
+    assert_false(cbvh_sweep_box(fx.file, NULL, half, d, &h));
+    assert_true(cbvh_sweep_capsule(fx.file, c, c, 0.1f, d, NULL)); /* no output wanted */
+    ref_fixture_close(&fx);
+    scene_free(&s);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_random_sweeps),
+        cmocka_unit_test(test_zero_size_is_raycast),
+        cmocka_unit_test(test_start_overlap_and_no_motion),
+        cmocka_unit_test(test_invalid_input),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
