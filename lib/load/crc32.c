@@ -17,12 +17,12 @@ static uint32_t crc32_zlib(uint32_t crc, const uint8_t *data, uint64_t size)
     return (uint32_t)c;
 }
 
-uint32_t cbvh_crc32(const uint8_t *data, uint64_t size)
+uint32_t cbvh_crc32(uint32_t crc, const uint8_t *data, uint64_t size)
 {
     if (size < 64 || size > SIZE_MAX || !cbvh_crc32_pclmul_available())
-        return crc32_zlib(0, data, size);
+        return crc32_zlib(crc, data, size);
     /* the kernel works on the inverted state; zlib's crc32() inverts on entry and exit */
     size_t bulk = (size_t)size & ~(size_t)15;
-    uint32_t state = cbvh_crc32_pclmul(0xFFFFFFFFu, data, bulk);
+    uint32_t state = cbvh_crc32_pclmul(~crc, data, bulk);
     return crc32_zlib(~state, data + bulk, size - bulk);
 }

@@ -1,4 +1,4 @@
-/* load.c: the loading pipeline: header, table and CRCs, section placement (in place, copied or inflated), tree, mesh. */
+/* load.c: the loading pipeline: header, table, section placement (in place, copied or inflated), section checks. */
 #include <assert.h>
 #include <string.h>
 
@@ -14,8 +14,8 @@ void cbvh_file_own(struct cbvh_file *f, void *p)
     f->owned[f->owned_count++] = p;
 }
 
-/* Where a known section's decoded bytes are: in place when raw and the bytes are 4-byte aligned
- * (sections sit at multiples of 64), else in an owned 64-byte aligned copy or inflated buffer. */
+/* Where a known section's decoded bytes are: in place when raw and cbvh_in_place, else in an owned
+ * 64-byte aligned copy or inflated buffer. */
 static cbvh_result place_section(struct cbvh_file *f, uint32_t index, const void **out, cbvh_error *err)
 {
     const cbvh_section_info *s = &f->sections[index];
@@ -25,7 +25,7 @@ static cbvh_result place_section(struct cbvh_file *f, uint32_t index, const void
         cbvh_result r = cbvh_inflate_section(&f->allocator, src, s->stored_size, s->size, index, &owned, err);
         if (r != CBVH_OK)
             return r;
-    } else if ((uintptr_t)f->bytes % 4 == 0) {
+    } else if (cbvh_in_place(f)) {
         *out = src;
         return CBVH_OK;
     } else {
@@ -80,12 +80,6 @@ cbvh_result cbvh_load(struct cbvh_file *f, cbvh_error *err)
     if (r == CBVH_OK)
         r = place_sections(f, &map, err);
     if (r == CBVH_OK)
-        r = cbvh_validate_tree(f, err);
-    if (r == CBVH_OK)
-        r = cbvh_validate_indices(f, err);
-    if (r == CBVH_OK)
-        r = cbvh_validate_vertices(f, err);
-    if (r == CBVH_OK)
-        r = cbvh_validate_remap(f, err);
+        r = cbvh_check_sections(f, &map, err);
     return r;
 }

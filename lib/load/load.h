@@ -7,14 +7,24 @@
 
 #include "common/file.h"
 
-/* Index in f->sections of each known section type (0 = NODES .. 4 = MATERIALS), -1 when absent. */
+/* Index in f->sections of each known section type (0 = NODES .. 4 = MATERIALS), -1 when absent;
+ * crc_pending: a raw section used in place whose CRC is checked chunk by chunk with its content. */
 #define CBVH_KNOWN_SECTIONS 5
 typedef struct cbvh_section_map {
     int index[CBVH_KNOWN_SECTIONS];
+    int crc_pending[CBVH_KNOWN_SECTIONS];
 } cbvh_section_map;
 
-/* CRC32 (zlib's) of `size` bytes, any size: by carry-less multiplication when the CPU has it, else zlib. */
-uint32_t cbvh_crc32(const uint8_t *data, uint64_t size);
+/* Raw sections are used in place when the file's bytes are 4-byte aligned (sections sit at multiples of
+ * 64, and nothing in a section needs more than 4); otherwise they are copied. */
+static inline int cbvh_in_place(const struct cbvh_file *f)
+{
+    return (uintptr_t)f->bytes % 4 == 0;
+}
+
+/* CRC32 of `size` more bytes, zlib style (start from 0, feed the result back to continue), any size:
+ * by carry-less multiplication when the CPU has it, else with zlib. */
+uint32_t cbvh_crc32(uint32_t crc, const uint8_t *data, uint64_t size);
 
 /* The PCLMULQDQ kernel: the running (uninverted) state after `size` more bytes, size >= 64 and a
  * multiple of 16; callable only when cbvh_crc32_pclmul_available() says so. */
@@ -26,26 +36,56 @@ int cbvh_crc32_pclmul_available(void);
 cbvh_result cbvh_validate_header(struct cbvh_file *f, cbvh_error *err);
 
 /* Checks the section table, the layout (bounds, alignment, order, zero
- * padding) and every section's CRC; fills f->sections and `map`. */
+ * padding) and the CRC of every section but those left crc_pending; fills f->sections and `map`. */
 cbvh_result cbvh_validate_table(struct cbvh_file *f, cbvh_section_map *map, cbvh_error *err);
+
+/* The error for section `index` whose stored bytes have CRC `computed`. */
+cbvh_result cbvh_crc_mismatch(const struct cbvh_file *f, uint32_t index, uint32_t computed, cbvh_error *err);
 
 /* Inflates one zlib stream of exactly `stored_size` bytes into a new 64-byte
  * aligned buffer of exactly `size` bytes (*out, owned by the caller). */
 cbvh_result cbvh_inflate_section(const cbvh_allocator *a, const uint8_t *src, uint64_t stored_size,
                                  uint64_t size, uint32_t section_index, void **out, cbvh_error *err);
 
-/* Checks every node's box, links, depth and leaf ranges (format spec section 5). */
-cbvh_result cbvh_validate_tree(const struct cbvh_file *f, cbvh_error *err);
+/* Element checks. Each runs over consecutive ranges [begin, end) of its section's elements, in order
+ * (cbvh_check_sections feeds them chunk by chunk, each chunk checked while in cache), then finishes. */
+typedef cbvh_result (*cbvh_range_check)(const struct cbvh_file *f, void *state, uint32_t begin, uint32_t end,
+                                        cbvh_error *err);
 
-/* Checks every vertex index of the TRIANGLES section against vertex_count. */
-cbvh_result cbvh_validate_indices(const struct cbvh_file *f, cbvh_error *err);
+/* Nodes: boxes, links, depth and leaf ranges (format spec section 5). Start from a zeroed walk. */
+typedef struct cbvh_tree_walk {
+    uint32_t begin[CBVH_MAX_DEPTH], end[CBVH_MAX_DEPTH], depth[CBVH_MAX_DEPTH]; /* pending second children */
+    uint32_t top, next_triangle, max_depth, current_depth, after_leaf, bad_box;
+} cbvh_tree_walk;
+cbvh_result cbvh_tree_check(const struct cbvh_file *f, void *walk, uint32_t begin, uint32_t end, cbvh_error *err);
+cbvh_result cbvh_tree_finish(const struct cbvh_file *f, const cbvh_tree_walk *walk, cbvh_error *err);
 
-/* Checks every decoded vertex is finite and that their bounds equal the header's. */
-cbvh_result cbvh_validate_vertices(const struct cbvh_file *f, cbvh_error *err);
+/* Triangles: every vertex index below vertex_count (no state). */
+cbvh_result cbvh_indices_check(const struct cbvh_file *f, void *unused, uint32_t begin, uint32_t end,
+                               cbvh_error *err);
 
-/* Checks REMAP values are below original_triangle_count and unique, and
- * builds f->unmap (owned, appended to f->owned). No-op without REMAP. */
-cbvh_result cbvh_validate_remap(struct cbvh_file *f, cbvh_error *err);
+/* Vertices: finite, and their bounds equal to the header's. */
+typedef struct cbvh_vertex_bounds {
+    float lo[3], hi[3];    /* float vertices */
+    uint32_t qlo[3], qhi[3]; /* grid vertices */
+} cbvh_vertex_bounds;
+void cbvh_vertex_bounds_init(cbvh_vertex_bounds *b);
+cbvh_result cbvh_vertices_check(const struct cbvh_file *f, void *bounds, uint32_t begin, uint32_t end,
+                                cbvh_error *err);
+cbvh_result cbvh_vertices_finish(const struct cbvh_file *f, const cbvh_vertex_bounds *b, cbvh_error *err);
+
+/* Remap: values below original_triangle_count and unique, while building f->unmap. begin allocates the
+ * table (owned by f at once); the range check fills a dense table; finish builds a sorted one. */
+typedef struct cbvh_unmap_build {
+    uint32_t *unmap;
+    int dense;
+} cbvh_unmap_build;
+cbvh_result cbvh_unmap_begin(struct cbvh_file *f, cbvh_unmap_build *b, cbvh_error *err);
+cbvh_result cbvh_remap_check(const struct cbvh_file *f, void *build, uint32_t begin, uint32_t end, cbvh_error *err);
+cbvh_result cbvh_unmap_finish(const struct cbvh_file *f, const cbvh_unmap_build *b, cbvh_error *err);
+
+/* Runs the element checks over every known section, with the pending CRCs, chunk by chunk. */
+cbvh_result cbvh_check_sections(struct cbvh_file *f, const cbvh_section_map *map, cbvh_error *err);
 
 /* Runs every step on f->bytes / f->size (set by the caller, with f->allocator);
  * on failure the caller frees what f owns, as cbvh_close does. */

@@ -41,7 +41,7 @@ static cbvh_result check_identity(const uint8_t *b, size_t size, cbvh_error *err
     if (size < CBVH_HEADER_SIZE)
         return CORRUPT("truncated: %zu bytes, the header needs %d", size, CBVH_HEADER_SIZE);
     uint32_t stored = cbvh_read_u32(b + CBVH_HDR_HEADER_CRC);
-    uint32_t actual = cbvh_crc32(b, CBVH_HDR_HEADER_CRC);
+    uint32_t actual = cbvh_crc32(0, b, CBVH_HDR_HEADER_CRC);
     if (stored != actual)
         return CORRUPT("header CRC mismatch (byte %d: stored 0x%08x, computed 0x%08x)", CBVH_HDR_HEADER_CRC, stored,
                        actual);

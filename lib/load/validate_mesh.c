@@ -25,9 +25,9 @@ static uint32_t max_u32(const uint32_t *restrict v, size_t n)
     return m;
 }
 
-static cbvh_result find_bad_index(const struct cbvh_file *f, cbvh_error *err)
+static cbvh_result find_bad_index(const struct cbvh_file *f, uint32_t begin, uint32_t end, cbvh_error *err)
 {
-    for (uint32_t t = 0; t < f->info.triangle_count; t++) {
+    for (uint32_t t = begin; t < end; t++) {
         uint32_t idx[3];
         cbvh_triangle_indices(f, t, idx);
         if (idx[0] >= f->info.vertex_count || idx[1] >= f->info.vertex_count || idx[2] >= f->info.vertex_count)
@@ -38,12 +38,11 @@ static cbvh_result find_bad_index(const struct cbvh_file *f, cbvh_error *err)
 }
 
 /* DELTA16: base + d computed in 64 bits, so a negative or wrapped index is caught. */
-static cbvh_result check_delta16(const struct cbvh_file *f, cbvh_error *err)
+static cbvh_result check_delta16(const struct cbvh_file *f, uint32_t begin, uint32_t end, cbvh_error *err)
 {
-    const uint8_t *restrict t = f->triangles;
-    const uint32_t n = f->info.triangle_count;
+    const uint8_t *restrict t = (const uint8_t *)f->triangles + 8u * (size_t)begin;
     const int64_t vc = f->info.vertex_count;
-    for (uint32_t i = 0; i < n; i++, t += 8) {
+    for (uint32_t i = begin; i < end; i++, t += 8) {
         const int64_t base = (int64_t)*(const uint32_t *)t;
         const int16_t *d = (const int16_t *)(t + 4);
         const int64_t a = base + d[0], b = base + d[1];
@@ -54,44 +53,46 @@ static cbvh_result check_delta16(const struct cbvh_file *f, cbvh_error *err)
     return CBVH_OK;
 }
 
-cbvh_result cbvh_validate_indices(const struct cbvh_file *f, cbvh_error *err)
+cbvh_result cbvh_indices_check(const struct cbvh_file *f, void *unused, uint32_t begin, uint32_t end,
+                               cbvh_error *err)
 {
-    const size_t n = 3u * (size_t)f->info.triangle_count;
+    (void)unused;
+    const size_t first = 3u * (size_t)begin, n = 3u * (size_t)(end - begin);
+    uint32_t max;
     switch (f->triangle_encoding) {
-    case CBVH_TRIS_U16:
-        return max_u16(f->triangles, n) < f->info.vertex_count ? CBVH_OK : find_bad_index(f, err);
-    case CBVH_TRIS_U32:
-        return max_u32(f->triangles, n) < f->info.vertex_count ? CBVH_OK : find_bad_index(f, err);
-    default:
-        return check_delta16(f, err);
+    case CBVH_TRIS_U16: max = max_u16((const uint16_t *)f->triangles + first, n); break;
+    case CBVH_TRIS_U32: max = max_u32((const uint32_t *)f->triangles + first, n); break;
+    default: return check_delta16(f, begin, end, err);
+    }
+    return max < f->info.vertex_count ? CBVH_OK : find_bad_index(f, begin, end, err);
+}
+
+void cbvh_vertex_bounds_init(cbvh_vertex_bounds *b)
+{
+    for (int a = 0; a < 3; a++) {
+        b->lo[a] = FLT_MAX;
+        b->hi[a] = -FLT_MAX;
+        b->qlo[a] = 65535;
+        b->qhi[a] = 0;
     }
 }
 
-static cbvh_result check_bounds(const struct cbvh_file *f, const float lo[3], const float hi[3], cbvh_error *err)
+static cbvh_result find_bad_vertex(const float *restrict v, uint32_t begin, uint32_t end, cbvh_error *err)
 {
-    for (int a = 0; a < 3; a++)
-        if (lo[a] != f->info.bounds_min[a] || hi[a] != f->info.bounds_max[a])
-            return CORRUPT("header bounds on axis %d [%.9g, %.9g] differ from the vertices' bounds [%.9g, %.9g]", a,
-                           (double)f->info.bounds_min[a], (double)f->info.bounds_max[a], (double)lo[a], (double)hi[a]);
-    return CBVH_OK;
-}
-
-static cbvh_result find_bad_vertex(const float *restrict v, uint32_t n, cbvh_error *err)
-{
-    for (uint32_t i = 0; i < n; i++)
+    for (uint32_t i = begin; i < end; i++)
         for (int a = 0; a < 3; a++)
             if (!isfinite(v[3 * (size_t)i + a]))
                 return CORRUPT("vertex %u: coordinate %d is %g, must be finite", i, a, (double)v[3 * (size_t)i + a]);
     return CBVH_OK;
 }
 
-static cbvh_result check_f32(const struct cbvh_file *f, cbvh_error *err)
+static cbvh_result check_f32(const struct cbvh_file *f, cbvh_vertex_bounds *b, uint32_t begin, uint32_t end,
+                             cbvh_error *err)
 {
-    const float *restrict v = f->vertices;
-    const uint32_t n = f->info.vertex_count;
-    float lo[3] = { FLT_MAX, FLT_MAX, FLT_MAX }, hi[3] = { -FLT_MAX, -FLT_MAX, -FLT_MAX };
+    const float *restrict v = (const float *)f->vertices + 3u * (size_t)begin;
+    float lo[3] = { b->lo[0], b->lo[1], b->lo[2] }, hi[3] = { b->hi[0], b->hi[1], b->hi[2] };
     int finite = 1;
-    for (uint32_t i = 0; i < n; i++, v += 3) {
+    for (uint32_t i = begin; i < end; i++, v += 3) {
         for (int a = 0; a < 3; a++) {
             const float x = v[a];
             finite &= fabsf(x) <= FLT_MAX; /* false for NaN and infinities */
@@ -100,32 +101,53 @@ static cbvh_result check_f32(const struct cbvh_file *f, cbvh_error *err)
         }
     }
     if (!finite)
-        return find_bad_vertex(f->vertices, n, err);
-    return check_bounds(f, lo, hi, err);
+        return find_bad_vertex(f->vertices, begin, end, err);
+    for (int a = 0; a < 3; a++) {
+        b->lo[a] = lo[a];
+        b->hi[a] = hi[a];
+    }
+    return CBVH_OK;
 }
 
-/* Dequantization is monotonic in q (scale >= 0), so the bounds are those of the extreme grid coordinates. */
-static cbvh_result check_q16(const struct cbvh_file *f, cbvh_error *err)
+static void check_q16(const struct cbvh_file *f, cbvh_vertex_bounds *b, uint32_t begin, uint32_t end)
 {
-    const uint16_t *restrict v = f->vertices;
-    const uint32_t n = f->info.vertex_count;
-    uint32_t qlo[3] = { 65535, 65535, 65535 }, qhi[3] = { 0, 0, 0 };
-    for (uint32_t i = 0; i < n; i++, v += 3) {
+    const uint16_t *restrict v = (const uint16_t *)f->vertices + 3u * (size_t)begin;
+    uint32_t qlo[3] = { b->qlo[0], b->qlo[1], b->qlo[2] }, qhi[3] = { b->qhi[0], b->qhi[1], b->qhi[2] };
+    for (uint32_t i = begin; i < end; i++, v += 3) {
         for (int a = 0; a < 3; a++) {
             const uint32_t q = v[a];
             qlo[a] = q < qlo[a] ? q : qlo[a];
             qhi[a] = q > qhi[a] ? q : qhi[a];
         }
     }
-    float lo[3], hi[3];
     for (int a = 0; a < 3; a++) {
-        lo[a] = cbvh_dequantize(qlo[a], f->grid_origin[a], f->grid_scale[a]);
-        hi[a] = cbvh_dequantize(qhi[a], f->grid_origin[a], f->grid_scale[a]);
+        b->qlo[a] = qlo[a];
+        b->qhi[a] = qhi[a];
     }
-    return check_bounds(f, lo, hi, err);
 }
 
-cbvh_result cbvh_validate_vertices(const struct cbvh_file *f, cbvh_error *err)
+cbvh_result cbvh_vertices_check(const struct cbvh_file *f, void *bounds, uint32_t begin, uint32_t end,
+                                cbvh_error *err)
 {
-    return f->vertex_encoding == CBVH_VERTS_F32 ? check_f32(f, err) : check_q16(f, err);
+    if (f->vertex_encoding == CBVH_VERTS_F32)
+        return check_f32(f, bounds, begin, end, err);
+    check_q16(f, bounds, begin, end);
+    return CBVH_OK;
+}
+
+/* Grid vertices: dequantization is monotonic in q (scale >= 0), so their bounds are those of the extreme
+ * grid coordinates. */
+cbvh_result cbvh_vertices_finish(const struct cbvh_file *f, const cbvh_vertex_bounds *b, cbvh_error *err)
+{
+    for (int a = 0; a < 3; a++) {
+        float lo = b->lo[a], hi = b->hi[a];
+        if (f->vertex_encoding == CBVH_VERTS_Q16) {
+            lo = cbvh_dequantize(b->qlo[a], f->grid_origin[a], f->grid_scale[a]);
+            hi = cbvh_dequantize(b->qhi[a], f->grid_origin[a], f->grid_scale[a]);
+        }
+        if (lo != f->info.bounds_min[a] || hi != f->info.bounds_max[a])
+            return CORRUPT("header bounds on axis %d [%.9g, %.9g] differ from the vertices' bounds [%.9g, %.9g]", a,
+                           (double)f->info.bounds_min[a], (double)f->info.bounds_max[a], (double)lo, (double)hi);
+    }
+    return CBVH_OK;
 }

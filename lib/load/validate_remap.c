@@ -43,14 +43,34 @@ static int digits_for(uint32_t max_key)
     return passes;
 }
 
+cbvh_result cbvh_unmap_begin(struct cbvh_file *f, cbvh_unmap_build *b, cbvh_error *err)
+{
+    b->unmap = NULL;
+    b->dense = (uint64_t)f->original_triangle_count <= 2u * (uint64_t)f->info.triangle_count;
+    if (!f->remap)
+        return CBVH_OK;
+    const uint32_t entries = b->dense ? f->original_triangle_count : f->info.triangle_count;
+    b->unmap = cbvh_alloc_array(&f->allocator, entries, sizeof(uint32_t), 64);
+    if (!b->unmap)
+        return cbvh_fail(err, CBVH_ERROR_OUT_OF_MEMORY, "cannot allocate the %u-entry unmap table", entries);
+    cbvh_file_own(f, b->unmap);
+    if (b->dense)
+        memset(b->unmap, 0xFF, (size_t)entries * sizeof(uint32_t));
+    f->unmap = b->unmap;
+    f->unmap_sorted = !b->dense;
+    return CBVH_OK;
+}
+
 /* Dense unmap, one scattered write per triangle: used when original ids are at most twice the triangles,
  * so its memory stays proportional to the file's. A slot already taken is a repeated id. */
-static cbvh_result build_dense(struct cbvh_file *f, uint32_t *restrict unmap, cbvh_error *err)
+cbvh_result cbvh_remap_check(const struct cbvh_file *f, void *build, uint32_t begin, uint32_t end, cbvh_error *err)
 {
-    const uint32_t n = f->info.triangle_count;
+    const cbvh_unmap_build *b = build;
+    if (!b->dense)
+        return CBVH_OK; /* checked in cbvh_unmap_finish, which needs all values */
+    uint32_t *restrict unmap = b->unmap;
     const uint32_t original = f->original_triangle_count;
-    memset(unmap, 0xFF, (size_t)original * sizeof *unmap);
-    for (uint32_t t = 0; t < n; t++) {
+    for (uint32_t t = begin; t < end; t++) {
         const uint32_t id = cbvh_original_id(f, t);
         if (id >= original)
             return CORRUPT("REMAP entry %u: original id %u, original_triangle_count is %u", t, id, original);
@@ -62,8 +82,10 @@ static cbvh_result build_dense(struct cbvh_file *f, uint32_t *restrict unmap, cb
 }
 
 /* Sorted unmap for sparse original ids: radix-sorts (id, cooked) pairs, then repeated ids are neighbours. */
-static cbvh_result build_sorted(struct cbvh_file *f, uint32_t *restrict unmap, cbvh_error *err)
+cbvh_result cbvh_unmap_finish(const struct cbvh_file *f, const cbvh_unmap_build *b, cbvh_error *err)
 {
+    if (b->dense)
+        return CBVH_OK;
     const uint32_t n = f->info.triangle_count;
     const uint32_t original = f->original_triangle_count;
     uint64_t *pairs = cbvh_alloc_array(&f->allocator, 2u * (size_t)n, sizeof(uint64_t), 64);
@@ -83,28 +105,8 @@ static cbvh_result build_sorted(struct cbvh_file *f, uint32_t *restrict unmap, c
                 r = CORRUPT("REMAP entries %u and %u both hold original id %u", (uint32_t)sorted[k - 1],
                             (uint32_t)sorted[k], (uint32_t)(sorted[k] >> 32));
         for (uint32_t k = 0; k < n; k++)
-            unmap[k] = (uint32_t)sorted[k];
+            b->unmap[k] = (uint32_t)sorted[k];
     }
     cbvh_free(&f->allocator, pairs);
     return r;
-}
-
-cbvh_result cbvh_validate_remap(struct cbvh_file *f, cbvh_error *err)
-{
-    if (!f->remap)
-        return CBVH_OK;
-    const int dense = (uint64_t)f->original_triangle_count <= 2u * (uint64_t)f->info.triangle_count;
-    const uint32_t entries = dense ? f->original_triangle_count : f->info.triangle_count;
-    uint32_t *unmap = cbvh_alloc_array(&f->allocator, entries, sizeof(uint32_t), 64);
-    if (!unmap)
-        return cbvh_fail(err, CBVH_ERROR_OUT_OF_MEMORY, "cannot allocate the %u-entry unmap table", entries);
-    cbvh_result r = dense ? build_dense(f, unmap, err) : build_sorted(f, unmap, err);
-    if (r != CBVH_OK) {
-        cbvh_free(&f->allocator, unmap);
-        return r;
-    }
-    cbvh_file_own(f, unmap);
-    f->unmap = unmap;
-    f->unmap_sorted = !dense;
-    return CBVH_OK;
 }

@@ -31,7 +31,14 @@ static uint64_t element_count(const cbvh_file_info *in, uint32_t type)
     }
 }
 
-/* Bounds, alignment, order, zero padding before it, then the CRC of its stored bytes. */
+cbvh_result cbvh_crc_mismatch(const struct cbvh_file *f, uint32_t index, uint32_t computed, cbvh_error *err)
+{
+    const cbvh_section_info *s = &f->sections[index];
+    return CORRUPT("section %u (type 0x%x) at byte %llu: CRC mismatch (stored 0x%08x, computed 0x%08x)", index,
+                   s->type, (unsigned long long)s->offset, s->crc32, computed);
+}
+
+/* Bounds, alignment, order and zero padding before it. */
 static cbvh_result check_layout(const uint8_t *b, uint64_t file_size, const cbvh_section_info *s, uint32_t i,
                                 uint64_t *prev_end, cbvh_error *err)
 {
@@ -50,10 +57,6 @@ static cbvh_result check_layout(const uint8_t *b, uint64_t file_size, const cbvh
         if (b[p] != 0)
             return CORRUPT("byte %llu: padding before section %u is 0x%02x, must be 0", (unsigned long long)p, i,
                            b[p]);
-    uint32_t crc = cbvh_crc32(b + s->offset, s->stored_size);
-    if (crc != s->crc32)
-        return CORRUPT("section %u (type 0x%x) at byte %llu: CRC mismatch (stored 0x%08x, computed 0x%08x)", i,
-                       s->type, (unsigned long long)s->offset, s->crc32, crc);
     *prev_end = s->offset + s->stored_size;
     return CBVH_OK;
 }
@@ -103,12 +106,14 @@ cbvh_result cbvh_validate_table(struct cbvh_file *f, cbvh_section_map *map, cbvh
         return CORRUPT("truncated: the section table ends at byte %llu, the file has %llu bytes",
                        (unsigned long long)table_end, (unsigned long long)file_size);
     uint32_t stored = cbvh_read_u32(b + CBVH_HDR_TABLE_CRC);
-    uint32_t actual = cbvh_crc32(b + CBVH_HEADER_SIZE, table_end - CBVH_HEADER_SIZE);
+    uint32_t actual = cbvh_crc32(0, b + CBVH_HEADER_SIZE, table_end - CBVH_HEADER_SIZE);
     if (stored != actual)
         return CORRUPT("section table CRC mismatch (stored 0x%08x, computed 0x%08x)", stored, actual);
 
-    for (int t = 0; t < CBVH_KNOWN_SECTIONS; t++)
+    for (int t = 0; t < CBVH_KNOWN_SECTIONS; t++) {
         map->index[t] = -1;
+        map->crc_pending[t] = 0;
+    }
     uint64_t prev_end = table_end;
     for (uint32_t i = 0; i < count; i++) {
         const uint8_t *e = b + CBVH_HEADER_SIZE + (size_t)i * CBVH_SECTION_ENTRY_SIZE;
@@ -125,6 +130,15 @@ cbvh_result cbvh_validate_table(struct cbvh_file *f, cbvh_section_map *map, cbvh
             r = check_content(&f->info, f->sections, i, map, err);
         if (r != CBVH_OK)
             return r;
+        /* A raw known section used in place has its CRC checked with its content, chunk by chunk. */
+        const int t = s->type >= 1 && s->type <= CBVH_KNOWN_SECTIONS ? (int)s->type - 1 : -1;
+        if (t >= 0 && s->codec == CBVH_CODEC_RAW && cbvh_in_place(f)) {
+            map->crc_pending[t] = 1;
+            continue;
+        }
+        uint32_t crc = cbvh_crc32(0, b + s->offset, s->stored_size);
+        if (crc != s->crc32)
+            return cbvh_crc_mismatch(f, i, crc, err);
     }
     if (prev_end != file_size)
         return CORRUPT("trailing bytes: the last section ends at byte %llu but the file has %llu bytes",

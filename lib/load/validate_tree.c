@@ -1,4 +1,4 @@
-/* validate_tree.c: checks every node in one linear pass (format spec section 5): boxes, subtree links, depth, leaf ranges. */
+/* validate_tree.c: checks every node in one linear, resumable pass (format spec section 5): boxes, links, depth, leaves. */
 #include "common/error.h"
 #include "load/load.h"
 
@@ -33,74 +33,100 @@ static cbvh_result check_leaf(uint32_t i, uint32_t word, uint32_t next_triangle,
     return CBVH_OK;
 }
 
-/* A second child still to visit: where it starts, where its subtree must end, and its depth. */
-typedef struct pending {
-    uint32_t begin, end, depth;
-} pending;
-
 /* One pass in node order, which is depth-first order, reading only node i and node i + 1.
  * An internal node i of subtree size s >= 3 has its first child at i + 1, of size s1 with
  * 1 <= s1 <= s - 2, and its second child at c = i + 1 + s1, which must end exactly at i + s: c is
  * pushed and checked when the walk reaches it, right after the first child's subtree, that is right
  * after a leaf. With the root's size equal to node_count, these checks make the children's ranges tile
  * their parent's, every node belong to the tree and every escape link point strictly forward. The
- * stack holds one pending second child per level, so the depth limit bounds it. */
-cbvh_result cbvh_validate_tree(const struct cbvh_file *f, cbvh_error *err)
+ * stack holds one pending second child per level, so the depth limit bounds it. The walk's state lives
+ * in `walk_state` (a cbvh_tree_walk) between ranges; the loop keeps it in locals. */
+cbvh_result cbvh_tree_check(const struct cbvh_file *f, void *walk_state, uint32_t begin, uint32_t end,
+                            cbvh_error *err)
 {
+    cbvh_tree_walk *restrict w = walk_state;
     const cbvh_node *restrict nodes = f->nodes;
     const uint32_t node_count = f->info.node_count;
     const uint32_t triangle_count = f->info.triangle_count;
     const uint32_t max_leaf = f->info.max_leaf_size;
     const uint32_t header_depth = f->info.depth;
-    if (subtree_size(nodes[0].word) != node_count)
+    if (begin == 0 && subtree_size(nodes[0].word) != node_count)
         return CORRUPT("node 0: subtree size %u, but its parent leaves it nodes [0, %u)", subtree_size(nodes[0].word),
                        node_count);
-    pending stack[CBVH_MAX_DEPTH];
-    uint32_t top = 0, next_triangle = 0, max_depth = 0, bad_box = 0, depth = 0, after_leaf = 0;
-    for (uint32_t i = 0; i < node_count; i++) {
+    uint32_t top = w->top, next_triangle = w->next_triangle, max_depth = w->max_depth;
+    uint32_t depth = w->current_depth, after_leaf = w->after_leaf, bad_box = w->bad_box;
+    cbvh_result r = CBVH_OK;
+    for (uint32_t i = begin; i < end; i++) {
         const cbvh_node n = nodes[i];
         bad_box |= (uint32_t)(n.qmin[0] > n.qmax[0]) | (uint32_t)(n.qmin[1] > n.qmax[1]) |
                    (uint32_t)(n.qmin[2] > n.qmax[2]);
-        const uint32_t w = n.word;
+        const uint32_t word = n.word;
         if (after_leaf) { /* node i is the second child of the innermost pending internal node */
-            if (top == 0 || stack[top - 1].begin != i)
-                return CORRUPT("node %u: the walk reaches it where no subtree starts", i);
-            const pending p = stack[--top];
-            if (subtree_size(w) != p.end - i)
-                return CORRUPT("node %u: subtree size %u, but its parent leaves it nodes [%u, %u)", i,
-                               subtree_size(w), i, p.end);
-            depth = p.depth;
+            if (top == 0 || w->begin[top - 1] != i) {
+                r = CORRUPT("node %u: the walk reaches it where no subtree starts", i);
+                break;
+            }
+            top--;
+            if (subtree_size(word) != w->end[top] - i) {
+                r = CORRUPT("node %u: subtree size %u, but its parent leaves it nodes [%u, %u)", i, subtree_size(word),
+                            i, w->end[top]);
+                break;
+            }
+            depth = w->depth[top];
         } else {
             depth++; /* the root, or the first child of node i - 1 */
         }
         if (depth > max_depth) {
             max_depth = depth;
-            if (depth > header_depth)
-                return CORRUPT("node %u: at depth %u, deeper than the header's depth %u", i, depth, header_depth);
+            if (depth > header_depth) {
+                r = CORRUPT("node %u: at depth %u, deeper than the header's depth %u", i, depth, header_depth);
+                break;
+            }
         }
-        after_leaf = cbvh_node_is_leaf(w);
+        after_leaf = cbvh_node_is_leaf(word);
         if (after_leaf) {
-            const uint32_t first = cbvh_leaf_first(w), count = cbvh_leaf_count(w);
-            if ((first != next_triangle) | (count > max_leaf) | (count > triangle_count - first))
-                return check_leaf(i, w, next_triangle, triangle_count, max_leaf, err);
+            const uint32_t first = cbvh_leaf_first(word), count = cbvh_leaf_count(word);
+            if ((first != next_triangle) | (count > max_leaf) | (count > triangle_count - first)) {
+                r = check_leaf(i, word, next_triangle, triangle_count, max_leaf, err);
+                break;
+            }
             next_triangle += count;
             continue;
         }
-        const uint32_t s = cbvh_node_subtree_size(w);
-        if (s < 3)
-            return CORRUPT("node %u: internal node with subtree size %u (at least 3)", i, s);
+        const uint32_t s = cbvh_node_subtree_size(word);
+        if (s < 3) {
+            r = CORRUPT("node %u: internal node with subtree size %u (at least 3)", i, s);
+            break;
+        }
         /* i + s lies inside the parent's range, so node i + 1 exists */
         const uint32_t first_size = subtree_size(nodes[i + 1].word);
-        if (first_size < 1 || first_size > s - 2)
-            return CORRUPT("node %u: first child %u has subtree size %u, leaving no room for a second child within %u",
-                           i, i + 1, first_size, s);
-        stack[top++] = (pending){ i + 1 + first_size, i + s, depth + 1 }; /* top < depth <= 64 before this push */
+        if (first_size < 1 || first_size > s - 2) {
+            r = CORRUPT("node %u: first child %u has subtree size %u, leaving no room for a second child within %u", i,
+                        i + 1, first_size, s);
+            break;
+        }
+        /* top < depth <= 64 before this push */
+        w->begin[top] = i + 1 + first_size;
+        w->end[top] = i + s;
+        w->depth[top] = depth + 1;
+        top++;
     }
-    if (bad_box)
-        return find_bad_box(nodes, node_count, err);
-    if (max_depth != header_depth)
-        return CORRUPT("the tree's depth is %u, the header says %u", max_depth, header_depth);
-    if (next_triangle != triangle_count)
-        return CORRUPT("leaves cover triangles [0, %u), triangle_count is %u", next_triangle, triangle_count);
+    w->top = top;
+    w->next_triangle = next_triangle;
+    w->max_depth = max_depth;
+    w->current_depth = depth;
+    w->after_leaf = after_leaf;
+    w->bad_box = bad_box;
+    return r;
+}
+
+cbvh_result cbvh_tree_finish(const struct cbvh_file *f, const cbvh_tree_walk *w, cbvh_error *err)
+{
+    if (w->bad_box)
+        return find_bad_box(f->nodes, f->info.node_count, err);
+    if (w->max_depth != f->info.depth)
+        return CORRUPT("the tree's depth is %u, the header says %u", w->max_depth, f->info.depth);
+    if (w->next_triangle != f->info.triangle_count)
+        return CORRUPT("leaves cover triangles [0, %u), triangle_count is %u", w->next_triangle, f->info.triangle_count);
     return CBVH_OK;
 }
