@@ -63,6 +63,9 @@ static uint32_t smallest_past(const cook_grid *g, int axis, float v, uint32_t lo
         double e = ((double)v - (double)g->origin[axis]) / (double)g->scale[axis];
         if (e > 0.0 && e < (double)Q_MAX) {
             uint32_t c = (uint32_t)ceil(e);
+            /* Usually the estimate is the answer: two evaluations prove it. */
+            if (c >= lo && c <= Q_MAX && past(g, axis, c, v, strict) && (c == lo || !past(g, axis, c - 1, v, strict)))
+                return c;
             uint32_t up = c + 2 < Q_MAX ? c + 2 : Q_MAX, down = c > 3 ? c - 2 : 1;
             if (up >= lo && past(g, axis, up, v, strict))
                 hi = up;

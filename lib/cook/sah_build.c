@@ -2,6 +2,11 @@
 #include <float.h>
 #include <string.h>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#define COOK_SSE2 1 /* box and centroid operations four lanes at once; results equal the scalar code's */
+#endif
+
 #include "common/alloc.h"
 #include "common/error.h"
 #include "common/format.h"
@@ -9,17 +14,25 @@
 
 #define MAX_BINS 256
 
-/* A triangle's box and id; 32 bytes so the partitions move whole cache-friendly records. */
+/* A triangle's box and id; 32 bytes so the partitions move whole cache-friendly records.
+ * Lane 3 of lo holds the id's bits, lane 3 of hi is 0; box operations ignore lane 3. */
 typedef struct prim_ref {
-    float lo[3];
-    uint32_t id;
-    float hi[3];
-    uint32_t pad;
+    _Alignas(16) float lo[4];
+    float hi[4];
 } prim_ref;
 
+/* Lane 3 unused: four lanes let box operations run as single SSE instructions. */
 typedef struct box {
-    float lo[3], hi[3];
+    _Alignas(16) float lo[4];
+    float hi[4];
 } box;
+
+static inline uint32_t prim_id(const prim_ref *r)
+{
+    uint32_t id;
+    memcpy(&id, &r->lo[3], sizeof id);
+    return id;
+}
 
 /* A node still to split: its prims are refs[begin, end), depth counts nodes from the root (1). */
 typedef struct task {
@@ -48,9 +61,24 @@ static inline float centroid(const prim_ref *r, int a)
     return r->lo[a] * 0.5f + r->hi[a] * 0.5f;
 }
 
+/* The three centroids at once, each computed exactly as centroid() does. c: 16-byte aligned. */
+static inline void centroid3(const prim_ref *r, float *restrict c)
+{
+#ifdef COOK_SSE2
+    /* The id's bits in lane 3 are cleared first: as a denormal they would slow the multiply. */
+    const __m128 keep = _mm_castsi128_ps(_mm_setr_epi32(-1, -1, -1, 0)), half = _mm_set1_ps(0.5f);
+    __m128 lo = _mm_and_ps(_mm_load_ps(r->lo), keep), hi = _mm_load_ps(r->hi);
+    _mm_store_ps(c, _mm_add_ps(_mm_mul_ps(lo, half), _mm_mul_ps(hi, half)));
+#else
+    for (int a = 0; a < 3; a++)
+        c[a] = centroid(r, a);
+    c[3] = 0.0f;
+#endif
+}
+
 static void box_empty(box *b)
 {
-    for (int a = 0; a < 3; a++) {
+    for (int a = 0; a < 4; a++) {
         b->lo[a] = FLT_MAX;
         b->hi[a] = -FLT_MAX;
     }
@@ -66,9 +94,15 @@ static inline float max_f(float x, float y)
     return x > y ? x : y;
 }
 
-/* Written out with locals: this is the builder's innermost operation. */
+/* The builder's innermost operation. All pointers 16-byte aligned. MINPS/MAXPS pick like
+ * min_f/max_f (the second operand unless the first is strictly beyond it), so both paths
+ * give the same bits. */
 static inline void box_grow(box *restrict b, const float *restrict lo, const float *restrict hi)
 {
+#ifdef COOK_SSE2
+    _mm_store_ps(b->lo, _mm_min_ps(_mm_load_ps(lo), _mm_load_ps(b->lo)));
+    _mm_store_ps(b->hi, _mm_max_ps(_mm_load_ps(hi), _mm_load_ps(b->hi)));
+#else
     const float l0 = lo[0], l1 = lo[1], l2 = lo[2], h0 = hi[0], h1 = hi[1], h2 = hi[2];
     b->lo[0] = min_f(l0, b->lo[0]);
     b->lo[1] = min_f(l1, b->lo[1]);
@@ -76,6 +110,7 @@ static inline void box_grow(box *restrict b, const float *restrict lo, const flo
     b->hi[0] = max_f(h0, b->hi[0]);
     b->hi[1] = max_f(h1, b->hi[1]);
     b->hi[2] = max_f(h2, b->hi[2]);
+#endif
 }
 
 static inline void box_grow_point(box *restrict b, const float *restrict p)
@@ -111,13 +146,29 @@ static inline uint32_t bin_of(float c, float c_lo, float scale, uint32_t bins)
 
 /* Per axis, bins / centroid extent. 0 puts every prim in bin 0, so no plane is found on an axis
  * whose extent is zero or too small for a finite float scale. */
-static void bin_scales(const box *cent, uint32_t bins, float scale[3])
+static void bin_scales(const box *cent, uint32_t bins, float scale[4])
 {
     for (int a = 0; a < 3; a++) {
         double extent = (double)cent->hi[a] - (double)cent->lo[a];
         double s = extent > 0.0 ? (double)bins / extent : 0.0;
         scale[a] = s < (double)FLT_MAX ? (float)s : 0.0f;
     }
+    scale[3] = 0.0f;
+}
+
+/* bin_of on the three axes at once. min(k, bins - 1) then truncation equals bin_of's test
+ * (k >= 0 always), so both paths give the same bins. Arrays 16-byte aligned. */
+static inline void bins_of3(const float *restrict c, const float *restrict c_lo, const float *restrict scale,
+                            uint32_t bins, uint32_t out[4])
+{
+#ifdef COOK_SSE2
+    __m128 k = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(c), _mm_load_ps(c_lo)), _mm_load_ps(scale));
+    k = _mm_min_ps(k, _mm_set1_ps((float)(bins - 1)));
+    _mm_storeu_si128((__m128i *)(void *)out, _mm_cvttps_epi32(k));
+#else
+    for (int a = 0; a < 3; a++)
+        out[a] = bin_of(c[a], c_lo[a], scale[a], bins);
+#endif
 }
 
 /* Bins the prims on all three axes at once and sweeps each axis for the cheapest plane. */
@@ -126,19 +177,20 @@ static split find_split(workspace *restrict w, const prim_ref *restrict refs, co
     split best;
     best.axis = -1;
     best.cost = 0.0;
-    float scale[3];
+    _Alignas(16) float scale[4];
     bin_scales(&t->cent, bins, scale);
     for (int a = 0; a < 3; a++) {
         for (uint32_t b = 0; b < bins; b++)
             box_empty(&w->bins[a][b]);
         memset(w->counts[a], 0, bins * sizeof(uint32_t));
     }
-    const float c_lo[3] = { t->cent.lo[0], t->cent.lo[1], t->cent.lo[2] };
     for (uint32_t i = t->begin; i < t->end; i++) {
         const prim_ref *r = &refs[i];
-        const uint32_t b0 = bin_of(centroid(r, 0), c_lo[0], scale[0], bins);
-        const uint32_t b1 = bin_of(centroid(r, 1), c_lo[1], scale[1], bins);
-        const uint32_t b2 = bin_of(centroid(r, 2), c_lo[2], scale[2], bins);
+        _Alignas(16) float c[4];
+        uint32_t k[4];
+        centroid3(r, c);
+        bins_of3(c, t->cent.lo, scale, bins, k);
+        const uint32_t b0 = k[0], b1 = k[1], b2 = k[2];
         w->counts[0][b0]++;
         w->counts[1][b1]++;
         w->counts[2][b2]++;
@@ -191,7 +243,7 @@ static split find_split(workspace *restrict w, const prim_ref *restrict refs, co
 static uint32_t partition_bins(prim_ref *restrict refs, const task *t, const split *s, uint32_t bins,
                                box *left_cent, box *right_cent)
 {
-    float scale[3];
+    _Alignas(16) float scale[4];
     bin_scales(&t->cent, bins, scale);
     const int a = s->axis;
     const float c_lo = t->cent.lo[a];
@@ -201,7 +253,8 @@ static uint32_t partition_bins(prim_ref *restrict refs, const task *t, const spl
     box_empty(right_cent);
     uint32_t i = t->begin, j = t->end;
     while (i < j) {
-        float c[3] = { centroid(&refs[i], 0), centroid(&refs[i], 1), centroid(&refs[i], 2) };
+        _Alignas(16) float c[4];
+        centroid3(&refs[i], c);
         if (bin_of(c[a], c_lo, sc, bins) < split_bin) {
             box_grow_point(left_cent, c);
             i++;
@@ -219,12 +272,6 @@ static uint32_t partition_bins(prim_ref *restrict refs, const task *t, const spl
 /* Nodes this small try every split exactly instead of binning: most nodes are small, and
  * enumerating their few partitions is both cheaper and better than binning them. */
 #define SMALL_NODE 4
-
-static void centroid_of(const prim_ref *r, float c[3])
-{
-    for (int a = 0; a < 3; a++)
-        c[a] = centroid(r, a);
-}
 
 /* Every split into two nonempty sets, prim 0 always on the left; bin holds the left set's mask. */
 static split find_split_small(const prim_ref *restrict refs, const task *t)
@@ -275,8 +322,8 @@ static uint32_t partition_small(prim_ref *restrict refs, const task *t, const sp
         for (uint32_t i = 0; i < n; i++) {
             if (((mask >> i) & 1) != (uint32_t)side)
                 continue;
-            float c[3];
-            centroid_of(&tmp[i], c);
+            _Alignas(16) float c[4];
+            centroid3(&tmp[i], c);
             box_grow_point(side ? left_cent : right_cent, c);
             refs[k++] = tmp[i];
         }
@@ -289,7 +336,7 @@ static inline int key_less(const prim_ref *x, const prim_ref *y, int a)
     float cx = centroid(x, a), cy = centroid(y, a);
     if (cx != cy)
         return cx < cy;
-    return x->id < y->id;
+    return prim_id(x) < prim_id(y);
 }
 
 static inline void swap_refs(prim_ref *x, prim_ref *y)
@@ -339,7 +386,8 @@ static void bounds_of(const prim_ref *restrict refs, uint32_t begin, uint32_t en
     box_empty(cent);
     for (uint32_t i = begin; i < end; i++) {
         box_grow(b, refs[i].lo, refs[i].hi);
-        float c[3] = { centroid(&refs[i], 0), centroid(&refs[i], 1), centroid(&refs[i], 2) };
+        _Alignas(16) float c[4];
+        centroid3(&refs[i], c);
         box_grow_point(cent, c);
     }
 }
@@ -380,10 +428,11 @@ static void init_refs(const cook_mesh *m, prim_ref *restrict refs, box *root, bo
             r->lo[a] = p2[a] < lo ? p2[a] : lo;
             r->hi[a] = p2[a] > hi ? p2[a] : hi;
         }
-        r->id = t;
-        r->pad = 0;
+        memcpy(&r->lo[3], &t, sizeof t);
+        r->hi[3] = 0.0f;
         box_grow(root, r->lo, r->hi);
-        float c[3] = { centroid(r, 0), centroid(r, 1), centroid(r, 2) };
+        _Alignas(16) float c[4];
+        centroid3(r, c);
         box_grow_point(cent, c);
     }
 }
@@ -490,7 +539,7 @@ cbvh_result cook_build(const cook_mesh *m, const cook_build_params *params, cons
     }
 
     for (uint32_t i = 0; i < tris; i++)
-        out->prims[i] = refs[i].id;
+        out->prims[i] = prim_id(&refs[i]);
     out->node_count = node_count;
     out->leaf_count = leaf_count;
     cbvh_free(a, refs);
