@@ -1,0 +1,214 @@
+/* test_overlap.c: box and sphere overlap queries against brute force; the triangle/box SAT against clipping. */
+#include <math.h>
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <cmocka.h>
+
+#include "cbvh.h"
+#include "query/triangle_box.h"
+#include "support/reference.h"
+#include "support/scene_gen.h"
+
+static double rnd(uint64_t *st, double lo, double hi) { return lo + (hi - lo) * scene_rand_unit(st); }
+
+/* Reference membership of one triangle: 2 surely overlapping (also with the
+ * region shrunk by tol), 1 borderline, 0 surely apart (also grown by tol). */
+static int ref_box_class(const double *tri, const double lo[3], const double hi[3], double tol)
+{
+    if (!ref_triangle_box_overlap(tri, lo, hi, tol))
+        return 0;
+    return ref_triangle_box_overlap(tri, lo, hi, -tol) ? 2 : 1;
+}
+
+static int ref_sphere_class(const double *tri, const double c[3], double r, double tol)
+{
+    const double d = sqrt(ref_point_triangle_dist2(tri, c));
+    return d > r + tol ? 0 : d <= r - tol ? 2 : 1;
+}
+
+/* The reported set holds every sure overlap and no sure miss, each once. */
+static void check_set(const ref_fixture *fx, const uint32_t *ids, size_t n, const double *region, int sphere)
+{
+    const double tol = 1e-6 * fx->diag;
+    uint8_t *seen = calloc(fx->id_count + 1, 1);
+    assert_non_null(seen);
+    for (size_t k = 0; k < n; k++) {
+        assert_true(ids[k] < fx->id_count);
+        assert_false(seen[ids[k]]);
+        seen[ids[k]] = 1;
+    }
+    for (size_t k = 0; k < fx->tris.count; k++) {
+        const double *tri = fx->tris.v + 9 * k;
+        const int cls = sphere ? ref_sphere_class(tri, region, region[3], tol) : ref_box_class(tri, region, region + 3, tol);
+        const int got = seen[fx->tris.id[k]];
+        if ((cls == 2 && !got) || (cls == 0 && got)) {
+            fprintf(stderr, "%s overlap: tri %u reported %d, reference class %d\n", sphere ? "sphere" : "box",
+                    fx->tris.id[k], got, cls);
+            fail();
+        }
+    }
+    free(seen);
+}
+
+static int count_calls(void *user, uint32_t tri)
+{
+    (void)tri;
+    (*(size_t *)user)++;
+    return 0;
+}
+
+static int stop_at_first(void *user, uint32_t tri)
+{
+    *(uint32_t *)user = tri;
+    return 1;
+}
+
+static void run_overlaps(const ref_fixture *fx, int count, uint64_t seed)
+{
+    uint64_t st = seed;
+    uint32_t *ids = malloc(sizeof(uint32_t) * (fx->id_count + 1));
+    assert_non_null(ids);
+    size_t nonempty = 0;
+    for (int r = 0; r < count; r++) {
+        const int sphere = r % 2;
+        double region[6];
+        float fmin3[3], fmax3[3], center[3];
+        const double size = rnd(&st, 0.0, 0.15) * fx->diag;
+        for (int a = 0; a < 3; a++) {
+            center[a] = (float)rnd(&st, fx->lo[a] - 0.05 * fx->diag, fx->hi[a] + 0.05 * fx->diag);
+            fmin3[a] = center[a] - (float)(size * scene_rand_unit(&st));
+            fmax3[a] = center[a] + (float)(size * scene_rand_unit(&st));
+            region[a] = sphere ? center[a] : fmin3[a];
+            region[3 + a] = fmax3[a];
+        }
+        const float radius = (float)size;
+        if (sphere)
+            region[3] = radius;
+        size_t calls = 0;
+        const size_t n = sphere ? cbvh_overlap_sphere(fx->file, center, radius, count_calls, &calls, ids, fx->id_count)
+                                : cbvh_overlap_box(fx->file, fmin3, fmax3, count_calls, &calls, ids, fx->id_count);
+        assert_int_equal(calls, n);
+        check_set(fx, ids, n, region, sphere);
+        nonempty += n > 0;
+        /* Without an output array the count is the same; a callback that stops ends the query at 1. */
+        const size_t n2 = sphere ? cbvh_overlap_sphere(fx->file, center, radius, NULL, NULL, NULL, 0)
+                                 : cbvh_overlap_box(fx->file, fmin3, fmax3, NULL, NULL, NULL, 0);
+        assert_int_equal(n2, n);
+        uint32_t first = CBVH_NO_HIT;
+        const size_t n3 = sphere ? cbvh_overlap_sphere(fx->file, center, radius, stop_at_first, &first, NULL, 0)
+                                 : cbvh_overlap_box(fx->file, fmin3, fmax3, stop_at_first, &first, NULL, 0);
+        assert_int_equal(n3, n > 0 ? 1 : 0);
+        if (n > 0) {
+            int found = 0;
+            for (size_t k = 0; k < n; k++)
+                found |= ids[k] == first;
+            assert_true(found);
+        }
+        /* A small array fills and stops the query; capacity 0 reports nothing. */
+        uint32_t small[3] = {CBVH_NO_HIT, CBVH_NO_HIT, CBVH_NO_HIT};
+        const size_t n4 = sphere ? cbvh_overlap_sphere(fx->file, center, radius, NULL, NULL, small, 2)
+                                 : cbvh_overlap_box(fx->file, fmin3, fmax3, NULL, NULL, small, 2);
+        assert_int_equal(n4, n < 2 ? n : 2);
+        assert_int_equal(small[2], CBVH_NO_HIT);
+        const size_t n5 = sphere ? cbvh_overlap_sphere(fx->file, center, radius, count_calls, &calls, small, 0)
+                                 : cbvh_overlap_box(fx->file, fmin3, fmax3, count_calls, &calls, small, 0);
+        assert_int_equal(n5, 0);
+    }
+    assert_true(nonempty > (size_t)count / 4);
+    free(ids);
+}
+
+static void test_overlaps(void **state)
+{
+    (void)state;
+    for (int m = 0; m < 3; m++) {
+        scene s;
+        ref_fixture fx;
+        if (m == 0)
+            assert_true(scene_soup(&s, 2000, 0.1f, 5));
+        else if (m == 1)
+            assert_true(scene_sphere(&s, 3000, (float[3]){0, 0, 0}, 1.0f));
+        else
+            assert_true(scene_terrain(&s, 3000, 40.0f));
+        assert_int_equal(ref_fixture_open(&fx, s.positions, s.vertex_count, s.indices, s.triangle_count, NULL),
+                         CBVH_OK);
+        run_overlaps(&fx, 300, 50 + (uint64_t)m);
+        ref_fixture_close(&fx);
+        scene_free(&s);
+    }
+}
+
+/* The static SAT agrees with clipping on random triangles and boxes, touching
+ * and flat cases included (triangles on box planes, zero-size boxes). */
+static void test_triangle_box_sat(void **state)
+{
+    (void)state;
+    uint64_t st = 17;
+    long sure_in = 0, sure_out = 0;
+    for (int r = 0; r < 200000; r++) {
+        double tri[9], lo[3], hi[3];
+        for (int k = 0; k < 9; k++)
+            tri[k] = (float)rnd(&st, -1.0, 1.0);
+        for (int a = 0; a < 3; a++) {
+            const double c = (float)rnd(&st, -1.0, 1.0), h = r % 10 == 0 ? 0.0 : (float)rnd(&st, 0.0, 0.6);
+            lo[a] = c - h;
+            hi[a] = c + h;
+        }
+        if (r % 7 == 0) /* a triangle lying in a box plane */
+            tri[2] = tri[5] = tri[8] = hi[2];
+        double t;
+        cbvh_v3 n;
+        const int got = cbvh_triangle_box_sweep(v3(tri[0], tri[1], tri[2]), v3(tri[3], tri[4], tri[5]),
+                                                v3(tri[6], tri[7], tri[8]), v3(0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1]), 0.5 * (lo[2] + hi[2])),
+                                                v3(0.5 * (hi[0] - lo[0]), 0.5 * (hi[1] - lo[1]), 0.5 * (hi[2] - lo[2])),
+                                                v3(0, 0, 0), 0.0, &t, &n);
+        const int cls = ref_box_class(tri, lo, hi, 1e-9);
+        if ((cls == 2 && !got) || (cls == 0 && got)) {
+            fprintf(stderr, "SAT %d, clipping class %d at case %d\n", got, cls, r);
+            fail();
+        }
+        if (got)
+            assert_true(t == 0.0);
+        sure_in += cls == 2;
+        sure_out += cls == 0;
+    }
+    assert_true(sure_in > 10000 && sure_out > 10000);
+}
+
+static void test_invalid_input(void **state)
+{
+    (void)state;
+    scene s;
+    ref_fixture fx;
+    assert_true(scene_sphere(&s, 200, (float[3]){0, 0, 0}, 1.0f));
+    assert_int_equal(ref_fixture_open(&fx, s.positions, s.vertex_count, s.indices, s.triangle_count, NULL), CBVH_OK);
+    const float lo[3] = {-2, -2, -2}, hi[3] = {2, 2, 2}, nan3[3] = {0, NAN, 0}, c[3] = {0, 0, 0};
+    assert_true(cbvh_overlap_box(fx.file, lo, hi, NULL, NULL, NULL, 0) == fx.tris.count);
+    assert_int_equal(cbvh_overlap_box(fx.file, hi, lo, NULL, NULL, NULL, 0), 0); /* min > max */
+    assert_int_equal(cbvh_overlap_box(fx.file, nan3, hi, NULL, NULL, NULL, 0), 0);
+    assert_int_equal(cbvh_overlap_box(NULL, lo, hi, NULL, NULL, NULL, 0), 0);
+    assert_int_equal(cbvh_overlap_sphere(fx.file, c, -1.0f, NULL, NULL, NULL, 0), 0);
+    assert_int_equal(cbvh_overlap_sphere(fx.file, c, NAN, NULL, NULL, NULL, 0), 0);
+    assert_int_equal(cbvh_overlap_sphere(fx.file, nan3, 1.0f, NULL, NULL, NULL, 0), 0);
+    /* The ball inside the closed sphere mesh touches nothing; a radius reaching the surface touches. */
+    assert_int_equal(cbvh_overlap_sphere(fx.file, c, 0.5f, NULL, NULL, NULL, 0), 0);
+    assert_true(cbvh_overlap_sphere(fx.file, c, 1.0f, NULL, NULL, NULL, 0) > 0);
+    ref_fixture_close(&fx);
+    scene_free(&s);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_overlaps),
+        cmocka_unit_test(test_triangle_box_sat),
+        cmocka_unit_test(test_invalid_input),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
