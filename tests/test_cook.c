@@ -946,6 +946,31 @@ static void test_depth_limit(void **state)
     mesh_free(&m);
 }
 
+/* Many copies of one triangle: no plane separates them, median splits must. */
+static void test_identical_triangles(void **state)
+{
+    (void)state;
+    test_mesh m;
+    mesh_alloc(&m, 3, 1000);
+    const float tri[9] = { 0, 0, 0, 1, 0, 0, 0, 1, 0 };
+    memcpy(m.pos, tri, sizeof tri);
+    for (size_t t = 0; t < m.nt; t++)
+        for (int c = 0; c < 3; c++)
+            m.idx[3 * t + (size_t)c] = (uint32_t)c;
+    static const uint32_t leaf[] = { 1, 3, 16 };
+    for (int i = 0; i < 3; i++) {
+        cbvh_cook_options o;
+        cbvh_cook_options_init(&o);
+        o.max_leaf_size = leaf[i];
+        cooked c;
+        cook_and_check(&m, &o, &c);
+        assert_true(c.stats.depth <= 12);
+        assert_int_equal(c.stats.vertices, 3);
+        cooked_free(&c);
+    }
+    mesh_free(&m);
+}
+
 /* SAH cost of a median-split tree over the same triangles, in double, on exact float boxes. */
 typedef struct ref_tri {
     double lo[3], hi[3], c[3];
@@ -1096,6 +1121,13 @@ static void test_bad_meshes(void **state)
     cooked_free(&c);
     for (size_t i = 0; i < 3 * m.nv; i++)
         m.pos[i] /= 1e37f;
+
+    /* More triangles than 32-bit original ids can name: a limit, found before any index is read. */
+    if (SIZE_MAX > UINT32_MAX) {
+        cbvh_mesh huge = mesh;
+        huge.triangle_count = (size_t)UINT32_MAX + 1;
+        expect_error(&huge, NULL, CBVH_ERROR_LIMIT, "4294967296 triangles", NULL);
+    }
 
     cbvh_mesh empty = mesh;
     empty.triangle_count = 0;
@@ -1461,6 +1493,7 @@ int main(void)
         cmocka_unit_test(test_remap_and_materials),
         cmocka_unit_test(test_determinism),
         cmocka_unit_test(test_depth_limit),
+        cmocka_unit_test(test_identical_triangles),
         cmocka_unit_test(test_sah_quality),
         cmocka_unit_test(test_bad_meshes),
         cmocka_unit_test(test_bad_options),
