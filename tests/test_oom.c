@@ -1,0 +1,393 @@
+/* test_oom.c: every allocation of cook, open and cook_to_path failed in turn (clean error, nothing leaked, no partial file), and cooks killed mid-write never damage the destination. */
+#include <dirent.h>
+#include <math.h>
+#include <setjmp.h>
+#include <signal.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <time.h>
+#include <unistd.h>
+
+#include <cmocka.h>
+
+#include "cbvh.h"
+#include "support/scene_gen.h"
+
+/* Fails allocation number fail_at (0-based) and every later one while
+ * fail_all is set; counts live blocks so leaks show. */
+typedef struct counting {
+    size_t calls, fail_at, live, peak_live;
+    int fail_all;
+} counting;
+
+static void *counting_alloc(void *user, size_t size, size_t align)
+{
+    counting *c = user;
+    size_t n = c->calls++;
+    if (n == c->fail_at || (c->fail_all && n > c->fail_at))
+        return NULL;
+    if (align < sizeof(void *))
+        align = sizeof(void *);
+    void *p = NULL;
+    if (posix_memalign(&p, align, size) != 0)
+        return NULL;
+    c->live++;
+    if (c->live > c->peak_live)
+        c->peak_live = c->live;
+    return p;
+}
+
+static void counting_free(void *user, void *ptr)
+{
+    counting *c = user;
+    if (ptr) {
+        assert_true(c->live > 0);
+        c->live--;
+        free(ptr);
+    }
+}
+
+static cbvh_allocator make_allocator(counting *c, size_t fail_at, int fail_all)
+{
+    memset(c, 0, sizeof *c);
+    c->fail_at = fail_at;
+    c->fail_all = fail_all;
+    cbvh_allocator a = { counting_alloc, counting_free, c };
+    return a;
+}
+
+static scene mesh;        /* small, with materials: every section present */
+static scene big_mesh;    /* for the kill test */
+static void *file_raw, *file_zlib, *file_q16;
+static size_t size_raw, size_zlib, size_q16;
+
+static cbvh_mesh as_mesh(const scene *s)
+{
+    cbvh_mesh m = { s->positions, s->vertex_count, 0, s->indices, s->triangle_count, s->material_ids };
+    return m;
+}
+
+static void options_for(cbvh_cook_options *o, int level, int quantized)
+{
+    cbvh_cook_options_init(o);
+    o->compress_level = level;
+    o->vertex_format = quantized ? CBVH_VERTEX_QUANTIZED16 : CBVH_VERTEX_FLOAT32;
+}
+
+static int group_setup(void **state)
+{
+    (void)state;
+    float c[3] = { 0, 0, 0 };
+    if (!scene_sphere(&mesh, 500, c, 1.0f) || !scene_terrain(&big_mesh, 250000, 100.0f))
+        return -1;
+    mesh.material_ids = malloc(mesh.triangle_count * sizeof(uint32_t));
+    for (size_t t = 0; t < mesh.triangle_count; t++)
+        mesh.material_ids[t] = (uint32_t)(t % 7) * 1000u;
+    cbvh_mesh m = as_mesh(&mesh);
+    cbvh_cook_options o;
+    options_for(&o, 0, 0);
+    if (cbvh_cook(&m, &o, NULL, &file_raw, &size_raw, NULL, NULL) != CBVH_OK)
+        return -1;
+    options_for(&o, 6, 0);
+    if (cbvh_cook(&m, &o, NULL, &file_zlib, &size_zlib, NULL, NULL) != CBVH_OK)
+        return -1;
+    options_for(&o, 0, 1);
+    if (cbvh_cook(&m, &o, NULL, &file_q16, &size_q16, NULL, NULL) != CBVH_OK)
+        return -1;
+    return 0;
+}
+
+static int group_teardown(void **state)
+{
+    (void)state;
+    cbvh_buffer_free(NULL, file_raw);
+    cbvh_buffer_free(NULL, file_zlib);
+    cbvh_buffer_free(NULL, file_q16);
+    scene_free(&mesh);
+    scene_free(&big_mesh);
+    return 0;
+}
+
+/* Cooks with allocation n failing, for n = 0, 1, 2 ... until the cook
+ * succeeds; each failure must be CBVH_ERROR_OUT_OF_MEMORY with a message and
+ * nothing live. With fail_all, every allocation from n on fails too (the
+ * cleanup paths must not allocate). Returns the number of failure points. */
+static size_t oom_loop_cook(int level, int quantized, int fail_all, const void *expect, size_t expect_size)
+{
+    cbvh_mesh m = as_mesh(&mesh);
+    cbvh_cook_options o;
+    options_for(&o, level, quantized);
+    for (size_t n = 0;; n++) {
+        counting c;
+        cbvh_allocator a = make_allocator(&c, n, fail_all);
+        void *out = NULL;
+        size_t out_size = 0;
+        cbvh_error err;
+        cbvh_result r = cbvh_cook(&m, &o, &a, &out, &out_size, NULL, &err);
+        if (r == CBVH_OK) {
+            assert_int_equal(out_size, expect_size);
+            assert_memory_equal(out, expect, out_size);
+            cbvh_buffer_free(&a, out);
+            assert_int_equal(c.live, 0);
+            return n;
+        }
+        if (r != CBVH_ERROR_OUT_OF_MEMORY)
+            fail_msg("cook with allocation %zu failing: %s (%s)", n, cbvh_result_string(r), err.message);
+        assert_true(err.message[0] != 0);
+        assert_null(out);
+        if (c.live != 0)
+            fail_msg("cook with allocation %zu failing leaked %zu blocks", n, c.live);
+        assert_true(n < 100000);
+    }
+}
+
+static void test_cook_oom(void **state)
+{
+    (void)state;
+    size_t raw = oom_loop_cook(0, 0, 0, file_raw, size_raw);
+    size_t zlib = oom_loop_cook(6, 0, 0, file_zlib, size_zlib);
+    size_t q16 = oom_loop_cook(0, 1, 0, file_q16, size_q16);
+    size_t raw_all = oom_loop_cook(0, 0, 1, file_raw, size_raw);
+    printf("cook failure points: raw %zu, zlib %zu, quantized %zu (raw, every later allocation failing too: %zu)\n", raw, zlib,
+           q16, raw_all);
+    assert_true(raw > 0 && zlib > 0 && q16 > 0);
+}
+
+/* The same for opening from memory (aligned and misaligned buffers) and by path. */
+static size_t oom_loop_open(const void *data, size_t size, const char *path)
+{
+    for (size_t n = 0;; n++) {
+        counting c;
+        cbvh_allocator a = make_allocator(&c, n, 0);
+        cbvh_file *f = NULL;
+        cbvh_error err;
+        cbvh_result r = path ? cbvh_open_path(path, &a, &f, &err) : cbvh_open_memory(data, size, &a, &f, &err);
+        if (r == CBVH_OK) {
+            cbvh_hit h;
+            cbvh_ray ray = { { 0, 0, -5 }, 0, { 0, 0, 1 }, INFINITY };
+            assert_int_equal(cbvh_raycast(f, &ray, CBVH_TRAVERSAL_SORTED, &h, NULL), 1);
+            cbvh_close(f);
+            assert_int_equal(c.live, 0);
+            return n;
+        }
+        if (r != CBVH_ERROR_OUT_OF_MEMORY)
+            fail_msg("open with allocation %zu failing: %s (%s)", n, cbvh_result_string(r), err.message);
+        assert_true(err.message[0] != 0);
+        if (c.live != 0)
+            fail_msg("open with allocation %zu failing leaked %zu blocks", n, c.live);
+        assert_true(n < 10000);
+    }
+}
+
+static void write_whole(const char *path, const void *data, size_t size)
+{
+    FILE *fp = fopen(path, "wb");
+    assert_non_null(fp);
+    assert_int_equal(fwrite(data, 1, size, fp), size);
+    assert_int_equal(fclose(fp), 0);
+}
+
+static void test_open_oom(void **state)
+{
+    (void)state;
+    size_t raw = oom_loop_open(file_raw, size_raw, NULL);
+    size_t zlib = oom_loop_open(file_zlib, size_zlib, NULL);
+    size_t q16 = oom_loop_open(file_q16, size_q16, NULL);
+    /* a misaligned copy makes the loader copy raw sections */
+    uint8_t *odd = malloc(size_raw + 1);
+    memcpy(odd + 1, file_raw, size_raw);
+    size_t misaligned = oom_loop_open(odd + 1, size_raw, NULL);
+    free(odd);
+    char dir[] = "/tmp/cbvh_oom_XXXXXX", path[256];
+    assert_non_null(mkdtemp(dir));
+    snprintf(path, sizeof path, "%s/f.cbvh", dir);
+    write_whole(path, file_zlib, size_zlib);
+    size_t by_path = oom_loop_open(NULL, 0, path);
+    unlink(path);
+    rmdir(dir);
+    printf("open failure points: raw %zu, zlib %zu, quantized %zu, misaligned raw %zu, zlib by path %zu\n", raw, zlib, q16,
+           misaligned, by_path);
+}
+
+/* Names in `dir`, other than `keep`. */
+static size_t count_entries(const char *dir, const char *keep)
+{
+    DIR *d = opendir(dir);
+    assert_non_null(d);
+    size_t n = 0;
+    struct dirent *e;
+    while ((e = readdir(d)) != NULL)
+        if (strcmp(e->d_name, ".") && strcmp(e->d_name, "..") && (!keep || strcmp(e->d_name, keep)))
+            n++;
+    closedir(d);
+    return n;
+}
+
+static uint8_t *read_whole(const char *path, size_t *size)
+{
+    FILE *fp = fopen(path, "rb");
+    if (!fp)
+        return NULL;
+    fseek(fp, 0, SEEK_END);
+    long n = ftell(fp);
+    fseek(fp, 0, SEEK_SET);
+    uint8_t *b = malloc(n > 0 ? (size_t)n : 1);
+    *size = fread(b, 1, (size_t)n, fp);
+    fclose(fp);
+    return b;
+}
+
+/* cook_to_path with each allocation failing: a clean error, nothing live,
+ * no file left behind, and an existing file at the path left as it was. */
+static void test_cook_to_path_oom(void **state)
+{
+    (void)state;
+    char dir[] = "/tmp/cbvh_oom_XXXXXX", path[256];
+    assert_non_null(mkdtemp(dir));
+    snprintf(path, sizeof path, "%s/out.cbvh", dir);
+    cbvh_mesh m = as_mesh(&mesh);
+    cbvh_cook_options o;
+    options_for(&o, 6, 0);
+    static const uint8_t old_bytes[] = "an older file that must survive a failed cook";
+    size_t points[2] = { 0, 0 };
+    for (int with_old = 0; with_old < 2; with_old++) {
+        for (size_t n = 0;; n++) {
+            if (with_old)
+                write_whole(path, old_bytes, sizeof old_bytes);
+            counting c;
+            cbvh_allocator a = make_allocator(&c, n, 0);
+            cbvh_error err;
+            cbvh_result r = cbvh_cook_to_path(&m, &o, &a, path, NULL, &err);
+            assert_int_equal(c.live, 0);
+            size_t got_size = 0;
+            uint8_t *got = read_whole(path, &got_size);
+            if (r == CBVH_OK) {
+                assert_non_null(got);
+                assert_int_equal(got_size, size_zlib);
+                assert_memory_equal(got, file_zlib, got_size);
+                free(got);
+                assert_int_equal(count_entries(dir, "out.cbvh"), 0);
+                unlink(path);
+                points[with_old] = n;
+                break;
+            }
+            if (r != CBVH_ERROR_OUT_OF_MEMORY)
+                fail_msg("cook_to_path with allocation %zu failing: %s (%s)", n, cbvh_result_string(r), err.message);
+            if (with_old) {
+                assert_non_null(got);
+                assert_int_equal(got_size, sizeof old_bytes);
+                assert_memory_equal(got, old_bytes, sizeof old_bytes);
+            } else {
+                assert_null(got);
+            }
+            free(got);
+            if (count_entries(dir, "out.cbvh") != 0)
+                fail_msg("cook_to_path with allocation %zu failing left a temporary file in %s", n, dir);
+            assert_true(n < 100000);
+        }
+    }
+    unlink(path);
+    rmdir(dir);
+    printf("cook_to_path failure points: %zu into an empty folder, %zu over an existing file\n", points[0], points[1]);
+}
+
+/* A child cooks a large mesh to the path and is killed after a random delay;
+ * the destination must be absent, the old complete file or the new complete
+ * file. Temporary files a killed process cannot remove are counted. */
+static void test_killed_cook(void **state)
+{
+    (void)state;
+    cbvh_mesh m = as_mesh(&big_mesh);
+    cbvh_cook_options o;
+    options_for(&o, 1, 0);
+    struct timespec t0, t1;
+    clock_gettime(CLOCK_MONOTONIC, &t0);
+    void *expect = NULL;
+    size_t expect_size = 0;
+    assert_int_equal(cbvh_cook(&m, &o, NULL, &expect, &expect_size, NULL, NULL), CBVH_OK);
+    clock_gettime(CLOCK_MONOTONIC, &t1);
+    double cook_seconds = (double)(t1.tv_sec - t0.tv_sec) + 1e-9 * (double)(t1.tv_nsec - t0.tv_nsec);
+
+    char dir[] = "/tmp/cbvh_kill_XXXXXX", path[256];
+    assert_non_null(mkdtemp(dir));
+    snprintf(path, sizeof path, "%s/level.cbvh", dir);
+    const char *env = getenv("CBVH_KILL_ROUNDS");
+    int rounds = env ? atoi(env) : 12;
+    uint64_t rng = 2024;
+    size_t absent = 0, old_kept = 0, new_complete = 0, finished = 0;
+    for (int i = 0; i < rounds; i++) {
+        int with_old = i % 2;
+        if (with_old)
+            write_whole(path, file_raw, size_raw);
+        else
+            unlink(path);
+        /* delays spread over the whole cook, the write and rename at the end included */
+        double delay = cook_seconds * 1.3 * scene_rand_unit(&rng);
+        pid_t pid = fork();
+        assert_true(pid >= 0);
+        if (pid == 0) {
+            cbvh_result r = cbvh_cook_to_path(&m, &o, NULL, path, NULL, NULL);
+            _exit(r == CBVH_OK ? 0 : 1);
+        }
+        struct timespec d = { (time_t)delay, (long)((delay - (double)(time_t)delay) * 1e9) };
+        nanosleep(&d, NULL);
+        kill(pid, SIGKILL);
+        int status;
+        waitpid(pid, &status, 0);
+        if (WIFEXITED(status)) {
+            assert_int_equal(WEXITSTATUS(status), 0);
+            finished++;
+        }
+        size_t got_size = 0;
+        uint8_t *got = read_whole(path, &got_size);
+        if (!got) {
+            assert_false(with_old); /* an old file may only be replaced, never removed */
+            absent++;
+        } else if (with_old && got_size == size_raw && memcmp(got, file_raw, size_raw) == 0) {
+            old_kept++;
+        } else {
+            if (got_size != expect_size || memcmp(got, expect, expect_size) != 0)
+                fail_msg("round %d (killed after %.3f s): %s holds %zu bytes that are neither the old nor the new file", i,
+                         delay, path, got_size);
+            cbvh_file *f = NULL;
+            assert_int_equal(cbvh_open_path(path, NULL, &f, NULL), CBVH_OK);
+            cbvh_close(f);
+            new_complete++;
+        }
+        free(got);
+    }
+    size_t leftovers = count_entries(dir, "level.cbvh");
+    printf("killed cooks: %d rounds over a %.2f s cook: destination absent %zu, old file intact %zu, new complete file %zu "
+           "(%zu children finished before the kill); temporary files left by killed children: %zu\n",
+           rounds, cook_seconds, absent, old_kept, new_complete, finished, leftovers);
+    /* clean up what killed children left */
+    DIR *d = opendir(dir);
+    struct dirent *e;
+    while ((e = readdir(d)) != NULL) {
+        char p[512];
+        if (!strcmp(e->d_name, ".") || !strcmp(e->d_name, ".."))
+            continue;
+        snprintf(p, sizeof p, "%s/%s", dir, e->d_name);
+        unlink(p);
+    }
+    closedir(d);
+    rmdir(dir);
+    cbvh_buffer_free(NULL, expect);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_cook_oom),
+        cmocka_unit_test(test_open_oom),
+        cmocka_unit_test(test_cook_to_path_oom),
+        cmocka_unit_test(test_killed_cook),
+    };
+    return cmocka_run_group_tests(tests, group_setup, group_teardown);
+}
