@@ -925,6 +925,7 @@ def main(argv):
         print("EXTRA_DIST +=" + "".join(f" \\\n\tfileformat/{name}.cbvh" for name in sorted(v[0] for v in VECTORS)))
         return 0
     out = argv[1] if len(argv) > 1 else os.path.dirname(os.path.abspath(__file__))
+    os.makedirs(out, exist_ok=True)
     for name, _, _, _, fn in VECTORS:
         with open(os.path.join(out, name + ".cbvh"), "wb") as f:
             f.write(fn())
