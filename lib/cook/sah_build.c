@@ -1,5 +1,7 @@
 /* sah_build.c: binned SAH BVH builder, with median splits to stay within the format's depth limit. */
 #include <float.h>
+#include <pthread.h>
+#include <stdatomic.h>
 #include <string.h>
 
 #if defined(__SSE2__)
@@ -450,100 +452,231 @@ static void set_box(cook_bnode *n, const box *b)
     memcpy(n->hi, b->hi, sizeof n->hi);
 }
 
+/* One builder per thread: its own node array and bins; prim ranges of different builders
+ * never overlap, so the two threads share nothing they write. */
+typedef struct builder {
+    prim_ref *refs;
+    workspace *w;
+    cook_bnode *nodes;
+    uint32_t node_count;
+    uint32_t leaf_count;
+    uint32_t leaf_size, bins;
+    double ct, ci;
+    _Atomic uint64_t done;      /* prims placed in leaves, read by the reporting thread */
+} builder;
+
+/* Makes t's node a leaf (returns 0) or splits it, appending two children and filling lt, rt. */
+static int split_node(builder *b, const task *t, task *lt, task *rt)
+{
+    prim_ref *refs = b->refs;
+    cook_bnode *node = &b->nodes[t->node];
+    const uint32_t n = t->end - t->begin;
+    split s;
+    s.axis = -1;
+    /* A node of n prims fills at most n bins; fewer bins keep small nodes cheap. */
+    const uint32_t node_bins = n < b->bins ? (n < 4 ? 4 : n) : b->bins;
+    const int small = n <= SMALL_NODE;
+    if (n > 1)
+        s = small ? find_split_small(refs, t) : find_split(b->w, refs, t, node_bins);
+    const double area = half_area(node->lo, node->hi);
+    if (n <= b->leaf_size &&
+        (s.axis < 0 || t->depth >= CBVH_MAX_DEPTH || b->ci * n * area <= b->ct * area + b->ci * s.cost)) {
+        node->child = t->begin;
+        node->count = n;
+        b->leaf_count++;
+        atomic_fetch_add_explicit(&b->done, n, memory_order_relaxed);
+        return 0;
+    }
+    box left, right;
+    uint32_t mid;
+    const uint32_t budget = CBVH_MAX_DEPTH - t->depth;
+    const uint32_t larger = s.left_count > n - s.left_count ? s.left_count : n - s.left_count;
+    if (s.axis >= 0 && levels_needed(larger, b->leaf_size) <= budget) {
+        mid = small ? partition_small(refs, t, &s, &lt->cent, &rt->cent)
+                    : partition_bins(refs, t, &s, node_bins, &lt->cent, &rt->cent);
+        left = s.left;
+        right = s.right;
+    } else {
+        mid = split_median(refs, t, &left, &right, &lt->cent, &rt->cent);
+    }
+    const uint32_t child = b->node_count;
+    b->node_count += 2;
+    node->child = child;
+    node->count = 0;
+    set_box(&b->nodes[child], &left);
+    set_box(&b->nodes[child + 1], &right);
+    lt->node = child;
+    lt->begin = t->begin;
+    lt->end = mid;
+    lt->depth = t->depth + 1;
+    rt->node = child + 1;
+    rt->begin = mid;
+    rt->end = t->end;
+    rt->depth = t->depth + 1;
+    return 1;
+}
+
+typedef struct report_state {
+    const cook_progress *progress;
+    const builder *other;       /* the worker's counter, or NULL */
+    uint64_t total, next;
+} report_state;
+
+/* Builds the subtree of `root` (its node already holds its box), depth first. */
+static void build_from(builder *b, const task *root, report_state *report)
+{
+    task stack[2 * CBVH_MAX_DEPTH + 2];
+    uint32_t top = 0;
+    stack[top++] = *root;
+    while (top > 0) {
+        const task t = stack[--top];
+        task lt, rt;
+        if (split_node(b, &t, &lt, &rt)) {
+            stack[top++] = rt;
+            stack[top++] = lt;
+            continue;
+        }
+        if (!report)
+            continue;
+        uint64_t done = atomic_load_explicit(&b->done, memory_order_relaxed);
+        if (report->other)
+            done += atomic_load_explicit(&report->other->done, memory_order_relaxed);
+        if (done >= report->next) {
+            cook_report(report->progress, (double)done / (double)report->total);
+            report->next = done + report->total / 64 + 1;
+        }
+    }
+}
+
+/* The second thread's share: a builder and the subtree it builds. */
+typedef struct worker_job {
+    builder b;
+    task root;
+} worker_job;
+
+static void *worker_main(void *arg)
+{
+    worker_job *job = arg;
+    build_from(&job->b, &job->root, NULL);
+    return NULL;
+}
+
+/* Prepares a job for the subtree rt (all allocation here, on the calling thread: the
+ * caller's allocator need not be thread-safe). Returns 0 without memory. */
+static int worker_init(worker_job *job, const builder *main, const task *rt, const cbvh_allocator *a)
+{
+    memset(job, 0, sizeof *job);
+    job->b.refs = main->refs;
+    job->b.leaf_size = main->leaf_size;
+    job->b.bins = main->bins;
+    job->b.ct = main->ct;
+    job->b.ci = main->ci;
+    atomic_init(&job->b.done, 0);
+    job->b.w = cbvh_alloc(a, sizeof(workspace), 64);
+    job->b.nodes = cbvh_alloc_array(a, 2 * (size_t)(rt->end - rt->begin) - 1, sizeof(cook_bnode), 64);
+    if (!job->b.w || !job->b.nodes) {
+        cbvh_free(a, job->b.w);
+        cbvh_free(a, job->b.nodes);
+        return 0;
+    }
+    job->b.nodes[0] = main->nodes[rt->node];
+    job->b.node_count = 1;
+    job->root = *rt;
+    job->root.node = 0;
+    return 1;
+}
+
+/* Appends the worker's nodes to the main array; its root replaces the main node `at`. */
+static void merge_worker(builder *main, const builder *worker, uint32_t at)
+{
+    const uint32_t base = main->node_count - 1; /* worker node j >= 1 goes to base + j */
+    for (uint32_t j = 0; j < worker->node_count; j++) {
+        cook_bnode n = worker->nodes[j];
+        if (n.count == 0)
+            n.child += base;
+        main->nodes[j ? base + j : at] = n;
+    }
+    main->node_count += worker->node_count - 1;
+    main->leaf_count += worker->leaf_count;
+}
+
+/* Subtrees at least this large are worth a second thread. */
+#define PARALLEL_MIN 32768
+
 cbvh_result cook_build(const cook_mesh *m, const cook_build_params *params, const cbvh_allocator *a,
                        const cook_progress *progress, cook_tree *out, cbvh_error *err)
 {
     memset(out, 0, sizeof *out);
     const uint32_t tris = m->triangle_count;
-    const uint32_t leaf_size = params->max_leaf_size, bins = params->bins;
-    const double ct = params->traversal_cost, ci = params->intersection_cost;
     const size_t node_capacity = 2 * (size_t)tris - 1;
 
-    prim_ref *refs = cbvh_alloc_array(a, tris, sizeof(prim_ref), 64);
-    workspace *w = cbvh_alloc(a, sizeof(workspace), 64);
+    builder b;
+    memset(&b, 0, sizeof b);
+    b.leaf_size = params->max_leaf_size;
+    b.bins = params->bins;
+    b.ct = params->traversal_cost;
+    b.ci = params->intersection_cost;
+    atomic_init(&b.done, 0);
+    b.refs = cbvh_alloc_array(a, tris, sizeof(prim_ref), 64);
+    b.w = cbvh_alloc(a, sizeof(workspace), 64);
     out->nodes = cbvh_alloc_array(a, node_capacity, sizeof(cook_bnode), 64);
     out->prims = cbvh_alloc_array(a, tris, sizeof(uint32_t), 64);
-    if (!refs || !w || !out->nodes || !out->prims) {
-        cbvh_free(a, refs);
-        cbvh_free(a, w);
+    if (!b.refs || !b.w || !out->nodes || !out->prims) {
+        cbvh_free(a, b.refs);
+        cbvh_free(a, b.w);
         cook_tree_free(a, out);
         return cbvh_fail(err, CBVH_ERROR_OUT_OF_MEMORY, "out of memory while building the tree (%u triangles)", tris);
     }
+    b.nodes = out->nodes;
 
-    box root;
-    task stack[2 * CBVH_MAX_DEPTH + 2];
-    uint32_t top = 0;
-    init_refs(m, refs, &root, &stack[0].cent);
-    set_box(&out->nodes[0], &root);
-    stack[0].node = 0;
-    stack[0].begin = 0;
-    stack[0].end = tris;
-    stack[0].depth = 1;
-    top = 1;
-    uint32_t node_count = 1, leaf_count = 0;
-    uint64_t done = 0, next_report = tris / 64 + 1;
+    box root_box;
+    task root;
+    init_refs(m, b.refs, &root_box, &root.cent);
+    set_box(&b.nodes[0], &root_box);
+    root.node = 0;
+    root.begin = 0;
+    root.end = tris;
+    root.depth = 1;
+    b.node_count = 1;
+    report_state report = { progress, NULL, tris, tris / 64 + 1 };
 
-    while (top > 0) {
-        const task t = stack[--top];
-        cook_bnode *node = &out->nodes[t.node];
-        const uint32_t n = t.end - t.begin;
-        split s;
-        s.axis = -1;
-        /* A node of n prims fills at most n bins; fewer bins keep small nodes cheap. */
-        const uint32_t node_bins = n < bins ? (n < 4 ? 4 : n) : bins;
-        const int small = n <= SMALL_NODE;
-        if (n > 1)
-            s = small ? find_split_small(refs, &t) : find_split(w, refs, &t, node_bins);
-        const double area = half_area(node->lo, node->hi);
-        const int may_be_leaf = n <= leaf_size;
-        if (may_be_leaf && (s.axis < 0 || t.depth >= CBVH_MAX_DEPTH || ci * n * area <= ct * area + ci * s.cost)) {
-            node->child = t.begin;
-            node->count = n;
-            leaf_count++;
-            done += n;
-            if (done >= next_report) {
-                cook_report(progress, (double)done / tris);
-                next_report = done + tris / 64 + 1;
+    /* Large meshes: the root's second subtree is built on a second thread, into its own
+     * nodes, then appended. The tree is the same as a one-thread build's (a subtree depends
+     * only on its own prims; only node numbering differs, and layout orders nodes by the
+     * tree alone), so the file is too. */
+    task lt, rt;
+    if (tris < 2 * PARALLEL_MIN || !split_node(&b, &root, &lt, &rt)) {
+        build_from(&b, &root, &report);
+    } else {
+        worker_job job;
+        pthread_t thread;
+        int threaded = rt.end - rt.begin >= PARALLEL_MIN && worker_init(&job, &b, &rt, a);
+        if (threaded) {
+            report.other = &job.b;
+            if (pthread_create(&thread, NULL, worker_main, &job) != 0) {
+                report.other = NULL;
+                cbvh_free(a, job.b.w);
+                cbvh_free(a, job.b.nodes);
+                threaded = 0;
             }
-            continue;
         }
-        box left, right;
-        task lt, rt;
-        uint32_t mid;
-        const uint32_t budget = CBVH_MAX_DEPTH - t.depth;
-        if (s.axis >= 0 && levels_needed(s.left_count > n - s.left_count ? s.left_count : n - s.left_count,
-                                         leaf_size) <= budget) {
-            mid = small ? partition_small(refs, &t, &s, &lt.cent, &rt.cent)
-                        : partition_bins(refs, &t, &s, node_bins, &lt.cent, &rt.cent);
-            left = s.left;
-            right = s.right;
-        } else {
-            mid = split_median(refs, &t, &left, &right, &lt.cent, &rt.cent);
+        if (!threaded) /* no second thread (or no memory for one): the same work here */
+            build_from(&b, &rt, &report);
+        build_from(&b, &lt, &report);
+        if (threaded) {
+            pthread_join(thread, NULL);
+            merge_worker(&b, &job.b, rt.node);
+            cbvh_free(a, job.b.w);
+            cbvh_free(a, job.b.nodes);
         }
-        const uint32_t child = node_count;
-        node_count += 2;
-        node->child = child;
-        node->count = 0;
-        set_box(&out->nodes[child], &left);
-        set_box(&out->nodes[child + 1], &right);
-        lt.node = child;
-        lt.begin = t.begin;
-        lt.end = mid;
-        lt.depth = t.depth + 1;
-        rt.node = child + 1;
-        rt.begin = mid;
-        rt.end = t.end;
-        rt.depth = t.depth + 1;
-        stack[top++] = rt;
-        stack[top++] = lt;
     }
 
     for (uint32_t i = 0; i < tris; i++)
-        out->prims[i] = prim_id(&refs[i]);
-    out->node_count = node_count;
-    out->leaf_count = leaf_count;
-    cbvh_free(a, refs);
-    cbvh_free(a, w);
+        out->prims[i] = prim_id(&b.refs[i]);
+    out->node_count = b.node_count;
+    out->leaf_count = b.leaf_count;
+    cbvh_free(a, b.refs);
+    cbvh_free(a, b.w);
     cook_report(progress, 1.0);
     return CBVH_OK;
 }
