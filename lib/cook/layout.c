@@ -157,17 +157,6 @@ static cbvh_result order_vertices(const cook_mesh *m, cook_layout *l, int copies
     return CBVH_OK;
 }
 
-/* True when some triangle's deltas do not fit DELTA16 while u16 indices do not fit either. */
-static int needs_copies(const cook_layout *l)
-{
-    if (l->vertex_count <= 65536)
-        return 0;
-    for (size_t i = 0; i < 3 * (size_t)l->triangle_count; i += 3)
-        if (!delta16_fits(l->triangles[i], l->triangles[i + 1]) || !delta16_fits(l->triangles[i], l->triangles[i + 2]))
-            return 1;
-    return 0;
-}
-
 /* Ct x internal areas + Ci x leaf areas x triangles, over the root's area, on the decoded boxes. */
 static double sah_cost(const cbvh_node *nodes, uint32_t count, const cook_grid *g, double ct, double ci)
 {
@@ -219,9 +208,9 @@ cbvh_result cook_layout_build(const cook_tree *t, const cook_mesh *m, const cook
         return cbvh_fail(err, CBVH_ERROR_LIMIT, "the tree is %u nodes deep; a file allows at most %u", depth,
                          CBVH_MAX_DEPTH);
     }
-    cbvh_result r = order_vertices(m, out, 0, a);
-    if (r == CBVH_OK && needs_copies(out))
-        r = order_vertices(m, out, 1, a);
+    /* Copies are made only where a delta would not fit, so with few vertices (u16 indices)
+     * or a mesh whose deltas all fit there are none. */
+    cbvh_result r = order_vertices(m, out, m->vertex_count > 65536, a);
     if (r != CBVH_OK) {
         cook_layout_free(a, out);
         return cbvh_fail(err, CBVH_ERROR_OUT_OF_MEMORY, "out of memory while ordering %u vertices", m->vertex_count);
