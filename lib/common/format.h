@@ -28,7 +28,7 @@ enum {
     CBVH_HDR_NODE_COUNT = 40,
     CBVH_HDR_DEPTH = 44,
     CBVH_HDR_MAX_LEAF = 48,
-    CBVH_HDR_RESERVED0 = 52,
+    CBVH_HDR_ORIGINAL_TRIANGLES = 52,
     CBVH_HDR_GRID_ORIGIN = 56, /* float[3] */
     CBVH_HDR_GRID_SCALE = 68,  /* float[3] */
     CBVH_HDR_BOUNDS_MIN = 80,  /* float[3] */

@@ -111,7 +111,7 @@ static void write_header(uint8_t *file, const cook_header *h, uint32_t section_c
     cbvh_write_u32(file + CBVH_HDR_DEPTH, h->depth);
     cbvh_write_u32(file + CBVH_HDR_MAX_LEAF, h->max_leaf_size);
     /* Offset 52 holds original_triangle_count (spec section 3). */
-    cbvh_write_u32(file + CBVH_HDR_RESERVED0, h->original_triangle_count);
+    cbvh_write_u32(file + CBVH_HDR_ORIGINAL_TRIANGLES, h->original_triangle_count);
     write_f32x3(file + CBVH_HDR_GRID_ORIGIN, h->grid_origin);
     write_f32x3(file + CBVH_HDR_GRID_SCALE, h->grid_scale);
     write_f32x3(file + CBVH_HDR_BOUNDS_MIN, h->bounds_min);

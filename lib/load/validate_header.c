@@ -70,7 +70,7 @@ static cbvh_result check_counts(const cbvh_file_info *in, uint32_t original, cbv
         return CORRUPT("header byte %d: max_leaf_size %u is outside 1..%u", CBVH_HDR_MAX_LEAF, in->max_leaf_size,
                        CBVH_MAX_LEAF_SIZE);
     if (original < in->triangle_count)
-        return CORRUPT("header byte %d: original_triangle_count %u is below triangle_count %u", CBVH_HDR_RESERVED0,
+        return CORRUPT("header byte %d: original_triangle_count %u is below triangle_count %u", CBVH_HDR_ORIGINAL_TRIANGLES,
                        original, in->triangle_count);
     return CBVH_OK;
 }
@@ -123,7 +123,7 @@ cbvh_result cbvh_validate_header(struct cbvh_file *f, cbvh_error *err)
     in->node_count = cbvh_read_u32(b + CBVH_HDR_NODE_COUNT);
     in->depth = cbvh_read_u32(b + CBVH_HDR_DEPTH);
     in->max_leaf_size = cbvh_read_u32(b + CBVH_HDR_MAX_LEAF);
-    f->original_triangle_count = cbvh_read_u32(b + CBVH_HDR_RESERVED0);
+    f->original_triangle_count = cbvh_read_u32(b + CBVH_HDR_ORIGINAL_TRIANGLES);
     r = check_counts(in, f->original_triangle_count, err);
     if (r != CBVH_OK)
         return r;

@@ -148,6 +148,6 @@ cbvh_result cbvh_validate_table(struct cbvh_file *f, cbvh_section_map *map, cbvh
             return CORRUPT("required section %s is missing", known[t].name);
     if (map->index[CBVH_SECTION_REMAP - 1] < 0 && f->original_triangle_count != f->info.triangle_count)
         return CORRUPT("header byte %d: original_triangle_count %u != triangle_count %u without a REMAP section",
-                       CBVH_HDR_RESERVED0, f->original_triangle_count, f->info.triangle_count);
+                       CBVH_HDR_ORIGINAL_TRIANGLES, f->original_triangle_count, f->info.triangle_count);
     return CBVH_OK;
 }
