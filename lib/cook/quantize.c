@@ -53,24 +53,33 @@ static inline int past(const cook_grid *g, int axis, uint32_t q, float v, int st
     return strict ? d > v : d >= v;
 }
 
-/* Smallest q in [lo, 65535] with deq(q) >= v (strict: > v); 65536 when none. A binary
- * search, first narrowed around the real-valued estimate (v - origin) / scale: the narrowing
- * only keeps bounds the monotone predicate proves, so the result is the exact answer. */
+/* Smallest q in [lo, 65535] with deq(q) >= v (strict: > v); 65536 when none. A few steps
+ * from the real-valued estimate (v - origin) / scale usually find it; each step only keeps
+ * a bound the monotone predicate proves, and a binary search finishes what they do not. */
 static uint32_t smallest_past(const cook_grid *g, int axis, float v, uint32_t lo, int strict)
 {
-    uint32_t hi = Q_MAX + 1;
+    uint32_t hi = Q_MAX + 1; /* past(hi) holds (65536 stands for "none") */
     if (g->scale[axis] > 0.0f) {
         double e = ((double)v - (double)g->origin[axis]) / (double)g->scale[axis];
-        if (e > 0.0 && e < (double)Q_MAX) {
-            uint32_t c = (uint32_t)ceil(e);
-            /* Usually the estimate is the answer: two evaluations prove it. */
-            if (c >= lo && c <= Q_MAX && past(g, axis, c, v, strict) && (c == lo || !past(g, axis, c - 1, v, strict)))
-                return c;
-            uint32_t up = c + 2 < Q_MAX ? c + 2 : Q_MAX, down = c > 3 ? c - 2 : 1;
-            if (up >= lo && past(g, axis, up, v, strict))
-                hi = up;
-            if (down - 1 >= lo && down <= hi && !past(g, axis, down - 1, v, strict))
-                lo = down;
+        if (e >= 0.0 && e <= (double)Q_MAX) {
+            uint32_t c = (uint32_t)e; /* ceil(e), e >= 0, without a libm call */
+            c += (double)c < e;
+            c = c < lo ? lo : c;
+            for (int step = 0; step < 3 && lo < hi; step++) {
+                if (past(g, axis, c, v, strict)) {
+                    hi = c;
+                    if (c == lo)
+                        break;
+                    c--;
+                } else {
+                    lo = c + 1;
+                    if (c == Q_MAX)
+                        break;
+                    c++;
+                }
+                if (lo == hi)
+                    return lo;
+            }
         }
     }
     while (lo < hi) {
