@@ -60,4 +60,29 @@ static inline int cbvh_leaf_any(const struct cbvh_file *restrict f, uint32_t wor
     return 0;
 }
 
+/* The leaf step of every single-ray walk. Any-hit: returns 1 when the leaf
+ * occludes the ray. Closest-hit: updates best and *tmax, returns 0. When
+ * counting, adds the triangles tested to *tested. */
+CBVH_KERNEL int cbvh_leaf_visit(const struct cbvh_file *restrict f, uint32_t word, const struct cbvh_ray_ctx *ray,
+                                const int any, const int counting, float *restrict tmax,
+                                struct cbvh_best_hit *restrict best, uint64_t *restrict tested)
+{
+    uint32_t count;
+    int hit = 0;
+    if (any)
+        hit = cbvh_leaf_any(f, word, &ray->shear, ray->tmin, *tmax, &count);
+    else
+        count = cbvh_leaf_closest(f, word, &ray->shear, ray->tmin, tmax, best);
+    if (counting)
+        *tested += count;
+    return hit;
+}
+
+/* Adds a walk's counters to the caller's stats. */
+static inline void cbvh_stats_add(cbvh_query_stats *stats, uint64_t visited, uint64_t tested)
+{
+    stats->nodes_visited += visited;
+    stats->triangles_tested += tested;
+}
+
 #endif

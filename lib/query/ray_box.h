@@ -74,4 +74,29 @@ static inline int cbvh_ray_node(const cbvh_node *n, const float origin[3], const
                           cbvh_dequantize(q[sel.far_z], origin[2], scale[2]), org, rcp, tmin, tmax, entry);
 }
 
+/* A ray as the walks test it against nodes: everything kept in locals for the walk's duration. */
+struct cbvh_box_ray {
+    float origin[3], scale[3]; /* the file's grid */
+    float org[3], rcp[3];
+    struct cbvh_slab_select sel;
+};
+
+static inline void cbvh_box_ray_init(struct cbvh_box_ray *b, const float grid_origin[3], const float grid_scale[3],
+                                     const float org[3], const float rcp[3], uint32_t octant)
+{
+    for (int a = 0; a < 3; a++) {
+        b->origin[a] = grid_origin[a];
+        b->scale[a] = grid_scale[a];
+        b->org[a] = org[a];
+        b->rcp[a] = rcp[a];
+    }
+    b->sel = cbvh_slab_select_of(octant);
+}
+
+static inline int cbvh_box_ray_test(const struct cbvh_box_ray *b, const cbvh_node *n, float tmin, float tmax,
+                                    float *entry)
+{
+    return cbvh_ray_node(n, b->origin, b->scale, b->sel, b->org, b->rcp, tmin, tmax, entry);
+}
+
 #endif

@@ -13,11 +13,8 @@ CBVH_KERNEL int distance_walk(const struct cbvh_file *restrict f, const struct c
                               cbvh_query_stats *restrict stats)
 {
     const cbvh_node *restrict nodes = f->nodes;
-    const float origin[3] = {f->grid_origin[0], f->grid_origin[1], f->grid_origin[2]};
-    const float scale[3] = {f->grid_scale[0], f->grid_scale[1], f->grid_scale[2]};
-    const float org[3] = {ray->shear.org[0], ray->shear.org[1], ray->shear.org[2]};
-    const float rcp[3] = {ray->rcp[0], ray->rcp[1], ray->rcp[2]};
-    const struct cbvh_slab_select sel = cbvh_slab_select_of(ray->octant);
+    struct cbvh_box_ray box;
+    cbvh_box_ray_init(&box, f->grid_origin, f->grid_scale, ray->shear.org, ray->rcp, ray->octant);
     const float tmin = ray->tmin;
     float tmax = ray->tmax;
     struct {
@@ -29,14 +26,14 @@ CBVH_KERNEL int distance_walk(const struct cbvh_file *restrict f, const struct c
     int hit = 0;
     float entry0, entry1;
 
-    if (!cbvh_ray_node(&nodes[0], origin, scale, sel, org, rcp, tmin, tmax, &entry0))
+    if (!cbvh_box_ray_test(&box, &nodes[0], tmin, tmax, &entry0))
         goto done;
     for (;;) {
         const uint32_t word = nodes[i].word;
         if (!cbvh_node_is_leaf(word)) {
             uint32_t near = i + 1u, far = cbvh_second_child(nodes, i);
-            int h0 = cbvh_ray_node(&nodes[near], origin, scale, sel, org, rcp, tmin, tmax, &entry0);
-            int h1 = cbvh_ray_node(&nodes[far], origin, scale, sel, org, rcp, tmin, tmax, &entry1);
+            int h0 = cbvh_box_ray_test(&box, &nodes[near], tmin, tmax, &entry0);
+            int h1 = cbvh_box_ray_test(&box, &nodes[far], tmin, tmax, &entry1);
             if (counting)
                 visited += 2;
             if (h0 && h1) {
@@ -56,19 +53,9 @@ CBVH_KERNEL int distance_walk(const struct cbvh_file *restrict f, const struct c
                 i = h0 ? near : far;
                 continue;
             }
-        } else if (any) {
-            uint32_t count;
-            int h = cbvh_leaf_any(f, word, &ray->shear, tmin, tmax, &count);
-            if (counting)
-                tested += count;
-            if (h) {
-                hit = 1;
-                break;
-            }
-        } else {
-            uint32_t count = cbvh_leaf_closest(f, word, &ray->shear, tmin, &tmax, best);
-            if (counting)
-                tested += count;
+        } else if (cbvh_leaf_visit(f, word, ray, any, counting, &tmax, best, &tested)) {
+            hit = 1;
+            break;
         }
         /* Pop the next node still in reach: the padded test of ray_box.h with the current tmax. */
         do {
@@ -79,10 +66,8 @@ CBVH_KERNEL int distance_walk(const struct cbvh_file *restrict f, const struct c
         i = stack[sp].node;
     }
 done:
-    if (counting) {
-        stats->nodes_visited += visited;
-        stats->triangles_tested += tested;
-    }
+    if (counting)
+        cbvh_stats_add(stats, visited, tested);
     return hit;
 }
 

@@ -14,11 +14,8 @@ CBVH_KERNEL int stackless_walk(const struct cbvh_file *restrict f, const struct 
 {
     const cbvh_node *restrict nodes = f->nodes;
     const uint32_t end = f->info.node_count;
-    const float origin[3] = {f->grid_origin[0], f->grid_origin[1], f->grid_origin[2]};
-    const float scale[3] = {f->grid_scale[0], f->grid_scale[1], f->grid_scale[2]};
-    const float org[3] = {ray->shear.org[0], ray->shear.org[1], ray->shear.org[2]};
-    const float rcp[3] = {ray->rcp[0], ray->rcp[1], ray->rcp[2]};
-    const struct cbvh_slab_select sel = cbvh_slab_select_of(ray->octant);
+    struct cbvh_box_ray box;
+    cbvh_box_ray_init(&box, f->grid_origin, f->grid_scale, ray->shear.org, ray->rcp, ray->octant);
     const float tmin = ray->tmin;
     float tmax = ray->tmax;
     uint64_t visited = 0, tested = 0;
@@ -31,32 +28,20 @@ CBVH_KERNEL int stackless_walk(const struct cbvh_file *restrict f, const struct 
         float entry;
         if (counting)
             visited++;
-        if (!cbvh_ray_node(n, origin, scale, sel, org, rcp, tmin, tmax, &entry)) {
+        if (!cbvh_box_ray_test(&box, n, tmin, tmax, &entry)) {
             i += cbvh_node_span(word);
             continue;
         }
         if (cbvh_node_is_leaf(word)) {
-            if (any) {
-                uint32_t count;
-                int h = cbvh_leaf_any(f, word, &ray->shear, tmin, tmax, &count);
-                if (counting)
-                    tested += count;
-                if (h) {
-                    hit = 1;
-                    break;
-                }
-            } else {
-                uint32_t count = cbvh_leaf_closest(f, word, &ray->shear, tmin, &tmax, best);
-                if (counting)
-                    tested += count;
+            if (cbvh_leaf_visit(f, word, ray, any, counting, &tmax, best, &tested)) {
+                hit = 1;
+                break;
             }
         }
         i++;
     }
-    if (counting) {
-        stats->nodes_visited += visited;
-        stats->triangles_tested += tested;
-    }
+    if (counting)
+        cbvh_stats_add(stats, visited, tested);
     return hit;
 }
 
