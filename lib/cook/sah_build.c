@@ -86,18 +86,8 @@ static void box_empty(box *b)
     }
 }
 
-static inline float min_f(float x, float y)
-{
-    return x < y ? x : y;
-}
-
-static inline float max_f(float x, float y)
-{
-    return x > y ? x : y;
-}
-
 /* The builder's innermost operation. All pointers 16-byte aligned. MINPS/MAXPS pick like
- * min_f/max_f (the second operand unless the first is strictly beyond it), so both paths
+ * the scalar code (the second operand unless the first is strictly beyond it), so both paths
  * give the same bits. */
 static inline void box_grow(box *restrict b, const float *restrict lo, const float *restrict hi)
 {
@@ -106,12 +96,12 @@ static inline void box_grow(box *restrict b, const float *restrict lo, const flo
     _mm_store_ps(b->hi, _mm_max_ps(_mm_load_ps(hi), _mm_load_ps(b->hi)));
 #else
     const float l0 = lo[0], l1 = lo[1], l2 = lo[2], h0 = hi[0], h1 = hi[1], h2 = hi[2];
-    b->lo[0] = min_f(l0, b->lo[0]);
-    b->lo[1] = min_f(l1, b->lo[1]);
-    b->lo[2] = min_f(l2, b->lo[2]);
-    b->hi[0] = max_f(h0, b->hi[0]);
-    b->hi[1] = max_f(h1, b->hi[1]);
-    b->hi[2] = max_f(h2, b->hi[2]);
+    b->lo[0] = l0 < b->lo[0] ? l0 : b->lo[0];
+    b->lo[1] = l1 < b->lo[1] ? l1 : b->lo[1];
+    b->lo[2] = l2 < b->lo[2] ? l2 : b->lo[2];
+    b->hi[0] = h0 > b->hi[0] ? h0 : b->hi[0];
+    b->hi[1] = h1 > b->hi[1] ? h1 : b->hi[1];
+    b->hi[2] = h2 > b->hi[2] ? h2 : b->hi[2];
 #endif
 }
 
