@@ -72,11 +72,11 @@ static int compare_double(const void *a, const void *b)
     return (x > y) - (x < y);
 }
 
-double bench_run_median(const bench_job *job, unsigned threads, unsigned reps)
+double bench_run_median(const bench_job *job, unsigned threads, unsigned reps, double budget, unsigned *runs)
 {
     if (reps < 1)
         reps = 1;
-    double *times = malloc(reps * sizeof *times);
+    double *times = malloc(reps * sizeof *times), total = 0.0;
     if (!times)
         return -1.0;
     for (unsigned r = 0; r < reps; r++) {
@@ -85,7 +85,12 @@ double bench_run_median(const bench_job *job, unsigned threads, unsigned reps)
             free(times);
             return -1.0;
         }
+        total += times[r];
+        if (budget > 0.0 && total > budget)
+            reps = r + 1;
     }
+    if (runs)
+        *runs = reps;
     qsort(times, reps, sizeof *times, compare_double);
     double median = reps % 2 ? times[reps / 2] : 0.5 * (times[reps / 2 - 1] + times[reps / 2]);
     free(times);

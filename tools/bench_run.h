@@ -28,8 +28,11 @@ typedef struct bench_job {
  * kernel counts and the per-thread counters are summed into *stats. */
 double bench_run_once(const bench_job *job, unsigned threads, cbvh_query_stats *stats);
 
-/* The median wall time of `reps` timed runs (reps >= 1); negative on failure. */
-double bench_run_median(const bench_job *job, unsigned threads, unsigned reps);
+/* The median wall time of up to `reps` timed runs (reps >= 1): repeating stops
+ * early once the runs took more than `budget` seconds in all (0: no limit), so
+ * slow engines do not dominate a benchmark. *runs (may be NULL) receives the
+ * runs made. Negative on failure. */
+double bench_run_median(const bench_job *job, unsigned threads, unsigned reps, double budget, unsigned *runs);
 
 /* cbvh as an engine: one traversal of an opened file, or its batched streams. */
 typedef struct bench_cbvh {

@@ -39,6 +39,8 @@ static const char usage[] =
     "  --seed S        ray generator seed (default 1)\n"
     "  --threads T     split the rays across T threads (default 1); Embree builds with T threads\n"
     "  --reps R        timed repetitions per figure, the median is reported (default 5)\n"
+    "  --budget S      stop repeating a figure once its runs took S seconds in all (default 2;\n"
+    "                  0: never), so the slowest peer does not dominate the run time\n"
     "  --json FILE     also write every figure as JSON to FILE\n"
     "  --no-peers      measure cbvh only\n"
     "  --quiet         no progress display\n"
@@ -46,12 +48,13 @@ static const char usage[] =
     "\n"
     "Exit status: 0 done, 1 the input is not a usable mesh or cbvh file, 2 usage or I/O error.\n";
 
-enum { OPT_GEN = 1, OPT_RAYS, OPT_SEED, OPT_THREADS, OPT_REPS, OPT_JSON, OPT_NO_PEERS, OPT_QUIET };
+enum { OPT_GEN = 1, OPT_RAYS, OPT_SEED, OPT_THREADS, OPT_REPS, OPT_BUDGET, OPT_JSON, OPT_NO_PEERS, OPT_QUIET };
 
 static const cli_option options[] = {
     { "gen", CLI_ARG_REQUIRED, OPT_GEN },       { "rays", CLI_ARG_REQUIRED, OPT_RAYS },
     { "seed", CLI_ARG_REQUIRED, OPT_SEED },     { "threads", CLI_ARG_REQUIRED, OPT_THREADS },
-    { "reps", CLI_ARG_REQUIRED, OPT_REPS },     { "json", CLI_ARG_REQUIRED, OPT_JSON },
+    { "reps", CLI_ARG_REQUIRED, OPT_REPS },     { "budget", CLI_ARG_REQUIRED, OPT_BUDGET },
+    { "json", CLI_ARG_REQUIRED, OPT_JSON },
     { "no-peers", CLI_ARG_NONE, OPT_NO_PEERS }, { "quiet", CLI_ARG_NONE, OPT_QUIET },
     { NULL, 0, 0 },
 };
@@ -117,6 +120,7 @@ typedef struct result_row {
     int any;
     const method *m;
     double seconds;
+    unsigned runs;
     cbvh_query_stats stats;
 } result_row;
 
@@ -135,6 +139,7 @@ typedef struct bench_state {
     size_t rays;
     uint64_t seed;
     unsigned threads, reps;
+    float budget;
     const char *json_path;
     int no_peers;
     progress prog;
@@ -348,7 +353,7 @@ static int measure_set(bench_state *s, ray_kind set, buffers *b, int *step, int 
              * Every pass leaves the answers for the agreement check. */
             double t = m->counted ? bench_run_once(&job, s->threads, &r->stats) : 0.0;
             if (t >= 0.0)
-                t = bench_run_median(&job, s->threads, s->reps);
+                t = bench_run_median(&job, s->threads, s->reps, s->budget, &r->runs);
             if (t < 0.0) {
                 progress_done(&s->prog);
                 cli_error(s->command, NULL, "cannot start %u threads", s->threads);
@@ -393,8 +398,9 @@ static void print_tables(const bench_state *s)
 {
     double tris = (double)s->mesh.triangle_count;
     printf("## cbvh bench: %s\n\n", s->mesh.name);
-    printf("%zu triangles, %zu rays per set, seed %llu, %u thread(s), median of %u run(s).\n\n",
-           s->mesh.triangle_count, s->rays, (unsigned long long)s->seed, s->threads, s->reps);
+    printf("%zu triangles, %zu rays per set, seed %llu, %u thread(s), median of up to %u runs per figure "
+           "(fewer once a figure's runs took %.3g s).\n\n",
+           s->mesh.triangle_count, s->rays, (unsigned long long)s->seed, s->threads, s->reps, s->budget);
     const build_row *c = &s->builds[0];
     printf("| engine | build s | Mtris/s | open ms | bytes/tri | cbvh/this bytes | cbvh open / this build |\n");
     printf("|---|---:|---:|---:|---:|---:|---:|\n");
@@ -418,8 +424,8 @@ static void print_tables(const bench_state *s)
     printf("\nbytes/tri: the cbvh file; for the peers their acceleration structure plus the shared vertex and index "
            "arrays they need.\n\n");
 
-    printf("| rays | query | engine | variant | MRays/s | MRays/s/thread | nodes/ray | tris/ray | cbvh sorted / this |\n");
-    printf("|---|---|---|---|---:|---:|---:|---:|---:|\n");
+    printf("| rays | query | engine | variant | MRays/s | MRays/s/thread | nodes/ray | tris/ray | cbvh sorted / this | runs |\n");
+    printf("|---|---|---|---|---:|---:|---:|---:|---:|---:|\n");
     for (int i = 0; i < s->result_count; i++) {
         const result_row *r = &s->results[i];
         double speed = mrays(s, r->seconds), ref = mrays(s, sorted_row(s, r)->seconds);
@@ -430,7 +436,7 @@ static void print_tables(const bench_state *s)
                    (double)r->stats.triangles_tested / (double)s->rays);
         else
             printf("- | - | ");
-        printf("%.3f |\n", speed > 0.0 ? ref / speed : 0.0);
+        printf("%.3f | %u |\n", speed > 0.0 ? ref / speed : 0.0, r->runs);
     }
 
     printf("\nAgreement with cbvh sorted, ray by ray (t within %.0e of the scene diagonal):\n\n", AGREE_TOLERANCE);
@@ -466,6 +472,7 @@ static int write_json(const bench_state *s)
     json_uint(&w, "seed", s->seed);
     json_uint(&w, "threads", s->threads);
     json_uint(&w, "reps", s->reps);
+    json_double(&w, "budget_seconds", s->budget);
     json_double(&w, "agreement_tolerance", AGREE_TOLERANCE);
     json_begin_array(&w, "builds");
     for (int i = 0; i < s->build_count; i++) {
@@ -508,6 +515,7 @@ static int write_json(const bench_state *s)
         json_string(&w, "engine", r->m->engine);
         json_string(&w, "variant", r->m->variant);
         json_double(&w, "seconds", r->seconds);
+        json_uint(&w, "runs", r->runs);
         json_double(&w, "mrays_per_s", speed);
         json_double(&w, "mrays_per_s_per_thread", speed / s->threads);
         if (r->m->counted) {
@@ -596,6 +604,7 @@ int cmd_bench(int argc, char **argv)
     s.seed = 1;
     s.threads = 1;
     s.reps = 5;
+    s.budget = 2.0f;
     const char *input = NULL, *gen = NULL;
     int quiet = 0;
 
@@ -630,6 +639,10 @@ int cmd_bench(int argc, char **argv)
             break;
         case OPT_REPS:
             if (!cli_parse_u32(s.command, "--reps", value, 1, 1000, &s.reps))
+                return CLI_EXIT_USAGE;
+            break;
+        case OPT_BUDGET:
+            if (!cli_parse_float(s.command, "--budget", value, 0.0f, 1e6f, &s.budget))
                 return CLI_EXIT_USAGE;
             break;
         case OPT_JSON: s.json_path = value; break;

@@ -10,13 +10,13 @@
 
 #include "bench_input.h"
 #include "bench_run.h"
-#include "brute_force.h"
 #include "cli.h"
 #include "commands.h"
 #include "json.h"
 #include "progress.h"
 #include "report_exact.h"
 #include "support/rays.h"
+#include "support/reference.h"
 #include "svg_plot.h"
 #include "tree_stats.h"
 
@@ -125,51 +125,43 @@ typedef struct mesh_ctx {
 /* Double-precision brute force                                        */
 /* ------------------------------------------------------------------ */
 
-static void load_triangle(const bench_mesh *m, size_t tri, double v[3][3])
+/* The mesh as the reference takes it: every triangle in double, ids = indices. */
+static int reference_triangles(const bench_mesh *m, ref_tris *out)
 {
-    for (int k = 0; k < 3; k++) {
-        const float *p = m->positions + 3 * (size_t)m->indices[3 * tri + k];
-        for (int a = 0; a < 3; a++)
-            v[k][a] = p[a];
+    out->count = m->triangle_count;
+    out->v = malloc(9 * m->triangle_count * sizeof *out->v);
+    out->id = malloc(m->triangle_count * sizeof *out->id);
+    if (!out->v || !out->id) {
+        ref_tris_free(out);
+        return 0;
     }
-}
-
-/* Closest hit over every triangle: O(triangles). Returns the triangle or CBVH_NO_HIT. */
-static uint32_t brute_closest(const bench_mesh *m, const double org[3], const double dir[3], double tmin, double tmax,
-                              double *t_out)
-{
-    uint32_t best = CBVH_NO_HIT;
-    double best_t = tmax;
-    for (size_t i = 0; i < m->triangle_count; i++) {
-        double v[3][3], t, u, w, margin;
-        load_triangle(m, i, v);
-        if (bf_ray_triangle(org, dir, tmin, best_t, v[0], v[1], v[2], &t, &u, &w, &margin) &&
-            (t < best_t || best == CBVH_NO_HIT)) {
-            best_t = t;
-            best = (uint32_t)i;
-        }
+    for (size_t t = 0; t < m->triangle_count; t++) {
+        for (int k = 0; k < 3; k++)
+            for (int a = 0; a < 3; a++)
+                out->v[9 * t + 3 * k + a] = m->positions[3 * (size_t)m->indices[3 * t + k] + a];
+        out->id[t] = (uint32_t)t;
     }
-    *t_out = best_t;
-    return best;
+    return 1;
 }
 
 typedef struct brute_engine {
-    const bench_mesh *mesh;
+    const ref_tris *tris;
     const cbvh_ray *base; /* the sample: answers go to the same index in ref_tri / ref_t */
     uint32_t *ref_tri;
     double *ref_t;
 } brute_engine;
 
-/* A bench_kernel, so the brute force runs on every core. */
+/* A bench_kernel over helper C's double-precision brute force, so it runs on every core. */
 static void brute_kernel(const void *engine, const cbvh_ray *rays, size_t count, cbvh_hit *hits, uint8_t *occluded,
                          cbvh_query_stats *stats)
 {
     const brute_engine *e = engine;
     for (size_t k = 0; k < count; k++) {
-        const cbvh_ray *r = &rays[k];
-        size_t i = (size_t)(r - e->base);
-        double org[3] = { r->org[0], r->org[1], r->org[2] }, dir[3] = { r->dir[0], r->dir[1], r->dir[2] };
-        e->ref_tri[i] = brute_closest(e->mesh, org, dir, r->tmin, r->tmax, &e->ref_t[i]);
+        size_t i = (size_t)(&rays[k] - e->base);
+        ref_ray_hit hit;
+        ref_ray_closest(e->tris, &rays[k], 0.0, &hit);
+        e->ref_tri[i] = hit.tri;
+        e->ref_t[i] = hit.t;
     }
 }
 
@@ -246,28 +238,28 @@ static uint64_t *closed_edges(const bench_mesh *m, size_t *unique_count, int *cl
 
 /* A point inside a closed mesh: halfway between where a ray from outside
  * first enters the mesh and where it next crosses the surface. */
-static int interior_point(const bench_mesh *m, double diagonal, float out[3])
+static int interior_point(const ref_tris *tris, const float lo[3], const float hi[3], double diagonal, float out[3])
 {
     static const double tries[][3] = { { 0.5773, 0.5774, 0.5773 }, { -0.2673, 0.5345, 0.8018 },
                                        { 0.8729, -0.2182, 0.4364 }, { -0.4082, -0.4082, 0.8165 },
                                        { 0.1, 0.98, -0.17 },         { -0.9, 0.3, -0.316 } };
-    float lo[3], hi[3];
-    rays_mesh rm = { m->positions, m->vertex_count, m->indices, m->triangle_count };
-    rays_mesh_bounds(&rm, lo, hi);
     for (size_t k = 0; k < sizeof tries / sizeof tries[0]; k++) {
         double n = sqrt(tries[k][0] * tries[k][0] + tries[k][1] * tries[k][1] + tries[k][2] * tries[k][2]);
-        double dir[3], org[3], t1, t2;
+        cbvh_ray r;
         for (int a = 0; a < 3; a++) {
-            dir[a] = tries[k][a] / n;
-            org[a] = 0.5 * ((double)lo[a] + hi[a]) - dir[a] * diagonal;
+            r.dir[a] = (float)(tries[k][a] / n);
+            r.org[a] = (float)(0.5 * ((double)lo[a] + hi[a]) - r.dir[a] * diagonal);
         }
-        if (brute_closest(m, org, dir, 0.0, 4.0 * diagonal, &t1) == CBVH_NO_HIT)
+        r.tmin = 0.0f;
+        r.tmax = (float)(4.0 * diagonal);
+        ref_ray_hit first, next;
+        if (!ref_ray_closest(tris, &r, 0.0, &first))
             continue;
-        if (brute_closest(m, org, dir, t1 + 1e-7 * diagonal, 4.0 * diagonal, &t2) == CBVH_NO_HIT ||
-            t2 - t1 < 1e-4 * diagonal)
+        r.tmin = (float)(first.t + 1e-7 * diagonal);
+        if (!ref_ray_closest(tris, &r, 0.0, &next) || next.t - first.t < 1e-4 * diagonal)
             continue;
         for (int a = 0; a < 3; a++)
-            out[a] = (float)(org[a] + 0.5 * (t1 + t2) * dir[a]);
+            out[a] = (float)(r.org[a] + 0.5 * (first.t + next.t) * r.dir[a]);
         return 1;
     }
     return 0;
@@ -284,14 +276,14 @@ static void leak_ray(cbvh_ray *r, const float from[3], const float to[3])
 }
 
 /* Rays from inside a closed mesh at its vertices and edge midpoints: every one must hit. */
-static int make_leak_rays(mesh_ctx *c)
+static int make_leak_rays(mesh_ctx *c, const ref_tris *tris, const float lo[3], const float hi[3])
 {
     size_t edge_count;
     uint64_t *edges = closed_edges(&c->mesh, &edge_count, &c->closed);
     if (!edges)
         return 0;
     float inside[3];
-    if (!c->closed || !interior_point(&c->mesh, c->diagonal, inside)) {
+    if (!c->closed || !interior_point(tris, lo, hi, c->diagonal, inside)) {
         c->closed = 0;
         free(edges);
         return 1;
@@ -361,10 +353,10 @@ static int measure(const report_state *s, mesh_ctx *c, bench_kernel kernel, cons
     bench_job job = { kernel, engine, c->rays, s->rays, c->hits, NULL };
     cbvh_query_stats st = { 0, 0 };
     double t = bench_run_once(&job, 1, &st);
-    double closest = t >= 0.0 ? bench_run_median(&job, 1, s->reps) : -1.0;
+    double closest = t >= 0.0 ? bench_run_median(&job, 1, s->reps, 0.0, NULL) : -1.0;
     job.hits = NULL;
     job.occluded = c->occluded;
-    double any = closest >= 0.0 ? bench_run_median(&job, 1, s->reps) : -1.0;
+    double any = closest >= 0.0 ? bench_run_median(&job, 1, s->reps, 0.0, NULL) : -1.0;
     if (any < 0.0)
         return 0;
     row->closest_mrays = (double)s->rays / closest * 1e-6;
@@ -582,10 +574,18 @@ static int report_mesh(report_state *s, const char *source, int generated)
     char label[128];
     snprintf(label, sizeof label, "%s: brute force on %zu rays", c.label, s->sample);
     progress_update(&s->prog, label, -1.0);
-    brute_engine be = { &c.mesh, c.rays, c.ref_tri, c.ref_t };
+    ref_tris tris;
+    if (!reference_triangles(&c.mesh, &tris)) {
+        mesh_ctx_free(&c);
+        cli_error(s->command, NULL, "out of memory");
+        return CLI_EXIT_USAGE;
+    }
+    brute_engine be = { &tris, c.rays, c.ref_tri, c.ref_t };
     bench_job job = { brute_kernel, &be, c.rays, s->sample, NULL, NULL };
     long cores = sysconf(_SC_NPROCESSORS_ONLN);
-    if (bench_run_once(&job, cores > 0 ? (unsigned)cores : 1u, NULL) < 0.0 || !make_leak_rays(&c)) {
+    int ok = bench_run_once(&job, cores > 0 ? (unsigned)cores : 1u, NULL) >= 0.0 && make_leak_rays(&c, &tris, lo, hi);
+    ref_tris_free(&tris);
+    if (!ok) {
         progress_done(&s->prog);
         mesh_ctx_free(&c);
         cli_error(s->command, NULL, "out of memory or cannot start a thread");

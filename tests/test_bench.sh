@@ -1,0 +1,166 @@
+#!/bin/sh
+# test_bench.sh: `cbvh bench` and `cbvh report` on tiny generated scenes: exit codes, help, tables, JSON, SVG, peer agreement.
+#
+# Environment (set by `make check` through AM_TESTS_ENVIRONMENT):
+#   CBVH_TOOL   the built tools/cbvh
+# Writes only into a mktemp folder, removed at exit. JSON and SVG checks need python3 (skipped without it).
+
+CBVH=${CBVH_TOOL:-./tools/cbvh}
+[ -x "$CBVH" ] || { echo "test_bench.sh: $CBVH is not built"; exit 99; }
+
+tmp=$(mktemp -d "${TMPDIR:-/tmp}/cbvh-test-bench.XXXXXX") || exit 99
+trap 'rm -rf "$tmp"' EXIT INT TERM
+
+passed=0
+failed=0
+skipped=0
+pass() { passed=$((passed + 1)); echo "ok   $1"; }
+fail() { failed=$((failed + 1)); echo "FAIL $1"; }
+skip() { skipped=$((skipped + 1)); echo "skip $1"; }
+
+# run EXPECTED_STATUS NAME CMD...: stdout in $tmp/out, stderr in $tmp/err.
+run() {
+    expect=$1
+    name=$2
+    shift 2
+    "$@" >"$tmp/out" 2>"$tmp/err" </dev/null
+    status=$?
+    if [ "$status" -eq "$expect" ]; then
+        pass "$name"
+        return 0
+    fi
+    fail "$name (exit $status, expected $expect)"
+    sed 's/^/     | /' "$tmp/err" | head -5
+    return 1
+}
+
+check() {
+    name=$1
+    shift
+    if "$@"; then pass "$name"; else fail "$name"; fi
+}
+
+has_python=0
+command -v python3 >/dev/null 2>&1 && has_python=1
+
+# ---- usage ------------------------------------------------------------------------------------
+
+run 0 "bench --help" "$CBVH" bench --help && check "... prints the usage" grep -q '^Usage: cbvh bench' "$tmp/out"
+run 0 "report --help" "$CBVH" report --help && check "... prints the usage" grep -q '^Usage: cbvh report' "$tmp/out"
+run 2 "bench without input" "$CBVH" bench
+run 2 "bench with INPUT and --gen" "$CBVH" bench x.obj --gen sphere:100
+run 2 "bench --rays 0" "$CBVH" bench --gen sphere:100 --rays 0
+run 2 "bench --threads abc" "$CBVH" bench --gen sphere:100 --threads abc
+run 2 "bench with an unknown option" "$CBVH" bench --gen sphere:100 --frobnicate
+run 2 "bench with a bad generated scene" "$CBVH" bench --gen pyramid:5 &&
+    check "... says what is wrong" grep -q 'pyramid:5' "$tmp/err"
+run 2 "bench of a missing file" "$CBVH" bench "$tmp/missing.obj" &&
+    check "... names the file" grep -q 'missing.obj' "$tmp/err"
+printf 'this is not a mesh\n' >"$tmp/junk.obj"
+run 1 "bench of a file that is not a mesh" "$CBVH" bench "$tmp/junk.obj"
+run 2 "report without mesh" "$CBVH" report
+run 2 "report --reps 0" "$CBVH" report --gen sphere:100 --reps 0
+
+# ---- bench ------------------------------------------------------------------------------------
+
+run 0 "bench --gen sphere:2000" "$CBVH" bench --gen sphere:2000 --rays 2000 --reps 1 --quiet --json "$tmp/bench.json" &&
+    cp "$tmp/out" "$tmp/bench.md" &&
+    check "... prints the build table" grep -q '^| engine | build s | Mtris/s | open ms | bytes/tri |' "$tmp/bench.md" &&
+    check "... prints the speed table" \
+        grep -q '^| rays | query | engine | variant | MRays/s | MRays/s/thread | nodes/ray | tris/ray |' "$tmp/bench.md" &&
+    check "... prints the agreement table" grep -q '^| rays | engine | variant | same triangle | both miss |' "$tmp/bench.md" &&
+    check "... a row per ray set, query and traversal" \
+        test "$(grep -c '^| \(incoherent\|coherent\|shadow\) | \(closest\|any\) | cbvh | ' "$tmp/bench.md")" -eq 30 &&
+    check "... progress stays off stdout" test "$(grep -c '%' "$tmp/bench.md")" -eq 0
+
+if [ "$has_python" = 1 ] && [ -f "$tmp/bench.json" ]; then
+    check "bench --json is valid JSON" python3 -m json.tool "$tmp/bench.json" /dev/null
+    # Every traversal and every peer agrees with cbvh sorted on a closed sphere, ray by ray.
+    check "bench: cbvh traversals and peers agree ray by ray" python3 - "$tmp/bench.json" <<'EOF'
+import json, sys
+d = json.load(open(sys.argv[1]))
+assert d["triangles"] >= 2000 and d["rays"] == 2000, d
+engines = {b["engine"] for b in d["builds"]}
+assert "cbvh" in engines
+rows = d["agreement"]
+assert len(rows) >= 3 * 4, len(rows)
+for r in rows:
+    total = r["same_triangle"] + r["both_miss"] + r["t_close_other_triangle"] + r["disagree"]
+    assert total == 2000, r
+    assert r["disagree"] == 0 and r["any_disagree"] == 0, r
+    assert r["same_triangle"] > 0 and r["both_miss"] > 0, r
+for e in engines - {"cbvh"}:
+    assert any(r["engine"] == e for r in rows), e
+for r in d["results"]:
+    assert r["mrays_per_s"] > 0, r
+    if r["engine"] == "cbvh":
+        assert r["nodes_per_ray"] >= 1 and r["triangles_per_ray"] > 0, r
+print("peers:", sorted(engines - {"cbvh"}))
+EOF
+else
+    skip "bench JSON checks: python3 not found"
+fi
+
+run 0 "bench --threads 2 --no-peers" "$CBVH" bench --gen terrain:3000 --rays 3000 --reps 2 --threads 2 --no-peers &&
+    check "... measures cbvh only" test "$(grep -c '| embree\|| bullet' "$tmp/out")" -eq 0 &&
+    check "... all traversals agree" sh -c "grep '^| [a-z]* | cbvh | ' '$tmp/out' | awk -F'|' '\$8 != 0 || \$9 != 0 { bad = 1 } END { exit bad }'"
+
+if run 0 "cook a file to bench" "$CBVH" cook gen:sphere:1000 "$tmp/sphere.cbvh"; then
+    run 0 "bench of a cooked .cbvh file" "$CBVH" bench "$tmp/sphere.cbvh" --rays 1000 --reps 1 --quiet &&
+        check "... has no cook time" grep -q '^| cbvh | - | - |' "$tmp/out"
+fi
+
+# ---- report -----------------------------------------------------------------------------------
+
+run 0 "report --gen sphere:2000" "$CBVH" report --gen sphere:2000 --rays 2000 --sample 500 --reps 1 --quiet \
+    --json "$tmp/report.json" --svg "$tmp/report.svg" &&
+    cp "$tmp/out" "$tmp/report.md" &&
+    check "... prints the table with error and run-time columns" \
+        grep -q '^| mesh | configuration | bytes/tri | open ms | closest MRays/s | any MRays/s | nodes/ray | tris/ray | extra nodes/ray | extra tris/ray | box inflation mean | box inflation worst | flips | wrong tri | t err max | t err RMS | vertex err | leaked rays |' "$tmp/report.md" &&
+    check "... one row per configuration" test "$(grep -c '^| sphere:2000 | leaf ' "$tmp/report.md")" -eq 11 &&
+    check "... no ray leaks through the closed sphere" \
+        test "$(grep '^| sphere:2000 |' "$tmp/report.md" | grep -vc '| 0 / [0-9]* |$')" -eq 0
+
+if [ "$has_python" = 1 ] && [ -f "$tmp/report.json" ]; then
+    check "report --json is valid JSON" python3 -m json.tool "$tmp/report.json" /dev/null
+    check "report: exact answers with float vertices, bounded error with quantized ones" python3 - "$tmp/report.json" <<'EOF'
+import json, sys
+rows = json.load(open(sys.argv[1]))["rows"]
+assert len(rows) == 11, len(rows)
+for r in rows:
+    assert r["leaked_rays"] == 0 and r["leak_test_rays"] > 0, r
+    assert r["closest_mrays_per_s"] > 0 and r["any_mrays_per_s"] > 0, r
+    if r["vertices"] == "float":
+        assert r["hit_flips"] == 0 and r["wrong_triangle"] == 0, r
+        assert r["t_error_max"] < 1e-5 and r["vertex_error"] == 0, r
+    else:
+        assert 0 < r["vertex_error"] < 1e-4, r
+    if r["boxes"] == "float":
+        assert r["extra_nodes_per_ray"] == 0 and r["box_inflation_worst"] == 0, r
+    elif r["vertices"] == "float":
+        assert r["box_inflation_worst"] > 0, r
+    if r["traversal"] == "sorted" and r["boxes"] == "q16":
+        assert r["extra_nodes_per_ray"] >= 0, r
+EOF
+    check "report --svg is a well-formed SVG with one point per configuration and panel" python3 - "$tmp/report.svg" <<'EOF'
+import sys
+import xml.etree.ElementTree as ET
+root = ET.parse(sys.argv[1]).getroot()
+ns = "{http://www.w3.org/2000/svg}"
+assert root.tag == ns + "svg", root.tag
+circles = root.findall(".//" + ns + "circle")
+assert len(circles) == 3 * 11, len(circles)
+texts = [t.text or "" for t in root.iter(ns + "text")]
+assert any("ns per ray" in t for t in texts), texts[:5]
+EOF
+else
+    skip "report JSON and SVG checks: python3 not found"
+fi
+
+run 0 "report --out DIR" "$CBVH" report --gen cube --rays 500 --sample 100 --reps 1 --quiet --out "$tmp/out-dir" &&
+    check "... writes report.md, report.json, report.svg and the cooked files" \
+        test -s "$tmp/out-dir/report.md" -a -s "$tmp/out-dir/report.json" -a -s "$tmp/out-dir/report.svg" \
+        -a -s "$tmp/out-dir/cube-leaf4.cbvh" -a -s "$tmp/out-dir/cube-leaf4-qverts.cbvh"
+
+echo "test_bench.sh: $passed passed, $failed failed, $skipped skipped"
+[ "$failed" -eq 0 ]
