@@ -1234,6 +1234,44 @@ static void counting_free(void *user, void *ptr)
     free(ptr);
 }
 
+/* Fails allocation n for every n a successful cook makes: each run either fails cleanly
+ * (out of memory, nothing leaked) or, where a failure has a fallback (the builder's second
+ * thread), succeeds with the very same bytes. */
+static void alloc_failure_loop(const test_mesh *m, const cbvh_cook_options *o)
+{
+    cbvh_mesh mesh = as_mesh(m);
+    counting ref = { 0, 0, -1 };
+    cbvh_allocator ra = { counting_alloc, counting_free, &ref };
+    void *expect = NULL;
+    size_t expect_size = 0;
+    assert_int_equal(cbvh_cook(&mesh, o, &ra, &expect, &expect_size, NULL, NULL), CBVH_OK);
+    assert_true(ref.calls >= 8);
+    int failures = 0;
+    for (long n = 0; n < ref.calls; n++) {
+        counting c = { 0, 0, n };
+        cbvh_allocator a = { counting_alloc, counting_free, &c };
+        void *data = NULL;
+        size_t size = 0;
+        cbvh_error err;
+        cbvh_result r = cbvh_cook(&mesh, o, &a, &data, &size, NULL, &err);
+        if (r == CBVH_OK) {
+            assert_int_equal(size, expect_size);
+            assert_memory_equal(data, expect, size);
+            assert_int_equal(c.live, 1);
+            cbvh_buffer_free(&a, data);
+        } else {
+            assert_int_equal(r, CBVH_ERROR_OUT_OF_MEMORY);
+            assert_non_null(strstr(err.message, "out of memory"));
+            assert_null(data);
+            failures++;
+        }
+        assert_int_equal(c.live, 0);
+    }
+    assert_true(failures >= ref.calls - 2);
+    cbvh_buffer_free(&ra, expect);
+    assert_int_equal(ref.live, 0);
+}
+
 static void test_allocation_failures(void **state)
 {
     (void)state;
@@ -1241,32 +1279,19 @@ static void test_allocation_failures(void **state)
     make_grid(&m, 12, 1.0, 3);
     m.mat = calloc(m.nt, sizeof(uint32_t));
     m.mat[1] = 2;
-    cbvh_mesh mesh = as_mesh(&m);
     for (int variant = 0; variant < 2; variant++) {
         cbvh_cook_options o;
         cbvh_cook_options_init(&o);
         o.compress_level = variant ? 9 : 0;
         o.vertex_format = variant ? CBVH_VERTEX_QUANTIZED16 : CBVH_VERTEX_FLOAT32;
-        for (long n = 0;; n++) {
-            counting c = { 0, 0, n };
-            cbvh_allocator a = { counting_alloc, counting_free, &c };
-            void *data = NULL;
-            size_t size = 0;
-            cbvh_error err;
-            cbvh_result r = cbvh_cook(&mesh, &o, &a, &data, &size, NULL, &err);
-            if (r == CBVH_OK) {
-                assert_true(n >= 8);
-                assert_int_equal(c.live, 1);
-                cbvh_buffer_free(&a, data);
-                assert_int_equal(c.live, 0);
-                break;
-            }
-            assert_int_equal(r, CBVH_ERROR_OUT_OF_MEMORY);
-            assert_non_null(strstr(err.message, "out of memory"));
-            assert_null(data);
-            assert_int_equal(c.live, 0);
-        }
+        alloc_failure_loop(&m, &o);
     }
+    mesh_free(&m);
+    /* Large enough for the builder's second thread, whose allocations have a fallback. */
+    make_soup(&m, 70000, 12, 100, 1, origin3);
+    cbvh_cook_options o;
+    cbvh_cook_options_init(&o);
+    alloc_failure_loop(&m, &o);
     mesh_free(&m);
 }
 
