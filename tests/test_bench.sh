@@ -101,7 +101,8 @@ else
     skip "bench JSON checks: python3 not found"
 fi
 
-run 0 "bench --threads 2 --no-peers" "$CBVH" bench --gen terrain:3000 --rays 3000 --reps 2 --threads 2 --no-peers &&
+run 0 "bench --threads 2 --no-peers --cpu-time" "$CBVH" bench --gen terrain:3000 --rays 3000 --reps 2 --threads 2 --no-peers --cpu-time &&
+    check "... says it used CPU time" grep -q "CPU time" "$tmp/out" &&
     check "... measures cbvh only" test "$(grep -c '| embree\|| bullet' "$tmp/out")" -eq 0 &&
     check "... all traversals agree" sh -c "grep '^| [a-z]* | cbvh | ' '$tmp/out' | awk -F'|' '\$8 != 0 || \$9 != 0 { bad = 1 } END { exit bad }'"
 

@@ -3,6 +3,7 @@
 #include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 #include "bench_run.h"
 #include "cli.h"
@@ -13,13 +14,28 @@ typedef struct slice {
     const bench_job *job;
     size_t begin, end;
     cbvh_query_stats *stats;
+    double cpu_seconds; /* CPU time of the thread that ran the slice */
 } slice;
 
-static void run_slice(const slice *s)
+static double clock_seconds(clockid_t id)
+{
+    struct timespec ts;
+    clock_gettime(id, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+double bench_clock(int cpu)
+{
+    return cpu ? clock_seconds(CLOCK_PROCESS_CPUTIME_ID) : cli_now();
+}
+
+static void run_slice(slice *s)
 {
     const bench_job *j = s->job;
+    double start = clock_seconds(CLOCK_THREAD_CPUTIME_ID);
     j->kernel(j->engine, j->rays + s->begin, s->end - s->begin, j->hits ? j->hits + s->begin : NULL,
               j->occluded ? j->occluded + s->begin : NULL, s->stats);
+    s->cpu_seconds = clock_seconds(CLOCK_THREAD_CPUTIME_ID) - start;
 }
 
 static void *slice_thread(void *arg)
@@ -58,6 +74,11 @@ double bench_run_once(const bench_job *job, unsigned threads, cbvh_query_stats *
             return -1.0;
     }
     double seconds = cli_now() - start;
+    if (job->cpu_clock) {
+        seconds = 0.0;
+        for (unsigned k = 0; k < threads; k++)
+            seconds = slices[k].cpu_seconds > seconds ? slices[k].cpu_seconds : seconds;
+    }
     if (stats)
         for (unsigned k = 0; k < threads; k++) {
             stats->nodes_visited += counters[k].nodes_visited;
@@ -70,6 +91,13 @@ static int compare_double(const void *a, const void *b)
 {
     double x = *(const double *)a, y = *(const double *)b;
     return (x > y) - (x < y);
+}
+
+/* Sorts values[0..n) and returns their median (n >= 1). */
+static double median_of(double *values, unsigned n)
+{
+    qsort(values, n, sizeof *values, compare_double);
+    return n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
 }
 
 double bench_run_median(const bench_job *job, unsigned threads, unsigned reps, double budget, unsigned *runs)
@@ -91,10 +119,29 @@ double bench_run_median(const bench_job *job, unsigned threads, unsigned reps, d
     }
     if (runs)
         *runs = reps;
-    qsort(times, reps, sizeof *times, compare_double);
-    double median = reps % 2 ? times[reps / 2] : 0.5 * (times[reps / 2 - 1] + times[reps / 2]);
+    double median = median_of(times, reps);
     free(times);
     return median;
+}
+
+double bench_open_median(const char *command, const char *path, unsigned reps, int cpu_clock, cbvh_file **keep,
+                         int *status)
+{
+    double times[64];
+    unsigned n = reps < 1 ? 1 : reps > 64 ? 64 : reps;
+    for (unsigned r = 0; r < n; r++) {
+        cbvh_file *f = NULL;
+        double start = bench_clock(cpu_clock);
+        *status = cli_open(command, path, &f);
+        times[r] = bench_clock(cpu_clock) - start;
+        if (*status)
+            return 0.0;
+        if (keep && r + 1 == n)
+            *keep = f;
+        else
+            cbvh_close(f);
+    }
+    return median_of(times, n);
 }
 
 void bench_cbvh_variant(bench_cbvh *e, const cbvh_file *file, int k)

@@ -20,11 +20,17 @@ typedef struct bench_job {
     size_t count;
     cbvh_hit *hits;     /* closest hit queries, else NULL */
     uint8_t *occluded;  /* any-hit queries, else NULL */
+    int cpu_clock;      /* time with the threads' CPU clocks instead of the wall clock */
 } bench_job;
 
+/* Seconds on the wall clock, or with cpu nonzero the CPU time of the whole
+ * process: on a loaded machine it leaves out the time other programs ran. */
+double bench_clock(int cpu);
+
 /* Runs the job once with its rays split into `threads` contiguous slices, one
- * thread each (inline when threads is 1). Returns the wall time in seconds, or
- * a negative value when a thread cannot be started. With stats non-NULL the
+ * thread each (inline when threads is 1). Returns the wall time in seconds (with
+ * job->cpu_clock, the CPU time of the slowest thread), or a negative value when
+ * a thread cannot be started. With stats non-NULL the
  * kernel counts and the per-thread counters are summed into *stats. */
 double bench_run_once(const bench_job *job, unsigned threads, cbvh_query_stats *stats);
 
@@ -33,6 +39,13 @@ double bench_run_once(const bench_job *job, unsigned threads, cbvh_query_stats *
  * slow engines do not dominate a benchmark. *runs (may be NULL) receives the
  * runs made. Negative on failure. */
 double bench_run_median(const bench_job *job, unsigned threads, unsigned reps, double budget, unsigned *runs);
+
+/* Opens and closes the cbvh file at `path` `reps` times (a failure is reported
+ * as "cbvh COMMAND: PATH: ..." and its exit status stored in *status, else 0).
+ * Returns the median seconds of an open (bench_clock(cpu_clock)). With keep
+ * non-NULL the file of the last open stays open in *keep. */
+double bench_open_median(const char *command, const char *path, unsigned reps, int cpu_clock, cbvh_file **keep,
+                         int *status);
 
 /* cbvh as an engine: one traversal of an opened file, or its batched streams. */
 typedef struct bench_cbvh {

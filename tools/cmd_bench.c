@@ -41,6 +41,9 @@ static const char usage[] =
     "  --reps R        timed repetitions per figure, the median is reported (default 5)\n"
     "  --budget S      stop repeating a figure once its runs took S seconds in all (default 2;\n"
     "                  0: never), so the slowest peer does not dominate the run time\n"
+    "  --cpu-time      time with CPU clocks instead of the wall clock (the slowest thread's CPU\n"
+    "                  time for queries, the process's CPU time for cook, build and open): steadier\n"
+    "                  on a machine busy with other work\n"
     "  --json FILE     also write every figure as JSON to FILE\n"
     "  --no-peers      measure cbvh only\n"
     "  --quiet         no progress display\n"
@@ -48,13 +51,13 @@ static const char usage[] =
     "\n"
     "Exit status: 0 done, 1 the input is not a usable mesh or cbvh file, 2 usage or I/O error.\n";
 
-enum { OPT_GEN = 1, OPT_RAYS, OPT_SEED, OPT_THREADS, OPT_REPS, OPT_BUDGET, OPT_JSON, OPT_NO_PEERS, OPT_QUIET };
+enum { OPT_GEN = 1, OPT_RAYS, OPT_SEED, OPT_THREADS, OPT_REPS, OPT_BUDGET, OPT_CPU, OPT_JSON, OPT_NO_PEERS, OPT_QUIET };
 
 static const cli_option options[] = {
     { "gen", CLI_ARG_REQUIRED, OPT_GEN },       { "rays", CLI_ARG_REQUIRED, OPT_RAYS },
     { "seed", CLI_ARG_REQUIRED, OPT_SEED },     { "threads", CLI_ARG_REQUIRED, OPT_THREADS },
     { "reps", CLI_ARG_REQUIRED, OPT_REPS },     { "budget", CLI_ARG_REQUIRED, OPT_BUDGET },
-    { "json", CLI_ARG_REQUIRED, OPT_JSON },
+    { "cpu-time", CLI_ARG_NONE, OPT_CPU },      { "json", CLI_ARG_REQUIRED, OPT_JSON },
     { "no-peers", CLI_ARG_NONE, OPT_NO_PEERS }, { "quiet", CLI_ARG_NONE, OPT_QUIET },
     { NULL, 0, 0 },
 };
@@ -140,6 +143,7 @@ typedef struct bench_state {
     uint64_t seed;
     unsigned threads, reps;
     float budget;
+    int cpu_clock;
     const char *json_path;
     int no_peers;
     progress prog;
@@ -195,9 +199,9 @@ static int prepare_cbvh(bench_state *s)
         void *data = NULL;
         size_t size = 0;
         cbvh_error err;
-        double start = cli_now();
+        double start = bench_clock(s->cpu_clock);
         cbvh_result r = cbvh_cook(&view, &opt, NULL, &data, &size, &s->cook, &err);
-        double seconds = cli_now() - start;
+        double seconds = bench_clock(s->cpu_clock) - start;
         progress_done(&s->prog);
         if (r != CBVH_OK)
             return cli_report(s->command, s->mesh.name, &err);
@@ -209,37 +213,13 @@ static int prepare_cbvh(bench_state *s)
             return status;
         path = s->temp_path;
     }
-    /* Open time: the median over the repetitions of open + close of the file on disk. */
-    double *times = malloc(s->reps * sizeof *times);
-    if (!times) {
-        cli_error(s->command, NULL, "out of memory");
-        return CLI_EXIT_USAGE;
-    }
-    for (unsigned r = 0; r < s->reps; r++) {
-        cbvh_file *f = NULL;
-        double start = cli_now();
-        int status = cli_open(s->command, path, &f);
-        times[r] = cli_now() - start;
-        if (status) {
-            free(times);
-            return status;
-        }
-        if (r + 1 < s->reps)
-            cbvh_close(f);
-        else
-            s->file = f;
-    }
-    /* The reps are few: a simple insertion sort for the median. */
-    for (unsigned i = 1; i < s->reps; i++)
-        for (unsigned j = i; j > 0 && times[j] < times[j - 1]; j--) {
-            double t = times[j];
-            times[j] = times[j - 1];
-            times[j - 1] = t;
-        }
+    /* Open time: the median over the repetitions of opening the file on disk. */
+    int status = 0;
     build_row *b = &s->builds[0];
     b->engine = "cbvh";
-    b->open_seconds = s->reps % 2 ? times[s->reps / 2] : 0.5 * (times[s->reps / 2 - 1] + times[s->reps / 2]);
-    free(times);
+    b->open_seconds = bench_open_median(s->command, path, s->reps, s->cpu_clock, &s->file, &status);
+    if (status)
+        return status;
     cbvh_file_info info;
     cbvh_file_get_info(s->file, &info);
     b->bytes = info.file_size;
@@ -280,7 +260,7 @@ static void build_peers(bench_state *s)
         }
         build_row *b = &s->builds[s->build_count++];
         b->engine = names[robust];
-        b->seconds = info.seconds;
+        b->seconds = s->cpu_clock ? info.cpu_seconds : info.seconds;
         b->open_seconds = -1.0;
         b->bytes = info.memory_bytes + info.mesh_bytes;
         b->structure_bytes = info.memory_bytes;
@@ -297,7 +277,7 @@ static void build_peers(bench_state *s)
     } else {
         build_row *b = &s->builds[s->build_count++];
         b->engine = "bullet";
-        b->seconds = info.seconds;
+        b->seconds = s->cpu_clock ? info.cpu_seconds : info.seconds;
         b->open_seconds = -1.0;
         b->bytes = info.memory_bytes + info.mesh_bytes;
         b->structure_bytes = info.memory_bytes;
@@ -339,7 +319,7 @@ static int measure_set(bench_state *s, ray_kind set, buffers *b, int *step, int 
             snprintf(label, sizeof label, "%s %s: %s %s", rays_kind_name(set), any ? "any" : "closest", m->engine,
                      m->variant);
             progress_update(&s->prog, label, (double)(*step)++ / steps);
-            bench_job job = { m->kernel, m->state, b->rays, s->rays, NULL, NULL };
+            bench_job job = { m->kernel, m->state, b->rays, s->rays, NULL, NULL, s->cpu_clock };
             if (any)
                 job.occluded = k == 0 ? b->ref_occluded : b->occluded;
             else
@@ -399,8 +379,10 @@ static void print_tables(const bench_state *s)
     double tris = (double)s->mesh.triangle_count;
     printf("## cbvh bench: %s\n\n", s->mesh.name);
     printf("%zu triangles, %zu rays per set, seed %llu, %u thread(s), median of up to %u runs per figure "
-           "(fewer once a figure's runs took %.3g s).\n\n",
-           s->mesh.triangle_count, s->rays, (unsigned long long)s->seed, s->threads, s->reps, s->budget);
+           "(fewer once a figure's runs took %.3g s), %s.\n\n",
+           s->mesh.triangle_count, s->rays, (unsigned long long)s->seed, s->threads, s->reps, s->budget,
+           s->cpu_clock ? "CPU time (process CPU for cook, build and open; slowest thread's CPU for queries)"
+                        : "wall-clock time");
     const build_row *c = &s->builds[0];
     printf("| engine | build s | Mtris/s | open ms | bytes/tri | cbvh/this bytes | cbvh open / this build |\n");
     printf("|---|---:|---:|---:|---:|---:|---:|\n");
@@ -473,6 +455,7 @@ static int write_json(const bench_state *s)
     json_uint(&w, "threads", s->threads);
     json_uint(&w, "reps", s->reps);
     json_double(&w, "budget_seconds", s->budget);
+    json_string(&w, "clock", s->cpu_clock ? "cpu" : "wall");
     json_double(&w, "agreement_tolerance", AGREE_TOLERANCE);
     json_begin_array(&w, "builds");
     for (int i = 0; i < s->build_count; i++) {
@@ -645,6 +628,7 @@ int cmd_bench(int argc, char **argv)
             if (!cli_parse_float(s.command, "--budget", value, 0.0f, 1e6f, &s.budget))
                 return CLI_EXIT_USAGE;
             break;
+        case OPT_CPU: s.cpu_clock = 1; break;
         case OPT_JSON: s.json_path = value; break;
         case OPT_NO_PEERS: s.no_peers = 1; break;
         case OPT_QUIET: quiet = 1; break;

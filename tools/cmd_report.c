@@ -48,6 +48,7 @@ static const char usage[] =
     "  --seed S        ray generator seed (default 1)\n"
     "  --reps R        timed repetitions, the median is reported (default 3)\n"
     "  --out DIR       write report.md, report.json, report.svg and the cooked files into DIR\n"
+    "  --cpu-time      time with CPU clocks instead of the wall clock (steadier on a busy machine)\n"
     "  --json FILE     write the figures as JSON to FILE\n"
     "  --svg FILE      write a plot of error against run time to FILE\n"
     "  --quiet         no progress display\n"
@@ -55,12 +56,13 @@ static const char usage[] =
     "\n"
     "Exit status: 0 done, 1 an input is not a usable mesh, 2 usage or I/O error.\n";
 
-enum { OPT_GEN = 1, OPT_RAYS, OPT_SAMPLE, OPT_SEED, OPT_REPS, OPT_OUT, OPT_JSON, OPT_SVG, OPT_QUIET };
+enum { OPT_GEN = 1, OPT_RAYS, OPT_SAMPLE, OPT_SEED, OPT_REPS, OPT_CPU, OPT_OUT, OPT_JSON, OPT_SVG, OPT_QUIET };
 
 static const cli_option options[] = {
     { "gen", CLI_ARG_REQUIRED, OPT_GEN },   { "rays", CLI_ARG_REQUIRED, OPT_RAYS },
     { "sample", CLI_ARG_REQUIRED, OPT_SAMPLE }, { "seed", CLI_ARG_REQUIRED, OPT_SEED },
-    { "reps", CLI_ARG_REQUIRED, OPT_REPS }, { "out", CLI_ARG_REQUIRED, OPT_OUT },
+    { "reps", CLI_ARG_REQUIRED, OPT_REPS }, { "cpu-time", CLI_ARG_NONE, OPT_CPU },
+    { "out", CLI_ARG_REQUIRED, OPT_OUT },
     { "json", CLI_ARG_REQUIRED, OPT_JSON }, { "svg", CLI_ARG_REQUIRED, OPT_SVG },
     { "quiet", CLI_ARG_NONE, OPT_QUIET },   { NULL, 0, 0 },
 };
@@ -100,6 +102,7 @@ typedef struct report_state {
     size_t rays, sample;
     uint64_t seed;
     unsigned reps;
+    int cpu_clock;
     const char *out_dir, *json_path, *svg_path;
     progress prog;
     report_row *rows;
@@ -325,32 +328,10 @@ static void exact_kernel(const void *engine, const cbvh_ray *rays, size_t count,
             occluded[i] = (uint8_t)exact_occluded(engine, &rays[i], stats);
 }
 
-static double median_open(const report_state *s, const char *path, int *status)
-{
-    double times[64];
-    unsigned n = s->reps < 64 ? s->reps : 64;
-    for (unsigned r = 0; r < n; r++) {
-        cbvh_file *f = NULL;
-        double start = cli_now();
-        *status = cli_open(s->command, path, &f);
-        times[r] = cli_now() - start;
-        cbvh_close(f);
-        if (*status)
-            return 0.0;
-    }
-    for (unsigned i = 1; i < n; i++)
-        for (unsigned j = i; j > 0 && times[j] < times[j - 1]; j--) {
-            double t = times[j];
-            times[j] = times[j - 1];
-            times[j - 1] = t;
-        }
-    return n % 2 ? times[n / 2] : 0.5 * (times[n / 2 - 1] + times[n / 2]);
-}
-
 /* Times closest and any hit, counts the work, and compares the answers with the brute force and the leak test. */
 static int measure(const report_state *s, mesh_ctx *c, bench_kernel kernel, const void *engine, report_row *row)
 {
-    bench_job job = { kernel, engine, c->rays, s->rays, c->hits, NULL };
+    bench_job job = { kernel, engine, c->rays, s->rays, c->hits, NULL, s->cpu_clock };
     cbvh_query_stats st = { 0, 0 };
     double t = bench_run_once(&job, 1, &st);
     double closest = t >= 0.0 ? bench_run_median(&job, 1, s->reps, 0.0, NULL) : -1.0;
@@ -391,7 +372,7 @@ static int measure(const report_state *s, mesh_ctx *c, bench_kernel kernel, cons
 
     row->leaks = -1;
     if (c->closed) {
-        bench_job leak = { kernel, engine, c->leak, c->leak_count, c->hits, NULL };
+        bench_job leak = { kernel, engine, c->leak, c->leak_count, c->hits, NULL, 0 };
         bench_run_once(&leak, 1, NULL);
         row->leaks = 0;
         for (size_t i = 0; i < c->leak_count; i++)
@@ -464,10 +445,8 @@ static int measure_cook(report_state *s, mesh_ctx *c, size_t k, int *step, int s
         return status;
     }
     uint64_t size = stats.file_size;
-    double open_seconds = median_open(s, path, &status);
     cbvh_file *file = NULL;
-    if (!status)
-        status = cli_open(s->command, path, &file);
+    double open_seconds = bench_open_median(s->command, path, s->reps, s->cpu_clock, &file, &status);
     if (!s->out_dir)
         unlink(path);
     if (status)
@@ -581,7 +560,7 @@ static int report_mesh(report_state *s, const char *source, int generated)
         return CLI_EXIT_USAGE;
     }
     brute_engine be = { &tris, c.rays, c.ref_tri, c.ref_t };
-    bench_job job = { brute_kernel, &be, c.rays, s->sample, NULL, NULL };
+    bench_job job = { brute_kernel, &be, c.rays, s->sample, NULL, NULL, 0 };
     long cores = sysconf(_SC_NPROCESSORS_ONLN);
     int ok = bench_run_once(&job, cores > 0 ? (unsigned)cores : 1u, NULL) >= 0.0 && make_leak_rays(&c, &tris, lo, hi);
     ref_tris_free(&tris);
@@ -606,9 +585,9 @@ static int report_mesh(report_state *s, const char *source, int generated)
 static void print_table(const report_state *s, FILE *out)
 {
     fprintf(out, "## cbvh report\n\n");
-    fprintf(out, "%zu incoherent rays per configuration (one thread, median of %u), %zu checked against a "
+    fprintf(out, "%zu incoherent rays per configuration (one thread, median of %u, %s), %zu checked against a "
                  "double-precision brute force; errors relative to the scene diagonal.\n\n",
-            s->rays, s->reps, s->sample);
+            s->rays, s->reps, s->cpu_clock ? "CPU time" : "wall-clock time", s->sample);
     fprintf(out, "| mesh | configuration | bytes/tri | open ms | closest MRays/s | any MRays/s | nodes/ray | tris/ray "
                  "| extra nodes/ray | extra tris/ray | box inflation mean | box inflation worst | flips | wrong tri "
                  "| t err max | t err RMS | vertex err | leaked rays |\n");
@@ -646,6 +625,7 @@ static int write_json(const report_state *s, const char *path)
     json_uint(&w, "sample", s->sample);
     json_uint(&w, "seed", s->seed);
     json_uint(&w, "reps", s->reps);
+    json_string(&w, "clock", s->cpu_clock ? "cpu" : "wall");
     json_double(&w, "tie_tolerance", TIE_TOLERANCE);
     json_begin_array(&w, "rows");
     for (size_t i = 0; i < s->row_count; i++) {
@@ -826,6 +806,7 @@ int cmd_report(int argc, char **argv)
             if (!cli_parse_u32(s.command, "--reps", value, 1, 1000, &s.reps))
                 status = CLI_EXIT_USAGE;
             break;
+        case OPT_CPU: s.cpu_clock = 1; break;
         case OPT_OUT: s.out_dir = value; break;
         case OPT_JSON: s.json_path = value; break;
         case OPT_SVG: s.svg_path = value; break;

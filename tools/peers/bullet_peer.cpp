@@ -17,10 +17,10 @@ struct bullet_peer {
 
 namespace {
 
-double now_seconds()
+double now_seconds(clockid_t id)
 {
     struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
+    clock_gettime(id, &ts);
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
@@ -68,13 +68,14 @@ extern "C" bullet_peer *bullet_peer_create(const peer_mesh *mesh, peer_build_inf
         snprintf(err, err_size, "bullet: out of memory");
         return nullptr;
     }
-    double start = now_seconds();
+    double start = now_seconds(CLOCK_MONOTONIC), cpu_start = now_seconds(CLOCK_PROCESS_CPUTIME_ID);
     /* Bullet takes non-const pointers but only reads the arrays. */
     p->arrays = new btTriangleIndexVertexArray((int)mesh->triangle_count, (int *)mesh->indices,
                                                3 * (int)sizeof(uint32_t), (int)mesh->vertex_count,
                                                (btScalar *)mesh->positions, 3 * (int)sizeof(float));
     p->shape = new btBvhTriangleMeshShape(p->arrays, true, true);
-    info->seconds = now_seconds() - start;
+    info->seconds = now_seconds(CLOCK_MONOTONIC) - start;
+    info->cpu_seconds = now_seconds(CLOCK_PROCESS_CPUTIME_ID) - cpu_start;
     const btOptimizedBvh *bvh = p->shape->getOptimizedBvh();
     info->memory_bytes = bvh ? bvh->calculateSerializeBufferSize() : 0;
     info->mesh_bytes = 12u * (uint64_t)mesh->vertex_count + 12u * (uint64_t)mesh->triangle_count;

@@ -24,10 +24,10 @@ static bool memory_monitor(void *user, ssize_t bytes, bool post)
     return true;
 }
 
-static double now_seconds(void)
+static double now_seconds(clockid_t id)
 {
     struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
+    clock_gettime(id, &ts);
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
@@ -51,7 +51,7 @@ embree_peer *embree_peer_create(const peer_mesh *mesh, int robust, int threads, 
     }
     rtcSetDeviceMemoryMonitorFunction(p->device, memory_monitor, &p->memory);
     /* Device creation (thread pool start) is not part of the build. */
-    double start = now_seconds();
+    double start = now_seconds(CLOCK_MONOTONIC), cpu_start = now_seconds(CLOCK_PROCESS_CPUTIME_ID);
     p->scene = rtcNewScene(p->device);
     rtcSetSceneFlags(p->scene, robust ? RTC_SCENE_FLAG_ROBUST : RTC_SCENE_FLAG_NONE);
     RTCGeometry geom = rtcNewGeometry(p->device, RTC_GEOMETRY_TYPE_TRIANGLE);
@@ -63,7 +63,8 @@ embree_peer *embree_peer_create(const peer_mesh *mesh, int robust, int threads, 
     rtcAttachGeometry(p->scene, geom);
     rtcReleaseGeometry(geom);
     rtcCommitScene(p->scene);
-    double seconds = now_seconds() - start;
+    double seconds = now_seconds(CLOCK_MONOTONIC) - start;
+    double cpu_seconds = now_seconds(CLOCK_PROCESS_CPUTIME_ID) - cpu_start;
     enum RTCError code = rtcGetDeviceError(p->device);
     if (code != RTC_ERROR_NONE) {
         snprintf(err, err_size, "embree: building the scene failed (error %d)", (int)code);
@@ -71,6 +72,7 @@ embree_peer *embree_peer_create(const peer_mesh *mesh, int robust, int threads, 
         return NULL;
     }
     info->seconds = seconds;
+    info->cpu_seconds = cpu_seconds;
     int64_t memory = __atomic_load_n(&p->memory, __ATOMIC_RELAXED);
     info->memory_bytes = memory > 0 ? (uint64_t)memory : 0;
     info->mesh_bytes = 12u * (uint64_t)mesh->vertex_count + 12u * (uint64_t)mesh->triangle_count;
@@ -103,6 +105,21 @@ static void set_ray(struct RTCRay *r, const cbvh_ray *in)
     r->flags = 0;
 }
 
+/* Embree's answer for one ray in cbvh's form. */
+static void store_hit(cbvh_hit *h, unsigned geom, unsigned prim, float tfar, float u, float v)
+{
+    if (geom == RTC_INVALID_GEOMETRY_ID) {
+        h->tri = CBVH_NO_HIT;
+        h->t = INFINITY;
+        h->u = h->v = 0.0f;
+    } else {
+        h->tri = prim;
+        h->t = tfar;
+        h->u = u;
+        h->v = v;
+    }
+}
+
 void embree_peer_raycast(const embree_peer *peer, const cbvh_ray *rays, size_t count, cbvh_hit *hits)
 {
     struct RTCIntersectContext context;
@@ -114,17 +131,7 @@ void embree_peer_raycast(const embree_peer *peer, const cbvh_ray *rays, size_t c
         rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
         rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
         rtcIntersect1(scene, &context, &rh);
-        cbvh_hit *h = &hits[i];
-        if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) {
-            h->tri = CBVH_NO_HIT;
-            h->t = INFINITY;
-            h->u = h->v = 0.0f;
-        } else {
-            h->tri = rh.hit.primID;
-            h->t = rh.ray.tfar;
-            h->u = rh.hit.u;
-            h->v = rh.hit.v;
-        }
+        store_hit(&hits[i], rh.hit.geomID, rh.hit.primID, rh.ray.tfar, rh.hit.u, rh.hit.v);
     }
 }
 
@@ -175,19 +182,8 @@ void embree_peer_raycast16(const embree_peer *peer, const cbvh_ray *rays, size_t
         for (size_t k = 0; k < 16; k++)
             rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
         rtcIntersect16(valid, peer->scene, &context, &rh);
-        for (size_t k = 0; k < n; k++) {
-            cbvh_hit *h = &hits[i + k];
-            if (rh.hit.geomID[k] == RTC_INVALID_GEOMETRY_ID) {
-                h->tri = CBVH_NO_HIT;
-                h->t = INFINITY;
-                h->u = h->v = 0.0f;
-            } else {
-                h->tri = rh.hit.primID[k];
-                h->t = rh.ray.tfar[k];
-                h->u = rh.hit.u[k];
-                h->v = rh.hit.v[k];
-            }
-        }
+        for (size_t k = 0; k < n; k++)
+            store_hit(&hits[i + k], rh.hit.geomID[k], rh.hit.primID[k], rh.ray.tfar[k], rh.hit.u[k], rh.hit.v[k]);
     }
 }
 

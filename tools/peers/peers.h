@@ -26,7 +26,8 @@ typedef struct peer_mesh {
  * acceleration structure; mesh_bytes the vertex and index arrays it shares with
  * the caller (which a user of that library must keep alive too). */
 typedef struct peer_build_info {
-    double seconds;
+    double seconds;     /* wall clock */
+    double cpu_seconds; /* CPU time of the whole process (every build thread) */
     uint64_t memory_bytes;
     uint64_t mesh_bytes;
 } peer_build_info;
