@@ -57,10 +57,11 @@ static int zero_area(const float *p0, const float *p1, const float *p2)
 }
 
 /* Marks every referenced vertex in `map` (0 = used) after checking the index is in range. */
-static cbvh_result check_indices(const cbvh_mesh *mesh, uint32_t *restrict map, cbvh_error *err)
+static cbvh_result check_indices(const cbvh_mesh *mesh, uint32_t *restrict map, size_t *used, cbvh_error *err)
 {
     const uint32_t *restrict idx = mesh->indices;
     const size_t tris = mesh->triangle_count, verts = mesh->vertex_count;
+    size_t n = 0;
     for (size_t t = 0; t < tris; t++) {
         for (int c = 0; c < 3; c++) {
             uint32_t i = idx[3 * t + (size_t)c];
@@ -68,43 +69,32 @@ static cbvh_result check_indices(const cbvh_mesh *mesh, uint32_t *restrict map, 
                 return cbvh_fail(err, CBVH_ERROR_BAD_MESH,
                                  "triangle %zu, corner %d: vertex index %u is out of range (the mesh has %zu vertices)",
                                  t, c, i, verts);
+            n += map[i] == NO_VERTEX;
             map[i] = 0;
         }
-    }
-    return CBVH_OK;
-}
-
-/* Checks every referenced vertex is finite and counts them. */
-static cbvh_result check_positions(const cbvh_mesh *mesh, size_t stride, const uint32_t *restrict map,
-                                   size_t map_count, size_t *used, cbvh_error *err)
-{
-    size_t n = 0;
-    for (size_t v = 0; v < map_count; v++) {
-        if (map[v] == NO_VERTEX)
-            continue;
-        float p[3];
-        read_position(mesh, stride, v, p);
-        for (int k = 0; k < 3; k++)
-            if (!isfinite(p[k]))
-                return cbvh_fail(err, CBVH_ERROR_BAD_MESH, "vertex %zu: %c coordinate is %s", v, axis_name[k],
-                                 isnan(p[k]) ? "NaN" : "infinite");
-        n++;
     }
     *used = n;
     return CBVH_OK;
 }
 
-/* Gives each used vertex in `map` the id of the first used vertex with the same position,
- * numbering distinct positions in input order; writes the distinct positions to `out`. */
+static cbvh_result out_of_memory(cbvh_error *err, const char *what)
+{
+    return cbvh_fail(err, CBVH_ERROR_OUT_OF_MEMORY, "out of memory while preparing the mesh (%s)", what);
+}
+
+/* Checks every used vertex is finite (the first bad one is named) and gives it the id of the
+ * first used vertex with the same position, numbering distinct positions in input order;
+ * writes the distinct positions to `out`. */
 static cbvh_result weld(const cbvh_mesh *mesh, size_t stride, uint32_t *restrict map, size_t map_count,
-                        size_t used, float *restrict out, uint32_t *welded, const cbvh_allocator *a)
+                        size_t used, float *restrict out, uint32_t *welded, const cbvh_allocator *a,
+                        cbvh_error *err)
 {
     size_t cap = 16;
     while (cap < 2 * used)
         cap *= 2;
     uint32_t *table = cbvh_alloc_array(a, cap, sizeof(uint32_t), 64);
     if (!table)
-        return CBVH_ERROR_OUT_OF_MEMORY;
+        return out_of_memory(err, "welding");
     memset(table, 0xFF, cap * sizeof(uint32_t));
     const size_t mask = cap - 1;
     uint32_t count = 0;
@@ -113,6 +103,12 @@ static cbvh_result weld(const cbvh_mesh *mesh, size_t stride, uint32_t *restrict
             continue;
         float p[3];
         read_position(mesh, stride, v, p);
+        for (int k = 0; k < 3; k++)
+            if (!isfinite(p[k])) {
+                cbvh_free(a, table);
+                return cbvh_fail(err, CBVH_ERROR_BAD_MESH, "vertex %zu: %c coordinate is %s", v, axis_name[k],
+                                 isnan(p[k]) ? "NaN" : "infinite");
+            }
         size_t slot = weld_hash(p) & mask;
         while (table[slot] != NO_VERTEX && !same_point(out + 3 * (size_t)table[slot], p))
             slot = (slot + 1) & mask;
@@ -205,11 +201,6 @@ void cook_mesh_free(const cbvh_allocator *a, cook_mesh *m)
     memset(m, 0, sizeof *m);
 }
 
-static cbvh_result out_of_memory(cbvh_error *err, const char *what)
-{
-    return cbvh_fail(err, CBVH_ERROR_OUT_OF_MEMORY, "out of memory while preparing the mesh (%s)", what);
-}
-
 cbvh_result cook_prepare(const cbvh_mesh *mesh, const cbvh_allocator *a, const cook_progress *progress,
                          cook_mesh *out, cbvh_error *err)
 {
@@ -231,22 +222,19 @@ cbvh_result cook_prepare(const cbvh_mesh *mesh, const cbvh_allocator *a, const c
         return out_of_memory(err, "vertex map");
     memset(map, 0xFF, map_count * sizeof(uint32_t));
 
-    cbvh_result r = check_indices(mesh, map, err);
     size_t used = 0;
-    if (r == CBVH_OK)
-        r = check_positions(mesh, stride, map, map_count, &used, err);
+    cbvh_result r = check_indices(mesh, map, &used, err);
+    uint32_t welded = 0;
+    if (r == CBVH_OK) {
+        cook_report(progress, 0.25);
+        out->positions = cbvh_alloc_array(a, used, 3 * sizeof(float), 64);
+        r = out->positions ? weld(mesh, stride, map, map_count, used, out->positions, &welded, a, err)
+                           : out_of_memory(err, "positions");
+    }
     if (r != CBVH_OK) {
         cbvh_free(a, map);
-        return r;
-    }
-    cook_report(progress, 0.25);
-
-    uint32_t welded = 0;
-    out->positions = cbvh_alloc_array(a, used, 3 * sizeof(float), 64);
-    if (!out->positions || weld(mesh, stride, map, map_count, used, out->positions, &welded, a) != CBVH_OK) {
-        cbvh_free(a, map);
         cook_mesh_free(a, out);
-        return out_of_memory(err, "welding");
+        return r;
     }
     cook_report(progress, 0.5);
 
