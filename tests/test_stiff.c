@@ -1,0 +1,841 @@
+/* test_stiff.c: stiff and extreme numerical cases: watertightness at shared edges and vertices, far and tiny/huge meshes, degenerate meshes, extreme rays and sweeps, against double-precision references. */
+#include <math.h>
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <cmocka.h>
+
+#include "cbvh.h"
+#include "common/file.h"
+#include "support/reference.h"
+#include "support/scene_gen.h"
+
+/* ------------------------------------------------------------------ */
+/* Helpers                                                            */
+/* ------------------------------------------------------------------ */
+
+static cbvh_cook_options options(int quantized, int level)
+{
+    cbvh_cook_options o;
+    cbvh_cook_options_init(&o);
+    o.vertex_format = quantized ? CBVH_VERTEX_QUANTIZED16 : CBVH_VERTEX_FLOAT32;
+    o.compress_level = level;
+    return o;
+}
+
+static double vec_len(const float v[3]) { return sqrt((double)v[0] * v[0] + (double)v[1] * v[1] + (double)v[2] * v[2]); }
+
+/* Magnitude of the coordinates a ray against fixture fx works with. */
+static double magnitude(const ref_fixture *fx, const cbvh_ray *r)
+{
+    double m = 0;
+    for (int a = 0; a < 3; a++)
+        m = fmax(m, fmax(fabs((double)r->org[a]), fmax(fabs(fx->lo[a]), fabs(fx->hi[a]))));
+    return m;
+}
+
+/* Bound on hit disagreements with the double reference, stated in
+ * ROBUSTNESS.md: with tol = HIT_TOL x the mesh's diagonal + 8 float steps at
+ * the magnitude of the coordinates (mesh bounds and ray origin), a triangle
+ * clearly hit (the ray's line at least tol inside its edges) is never
+ * missed, no hit lies more than tol before the closest triangle within tol
+ * along the ray, and every hit lies within tol of its triangle's plane. */
+#define HIT_TOL 1e-5
+#define FLOAT_STEP 1.1920929e-7
+
+typedef struct agree_stats {
+    size_t rays, clear_hits, missed, early, off_plane, disagree_paths;
+    uint64_t nodes;
+} agree_stats;
+
+/* One ray against the reference and across every traversal and the stream. */
+static void check_against_reference(const ref_fixture *fx, const cbvh_ray *r, double rel_tol, agree_stats *st)
+{
+    double tol = rel_tol * fx->diag + 8 * FLOAT_STEP * magnitude(fx, r), dlen = vec_len(r->dir);
+    ref_ray_hit clear, loose;
+    int has_clear = ref_ray_closest(&fx->tris, r, -tol, &clear);
+    ref_ray_closest(&fx->tris, r, tol, &loose);
+    cbvh_hit h[4], sh;
+    int got[4];
+    cbvh_query_stats qs = { 0, 0 };
+    for (int t = 0; t < 4; t++)
+        got[t] = cbvh_raycast(fx->file, r, (cbvh_traversal)t, &h[t], t == 0 ? &qs : NULL);
+    cbvh_raycast_stream(fx->file, r, 1, &sh, NULL);
+    int occ = cbvh_occluded(fx->file, r, CBVH_TRAVERSAL_STACKLESS, NULL);
+    st->rays++;
+    st->nodes += qs.nodes_visited;
+    for (int t = 1; t < 4; t++)
+        if (got[t] != got[0] || (got[0] && h[t].t != h[0].t))
+            st->disagree_paths++;
+    if ((sh.tri != CBVH_NO_HIT) != got[0] || (got[0] && sh.t != h[0].t) || occ != got[0])
+        st->disagree_paths++;
+    if (has_clear) {
+        st->clear_hits++;
+        if (!got[0])
+            st->missed++;
+    }
+    if (got[0]) {
+        /* no hit before the closest triangle that could be hit at all */
+        if (loose.index != (size_t)-1 && (loose.t - h[0].t) * dlen > tol)
+            st->early++;
+        size_t k = fx->index_of_id[h[0].tri];
+        if (k == (size_t)-1) {
+            st->off_plane++;
+        } else {
+            const double *v = fx->tris.v + 9 * k;
+            double e1[3], e2[3], n[3], p[3];
+            for (int a = 0; a < 3; a++) {
+                e1[a] = v[3 + a] - v[a];
+                e2[a] = v[6 + a] - v[a];
+                p[a] = (double)r->org[a] + (double)h[0].t * r->dir[a] - v[a];
+            }
+            n[0] = e1[1] * e2[2] - e1[2] * e2[1];
+            n[1] = e1[2] * e2[0] - e1[0] * e2[2];
+            n[2] = e1[0] * e2[1] - e1[1] * e2[0];
+            double nl = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+            if (nl > 0 && fabs(p[0] * n[0] + p[1] * n[1] + p[2] * n[2]) / nl > tol)
+                st->off_plane++;
+        }
+    }
+}
+
+static void assert_agreement(const char *what, const agree_stats *st)
+{
+    if (st->missed || st->early || st->off_plane || st->disagree_paths)
+        fail_msg("%s: %zu rays, %zu clear hits: %zu missed, %zu early, %zu off the plane, %zu path disagreements", what, st->rays,
+                 st->clear_hits, st->missed, st->early, st->off_plane, st->disagree_paths);
+}
+
+/* Every node box (dequantized exactly as the traversal does) contains every
+ * vertex of every triangle below it. Returns the number of boxes checked. */
+static size_t check_conservative(const cbvh_file *f, uint32_t node, float lo_out[3], float hi_out[3], size_t *bad)
+{
+    const cbvh_node *n = &f->nodes[node];
+    float lo[3], hi[3], sub_lo[3] = { INFINITY, INFINITY, INFINITY }, sub_hi[3] = { -INFINITY, -INFINITY, -INFINITY };
+    cbvh_node_box(f, n, lo, hi);
+    size_t checked = 1;
+    if (cbvh_node_is_leaf(n->word)) {
+        uint32_t first = cbvh_leaf_first(n->word), count = cbvh_leaf_count(n->word);
+        for (uint32_t t = first; t < first + count; t++) {
+            float v[3][3];
+            cbvh_triangle_vertices(f, t, v[0], v[1], v[2]);
+            for (int k = 0; k < 3; k++)
+                for (int a = 0; a < 3; a++) {
+                    sub_lo[a] = fminf(sub_lo[a], v[k][a]);
+                    sub_hi[a] = fmaxf(sub_hi[a], v[k][a]);
+                }
+        }
+    } else {
+        uint32_t first = node + 1, second = first + cbvh_node_subtree_size(f->nodes[first].word);
+        if (cbvh_node_is_leaf(f->nodes[first].word))
+            second = first + 1;
+        float a_lo[3], a_hi[3], b_lo[3], b_hi[3];
+        checked += check_conservative(f, first, a_lo, a_hi, bad);
+        checked += check_conservative(f, second, b_lo, b_hi, bad);
+        for (int a = 0; a < 3; a++) {
+            sub_lo[a] = fminf(a_lo[a], b_lo[a]);
+            sub_hi[a] = fmaxf(a_hi[a], b_hi[a]);
+        }
+    }
+    for (int a = 0; a < 3; a++)
+        if (!(lo[a] <= sub_lo[a] && hi[a] >= sub_hi[a]))
+            (*bad)++;
+    memcpy(lo_out, sub_lo, sizeof sub_lo);
+    memcpy(hi_out, sub_hi, sizeof sub_hi);
+    return checked;
+}
+
+/* ------------------------------------------------------------------ */
+/* Watertightness                                                     */
+/* ------------------------------------------------------------------ */
+
+typedef struct leak_stats {
+    size_t rays, leaks[6]; /* sorted, stackless, unsorted, distance, stream, occluded */
+} leak_stats;
+
+/* A ray from `org` at a point of the surface (t = 1 there) must hit at t <= 1
+ * on every path: anything else went through a crack. The slack covers the
+ * target's rounding (a few float steps) seen at the crossing angle. */
+static void shoot_at(const cbvh_file *f, const float org[3], const float target[3], double cosine, leak_stats *st)
+{
+    cbvh_ray r = { { org[0], org[1], org[2] }, 0.0f, { target[0] - org[0], target[1] - org[1], target[2] - org[2] }, INFINITY };
+    double mag = 0;
+    for (int a = 0; a < 3; a++)
+        mag = fmax(mag, fmax(fabs((double)target[a]), fabs((double)org[a])));
+    const float limit = (float)(1.0 + 4 * FLOAT_STEP + 8 * FLOAT_STEP * mag / (vec_len(r.dir) * cosine));
+    for (int t = 0; t < 4; t++) {
+        cbvh_hit h;
+        if (!cbvh_raycast(f, &r, (cbvh_traversal)t, &h, NULL) || h.t > limit)
+            st->leaks[t]++;
+    }
+    cbvh_hit sh;
+    cbvh_raycast_stream(f, &r, 1, &sh, NULL);
+    if (sh.tri == CBVH_NO_HIT || sh.t > limit)
+        st->leaks[4]++;
+    r.tmax = limit;
+    if (!cbvh_occluded(f, &r, CBVH_TRAVERSAL_STACKLESS, NULL))
+        st->leaks[5]++;
+    st->rays++;
+}
+
+/* The file's own topology (welded vertex indices of the cooked triangles):
+ * edges sorted by their vertex pair, triangles around each vertex. */
+typedef struct edge_ref { uint64_t key; uint32_t tri; } edge_ref;
+typedef struct topology {
+    uint32_t tris, verts;
+    edge_ref *edges;        /* 3 per triangle, sorted by key */
+    uint32_t *vert_start;   /* verts + 1 offsets into vert_tris */
+    uint32_t *vert_tris;
+    uint8_t *border;        /* vertex on an edge not shared by exactly two triangles */
+} topology;
+
+static int cmp_edge(const void *a, const void *b)
+{
+    uint64_t x = ((const edge_ref *)a)->key, y = ((const edge_ref *)b)->key;
+    return (x > y) - (x < y);
+}
+
+static uint64_t edge_key(uint32_t a, uint32_t b) { return a < b ? (uint64_t)a << 32 | b : (uint64_t)b << 32 | a; }
+
+static void topology_build(const cbvh_file *f, topology *tp)
+{
+    tp->tris = f->info.triangle_count;
+    tp->verts = f->info.vertex_count;
+    tp->edges = malloc(3 * (size_t)tp->tris * sizeof *tp->edges);
+    tp->vert_start = calloc((size_t)tp->verts + 1, sizeof(uint32_t));
+    tp->vert_tris = malloc(3 * (size_t)tp->tris * sizeof(uint32_t));
+    tp->border = calloc(tp->verts, 1);
+    assert_true(tp->edges && tp->vert_start && tp->vert_tris && tp->border);
+    for (uint32_t t = 0; t < tp->tris; t++) {
+        uint32_t idx[3];
+        cbvh_triangle_indices(f, t, idx);
+        for (int k = 0; k < 3; k++) {
+            tp->edges[3 * t + k] = (edge_ref){ edge_key(idx[k], idx[(k + 1) % 3]), t };
+            tp->vert_start[idx[k] + 1]++;
+        }
+    }
+    for (uint32_t v = 0; v < tp->verts; v++)
+        tp->vert_start[v + 1] += tp->vert_start[v];
+    uint32_t *fill = calloc(tp->verts, sizeof(uint32_t));
+    for (uint32_t t = 0; t < tp->tris; t++) {
+        uint32_t idx[3];
+        cbvh_triangle_indices(f, t, idx);
+        for (int k = 0; k < 3; k++)
+            tp->vert_tris[tp->vert_start[idx[k]] + fill[idx[k]]++] = t;
+    }
+    free(fill);
+    qsort(tp->edges, 3 * (size_t)tp->tris, sizeof *tp->edges, cmp_edge);
+    for (size_t i = 0, n = 3 * (size_t)tp->tris; i < n;) {
+        size_t j = i;
+        while (j < n && tp->edges[j].key == tp->edges[i].key)
+            j++;
+        if (j - i != 2) {
+            tp->border[tp->edges[i].key >> 32] = 1;
+            tp->border[(uint32_t)tp->edges[i].key] = 1;
+        }
+        i = j;
+    }
+}
+
+static void topology_free(topology *tp)
+{
+    free(tp->edges);
+    free(tp->vert_start);
+    free(tp->vert_tris);
+    free(tp->border);
+}
+
+/* The smallest |cosine| between the ray and the listed triangles' normals
+ * when the ray crosses all of them from the same side, not grazing any
+ * (then the surface around the target is pierced, not touched on a
+ * silhouette, and a watertight test must report a hit); else 0. */
+static double pierces(const cbvh_file *f, const uint32_t *tris, size_t n, const float dir[3])
+{
+    int sign = 0;
+    double least = 1;
+    double dl = vec_len(dir);
+    for (size_t i = 0; i < n; i++) {
+        float v[3][3];
+        cbvh_triangle_vertices(f, tris[i], v[0], v[1], v[2]);
+        double e1[3], e2[3];
+        for (int a = 0; a < 3; a++) {
+            e1[a] = (double)v[1][a] - v[0][a];
+            e2[a] = (double)v[2][a] - v[0][a];
+        }
+        double nx = e1[1] * e2[2] - e1[2] * e2[1], ny = e1[2] * e2[0] - e1[0] * e2[2], nz = e1[0] * e2[1] - e1[1] * e2[0];
+        double nl = sqrt(nx * nx + ny * ny + nz * nz);
+        if (!(nl > 0))
+            return 0;
+        double c = (nx * dir[0] + ny * dir[1] + nz * dir[2]) / (nl * dl);
+        int sg = c > 1e-3 ? 1 : c < -1e-3 ? -1 : 0;
+        if (sg == 0 || (sign && sg != sign))
+            return 0;
+        sign = sg;
+        least = fmin(least, fabs(c));
+    }
+    return least;
+}
+
+/* Targets: every vertex (when no border edge touches it) and the points at
+ * 1/2, 1/4, 3/4, 7/8 of every shared edge that are exact floats on the
+ * edge, of every `stride`-th cooked triangle; origins on a sphere around the
+ * mesh, kept when target - origin is exact (the ray's line passes exactly
+ * through the target) and the ray pierces the surface there (pierces()). */
+static void watertight_file(const cbvh_file *f, uint32_t stride, int origins_per_target, leak_stats *st, size_t *skipped)
+{
+    topology tp;
+    topology_build(f, &tp);
+    cbvh_file_info info;
+    cbvh_file_get_info(f, &info);
+    double rad = 0;
+    for (int a = 0; a < 3; a++) {
+        rad += ((double)info.bounds_max[a] - info.bounds_min[a]) * ((double)info.bounds_max[a] - info.bounds_min[a]);
+    }
+    rad = sqrt(rad);
+    double unit_len = exp2(floor(log2(rad / 64)));
+    uint64_t rng = 12345;
+    static const int along[] = { 2, 4, 4, 8 }; /* points i/n of an edge, n = 2, 4, 4, 8 with i = 1, 1, 3, 7 */
+    static const int step[] = { 1, 1, 3, 7 };
+    for (uint32_t t = 0; t < tp.tris; t += stride) {
+        uint32_t idx[3];
+        float v[3][3];
+        cbvh_triangle_indices(f, t, idx);
+        cbvh_triangle_vertices(f, t, v[0], v[1], v[2]);
+        for (int j = 0; j < 3 + 3 * 4; j++) {
+            float target[3];
+            const uint32_t *around;
+            size_t n_around;
+            uint32_t pair[2];
+            if (j < 3) { /* the vertex itself */
+                if (tp.border[idx[j]])
+                    continue;
+                memcpy(target, v[j], sizeof target);
+                around = tp.vert_tris + tp.vert_start[idx[j]];
+                n_around = tp.vert_start[idx[j] + 1] - tp.vert_start[idx[j]];
+            } else { /* a point of edge i */
+                int i = (j - 3) / 4, k = (j - 3) % 4;
+                edge_ref key = { edge_key(idx[i], idx[(i + 1) % 3]), 0 };
+                edge_ref *e = bsearch(&key, tp.edges, 3 * (size_t)tp.tris, sizeof key, cmp_edge);
+                while (e > tp.edges && e[-1].key == key.key)
+                    e--;
+                if (e + 1 >= tp.edges + 3 * (size_t)tp.tris || e[1].key != key.key ||
+                    (e + 2 < tp.edges + 3 * (size_t)tp.tris && e[2].key == key.key))
+                    continue; /* a border or non-manifold edge */
+                pair[0] = e[0].tri;
+                pair[1] = e[1].tri;
+                around = pair;
+                n_around = 2;
+                /* only points exactly on the edge: n * P == (n - i) * a + i * b holds exactly in double */
+                int exact = 1;
+                for (int a = 0; a < 3; a++) {
+                    double pa = v[i][a], pb = v[(i + 1) % 3][a];
+                    target[a] = (float)(((along[k] - step[k]) * pa + step[k] * pb) / along[k]);
+                    exact &= (double)target[a] * along[k] == (along[k] - step[k]) * pa + step[k] * pb;
+                }
+                if (!exact) {
+                    (*skipped)++;
+                    continue;
+                }
+            }
+            for (int o = 0; o < origins_per_target; o++) {
+                /* a direction of small integers times a power of two, so that
+                 * org = target - dir is usually exact; any origin works: a
+                 * ray that pierces the surface at t = 1 must hit by then */
+                float org[3], d[3];
+                for (int a = 0; a < 3; a++) {
+                    d[a] = (float)((double)((int)(scene_rand_unit(&rng) * 129) - 64) * unit_len);
+                    org[a] = target[a] - d[a];
+                }
+                float dir[3] = { target[0] - org[0], target[1] - org[1], target[2] - org[2] };
+                double cosine = pierces(f, around, n_around, dir);
+                /* the ray's line must pass exactly through the target */
+                for (int a = 0; a < 3; a++)
+                    if ((double)dir[a] != (double)target[a] - (double)org[a])
+                        cosine = 0;
+                if (cosine == 0) {
+                    (*skipped)++;
+                    continue;
+                }
+                shoot_at(f, org, target, cosine, st);
+            }
+        }
+    }
+    topology_free(&tp);
+}
+
+static void report_leaks(const char *what, const leak_stats *st, size_t skipped)
+{
+    printf("watertight %-30s %7zu rays (%zu inexact or grazing skipped): leaks sorted %zu stackless %zu unsorted %zu distance %zu stream %zu "
+           "occluded %zu\n",
+           what, st->rays, skipped, st->leaks[0], st->leaks[1], st->leaks[2], st->leaks[3], st->leaks[4], st->leaks[5]);
+    assert_true(st->rays > 0);
+    for (int i = 0; i < 6; i++)
+        assert_int_equal(st->leaks[i], 0);
+}
+
+static void watertight_scene(const char *name, const scene *s, int origins)
+{
+    for (int q = 0; q < 2; q++) {
+        cbvh_cook_options o = options(q, 0);
+        void *buf = NULL;
+        size_t size = 0;
+        cbvh_file *f = NULL;
+        cbvh_mesh m = { s->positions, s->vertex_count, 0, s->indices, s->triangle_count, NULL };
+        assert_int_equal(cbvh_cook(&m, &o, NULL, &buf, &size, NULL, NULL), CBVH_OK);
+        assert_int_equal(cbvh_open_memory(buf, size, NULL, &f, NULL), CBVH_OK);
+        leak_stats st;
+        size_t skipped = 0;
+        memset(&st, 0, sizeof st);
+        watertight_file(f, 1, origins, &st, &skipped);
+        char what[128];
+        snprintf(what, sizeof what, "%s, %s", name, q ? "quantized" : "lossless");
+        report_leaks(what, &st, skipped);
+        cbvh_close(f);
+        cbvh_buffer_free(NULL, buf);
+    }
+}
+
+static void test_watertight(void **state)
+{
+    (void)state;
+    scene s;
+    float c[3] = { 0.3f, -0.2f, 0.1f }, lo[3] = { -1, -2, -3 }, hi[3] = { 1.5f, 2.5f, 0.5f };
+    assert_true(scene_sphere(&s, 3000, c, 1.0f));
+    watertight_scene("sphere 3000", &s, 3);
+    scene_free(&s);
+    assert_true(scene_cube(&s, lo, hi));
+    watertight_scene("cube", &s, 400);
+    scene_free(&s);
+    /* far away: the float spacing of the vertices is coarse */
+    float far_c[3] = { 1e5f, -3e5f, 2e5f };
+    assert_true(scene_sphere(&s, 3000, far_c, 10.0f));
+    watertight_scene("sphere 3000 at 1e5", &s, 3);
+    scene_free(&s);
+}
+
+/* The dragon (871K triangles, a real scan with borders): a sample of its
+ * shared edges and interior vertices, from a cooked file named by CBVH_DRAGON. */
+static void test_watertight_dragon(void **state)
+{
+    (void)state;
+    const char *path = getenv("CBVH_DRAGON");
+    if (!path || !*path) {
+        printf("CBVH_DRAGON not set (path of a cooked dragon, e.g. `cbvh cook dragon_vrip.ply dragon.cbvh`): skipped\n");
+        skip();
+    }
+    cbvh_file *f = NULL;
+    cbvh_error err;
+    if (cbvh_open_path(path, NULL, &f, &err) != CBVH_OK)
+        fail_msg("CBVH_DRAGON=%s: %s", path, err.message);
+    leak_stats st;
+    size_t skipped = 0;
+    memset(&st, 0, sizeof st);
+    watertight_file(f, 37, 1, &st, &skipped);
+    report_leaks("dragon (every 37th triangle)", &st, skipped);
+    cbvh_close(f);
+}
+
+/* ------------------------------------------------------------------ */
+/* Far from the origin and at every scale                             */
+/* ------------------------------------------------------------------ */
+
+static void transformed(const scene *s, double scale, double offset, float *out)
+{
+    for (size_t i = 0; i < 3 * s->vertex_count; i++)
+        out[i] = (float)((double)s->positions[i] * scale + offset * (i % 3 == 1 ? -0.5 : 1.0));
+}
+
+static void test_scales(void **state)
+{
+    (void)state;
+    scene base;
+    float c[3] = { 0, 0, 0 };
+    assert_true(scene_sphere(&base, 4000, c, 1000.0f)); /* a 2 km object: still resolved at 1e7 */
+    float *pos = malloc(3 * base.vertex_count * sizeof(float));
+    static const struct { double scale, offset; } cases[] = {
+        { 1, 0 },    { 1, 1e3 },  { 1, -1e3 }, { 1, 1e5 }, { 1, -1e5 }, { 1, 1e7 }, { 1, -1e7 },
+        { 1e-6, 0 }, { 1e9, 0 },  { 1e-6, 1 }, { 1e9, 1e10 },
+    };
+    uint64_t nodes_at_origin[2] = { 0, 0 };
+    printf("%-8s %-8s %-9s %6s %6s %6s %6s %6s %6s %9s %8s\n", "scale", "offset", "vertices", "rays", "clear", "missed", "early",
+           "offpl", "paths", "nodes/ray", "vs orig");
+    for (size_t ci = 0; ci < sizeof cases / sizeof cases[0]; ci++) {
+        transformed(&base, cases[ci].scale, cases[ci].offset, pos);
+        for (int q = 0; q < 2; q++) {
+            cbvh_cook_options o = options(q, 0);
+            ref_fixture fx;
+            assert_int_equal(ref_fixture_open(&fx, pos, base.vertex_count, base.indices, base.triangle_count, &o), CBVH_OK);
+            size_t bad = 0, checked;
+            float lo[3], hi[3];
+            checked = check_conservative(fx.file, 0, lo, hi, &bad);
+            if (bad)
+                fail_msg("scale %g offset %g: %zu of %zu node boxes not conservative", cases[ci].scale, cases[ci].offset, bad, checked);
+            agree_stats st;
+            memset(&st, 0, sizeof st);
+            uint64_t rng = 777; /* the same rays relative to the mesh in every case */
+            for (int i = 0; i < 1500; i++) {
+                cbvh_ray r = ref_make_ray(&fx, &rng, i % REF_RAY_KINDS);
+                check_against_reference(&fx, &r, HIT_TOL, &st);
+            }
+            if (ci == 0)
+                nodes_at_origin[q] = st.nodes;
+            double ratio = (double)st.nodes / (double)nodes_at_origin[q];
+            printf("%-8g %-8g %-9s %6zu %6zu %6zu %6zu %6zu %6zu %9.2f %8.2f\n", cases[ci].scale, cases[ci].offset,
+                   q ? "quantized" : "lossless", st.rays, st.clear_hits, st.missed, st.early, st.off_plane, st.disagree_paths,
+                   (double)st.nodes / (double)st.rays, ratio);
+            char what[96];
+            snprintf(what, sizeof what, "scale %g offset %g %s", cases[ci].scale, cases[ci].offset, q ? "quantized" : "lossless");
+            assert_agreement(what, &st);
+            if (ratio > 2.0)
+                fail_msg("%s: %.2fx the node visits of the mesh at the origin", what, ratio);
+            ref_fixture_close(&fx);
+        }
+    }
+    free(pos);
+    scene_free(&base);
+}
+
+/* Finding F1 (notes/findings.md): coordinates beyond ~1e12 overflow the float
+ * triangle test. Measures where hits stop, without failing the suite. */
+static void test_huge_extent(void **state)
+{
+    (void)state;
+    printf("huge extents (tetrahedron of edge s, 200 rays through a face):");
+    for (int e = 9; e <= 30; e += 3) {
+        float s = powf(10.0f, (float)e);
+        float p[12] = { 0, 0, 0, s, 0, 0, 0, s, 0, 0, 0, s };
+        uint32_t idx[12] = { 0, 2, 1, 0, 1, 3, 1, 2, 3, 0, 3, 2 };
+        cbvh_mesh m = { p, 4, 0, idx, 4, NULL };
+        void *buf = NULL;
+        size_t n = 0;
+        cbvh_result r = cbvh_cook(&m, NULL, NULL, &buf, &n, NULL, NULL);
+        if (r != CBVH_OK) {
+            printf(" 1e%d: cook %s;", e, cbvh_result_string(r));
+            continue;
+        }
+        cbvh_file *f = NULL;
+        assert_int_equal(cbvh_open_memory(buf, n, NULL, &f, NULL), CBVH_OK);
+        int miss = 0;
+        for (int i = 0; i < 200; i++) {
+            float a = (float)(i % 10 + 0.5) / 20, b = (float)(i / 10 % 10 + 0.5) / 20;
+            cbvh_ray ray = { { a * s, b * s, -s }, 0, { 0, 0, 1 }, INFINITY };
+            if (i >= 100)
+                ray = (cbvh_ray){ { a * s - s, b * s - 2 * s, -s }, 0, { s, 2 * s, s }, INFINITY };
+            cbvh_hit h;
+            miss += !cbvh_raycast(f, &ray, CBVH_TRAVERSAL_SORTED, &h, NULL);
+        }
+        printf(" 1e%d: %d missed;", e, miss);
+        if (e <= 12)
+            assert_int_equal(miss, 0);
+        cbvh_close(f);
+        cbvh_buffer_free(NULL, buf);
+    }
+    printf("\n");
+}
+
+/* ------------------------------------------------------------------ */
+/* Degenerate meshes                                                  */
+/* ------------------------------------------------------------------ */
+
+typedef struct mesh_case {
+    const char *name;
+    size_t vertex_count, triangle_count;
+    float pos[3 * 12];
+    uint32_t idx[3 * 12];
+    cbvh_result expect;  /* cook result */
+    size_t dropped;      /* triangles the cooker must drop */
+    double tolerance;    /* relative to the diagonal: HIT_TOL, or 1 (hit/miss and path agreement only) where finding F2 applies */
+} mesh_case;
+
+static void test_degenerate_meshes(void **state)
+{
+    (void)state;
+    static const mesh_case cases[] = {
+        { "single triangle", 3, 1, { 0, 0, 0, 1, 0, 0, 0, 1, 0 }, { 0, 1, 2 }, CBVH_OK, 0, HIT_TOL },
+        { "sliver 1e7:1", 3, 1, { 0, 0, 0, 1e3f, 0, 0, 500, 1e-4f, 0 }, { 0, 1, 2 }, CBVH_OK, 0, 1.0 },
+        { "needle", 4, 2, { 0, 0, 0, 0, 0, 1e3f, 1e-4f, 0, 0, 0, 1e-4f, 1e3f }, { 0, 1, 2, 1, 3, 2 }, CBVH_OK, 0, 1.0 },
+        { "zero-area + good", 6, 2, { 0, 0, 0, 1, 1, 1, 2, 2, 2, 0, 0, 0, 1, 0, 0, 0, 1, 0 }, { 0, 1, 2, 3, 4, 5 }, CBVH_OK, 1, HIT_TOL },
+        { "repeated vertex", 4, 2, { 0, 0, 0, 1, 0, 0, 1, 0, 0, 0, 1, 0 }, { 0, 1, 3, 0, 2, 3 }, CBVH_OK, 0, HIT_TOL },
+        { "duplicated triangle", 3, 2, { 0, 0, 0, 1, 0, 0, 0, 1, 0 }, { 0, 1, 2, 0, 1, 2 }, CBVH_OK, 0, HIT_TOL },
+        { "back-to-back", 3, 2, { 0, 0, 0, 1, 0, 0, 0, 1, 0 }, { 0, 1, 2, 0, 2, 1 }, CBVH_OK, 0, HIT_TOL },
+        { "flat (zero z extent)", 4, 2, { 0, 0, 5, 1, 0, 5, 1, 1, 5, 0, 1, 5 }, { 0, 1, 2, 0, 2, 3 }, CBVH_OK, 0, HIT_TOL },
+        { "line (zero y,z extent)", 3, 1, { 0, 2, 2, 1, 2, 2, 3, 2, 2 }, { 0, 1, 2 }, CBVH_ERROR_EMPTY_MESH, 1, HIT_TOL },
+        { "all vertices equal", 3, 2, { 1, 1, 1, 1, 1, 1, 1, 1, 1 }, { 0, 1, 2, 2, 1, 0 }, CBVH_ERROR_EMPTY_MESH, 2, HIT_TOL },
+        { "no triangles", 3, 0, { 0 }, { 0 }, CBVH_ERROR_EMPTY_MESH, 0, HIT_TOL },
+        { "index out of range", 3, 1, { 0, 0, 0, 1, 0, 0, 0, 1, 0 }, { 0, 1, 3 }, CBVH_ERROR_BAD_MESH, 0, HIT_TOL },
+        { "NaN coordinate", 3, 1, { 0, 0, 0, NAN, 0, 0, 0, 1, 0 }, { 0, 1, 2 }, CBVH_ERROR_BAD_MESH, 0, HIT_TOL },
+        { "infinite coordinate", 3, 1, { 0, 0, 0, INFINITY, 0, 0, 0, 1, 0 }, { 0, 1, 2 }, CBVH_ERROR_BAD_MESH, 0, HIT_TOL },
+    };
+    for (size_t ci = 0; ci < sizeof cases / sizeof cases[0]; ci++) {
+        const mesh_case *mc = &cases[ci];
+        for (int q = 0; q < 2; q++) {
+            cbvh_mesh m = { mc->pos, mc->vertex_count, 0, mc->idx, mc->triangle_count, NULL };
+            cbvh_cook_options o = options(q, 0);
+            cbvh_cook_stats stats;
+            cbvh_error err;
+            void *buf = NULL;
+            size_t n = 0;
+            cbvh_result r = cbvh_cook(&m, &o, NULL, &buf, &n, &stats, &err);
+            printf("mesh %-24s %-9s: %s%s%s\n", mc->name, q ? "quantized" : "lossless", cbvh_result_string(r), r ? ": " : "",
+                   r ? err.message : "");
+            if (r != mc->expect)
+                fail_msg("%s: cook gave %s, expected %s (%s)", mc->name, cbvh_result_string(r), cbvh_result_string(mc->expect),
+                         err.message);
+            if (r != CBVH_OK) {
+                assert_true(err.message[0] != 0);
+                continue;
+            }
+            if (!q)
+                assert_int_equal(stats.dropped_degenerate, mc->dropped);
+            cbvh_buffer_free(NULL, buf);
+            ref_fixture fx;
+            assert_int_equal(ref_fixture_open(&fx, mc->pos, mc->vertex_count, mc->idx, mc->triangle_count, &o), CBVH_OK);
+            size_t bad = 0;
+            float lo[3], hi[3];
+            check_conservative(fx.file, 0, lo, hi, &bad);
+            assert_int_equal(bad, 0);
+            agree_stats st;
+            memset(&st, 0, sizeof st);
+            uint64_t rng = 31;
+            for (int i = 0; i < 4000; i++) {
+                cbvh_ray ray = ref_make_ray(&fx, &rng, i % REF_RAY_KINDS);
+                check_against_reference(&fx, &ray, mc->tolerance, &st);
+            }
+            assert_agreement(mc->name, &st);
+            /* dropped triangles are never reported */
+            for (uint32_t t = 0; t < mc->triangle_count; t++)
+                if (fx.index_of_id[t] == (size_t)-1) {
+                    float v[3][3];
+                    assert_int_equal(cbvh_file_get_triangle(fx.file, t, v[0], v[1], v[2]), 0);
+                }
+            ref_fixture_close(&fx);
+        }
+    }
+}
+
+/* Finding F2 (notes/findings.md): t drifts on slivers. Rays aimed inside a
+ * triangle of length 1000 and width 1000/aspect; the hit point must lie on
+ * the plane within 1e-5 of the length up to aspect 1e3; beyond, measured. */
+static void test_sliver_accuracy(void **state)
+{
+    (void)state;
+    printf("sliver accuracy (triangle length 1000): aspect: worst hit distance from the plane, missed of inside rays\n");
+    for (int e = 0; e <= 8; e++) {
+        float w = 1e3f / powf(10.0f, (float)e);
+        float pos[9] = { 0, 0, 0, 1e3f, 0, 0, 500, w, 0 };
+        uint32_t idx[3] = { 0, 1, 2 };
+        cbvh_cook_options o = options(0, 0);
+        ref_fixture fx;
+        assert_int_equal(ref_fixture_open(&fx, pos, 3, idx, 1, &o), CBVH_OK);
+        uint64_t rng = 31;
+        double worst = 0;
+        int inside = 0, missed = 0;
+        for (int i = 0; i < 5000; i++) {
+            cbvh_ray r = ref_make_ray(&fx, &rng, 1);
+            double t, u, v, m;
+            /* inside by at least 8 float steps at the coordinates' magnitude */
+            if (!ref_ray_triangle(fx.tris.v, &r, &t, &u, &v, &m) || m < 8 * 1e3 * 1.2e-7)
+                continue;
+            inside++;
+            cbvh_hit h;
+            if (!cbvh_raycast(fx.file, &r, CBVH_TRAVERSAL_SORTED, &h, NULL)) {
+                missed++;
+                continue;
+            }
+            worst = fmax(worst, fabs((double)r.org[2] + (double)h.t * r.dir[2]));
+        }
+        printf("  1e%d: %.3g, %d of %d\n", e, worst, missed, inside);
+        if (e <= 3) {
+            assert_true(worst <= 1e-5 * 1e3);
+            assert_int_equal(missed, 0);
+        }
+        ref_fixture_close(&fx);
+    }
+}
+
+/* ------------------------------------------------------------------ */
+/* Extreme rays                                                       */
+/* ------------------------------------------------------------------ */
+
+static int hit_all_paths(const cbvh_file *f, const cbvh_ray *r, cbvh_hit *out)
+{
+    cbvh_hit h[4], sh;
+    int got[4];
+    for (int t = 0; t < 4; t++)
+        got[t] = cbvh_raycast(f, r, (cbvh_traversal)t, &h[t], NULL);
+    cbvh_raycast_stream(f, r, 1, &sh, NULL);
+    int occ = cbvh_occluded(f, r, CBVH_TRAVERSAL_SORTED, NULL);
+    for (int t = 1; t < 4; t++) {
+        assert_int_equal(got[t], got[0]);
+        if (got[0])
+            assert_true(h[t].t == h[0].t);
+    }
+    assert_int_equal(sh.tri != CBVH_NO_HIT, got[0]);
+    assert_int_equal(occ, got[0]);
+    *out = h[0];
+    return got[0];
+}
+
+static void test_extreme_rays(void **state)
+{
+    (void)state;
+    /* a unit cube [0,1]^3: its faces lie on the node boxes' planes */
+    scene s;
+    float lo[3] = { 0, 0, 0 }, hi[3] = { 1, 1, 1 };
+    assert_true(scene_cube(&s, lo, hi));
+    cbvh_cook_options o = options(0, 0);
+    ref_fixture fx;
+    assert_int_equal(ref_fixture_open(&fx, s.positions, s.vertex_count, s.indices, s.triangle_count, &o), CBVH_OK);
+    const cbvh_file *f = fx.file;
+    cbvh_hit h;
+    const float inf = INFINITY, nan = NAN, den = 1e-40f;
+    static const char *const names[] = {
+        "dir (0,0,1)",          "dir (-0,-0,1)",       "dir (den,-den,1)",   "dir (1e30 scaled)",   "unnormalized 1e-20",
+        "origin on a face",     "origin on an edge",   "origin on a vertex", "origin on box plane", "in the face's plane",
+        "tmin = tmax at face",  "tmin > tmax",         "zero direction",     "NaN origin",          "inf origin",
+        "NaN direction",        "inf direction",       "NaN tmax",           "negative tmin",       "tmax = +inf, tmin inf",
+    };
+    const cbvh_ray rays[] = {
+        { { 0.5f, 0.5f, -1 }, 0, { 0, 0, 1 }, inf },
+        { { 0.5f, 0.5f, -1 }, 0, { -0.0f, -0.0f, 1 }, inf },
+        { { 0.5f, 0.5f, -1 }, 0, { den, -den, 1 }, inf },
+        { { 0.5f, 0.5f, -1 }, 0, { 1e20f, 1e20f, 1e30f }, inf },
+        { { 0.25f, 0.75f, -1 }, 0, { 0, 0, 1e-20f }, inf },
+        { { 0.5f, 0.5f, 0 }, 0, { 0, 0, 1 }, inf },
+        { { 0.5f, 0, 0 }, 0, { 0, 0.3f, 1 }, inf },
+        { { 0, 0, 0 }, 0, { 0.3f, 0.4f, 1 }, inf },
+        { { 0.5f, 0.5f, -1 }, 0, { 0, 0, 1 }, inf }, /* origin on the plane x = 0.5? no: on y,z planes below */
+        { { -1, 0.5f, 0 }, 0, { 1, 0, 0 }, inf },
+        { { 0.5f, 0.5f, -1 }, 1, { 0, 0, 1 }, 1 },
+        { { 0.5f, 0.5f, -1 }, 2, { 0, 0, 1 }, 1 },
+        { { 0.5f, 0.5f, -1 }, 0, { 0, 0, 0 }, inf },
+        { { nan, 0.5f, -1 }, 0, { 0, 0, 1 }, inf },
+        { { inf, 0.5f, -1 }, 0, { 0, 0, 1 }, inf },
+        { { 0.5f, 0.5f, -1 }, 0, { 0, nan, 1 }, inf },
+        { { 0.5f, 0.5f, -1 }, 0, { 0, inf, 1 }, inf },
+        { { 0.5f, 0.5f, -1 }, 0, { 0, 0, 1 }, nan },
+        { { 0.5f, 0.5f, -1 }, -1, { 0, 0, 1 }, inf },
+        { { 0.5f, 0.5f, -1 }, inf, { 0, 0, 1 }, inf },
+    };
+    cbvh_ray plane_ray = { { 0, 0.5f, -1 }, 0, { 0, 0, 1 }, inf }; /* origin on the box plane x = 0 */
+    for (size_t i = 0; i < sizeof rays / sizeof rays[0]; i++) {
+        cbvh_ray r = i == 8 ? plane_ray : rays[i];
+        ref_ray_hit ref;
+        int want = ref_ray_closest(&fx.tris, &r, 0, &ref);
+        int got = hit_all_paths(f, &r, &h);
+        printf("ray %-22s valid %d: reference %s t %-10g  cbvh %s t %g\n", names[i], ref_ray_valid(&r), want ? "hit " : "miss",
+               want ? ref.t : 0.0, got ? "hit " : "miss", got ? h.t : 0.0);
+        if (!ref_ray_valid(&r)) {
+            assert_int_equal(got, 0); /* cbvh.h: invalid rays miss on every query */
+            assert_int_equal(h.tri, CBVH_NO_HIT);
+            continue;
+        }
+        if (i == 9)
+            continue; /* in the plane of the x = 0 face: either answer, consistent across paths (checked above) */
+        assert_int_equal(got, want);
+        if (got)
+            assert_true(fabs((double)h.t - ref.t) <= 1e-6 * fmax(1.0, ref.t));
+    }
+    ref_fixture_close(&fx);
+    scene_free(&s);
+}
+
+/* ------------------------------------------------------------------ */
+/* Sweeps                                                             */
+/* ------------------------------------------------------------------ */
+
+static void test_extreme_sweeps(void **state)
+{
+    (void)state;
+    scene s;
+    float c[3] = { 0, 0, 0 };
+    assert_true(scene_sphere(&s, 800, c, 1.0f));
+    cbvh_cook_options o = options(0, 0);
+    ref_fixture fx;
+    assert_int_equal(ref_fixture_open(&fx, s.positions, s.vertex_count, s.indices, s.triangle_count, &o), CBVH_OK);
+    const cbvh_file *f = fx.file;
+    uint64_t rng = 3;
+    size_t zero_agree = 0, zero_total = 0;
+    for (int i = 0; i < 500; i++) {
+        cbvh_ray r = ref_make_ray(&fx, &rng, i % 3);
+        float delta[3] = { r.dir[0] * 3, r.dir[1] * 3, r.dir[2] * 3 }, zero[3] = { 0, 0, 0 };
+        cbvh_ray seg = r;
+        seg.dir[0] = delta[0]; seg.dir[1] = delta[1]; seg.dir[2] = delta[2];
+        seg.tmax = 1;
+        cbvh_hit rh;
+        cbvh_sweep_hit sh, ch, bh;
+        int rg = cbvh_raycast(f, &seg, CBVH_TRAVERSAL_SORTED, &rh, NULL);
+        int sg = cbvh_sweep_sphere(f, r.org, 0.0f, delta, &sh);
+        int cg = cbvh_sweep_capsule(f, r.org, r.org, 0.0f, delta, &ch);
+        int bg = cbvh_sweep_box(f, r.org, zero, delta, &bh);
+        zero_total++;
+        /* radius 0 is the raycast: same contact and t (up to the sweep's own arithmetic) */
+        if (sg == rg && cg == rg && bg == rg &&
+            (!rg || (fabs((double)sh.t - rh.t) < 1e-5 && fabs((double)ch.t - rh.t) < 1e-5 && fabs((double)bh.t - rh.t) < 1e-5)))
+            zero_agree++;
+    }
+    printf("sweeps of radius/half-extent 0 agreeing with the raycast: %zu of %zu\n", zero_agree, zero_total);
+    assert_int_equal(zero_agree, zero_total);
+
+    /* huge radius around the mesh: overlapping at the start, t = 0, unit normal */
+    float center[3] = { 0.1f, 0.2f, 0.3f }, delta[3] = { 1, 0, 0 }, half_big[3] = { 1e6f, 1e6f, 1e6f };
+    cbvh_sweep_hit h;
+    assert_int_equal(cbvh_sweep_sphere(f, center, 1e6f, delta, &h), 1);
+    assert_true(h.t == 0.0f && fabs(vec_len(h.normal) - 1) < 1e-4);
+    assert_int_equal(cbvh_sweep_box(f, center, half_big, delta, &h), 1);
+    assert_true(h.t == 0.0f && fabs(vec_len(h.normal) - 1) < 1e-4);
+    float far_p1[3] = { 0.1f, 0.2f, 1e6f };
+    assert_int_equal(cbvh_sweep_capsule(f, center, far_p1, 1e5f, delta, &h), 1);
+    assert_true(h.t == 0.0f && fabs(vec_len(h.normal) - 1) < 1e-4);
+
+    /* overlapping at the start: small sphere straddling the surface */
+    float on[3] = { 0, 0, 1 }, away[3] = { 0, 0, 5 };
+    assert_int_equal(cbvh_sweep_sphere(f, on, 0.05f, away, &h), 1);
+    assert_true(h.t == 0.0f && isfinite(h.normal[0]) && fabs(vec_len(h.normal) - 1) < 1e-4);
+
+    /* exact touching contact on a flat face: a unit cube and a sphere whose
+     * surface starts exactly on the face plane, moving away and along it */
+    scene cube;
+    float lo[3] = { 0, 0, 0 }, hi[3] = { 1, 1, 1 };
+    assert_true(scene_cube(&cube, lo, hi));
+    ref_fixture cx;
+    assert_int_equal(ref_fixture_open(&cx, cube.positions, cube.vertex_count, cube.indices, cube.triangle_count, &o), CBVH_OK);
+    float touch[3] = { 0.5f, 0.5f, 1.25f }, up[3] = { 0, 0, 1 }, down[3] = { 0, 0, -1 }, side[3] = { 0.1f, 0, 0 };
+    int touching = cbvh_sweep_sphere(cx.file, touch, 0.25f, up, &h);
+    printf("sphere touching a face, moving away: %s", touching ? "contact" : "no contact");
+    if (touching)
+        printf(" at t %g normal (%g %g %g)", h.t, h.normal[0], h.normal[1], h.normal[2]);
+    printf("\n");
+    if (touching)
+        assert_true(h.t == 0.0f && fabs(vec_len(h.normal) - 1) < 1e-4);
+    assert_int_equal(cbvh_sweep_sphere(cx.file, touch, 0.25f, down, &h), 1);
+    assert_true(h.t == 0.0f && h.normal[2] > 0.99f);
+    assert_int_equal(cbvh_sweep_sphere(cx.file, touch, 0.25f, side, &h), touching);
+    /* box resting on the face */
+    float box_c[3] = { 0.5f, 0.5f, 1.5f }, box_h[3] = { 0.2f, 0.2f, 0.5f };
+    assert_int_equal(cbvh_sweep_box(cx.file, box_c, box_h, down, &h), 1);
+    assert_true(h.t == 0.0f && fabs(vec_len(h.normal) - 1) < 1e-4);
+    /* approaching from 1 away: contact at t = 0.5 of a delta of 2 */
+    float above[3] = { 0.5f, 0.5f, 2.25f }, two_down[3] = { 0, 0, -2 };
+    assert_int_equal(cbvh_sweep_sphere(cx.file, above, 0.25f, two_down, &h), 1);
+    assert_true(fabs(h.t - 0.5) < 1e-6 && h.normal[2] > 0.999f);
+    ref_fixture_close(&cx);
+    scene_free(&cube);
+    ref_fixture_close(&fx);
+    scene_free(&s);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_watertight),       cmocka_unit_test(test_watertight_dragon), cmocka_unit_test(test_scales),
+        cmocka_unit_test(test_huge_extent),      cmocka_unit_test(test_sliver_accuracy), cmocka_unit_test(test_degenerate_meshes), cmocka_unit_test(test_extreme_rays),
+        cmocka_unit_test(test_extreme_sweeps),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
