@@ -62,6 +62,9 @@ static const cli_option options[] = {
     { NULL, 0, 0 },
 };
 
+/* Rays a peer runs first, to see whether all rays fit in the time budget. */
+#define BENCH_PROBE_RAYS 65536
+
 /* Answers compared with a tolerance of this fraction of the scene diagonal. */
 #define AGREE_TOLERANCE 1e-5
 
@@ -123,6 +126,7 @@ typedef struct result_row {
     int any;
     const method *m;
     double seconds;
+    size_t count; /* rays timed: all, or a prefix for an engine too slow for the budget */
     unsigned runs;
     cbvh_query_stats stats;
 } result_row;
@@ -132,6 +136,7 @@ typedef struct agree_row {
     const method *m;
     bench_agreement closest;
     uint64_t any_disagree;
+    size_t closest_count, any_count; /* rays compared */
 } agree_row;
 
 #define MAX_METHODS 16
@@ -330,8 +335,19 @@ static int measure_set(bench_state *s, ray_kind set, buffers *b, int *step, int 
             r->any = any;
             r->m = m;
             /* A separate counted pass for cbvh, so counting does not perturb the timing.
-             * Every pass leaves the answers for the agreement check. */
+             * Every pass leaves the answers for the agreement check. A peer first runs
+             * a prefix of the rays; when all of them would take longer than the budget
+             * it is timed on the prefix the budget allows (Bullet's walk cannot stop
+             * at the first hit, and takes minutes for a million rays on a large mesh). */
             double t = m->counted ? bench_run_once(&job, s->threads, &r->stats) : 0.0;
+            if (!m->counted && s->budget > 0.0f && s->rays > BENCH_PROBE_RAYS) {
+                job.count = BENCH_PROBE_RAYS;
+                t = bench_run_once(&job, s->threads, NULL);
+                double allowed = t > 0.0 ? (double)BENCH_PROBE_RAYS * s->budget / t : (double)s->rays;
+                job.count = allowed >= (double)s->rays ? s->rays : allowed > BENCH_PROBE_RAYS ? (size_t)allowed
+                                                                                             : BENCH_PROBE_RAYS;
+            }
+            r->count = job.count;
             if (t >= 0.0)
                 t = bench_run_median(&job, s->threads, s->reps, s->budget, &r->runs);
             if (t < 0.0) {
@@ -347,10 +363,12 @@ static int measure_set(bench_state *s, ray_kind set, buffers *b, int *step, int 
                 memset(a, 0, sizeof *a);
                 a->set = set;
                 a->m = m;
-                bench_agree_closest(&a->closest, b->rays, b->ref_hits, b->hits, s->rays,
+                a->closest_count = job.count;
+                bench_agree_closest(&a->closest, b->rays, b->ref_hits, b->hits, job.count,
                                     AGREE_TOLERANCE * s->diagonal);
             } else {
-                a->any_disagree = bench_disagree_any(b->ref_occluded, b->occluded, s->rays);
+                a->any_count = job.count;
+                a->any_disagree = bench_disagree_any(b->ref_occluded, b->occluded, job.count);
             }
         }
     return 0;
@@ -360,9 +378,9 @@ static int measure_set(bench_state *s, ray_kind set, buffers *b, int *step, int 
 /* Output                                                              */
 /* ------------------------------------------------------------------ */
 
-static double mrays(const bench_state *s, double seconds)
+static double mrays(const result_row *r)
 {
-    return seconds > 0.0 ? (double)s->rays / seconds * 1e-6 : 0.0;
+    return r->seconds > 0.0 ? (double)r->count / r->seconds * 1e-6 : 0.0;
 }
 
 /* The cbvh sorted row of the same set and query: the reference of the ratio column. */
@@ -406,11 +424,11 @@ static void print_tables(const bench_state *s)
     printf("\nbytes/tri: the cbvh file; for the peers their acceleration structure plus the shared vertex and index "
            "arrays they need.\n\n");
 
-    printf("| rays | query | engine | variant | MRays/s | MRays/s/thread | nodes/ray | tris/ray | cbvh sorted / this | runs |\n");
+    printf("| rays | query | engine | variant | MRays/s | MRays/s/thread | nodes/ray | tris/ray | cbvh sorted / this | runs x rays |\n");
     printf("|---|---|---|---|---:|---:|---:|---:|---:|---:|\n");
     for (int i = 0; i < s->result_count; i++) {
         const result_row *r = &s->results[i];
-        double speed = mrays(s, r->seconds), ref = mrays(s, sorted_row(s, r)->seconds);
+        double speed = mrays(r), ref = mrays(sorted_row(s, r));
         printf("| %s | %s | %s | %s | %.3f | %.3f | ", rays_kind_name(r->set), r->any ? "any" : "closest",
                r->m->engine, r->m->variant, speed, speed / s->threads);
         if (r->m->counted)
@@ -418,18 +436,21 @@ static void print_tables(const bench_state *s)
                    (double)r->stats.triangles_tested / (double)s->rays);
         else
             printf("- | - | ");
-        printf("%.3f | %u |\n", speed > 0.0 ? ref / speed : 0.0, r->runs);
+        printf("%.3f | %u x %zu |\n", speed > 0.0 ? ref / speed : 0.0, r->runs, r->count);
     }
 
     printf("\nAgreement with cbvh sorted, ray by ray (t within %.0e of the scene diagonal):\n\n", AGREE_TOLERANCE);
-    printf("| rays | engine | variant | same triangle | both miss | t close, other triangle | disagree | any-hit disagree |\n");
-    printf("|---|---|---|---:|---:|---:|---:|---:|\n");
+    printf("| rays | engine | variant | same triangle | both miss | t close, other triangle | disagree | any-hit disagree | rays compared |\n");
+    printf("|---|---|---|---:|---:|---:|---:|---:|---:|\n");
     for (int i = 0; i < s->agree_count; i++) {
         const agree_row *a = &s->agreements[i];
-        printf("| %s | %s | %s | %llu | %llu | %llu | %llu | %llu |\n", rays_kind_name(a->set), a->m->engine,
+        printf("| %s | %s | %s | %llu | %llu | %llu | %llu | %llu | %zu", rays_kind_name(a->set), a->m->engine,
                a->m->variant, (unsigned long long)a->closest.same_triangle, (unsigned long long)a->closest.both_miss,
                (unsigned long long)a->closest.t_close, (unsigned long long)a->closest.disagree,
-               (unsigned long long)a->any_disagree);
+               (unsigned long long)a->any_disagree, a->closest_count);
+        if (a->any_count != a->closest_count)
+            printf(" (any hit: %zu)", a->any_count);
+        printf(" |\n");
     }
     fflush(stdout);
 }
@@ -491,7 +512,7 @@ static int write_json(const bench_state *s)
     json_begin_array(&w, "results");
     for (int i = 0; i < s->result_count; i++) {
         const result_row *r = &s->results[i];
-        double speed = mrays(s, r->seconds), ref = mrays(s, sorted_row(s, r)->seconds);
+        double speed = mrays(r), ref = mrays(sorted_row(s, r));
         json_begin_object(&w, NULL);
         json_string(&w, "rays", rays_kind_name(r->set));
         json_string(&w, "query", r->any ? "any" : "closest");
@@ -499,6 +520,7 @@ static int write_json(const bench_state *s)
         json_string(&w, "variant", r->m->variant);
         json_double(&w, "seconds", r->seconds);
         json_uint(&w, "runs", r->runs);
+        json_uint(&w, "rays_timed", r->count);
         json_double(&w, "mrays_per_s", speed);
         json_double(&w, "mrays_per_s_per_thread", speed / s->threads);
         if (r->m->counted) {
@@ -521,6 +543,8 @@ static int write_json(const bench_state *s)
         json_uint(&w, "t_close_other_triangle", a->closest.t_close);
         json_uint(&w, "disagree", a->closest.disagree);
         json_uint(&w, "any_disagree", a->any_disagree);
+        json_uint(&w, "closest_rays_compared", a->closest_count);
+        json_uint(&w, "any_rays_compared", a->any_count);
         json_end_object(&w);
     }
     json_end_array(&w);
