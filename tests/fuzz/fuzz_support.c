@@ -481,8 +481,9 @@ static void check_overlaps(check_ctx *c)
         if (!triangle_of(c, t, v))
             continue;
         /* a zero-area triangle (quantization can collapse one, finding F3)
-         * has no defined overlap: only the "reported ones touch" checks apply */
-        int flat = dlen(dcross(dsub(v[1], v[0]), dsub(v[2], v[0]))) == 0;
+         * has no defined overlap, and slivers lose precision (F4): only the
+         * "reported ones touch" checks apply to them */
+        int flat = dlen(dcross(dsub(v[1], v[0]), dsub(v[2], v[0]))) == 0 || aspect_of(c, t) > FUZZ_MAX_ASPECT;
         dvec cp = closest_on_triangle(bc, v[0], v[1], v[2]);
         double out_by = fmax(fmax(lo[0] - cp.x, cp.x - hi[0]), fmax(fmax(lo[1] - cp.y, cp.y - hi[1]), fmax(lo[2] - cp.z, cp.z - hi[2])));
         int inside_vertex = 0;

@@ -48,6 +48,14 @@ static uint8_t *cook(const scene *s, int quantized, int level, int keep_remap, s
     return copy;
 }
 
+static void write_cooked(const scene *s, int quantized, int level, int keep_remap, const char *name)
+{
+    size_t n;
+    uint8_t *file = cook(s, quantized, level, keep_remap, &n);
+    write_file("open", name, file, n);
+    free(file);
+}
+
 static void put16(uint8_t *p, uint32_t v) { p[0] = (uint8_t)v; p[1] = (uint8_t)(v >> 8); }
 static void put32(uint8_t *p, uint32_t v) { for (int i = 0; i < 4; i++) p[i] = (uint8_t)(v >> (8 * i)); }
 static uint32_t get16(const uint8_t *p) { return (uint32_t)p[0] | (uint32_t)p[1] << 8; }
@@ -160,18 +168,10 @@ int main(int argc, char **argv)
     write_file("open", "unsupported-version2.cbvh", bad, n);
     free(bad);
     free(raw);
-    raw = cook(&sphere, 0, 6, 1, &n);
-    write_file("open", "good-sphere-zlib.cbvh", raw, n);
-    free(raw);
-    raw = cook(&sphere, 1, 0, 1, &n);
-    write_file("open", "good-sphere-q16.cbvh", raw, n);
-    free(raw);
-    raw = cook(&cube, 0, 0, 0, &n);
-    write_file("open", "good-cube-noremap.cbvh", raw, n);
-    free(raw);
-    raw = cook(&soup, 1, 9, 1, &n);
-    write_file("open", "good-soup-materials-q16-zlib.cbvh", raw, n);
-    free(raw);
+    write_cooked(&sphere, 0, 6, 1, "good-sphere-zlib.cbvh");
+    write_cooked(&sphere, 1, 0, 1, "good-sphere-q16.cbvh");
+    write_cooked(&cube, 0, 0, 0, "good-cube-noremap.cbvh");
+    write_cooked(&soup, 1, 9, 1, "good-soup-materials-q16-zlib.cbvh");
 
     /* cook seeds: a tetrahedron, a cube with a degenerate and a duplicated
      * triangle, a bad index, a sliver */
