@@ -422,7 +422,16 @@ static void print_tables(const bench_state *s)
             printf("- |\n");
     }
     printf("\nbytes/tri: the cbvh file; for the peers their acceleration structure plus the shared vertex and index "
-           "arrays they need.\n\n");
+           "arrays they need.\n");
+    if (!s->no_peers) {
+#if !defined(HAVE_EMBREE)
+        printf("Embree 3 was not found at configure time: no Embree figures.\n");
+#endif
+#if !defined(HAVE_BULLET)
+        printf("Bullet 3 was not found at configure time: no Bullet figures.\n");
+#endif
+    }
+    printf("\n");
 
     printf("| rays | query | engine | variant | MRays/s | MRays/s/thread | nodes/ray | tris/ray | cbvh sorted / this | runs x rays |\n");
     printf("|---|---|---|---|---:|---:|---:|---:|---:|---:|\n");
