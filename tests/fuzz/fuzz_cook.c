@@ -134,6 +134,10 @@ static double clear_hit(const double o[3], const double dir[3], const float *v0,
            len3 = sqrt(e3[0] * e3[0] + e3[1] * e3[1] + e3[2] * e3[2]), tol = 1e-5 * mag;
     if (v * area2 < tol * len1 || u * area2 < tol * len2 || (1 - u - v) * area2 < tol * len3)
         return -1;
+    /* and not grazing: t is ill conditioned as 1/cos of the crossing angle */
+    double dl = sqrt(dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]);
+    if (fabs(n[0] * dir[0] + n[1] * dir[1] + n[2] * dir[2]) < 1e-2 * area2 * dl)
+        return -1;
     return t;
 }
 
