@@ -28,8 +28,18 @@ void exact_tree_free(exact_tree *tree)
     tree->boxes = NULL;
 }
 
-/* The stack walk of lib/query/raycast_stack.c over float boxes: same visit
- * order (sort byte), same slab and triangle tests, same counters. */
+/* A float box against the ray, with ray_box.h's slab test and octant plane choice. */
+static inline int exact_box_test(const float *restrict box, struct cbvh_slab_select sel, const float org[3],
+                                 const float rcp[3], float tmin, float tmax, float *entry)
+{
+    return cbvh_slab_test(box[sel.near_x], box[sel.near_y], box[sel.near_z], box[sel.far_x], box[sel.far_y],
+                          box[sel.far_z], org, rcp, tmin, tmax, entry);
+}
+
+/* The sorted walk of lib/query/raycast_stack.c over float boxes: both children
+ * tested at the parent, the nearer by the sort byte first, the farther pushed
+ * with its entry distance and dropped on pop once beyond tmax; the same leaf
+ * step and the same counters. Only the boxes differ. */
 static int exact_walk(const exact_tree *tree, const struct cbvh_ray_ctx *ray, int any, struct cbvh_best_hit *best,
                       cbvh_query_stats *stats)
 {
@@ -41,47 +51,54 @@ static int exact_walk(const exact_tree *tree, const struct cbvh_ray_ctx *ray, in
     const struct cbvh_slab_select sel = cbvh_slab_select_of(ray->octant);
     const uint32_t mask = ray->sort_mask;
     const float tmin = ray->tmin;
-    float tmax = ray->tmax;
-    uint32_t stack[CBVH_MAX_DEPTH];
-    uint32_t sp = 0, i = 0;
-    uint64_t visited = 0, tested = 0;
-    int hit = 0;
-    for (;;) {
-        const float *b = boxes + 6 * (size_t)i;
+    float tmax = ray->tmax, entry0, entry1;
+    struct {
+        uint32_t node;
         float entry;
-        visited++;
-        if (cbvh_slab_test(b[sel.near_x], b[sel.near_y], b[sel.near_z], b[sel.far_x], b[sel.far_y], b[sel.far_z], org,
-                           rcp, tmin, tmax, &entry)) {
-            const uint32_t word = nodes[i].word;
-            if (!cbvh_node_is_leaf(word)) {
-                uint32_t near = i + 1u, far = cbvh_second_child(nodes, i);
+    } stack[CBVH_MAX_DEPTH];
+    uint32_t sp = 0, i = 0;
+    uint64_t visited = 1, tested = 0;
+    int hit = 0;
+    if (!exact_box_test(boxes, sel, org, rcp, tmin, tmax, &entry0))
+        goto done;
+    for (;;) {
+        const uint32_t word = nodes[i].word;
+        if (!cbvh_node_is_leaf(word)) {
+            uint32_t near = i + 1u, far = cbvh_second_child(nodes, i);
+            const int h0 = exact_box_test(boxes + 6 * (size_t)near, sel, org, rcp, tmin, tmax, &entry0);
+            const int h1 = exact_box_test(boxes + 6 * (size_t)far, sel, org, rcp, tmin, tmax, &entry1);
+            visited += 2;
+            if (h0 && h1) {
                 if (word & mask) {
                     uint32_t tmp = near;
                     near = far;
                     far = tmp;
+                    entry1 = entry0;
                 }
-                stack[sp++] = far;
+                stack[sp].node = far;
+                stack[sp].entry = entry1;
+                sp++;
                 i = near;
                 continue;
             }
-            if (any) {
-                uint32_t count;
-                hit = cbvh_leaf_any(f, word, &ray->shear, tmin, tmax, &count);
-                tested += count;
-                if (hit)
-                    break;
-            } else {
-                tested += cbvh_leaf_closest(f, word, &ray->shear, tmin, &tmax, best);
+            if (h0 || h1) {
+                i = h0 ? near : far;
+                continue;
             }
-        }
-        if (sp == 0)
+        } else if (cbvh_leaf_visit(f, word, ray, any, 1, &tmax, best, &tested)) {
+            hit = 1;
             break;
-        i = stack[--sp];
+        }
+        do {
+            if (sp == 0)
+                goto done;
+            sp--;
+        } while (!(stack[sp].entry <= tmax * CBVH_BOX_PAD));
+        i = stack[sp].node;
     }
-    if (stats) {
-        stats->nodes_visited += visited;
-        stats->triangles_tested += tested;
-    }
+done:
+    if (stats)
+        cbvh_stats_add(stats, visited, tested);
     return hit;
 }
 
