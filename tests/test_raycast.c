@@ -397,6 +397,170 @@ static void test_far_from_origin(void **state)
     scene_free(&s);
 }
 
+/* ------------------------------------------------------------------ */
+/* Findings F1 and F2 (notes/findings.md)                              */
+/* ------------------------------------------------------------------ */
+
+/* Every traversal, the any-hit query and a one-ray stream agree on ray r. */
+static int hit_everywhere(const cbvh_file *f, const cbvh_ray *r, cbvh_hit *out)
+{
+    cbvh_hit h[4], sh;
+    int got[4];
+    for (int k = 0; k < 4; k++) {
+        got[k] = cbvh_raycast(f, r, traversals[k], &h[k], NULL);
+        assert_int_equal(cbvh_occluded(f, r, traversals[k], NULL), got[k]);
+    }
+    cbvh_raycast_stream(f, r, 1, &sh, NULL);
+    for (int k = 1; k < 4; k++) {
+        assert_int_equal(got[k], got[0]);
+        assert_int_equal(h[k].tri, h[0].tri);
+        if (got[0])
+            assert_true(h[k].t == h[0].t);
+    }
+    assert_int_equal(sh.tri, h[0].tri);
+    if (got[0])
+        assert_true(sh.t == h[0].t);
+    *out = h[0];
+    return got[0];
+}
+
+/* F1: coordinates beyond ~1e12 relative to the origin overflowed the float
+ * triangle test (coord^2 edge functions, coord^3 for t) and every ray
+ * missed. A tetrahedron of edge s up to 1e30: rays through a face from
+ * outside, axis-aligned and diagonal, must all hit it at the right t. */
+static void test_huge_coordinates(void **state)
+{
+    (void)state;
+    for (int e = 6; e <= 36; e += 3) {
+        const float s = powf(10.0f, (float)e);
+        const float p[12] = {0, 0, 0, s, 0, 0, 0, s, 0, 0, 0, s};
+        const uint32_t idx[12] = {0, 2, 1, 0, 1, 3, 1, 2, 3, 0, 3, 2};
+        void *buf = NULL;
+        cbvh_file *f = NULL;
+        assert_int_equal(ref_cook_open(p, 4, idx, 4, NULL, &buf, &f), CBVH_OK);
+        for (int i = 0; i < 100; i++) {
+            const float a = (float)(i % 10 + 0.5) / 20, b = (float)(i / 10 % 10 + 0.5) / 20;
+            /* Through the face z = 0 at (a s, b s): t = 1 for both rays. */
+            const cbvh_ray rays[2] = {{{a * s, b * s, -s}, 0, {0, 0, s}, INFINITY},
+                                      {{a * s - s, b * s - 2 * s, -s}, 0, {s, 2 * s, s}, INFINITY}};
+            for (int k = 0; k < 2; k++) {
+                cbvh_hit h;
+                if (!hit_everywhere(f, &rays[k], &h))
+                    fail_msg("s = 1e%d ray %d/%d missed the tetrahedron", e, i, k);
+                assert_int_equal(h.tri, 0);
+                assert_true(fabs(h.t - 1.0) <= 1e-6);
+            }
+        }
+        cbvh_close(f);
+        cbvh_buffer_free(NULL, buf);
+    }
+}
+
+/* F1, far origins: a unit sphere seen from 2^66 (about 7e19) away. In float,
+ * coordinates relative to such an origin collapse to one point. The rays
+ * pass exactly through the world origin (org = -2^66 dir, dir of small
+ * integers, all exact in float), which lies inside the sphere, so they must
+ * hit it where the same line cast from near by hits it: on the same
+ * triangle up to edge ties, at t = 2^66 + that ray's t (up to float rounding). */
+static void test_far_origin_hits(void **state)
+{
+    (void)state;
+    scene sc;
+    ref_fixture fx;
+    assert_true(scene_sphere(&sc, 2000, (float[3]){0.3f, -0.2f, 0.1f}, 1.0f));
+    open_scene(&fx, &sc, NULL);
+    uint64_t st = 99;
+    int rays = 0;
+    while (rays < 500) {
+        float dir[3];
+        for (int a = 0; a < 3; a++)
+            dir[a] = (float)((int)(scene_rand_unit(&st) * 9.0) - 4);
+        if (dir[0] == 0 && dir[1] == 0 && dir[2] == 0)
+            continue;
+        rays++;
+        const float far = 0x1p66f;
+        const cbvh_ray far_ray = {{-far * dir[0], -far * dir[1], -far * dir[2]}, 0, {dir[0], dir[1], dir[2]}, INFINITY};
+        const cbvh_ray near_ray = {{-8 * dir[0], -8 * dir[1], -8 * dir[2]}, 0, {dir[0], dir[1], dir[2]}, INFINITY};
+        cbvh_hit hf, hn;
+        assert_true(hit_everywhere(fx.file, &near_ray, &hn));
+        if (!hit_everywhere(fx.file, &far_ray, &hf))
+            fail_msg("ray %d (dir %g %g %g) from 2^66 missed", rays, dir[0], dir[1], dir[2]);
+        const double expect = (double)far - 8.0 + hn.t;
+        assert_true(fabs(hf.t - expect) <= 2e-7 * expect);
+        /* The far hit's triangle lies on the line, at the near hit's distance. */
+        double t, u, v, m;
+        const size_t k = fx.index_of_id[hf.tri];
+        assert_true(k != (size_t)-1);
+        assert_true(ref_ray_triangle(fx.tris.v + 9 * k, &near_ray, &t, &u, &v, &m));
+        assert_true(m >= -1e-5);
+        assert_true(fabs(t - hn.t) <= 1e-5);
+    }
+    /* A far ray that stops before the mesh, or points away from it, misses. */
+    const cbvh_ray short_ray = {{-0x1p66f, 0, 0}, 0, {1, 0, 0}, 0x1p65f};
+    const cbvh_ray away = {{-0x1p66f, 0, 0}, 0, {-1, 0, 0}, INFINITY};
+    cbvh_hit h;
+    assert_false(hit_everywhere(fx.file, &short_ray, &h));
+    assert_false(hit_everywhere(fx.file, &away, &h));
+    /* tmin just short of the sphere still sees it; tmin beyond its far side does not */
+    const cbvh_ray tmin_ray = {{-0x1p66f, 0, 0}, 0x1p66f - 4, {1, 0, 0}, INFINITY};
+    const cbvh_ray past = {{-0x1p66f, 0, 0}, 0x1p66f + 0x1p44f, {1, 0, 0}, INFINITY};
+    assert_true(hit_everywhere(fx.file, &tmin_ray, &h));
+    assert_true(h.t >= tmin_ray.tmin);
+    assert_false(hit_everywhere(fx.file, &past, &h));
+    ref_fixture_close(&fx);
+    scene_free(&sc);
+}
+
+/* F2: t was interpolated as T / det, whose error grows as 1/area: on a
+ * sliver of length 1000 and aspect 1e5 hit points were 0.6 off the plane,
+ * and some rays well inside missed. Rays aimed at points inside slivers of
+ * aspect up to 1e7 (z = 0 plane) get the hit point on the plane within 1e-5
+ * of the length, identically on every path, and must hit up to aspect 1e6;
+ * at 1e7 the width (1e-4) is within a few float steps of the coordinates
+ * relative to the origins (about 100 * 2^-24 each), where the float edge
+ * tests may legitimately miss, so only the hits' accuracy is asserted. */
+static void test_sliver_t(void **state)
+{
+    (void)state;
+    for (int e = 0; e <= 7; e++) {
+        const float w = 1e3f / powf(10.0f, (float)e);
+        const float pos[9] = {0, 0, 0, 1e3f, 0, 0, 500, w, 0};
+        const uint32_t idx[3] = {0, 1, 2};
+        void *buf = NULL;
+        cbvh_file *f = NULL;
+        assert_int_equal(ref_cook_open(pos, 3, idx, 1, NULL, &buf, &f), CBVH_OK);
+        uint64_t st = 7 + (uint64_t)e;
+        double worst = 0.0;
+        int hits = 0;
+        for (int i = 0; i < 2000; i++) {
+            /* a point well inside: x in [300, 700], y in [0.2, 0.4] w (inside for x in [250, 750]) */
+            const double x = 300.0 + 400.0 * scene_rand_unit(&st), y = w * (0.2 + 0.2 * scene_rand_unit(&st));
+            const double th = PI * scene_rand_unit(&st), ph = 2.0 * PI * scene_rand_unit(&st);
+            const double d[3] = {sin(th) * cos(ph) * 100.0, sin(th) * sin(ph) * 100.0, cos(th) * 100.0 + (i % 2 ? 1 : -1)};
+            const cbvh_ray r = {{(float)(x - d[0]), (float)(y - d[1]), (float)(-d[2])}, 0, {(float)d[0], (float)d[1], (float)d[2]},
+                                INFINITY};
+            /* the float ray crosses the plane inside the triangle? (its origin was rounded) */
+            const double tz = -(double)r.org[2] / r.dir[2];
+            const double px = r.org[0] + tz * r.dir[0], py = r.org[1] + tz * r.dir[1];
+            if (!(py > 0.1 * w && py < 0.5 * w && px > 260.0 && px < 740.0))
+                continue;
+            cbvh_hit h;
+            if (!hit_everywhere(f, &r, &h)) {
+                if (e <= 6)
+                    fail_msg("aspect 1e%d: ray %d inside the sliver missed", e, i);
+                continue;
+            }
+            hits++;
+            worst = fmax(worst, fabs((double)r.org[2] + (double)h.t * r.dir[2]));
+        }
+        if (!(worst <= 1e-5 * 1e3))
+            fail_msg("aspect 1e%d: hit point %g off the plane", e, worst);
+        assert_true(hits > 500);
+        cbvh_close(f);
+        cbvh_buffer_free(NULL, buf);
+    }
+}
+
 static void test_invalid_rays(void **state)
 {
     (void)state;
@@ -491,6 +655,8 @@ int main(void)
         cmocka_unit_test(test_sphere_and_terrain), cmocka_unit_test(test_cook_variants),
         cmocka_unit_test(test_closed_mesh_no_leaks), cmocka_unit_test(test_far_from_origin),
         cmocka_unit_test(test_invalid_rays),     cmocka_unit_test(test_stats),
+        cmocka_unit_test(test_huge_coordinates), cmocka_unit_test(test_far_origin_hits),
+        cmocka_unit_test(test_sliver_t),
     };
     int failed = cmocka_run_group_tests(tests, NULL, NULL);
     fprintf(stderr, "test_raycast: %ld reference checks\n", checks_done);

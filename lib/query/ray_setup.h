@@ -25,6 +25,7 @@
  * Woop, Benthin & Wald 2013 ("Watertight ray/triangle intersection"). */
 struct cbvh_ray_shear {
     float org[3];
+    float dir[3];      /* for t from the triangle's plane (ray_triangle.h) */
     float sx, sy, sz;  /* dir[kx]/dir[kz], dir[ky]/dir[kz], 1/dir[kz] */
     uint32_t kx, ky, kz; /* kz: dominant axis of dir; kx, ky keep the winding */
 };
@@ -35,6 +36,8 @@ struct cbvh_ray_ctx {
     float rcp[3];         /* 1/dir: 0 and -0 give +inf and -inf, which the box test handles */
     float tmin, tmax;     /* tmax clamped to CBVH_T_LIMIT: an overflowed t never counts as a hit, and the
                            * box test's padded tmax stays finite, so a box at infinity is never entered */
+    double t_base;        /* t of shear.org on the caller's ray: 0, or the distance a far origin was moved
+                           * (ray_origin.c); the kernels' t and [tmin, tmax] are relative to it */
     uint32_t octant;      /* bit a set when rcp[a] has its sign bit set (so -0 counts as negative) */
     uint32_t sort_mask;   /* (1 << octant) << CBVH_NODE_SORT_SHIFT: one AND with the node word */
 };
@@ -64,9 +67,10 @@ static inline void cbvh_shear_setup(struct cbvh_ray_shear *s, const float org[3]
     s->sx = dir[kx] / dir[kz];
     s->sy = dir[ky] / dir[kz];
     s->sz = 1.0f / dir[kz];
-    s->org[0] = org[0];
-    s->org[1] = org[1];
-    s->org[2] = org[2];
+    for (int a = 0; a < 3; a++) {
+        s->org[a] = org[a];
+        s->dir[a] = dir[a];
+    }
 }
 
 /* Returns 1 and fills ctx when the ray is valid (cbvh.h: finite org and dir,
@@ -84,6 +88,7 @@ static inline int cbvh_ray_setup(struct cbvh_ray_ctx *ctx, const cbvh_ray *ray)
         return 0;
     for (int a = 0; a < 3; a++)
         ctx->rcp[a] = 1.0f / d[a];
+    ctx->t_base = 0.0;
     ctx->tmin = ray->tmin;
     ctx->tmax = ray->tmax < CBVH_T_LIMIT ? ray->tmax : CBVH_T_LIMIT;
     ctx->octant = cbvh_octant_of(ctx->rcp);

@@ -1,22 +1,90 @@
-/* ray_triangle.h: the watertight ray/triangle test of Woop, Benthin and Wald (JCGT 2013). */
+/* ray_triangle.h: the watertight ray/triangle test of Woop, Benthin and Wald (JCGT 2013), t from the plane in double. */
 #ifndef CBVH_QUERY_RAY_TRIANGLE_H
 #define CBVH_QUERY_RAY_TRIANGLE_H
 
 #include "query/ray_setup.h"
 
+#if defined(__GNUC__)
+#define CBVH_LIKELY(x) __builtin_expect(!!(x), 1)
+#define CBVH_COLD __attribute__((noinline, cold))
+#else
+#define CBVH_LIKELY(x) (x)
+#define CBVH_COLD
+#endif
+
+/* Edge functions of the sheared triangle when float could not decide them:
+ * one of them is 0, infinite or NaN (coordinates beyond about 1e12 relative
+ * to the origin overflow coord^2 products), or their sum overflows. Returns
+ * 0 on a miss, else 1 with the double edge functions in e[3].
+ *
+ * Watertight across the two paths: rounding is monotonic, so a float edge
+ * function that is finite and non-zero has the exact sign of the edge
+ * function of the float sheared coordinates, and the double one below is
+ * exact (a product of two floats is exact in double), so both paths decide
+ * every edge the same way and two triangles sharing an edge agree whichever
+ * path each takes. A vertex whose float sheared coordinates overflowed is
+ * sheared in double instead; that choice depends on the vertex and the ray
+ * only, and the two triangles' edge functions are then the same double
+ * expression up to an exact negation, so they still agree. */
+CBVH_COLD static int cbvh_ray_triangle_edges_double(const struct cbvh_ray_shear *s, const float *const v[3],
+                                                    const float sheared[3][2], double e[3])
+{
+    double p[3][2];
+    for (int k = 0; k < 3; k++) {
+        if (isfinite(sheared[k][0]) && isfinite(sheared[k][1])) {
+            p[k][0] = sheared[k][0];
+            p[k][1] = sheared[k][1];
+        } else {
+            const double z = (double)v[k][s->kz] - s->org[s->kz];
+            p[k][0] = ((double)v[k][s->kx] - s->org[s->kx]) - (double)s->sx * z;
+            p[k][1] = ((double)v[k][s->ky] - s->org[s->ky]) - (double)s->sy * z;
+        }
+    }
+    e[0] = p[2][0] * p[1][1] - p[2][1] * p[1][0]; /* u: edge b-c */
+    e[1] = p[0][0] * p[2][1] - p[0][1] * p[2][0]; /* v: edge c-a */
+    e[2] = p[1][0] * p[0][1] - p[1][1] * p[0][0]; /* w: edge a-b */
+    if ((e[0] < 0.0 || e[1] < 0.0 || e[2] < 0.0) && (e[0] > 0.0 || e[1] > 0.0 || e[2] > 0.0))
+        return 0;
+    /* An edge function that is NaN here came from infinite double coordinates, which a
+     * finite file and a finite ray cannot produce; reject it rather than guess. */
+    return !isnan(e[0]) && !isnan(e[1]) && !isnan(e[2]) && e[0] + e[1] + e[2] != 0.0;
+}
+
+/* t where the ray crosses the plane of (a, b, c): dot(n, a - org) / dot(n, dir)
+ * with n = (b - a) x (c - a), all in double. Well conditioned whatever the
+ * triangle's shape (the interpolated t of the original test loses accuracy as
+ * 1/area on slivers), and without overflow for any float coordinates. Only
+ * triangles that passed the edge tests get here. Returns 0 when the ray lies
+ * in the plane (t undefined). */
+static inline int cbvh_plane_t(const struct cbvh_ray_shear *restrict s, const float *restrict a,
+                               const float *restrict b, const float *restrict c, double *t)
+{
+    const double e1x = (double)b[0] - a[0], e1y = (double)b[1] - a[1], e1z = (double)b[2] - a[2];
+    const double e2x = (double)c[0] - a[0], e2y = (double)c[1] - a[1], e2z = (double)c[2] - a[2];
+    const double nx = e1y * e2z - e1z * e2y, ny = e1z * e2x - e1x * e2z, nz = e1x * e2y - e1y * e2x;
+    const double den = nx * s->dir[0] + ny * s->dir[1] + nz * s->dir[2];
+    const double num = nx * ((double)a[0] - s->org[0]) + ny * ((double)a[1] - s->org[1]) + nz * ((double)a[2] - s->org[2]);
+    if (den == 0.0)
+        return 0;
+    *t = num / den;
+    return 1;
+}
+
 /* Tests the ray (sheared by s) against triangle (a, b, c). Returns 1 when it
  * hits at t in [tmin, tmax] and writes t and the barycentrics u (weight of b)
  * and v (weight of c). Watertight: a ray through a shared edge or vertex hits
- * at least one of the triangles sharing it, because the edge functions are
- * computed identically for both (in double when a float result is exactly 0)
- * and the sign test accepts 0 on either side. A ray in the triangle's plane
- * (det == 0) misses, as does a degenerate triangle. Both windings are hit. */
+ * at least one of the triangles sharing it, because each edge function's sign
+ * is the exact sign for the float sheared coordinates, which both triangles
+ * compute identically (see cbvh_ray_triangle_edges_double), and the sign test
+ * accepts 0 on either side. A ray in the triangle's plane misses, as does a
+ * degenerate triangle. Both windings are hit. The hit/miss decision is the
+ * edge tests'; t comes from the plane (cbvh_plane_t), rounded to float. */
 static inline int cbvh_ray_triangle(const struct cbvh_ray_shear *restrict s, const float *restrict a,
                                     const float *restrict b, const float *restrict c, float tmin, float tmax,
                                     float *t_out, float *u_out, float *v_out)
 {
     const uint32_t kx = s->kx, ky = s->ky, kz = s->kz;
-    const float sx = s->sx, sy = s->sy, sz = s->sz;
+    const float sx = s->sx, sy = s->sy;
     const float ox = s->org[kx], oy = s->org[ky], oz = s->org[kz];
 
     /* Vertices relative to the origin, then sheared so the ray is the +z axis. */
@@ -26,30 +94,37 @@ static inline int cbvh_ray_triangle(const struct cbvh_ray_shear *restrict s, con
     const float cx = (c[kx] - ox) - sx * cz, cy = (c[ky] - oy) - sy * cz;
 
     /* Scaled barycentrics: 2D edge functions of the sheared triangle at the origin. */
-    float u = cx * by - cy * bx;
-    float v = ax * cy - ay * cx;
-    float w = bx * ay - by * ax;
-    if (u == 0.0f || v == 0.0f || w == 0.0f) {
-        /* On an edge in float: products of floats are exact in double, so the
-         * double difference has the exact sign; both neighbours agree on it. */
-        u = (float)((double)cx * (double)by - (double)cy * (double)bx);
-        v = (float)((double)ax * (double)cy - (double)ay * (double)cx);
-        w = (float)((double)bx * (double)ay - (double)by * (double)ax);
-    }
+    const float u = cx * by - cy * bx;
+    const float v = ax * cy - ay * cx;
+    const float w = bx * ay - by * ax;
+    /* Non-zero, non-NaN float edge functions have exact signs (see above):
+     * two of opposite sign are a miss whatever the third is. */
     if ((u < 0.0f || v < 0.0f || w < 0.0f) && (u > 0.0f || v > 0.0f || w > 0.0f))
         return 0;
-    const float det = u + v + w;
-    if (det == 0.0f)
+    double du = u, dv = v, dw = w, det = du + dv + dw;
+    /* All non-zero and finite (so of one sign): decided. Otherwise (an edge
+     * through the origin, an overflow) decide in double. */
+    if (!CBVH_LIKELY(u != 0.0f && v != 0.0f && w != 0.0f && fabs(det) <= (double)FLT_MAX)) {
+        const float *const vert[3] = {a, b, c};
+        const float sheared[3][2] = {{ax, ay}, {bx, by}, {cx, cy}};
+        double e[3];
+        if (!cbvh_ray_triangle_edges_double(s, vert, sheared, e))
+            return 0;
+        du = e[0];
+        dv = e[1];
+        dw = e[2];
+        det = du + dv + dw;
+    }
+    double td;
+    if (!cbvh_plane_t(s, a, b, c, &td))
         return 0;
-    const float tz = u * (sz * az) + v * (sz * bz) + w * (sz * cz);
-    const float inv = 1.0f / det;
-    const float t = tz * inv;
-    /* Ordered compares: t is never NaN here, but an overflowed t (inf) fails t <= tmax <= CBVH_T_LIMIT. */
+    const float t = (float)td;
+    /* Ordered compares: an overflowed t (inf) fails t <= tmax <= CBVH_T_LIMIT. */
     if (!(t >= tmin && t <= tmax))
         return 0;
     *t_out = t;
-    *u_out = v * inv;
-    *v_out = w * inv;
+    *u_out = (float)(dv / det);
+    *v_out = (float)(dw / det);
     return 1;
 }
 

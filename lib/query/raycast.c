@@ -1,7 +1,7 @@
 /* raycast.c: the public single-ray entry points, cbvh_raycast and cbvh_occluded. */
 #include "query/raycast.h"
 
-int cbvh_hit_output(const struct cbvh_file *f, const struct cbvh_best_hit *best, cbvh_hit *hit)
+int cbvh_hit_output(const struct cbvh_file *f, const struct cbvh_best_hit *best, double t_base, cbvh_hit *hit)
 {
     if (best->tri == UINT32_MAX) {
         if (hit)
@@ -10,7 +10,7 @@ int cbvh_hit_output(const struct cbvh_file *f, const struct cbvh_best_hit *best,
     }
     if (hit) {
         hit->tri = cbvh_original_id(f, best->tri);
-        hit->t = best->t;
+        hit->t = t_base == 0.0 ? best->t : (float)(t_base + best->t);
         hit->u = best->u;
         hit->v = best->v;
     }
@@ -23,7 +23,8 @@ CBVH_API int cbvh_raycast(const cbvh_file *file, const cbvh_ray *ray, cbvh_trave
 {
     struct cbvh_best_hit best = {UINT32_MAX, 0.0f, 0.0f, 0.0f};
     struct cbvh_ray_ctx ctx;
-    if (file && ray && cbvh_ray_setup(&ctx, ray)) {
+    ctx.t_base = 0.0;
+    if (file && ray && cbvh_ray_prepare(&ctx, ray, file)) {
         switch (traversal) {
         case CBVH_TRAVERSAL_SORTED:
             cbvh_closest_stack(file, &ctx, 1, &best, stats);
@@ -39,14 +40,14 @@ CBVH_API int cbvh_raycast(const cbvh_file *file, const cbvh_ray *ray, cbvh_trave
             break;
         }
     }
-    return cbvh_hit_output(file, &best, hit);
+    return cbvh_hit_output(file, &best, ctx.t_base, hit);
 }
 
 CBVH_API int cbvh_occluded(const cbvh_file *file, const cbvh_ray *ray, cbvh_traversal traversal,
                            cbvh_query_stats *stats)
 {
     struct cbvh_ray_ctx ctx;
-    if (!file || !ray || !cbvh_ray_setup(&ctx, ray))
+    if (!file || !ray || !cbvh_ray_prepare(&ctx, ray, file))
         return 0;
     switch (traversal) {
     case CBVH_TRAVERSAL_SORTED:

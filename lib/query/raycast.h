@@ -25,7 +25,14 @@ void cbvh_closest_stackless(const struct cbvh_file *f, const struct cbvh_ray_ctx
                             cbvh_query_stats *stats);
 int cbvh_any_stackless(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray, cbvh_query_stats *stats);
 
-/* Converts a kernel's best hit into the public form (original id). Returns 1 on a hit. */
-int cbvh_hit_output(const struct cbvh_file *f, const struct cbvh_best_hit *best, cbvh_hit *hit);
+/* cbvh_ray_setup for a ray cast into file f: also moves an origin far from
+ * the file's bounds next to them (ray_origin.c), so the triangle test keeps
+ * its precision; ctx->t_base is then the distance moved. Returns 0 for an
+ * invalid ray. */
+int cbvh_ray_prepare(struct cbvh_ray_ctx *ctx, const cbvh_ray *ray, const struct cbvh_file *f);
+
+/* Converts a kernel's best hit into the public form (original id, t on the
+ * caller's ray: t_base + the kernel's t). Returns 1 on a hit. */
+int cbvh_hit_output(const struct cbvh_file *f, const struct cbvh_best_hit *best, double t_base, cbvh_hit *hit);
 
 #endif

@@ -114,6 +114,7 @@ static void batch_add(struct cbvh_stream_batch *b, const struct cbvh_ray_ctx *ct
     b->shear[r] = ctx->shear;
     b->best[r].tri = UINT32_MAX;
     b->ray_index[r] = ray_index;
+    b->t_base[r] = ctx->t_base;
 }
 
 /* Traverses the batch and writes its results, then empties it. */
@@ -126,7 +127,7 @@ static void batch_flush(const struct cbvh_file *f, struct cbvh_stream_batch *b, 
     if (hits) {
         stream_walk(f, b, octant, box_test, 0, NULL, visited, tested);
         for (uint32_t r = 0; r < b->count; r++)
-            cbvh_hit_output(f, &b->best[r], &hits[b->ray_index[r]]);
+            cbvh_hit_output(f, &b->best[r], b->t_base[r], &hits[b->ray_index[r]]);
     } else {
         stream_walk(f, b, octant, box_test, 1, occluded, visited, tested);
     }
@@ -154,7 +155,7 @@ static void stream_run(const struct cbvh_file *f, const cbvh_ray *rays, size_t c
                 hits[r].tri = CBVH_NO_HIT;
             else
                 occluded[r] = 0;
-            octant[j] = cbvh_ray_setup(&ctx, &rays[r]) ? (uint8_t)ctx.octant : UINT8_MAX;
+            octant[j] = cbvh_ray_prepare(&ctx, &rays[r], f) ? (uint8_t)ctx.octant : UINT8_MAX;
             if (octant[j] != UINT8_MAX)
                 present |= 1u << octant[j];
         }
@@ -164,7 +165,7 @@ static void stream_run(const struct cbvh_file *f, const cbvh_ray *rays, size_t c
             for (uint32_t j = 0; j < window; j++) {
                 if (octant[j] != o)
                     continue;
-                cbvh_ray_setup(&ctx, &rays[start + j]);
+                cbvh_ray_prepare(&ctx, &rays[start + j], f);
                 batch_add(&batch, &ctx, start + j);
                 if (batch.count == CBVH_STREAM_BATCH)
                     batch_flush(f, &batch, o, box_test, hits, occluded, &visited, &tested);

@@ -22,6 +22,7 @@ struct cbvh_stream_batch {
     struct cbvh_ray_shear shear[CBVH_STREAM_BATCH];
     struct cbvh_best_hit best[CBVH_STREAM_BATCH];
     size_t ray_index[CBVH_STREAM_BATCH];   /* position in the caller's arrays */
+    double t_base[CBVH_STREAM_BATCH];      /* cbvh_ray_ctx.t_base */
     uint32_t count;
 };
 

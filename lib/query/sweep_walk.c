@@ -107,7 +107,7 @@ int cbvh_sweep_as_ray(const struct cbvh_file *f, const float center[3], const fl
     const cbvh_ray ray = {{center[0], center[1], center[2]}, 0.0f, {delta[0], delta[1], delta[2]}, 1.0f};
     struct cbvh_ray_ctx ctx;
     struct cbvh_best_hit best = {UINT32_MAX, 0.0f, 0.0f, 0.0f};
-    if (!cbvh_ray_setup(&ctx, &ray))
+    if (!cbvh_ray_prepare(&ctx, &ray, f))
         return cbvh_sweep_miss(hit);
     cbvh_closest_stack(f, &ctx, 1, &best, NULL);
     if (best.tri == UINT32_MAX)
@@ -118,7 +118,7 @@ int cbvh_sweep_as_ray(const struct cbvh_file *f, const float center[3], const fl
         const cbvh_v3 va = v3_from_f(a), vb = v3_from_f(b), vc = v3_from_f(c);
         const cbvh_v3 p = v3_madd(v3_madd(v3_scale(va, 1.0 - (double)best.u - (double)best.v), vb, best.u), vc, best.v);
         hit->tri = cbvh_original_id(f, best.tri);
-        hit->t = best.t;
+        hit->t = (float)(ctx.t_base + best.t);
         v3_to_f(p, hit->point);
         v3_to_f(cbvh_fallback_normal(va, vb, vc, v3_from_f(delta)), hit->normal);
     }

@@ -1,0 +1,113 @@
+/* ray_origin.c: validating a ray for a file, and moving a far origin next to the file's bounds. */
+#include "query/raycast.h"
+
+/* An origin farther than this many times the mesh's extent from its bounds
+ * is moved: float coordinates relative to it would keep fewer than about
+ * 20 of their 24 bits at the mesh (a unit mesh seen from 1e20 collapses to
+ * a point), and the products of the triangle test would lose the rest. */
+#define CBVH_FAR_FACTOR 16.0f
+
+/* a + b as s + *err exactly (Knuth's two-sum). */
+static double two_sum(double a, double b, double *err)
+{
+    const double s = a + b, bb = s - a;
+    *err = (a - (s - bb)) + (b - bb);
+    return s;
+}
+
+/* org + t * dir with one rounding (the product's error from fma, the sum's
+ * from two_sum): the point stays on the ray's line to double precision even
+ * when org is 1e20 and the result 1. */
+static double advance(double org, double t, double dir)
+{
+    const double p = t * dir, pe = fma(t, dir, -p);
+    double se;
+    const double s = two_sum(org, p, &se);
+    return s + (se + pe);
+}
+
+/* Entry t of the line org + t * dir into the box [lo, hi]; 0 when the line misses it. */
+static int line_entry(const double org[3], const float dir[3], const float lo[3], const float hi[3], double *entry)
+{
+    double tn = -INFINITY, tf = INFINITY;
+    for (int a = 0; a < 3; a++) {
+        if (dir[a] == 0.0f) {
+            if (org[a] < lo[a] || org[a] > hi[a])
+                return 0;
+            continue;
+        }
+        double t1 = ((double)lo[a] - org[a]) / dir[a], t2 = ((double)hi[a] - org[a]) / dir[a];
+        if (t1 > t2) {
+            const double tmp = t1;
+            t1 = t2;
+            t2 = tmp;
+        }
+        tn = t1 > tn ? t1 : tn;
+        tf = t2 < tf ? t2 : tf;
+    }
+    *entry = tn;
+    return tn <= tf;
+}
+
+/* x rounded to float towards +inf (up = 1) or -inf (up = 0). */
+static float round_float(double x, int up)
+{
+    float f = (float)x;
+    if (up && (double)f < x)
+        f = nextafterf(f, INFINITY);
+    if (!up && (double)f > x)
+        f = nextafterf(f, -INFINITY);
+    return f;
+}
+
+/* Moves the origin along the ray to a point about one extent before the
+ * bounds (in double-double, so the new origin is on the ray's line to
+ * double precision, then rounded to float once), and makes t and the range
+ * relative to it: t' = t - t_base. The first step's entry is only as exact
+ * as the far origin allows; the second, from near the bounds, is exact to
+ * double precision. The range is rounded inwards, so t_base + t' always
+ * lies in the caller's [tmin, tmax]. A ray whose line misses the bounds, or
+ * which points away from them, is left alone: it hits nothing either way. */
+static void move_origin(struct cbvh_ray_ctx *ctx, const cbvh_ray *ray, const float lo[3], const float hi[3], float ext)
+{
+    const float *dir = ray->dir;
+    double o[3] = {ray->org[0], ray->org[1], ray->org[2]}, base = 0.0;
+    const double dmax = fmax(fabs(dir[0]), fmax(fabs(dir[1]), fabs(dir[2])));
+    const double margin = (double)ext / dmax;
+    for (int step = 0; step < 2; step++) {
+        double entry;
+        if (!line_entry(o, dir, lo, hi, &entry))
+            break;
+        const double dt = entry - margin;
+        if (step == 0 && !(dt > 0.0))
+            return;
+        for (int a = 0; a < 3; a++)
+            o[a] = advance(o[a], dt, dir[a]);
+        base += dt;
+    }
+    if (!(base > 0.0))
+        return;
+    const float org[3] = {(float)o[0], (float)o[1], (float)o[2]};
+    const double tmin = (double)ctx->tmin - base;
+    ctx->tmin = tmin > 0.0 ? round_float(tmin, 1) : 0.0f;
+    ctx->tmax = round_float((double)ctx->tmax - base, 0); /* below tmin when the ray ends before the mesh */
+    ctx->t_base = base;
+    cbvh_shear_setup(&ctx->shear, org, dir);
+}
+
+int cbvh_ray_prepare(struct cbvh_ray_ctx *ctx, const cbvh_ray *ray, const struct cbvh_file *f)
+{
+    if (!cbvh_ray_setup(ctx, ray))
+        return 0;
+    const float *lo = f->info.bounds_min, *hi = f->info.bounds_max;
+    float ext = 0.0f, dist = 0.0f;
+    for (int a = 0; a < 3; a++) {
+        const float o = ray->org[a];
+        ext = fmaxf(ext, hi[a] - lo[a]);
+        dist = fmaxf(dist, fmaxf(lo[a] - o, o - hi[a]));
+    }
+    /* Ordered compare: an extent near FLT_MAX gives an infinite product and no move. */
+    if (dist > CBVH_FAR_FACTOR * ext)
+        move_origin(ctx, ray, lo, hi, ext);
+    return 1;
+}
