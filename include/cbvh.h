@@ -119,7 +119,8 @@ CBVH_API void cbvh_cook_options_init(cbvh_cook_options *options);
 typedef struct cbvh_cook_stats {
     uint64_t input_triangles;
     uint64_t input_vertices;
-    uint64_t dropped_degenerate;   /* zero-area triangles removed (documented, never hit) */
+    uint64_t dropped_degenerate;   /* zero-area triangles removed (documented, never hit), including those
+                                    * that quantized vertices collapsed to zero area */
     uint64_t triangles;            /* triangles in the file */
     uint64_t vertices;             /* vertices in the file after welding equal positions */
     uint64_t nodes;

@@ -1506,6 +1506,54 @@ static void test_loader_round_trip(void **state)
     }
 }
 
+/* Finding F3 (notes/findings.md): a triangle smaller than the 16-bit vertex
+ * grid's step collapses to a segment when its vertices are quantized. The
+ * cooker drops it (counted in dropped_degenerate), so every triangle of a
+ * quantized file has a non-zero area; the loader's exact-bounds check passes
+ * although one of the tiny triangles held the mesh's extreme vertex. */
+static void test_quantized_collapse(void **state)
+{
+    (void)state;
+    float pos[] = { 0, 0, 0, 4, 0, 0, 0, 4, 0, 0, 0, 4,            /* a tetrahedron's faces, extent 4 */
+                    1, 1, 1, 1 + 1e-6f, 1, 1, 1, 1 + 1e-6f, 1,     /* tiny, inside */
+                    4.5f, 4.5f, 4.5f, 4.5f - 1e-6f, 4.5f, 4.5f, 4.5f, 4.5f - 1e-6f, 4.5f }; /* tiny, the maximum corner */
+    uint32_t idx[] = { 0, 2, 1, 0, 1, 3, 1, 2, 3, 0, 3, 2, 4, 5, 6, 7, 8, 9 };
+    test_mesh m = { pos, idx, NULL, 10, 6 };
+    for (int q = 0; q < 2; q++) {
+        cbvh_cook_options o;
+        cbvh_cook_options_init(&o);
+        o.vertex_format = q ? CBVH_VERTEX_QUANTIZED16 : CBVH_VERTEX_FLOAT32;
+        cooked c;
+        cook_and_check(&m, &o, &c);
+        assert_int_equal(c.stats.dropped_degenerate, q ? 2 : 0);
+        assert_int_equal(c.stats.triangles, q ? 4 : 6);
+        cbvh_file *file = NULL;
+        cbvh_error err;
+        if (cbvh_open_memory(c.data, c.size, NULL, &file, &err) != CBVH_OK)
+            fail_msg("the loader rejects a cooked file: %s", err.message);
+        cbvh_file_info info;
+        cbvh_file_get_info(file, &info);
+        for (int a = 0; a < 3; a++)
+            assert_true(q ? info.bounds_max[a] < 4.25f : info.bounds_max[a] == 4.5f);
+        for (uint32_t t = 0; t < 6; t++) {
+            float v[3][3];
+            const int present = cbvh_file_get_triangle(file, t, v[0], v[1], v[2]);
+            assert_int_equal(present, !(q && t >= 4));
+            if (!present)
+                continue;
+            double e1[3], e2[3];
+            for (int a = 0; a < 3; a++) {
+                e1[a] = (double)v[1][a] - v[0][a];
+                e2[a] = (double)v[2][a] - v[0][a];
+            }
+            assert_true(e1[1] * e2[2] - e1[2] * e2[1] != 0.0 || e1[2] * e2[0] - e1[0] * e2[2] != 0.0 ||
+                        e1[0] * e2[1] - e1[1] * e2[0] != 0.0);
+        }
+        cbvh_close(file);
+        cooked_free(&c);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -1527,6 +1575,7 @@ int main(void)
         cmocka_unit_test(test_progress),
         cmocka_unit_test(test_cook_to_path),
         cmocka_unit_test(test_loader_round_trip),
+        cmocka_unit_test(test_quantized_collapse),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

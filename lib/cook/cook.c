@@ -116,6 +116,11 @@ static cbvh_result make_grid(cook_state *s, const cbvh_cook_options *o, cbvh_coo
         return cbvh_fail(err, CBVH_ERROR_OUT_OF_MEMORY, "out of memory while quantizing %u vertices",
                          s->mesh.vertex_count);
     st->vertex_max_error = cook_quantize_vertices(&s->grid, s->mesh.positions, s->quantized, s->mesh.vertex_count);
+    /* A triangle smaller than the grid step can lose its area on the grid: readers
+     * would hold a segment that no ray and no overlap can report, so it goes. */
+    if (cook_drop_collapsed(&s->mesh) > 0 && s->mesh.triangle_count == 0)
+        return cbvh_fail(err, CBVH_ERROR_EMPTY_MESH,
+                         "all triangles collapsed to zero area on the 16-bit vertex grid (quantized vertices)");
     return cook_mesh_bounds(&s->mesh, err);
 }
 

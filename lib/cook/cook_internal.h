@@ -38,7 +38,13 @@ cbvh_result cook_prepare(const cbvh_mesh *mesh, const cbvh_allocator *a, const c
                          cook_mesh *out, cbvh_error *err);
 void cook_mesh_free(const cbvh_allocator *a, cook_mesh *m);
 
-/* Sets m->bounds_min/max from the positions; CBVH_ERROR_BAD_MESH when an extent overflows a float. */
+/* Drops the kept triangles whose current positions have zero area (quantized
+ * vertices can collapse a small triangle onto a segment or a point), keeping
+ * the order, and counts them in dropped_degenerate. Returns how many. Vertices
+ * only they used stay in positions; the layout writes used vertices only. */
+uint32_t cook_drop_collapsed(cook_mesh *m);
+
+/* Sets m->bounds_min/max from the positions the triangles use; CBVH_ERROR_BAD_MESH when an extent overflows a float. */
 cbvh_result cook_mesh_bounds(cook_mesh *m, cbvh_error *err);
 
 /* ---- quantize: the file's 16-bit grid (spec section 6) ---- */

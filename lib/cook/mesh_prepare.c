@@ -148,6 +148,28 @@ static void drop_degenerate(const cbvh_mesh *mesh, const uint32_t *restrict map,
     m->triangle_count = kept > UINT32_MAX ? UINT32_MAX : (uint32_t)kept;
 }
 
+uint32_t cook_drop_collapsed(cook_mesh *m)
+{
+    const float *restrict pos = m->positions;
+    uint32_t *restrict idx = m->indices;
+    uint32_t *restrict ids = m->original_ids;
+    uint32_t kept = 0;
+    for (uint32_t t = 0; t < m->triangle_count; t++) {
+        const uint32_t w0 = idx[3 * (size_t)t], w1 = idx[3 * (size_t)t + 1], w2 = idx[3 * (size_t)t + 2];
+        if (zero_area(pos + 3 * (size_t)w0, pos + 3 * (size_t)w1, pos + 3 * (size_t)w2))
+            continue;
+        idx[3 * (size_t)kept] = w0;
+        idx[3 * (size_t)kept + 1] = w1;
+        idx[3 * (size_t)kept + 2] = w2;
+        ids[kept] = ids[t];
+        kept++;
+    }
+    const uint32_t dropped = m->triangle_count - kept;
+    m->dropped_degenerate += dropped;
+    m->triangle_count = kept;
+    return dropped;
+}
+
 /* Renumbers the welded vertices that kept triangles use, in welded order, compacting positions. */
 static cbvh_result drop_unused(cook_mesh *m, uint32_t welded, const cbvh_allocator *a)
 {
@@ -174,12 +196,16 @@ static cbvh_result drop_unused(cook_mesh *m, uint32_t welded, const cbvh_allocat
 
 cbvh_result cook_mesh_bounds(cook_mesh *m, cbvh_error *err)
 {
+    /* Over the vertices the triangles use: after cook_drop_collapsed some are unused and the
+     * file, which stores used vertices only, must carry their exact bounds. */
     const float *p = m->positions;
+    const uint32_t *idx = m->indices;
+    const size_t corners = 3 * (size_t)m->triangle_count;
     for (int k = 0; k < 3; k++)
-        m->bounds_min[k] = m->bounds_max[k] = p[k];
-    for (uint32_t v = 1; v < m->vertex_count; v++)
+        m->bounds_min[k] = m->bounds_max[k] = p[3 * (size_t)idx[0] + (size_t)k];
+    for (size_t c = 1; c < corners; c++)
         for (int k = 0; k < 3; k++) {
-            float x = p[3 * (size_t)v + (size_t)k];
+            float x = p[3 * (size_t)idx[c] + (size_t)k];
             m->bounds_min[k] = x < m->bounds_min[k] ? x : m->bounds_min[k];
             m->bounds_max[k] = x > m->bounds_max[k] ? x : m->bounds_max[k];
         }
