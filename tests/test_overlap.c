@@ -203,12 +203,74 @@ static void test_invalid_input(void **state)
     scene_free(&s);
 }
 
+/* Finding F4 addendum (notes/findings.md): a sphere overlap missed a sliver
+ * of aspect 8e9 whose long edge passes 2.0 from the center of a sphere of
+ * radius 3.26e8 (the float-era closest point lost every digit). The
+ * finding's case, then spheres around points of slivers' long edges at
+ * aspects 1e4 to 1e10: every sphere holding a point of the long edge (a
+ * point-to-segment distance, exact enough in double) must report it, and
+ * the reported set matches the reference. */
+static void test_sliver_overlaps(void **state)
+{
+    (void)state;
+    for (int e = 4; e <= 10; e++) {
+        const float len = 3.7e9f;
+        const float pos[9] = {0.0f, -len, 0.0f, 2.0f, -1.0f, 2.0f, 1.56f, -2.06f, 2.0f};
+        float p[9];
+        memcpy(p, pos, sizeof p);
+        /* the finding's triangle at e = 10 (aspect 8e9); narrower ends shrink towards the long edge */
+        const float shrink = e == 10 ? 1.0f : powf(10.0f, (float)(e - 10));
+        for (int k = 1; k < 3; k++) {
+            p[3 * k] *= shrink;
+            p[3 * k + 2] *= shrink;
+        }
+        const uint32_t idx[3] = {0, 1, 2};
+        ref_fixture fx;
+        assert_int_equal(ref_fixture_open(&fx, p, 3, idx, 1, NULL), CBVH_OK);
+        uint64_t st = 5 + (uint64_t)e;
+        for (int i = 0; i < 200; i++) {
+            float center[3], radius;
+            if (i == 0 && e == 10) {
+                center[0] = 0.02f;
+                center[1] = -3.2e9f;
+                center[2] = -1.7f;
+                radius = 3.26e8f;
+            } else {
+                const double f = rnd(&st, 0.05, 0.95), r = rnd(&st, 1.0, 1e8);
+                for (int a = 0; a < 3; a++)
+                    center[a] = (float)((double)p[a] * (1.0 - f) + (double)p[3 + a] * f + rnd(&st, -0.7, 0.7) * r);
+                radius = (float)r;
+            }
+            /* distance from the center to the long edge (vertex 0 - vertex 1) */
+            double ab[3], ap[3], ab2 = 0, t = 0, d2 = 0;
+            for (int a = 0; a < 3; a++) {
+                ab[a] = (double)p[3 + a] - p[a];
+                ap[a] = (double)center[a] - p[a];
+                ab2 += ab[a] * ab[a];
+                t += ab[a] * ap[a];
+            }
+            t = fmin(1.0, fmax(0.0, t / ab2));
+            for (int a = 0; a < 3; a++)
+                d2 += (ap[a] - t * ab[a]) * (ap[a] - t * ab[a]);
+            uint32_t ids[2];
+            const size_t n = cbvh_overlap_sphere(fx.file, center, radius, NULL, NULL, ids, 2);
+            if (sqrt(d2) <= 0.999 * radius && n != 1)
+                fail_msg("aspect 1e%d sphere %d: the long edge is %g from the center, radius %g, not reported", e, i,
+                         sqrt(d2), (double)radius);
+            const double region[4] = {center[0], center[1], center[2], radius};
+            check_set(&fx, ids, n, region, 1);
+        }
+        ref_fixture_close(&fx);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_overlaps),
         cmocka_unit_test(test_triangle_box_sat),
         cmocka_unit_test(test_invalid_input),
+        cmocka_unit_test(test_sliver_overlaps),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

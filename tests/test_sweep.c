@@ -271,6 +271,52 @@ static void test_invalid_input(void **state)
     scene_free(&s);
 }
 
+/* Finding F4 (notes/findings.md): on a long sliver the face entry's
+ * barycentrics came from a Gram-matrix solve that cancels catastrophically,
+ * and a sphere sweep reported the midpoint of the long edge, 3 radii from the
+ * sphere. The finding's case exactly (delta, center, radius), then random
+ * sphere sweeps crossing slivers of aspect 1e4 to 1e9 near their long edge,
+ * against the reference (contact real, point on the triangle, one radius
+ * from the center along the normal). */
+static void test_sliver_sweeps(void **state)
+{
+    (void)state;
+    for (int e = 4; e <= 9; e++) {
+        const float len = 1.07e8f, w = len / powf(10.0f, (float)e) * 2.0f;
+        const float pos[9] = {0.0f, -len, -len, w, 1e-3f, 2e-3f, 1e-3f, 0.0f, 1e-3f};
+        const uint32_t idx[3] = {0, 1, 2};
+        ref_fixture fx;
+        assert_int_equal(ref_fixture_open(&fx, pos, 3, idx, 1, NULL), CBVH_OK);
+        ref_shape s;
+        memset(&s, 0, sizeof s);
+        s.kind = REF_SPHERE;
+        if (e == 8) { /* aspect 5e7: the finding's sweep */
+            const float center[3] = {0.62f, -4.98e7f, -3.56e7f}, delta[3] = {-0.4f, 1.95e7f, -3.59e7f};
+            for (int a = 0; a < 3; a++)
+                s.p0[a] = s.p1[a] = center[a];
+            s.radius = 4.02e6f;
+            check_sweep(&fx, &s, delta);
+        }
+        uint64_t st = 77 + (uint64_t)e;
+        for (int i = 0; i < 60; i++) {
+            /* a point of the long edge, a center off it, a motion across it */
+            const double f = rnd(&st, 0.1, 0.9);
+            const double off = rnd(&st, 1.5, 4.0), r = rnd(&st, 1e6, 8e6);
+            const double ang = rnd(&st, 0.0, 6.283185307179586);
+            const double side[3] = {cos(ang), sin(ang) * 0.7071067811865476, -sin(ang) * 0.7071067811865476};
+            float delta[3];
+            for (int a = 0; a < 3; a++) {
+                const double on = (double)pos[a] * (1.0 - f);
+                s.p0[a] = s.p1[a] = (float)(on + side[a] * off * r);
+                delta[a] = (float)(-side[a] * off * r * rnd(&st, 1.2, 2.5) + rnd(&st, -0.3, 0.3) * r);
+            }
+            s.radius = (float)r;
+            check_sweep(&fx, &s, delta);
+        }
+        ref_fixture_close(&fx);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -278,6 +324,7 @@ int main(void)
         cmocka_unit_test(test_zero_size_is_raycast),
         cmocka_unit_test(test_start_overlap_and_no_motion),
         cmocka_unit_test(test_invalid_input),
+        cmocka_unit_test(test_sliver_sweeps),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -4,9 +4,10 @@
 
 #include "query/vec3d.h"
 
-/* The point of triangle (a, b, c) nearest to p (Ericson, Real-Time Collision
- * Detection, 5.1.5: Voronoi regions of vertices, edges and face). Works for
- * degenerate triangles too (then a point of an edge). */
+/* The point of triangle (a, b, c) nearest to p: the projection onto the
+ * plane when it falls inside, else the nearest point of the three edges.
+ * Accurate on slivers of any aspect; works for degenerate triangles too
+ * (then a point of an edge). */
 cbvh_v3 cbvh_closest_point_triangle(cbvh_v3 p, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c);
 
 /* Closest points of segments p0-p1 and q0-q1 (Ericson 5.1.9), degenerate

@@ -50,9 +50,11 @@ int cbvh_enter_cylinder(cbvh_v3 o, cbvh_v3 d, cbvh_v3 p, cbvh_v3 q, double r, do
 int cbvh_enter_face(cbvh_v3 o, cbvh_v3 d, cbvh_v3 base, cbvh_v3 e1, cbvh_v3 e2, int parallelogram, double r,
                     double tmax, double *t, cbvh_v3 *normal, double *a, double *b)
 {
-    cbvh_v3 n = v3_normalize(v3_cross(e1, e2));
-    if (v3_len2(n) == 0.0)
+    const cbvh_v3 cross = v3_cross(e1, e2);
+    const double cc = v3_len2(cross);
+    if (!(cc > 0.0))
         return 0; /* flat piece of no area: its edges and vertices cover it */
+    cbvh_v3 n = v3_scale(cross, 1.0 / sqrt(cc));
     double dist = v3_dot(v3_sub(o, base), n);
     if (dist < 0.0) {
         n = v3_scale(n, -1.0);
@@ -64,13 +66,14 @@ int cbvh_enter_face(cbvh_v3 o, cbvh_v3 d, cbvh_v3 base, cbvh_v3 e1, cbvh_v3 e2, 
     const double tt = (dist - r) / -speed;
     if (!(tt <= tmax))
         return 0;
-    /* Entry point projected onto the piece's plane, in (e1, e2) coordinates. */
+    /* Entry point projected onto the piece's plane, in (e1, e2) coordinates:
+     * w = aa e1 + bb e2 gives aa = (w x e2).cross / |cross|^2 and bb =
+     * (e1 x w).cross / |cross|^2, whose errors scale with the edge lengths.
+     * (The Gram-matrix solve, det = |e1|^2 |e2|^2 - (e1.e2)^2, cancels
+     * catastrophically on a sliver: finding F4 put the contact at the
+     * midpoint of a long edge, 3 radii from the sphere.) */
     const cbvh_v3 w = v3_madd(v3_sub(v3_madd(o, d, tt), base), n, -r);
-    const double g11 = v3_len2(e1), g12 = v3_dot(e1, e2), g22 = v3_len2(e2);
-    const double w1 = v3_dot(w, e1), w2 = v3_dot(w, e2), det = g11 * g22 - g12 * g12;
-    if (!(det > 0.0))
-        return 0;
-    const double aa = (g22 * w1 - g12 * w2) / det, bb = (g11 * w2 - g12 * w1) / det;
+    const double aa = v3_dot(v3_cross(w, e2), cross) / cc, bb = v3_dot(v3_cross(e1, w), cross) / cc;
     if (aa < 0.0 || bb < 0.0 || (parallelogram ? (aa > 1.0 || bb > 1.0) : aa + bb > 1.0))
         return 0;
     *t = tt;
