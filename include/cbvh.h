@@ -266,7 +266,16 @@ typedef struct cbvh_query_stats {
 } cbvh_query_stats;
 
 /* Closest hit. Returns 1 and fills *hit on a hit, else returns 0 and sets hit->tri
- * to CBVH_NO_HIT. `stats` may be NULL; when given, counters are added to it. */
+ * to CBVH_NO_HIT. `stats` may be NULL; when given, counters are added to it.
+ * Ties: when several triangles are hit at exactly the same t, the one first in
+ * the file's cooked (leaf) order wins, so every traversal and the streams
+ * report the same triangle, t, u and v for a ray. The hit/miss decision is
+ * watertight (a ray through a shared edge or vertex hits one of its triangles);
+ * t is computed from the triangle's plane in double precision, accurate on
+ * slivers and for any finite coordinates. t is capped: tmax is clamped to about
+ * 1.7e38 (FLT_MAX / 2), hits beyond it are misses. An origin far from the mesh
+ * (more than 16 times its extent) is moved along the ray next to it first, so
+ * rays from 1e20 away still hit a unit mesh; t is reported on the caller's ray. */
 CBVH_API int cbvh_raycast(const cbvh_file *file, const cbvh_ray *ray, cbvh_traversal traversal,
                           cbvh_hit *hit, cbvh_query_stats *stats);
 
@@ -286,7 +295,13 @@ CBVH_API void cbvh_occluded_stream(const cbvh_file *file, const cbvh_ray *rays, 
 /* Result of a sweep: the first contact along the motion. t in [0,1] is the
  * fraction of `delta` travelled; point is the contact point on the triangle
  * and normal the unit contact normal pointing from the triangle towards the
- * moving shape. A shape that overlaps a triangle at the start reports t = 0. */
+ * moving shape. Ties at equal t go to the triangle first in cooked order.
+ * A shape that overlaps a triangle at the start reports t = 0 with point the
+ * triangle's point nearest the shape (sphere: nearest its center) and normal
+ * from that point towards the shape; when they touch with no separating
+ * direction (the center, axis or box reaches into the triangle) the normal is
+ * the face normal turned against delta (as wound when delta is zero or
+ * parallel to the face; -delta or +z for a zero-area triangle). */
 typedef struct cbvh_sweep_hit {
     uint32_t tri;
     float t;
@@ -295,7 +310,13 @@ typedef struct cbvh_sweep_hit {
 } cbvh_sweep_hit;
 
 /* Sweeps a sphere from `center` to `center + delta`. Returns 1 on contact. radius >= 0
- * (radius 0 is a raycast). Invalid input (NaN, inf, negative radius) is a miss. */
+ * (radius 0 is a raycast). Invalid input (NaN, inf, negative radius) is a miss.
+ * Zero-size shapes (radius 0; a capsule with radius 0 and p0 == p1; a box with
+ * zero half extents) are the ray center + t*delta, t in [0, 1], answered by
+ * cbvh_raycast's kernel (same triangle and t), normal the face normal against
+ * delta; with delta zero as well that ray is invalid and the sweep is a miss,
+ * even for a point lying on a triangle. A shape of non-zero size with zero delta
+ * reports t = 0 for what it overlaps, else a miss. */
 CBVH_API int cbvh_sweep_sphere(const cbvh_file *file, const float center[3], float radius,
                                const float delta[3], cbvh_sweep_hit *hit);
 
