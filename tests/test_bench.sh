@@ -118,7 +118,7 @@ run 0 "report --gen sphere:2000" "$CBVH" report --gen sphere:2000 --rays 2000 --
     cp "$tmp/out" "$tmp/report.md" &&
     check "... prints the table with error and run-time columns" \
         grep -q '^| mesh | configuration | bytes/tri | open ms | closest MRays/s | any MRays/s | nodes/ray | tris/ray | extra nodes/ray | extra tris/ray | box inflation mean | box inflation worst | flips | wrong tri | t err max | t err RMS | vertex err | leaked rays |' "$tmp/report.md" &&
-    check "... one row per configuration" test "$(grep -c '^| sphere:2000 | leaf ' "$tmp/report.md")" -eq 11 &&
+    check "... one row per configuration" test "$(grep -c '^| sphere:2000 | leaf ' "$tmp/report.md")" -eq 12 &&
     check "... no ray leaks through the closed sphere" \
         test "$(grep '^| sphere:2000 |' "$tmp/report.md" | grep -vc '| 0 / [0-9]* |$')" -eq 0
 
@@ -127,7 +127,11 @@ if [ "$has_python" = 1 ] && [ -f "$tmp/report.json" ]; then
     check "report: exact answers with float vertices, bounded error with quantized ones" python3 - "$tmp/report.json" <<'EOF'
 import json, sys
 rows = json.load(open(sys.argv[1]))["rows"]
-assert len(rows) == 11, len(rows)
+assert len(rows) == 12, len(rows)
+raw = [r for r in rows if r["leaf_size"] == 4 and r["vertices"] == "float" and r["boxes"] == "q16" and r["zlib_level"] == 0]
+packed = [r for r in rows if r["zlib_level"] > 0]
+assert len(raw) == 5 and len(packed) == 1, (raw, packed)
+assert packed[0]["bytes_per_triangle"] < raw[0]["bytes_per_triangle"], (packed, raw)
 for r in rows:
     assert r["leaked_rays"] == 0 and r["leak_test_rays"] > 0, r
     assert r["closest_mrays_per_s"] > 0 and r["any_mrays_per_s"] > 0, r
@@ -150,7 +154,7 @@ root = ET.parse(sys.argv[1]).getroot()
 ns = "{http://www.w3.org/2000/svg}"
 assert root.tag == ns + "svg", root.tag
 circles = root.findall(".//" + ns + "circle")
-assert len(circles) == 3 * 11, len(circles)
+assert len(circles) == 3 * 12, len(circles)
 texts = [t.text or "" for t in root.iter(ns + "text")]
 assert any("ns per ray" in t for t in texts), texts[:5]
 EOF
@@ -161,7 +165,7 @@ fi
 run 0 "report --out DIR" "$CBVH" report --gen cube --rays 500 --sample 100 --reps 1 --quiet --out "$tmp/out-dir" &&
     check "... writes report.md, report.json, report.svg and the cooked files" \
         test -s "$tmp/out-dir/report.md" -a -s "$tmp/out-dir/report.json" -a -s "$tmp/out-dir/report.svg" \
-        -a -s "$tmp/out-dir/cube-leaf4.cbvh" -a -s "$tmp/out-dir/cube-leaf4-qverts.cbvh"
+        -a -s "$tmp/out-dir/cube-leaf4.cbvh" -a -s "$tmp/out-dir/cube-leaf4-qverts.cbvh" -a -s "$tmp/out-dir/cube-leaf4-zlib.cbvh"
 
 echo "test_bench.sh: $passed passed, $failed failed, $skipped skipped"
 [ "$failed" -eq 0 ]

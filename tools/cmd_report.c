@@ -29,6 +29,7 @@ static const char usage[] =
     "  - node boxes: exact float boxes (an in-memory reference layout of the same tree) against\n"
     "    the file's 16-bit quantized boxes;\n"
     "  - vertices: lossless float against 16-bit quantized;\n"
+    "  - sections: raw against zlib-compressed (file size and open time);\n"
     "  - leaf sizes 1, 2, 4, 8, 16;\n"
     "  - traversals: sorted by the precomputed sort byte, unsorted, distance-sorted at run time,\n"
     "    stackless, batched streams.\n"
@@ -72,11 +73,14 @@ static const cli_option options[] = {
 /* Vertices and edge midpoints aimed at by the leak test, at most, each. */
 #define LEAK_TARGETS 5000
 
-/* The cooks of one mesh: every leaf size with lossless vertices, and quantized vertices at the default leaf size. */
+/* The cooks of one mesh: every leaf size with lossless vertices, then at the
+ * default leaf size quantized vertices, and zlib sections (smaller files, a
+ * slower open, the same queries). */
 static const struct {
     uint32_t leaf;
     int quantized_vertices;
-} cook_configs[] = { { 1, 0 }, { 2, 0 }, { 4, 0 }, { 8, 0 }, { 16, 0 }, { 4, 1 } };
+    int compress; /* zlib level, 0 for raw sections */
+} cook_configs[] = { { 1, 0, 0 }, { 2, 0, 0 }, { 4, 0, 0 }, { 8, 0, 0 }, { 16, 0, 0 }, { 4, 1, 0 }, { 4, 0, 6 } };
 #define COOK_COUNT (sizeof cook_configs / sizeof cook_configs[0])
 #define DEFAULT_LEAF 4
 
@@ -84,7 +88,7 @@ typedef struct report_row {
     const char *mesh;
     char config[64];
     uint32_t leaf;
-    int quantized_vertices, float_boxes;
+    int quantized_vertices, float_boxes, compress;
     const char *traversal;
     double bytes_per_triangle, open_seconds;
     double closest_mrays, any_mrays;
@@ -398,7 +402,7 @@ static report_row *new_row(report_state *s)
 }
 
 /* A file name for the cooked file of a configuration: the mesh's base name without odd characters. */
-static void cooked_path(const report_state *s, const mesh_ctx *c, uint32_t leaf, int qverts, char *path, size_t size)
+static void cooked_path(const report_state *s, const mesh_ctx *c, size_t k, char *path, size_t size)
 {
     const char *base = strrchr(c->mesh.name, '/');
     base = base ? base + 1 : c->mesh.name;
@@ -407,28 +411,32 @@ static void cooked_path(const report_state *s, const mesh_ctx *c, uint32_t leaf,
     for (; *base && n + 1 < sizeof clean; base++)
         clean[n++] = (isalnum((unsigned char)*base) || *base == '_' || *base == '-') ? *base : '_';
     clean[n] = '\0';
-    snprintf(path, size, "%s/%s-leaf%u%s.cbvh", s->out_dir, clean, (unsigned)leaf, qverts ? "-qverts" : "");
+    snprintf(path, size, "%s/%s-leaf%u%s%s.cbvh", s->out_dir, clean, (unsigned)cook_configs[k].leaf,
+             cook_configs[k].quantized_vertices ? "-qverts" : "", cook_configs[k].compress ? "-zlib" : "");
 }
 
 static int measure_cook(report_state *s, mesh_ctx *c, size_t k, int *step, int steps)
 {
     uint32_t leaf = cook_configs[k].leaf;
-    int qverts = cook_configs[k].quantized_vertices;
+    int qverts = cook_configs[k].quantized_vertices, compress = cook_configs[k].compress;
+    int is_default = leaf == DEFAULT_LEAF && !qverts && !compress;
     char label[128];
-    snprintf(label, sizeof label, "%s: cook leaf %u%s", c->label, (unsigned)leaf, qverts ? ", quantized vertices" : "");
+    snprintf(label, sizeof label, "%s: cook leaf %u%s%s", c->label, (unsigned)leaf, qverts ? ", quantized vertices" : "",
+             compress ? ", zlib" : "");
     progress_update(&s->prog, label, (double)(*step)++ / steps);
 
     cbvh_cook_options opt;
     cbvh_cook_options_init(&opt);
     opt.max_leaf_size = leaf;
     opt.vertex_format = qverts ? CBVH_VERTEX_QUANTIZED16 : CBVH_VERTEX_FLOAT32;
+    opt.compress_level = compress;
     cbvh_mesh view = bench_mesh_view(&c->mesh);
     cbvh_cook_stats stats;
     cbvh_error err;
     char path[1024];
     int status = 0;
     if (s->out_dir) {
-        cooked_path(s, c, leaf, qverts, path, sizeof path);
+        cooked_path(s, c, k, path, sizeof path);
         if (cbvh_cook_to_path(&view, &opt, NULL, path, &stats, &err) != CBVH_OK)
             status = cli_report(s->command, path, &err);
     } else {
@@ -467,9 +475,9 @@ static int measure_cook(report_state *s, mesh_ctx *c, size_t k, int *step, int s
         goto done;
     /* One row per traversal for the default cook, the sorted traversal for the others,
      * and the reference layout itself for the default cook. */
-    int variants = leaf == DEFAULT_LEAF && !qverts ? BENCH_CBVH_VARIANTS : 1;
+    int variants = is_default ? BENCH_CBVH_VARIANTS : 1;
     for (int v = -1; v < variants; v++) {
-        if (v < 0 && (leaf != DEFAULT_LEAF || qverts))
+        if (v < 0 && !is_default)
             continue;
         report_row *row = new_row(s);
         if (!row)
@@ -490,10 +498,11 @@ static int measure_cook(report_state *s, mesh_ctx *c, size_t k, int *step, int s
         row->mesh = c->mesh.name;
         row->leaf = leaf;
         row->quantized_vertices = qverts;
+        row->compress = compress;
         row->float_boxes = v < 0;
         row->traversal = v < 0 ? "sorted" : engine.name;
-        snprintf(row->config, sizeof row->config, "leaf %u, %s boxes, %s vertices, %s", (unsigned)leaf,
-                 v < 0 ? "float" : "q16", qverts ? "q16" : "float", row->traversal);
+        snprintf(row->config, sizeof row->config, "leaf %u, %s boxes, %s vertices, %s%s", (unsigned)leaf,
+                 v < 0 ? "float" : "q16", qverts ? "q16" : "float", row->traversal, compress ? ", zlib" : "");
         row->bytes_per_triangle = (double)size / (double)c->mesh.triangle_count;
         row->open_seconds = v < 0 ? -1.0 : open_seconds;
         row->extra_nodes = row->nodes_per_ray - base.nodes_per_ray;
@@ -637,6 +646,7 @@ static int write_json(const report_state *s, const char *path)
         json_string(&w, "boxes", r->float_boxes ? "float" : "q16");
         json_string(&w, "vertices", r->quantized_vertices ? "q16" : "float");
         json_string(&w, "traversal", r->traversal);
+        json_uint(&w, "zlib_level", (uint64_t)r->compress);
         json_double(&w, "bytes_per_triangle", r->bytes_per_triangle);
         if (r->open_seconds >= 0.0)
             json_double(&w, "open_seconds", r->open_seconds);
@@ -689,8 +699,9 @@ static int write_svg(const report_state *s, const char *path)
     for (size_t i = 0; i < n; i++) {
         const report_row *r = &s->rows[i];
         const char *base = strrchr(r->mesh, '/') ? strrchr(r->mesh, '/') + 1 : r->mesh;
-        snprintf(labels[i], sizeof labels[i], "%s%sL%u %s%s %s", many ? base : "", many ? " " : "", (unsigned)r->leaf,
-                 r->float_boxes ? "floatbox" : "q16box", r->quantized_vertices ? " q16vert" : "", r->traversal);
+        snprintf(labels[i], sizeof labels[i], "%s%sL%u %s%s %s%s", many ? base : "", many ? " " : "", (unsigned)r->leaf,
+                 r->float_boxes ? "floatbox" : "q16box", r->quantized_vertices ? " q16vert" : "", r->traversal,
+                 r->compress ? " zlib" : "");
         double ns = r->closest_mrays > 0.0 ? 1e3 / r->closest_mrays : NAN;
         pts[i] = (svg_point){ ns, r->t_err_rms, labels[i] };
         pts[n + i] = (svg_point){ ns, r->extra_nodes + r->extra_tris, labels[i] };
