@@ -281,10 +281,13 @@ static void check_ray(check_ctx *c, const cbvh_ray *r)
         return;
     for (int t = 1; t < 4; t++) {
         FUZZ_CHECK(got[t] == got[0], "%s and sorted disagree: hit %d vs %d", traversal_name[t], got[t], got[0]);
-        if (got[0])
+        /* slivers get t wrong by more than the gap between near-equal hits (F2),
+         * so which of two is "closest" can depend on the visiting order */
+        if (got[0] && aspect_of(c, hits[0].tri) <= FUZZ_MAX_ASPECT && aspect_of(c, hits[t].tri) <= FUZZ_MAX_ASPECT)
             FUZZ_CHECK(hits[t].t == hits[0].t, "%s t %.9g, sorted t %.9g", traversal_name[t], hits[t].t, hits[0].t);
     }
-    FUZZ_CHECK((sh.tri != CBVH_NO_HIT) == got[0] && (!got[0] || sh.t == hits[0].t),
+    int exact = !got[0] || (aspect_of(c, hits[0].tri) <= FUZZ_MAX_ASPECT && aspect_of(c, sh.tri) <= FUZZ_MAX_ASPECT);
+    FUZZ_CHECK((sh.tri != CBVH_NO_HIT) == got[0] && (!got[0] || !exact || sh.t == hits[0].t),
                "stream differs from raycast (tri %u t %.9g vs tri %u t %.9g)", sh.tri, sh.t, hits[0].tri, hits[0].t);
     FUZZ_CHECK(socc == got[0], "occluded stream %d but raycast %d", socc, got[0]);
 }
@@ -303,7 +306,8 @@ static void check_stream_batch(check_ctx *c, const cbvh_ray *rays, size_t n)
         if (c->strict && c->scale <= FUZZ_MAX_MAGNITUDE) {
             cbvh_hit one;
             int got = cbvh_raycast(c->f, &rays[i], CBVH_TRAVERSAL_SORTED, &one, NULL);
-            FUZZ_CHECK(got == (hits[i].tri != CBVH_NO_HIT) && (!got || one.t == hits[i].t),
+            int exact = !got || (aspect_of(c, one.tri) <= FUZZ_MAX_ASPECT && aspect_of(c, hits[i].tri) <= FUZZ_MAX_ASPECT);
+            FUZZ_CHECK(got == (hits[i].tri != CBVH_NO_HIT) && (!got || !exact || one.t == hits[i].t),
                        "stream batch ray %zu differs from its raycast", i);
             FUZZ_CHECK(occ[i] == got, "occluded stream ray %zu: %u, raycast %d", i, occ[i], got);
         }
