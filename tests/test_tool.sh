@@ -363,6 +363,29 @@ else
     skip "real meshes: the Debian package assimp-testmodels is not installed"
 fi
 
+# ---- downloadable meshes (npm packages, fetched by tools/quickstart.sh test) -------------
+
+if [ -n "${CBVH_BUNNY:-}" ] && [ -s "$CBVH_BUNNY" ]; then
+    run 0 "cook the npm bunny (OBJ)" "$CBVH" cook --json "$CBVH_BUNNY" "$tmp/bunny.cbvh" &&
+        check "... keeps its 3674 triangles" grep -qE '"kept": 3674,' "$tmp/out"
+    run 0 "verify the bunny" "$CBVH" verify "$tmp/bunny.cbvh"
+else
+    skip "npm bunny: CBVH_BUNNY is not set (sh tools/quickstart.sh test fetches it)"
+fi
+if [ -n "${CBVH_DRAGON_MESH:-}" ] && [ -s "$CBVH_DRAGON_MESH" ]; then
+    run 0 "cook the 871K-triangle dragon (PLY)" "$CBVH" cook --json "$CBVH_DRAGON_MESH" "$tmp/dragon.cbvh" &&
+        check "... keeps 871K triangles" grep -qE '"kept": 871[0-9]{3},' "$tmp/out"
+    run 0 "verify the dragon" "$CBVH" verify "$tmp/dragon.cbvh"
+    printf '%s\n' "-0.01 0.12 1  0 0 -1" "0 0.1 -1  0 0 1" "5 5 5  1 1 1" >"$tmp/dragon-rays.txt"
+    "$CBVH" raycast "$tmp/dragon.cbvh" <"$tmp/dragon-rays.txt" >"$tmp/dr-sorted.txt"
+    "$CBVH" raycast --traversal stream "$tmp/dragon.cbvh" <"$tmp/dragon-rays.txt" >"$tmp/dr-stream.txt"
+    check "dragon: sorted and stream raycasts agree" cmp -s "$tmp/dr-sorted.txt" "$tmp/dr-stream.txt"
+    check "dragon: a ray from outside away from it misses" sh -c "tail -n 1 '$tmp/dr-sorted.txt' | grep -qx -- -1"
+    rm -f "$tmp/dragon.cbvh"
+else
+    skip "npm dragon: CBVH_DRAGON_MESH is not set (sh tools/quickstart.sh test fetches it)"
+fi
+
 # ---- demo ----------------------------------------------------------------------------------
 
 run 0 "demo (every query kind, checked against brute force)" env TMPDIR="$tmp" "$CBVH" demo &&
