@@ -14,9 +14,11 @@ CBVH_API void cbvh_cook_options_init(cbvh_cook_options *options)
     if (!options)
         return;
     memset(options, 0, sizeof *options);
-    options->max_leaf_size = 4;
+    /* Fewer, larger leaves: each node skipped is a dependent cache miss saved,
+     * and a leaf's triangles sit together in memory (measurements in cbvh.h). */
+    options->max_leaf_size = 16;
     options->sah_bins = 32;
-    options->traversal_cost = 1.0f;
+    options->traversal_cost = 4.0f;
     options->intersection_cost = 1.0f;
     options->vertex_format = CBVH_VERTEX_FLOAT32;
     options->compress_level = 0;
@@ -205,8 +207,9 @@ CBVH_API cbvh_result cbvh_cook(const cbvh_mesh *mesh, const cbvh_cook_options *o
     if (r == CBVH_OK) {
         progress.phase = CBVH_PHASE_LAYOUT;
         cook_report(&progress, 0.0);
-        r = cook_layout_build(&s.tree, &s.mesh, &s.grid, o->traversal_cost, o->intersection_cost, &s.a, &s.layout,
-                              err);
+        /* The reported SAH cost uses unit costs whatever the build's costs, so trees cooked
+         * with different options compare (and `cbvh info` computes the same figure). */
+        r = cook_layout_build(&s.tree, &s.mesh, &s.grid, 1.0f, 1.0f, &s.a, &s.layout, err);
         cook_tree_free(&s.a, &s.tree);
         if (r == CBVH_OK)
             cook_report(&progress, 1.0);
