@@ -200,19 +200,6 @@ static int ray_valid(const cbvh_ray *r)
     return !isnan(r->tmin) && !isnan(r->tmax) && isfinite(r->tmin) && r->tmin >= 0 && r->tmin <= r->tmax;
 }
 
-/* Longest edge over the height onto it: slivers lose float precision
- * (findings F2, F4), so the geometric contact checks stop at FUZZ_MAX_ASPECT. */
-#define FUZZ_MAX_ASPECT 1e4
-static double aspect_of(check_ctx *c, uint32_t tri)
-{
-    dvec v[3];
-    if (!triangle_of(c, tri, v))
-        return INFINITY;
-    double longest = fmax(dlen(dsub(v[1], v[0])), fmax(dlen(dsub(v[2], v[1])), dlen(dsub(v[0], v[2]))));
-    double area2 = dlen(dcross(dsub(v[1], v[0]), dsub(v[2], v[0])));
-    return area2 > 0 ? longest * longest / area2 : INFINITY;
-}
-
 static void check_hit(check_ctx *c, const cbvh_ray *r, const cbvh_hit *h, int got, const char *what)
 {
     if (!got) {
@@ -230,7 +217,7 @@ static void check_hit(check_ctx *c, const cbvh_ray *r, const cbvh_hit *h, int go
     dvec p = dadd(o, dmul(d, h->t));
     dvec q = dadd(dmul(v[0], 1.0 - h->u - h->v), dadd(dmul(v[1], h->u), dmul(v[2], h->v)));
     double mag = fmax(fmax(dmaxabs(o), dmaxabs(p)), fmax(dmaxabs(v[0]), fmax(dmaxabs(v[1]), dmaxabs(v[2]))));
-    if (!dfinite(p) || !dfinite(q) || !(mag <= FUZZ_MAX_MAGNITUDE) || aspect_of(c, h->tri) > FUZZ_MAX_ASPECT)
+    if (!dfinite(p) || !dfinite(q) || !(mag <= FUZZ_MAX_MAGNITUDE))
         return;
     /* the barycentric point must lie on the ray's line and the ray point on
      * the triangle's plane: both stay well conditioned for grazing rays,
@@ -281,13 +268,10 @@ static void check_ray(check_ctx *c, const cbvh_ray *r)
         return;
     for (int t = 1; t < 4; t++) {
         FUZZ_CHECK(got[t] == got[0], "%s and sorted disagree: hit %d vs %d", traversal_name[t], got[t], got[0]);
-        /* slivers get t wrong by more than the gap between near-equal hits (F2),
-         * so which of two is "closest" can depend on the visiting order */
-        if (got[0] && aspect_of(c, hits[0].tri) <= FUZZ_MAX_ASPECT && aspect_of(c, hits[t].tri) <= FUZZ_MAX_ASPECT)
+        if (got[0])
             FUZZ_CHECK(hits[t].t == hits[0].t, "%s t %.9g, sorted t %.9g", traversal_name[t], hits[t].t, hits[0].t);
     }
-    int exact = !got[0] || (aspect_of(c, hits[0].tri) <= FUZZ_MAX_ASPECT && aspect_of(c, sh.tri) <= FUZZ_MAX_ASPECT);
-    FUZZ_CHECK((sh.tri != CBVH_NO_HIT) == got[0] && (!got[0] || !exact || sh.t == hits[0].t),
+    FUZZ_CHECK((sh.tri != CBVH_NO_HIT) == got[0] && (!got[0] || sh.t == hits[0].t),
                "stream differs from raycast (tri %u t %.9g vs tri %u t %.9g)", sh.tri, sh.t, hits[0].tri, hits[0].t);
     FUZZ_CHECK(socc == got[0], "occluded stream %d but raycast %d", socc, got[0]);
 }
@@ -306,8 +290,7 @@ static void check_stream_batch(check_ctx *c, const cbvh_ray *rays, size_t n)
         if (c->strict && c->scale <= FUZZ_MAX_MAGNITUDE) {
             cbvh_hit one;
             int got = cbvh_raycast(c->f, &rays[i], CBVH_TRAVERSAL_SORTED, &one, NULL);
-            int exact = !got || (aspect_of(c, one.tri) <= FUZZ_MAX_ASPECT && aspect_of(c, hits[i].tri) <= FUZZ_MAX_ASPECT);
-            FUZZ_CHECK(got == (hits[i].tri != CBVH_NO_HIT) && (!got || !exact || one.t == hits[i].t),
+            FUZZ_CHECK(got == (hits[i].tri != CBVH_NO_HIT) && (!got || one.t == hits[i].t),
                        "stream batch ray %zu differs from its raycast", i);
             FUZZ_CHECK(occ[i] == got, "occluded stream ray %zu: %u, raycast %d", i, occ[i], got);
         }
@@ -347,7 +330,7 @@ static void check_sweeps(check_ctx *c)
     cbvh_sweep_hit h;
     if (cbvh_sweep_sphere(c->f, center, radius, delta, &h)) {
         check_sweep_hit(c, &h, "sphere sweep");
-        if (c->strict && isfinite(h.point[0]) && c->scale <= FUZZ_MAX_MAGNITUDE && aspect_of(c, h.tri) <= FUZZ_MAX_ASPECT) {
+        if (c->strict && isfinite(h.point[0]) && c->scale <= FUZZ_MAX_MAGNITUDE) {
             dvec at = dadd(dv(center), dmul(dv(delta), h.t));
             double dist = dlen(dsub(at, dv(h.point))), tol = 1e-4 * fmax(c->scale, dmaxabs(at)) + 1e-30;
             FUZZ_CHECK(dist <= radius + tol, "sphere sweep: contact %.9g from the center, radius %.9g", dist, radius);
@@ -485,9 +468,8 @@ static void check_overlaps(check_ctx *c)
         if (!triangle_of(c, t, v))
             continue;
         /* a zero-area triangle (quantization can collapse one, finding F3)
-         * has no defined overlap, and slivers lose precision (F4): only the
-         * "reported ones touch" checks apply to them */
-        int flat = dlen(dcross(dsub(v[1], v[0]), dsub(v[2], v[0]))) == 0 || aspect_of(c, t) > FUZZ_MAX_ASPECT;
+         * has no defined overlap: only the "reported ones touch" checks apply */
+        int flat = dlen(dcross(dsub(v[1], v[0]), dsub(v[2], v[0]))) == 0;
         dvec cp = closest_on_triangle(bc, v[0], v[1], v[2]);
         double out_by = fmax(fmax(lo[0] - cp.x, cp.x - hi[0]), fmax(fmax(lo[1] - cp.y, cp.y - hi[1]), fmax(lo[2] - cp.z, cp.z - hi[2])));
         int inside_vertex = 0;

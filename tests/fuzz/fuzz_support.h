@@ -36,10 +36,12 @@ void fuzz_fail(const char *fmt, ...)
     ;
 #define FUZZ_CHECK(cond, ...) do { if (!(cond)) fuzz_fail(__VA_ARGS__); } while (0)
 
-/* Finding F1 (notes/findings.md): the float triangle test overflows once
- * coordinates relative to the ray origin pass about 1e12 (misses, and false
- * hits at t = 0 near 1e38). Geometric agreement is checked only below this. */
-#define FUZZ_MAX_MAGNITUDE 1e11
+/* Geometric agreement (hit point on the triangle, traversal agreement,
+ * sweep contacts, overlap completeness) is checked up to this coordinate
+ * magnitude. Rays are exact beyond it since finding F1 was fixed; capsule
+ * sweep contact points still lose accuracy near 1e17-1e20 (finding F5), where
+ * squared lengths approach the binary32 range. */
+#define FUZZ_MAX_MAGNITUDE 1e15
 
 /* Checks an open error: a known failing code and a non-empty message. */
 void fuzz_check_error(cbvh_result r, const cbvh_error *err);
