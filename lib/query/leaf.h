@@ -3,6 +3,7 @@
 #define CBVH_QUERY_LEAF_H
 
 #include "common/file.h"
+#include "query/ray_setup.h"
 #include "query/ray_triangle.h"
 
 /* The best hit so far, in cooked triangle order. */
@@ -20,59 +21,114 @@ static inline int cbvh_hit_better(float t, uint32_t tri, float best_t, uint32_t 
     return t < best_t || (t == best_t && tri < best_tri);
 }
 
-/* Tests the leaf's triangles [first, first+count) against the ray, updating
- * best and *tmax (the closest hit so far; hits at t == *tmax still compete by
- * index). Returns the number of triangles tested. */
-static inline uint32_t cbvh_leaf_closest(const struct cbvh_file *restrict f, uint32_t word,
-                                         const struct cbvh_ray_shear *restrict s, float tmin,
-                                         float *restrict tmax, struct cbvh_best_hit *restrict best)
+/* Triangle k's vertex indices and positions for encodings that are
+ * compile-time constants in the specialised leaf loops below (the switch
+ * then folds away), or run-time values in the generic one. */
+CBVH_KERNEL void leaf_triangle(const void *restrict tris, const int tri_enc, const void *restrict verts,
+                               const int vert_enc, const float *restrict grid_origin,
+                               const float *restrict grid_scale, uint32_t k, float a[3], float b[3], float c[3])
+{
+    uint32_t i0, i1, i2;
+    if (tri_enc == CBVH_TRIS_DELTA16) { /* u32 base, i16 d1, i16 d2 */
+        const uint8_t *t = (const uint8_t *)tris + 8u * (size_t)k;
+        const int16_t *d = (const int16_t *)(const void *)(t + 4);
+        i0 = *(const uint32_t *)(const void *)t;
+        i1 = i0 + (uint32_t)(int32_t)d[0];
+        i2 = i0 + (uint32_t)(int32_t)d[1];
+    } else if (tri_enc == CBVH_TRIS_U16) {
+        const uint16_t *t = (const uint16_t *)tris + 3u * (size_t)k;
+        i0 = t[0];
+        i1 = t[1];
+        i2 = t[2];
+    } else {
+        const uint32_t *t = (const uint32_t *)tris + 3u * (size_t)k;
+        i0 = t[0];
+        i1 = t[1];
+        i2 = t[2];
+    }
+    const uint32_t idx[3] = {i0, i1, i2};
+    float *const out[3] = {a, b, c};
+    for (int v = 0; v < 3; v++) {
+        if (vert_enc == CBVH_VERTS_F32) {
+            const float *q = (const float *)verts + 3u * (size_t)idx[v];
+            out[v][0] = q[0];
+            out[v][1] = q[1];
+            out[v][2] = q[2];
+        } else {
+            const uint16_t *q = (const uint16_t *)verts + 3u * (size_t)idx[v];
+            for (int x = 0; x < 3; x++)
+                out[v][x] = cbvh_dequantize(q[x], grid_origin[x], grid_scale[x]);
+        }
+    }
+}
+
+/* Tests the leaf's triangles [first, first+count) against the ray. Any-hit:
+ * returns 1 at the first hit. Closest-hit: updates best and *tmax (the
+ * closest hit so far; hits at t == *tmax still compete by index), returns 0.
+ * *tested receives the number of triangles tested. The file's arrays and
+ * grid are read into locals once per leaf. */
+CBVH_KERNEL int leaf_loop(const struct cbvh_file *restrict f, uint32_t word, const struct cbvh_ray_shear *restrict s,
+                          float tmin, float *restrict tmax, struct cbvh_best_hit *restrict best, const int any,
+                          const int tri_enc, const int vert_enc, uint32_t *restrict tested)
 {
     const uint32_t first = cbvh_leaf_first(word), count = cbvh_leaf_count(word);
+    const void *restrict tris = f->triangles;
+    const void *restrict verts = f->vertices;
+    const float origin[3] = {f->grid_origin[0], f->grid_origin[1], f->grid_origin[2]};
+    const float scale[3] = {f->grid_scale[0], f->grid_scale[1], f->grid_scale[2]};
+    float best_t = *tmax;
     float t, u, v, a[3], b[3], c[3];
     for (uint32_t k = first; k < first + count; k++) {
-        cbvh_triangle_vertices(f, k, a, b, c);
-        if (cbvh_ray_triangle(s, a, b, c, tmin, *tmax, &t, &u, &v) && cbvh_hit_better(t, k, *tmax, best->tri)) {
-            *tmax = t;
+        leaf_triangle(tris, tri_enc, verts, vert_enc, origin, scale, k, a, b, c);
+        if (!cbvh_ray_triangle(s, a, b, c, tmin, best_t, &t, &u, &v))
+            continue;
+        if (any) {
+            *tested = k - first + 1u;
+            return 1;
+        }
+        if (cbvh_hit_better(t, k, best_t, best->tri)) {
+            best_t = t;
             best->tri = k;
             best->t = t;
             best->u = u;
             best->v = v;
         }
     }
-    return count;
-}
-
-/* Any-hit: returns 1 when a triangle of the leaf is hit; *tested receives the triangles tested. */
-static inline int cbvh_leaf_any(const struct cbvh_file *restrict f, uint32_t word,
-                                const struct cbvh_ray_shear *restrict s, float tmin, float tmax,
-                                uint32_t *restrict tested)
-{
-    const uint32_t first = cbvh_leaf_first(word), count = cbvh_leaf_count(word);
-    float t, u, v, a[3], b[3], c[3];
-    for (uint32_t k = first; k < first + count; k++) {
-        cbvh_triangle_vertices(f, k, a, b, c);
-        if (cbvh_ray_triangle(s, a, b, c, tmin, tmax, &t, &u, &v)) {
-            *tested = k - first + 1u;
-            return 1;
-        }
-    }
+    *tmax = best_t;
     *tested = count;
     return 0;
 }
 
 /* The leaf step of every single-ray walk. Any-hit: returns 1 when the leaf
  * occludes the ray. Closest-hit: updates best and *tmax, returns 0. When
- * counting, adds the triangles tested to *tested. */
+ * counting, adds the triangles tested to *tested. The common encodings get
+ * their own loop (one switch per leaf, not per triangle); U32 indices go
+ * through the generic one. */
 CBVH_KERNEL int cbvh_leaf_visit(const struct cbvh_file *restrict f, uint32_t word, const struct cbvh_ray_ctx *ray,
                                 const int any, const int counting, float *restrict tmax,
                                 struct cbvh_best_hit *restrict best, uint64_t *restrict tested)
 {
+    const struct cbvh_ray_shear *s = &ray->shear;
+    const float tmin = ray->tmin;
     uint32_t count;
-    int hit = 0;
-    if (any)
-        hit = cbvh_leaf_any(f, word, &ray->shear, ray->tmin, *tmax, &count);
-    else
-        count = cbvh_leaf_closest(f, word, &ray->shear, ray->tmin, tmax, best);
+    int hit;
+    switch (f->triangle_encoding << 1 | f->vertex_encoding) {
+    case CBVH_TRIS_DELTA16 << 1 | CBVH_VERTS_F32:
+        hit = leaf_loop(f, word, s, tmin, tmax, best, any, CBVH_TRIS_DELTA16, CBVH_VERTS_F32, &count);
+        break;
+    case CBVH_TRIS_U16 << 1 | CBVH_VERTS_F32:
+        hit = leaf_loop(f, word, s, tmin, tmax, best, any, CBVH_TRIS_U16, CBVH_VERTS_F32, &count);
+        break;
+    case CBVH_TRIS_DELTA16 << 1 | CBVH_VERTS_Q16:
+        hit = leaf_loop(f, word, s, tmin, tmax, best, any, CBVH_TRIS_DELTA16, CBVH_VERTS_Q16, &count);
+        break;
+    case CBVH_TRIS_U16 << 1 | CBVH_VERTS_Q16:
+        hit = leaf_loop(f, word, s, tmin, tmax, best, any, CBVH_TRIS_U16, CBVH_VERTS_Q16, &count);
+        break;
+    default:
+        hit = leaf_loop(f, word, s, tmin, tmax, best, any, (int)f->triangle_encoding, (int)f->vertex_encoding, &count);
+        break;
+    }
     if (counting)
         *tested += count;
     return hit;

@@ -1,11 +1,5 @@
-/* ray_origin.c: validating a ray for a file, and moving a far origin next to the file's bounds. */
+/* ray_origin.c: moving a far ray origin next to the file's bounds, where the triangle test keeps its precision. */
 #include "query/raycast.h"
-
-/* An origin farther than this many times the mesh's extent from its bounds
- * is moved: float coordinates relative to it would keep fewer than about
- * 20 of their 24 bits at the mesh (a unit mesh seen from 1e20 collapses to
- * a point), and the products of the triangle test would lose the rest. */
-#define CBVH_FAR_FACTOR 16.0f
 
 /* a + b as s + *err exactly (Knuth's two-sum). */
 static double two_sum(double a, double b, double *err)
@@ -95,19 +89,7 @@ static void move_origin(struct cbvh_ray_ctx *ctx, const cbvh_ray *ray, const flo
     cbvh_shear_setup(&ctx->shear, org, dir);
 }
 
-int cbvh_ray_prepare(struct cbvh_ray_ctx *ctx, const cbvh_ray *ray, const struct cbvh_file *f)
+void cbvh_ray_move_far_origin(struct cbvh_ray_ctx *ctx, const cbvh_ray *ray, const struct cbvh_file *f, float extent)
 {
-    if (!cbvh_ray_setup(ctx, ray))
-        return 0;
-    const float *lo = f->info.bounds_min, *hi = f->info.bounds_max;
-    float ext = 0.0f, dist = 0.0f;
-    for (int a = 0; a < 3; a++) {
-        const float o = ray->org[a];
-        ext = fmaxf(ext, hi[a] - lo[a]);
-        dist = fmaxf(dist, fmaxf(lo[a] - o, o - hi[a]));
-    }
-    /* Ordered compare: an extent near FLT_MAX gives an infinite product and no move. */
-    if (dist > CBVH_FAR_FACTOR * ext)
-        move_origin(ctx, ray, lo, hi, ext);
-    return 1;
+    move_origin(ctx, ray, f->info.bounds_min, f->info.bounds_max, extent);
 }

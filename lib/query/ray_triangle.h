@@ -56,7 +56,7 @@ CBVH_COLD static int cbvh_ray_triangle_edges_double(const struct cbvh_ray_shear 
  * 1/area on slivers), and without overflow for any float coordinates. Only
  * triangles that passed the edge tests get here. Returns 0 when the ray lies
  * in the plane (t undefined). */
-static inline int cbvh_plane_t(const struct cbvh_ray_shear *restrict s, const float *restrict a,
+CBVH_KERNEL int cbvh_plane_t(const struct cbvh_ray_shear *restrict s, const float *restrict a,
                                const float *restrict b, const float *restrict c, double *t)
 {
     const double e1x = (double)b[0] - a[0], e1y = (double)b[1] - a[1], e1z = (double)b[2] - a[2];
@@ -79,7 +79,7 @@ static inline int cbvh_plane_t(const struct cbvh_ray_shear *restrict s, const fl
  * accepts 0 on either side. A ray in the triangle's plane misses, as does a
  * degenerate triangle. Both windings are hit. The hit/miss decision is the
  * edge tests'; t comes from the plane (cbvh_plane_t), rounded to float. */
-static inline int cbvh_ray_triangle(const struct cbvh_ray_shear *restrict s, const float *restrict a,
+CBVH_KERNEL int cbvh_ray_triangle(const struct cbvh_ray_shear *restrict s, const float *restrict a,
                                     const float *restrict b, const float *restrict c, float tmin, float tmax,
                                     float *t_out, float *u_out, float *v_out)
 {

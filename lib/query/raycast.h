@@ -25,11 +25,39 @@ void cbvh_closest_stackless(const struct cbvh_file *f, const struct cbvh_ray_ctx
                             cbvh_query_stats *stats);
 int cbvh_any_stackless(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray, cbvh_query_stats *stats);
 
+/* An origin farther than this many times the mesh's extent from its bounds
+ * is moved: float coordinates relative to it would keep fewer than about
+ * 20 of their 24 bits at the mesh (a unit mesh seen from 1e20 collapses to
+ * a point), and the products of the triangle test would lose the rest. */
+#define CBVH_FAR_FACTOR 16.0f
+
+/* Moves the origin of a validated ray that is far from f's bounds (largest
+ * extent `extent`) next to them, and makes ctx's t and range relative to the
+ * new origin (ctx->t_base: its t on the caller's ray). See ray_origin.c. */
+void cbvh_ray_move_far_origin(struct cbvh_ray_ctx *ctx, const cbvh_ray *ray, const struct cbvh_file *f, float extent);
+
 /* cbvh_ray_setup for a ray cast into file f: also moves an origin far from
- * the file's bounds next to them (ray_origin.c), so the triangle test keeps
- * its precision; ctx->t_base is then the distance moved. Returns 0 for an
- * invalid ray. */
-int cbvh_ray_prepare(struct cbvh_ray_ctx *ctx, const cbvh_ray *ray, const struct cbvh_file *f);
+ * the file's bounds next to them, so the triangle test keeps its precision.
+ * Returns 0 for an invalid ray. Inline: it runs once per ray, and the far
+ * case is rare. */
+static inline int cbvh_ray_prepare(struct cbvh_ray_ctx *ctx, const cbvh_ray *ray, const struct cbvh_file *f)
+{
+    if (!cbvh_ray_setup(ctx, ray))
+        return 0;
+    const float *lo = f->info.bounds_min, *hi = f->info.bounds_max;
+    float ext = 0.0f, dist = 0.0f;
+    /* Plain compares (every value is finite): fmaxf is a libm call without -ffast-math. */
+    for (int a = 0; a < 3; a++) {
+        const float o = ray->org[a], e = hi[a] - lo[a], below = lo[a] - o, above = o - hi[a];
+        ext = e > ext ? e : ext;
+        dist = below > dist ? below : dist;
+        dist = above > dist ? above : dist;
+    }
+    /* Ordered compare: an extent near FLT_MAX gives an infinite product and no move. */
+    if (dist > CBVH_FAR_FACTOR * ext)
+        cbvh_ray_move_far_origin(ctx, ray, f, ext);
+    return 1;
+}
 
 /* Converts a kernel's best hit into the public form (original id, t on the
  * caller's ray: t_base + the kernel's t). Returns 1 on a hit. */
