@@ -15,6 +15,13 @@ void cbvh_closest_stack(const struct cbvh_file *f, const struct cbvh_ray_ctx *ra
                         struct cbvh_best_hit *best, cbvh_query_stats *stats);
 int cbvh_any_stack(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray, int sorted, cbvh_query_stats *stats);
 
+/* Sorted stack walks of the subtree of node `root` only (the streams'
+ * per-ray tails, stream.c): best and the result are as for the whole tree
+ * restricted to the subtree's triangles. stats may be NULL. */
+void cbvh_closest_subtree(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray, uint32_t root,
+                          struct cbvh_best_hit *best, cbvh_query_stats *stats);
+int cbvh_any_subtree(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray, uint32_t root, cbvh_query_stats *stats);
+
 /* Stack walk ordering children by their box entry distance, computed at run time. */
 void cbvh_closest_distance(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray, struct cbvh_best_hit *best,
                            cbvh_query_stats *stats);

@@ -10,9 +10,10 @@
  * children is `word & mask` (mask = the ray's sort mask: one AND; mask = 0:
  * first child first) or, with by_distance, the smaller entry distance. The
  * loader checked depth <= CBVH_MAX_DEPTH and a walk pushes at most one node
- * per level, so the stack cannot overflow. */
-CBVH_KERNEL int stack_walk(const struct cbvh_file *restrict f, const struct cbvh_ray_ctx *restrict ray, uint32_t mask,
-                           const int by_distance, const int any, const int counting,
+ * per level, so the stack cannot overflow. The walk covers the subtree of
+ * `root` (0: the whole tree): everything it pushes lies in that subtree. */
+CBVH_KERNEL int stack_walk(const struct cbvh_file *restrict f, const struct cbvh_ray_ctx *restrict ray, uint32_t root,
+                           uint32_t mask, const int by_distance, const int any, const int counting,
                            struct cbvh_best_hit *restrict best, cbvh_query_stats *restrict stats)
 {
     const cbvh_node *restrict nodes = f->nodes;
@@ -24,12 +25,12 @@ CBVH_KERNEL int stack_walk(const struct cbvh_file *restrict f, const struct cbvh
         uint32_t node;
         float entry;
     } stack[CBVH_MAX_DEPTH];
-    uint32_t sp = 0, i = 0;
+    uint32_t sp = 0, i = root;
     uint64_t visited = 1, tested = 0;
     int hit = 0;
     float entry0, entry1;
 
-    if (!cbvh_box_ray_test(&box, &nodes[0], tmin, tmax, &entry0))
+    if (!cbvh_box_ray_test(&box, &nodes[root], tmin, tmax, &entry0))
         goto done;
     for (;;) {
         const uint32_t word = nodes[i].word;
@@ -79,31 +80,47 @@ void cbvh_closest_stack(const struct cbvh_file *f, const struct cbvh_ray_ctx *ra
 {
     const uint32_t mask = sorted ? ray->sort_mask : 0u;
     if (stats)
-        stack_walk(f, ray, mask, 0, 0, 1, best, stats);
+        stack_walk(f, ray, 0, mask, 0, 0, 1, best, stats);
     else
-        stack_walk(f, ray, mask, 0, 0, 0, best, NULL);
+        stack_walk(f, ray, 0, mask, 0, 0, 0, best, NULL);
 }
 
 int cbvh_any_stack(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray, int sorted, cbvh_query_stats *stats)
 {
     const uint32_t mask = sorted ? ray->sort_mask : 0u;
     if (stats)
-        return stack_walk(f, ray, mask, 0, 1, 1, NULL, stats);
-    return stack_walk(f, ray, mask, 0, 1, 0, NULL, NULL);
+        return stack_walk(f, ray, 0, mask, 0, 1, 1, NULL, stats);
+    return stack_walk(f, ray, 0, mask, 0, 1, 0, NULL, NULL);
 }
 
 void cbvh_closest_distance(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray, struct cbvh_best_hit *best,
                            cbvh_query_stats *stats)
 {
     if (stats)
-        stack_walk(f, ray, 0, 1, 0, 1, best, stats);
+        stack_walk(f, ray, 0, 0, 1, 0, 1, best, stats);
     else
-        stack_walk(f, ray, 0, 1, 0, 0, best, NULL);
+        stack_walk(f, ray, 0, 0, 1, 0, 0, best, NULL);
 }
 
 int cbvh_any_distance(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray, cbvh_query_stats *stats)
 {
     if (stats)
-        return stack_walk(f, ray, 0, 1, 1, 1, NULL, stats);
-    return stack_walk(f, ray, 0, 1, 1, 0, NULL, NULL);
+        return stack_walk(f, ray, 0, 0, 1, 1, 1, NULL, stats);
+    return stack_walk(f, ray, 0, 0, 1, 1, 0, NULL, NULL);
+}
+
+void cbvh_closest_subtree(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray, uint32_t root,
+                          struct cbvh_best_hit *best, cbvh_query_stats *stats)
+{
+    if (stats)
+        stack_walk(f, ray, root, ray->sort_mask, 0, 0, 1, best, stats);
+    else
+        stack_walk(f, ray, root, ray->sort_mask, 0, 0, 0, best, NULL);
+}
+
+int cbvh_any_subtree(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray, uint32_t root, cbvh_query_stats *stats)
+{
+    if (stats)
+        return stack_walk(f, ray, root, ray->sort_mask, 0, 1, 1, NULL, stats);
+    return stack_walk(f, ray, root, ray->sort_mask, 0, 1, 0, NULL, NULL);
 }

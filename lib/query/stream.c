@@ -10,6 +10,35 @@
  * batch shares one sort-byte mask and one near/far plane selection. */
 #define CBVH_STREAM_WINDOW 2048
 
+/* A batch node with at most this many live rays hands them to the single-ray
+ * walk: below it the batch would mostly carry one ray per node, paying the
+ * partition and stack bookkeeping without sharing any node fetch. */
+#ifndef CBVH_STREAM_SOLO
+#define CBVH_STREAM_SOLO 2
+#endif
+
+/* Ray r of the batch finishes the subtree of node `root` alone, starting
+ * from its current tmax; its best hit (or occlusion) goes back to the batch.
+ * The single-ray walk uses the same triangle test and tie rule, so the result
+ * does not depend on where the batch handed the ray over. */
+static void solo_tail(const struct cbvh_file *f, struct cbvh_stream_batch *b, uint32_t r, uint32_t root, int any,
+                      uint8_t *occluded, cbvh_query_stats *stats)
+{
+    struct cbvh_ray_ctx ctx = b->ctx[r];
+    float *box_ray = b->box_ray[r];
+    ctx.tmax = box_ray[CBVH_LANE_TMAX];
+    if (any) {
+        if (cbvh_any_subtree(f, &ctx, root, stats)) {
+            occluded[b->ray_index[r]] = 1;
+            box_ray[CBVH_LANE_TMAX] = -1.0f;
+        }
+        return;
+    }
+    cbvh_closest_subtree(f, &ctx, root, &b->best[r], stats);
+    if (b->best[r].tri != UINT32_MAX) /* its t is the ray's tmax: never above the one the walk started with */
+        box_ray[CBVH_LANE_TMAX] = b->best[r].t;
+}
+
 /* Walks the tree once for the batch. At each node the box is dequantized
  * once and all live rays [0, n) of `live` are tested and partitioned (the
  * survivors move to the front); the children are visited with the survivors
@@ -18,9 +47,10 @@
  * box test there sees each ray's current tmax. The triangle test and the tie
  * rule are those of the single-ray walks, so every ray gets the same hit. */
 CBVH_KERNEL void stream_walk(const struct cbvh_file *restrict f, struct cbvh_stream_batch *restrict b, uint32_t octant,
-                             cbvh_stream_box_fn box_test, const int any, uint8_t *restrict occluded,
+                             cbvh_stream_box_fn box_test, const int any, const int counting, uint8_t *restrict occluded,
                              uint64_t *restrict visited, uint64_t *restrict tested)
 {
+    cbvh_query_stats solo = {0, 0};
     const cbvh_node *restrict nodes = f->nodes;
     const float origin[3] = {f->grid_origin[0], f->grid_origin[1], f->grid_origin[2]};
     const float scale[3] = {f->grid_scale[0], f->grid_scale[1], f->grid_scale[2]};
@@ -47,6 +77,13 @@ CBVH_KERNEL void stream_walk(const struct cbvh_file *restrict f, struct cbvh_str
         const uint32_t word = node->word;
         nv += n;
         uint32_t m = box_test(b, live, n, near, far);
+        if (m > 0 && m <= CBVH_STREAM_SOLO && !cbvh_node_is_leaf(word)) {
+            /* Too few rays left to share the nodes below: each finishes the
+             * subtree on its own, with the single-ray walk and its current tmax. */
+            for (uint32_t j = 0; j < m; j++)
+                solo_tail(f, b, live[j], i, any, occluded, counting ? &solo : NULL);
+            m = 0;
+        }
         if (m > 0 && !cbvh_node_is_leaf(word)) {
             uint32_t first = i + 1u, second = cbvh_second_child(nodes, i);
             if (word & mask) {
@@ -72,7 +109,7 @@ CBVH_KERNEL void stream_walk(const struct cbvh_file *restrict f, struct cbvh_str
                     const uint32_t r = live[j];
                     float *box_ray = b->box_ray[r];
                     const float tmin = box_ray[CBVH_LANE_TMIN], tmax = box_ray[CBVH_LANE_TMAX];
-                    if (!cbvh_ray_triangle(&b->shear[r], a, v1, v2, tmin, tmax, &t, &u, &v))
+                    if (!cbvh_ray_triangle(&b->ctx[r].shear, a, v1, v2, tmin, tmax, &t, &u, &v))
                         continue;
                     if (any) {
                         /* Occluded: a negative tmax fails every later box and triangle test. */
@@ -94,8 +131,8 @@ CBVH_KERNEL void stream_walk(const struct cbvh_file *restrict f, struct cbvh_str
         i = stack[sp].node;
         n = stack[sp].count;
     }
-    *visited += nv;
-    *tested += nt;
+    *visited += nv + solo.nodes_visited;
+    *tested += nt + solo.triangles_tested;
 }
 
 /* Adds a validated ray to the batch. */
@@ -111,25 +148,30 @@ static void batch_add(struct cbvh_stream_batch *b, const struct cbvh_ray_ctx *ct
     box_ray[CBVH_LANE_RY] = ctx->rcp[1];
     box_ray[CBVH_LANE_RZ] = ctx->rcp[2];
     box_ray[CBVH_LANE_TMAX] = ctx->tmax;
-    b->shear[r] = ctx->shear;
+    b->ctx[r] = *ctx;
     b->best[r].tri = UINT32_MAX;
     b->ray_index[r] = ray_index;
-    b->t_base[r] = ctx->t_base;
 }
 
 /* Traverses the batch and writes its results, then empties it. */
 static void batch_flush(const struct cbvh_file *f, struct cbvh_stream_batch *b, uint32_t octant,
-                        cbvh_stream_box_fn box_test, cbvh_hit *hits, uint8_t *occluded, uint64_t *visited,
-                        uint64_t *tested)
+                        cbvh_stream_box_fn box_test, int counting, cbvh_hit *hits, uint8_t *occluded,
+                        uint64_t *visited, uint64_t *tested)
 {
     if (b->count == 0)
         return;
     if (hits) {
-        stream_walk(f, b, octant, box_test, 0, NULL, visited, tested);
+        if (counting)
+            stream_walk(f, b, octant, box_test, 0, 1, NULL, visited, tested);
+        else
+            stream_walk(f, b, octant, box_test, 0, 0, NULL, visited, tested);
         for (uint32_t r = 0; r < b->count; r++)
-            cbvh_hit_output(f, &b->best[r], b->t_base[r], &hits[b->ray_index[r]]);
+            cbvh_hit_output(f, &b->best[r], b->ctx[r].t_base, &hits[b->ray_index[r]]);
     } else {
-        stream_walk(f, b, octant, box_test, 1, occluded, visited, tested);
+        if (counting)
+            stream_walk(f, b, octant, box_test, 1, 1, occluded, visited, tested);
+        else
+            stream_walk(f, b, octant, box_test, 1, 0, occluded, visited, tested);
     }
     b->count = 0;
 }
@@ -168,9 +210,9 @@ static void stream_run(const struct cbvh_file *f, const cbvh_ray *rays, size_t c
                 cbvh_ray_prepare(&ctx, &rays[start + j], f);
                 batch_add(&batch, &ctx, start + j);
                 if (batch.count == CBVH_STREAM_BATCH)
-                    batch_flush(f, &batch, o, box_test, hits, occluded, &visited, &tested);
+                    batch_flush(f, &batch, o, box_test, stats != NULL, hits, occluded, &visited, &tested);
             }
-            batch_flush(f, &batch, o, box_test, hits, occluded, &visited, &tested);
+            batch_flush(f, &batch, o, box_test, stats != NULL, hits, occluded, &visited, &tested);
         }
     }
     if (stats) {

@@ -19,10 +19,9 @@ enum { CBVH_LANE_OX, CBVH_LANE_OY, CBVH_LANE_OZ, CBVH_LANE_TMIN, CBVH_LANE_RX, C
 /* Up to CBVH_STREAM_BATCH rays of one octant, so the sort byte orders the whole batch. */
 struct cbvh_stream_batch {
     _Alignas(32) float box_ray[CBVH_STREAM_BATCH][8]; /* CBVH_LANE_*; TMAX shrinks with hits, -1 once occluded */
-    struct cbvh_ray_shear shear[CBVH_STREAM_BATCH];
+    struct cbvh_ray_ctx ctx[CBVH_STREAM_BATCH];  /* the prepared rays (triangle test, per-ray tails) */
     struct cbvh_best_hit best[CBVH_STREAM_BATCH];
     size_t ray_index[CBVH_STREAM_BATCH];   /* position in the caller's arrays */
-    double t_base[CBVH_STREAM_BATCH];      /* cbvh_ray_ctx.t_base */
     uint32_t count;
 };
 
