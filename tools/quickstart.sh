@@ -95,5 +95,17 @@ fi
 if [ -x "$top/tests/sanitize.sh" ] && [ "${CBVH_SKIP_SANITIZE:-0}" != 1 ]; then
     if sh "$top/tests/sanitize.sh"; then pass=$((${pass:-0} + 1)); else fail=$((${fail:-0} + 1)); status=1; fi
 fi
+# The release tarball must build and pass on its own (distcheck: no file missing from the dist).
+if [ "${CBVH_SKIP_DISTCHECK:-0}" != 1 ]; then
+    if make -s -j"$jobs" distcheck >distcheck.log 2>&1; then
+        echo "distcheck: the release tarball builds and passes its tests"
+        pass=$((${pass:-0} + 1))
+    else
+        tail -n 40 distcheck.log >&2
+        echo "distcheck: FAILED (see $build/distcheck.log)"
+        fail=$((${fail:-0} + 1))
+        status=1
+    fi
+fi
 echo "${pass:-0} passed, $((${fail:-0} + ${err:-0})) failed, ${skip:-0} skipped"
 exit $status
