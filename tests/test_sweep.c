@@ -317,6 +317,39 @@ static void test_sliver_sweeps(void **state)
     }
 }
 
+/* Capsules whose axis runs almost along a triangle's edge of length 1e19,
+ * starting inside or outside it, against the reference: the case where the
+ * segment/segment closest points' Gram determinant (|d1|^2 |d2|^2 - (d1.d2)^2)
+ * cancels (closest.c now forms it as |d1 x d2|^2). Written for finding F5
+ * (capsule contacts drifting at 1e17-1e20), which it does not reproduce:
+ * it passes with the former arithmetic too. */
+static void test_huge_capsules(void **state)
+{
+    (void)state;
+    const float L = 1e19f;
+    const float pos[9] = {0, 0, 0, L, 0, 0, 0.5f * L, L, 0};
+    const uint32_t idx[3] = {0, 1, 2};
+    ref_fixture fx;
+    assert_int_equal(ref_fixture_open(&fx, pos, 3, idx, 1, NULL), CBVH_OK);
+    uint64_t st = 3;
+    for (int r = 0; r < 200; r++) {
+        ref_shape s;
+        memset(&s, 0, sizeof s);
+        s.kind = REF_CAPSULE;
+        const double off = rnd(&st, -0.02, 0.02) * L, lift = rnd(&st, 0.001, 0.05) * L;
+        const double tilt = rnd(&st, -1e-6, 1e-6) * L;
+        s.p0[0] = (float)(rnd(&st, 0.05, 0.3) * L);
+        s.p1[0] = (float)(rnd(&st, 0.7, 0.95) * L);
+        s.p0[1] = (float)off;
+        s.p1[1] = (float)(off + tilt);
+        s.p0[2] = s.p1[2] = (float)lift;
+        s.radius = (float)(rnd(&st, 0.5, 2.0) * lift);
+        const float delta[3] = {0.0f, (float)rnd(&st, -0.05, 0.05) * L, (float)(-rnd(&st, 0.0, 0.1) * L)};
+        check_sweep(&fx, &s, delta);
+    }
+    ref_fixture_close(&fx);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -325,6 +358,7 @@ int main(void)
         cmocka_unit_test(test_start_overlap_and_no_motion),
         cmocka_unit_test(test_invalid_input),
         cmocka_unit_test(test_sliver_sweeps),
+        cmocka_unit_test(test_huge_capsules),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -57,8 +57,13 @@ double cbvh_closest_segments(cbvh_v3 p0, cbvh_v3 p1, cbvh_v3 q0, cbvh_v3 q1, cbv
             t = 0.0;
             s = clamp01(-c / a);
         } else {
-            const double b = v3_dot(d1, d2), denom = a * e - b * b;
-            s = denom > 0.0 ? clamp01((b * f - c * e) / denom) : 0.0;
+            /* Ericson's a e - b^2 and b f - c e, written as |d1 x d2|^2 and
+             * (d1 x d2).(d2 x r): the same values without the cancellation
+             * that loses every digit for long, nearly parallel segments. */
+            const double b = v3_dot(d1, d2);
+            const cbvh_v3 n = v3_cross(d1, d2);
+            const double denom = v3_len2(n);
+            s = denom > 0.0 ? clamp01(v3_dot(n, v3_cross(d2, r)) / denom) : 0.0;
             t = (b * s + f) / e;
             if (t < 0.0) {
                 t = 0.0;
