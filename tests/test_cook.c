@@ -1445,14 +1445,21 @@ static void test_cook_to_path(void **state)
 
 /* ------------------------------------------------------------------ round trip through the loader */
 
+/* Opens a cooked file with the loader, which must accept it. */
+static cbvh_file *open_cooked(const cooked *c)
+{
+    cbvh_file *file = NULL;
+    cbvh_error err;
+    if (cbvh_open_memory(c->data, c->size, NULL, &file, &err) != CBVH_OK)
+        fail_msg("the loader rejects a cooked file: %s", err.message);
+    return file;
+}
+
 static void round_trip(const test_mesh *m, const cbvh_cook_options *o)
 {
     cooked c;
     cook_and_check(m, o, &c);
-    cbvh_file *file = NULL;
-    cbvh_error err;
-    if (cbvh_open_memory(c.data, c.size, NULL, &file, &err) != CBVH_OK)
-        fail_msg("the loader rejects a cooked file: %s", err.message);
+    cbvh_file *file = open_cooked(&c);
     cbvh_file_info info;
     cbvh_file_get_info(file, &info);
     assert_int_equal(info.format_version, 1);
@@ -1531,10 +1538,7 @@ static void test_quantized_collapse(void **state)
         cook_and_check(&m, &o, &c);
         assert_int_equal(c.stats.dropped_degenerate, q ? 2 : 0);
         assert_int_equal(c.stats.triangles, q ? 4 : 6);
-        cbvh_file *file = NULL;
-        cbvh_error err;
-        if (cbvh_open_memory(c.data, c.size, NULL, &file, &err) != CBVH_OK)
-            fail_msg("the loader rejects a cooked file: %s", err.message);
+        cbvh_file *file = open_cooked(&c);
         cbvh_file_info info;
         cbvh_file_get_info(file, &info);
         for (int a = 0; a < 3; a++)
