@@ -561,6 +561,49 @@ static void test_sliver_t(void **state)
     }
 }
 
+/* F6: u, v came from the sheared edge functions, which cancel on slivers
+ * with large coordinates relative to the origin: on the finding's sliver
+ * (aspect 1.8e7, coordinates 2.7e7) the barycentric point lay 2.7e6 from the
+ * hit. The finding's ray, then rays at random points of the sliver: the
+ * barycentric point must be the hit point (within 1e-6 of the coordinates). */
+static void test_sliver_barycentrics(void **state)
+{
+    (void)state;
+    const float pos[9] = {0, 0, 0, 2.75f, -0.56f, 0, -2.67e7f, -2.67e7f, -2.67e7f};
+    const uint32_t idx[3] = {0, 1, 2};
+    void *buf = NULL;
+    cbvh_file *f = NULL;
+    assert_int_equal(ref_cook_open(pos, 3, idx, 1, NULL, &buf, &f), CBVH_OK);
+    uint64_t st = 17;
+    for (int i = 0; i < 1000; i++) {
+        cbvh_ray r = {{-13355977.0f, -13355978.0f, 13355980.0f}, 0, {0, 0, -1}, INFINITY};
+        if (i > 0) {
+            /* a point of the sliver, a random direction towards it from 1.3e7 away */
+            const double f1 = scene_rand_unit(&st), f2 = scene_rand_unit(&st) * (1.0 - f1);
+            const double th = PI * scene_rand_unit(&st), ph = 2.0 * PI * scene_rand_unit(&st);
+            const double d[3] = {sin(th) * cos(ph), sin(th) * sin(ph), cos(th)};
+            for (int a = 0; a < 3; a++) {
+                const double p = pos[a] + f1 * (pos[3 + a] - pos[a]) + f2 * (pos[6 + a] - pos[a]);
+                r.org[a] = (float)(p - 1.3e7 * d[a]);
+                r.dir[a] = (float)d[a];
+            }
+        }
+        cbvh_hit h;
+        if (!hit_everywhere(f, &r, &h))
+            continue;
+        double gap2 = 0.0;
+        for (int a = 0; a < 3; a++) {
+            const double hit = r.org[a] + (double)h.t * r.dir[a];
+            const double bary = (1.0 - h.u - h.v) * pos[a] + h.u * (double)pos[3 + a] + h.v * (double)pos[6 + a];
+            gap2 += (hit - bary) * (hit - bary);
+        }
+        if (!(sqrt(gap2) <= 1e-6 * 2.67e7 * 1.8))
+            fail_msg("ray %d: the barycentric point (u %g v %g) is %g from the hit point", i, h.u, h.v, sqrt(gap2));
+    }
+    cbvh_close(f);
+    cbvh_buffer_free(NULL, buf);
+}
+
 static void test_invalid_rays(void **state)
 {
     (void)state;
@@ -656,7 +699,7 @@ int main(void)
         cmocka_unit_test(test_closed_mesh_no_leaks), cmocka_unit_test(test_far_from_origin),
         cmocka_unit_test(test_invalid_rays),     cmocka_unit_test(test_stats),
         cmocka_unit_test(test_huge_coordinates), cmocka_unit_test(test_far_origin_hits),
-        cmocka_unit_test(test_sliver_t),
+        cmocka_unit_test(test_sliver_t),        cmocka_unit_test(test_sliver_barycentrics),
     };
     int failed = cmocka_run_group_tests(tests, NULL, NULL);
     fprintf(stderr, "test_raycast: %ld reference checks\n", checks_done);

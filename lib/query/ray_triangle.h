@@ -15,7 +15,7 @@
 /* Edge functions of the sheared triangle when float could not decide them:
  * one of them is 0, infinite or NaN (coordinates beyond about 1e12 relative
  * to the origin overflow coord^2 products), or their sum overflows. Returns
- * 0 on a miss, else 1 with the double edge functions in e[3].
+ * 0 on a miss, else 1 (the double edge functions are left in e[3]).
  *
  * Watertight across the two paths: rounding is monotonic, so a float edge
  * function that is finite and non-zero has the exact sign of the edge
@@ -70,6 +70,79 @@ CBVH_KERNEL int cbvh_plane_t(const struct cbvh_ray_shear *restrict s, const floa
     return 1;
 }
 
+/* The barycentrics of the boundary point nearest to a + w (w = u e1 + v e2
+ * with (u, v) outside the triangle): the nearest of the three edges'
+ * clamped projections, measured in space (a barycentric shift along a long
+ * edge of a sliver would move the point far). */
+CBVH_COLD static void cbvh_barycentrics_to_boundary(const double e1[3], const double e2[3], const double w[3],
+                                                   double *u, double *v)
+{
+    /* edge k runs from p0 + s * d, s in [0, 1], with barycentrics (u0 + s du, v0 + s dv) */
+    const double d[3][3] = {{e1[0], e1[1], e1[2]}, {e2[0], e2[1], e2[2]},
+                            {e2[0] - e1[0], e2[1] - e1[1], e2[2] - e1[2]}};
+    const double start[3][3] = {{0, 0, 0}, {0, 0, 0}, {e1[0], e1[1], e1[2]}};
+    const double bary[3][4] = {{0, 0, 1, 0}, {0, 0, 0, 1}, {1, 0, -1, 1}}; /* u0, v0, du, dv */
+    double best = INFINITY;
+    for (int k = 0; k < 3; k++) {
+        double dd = 0.0, dw = 0.0;
+        for (int x = 0; x < 3; x++) {
+            dd += d[k][x] * d[k][x];
+            dw += d[k][x] * (w[x] - start[k][x]);
+        }
+        const double t = dd > 0.0 ? (dw / dd < 0.0 ? 0.0 : dw / dd > 1.0 ? 1.0 : dw / dd) : 0.0;
+        double gap = 0.0;
+        for (int x = 0; x < 3; x++) {
+            const double g = w[x] - start[k][x] - t * d[k][x];
+            gap += g * g;
+        }
+        if (gap < best) {
+            best = gap;
+            *u = bary[k][0] + t * bary[k][2];
+            *v = bary[k][1] + t * bary[k][3];
+        }
+    }
+}
+
+/* Barycentrics (u: weight of b, v: weight of c) of the point at t on the
+ * ray, which lies in the triangle's plane: w = p - a = u e1 + v e2 gives
+ * u = (w x e2).n / n.n and v = (e1 x w).n / n.n with n = e1 x e2, in double.
+ * Their errors scale with the edge lengths, not with the area: the sheared
+ * edge functions (products of coordinates relative to the origin) cancel on
+ * slivers and put the barycentric point far from the hit (finding F6). Only
+ * for accepted hits. edge: the sheared edge functions (u, v, w scaled). */
+CBVH_KERNEL void cbvh_plane_barycentrics(const struct cbvh_ray_shear *restrict s, const float *restrict a,
+                                         const float *restrict b, const float *restrict c, double t,
+                                         const double edge[3], float *u, float *v)
+{
+    double e1[3], e2[3], w[3];
+    for (int k = 0; k < 3; k++) {
+        e1[k] = (double)b[k] - a[k];
+        e2[k] = (double)c[k] - a[k];
+        w[k] = ((double)s->org[k] - a[k]) + t * s->dir[k];
+    }
+    const double nx = e1[1] * e2[2] - e1[2] * e2[1], ny = e1[2] * e2[0] - e1[0] * e2[2],
+                 nz = e1[0] * e2[1] - e1[1] * e2[0];
+    const double nn = nx * nx + ny * ny + nz * nz;
+    const double un = nx * (w[1] * e2[2] - w[2] * e2[1]) + ny * (w[2] * e2[0] - w[0] * e2[2]) +
+                      nz * (w[0] * e2[1] - w[1] * e2[0]);
+    const double vn = nx * (e1[1] * w[2] - e1[2] * w[1]) + ny * (e1[2] * w[0] - e1[0] * w[2]) +
+                      nz * (e1[0] * w[1] - e1[1] * w[0]);
+    double bu = un / nn, bv = vn / nn;
+    /* n.n underflowed (denormal coordinates): the edge functions' barycentrics. */
+    if (!(isfinite(bu) && isfinite(bv))) {
+        const double sum = edge[0] + edge[1] + edge[2];
+        bu = edge[1] / sum;
+        bv = edge[2] / sum;
+    }
+    /* Into the closed triangle: the edge tests accept a ray up to float
+     * precision outside it, where the exact point has a barycentric below 0;
+     * then the nearest boundary point. */
+    if (!(bu >= 0.0 && bv >= 0.0 && bu + bv <= 1.0))
+        cbvh_barycentrics_to_boundary(e1, e2, w, &bu, &bv);
+    *u = (float)bu;
+    *v = (float)bv;
+}
+
 /* Tests the ray (sheared by s) against triangle (a, b, c). Returns 1 when it
  * hits at t in [tmin, tmax] and writes t and the barycentrics u (weight of b)
  * and v (weight of c). Watertight: a ray through a shared edge or vertex hits
@@ -78,7 +151,8 @@ CBVH_KERNEL int cbvh_plane_t(const struct cbvh_ray_shear *restrict s, const floa
  * compute identically (see cbvh_ray_triangle_edges_double), and the sign test
  * accepts 0 on either side. A ray in the triangle's plane misses, as does a
  * degenerate triangle. Both windings are hit. The hit/miss decision is the
- * edge tests'; t comes from the plane (cbvh_plane_t), rounded to float. */
+ * edge tests'; t comes from the plane (cbvh_plane_t), rounded to float, and
+ * u, v from the hit point (cbvh_plane_barycentrics). */
 CBVH_KERNEL int cbvh_ray_triangle(const struct cbvh_ray_shear *restrict s, const float *restrict a,
                                     const float *restrict b, const float *restrict c, float tmin, float tmax,
                                     float *t_out, float *u_out, float *v_out)
@@ -101,19 +175,15 @@ CBVH_KERNEL int cbvh_ray_triangle(const struct cbvh_ray_shear *restrict s, const
      * two of opposite sign are a miss whatever the third is. */
     if ((u < 0.0f || v < 0.0f || w < 0.0f) && (u > 0.0f || v > 0.0f || w > 0.0f))
         return 0;
-    double du = u, dv = v, dw = w, det = du + dv + dw;
-    /* All non-zero and finite (so of one sign): decided. Otherwise (an edge
-     * through the origin, an overflow) decide in double. */
+    /* All non-zero and finite (so of one sign, with a finite sum): decided.
+     * Otherwise (an edge through the origin, an overflow) decide in double. */
+    double e[3] = {u, v, w};
+    const double det = e[0] + e[1] + e[2];
     if (!CBVH_LIKELY(u != 0.0f && v != 0.0f && w != 0.0f && fabs(det) <= (double)FLT_MAX)) {
         const float *const vert[3] = {a, b, c};
         const float sheared[3][2] = {{ax, ay}, {bx, by}, {cx, cy}};
-        double e[3];
         if (!cbvh_ray_triangle_edges_double(s, vert, sheared, e))
             return 0;
-        du = e[0];
-        dv = e[1];
-        dw = e[2];
-        det = du + dv + dw;
     }
     double td;
     if (!cbvh_plane_t(s, a, b, c, &td))
@@ -123,8 +193,7 @@ CBVH_KERNEL int cbvh_ray_triangle(const struct cbvh_ray_shear *restrict s, const
     if (!(t >= tmin && t <= tmax))
         return 0;
     *t_out = t;
-    *u_out = (float)(dv / det);
-    *v_out = (float)(dw / det);
+    cbvh_plane_barycentrics(s, a, b, c, td, e, u_out, v_out);
     return 1;
 }
 
