@@ -279,8 +279,8 @@ typedef struct cbvh_query_stats {
  * the file's cooked (leaf) order wins, so every traversal and the streams
  * report the same triangle, t, u and v for a ray. The hit/miss decision is
  * watertight (a ray through a shared edge or vertex hits one of its triangles);
- * t is computed from the triangle's plane in double precision, accurate on
- * slivers and for any finite coordinates. t is capped: tmax is clamped to about
+ * t is computed from the triangle's plane and u, v from the hit point, in
+ * double precision, accurate on slivers and for any finite coordinates. t is capped: tmax is clamped to about
  * 1.7e38 (FLT_MAX / 2), hits beyond it are misses. An origin far from the mesh
  * (more than 16 times its extent) is moved along the ray next to it first, so
  * rays from 1e20 away still hit a unit mesh; t is reported on the caller's ray. */
