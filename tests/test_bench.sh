@@ -5,43 +5,8 @@
 #   CBVH_TOOL   the built tools/cbvh
 # Writes only into a mktemp folder, removed at exit. JSON and SVG checks need python3 (skipped without it).
 
-CBVH=${CBVH_TOOL:-./tools/cbvh}
-[ -x "$CBVH" ] || { echo "test_bench.sh: $CBVH is not built"; exit 99; }
-
-tmp=$(mktemp -d "${TMPDIR:-/tmp}/cbvh-test-bench.XXXXXX") || exit 99
-trap 'rm -rf "$tmp"' EXIT INT TERM
-
-passed=0
-failed=0
-skipped=0
-pass() { passed=$((passed + 1)); echo "ok   $1"; }
-fail() { failed=$((failed + 1)); echo "FAIL $1"; }
-skip() { skipped=$((skipped + 1)); echo "skip $1"; }
-
-# run EXPECTED_STATUS NAME CMD...: stdout in $tmp/out, stderr in $tmp/err.
-run() {
-    expect=$1
-    name=$2
-    shift 2
-    "$@" >"$tmp/out" 2>"$tmp/err" </dev/null
-    status=$?
-    if [ "$status" -eq "$expect" ]; then
-        pass "$name"
-        return 0
-    fi
-    fail "$name (exit $status, expected $expect)"
-    sed 's/^/     | /' "$tmp/err" | head -5
-    return 1
-}
-
-check() {
-    name=$1
-    shift
-    if "$@"; then pass "$name"; else fail "$name"; fi
-}
-
-has_python=0
-command -v python3 >/dev/null 2>&1 && has_python=1
+name=test_bench.sh
+. "$(dirname "$0")/tool_test_lib.sh"
 
 # ---- usage ------------------------------------------------------------------------------------
 
@@ -167,5 +132,4 @@ run 0 "report --out DIR" "$CBVH" report --gen cube --rays 500 --sample 100 --rep
         test -s "$tmp/out-dir/report.md" -a -s "$tmp/out-dir/report.json" -a -s "$tmp/out-dir/report.svg" \
         -a -s "$tmp/out-dir/cube-leaf4.cbvh" -a -s "$tmp/out-dir/cube-leaf4-qverts.cbvh" -a -s "$tmp/out-dir/cube-leaf4-zlib.cbvh"
 
-echo "test_bench.sh: $passed passed, $failed failed, $skipped skipped"
-[ "$failed" -eq 0 ]
+finish

@@ -7,46 +7,8 @@
 #   CBVH_ASSIMP_MODELS  optional: folder of Debian's assimp-testmodels (found with dpkg -L otherwise)
 # Writes only into a mktemp folder, removed at exit.
 
-CBVH=${CBVH_TOOL:-./tools/cbvh}
-[ -x "$CBVH" ] || { echo "test_tool.sh: $CBVH is not built"; exit 99; }
-
-tmp=$(mktemp -d "${TMPDIR:-/tmp}/cbvh-test-tool.XXXXXX") || exit 99
-trap 'chmod -R u+w "$tmp" 2>/dev/null; rm -rf "$tmp"' EXIT INT TERM
-
-passed=0
-failed=0
-skipped=0
-
-pass() { passed=$((passed + 1)); echo "ok   $1"; }
-fail() { failed=$((failed + 1)); echo "FAIL $1"; }
-skip() { skipped=$((skipped + 1)); echo "skip $1"; }
-
-# run EXPECTED_STATUS NAME CMD...: runs CMD with stdout/stderr in $tmp/out, $tmp/err; checks the status.
-run() {
-    expect=$1
-    name=$2
-    shift 2
-    "$@" >"$tmp/out" 2>"$tmp/err" </dev/null
-    status=$?
-    if [ "$status" -eq "$expect" ]; then
-        pass "$name"
-        return 0
-    fi
-    fail "$name (exit $status, expected $expect)"
-    sed 's/^/     | /' "$tmp/err" | head -5
-    return 1
-}
-
-# check NAME CONDITION...: passes when the command succeeds.
-check() {
-    name=$1
-    shift
-    if "$@"; then pass "$name"; else fail "$name"; fi
-}
-
-has_python=0
-command -v python3 >/dev/null 2>&1 && has_python=1
-json_valid() { python3 -m json.tool "$1" >/dev/null 2>&1; }
+name=test_tool.sh
+. "$(dirname "$0")/tool_test_lib.sh"
 
 # ---- help, version, usage errors ----------------------------------------------------------
 
@@ -392,6 +354,4 @@ run 0 "demo (every query kind, checked against brute force)" env TMPDIR="$tmp" "
     check "demo ends with ok" grep -q "^cbvh demo: ok" "$tmp/out"
 check "demo removed its temporary file" test -z "$(ls -d "$tmp"/cbvh-demo-* 2>/dev/null)"
 
-echo "test_tool.sh: $passed passed, $failed failed, $skipped skipped"
-[ "$failed" -eq 0 ] || exit 1
-exit 0
+finish
