@@ -66,7 +66,26 @@ CBVH_KERNEL int cbvh_plane_t(const struct cbvh_ray_shear *restrict s, const floa
     const double num = nx * ((double)a[0] - s->org[0]) + ny * ((double)a[1] - s->org[1]) + nz * ((double)a[2] - s->org[2]);
     if (den == 0.0)
         return 0;
-    *t = num / den;
+    /* Every point of the triangle projects onto the ray between its vertices'
+     * projections, so a hit's t lies in that span. For a ray that grazes the
+     * plane, num / den is ill conditioned and can land far outside it (even
+     * behind the origin); clamping keeps t on the triangle the edge tests
+     * accepted. */
+    const double dd = (double)s->dir[0] * s->dir[0] + (double)s->dir[1] * s->dir[1] + (double)s->dir[2] * s->dir[2];
+    double lo = INFINITY, hi = -INFINITY;
+    const float *const v[3] = {a, b, c};
+    for (int k = 0; k < 3; k++) {
+        const double proj = ((double)v[k][0] - s->org[0]) * s->dir[0] + ((double)v[k][1] - s->org[1]) * s->dir[1] +
+                            ((double)v[k][2] - s->org[2]) * s->dir[2];
+        lo = proj < lo ? proj : lo;
+        hi = proj > hi ? proj : hi;
+    }
+    double tp = num / den;
+    lo /= dd;
+    hi /= dd;
+    tp = tp < lo ? lo : tp;
+    tp = tp > hi ? hi : tp;
+    *t = tp;
     return 1;
 }
 
