@@ -134,6 +134,15 @@ static dvec dcross(dvec a, dvec b)
  * point on the three edges (also covers degenerate triangles). */
 static dvec closest_on_triangle(dvec p, dvec a, dvec b, dvec c)
 {
+    /* the normal from the two shorter edges, at the vertex opposite the
+     * longest: on a sliver the long edges' differences round at the scale of
+     * the short one and tilt the plane (a rotation keeps the orientation) */
+    double la = dlen(dsub(c, b)), lb = dlen(dsub(a, c)), lc = dlen(dsub(b, a));
+    if (lb > la && lb >= lc) {
+        dvec t = a; a = b; b = c; c = t;
+    } else if (lc > la && lc > lb) {
+        dvec t = a; a = c; c = b; b = t;
+    }
     dvec n = dcross(dsub(b, a), dsub(c, a));
     double nn = ddot(n, n);
     if (nn > 0 && isfinite(nn)) {
@@ -217,7 +226,7 @@ static void check_hit(check_ctx *c, const cbvh_ray *r, const cbvh_hit *h, int go
     dvec p = dadd(o, dmul(d, h->t));
     dvec q = dadd(dmul(v[0], 1.0 - h->u - h->v), dadd(dmul(v[1], h->u), dmul(v[2], h->v)));
     double mag = fmax(fmax(dmaxabs(o), dmaxabs(p)), fmax(dmaxabs(v[0]), fmax(dmaxabs(v[1]), dmaxabs(v[2]))));
-    if (!dfinite(p) || !dfinite(q) || !(mag <= FUZZ_MAX_MAGNITUDE))
+    if (!dfinite(p) || !dfinite(q))
         return;
     /* the barycentric point must lie on the ray's line and the ray point on
      * the triangle's plane: both stay well conditioned for grazing rays,
@@ -254,7 +263,7 @@ static void check_ray(check_ctx *c, const cbvh_ray *r)
         FUZZ_CHECK(occ == 0 || occ == 1, "occluded returned %d", occ);
         if (!ray_valid(r))
             FUZZ_CHECK(!got[t] && !occ, "%s: invalid ray reported a hit", traversal_name[t]);
-        if (c->strict && c->scale <= FUZZ_MAX_MAGNITUDE)
+        if (c->strict)
             FUZZ_CHECK(occ == got[0], "%s: occluded %d but raycast %d", traversal_name[t], occ, got[0]);
         c->queries += 2;
     }
@@ -266,7 +275,7 @@ static void check_ray(check_ctx *c, const cbvh_ray *r)
     check_hit(c, r, &sh, sh.tri != CBVH_NO_HIT, "stream");
     FUZZ_CHECK(socc == 0 || socc == 1, "occluded stream wrote %u", socc);
     c->queries += 2;
-    if (!c->strict || c->scale > FUZZ_MAX_MAGNITUDE)
+    if (!c->strict)
         return;
     for (int t = 1; t < 4; t++) {
         FUZZ_CHECK(got[t] == got[0], "%s and sorted disagree: hit %d vs %d", traversal_name[t], got[t], got[0]);
@@ -289,7 +298,7 @@ static void check_stream_batch(check_ctx *c, const cbvh_ray *rays, size_t n)
     for (size_t i = 0; i < n; i++) {
         check_hit(c, &rays[i], &hits[i], hits[i].tri != CBVH_NO_HIT, "stream batch");
         FUZZ_CHECK(occ[i] <= 1, "occluded stream wrote %u", occ[i]);
-        if (c->strict && c->scale <= FUZZ_MAX_MAGNITUDE) {
+        if (c->strict) {
             cbvh_hit one;
             int got = cbvh_raycast(c->f, &rays[i], CBVH_TRAVERSAL_SORTED, &one, NULL);
             FUZZ_CHECK(got == (hits[i].tri != CBVH_NO_HIT) && (!got || one.t == hits[i].t),
@@ -299,7 +308,9 @@ static void check_stream_batch(check_ctx *c, const cbvh_ray *rays, size_t n)
     }
 }
 
-static void check_sweep_hit(check_ctx *c, const cbvh_sweep_hit *h, const char *what)
+/* `max_magnitude` bounds the coordinates (query's and file's) up to which the
+ * contact point must lie on the triangle. */
+static void check_sweep_hit(check_ctx *c, const cbvh_sweep_hit *h, const char *what, double max_magnitude)
 {
     dvec v[3];
     FUZZ_CHECK(triangle_of(c, h->tri, v), "%s: triangle id %u out of range", what, h->tri);
@@ -310,9 +321,11 @@ static void check_sweep_hit(check_ctx *c, const cbvh_sweep_hit *h, const char *w
         return;
     double mag = fmax(dmaxabs(p), fmax(dmaxabs(v[0]), fmax(dmaxabs(v[1]), dmaxabs(v[2]))));
     double gap = dlen(dsub(p, closest_on_triangle(p, v[0], v[1], v[2])));
-    /* the shapes are sized from the file's extent: the query's magnitude counts too */
-    if (c->strict && mag <= FUZZ_MAX_MAGNITUDE && c->scale <= FUZZ_MAX_MAGNITUDE)
-        FUZZ_CHECK(gap <= 1e-4 * mag + 1e-30, "%s: contact point %.3g off triangle %u", what, gap, h->tri);
+    /* the shapes are sized from the file's extent, so the contact point is
+     * computed from coordinates of that magnitude: a tiny triangle in a huge
+     * file gets the file's precision, not its own */
+    if (c->strict && mag <= max_magnitude && c->scale <= max_magnitude)
+        FUZZ_CHECK(gap <= 1e-4 * fmax(mag, c->scale) + 1e-30, "%s: contact point %.3g off triangle %u", what, gap, h->tri);
 }
 
 /* Sweeps: ids, t and normals always; with strict, the contact distance, and
@@ -332,8 +345,8 @@ static void check_sweeps(check_ctx *c)
     float radius = (float)(unit(c) * 0.05 * ext);
     cbvh_sweep_hit h;
     if (cbvh_sweep_sphere(c->f, center, radius, delta, &h)) {
-        check_sweep_hit(c, &h, "sphere sweep");
-        if (c->strict && isfinite(h.point[0]) && c->scale <= FUZZ_MAX_MAGNITUDE) {
+        check_sweep_hit(c, &h, "sphere sweep", INFINITY);
+        if (c->strict && isfinite(h.point[0])) {
             dvec at = dadd(dv(center), dmul(dv(delta), h.t));
             double dist = dlen(dsub(at, dv(h.point))), tol = 1e-4 * fmax(c->scale, dmaxabs(at)) + 1e-30;
             FUZZ_CHECK(dist <= radius + tol, "sphere sweep: contact %.9g from the center, radius %.9g", dist, radius);
@@ -342,9 +355,9 @@ static void check_sweeps(check_ctx *c)
         }
     }
     if (cbvh_sweep_capsule(c->f, center, p1, radius, delta, &h))
-        check_sweep_hit(c, &h, "capsule sweep");
+        check_sweep_hit(c, &h, "capsule sweep", FUZZ_CAPSULE_MAX_MAGNITUDE);
     if (cbvh_sweep_box(c->f, center, half, delta, &h))
-        check_sweep_hit(c, &h, "box sweep");
+        check_sweep_hit(c, &h, "box sweep", INFINITY);
     c->queries += 3;
 
     /* invalid shapes miss */
@@ -354,7 +367,7 @@ static void check_sweeps(check_ctx *c)
     FUZZ_CHECK(!cbvh_sweep_capsule(c->f, center, nan_center, radius, delta, &h), "NaN capsule sweep hit");
     c->queries += 3;
 
-    if (!c->strict || c->scale > FUZZ_MAX_MAGNITUDE)
+    if (!c->strict)
         return;
     /* a sphere of radius 0 is a ray from center along delta with t in [0,1] */
     cbvh_ray r = { { center[0], center[1], center[2] }, 0.0f, { delta[0], delta[1], delta[2] }, 1.0f };
@@ -460,12 +473,19 @@ static void check_overlaps(check_ctx *c)
     FUZZ_CHECK(cbvh_overlap_sphere(c->f, center, -1.0f, NULL, NULL, out, 8) == 0, "negative radius overlap reported triangles");
     c->queries += 2;
 
-    if (!c->strict || log.count >= 4096 || slog.count >= 4096 || c->scale > FUZZ_MAX_MAGNITUDE)
+    if (!c->strict || log.count >= 4096 || slog.count >= 4096)
         return;
     /* brute force: reported triangles touch the query (up to rounding), and
      * every triangle that certainly touches it was reported */
     dvec bc = { 0.5 * ((double)lo[0] + hi[0]), 0.5 * ((double)lo[1] + hi[1]), 0.5 * ((double)lo[2] + hi[2]) };
     double tol = 1e-5 * c->scale + 1e-30;
+    /* near FLT_MAX a query bound can round to inf: such a query is invalid
+     * and reports nothing, so it makes no "must report" claim */
+    int box_valid = 1, sphere_valid = isfinite(radius);
+    for (int k = 0; k < 3; k++) {
+        box_valid &= isfinite(lo[k]) && isfinite(hi[k]);
+        sphere_valid &= isfinite(center[k]);
+    }
     for (uint32_t t = 0; t < c->original_count; t++) {
         dvec v[3];
         if (!triangle_of(c, t, v))
@@ -476,7 +496,7 @@ static void check_overlaps(check_ctx *c)
         for (int k = 0; k < 3; k++)
             inside_vertex |= v[k].x > lo[0] + tol && v[k].x < hi[0] - tol && v[k].y > lo[1] + tol && v[k].y < hi[1] - tol &&
                              v[k].z > lo[2] + tol && v[k].z < hi[2] - tol;
-        if (inside_vertex || out_by < -tol)
+        if (box_valid && (inside_vertex || out_by < -tol))
             FUZZ_CHECK(sorted_has(&log, t), "box overlap missed triangle %u", t);
         if (sorted_has(&log, t)) {
             int apart = 0;
@@ -487,7 +507,7 @@ static void check_overlaps(check_ctx *c)
             FUZZ_CHECK(!apart, "box overlap reported triangle %u whose bounds miss the box", t);
         }
         double sd = dlen(dsub(dv(center), closest_on_triangle(dv(center), v[0], v[1], v[2])));
-        if (sd < radius - tol)
+        if (sphere_valid && sd < radius - tol)
             FUZZ_CHECK(sorted_has(&slog, t), "sphere overlap missed triangle %u at distance %.9g < %.9g", t, sd, radius);
         if (sorted_has(&slog, t))
             FUZZ_CHECK(sd <= radius + tol, "sphere overlap reported triangle %u at distance %.9g > %.9g", t, sd, radius);
