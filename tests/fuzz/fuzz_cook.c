@@ -151,7 +151,7 @@ static void compare_with_brute_force(const cbvh_file *f, const decoded *d, uint6
     size_t stride = m->position_stride / sizeof(float);
     /* The query works on coordinates relative to the ray origin in binary32:
      * a vertex - origin difference beyond FLT_MAX overflows and the triangle
-     * can be missed (finding F7, coordinates near 3e38). Rays whose origin
+     * can be missed (finding F8, coordinates near 3e38). Rays whose origin
      * and mesh magnitudes add up past FLT_MAX make no claim. */
     double mesh_mag = 0;
     for (size_t i = 0; i < 3 * m->triangle_count; i++)
