@@ -456,6 +456,67 @@ static void test_huge_coordinates(void **state)
     }
 }
 
+/* F8: a triangle spanning the float range, rays from origins just as far
+ * on the other side, so vertex - origin differences pass FLT_MAX. An
+ * overflowed sheared coordinate made two float edge functions opposite
+ * infinities, and a clear hit was rejected as a miss. Rays through points
+ * well inside the triangle (the finding's ray first) must hit it at the t
+ * of the double-precision plane crossing. */
+static void test_near_flt_max(void **state)
+{
+    (void)state;
+    const float pos[9] = {0x1.fefefep+127f, 0x1.fdfcp-135f, 0, 0x1.0000c2p-99f, 0x1.ff1d9ep+127f, 0x1.fefefep+127f,
+                          0, 0x1.000054p-123f, 0x1.5988p-136f};
+    const uint32_t idx[3] = {0, 1, 2};
+    void *buf = NULL;
+    cbvh_file *f = NULL;
+    assert_int_equal(ref_cook_open(pos, 3, idx, 1, NULL, &buf, &f), CBVH_OK);
+    uint64_t st = 41;
+    int overflowing = 0;
+    for (int i = 0; i < 2000; i++) {
+        cbvh_ray r = {{0x1.f51354p+127f, 0x1.aecb46p+124f, -0x1.13a364p+126f}, 0,
+                      {-0x1.ff1dap+126f, 0x1.7f5636p+126f, 0x1.7f5636p+127f}, INFINITY};
+        if (i > 0) {
+            const double wb = 0.1 + 0.4 * scene_rand_unit(&st), wc = 0.1 + 0.4 * scene_rand_unit(&st);
+            for (int a = 0; a < 3; a++) {
+                const double target = (1.0 - wb - wc) * pos[a] + wb * pos[3 + a] + wc * pos[6 + a];
+                const double lo = fmax(-3.3e38, target - 3.3e38);
+                r.org[a] = (float)(lo + scene_rand_unit(&st) * (3.3e38 - lo));
+                r.dir[a] = (float)(target - r.org[a]);
+            }
+        }
+        int past = 0;
+        for (int v = 0; v < 3; v++)
+            for (int a = 0; a < 3; a++)
+                past |= fabs((double)pos[3 * v + a] - r.org[a]) > FLT_MAX;
+        overflowing += past;
+        /* reference: the plane crossing in double */
+        double e1[3], e2[3], n[3];
+        for (int a = 0; a < 3; a++) {
+            e1[a] = (double)pos[3 + a] - pos[a];
+            e2[a] = (double)pos[6 + a] - pos[a];
+        }
+        n[0] = e1[1] * e2[2] - e1[2] * e2[1];
+        n[1] = e1[2] * e2[0] - e1[0] * e2[2];
+        n[2] = e1[0] * e2[1] - e1[1] * e2[0];
+        double num = 0, den = 0;
+        for (int a = 0; a < 3; a++) {
+            num += n[a] * ((double)pos[a] - r.org[a]);
+            den += n[a] * r.dir[a];
+        }
+        const double t_ref = num / den;
+        cbvh_hit h;
+        if (!hit_everywhere(f, &r, &h))
+            fail_msg("ray %d (%s) missed; the plane crossing is at t %g", i, past ? "overflowing" : "finite", t_ref);
+        if (!(fabs(h.t - t_ref) <= 1e-5 * t_ref))
+            fail_msg("ray %d: t %.9g, reference %.9g", i, h.t, t_ref);
+    }
+    /* the case under test: most origins are past FLT_MAX from some vertex */
+    assert_true(overflowing > 500);
+    cbvh_close(f);
+    cbvh_buffer_free(NULL, buf);
+}
+
 /* F1, far origins: a unit sphere seen from 2^66 (about 7e19) away. In float,
  * coordinates relative to such an origin collapse to one point. The rays
  * pass exactly through the world origin (org = -2^66 dir, dir of small
@@ -604,6 +665,60 @@ static void test_sliver_barycentrics(void **state)
     cbvh_buffer_free(NULL, buf);
 }
 
+/* F9: on a needle whose two short-edge vertices are closer than the
+ * rounding of its long edges (b and c 1e-16 apart, a at distance 3), the
+ * normal taken from the long edges pointed anywhere and the barycentric
+ * point lay 0.2 from the hit. The finding's ray, then rays along -y aimed at
+ * the middle of the needle's cross-section at x = -f, for widths 1e-16 to
+ * 1e-4: the barycentric point must be the hit point (within 1e-6 of the
+ * length) for every traversal. */
+static void test_needle_barycentrics(void **state)
+{
+    (void)state;
+    static const double widths[4] = {1e-16, 1e-12, 1e-8, 1e-4};
+    const uint32_t idx[3] = {0, 1, 2};
+    uint64_t st = 23;
+    for (int wi = 0; wi < 5; wi++) {
+        /* wi 4: the finding's triangle and ray, as the fuzzer cooked them */
+        const float k = wi < 4 ? (float)widths[wi] : 0x1.494948p-54f;
+        const float pos[9] = {-1.0f, 2.71875f, wi < 4 ? 0.0f : 0x1.0a0c02p-123f, -k, -k, -k,
+                              wi < 4 ? 0.0f : 0x1.040608p-113f, wi < 4 ? 0.0f : 0x1.8383p-132f,
+                              wi < 4 ? 0.0f : 0x1.c100cp-131f};
+        void *buf = NULL;
+        cbvh_file *f = NULL;
+        assert_int_equal(ref_cook_open(pos, 3, idx, 1, NULL, &buf, &f), CBVH_OK);
+        int hits = 0;
+        for (int i = 0; i < 200; i++) {
+            cbvh_ray r = {{-0.25f, 0x1.45p+2f, -0x1.494948p-55f}, 0, {0, -1, 0}, INFINITY};
+            if (wi < 4 || i > 0) {
+                /* edge a-b crosses x = -fx at parameter s, where its z is -s k; edge a-c stays at z = 0 */
+                const double fx = 0.05 + 0.9 * scene_rand_unit(&st);
+                const double sp = (1.0 - fx) / (1.0 - (double)k);
+                r.org[0] = (float)-fx;
+                r.org[2] = (float)(-0.5 * sp * k);
+            }
+            cbvh_hit h;
+            if (!hit_everywhere(f, &r, &h))
+                continue;
+            hits++;
+            double gap2 = 0.0;
+            for (int a = 0; a < 3; a++) {
+                const double hit = r.org[a] + (double)h.t * r.dir[a];
+                const double bary = (1.0 - h.u - h.v) * pos[a] + h.u * (double)pos[3 + a] + h.v * (double)pos[6 + a];
+                gap2 += (hit - bary) * (hit - bary);
+            }
+            if (!(sqrt(gap2) <= 3e-6))
+                fail_msg("width %g ray %d: the barycentric point (u %g v %g) is %g from the hit point", (double)k, i,
+                         h.u, h.v, sqrt(gap2));
+        }
+        /* rays aimed inside the cross-section hit, whatever the width */
+        if (hits < (wi < 4 ? 190 : 1))
+            fail_msg("width %g: only %d of the rays aimed at the needle hit it", (double)k, hits);
+        cbvh_close(f);
+        cbvh_buffer_free(NULL, buf);
+    }
+}
+
 static void test_invalid_rays(void **state)
 {
     (void)state;
@@ -700,6 +815,8 @@ int main(void)
         cmocka_unit_test(test_invalid_rays),     cmocka_unit_test(test_stats),
         cmocka_unit_test(test_huge_coordinates), cmocka_unit_test(test_far_origin_hits),
         cmocka_unit_test(test_sliver_t),        cmocka_unit_test(test_sliver_barycentrics),
+        cmocka_unit_test(test_needle_barycentrics),
+        cmocka_unit_test(test_near_flt_max),
     };
     int failed = cmocka_run_group_tests(tests, NULL, NULL);
     fprintf(stderr, "test_raycast: %ld reference checks\n", checks_done);

@@ -321,8 +321,8 @@ static void test_sliver_sweeps(void **state)
  * starting inside or outside it, against the reference: the case where the
  * segment/segment closest points' Gram determinant (|d1|^2 |d2|^2 - (d1.d2)^2)
  * cancels (closest.c now forms it as |d1 x d2|^2). Written for finding F5
- * (capsule contacts drifting at 1e17-1e20), which it does not reproduce:
- * it passes with the former arithmetic too. */
+ * before its cause was known (test_needle_capsules reproduces it); it
+ * passes with the former arithmetic too. */
 static void test_huge_capsules(void **state)
 {
     (void)state;
@@ -350,6 +350,61 @@ static void test_huge_capsules(void **state)
     ref_fixture_close(&fx);
 }
 
+/* F5: on a needle (two vertices 1e-28 apart, the third 5.4e16 away) the
+ * closest-point inside tests used the long edges, whose directions carry
+ * rounding far larger than the needle's angle, and a capsule overlapping
+ * the needle's line beyond its tip got a contact point 2.4e16 past the tip.
+ * The finding's capsule, then capsules and spheres around the tips of
+ * needles of widths 1e-28 to 1e-4 (relative), overlapping at the start or
+ * moving in, against the reference: contact real, point on the triangle. */
+static void test_needle_capsules(void **state)
+{
+    (void)state;
+    static const float widths[4] = {0x1.1p-90f, 1e-20f, 1e-10f, 1e-4f};
+    for (int wi = 0; wi < 5; wi++) {
+        /* wi 4: the finding's triangle as the fuzzer cooked it */
+        const float tip_y = -0x1.7f4p+55f, tip_z = -0x1.8007c2p+38f, k = wi < 4 ? widths[wi] * -tip_y : 0.0f;
+        const float pos[9] = {wi < 4 ? 0.0f : 0x1.fdp-128f, wi < 4 ? 0.0f : 0x1.020406p-91f, wi < 4 ? 0.0f : 0x1.080026p-121f,
+                              wi < 4 ? k : 0x1.142214p-103f, wi < 4 ? 0.0f : 0x1.0a0816p-103f, wi < 4 ? 0.0f : 0x1.181a0ap-117f,
+                              wi < 4 ? 0.0f : 0x1.fb83cp-128f, tip_y, tip_z};
+        const uint32_t idx[3] = {0, 1, 2};
+        ref_fixture fx;
+        assert_int_equal(ref_fixture_open(&fx, pos, 3, idx, 1, NULL), CBVH_OK);
+        ref_shape s;
+        memset(&s, 0, sizeof s);
+        uint64_t st = 5 + (uint64_t)wi;
+        for (int i = 0; i < (wi < 4 ? 100 : 1); i++) {
+            float delta[3];
+            if (wi == 4) {
+                s.kind = REF_CAPSULE;
+                const float p0[3] = {-0x1.89c9b8p-21f, -0x1.14a56ep+56f, -0x1.b46a78p+37f},
+                            p1[3] = {-0x1.89c9b8p-21f, -0x1.05e87cp+56f, -0x1.93389p+50f},
+                            d[3] = {0x1.ae4988p-20f, 0x1.ff5d98p+55f, -0x1.651acp+33f};
+                for (int a = 0; a < 3; a++) {
+                    s.p0[a] = p0[a];
+                    s.p1[a] = p1[a];
+                    delta[a] = d[a];
+                }
+                s.radius = 0x1.e20e4cp+50f;
+            } else {
+                /* a segment along the needle's line from beyond the tip, a radius that may reach it */
+                s.kind = i % 4 == 3 ? REF_SPHERE : REF_CAPSULE;
+                const double f0 = rnd(&st, 1.05, 1.5), f1 = s.kind == REF_SPHERE ? f0 : rnd(&st, 1.05, 1.5);
+                const double lift = rnd(&st, -0.2, 0.2) * -tip_y;
+                for (int a = 0; a < 3; a++) {
+                    const double tip = pos[6 + a];
+                    s.p0[a] = (float)(f0 * tip + (a == 0 ? lift : 0.0));
+                    s.p1[a] = (float)(f1 * tip + (a == 0 ? -lift : 0.0));
+                    delta[a] = (float)(rnd(&st, -0.6, 0.2) * tip);
+                }
+                s.radius = (float)(rnd(&st, 0.01, 0.6) * -tip_y);
+            }
+            check_sweep(&fx, &s, delta);
+        }
+        ref_fixture_close(&fx);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -359,6 +414,7 @@ int main(void)
         cmocka_unit_test(test_invalid_input),
         cmocka_unit_test(test_sliver_sweeps),
         cmocka_unit_test(test_huge_capsules),
+        cmocka_unit_test(test_needle_capsules),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -1,5 +1,6 @@
 /* closest.c: closest points between a point, a segment and a triangle, in double precision. */
 #include "query/closest.h"
+#include "query/triangle_frame.h"
 
 static double clamp01(double x) { return x < 0.0 ? 0.0 : x > 1.0 ? 1.0 : x; }
 
@@ -11,24 +12,27 @@ static cbvh_v3 closest_point_segment(cbvh_v3 p, cbvh_v3 a, cbvh_v3 b)
     return len2 > 0.0 ? v3_madd(a, ab, clamp01(v3_dot(v3_sub(p, a), ab) / len2)) : a;
 }
 
-/* Inside the triangle when p's projection q is on the inner side of all
- * three edges: then q. Otherwise the nearest point lies on the boundary: the
- * nearest of the three edges' clamped projections. Each quantity is a cross
- * or dot product of edge vectors and offsets, whose errors are relative to
- * the lengths involved, not to the area: Ericson's Voronoi-region form
- * (differences of products of dot products, i.e. Gram determinants ~ area^2)
- * loses every digit on a long sliver (finding F4: a sphere 2 from a sliver's
- * long edge of length 3.7e9 was reported clear of it). */
+/* Inside the triangle when the barycentrics of p's projection, in the
+ * triangle's frame (triangle_frame.h), are in range: then that point, built
+ * from them so it lies on the triangle up to rounding. Otherwise the
+ * nearest point lies on the boundary: the nearest of the three edges'
+ * clamped projections. Every quantity has errors relative to the lengths
+ * involved, not to the area: Ericson's Voronoi-region form (differences of
+ * products of dot products, i.e. Gram determinants ~ area^2) loses every
+ * digit on a long sliver (finding F4: a sphere 2 from a sliver's long edge
+ * of length 3.7e9 was reported clear of it), and inside tests against the
+ * edges of a needle (two vertices 1e-28 apart, the third 5e16 away) accepted
+ * a projection 2.4e16 beyond its tip (finding F5). */
 cbvh_v3 cbvh_closest_point_triangle(cbvh_v3 p, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c)
 {
-    const cbvh_v3 n = v3_cross(v3_sub(b, a), v3_sub(c, a));
-    const double nn = v3_len2(n);
-    if (nn > 0.0) {
-        const cbvh_v3 q = v3_madd(p, n, -v3_dot(v3_sub(p, a), n) / nn);
-        if (v3_dot(v3_cross(v3_sub(b, a), v3_sub(q, a)), n) >= 0.0 &&
-            v3_dot(v3_cross(v3_sub(c, b), v3_sub(q, b)), n) >= 0.0 &&
-            v3_dot(v3_cross(v3_sub(a, c), v3_sub(q, c)), n) >= 0.0)
-            return q;
+    const cbvh_v3 v[3] = {a, b, c};
+    struct cbvh_triangle_frame f;
+    cbvh_triangle_frame_of(v, &f);
+    if (f.nn > 0.0) {
+        double x, y;
+        cbvh_triangle_frame_barycentrics(&f, v3_sub(p, v[f.base]), &x, &y);
+        if (x >= 0.0 && y >= 0.0 && x + y <= 1.0)
+            return v3_madd(v3_madd(v[f.base], f.e1, x), f.e2, y);
     }
     cbvh_v3 best = closest_point_segment(p, a, b);
     double d = v3_len2(v3_sub(p, best));
@@ -79,19 +83,24 @@ double cbvh_closest_segments(cbvh_v3 p0, cbvh_v3 p1, cbvh_v3 q0, cbvh_v3 q1, cbv
     return v3_len2(v3_sub(*on_p, *on_q));
 }
 
-/* Where segment p0-p1 crosses the triangle's plane inside the triangle, if it does (non-coplanar case). */
+/* Where segment p0-p1 crosses the triangle's plane inside the triangle, if
+ * it does (non-coplanar case): the crossing's barycentrics in the triangle's
+ * frame decide, and the point is built from them. */
 static int segment_crosses_triangle(cbvh_v3 p0, cbvh_v3 p1, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, cbvh_v3 *x)
 {
-    const cbvh_v3 n = v3_cross(v3_sub(b, a), v3_sub(c, a));
-    const double s0 = v3_dot(v3_sub(p0, a), n), s1 = v3_dot(v3_sub(p1, a), n);
-    if ((s0 > 0.0 && s1 > 0.0) || (s0 < 0.0 && s1 < 0.0) || s0 == s1)
+    const cbvh_v3 v[3] = {a, b, c};
+    struct cbvh_triangle_frame f;
+    cbvh_triangle_frame_of(v, &f);
+    const cbvh_v3 o = v[f.base];
+    const double s0 = v3_dot(v3_sub(p0, o), f.n), s1 = v3_dot(v3_sub(p1, o), f.n);
+    if ((s0 > 0.0 && s1 > 0.0) || (s0 < 0.0 && s1 < 0.0) || s0 == s1 || !(f.nn > 0.0))
         return 0;
     const cbvh_v3 q = v3_madd(p0, v3_sub(p1, p0), s0 / (s0 - s1));
-    /* Inside when q is on the inner side of all three edges (same orientation as n). */
-    if (v3_dot(v3_cross(v3_sub(b, a), v3_sub(q, a)), n) < 0.0 || v3_dot(v3_cross(v3_sub(c, b), v3_sub(q, b)), n) < 0.0 ||
-        v3_dot(v3_cross(v3_sub(a, c), v3_sub(q, c)), n) < 0.0)
+    double bx, by;
+    cbvh_triangle_frame_barycentrics(&f, v3_sub(q, o), &bx, &by);
+    if (!(bx >= 0.0 && by >= 0.0 && bx + by <= 1.0))
         return 0;
-    *x = q;
+    *x = v3_madd(v3_madd(o, f.e1, bx), f.e2, by);
     return 1;
 }
 

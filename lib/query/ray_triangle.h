@@ -3,6 +3,7 @@
 #define CBVH_QUERY_RAY_TRIANGLE_H
 
 #include "query/ray_setup.h"
+#include "query/triangle_frame.h"
 
 #if defined(__GNUC__)
 #define CBVH_LIKELY(x) __builtin_expect(!!(x), 1)
@@ -50,20 +51,20 @@ CBVH_COLD static int cbvh_ray_triangle_edges_double(const struct cbvh_ray_shear 
     return !isnan(e[0]) && !isnan(e[1]) && !isnan(e[2]) && e[0] + e[1] + e[2] != 0.0;
 }
 
-/* t where the ray crosses the plane of (a, b, c): dot(n, a - org) / dot(n, dir)
- * with n = (b - a) x (c - a), all in double. Well conditioned whatever the
- * triangle's shape (the interpolated t of the original test loses accuracy as
- * 1/area on slivers), and without overflow for any float coordinates. Only
- * triangles that passed the edge tests get here. Returns 0 when the ray lies
- * in the plane (t undefined). */
+/* t where the ray crosses the plane of (a, b, c): dot(n, base - org) /
+ * dot(n, dir) in the triangle's frame (triangle_frame.h), all in double.
+ * Well conditioned whatever the triangle's shape (the interpolated t of the
+ * original test loses accuracy as 1/area on slivers), and without overflow
+ * for any float coordinates. Only triangles that passed the edge tests get
+ * here. Returns 0 when the ray lies in the plane (t undefined). */
 CBVH_KERNEL int cbvh_plane_t(const struct cbvh_ray_shear *restrict s, const float *restrict a,
                                const float *restrict b, const float *restrict c, double *t)
 {
-    const double e1x = (double)b[0] - a[0], e1y = (double)b[1] - a[1], e1z = (double)b[2] - a[2];
-    const double e2x = (double)c[0] - a[0], e2y = (double)c[1] - a[1], e2z = (double)c[2] - a[2];
-    const double nx = e1y * e2z - e1z * e2y, ny = e1z * e2x - e1x * e2z, nz = e1x * e2y - e1y * e2x;
-    const double den = nx * s->dir[0] + ny * s->dir[1] + nz * s->dir[2];
-    const double num = nx * ((double)a[0] - s->org[0]) + ny * ((double)a[1] - s->org[1]) + nz * ((double)a[2] - s->org[2]);
+    const cbvh_v3 v[3] = {v3_from_f(a), v3_from_f(b), v3_from_f(c)};
+    const cbvh_v3 org = v3_from_f(s->org), dir = v3_from_f(s->dir);
+    struct cbvh_triangle_frame f;
+    cbvh_triangle_frame_of(v, &f);
+    const double den = v3_dot(f.n, dir), num = v3_dot(f.n, v3_sub(v[f.base], org));
     if (den == 0.0)
         return 0;
     /* Every point of the triangle projects onto the ray between its vertices'
@@ -71,15 +72,13 @@ CBVH_KERNEL int cbvh_plane_t(const struct cbvh_ray_shear *restrict s, const floa
      * plane, num / den is ill conditioned and can land far outside it (even
      * behind the origin); clamping keeps t on the triangle the edge tests
      * accepted. */
-    const double dd = (double)s->dir[0] * s->dir[0] + (double)s->dir[1] * s->dir[1] + (double)s->dir[2] * s->dir[2];
     double lo = INFINITY, hi = -INFINITY;
-    const float *const v[3] = {a, b, c};
     for (int k = 0; k < 3; k++) {
-        const double proj = ((double)v[k][0] - s->org[0]) * s->dir[0] + ((double)v[k][1] - s->org[1]) * s->dir[1] +
-                            ((double)v[k][2] - s->org[2]) * s->dir[2];
+        const double proj = v3_dot(v3_sub(v[k], org), dir);
         lo = proj < lo ? proj : lo;
         hi = proj > hi ? proj : hi;
     }
+    const double dd = v3_len2(dir);
     double tp = num / den;
     lo /= dd;
     hi /= dd;
@@ -89,77 +88,65 @@ CBVH_KERNEL int cbvh_plane_t(const struct cbvh_ray_shear *restrict s, const floa
     return 1;
 }
 
-/* The barycentrics of the boundary point nearest to a + w (w = u e1 + v e2
- * with (u, v) outside the triangle): the nearest of the three edges'
- * clamped projections, measured in space (a barycentric shift along a long
- * edge of a sliver would move the point far). */
-CBVH_COLD static void cbvh_barycentrics_to_boundary(const double e1[3], const double e2[3], const double w[3],
-                                                   double *u, double *v)
+/* The barycentrics (weights of the ends of e1 and e2) of the boundary point
+ * nearest to base + w (w = x e1 + y e2 with (x, y) outside the triangle):
+ * the nearest of the three edges' clamped projections, measured in space (a
+ * barycentric shift along a long edge of a sliver would move the point far). */
+CBVH_COLD static void cbvh_barycentrics_to_boundary(const struct cbvh_triangle_frame *f, cbvh_v3 w, double *x,
+                                                   double *y)
 {
-    /* edge k runs from p0 + s * d, s in [0, 1], with barycentrics (u0 + s du, v0 + s dv) */
-    const double d[3][3] = {{e1[0], e1[1], e1[2]}, {e2[0], e2[1], e2[2]},
-                            {e2[0] - e1[0], e2[1] - e1[1], e2[2] - e1[2]}};
-    const double start[3][3] = {{0, 0, 0}, {0, 0, 0}, {e1[0], e1[1], e1[2]}};
-    const double bary[3][4] = {{0, 0, 1, 0}, {0, 0, 0, 1}, {1, 0, -1, 1}}; /* u0, v0, du, dv */
+    /* edge k runs from start + s * d, s in [0, 1], with barycentrics (x0 + s dx, y0 + s dy) */
+    const cbvh_v3 d[3] = {f->e1, f->e2, v3_sub(f->e2, f->e1)};
+    const cbvh_v3 start[3] = {v3(0, 0, 0), v3(0, 0, 0), f->e1};
+    const double bary[3][4] = {{0, 0, 1, 0}, {0, 0, 0, 1}, {1, 0, -1, 1}}; /* x0, y0, dx, dy */
     double best = INFINITY;
     for (int k = 0; k < 3; k++) {
-        double dd = 0.0, dw = 0.0;
-        for (int x = 0; x < 3; x++) {
-            dd += d[k][x] * d[k][x];
-            dw += d[k][x] * (w[x] - start[k][x]);
-        }
+        const cbvh_v3 rel = v3_sub(w, start[k]);
+        const double dd = v3_len2(d[k]), dw = v3_dot(d[k], rel);
         const double t = dd > 0.0 ? (dw / dd < 0.0 ? 0.0 : dw / dd > 1.0 ? 1.0 : dw / dd) : 0.0;
-        double gap = 0.0;
-        for (int x = 0; x < 3; x++) {
-            const double g = w[x] - start[k][x] - t * d[k][x];
-            gap += g * g;
-        }
+        const double gap = v3_len2(v3_madd(rel, d[k], -t));
         if (gap < best) {
             best = gap;
-            *u = bary[k][0] + t * bary[k][2];
-            *v = bary[k][1] + t * bary[k][3];
+            *x = bary[k][0] + t * bary[k][2];
+            *y = bary[k][1] + t * bary[k][3];
         }
     }
 }
 
 /* Barycentrics (u: weight of b, v: weight of c) of the point at t on the
- * ray, which lies in the triangle's plane: w = p - a = u e1 + v e2 gives
- * u = (w x e2).n / n.n and v = (e1 x w).n / n.n with n = e1 x e2, in double.
- * Their errors scale with the edge lengths, not with the area: the sheared
- * edge functions (products of coordinates relative to the origin) cancel on
- * slivers and put the barycentric point far from the hit (finding F6). Only
+ * ray, which lies in the triangle's plane, from the triangle's frame in
+ * double: errors relative to the edge lengths, not to the area (the sheared
+ * edge functions, products of coordinates relative to the origin, cancel on
+ * slivers and put the barycentric point far from the hit: finding F6). Only
  * for accepted hits. edge: the sheared edge functions (u, v, w scaled). */
 CBVH_KERNEL void cbvh_plane_barycentrics(const struct cbvh_ray_shear *restrict s, const float *restrict a,
                                          const float *restrict b, const float *restrict c, double t,
                                          const double edge[3], float *u, float *v)
 {
-    double e1[3], e2[3], w[3];
-    for (int k = 0; k < 3; k++) {
-        e1[k] = (double)b[k] - a[k];
-        e2[k] = (double)c[k] - a[k];
-        w[k] = ((double)s->org[k] - a[k]) + t * s->dir[k];
-    }
-    const double nx = e1[1] * e2[2] - e1[2] * e2[1], ny = e1[2] * e2[0] - e1[0] * e2[2],
-                 nz = e1[0] * e2[1] - e1[1] * e2[0];
-    const double nn = nx * nx + ny * ny + nz * nz;
-    const double un = nx * (w[1] * e2[2] - w[2] * e2[1]) + ny * (w[2] * e2[0] - w[0] * e2[2]) +
-                      nz * (w[0] * e2[1] - w[1] * e2[0]);
-    const double vn = nx * (e1[1] * w[2] - e1[2] * w[1]) + ny * (e1[2] * w[0] - e1[0] * w[2]) +
-                      nz * (e1[0] * w[1] - e1[1] * w[0]);
-    double bu = un / nn, bv = vn / nn;
-    /* n.n underflowed (denormal coordinates): the edge functions' barycentrics. */
-    if (!(isfinite(bu) && isfinite(bv))) {
+    const cbvh_v3 vert[3] = {v3_from_f(a), v3_from_f(b), v3_from_f(c)};
+    struct cbvh_triangle_frame f;
+    cbvh_triangle_frame_of(vert, &f);
+    const cbvh_v3 w = v3_madd(v3_sub(v3_from_f(s->org), vert[f.base]), v3_from_f(s->dir), t);
+    double weight[3]; /* of a, b, c */
+    double x, y;
+    cbvh_triangle_frame_barycentrics(&f, w, &x, &y);
+    if (isfinite(x) && isfinite(y)) {
+        /* Into the closed triangle: the edge tests accept a ray up to float
+         * precision outside it, where the exact point has a barycentric below
+         * 0; then the nearest boundary point. */
+        if (!(x >= 0.0 && y >= 0.0 && x + y <= 1.0))
+            cbvh_barycentrics_to_boundary(&f, w, &x, &y);
+        weight[(f.base + 1) % 3] = x;
+        weight[(f.base + 2) % 3] = y;
+        weight[f.base] = 1.0 - x - y;
+    } else {
+        /* n.n underflowed (denormal coordinates): the edge functions' barycentrics. */
         const double sum = edge[0] + edge[1] + edge[2];
-        bu = edge[1] / sum;
-        bv = edge[2] / sum;
+        weight[1] = edge[1] / sum;
+        weight[2] = edge[2] / sum;
     }
-    /* Into the closed triangle: the edge tests accept a ray up to float
-     * precision outside it, where the exact point has a barycentric below 0;
-     * then the nearest boundary point. */
-    if (!(bu >= 0.0 && bv >= 0.0 && bu + bv <= 1.0))
-        cbvh_barycentrics_to_boundary(e1, e2, w, &bu, &bv);
-    *u = (float)bu;
-    *v = (float)bv;
+    *u = (float)weight[1];
+    *v = (float)weight[2];
 }
 
 /* Tests the ray (sheared by s) against triangle (a, b, c). Returns 1 when it
@@ -190,9 +177,14 @@ CBVH_KERNEL int cbvh_ray_triangle(const struct cbvh_ray_shear *restrict s, const
     const float u = cx * by - cy * bx;
     const float v = ax * cy - ay * cx;
     const float w = bx * ay - by * ax;
-    /* Non-zero, non-NaN float edge functions have exact signs (see above):
-     * two of opposite sign are a miss whatever the third is. */
-    if ((u < 0.0f || v < 0.0f || w < 0.0f) && (u > 0.0f || v > 0.0f || w > 0.0f))
+    /* Finite float edge functions have exact signs (see above): two of
+     * opposite sign are a miss whatever the third is. An infinite or NaN one
+     * makes the sum non-finite; it may come from a sheared coordinate that
+     * overflowed, whose sign means nothing (finding F8: a vertex - origin
+     * difference past FLT_MAX turned a hit into two opposite infinities),
+     * so the double path decides it. */
+    if ((u < 0.0f || v < 0.0f || w < 0.0f) && (u > 0.0f || v > 0.0f || w > 0.0f) &&
+        CBVH_LIKELY(fabsf(u + v + w) <= FLT_MAX))
         return 0;
     /* All non-zero and finite (so of one sign, with a finite sum): decided.
      * Otherwise (an edge through the origin, an overflow) decide in double. */

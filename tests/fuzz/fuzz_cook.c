@@ -149,14 +149,6 @@ static void compare_with_brute_force(const cbvh_file *f, const decoded *d, uint6
 {
     const cbvh_mesh *m = &d->mesh;
     size_t stride = m->position_stride / sizeof(float);
-    /* The query works on coordinates relative to the ray origin in binary32:
-     * a vertex - origin difference beyond FLT_MAX overflows and the triangle
-     * can be missed (finding F8, coordinates near 3e38). Rays whose origin
-     * and mesh magnitudes add up past FLT_MAX make no claim. */
-    double mesh_mag = 0;
-    for (size_t i = 0; i < 3 * m->triangle_count; i++)
-        for (int a = 0; a < 3; a++)
-            mesh_mag = fmax(mesh_mag, fabs(m->positions[m->indices[i] * stride + a]));
     cbvh_file_info info;
     cbvh_file_get_info(f, &info);
     for (int i = 0; i < 16; i++) {
@@ -188,8 +180,7 @@ static void compare_with_brute_force(const cbvh_file *f, const decoded *d, uint6
             if (th >= 0 && th < best)
                 best = th;
         }
-        double ray_mag = fmax(fabs(o[0]), fmax(fabs(o[1]), fabs(o[2])));
-        if (d->opt.vertex_format == CBVH_VERTEX_QUANTIZED16 || !isfinite(best) || !(mesh_mag + ray_mag <= FLT_MAX))
+        if (d->opt.vertex_format == CBVH_VERTEX_QUANTIZED16 || !isfinite(best))
             continue; /* quantized vertices move: no brute-force claim on the input mesh */
         cbvh_hit h;
         int got = cbvh_raycast(f, &r, CBVH_TRAVERSAL_SORTED, &h, NULL);

@@ -308,9 +308,9 @@ static void check_stream_batch(check_ctx *c, const cbvh_ray *rays, size_t n)
     }
 }
 
-/* `max_magnitude` bounds the coordinates (query's and file's) up to which the
- * contact point must lie on the triangle. */
-static void check_sweep_hit(check_ctx *c, const cbvh_sweep_hit *h, const char *what, double max_magnitude)
+/* The contact point must lie on the triangle, at every coordinate magnitude
+ * since finding F5 was fixed. */
+static void check_sweep_hit(check_ctx *c, const cbvh_sweep_hit *h, const char *what)
 {
     dvec v[3];
     FUZZ_CHECK(triangle_of(c, h->tri, v), "%s: triangle id %u out of range", what, h->tri);
@@ -324,7 +324,7 @@ static void check_sweep_hit(check_ctx *c, const cbvh_sweep_hit *h, const char *w
     /* the shapes are sized from the file's extent, so the contact point is
      * computed from coordinates of that magnitude: a tiny triangle in a huge
      * file gets the file's precision, not its own */
-    if (c->strict && mag <= max_magnitude && c->scale <= max_magnitude)
+    if (c->strict)
         FUZZ_CHECK(gap <= 1e-4 * fmax(mag, c->scale) + 1e-30, "%s: contact point %.3g off triangle %u", what, gap, h->tri);
 }
 
@@ -345,7 +345,7 @@ static void check_sweeps(check_ctx *c)
     float radius = (float)(unit(c) * 0.05 * ext);
     cbvh_sweep_hit h;
     if (cbvh_sweep_sphere(c->f, center, radius, delta, &h)) {
-        check_sweep_hit(c, &h, "sphere sweep", INFINITY);
+        check_sweep_hit(c, &h, "sphere sweep");
         if (c->strict && isfinite(h.point[0])) {
             dvec at = dadd(dv(center), dmul(dv(delta), h.t));
             double dist = dlen(dsub(at, dv(h.point))), tol = 1e-4 * fmax(c->scale, dmaxabs(at)) + 1e-30;
@@ -355,9 +355,9 @@ static void check_sweeps(check_ctx *c)
         }
     }
     if (cbvh_sweep_capsule(c->f, center, p1, radius, delta, &h))
-        check_sweep_hit(c, &h, "capsule sweep", FUZZ_CAPSULE_MAX_MAGNITUDE);
+        check_sweep_hit(c, &h, "capsule sweep");
     if (cbvh_sweep_box(c->f, center, half, delta, &h))
-        check_sweep_hit(c, &h, "box sweep", INFINITY);
+        check_sweep_hit(c, &h, "box sweep");
     c->queries += 3;
 
     /* invalid shapes miss */

@@ -36,13 +36,6 @@ void fuzz_fail(const char *fmt, ...)
     ;
 #define FUZZ_CHECK(cond, ...) do { if (!(cond)) fuzz_fail(__VA_ARGS__); } while (0)
 
-/* Capsule sweep contact points are checked to lie on the triangle only up to
- * this coordinate magnitude: they lost accuracy near 1e17-1e20 (finding F5,
- * squared lengths near the binary32 range; a fix is unconfirmed). Every other
- * geometric check (rays, streams, sphere and box sweeps, overlaps) holds at
- * every finite magnitude since findings F1, F2, F4 and F6 were fixed. */
-#define FUZZ_CAPSULE_MAX_MAGNITUDE 1e15
-
 /* Checks an open error: a known failing code and a non-empty message. */
 void fuzz_check_error(cbvh_result r, const cbvh_error *err);
 

@@ -235,6 +235,15 @@ double ref_point_triangle_dist2(const double tri[9], const double p[3])
             cross3(x, y, c);
             inside = dot3(c, n) >= 0.0;
         }
+        /* A point of the triangle lies in its bounding box. On a needle the
+         * long edges' directions carry more rounding than the needle's angle,
+         * and the edge tests above can accept a projection far beyond its tip
+         * (finding F5): the box, exact, refuses it. */
+        for (int k = 0; k < 3 && inside; k++) {
+            const double lo = fmin(tri[k], fmin(tri[3 + k], tri[6 + k])), hi = fmax(tri[k], fmax(tri[3 + k], tri[6 + k]));
+            const double slack = 1e-12 * (hi - lo) + 1e-12 * fmax(fabs(lo), fabs(hi));
+            inside = q[k] >= lo - slack && q[k] <= hi + slack;
+        }
         if (inside)
             return h * h * nn;
     }

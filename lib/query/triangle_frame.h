@@ -1,0 +1,45 @@
+/* triangle_frame.h: a triangle's best-conditioned frame (base vertex, edges, normal) and barycentrics in it, in double. */
+#ifndef CBVH_QUERY_TRIANGLE_FRAME_H
+#define CBVH_QUERY_TRIANGLE_FRAME_H
+
+#include "query/vec3d.h"
+
+/* base: the vertex opposite the triangle's longest edge; e1, e2: the edges
+ * from it to the next two vertices in cyclic order (which keeps the
+ * winding); n = e1 x e2. */
+struct cbvh_triangle_frame {
+    int base;
+    cbvh_v3 e1, e2, n;
+    double nn; /* |n|^2: 0 for a degenerate triangle (or when it underflows) */
+};
+
+/* The shorter edges give the accurate normal: on a needle whose long edges
+ * differ by less than their rounding (findings F5 and F9: two vertices
+ * 1e-16 apart, the third at distance 3), differences taken from the far
+ * vertex lose the short edge, and n points anywhere. Ties (and NaN lengths
+ * of overflowing edges) keep vertex 0. */
+static inline void cbvh_triangle_frame_of(const cbvh_v3 v[3], struct cbvh_triangle_frame *f)
+{
+    const double len0 = v3_len2(v3_sub(v[2], v[1])), len1 = v3_len2(v3_sub(v[0], v[2])),
+                 len2 = v3_len2(v3_sub(v[1], v[0]));
+    const int base = len1 > len0 ? (len2 > len1 ? 2 : 1) : (len2 > len0 ? 2 : 0);
+    f->base = base;
+    f->e1 = v3_sub(v[(base + 1) % 3], v[base]);
+    f->e2 = v3_sub(v[(base + 2) % 3], v[base]);
+    f->n = v3_cross(f->e1, f->e2);
+    f->nn = v3_len2(f->n);
+}
+
+/* Barycentrics (x, y) of base + w projected onto the plane, with
+ * w ~ x e1 + y e2: x = (w x e2).n / n.n, y = (e1 x w).n / n.n. Their errors
+ * scale with the edge lengths, not with the area (a Gram-matrix solve or
+ * sheared edge functions cancel on slivers: findings F4 and F6). Only for
+ * nn > 0. */
+static inline void cbvh_triangle_frame_barycentrics(const struct cbvh_triangle_frame *f, cbvh_v3 w, double *x,
+                                                    double *y)
+{
+    *x = v3_dot(v3_cross(w, f->e2), f->n) / f->nn;
+    *y = v3_dot(v3_cross(f->e1, w), f->n) / f->nn;
+}
+
+#endif
