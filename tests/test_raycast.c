@@ -517,6 +517,62 @@ static void test_near_flt_max(void **state)
     cbvh_buffer_free(NULL, buf);
 }
 
+/* The F8 fix first let a finite float sum overflow skip the sign test:
+ * at coordinates near 1e19 the edge functions are near 2e38, and a ray whose
+ * edge functions had opposite signs but a sum past FLT_MAX was reported as a
+ * hit (fuzz input findings/cook-overflowing-edge-sum-false-hit.bin). The
+ * input's triangle and ray (a miss), then random triangles at 1e18 to 3e19
+ * and rays aimed 0.1 inside or outside an edge (in barycentrics), against
+ * the double-precision plane crossing: hit or miss as aimed. */
+static void test_overflowing_edge_sums(void **state)
+{
+    (void)state;
+    uint64_t st = 8;
+    int misses = 0;
+    for (int m = 0; m < 40; m++) {
+        float pos[9] = {-0x1p+63f, 0x1.f803b8p+61f, 0x1.ep+46f, 0x1.ep+62f, 0x1.c0002p+62f, 0x1.f803b8p+61f,
+                        0x1.ep+46f, -0x1.80008p+62f, 0x1.f803b8p+61f};
+        const double scale = 1e18 * pow(30.0, scene_rand_unit(&st));
+        if (m > 0)
+            for (int k = 0; k < 9; k++)
+                pos[k] = (float)((2.0 * scene_rand_unit(&st) - 1.0) * scale);
+        const uint32_t idx[3] = {0, 1, 2};
+        void *buf = NULL;
+        cbvh_file *f = NULL;
+        if (ref_cook_open(pos, 3, idx, 1, NULL, &buf, &f) != CBVH_OK)
+            continue; /* a random triangle may be degenerate */
+        for (int i = 0; i < 50; i++) {
+            cbvh_ray r = {{0x1.b3a124p+62f, 0x1.9e6a3p+60f, -0x1.e5cc04p+62f}, 0,
+                          {-0x1.e48ff8p+60f, 0x1.21a5f2p+62f, 0x1.4ad5f8p+61f}, INFINITY};
+            int inside = 0; /* the input's ray misses */
+            if (m > 0 || i > 0) {
+                /* weights of a, b, c: all >= 0.1 inside; one <= -0.1 outside */
+                inside = i % 2;
+                double w[3];
+                for (int k = 0; k < 3; k++)
+                    w[k] = 0.1 + scene_rand_unit(&st);
+                if (!inside)
+                    w[i % 3] = -0.1 - scene_rand_unit(&st);
+                const double sum = w[0] + w[1] + w[2];
+                for (int a = 0; a < 3; a++) {
+                    const double target = (w[0] * pos[a] + w[1] * pos[3 + a] + w[2] * pos[6 + a]) / sum;
+                    r.org[a] = (float)((2.0 * scene_rand_unit(&st) - 1.0) * 2.0 * scale);
+                    r.dir[a] = (float)(target - r.org[a]);
+                }
+            }
+            cbvh_hit h;
+            const int got = hit_everywhere(f, &r, &h);
+            if (got != inside)
+                fail_msg("triangle %d ray %d aimed %s the triangle: %s", m, i, inside ? "inside" : "outside",
+                         got ? "hit" : "missed");
+            misses += !inside;
+        }
+        cbvh_close(f);
+        cbvh_buffer_free(NULL, buf);
+    }
+    assert_true(misses > 500);
+}
+
 /* F1, far origins: a unit sphere seen from 2^66 (about 7e19) away. In float,
  * coordinates relative to such an origin collapse to one point. The rays
  * pass exactly through the world origin (org = -2^66 dir, dir of small
@@ -817,6 +873,7 @@ int main(void)
         cmocka_unit_test(test_sliver_t),        cmocka_unit_test(test_sliver_barycentrics),
         cmocka_unit_test(test_needle_barycentrics),
         cmocka_unit_test(test_near_flt_max),
+        cmocka_unit_test(test_overflowing_edge_sums),
     };
     int failed = cmocka_run_group_tests(tests, NULL, NULL);
     fprintf(stderr, "test_raycast: %ld reference checks\n", checks_done);

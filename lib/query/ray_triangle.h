@@ -179,18 +179,18 @@ CBVH_KERNEL int cbvh_ray_triangle(const struct cbvh_ray_shear *restrict s, const
     const float w = bx * ay - by * ax;
     /* Finite float edge functions have exact signs (see above): two of
      * opposite sign are a miss whatever the third is. An infinite or NaN one
-     * makes the sum non-finite; it may come from a sheared coordinate that
-     * overflowed, whose sign means nothing (finding F8: a vertex - origin
-     * difference past FLT_MAX turned a hit into two opposite infinities),
-     * so the double path decides it. */
-    if ((u < 0.0f || v < 0.0f || w < 0.0f) && (u > 0.0f || v > 0.0f || w > 0.0f) &&
-        CBVH_LIKELY(fabsf(u + v + w) <= FLT_MAX))
+     * may come from a sheared coordinate that overflowed, whose sign means
+     * nothing (finding F8: a vertex - origin difference past FLT_MAX turned
+     * a hit into two opposite infinities); it makes the sum non-finite, and
+     * the double path decides. So does a sum that overflows: the rest of the
+     * test must never see signs the first test skipped. */
+    const int finite = fabsf(u + v + w) <= FLT_MAX;
+    if (finite && (u < 0.0f || v < 0.0f || w < 0.0f) && (u > 0.0f || v > 0.0f || w > 0.0f))
         return 0;
     /* All non-zero and finite (so of one sign, with a finite sum): decided.
      * Otherwise (an edge through the origin, an overflow) decide in double. */
     double e[3] = {u, v, w};
-    const double det = e[0] + e[1] + e[2];
-    if (!CBVH_LIKELY(u != 0.0f && v != 0.0f && w != 0.0f && fabs(det) <= (double)FLT_MAX)) {
+    if (!CBVH_LIKELY(finite && u != 0.0f && v != 0.0f && w != 0.0f)) {
         const float *const vert[3] = {a, b, c};
         const float sheared[3][2] = {{ax, ay}, {bx, by}, {cx, cy}};
         if (!cbvh_ray_triangle_edges_double(s, vert, sheared, e))
