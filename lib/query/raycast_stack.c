@@ -1,126 +1,52 @@
-/* raycast_stack.c: closest-hit and any-hit walks with a fixed stack: children ordered by the sort byte, by distance, or not. */
-#include "query/ray_box.h"
-#include "query/raycast.h"
-#include "query/tree.h"
-
-/* One walk for every stack variant. Both children's boxes are tested at the
- * parent, so a missed child is never pushed, and the farther one is pushed
- * with its entry distance: when it is popped after the ray became shorter
- * than that, it is dropped without a second box test. The order of two hit
- * children is `word & mask` (mask = the ray's sort mask: one AND; mask = 0:
- * first child first) or, with by_distance, the smaller entry distance. The
- * loader checked depth <= CBVH_MAX_DEPTH and a walk pushes at most one node
- * per level, so the stack cannot overflow. The walk covers the subtree of
- * `root` (0: the whole tree): everything it pushes lies in that subtree. */
-CBVH_KERNEL int stack_walk(const struct cbvh_file *restrict f, const struct cbvh_ray_ctx *restrict ray, uint32_t root,
-                           uint32_t mask, const int by_distance, const int any, const int counting,
-                           struct cbvh_best_hit *restrict best, cbvh_query_stats *restrict stats)
-{
-    const cbvh_node *restrict nodes = f->nodes;
-    struct cbvh_box_ray box;
-    cbvh_box_ray_init(&box, f->grid_origin, f->grid_scale, ray->shear.org, ray->rcp, ray->octant);
-    const float tmin = ray->tmin;
-    float tmax = ray->tmax;
-    struct {
-        uint32_t node;
-        float entry;
-    } stack[CBVH_MAX_DEPTH];
-    uint32_t sp = 0, i = root;
-    uint64_t visited = 1, tested = 0;
-    int hit = 0;
-    float entry0, entry1;
-
-    if (!cbvh_box_ray_test(&box, &nodes[root], tmin, tmax, &entry0))
-        goto done;
-    for (;;) {
-        const uint32_t word = nodes[i].word;
-        if (!cbvh_node_is_leaf(word)) {
-            uint32_t near = i + 1u, far = cbvh_second_child(nodes, i);
-            const int h0 = cbvh_box_ray_test(&box, &nodes[near], tmin, tmax, &entry0);
-            const int h1 = cbvh_box_ray_test(&box, &nodes[far], tmin, tmax, &entry1);
-            if (counting)
-                visited += 2;
-            if (h0 && h1) {
-                if (by_distance ? entry1 < entry0 : (word & mask) != 0) {
-                    uint32_t tmp = near;
-                    near = far;
-                    far = tmp;
-                    entry1 = entry0;
-                }
-                stack[sp].node = far;
-                stack[sp].entry = entry1;
-                sp++;
-                i = near;
-                continue;
-            }
-            if (h0 || h1) {
-                i = h0 ? near : far;
-                continue;
-            }
-        } else if (cbvh_leaf_visit(f, word, ray, any, counting, &tmax, best, &tested)) {
-            hit = 1;
-            break;
-        }
-        /* Pop the next node still in reach: the padded test of ray_box.h with the current tmax. */
-        do {
-            if (sp == 0)
-                goto done;
-            sp--;
-        } while (!(stack[sp].entry <= tmax * CBVH_BOX_PAD));
-        i = stack[sp].node;
-    }
-done:
-    if (counting)
-        cbvh_stats_add(stats, visited, tested);
-    return hit;
-}
+/* raycast_stack.c: the library's instances of the stack walk (stack_walk.h): sorted, unsorted, by distance, from a subtree. */
+#include "query/stack_walk.h"
 
 void cbvh_closest_stack(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray, int sorted,
                         struct cbvh_best_hit *best, cbvh_query_stats *stats)
 {
     const uint32_t mask = sorted ? ray->sort_mask : 0u;
     if (stats)
-        stack_walk(f, ray, 0, mask, 0, 0, 1, best, stats);
+        cbvh_stack_walk(f, ray, 0, mask, 0, 0, 1, NULL, best, stats);
     else
-        stack_walk(f, ray, 0, mask, 0, 0, 0, best, NULL);
+        cbvh_stack_walk(f, ray, 0, mask, 0, 0, 0, NULL, best, NULL);
 }
 
 int cbvh_any_stack(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray, int sorted, cbvh_query_stats *stats)
 {
     const uint32_t mask = sorted ? ray->sort_mask : 0u;
     if (stats)
-        return stack_walk(f, ray, 0, mask, 0, 1, 1, NULL, stats);
-    return stack_walk(f, ray, 0, mask, 0, 1, 0, NULL, NULL);
+        return cbvh_stack_walk(f, ray, 0, mask, 0, 1, 1, NULL, NULL, stats);
+    return cbvh_stack_walk(f, ray, 0, mask, 0, 1, 0, NULL, NULL, NULL);
 }
 
 void cbvh_closest_distance(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray, struct cbvh_best_hit *best,
                            cbvh_query_stats *stats)
 {
     if (stats)
-        stack_walk(f, ray, 0, 0, 1, 0, 1, best, stats);
+        cbvh_stack_walk(f, ray, 0, 0, 1, 0, 1, NULL, best, stats);
     else
-        stack_walk(f, ray, 0, 0, 1, 0, 0, best, NULL);
+        cbvh_stack_walk(f, ray, 0, 0, 1, 0, 0, NULL, best, NULL);
 }
 
 int cbvh_any_distance(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray, cbvh_query_stats *stats)
 {
     if (stats)
-        return stack_walk(f, ray, 0, 0, 1, 1, 1, NULL, stats);
-    return stack_walk(f, ray, 0, 0, 1, 1, 0, NULL, NULL);
+        return cbvh_stack_walk(f, ray, 0, 0, 1, 1, 1, NULL, NULL, stats);
+    return cbvh_stack_walk(f, ray, 0, 0, 1, 1, 0, NULL, NULL, NULL);
 }
 
 void cbvh_closest_subtree(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray, uint32_t root,
                           struct cbvh_best_hit *best, cbvh_query_stats *stats)
 {
     if (stats)
-        stack_walk(f, ray, root, ray->sort_mask, 0, 0, 1, best, stats);
+        cbvh_stack_walk(f, ray, root, ray->sort_mask, 0, 0, 1, NULL, best, stats);
     else
-        stack_walk(f, ray, root, ray->sort_mask, 0, 0, 0, best, NULL);
+        cbvh_stack_walk(f, ray, root, ray->sort_mask, 0, 0, 0, NULL, best, NULL);
 }
 
 int cbvh_any_subtree(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray, uint32_t root, cbvh_query_stats *stats)
 {
     if (stats)
-        return stack_walk(f, ray, root, ray->sort_mask, 0, 1, 1, NULL, stats);
-    return stack_walk(f, ray, root, ray->sort_mask, 0, 1, 0, NULL, NULL);
+        return cbvh_stack_walk(f, ray, root, ray->sort_mask, 0, 1, 1, NULL, NULL, stats);
+    return cbvh_stack_walk(f, ray, root, ray->sort_mask, 0, 1, 0, NULL, NULL, NULL);
 }
