@@ -17,6 +17,7 @@
 #include <cmocka.h>
 
 #include "cbvh.h"
+#include "support/counting_alloc.h"
 #include "common/endian.h"
 #include "common/format.h"
 
@@ -1213,47 +1214,22 @@ static void test_bad_options(void **state)
 
 /* ------------------------------------------------------------------ allocation failures, progress */
 
-typedef struct counting {
-    long live, calls, fail_at;
-} counting;
-
-static void *counting_alloc(void *user, size_t size, size_t align)
-{
-    counting *c = user;
-    assert_true(align >= 1 && align <= 64 && (align & (align - 1)) == 0);
-    if (c->calls++ == c->fail_at)
-        return NULL;
-    void *p = NULL;
-    if (posix_memalign(&p, align < sizeof(void *) ? sizeof(void *) : align, size) != 0)
-        return NULL;
-    c->live++;
-    return p;
-}
-
-static void counting_free(void *user, void *ptr)
-{
-    counting *c = user;
-    assert_non_null(ptr);
-    c->live--;
-    free(ptr);
-}
-
 /* Fails allocation n for every n a successful cook makes: each run either fails cleanly
  * (out of memory, nothing leaked) or, where a failure has a fallback (the builder's second
  * thread), succeeds with the very same bytes. */
 static void alloc_failure_loop(const test_mesh *m, const cbvh_cook_options *o)
 {
     cbvh_mesh mesh = as_mesh(m);
-    counting ref = { 0, 0, -1 };
-    cbvh_allocator ra = { counting_alloc, counting_free, &ref };
+    counting_alloc ref;
+    cbvh_allocator ra = counting_allocator(&ref, -1, 0);
     void *expect = NULL;
     size_t expect_size = 0;
     assert_int_equal(cbvh_cook(&mesh, o, &ra, &expect, &expect_size, NULL, NULL), CBVH_OK);
     assert_true(ref.calls >= 8);
     int failures = 0;
     for (long n = 0; n < ref.calls; n++) {
-        counting c = { 0, 0, n };
-        cbvh_allocator a = { counting_alloc, counting_free, &c };
+        counting_alloc c;
+        cbvh_allocator a = counting_allocator(&c, n, 0);
         void *data = NULL;
         size_t size = 0;
         cbvh_error err;

@@ -15,52 +15,7 @@
 #include <cmocka.h>
 
 #include "cbvh.h"
-
-/* ------------------------------------------------------------------ a counting, failing allocator */
-
-typedef struct counting {
-    long live;         /* allocations not yet freed */
-    size_t live_bytes;
-    long calls;
-    long fail_at;      /* the call that fails (0-based); -1: none */
-} counting;
-
-#define PREFIX 64 /* room for the size, keeping the caller's alignment (at most 64) */
-
-static void *counting_alloc(void *user, size_t size, size_t align)
-{
-    counting *c = user;
-    assert_true(align >= 1 && align <= 64 && (align & (align - 1)) == 0);
-    if (c->calls++ == c->fail_at)
-        return NULL;
-    void *p = NULL;
-    if (posix_memalign(&p, 64, size + PREFIX) != 0)
-        return NULL;
-    memcpy(p, &size, sizeof size);
-    c->live++;
-    c->live_bytes += size;
-    return (uint8_t *)p + PREFIX;
-}
-
-static void counting_free(void *user, void *ptr)
-{
-    counting *c = user;
-    assert_non_null(ptr);
-    uint8_t *p = (uint8_t *)ptr - PREFIX;
-    size_t size;
-    memcpy(&size, p, sizeof size);
-    c->live--;
-    c->live_bytes -= size;
-    free(p);
-}
-
-static cbvh_allocator counting_allocator(counting *c, long fail_at)
-{
-    memset(c, 0, sizeof *c);
-    c->fail_at = fail_at;
-    cbvh_allocator a = { counting_alloc, counting_free, c };
-    return a;
-}
+#include "support/counting_alloc.h"
 
 /* ------------------------------------------------------------------ inputs */
 
@@ -217,10 +172,10 @@ static void touch_everything(const cbvh_file *f)
     assert_false(isnan(sum));
 }
 
-static cbvh_result open_counted(const uint8_t *data, size_t size, long fail_at, counting *c, cbvh_file **f,
+static cbvh_result open_counted(const uint8_t *data, size_t size, long fail_at, counting_alloc *c, cbvh_file **f,
                                 cbvh_error *err)
 {
-    cbvh_allocator a = counting_allocator(c, fail_at);
+    cbvh_allocator a = counting_allocator(c, fail_at, 0);
     cbvh_result r = cbvh_open_memory(data, size, &a, f, err);
     assert_int_equal(err->code, r);
     if (r != CBVH_OK) {
@@ -257,7 +212,7 @@ static void test_unaligned_buffer(void **state)
     input in = load_vector("good-box-raw");
     uint8_t *shifted = malloc(in.size + 8);
     assert_non_null(shifted);
-    counting c;
+    counting_alloc c;
     cbvh_error err;
     cbvh_file *aligned = NULL;
     assert_int_equal(open_counted(in.data, in.size, -1, &c, &aligned, &err), CBVH_OK);
@@ -272,7 +227,7 @@ static void test_unaligned_buffer(void **state)
     }
     for (size_t shift = 1; shift < 8; shift++) {
         memcpy(shifted + shift, in.data, in.size);
-        counting d;
+        counting_alloc d;
         cbvh_file *f = NULL;
         assert_int_equal(open_counted(shifted + shift, in.size, -1, &d, &f, &err), CBVH_OK);
         if (shift % 4 != 0)
@@ -296,7 +251,7 @@ static void check_truncations(const input *in, size_t step)
         uint8_t *copy = malloc(n ? n : 1);
         assert_non_null(copy);
         memcpy(copy, in->data, n); /* an exact-size buffer, so valgrind sees any read past n */
-        counting c;
+        counting_alloc c;
         cbvh_file *f = NULL;
         cbvh_error err;
         cbvh_result r = open_counted(copy, n, -1, &c, &f, &err);
@@ -324,7 +279,7 @@ static void test_flipped_bytes(void **state)
     for (size_t i = 0; i < in.size; i++) {
         for (int bit = 0; bit < 8; bit += 7) {
             in.data[i] ^= (uint8_t)(1u << bit);
-            counting c;
+            counting_alloc c;
             cbvh_file *f = NULL;
             cbvh_error err;
             cbvh_result r = open_counted(in.data, in.size, -1, &c, &f, &err);
@@ -371,7 +326,7 @@ static void check_changes(const input *in, size_t from)
             memcpy(copy, in->data, in->size);
             copy[i] ^= xors[k];
             repair_crcs(copy, in->size);
-            counting c;
+            counting_alloc c;
             cbvh_file *f = NULL;
             cbvh_error err;
             cbvh_result r = open_counted(copy, in->size, -1, &c, &f, &err);
@@ -403,8 +358,8 @@ static void check_allocation_failures(const uint8_t *data, size_t size, const ch
 {
     long n;
     for (n = 0;; n++) {
-        counting c;
-        cbvh_allocator a = counting_allocator(&c, n);
+        counting_alloc c;
+        cbvh_allocator a = counting_allocator(&c, n, 0);
         cbvh_file *f = NULL;
         cbvh_error err;
         cbvh_result r = path ? cbvh_open_path(path, &a, &f, &err) : cbvh_open_memory(data, size, &a, &f, &err);
@@ -600,7 +555,7 @@ static void test_cooked_files(void **state)
         for (int compress = 0; compress <= 6; compress += 6)
             for (int format = 0; format <= keep_remap; format++) {
                 input in = cook_input("random", &m, compress, (cbvh_vertex_format)format, keep_remap);
-                counting c;
+                counting_alloc c;
                 cbvh_file *f = NULL;
                 cbvh_error err;
                 if (open_counted(in.data, in.size, -1, &c, &f, &err) != CBVH_OK)

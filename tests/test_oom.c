@@ -17,50 +17,8 @@
 #include <cmocka.h>
 
 #include "cbvh.h"
+#include "support/counting_alloc.h"
 #include "support/scene_gen.h"
-
-/* Fails allocation number fail_at (0-based) and every later one while
- * fail_all is set; counts live blocks so leaks show. */
-typedef struct counting {
-    size_t calls, fail_at, live, peak_live;
-    int fail_all;
-} counting;
-
-static void *counting_alloc(void *user, size_t size, size_t align)
-{
-    counting *c = user;
-    size_t n = c->calls++;
-    if (n == c->fail_at || (c->fail_all && n > c->fail_at))
-        return NULL;
-    if (align < sizeof(void *))
-        align = sizeof(void *);
-    void *p = NULL;
-    if (posix_memalign(&p, align, size) != 0)
-        return NULL;
-    c->live++;
-    if (c->live > c->peak_live)
-        c->peak_live = c->live;
-    return p;
-}
-
-static void counting_free(void *user, void *ptr)
-{
-    counting *c = user;
-    if (ptr) {
-        assert_true(c->live > 0);
-        c->live--;
-        free(ptr);
-    }
-}
-
-static cbvh_allocator make_allocator(counting *c, size_t fail_at, int fail_all)
-{
-    memset(c, 0, sizeof *c);
-    c->fail_at = fail_at;
-    c->fail_all = fail_all;
-    cbvh_allocator a = { counting_alloc, counting_free, c };
-    return a;
-}
 
 static scene mesh;        /* small, with materials: every section present */
 static scene big_mesh;    /* for the kill test */
@@ -124,8 +82,8 @@ static size_t oom_loop_cook(int level, int quantized, int fail_all, const void *
     cbvh_cook_options o;
     options_for(&o, level, quantized);
     for (size_t n = 0;; n++) {
-        counting c;
-        cbvh_allocator a = make_allocator(&c, n, fail_all);
+        counting_alloc c;
+        cbvh_allocator a = counting_allocator(&c, n, fail_all);
         void *out = NULL;
         size_t out_size = 0;
         cbvh_error err;
@@ -163,8 +121,8 @@ static void test_cook_oom(void **state)
 static size_t oom_loop_open(const void *data, size_t size, const char *path)
 {
     for (size_t n = 0;; n++) {
-        counting c;
-        cbvh_allocator a = make_allocator(&c, n, 0);
+        counting_alloc c;
+        cbvh_allocator a = counting_allocator(&c, n, 0);
         cbvh_file *f = NULL;
         cbvh_error err;
         cbvh_result r = path ? cbvh_open_path(path, &a, &f, &err) : cbvh_open_memory(data, size, &a, &f, &err);
@@ -260,8 +218,8 @@ static void test_cook_to_path_oom(void **state)
         for (size_t n = 0;; n++) {
             if (with_old)
                 write_whole(path, old_bytes, sizeof old_bytes);
-            counting c;
-            cbvh_allocator a = make_allocator(&c, n, 0);
+            counting_alloc c;
+            cbvh_allocator a = counting_allocator(&c, n, 0);
             cbvh_error err;
             cbvh_result r = cbvh_cook_to_path(&m, &o, &a, path, NULL, &err);
             assert_int_equal(c.live, 0);
