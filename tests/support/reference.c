@@ -239,10 +239,12 @@ double ref_point_triangle_dist2(const double tri[9], const double p[3])
          * long edges' directions carry more rounding than the needle's angle,
          * and the edge tests above can accept a projection far beyond its tip
          * (finding F5): the box, exact, refuses it. */
+        double mag = 0.0; /* q carries rounding relative to p's and the vertices' magnitudes */
+        for (int k = 0; k < 3; k++)
+            mag = fmax(mag, fmax(fabs(p[k]), fmax(fabs(tri[k]), fmax(fabs(tri[3 + k]), fabs(tri[6 + k])))));
         for (int k = 0; k < 3 && inside; k++) {
             const double lo = fmin(tri[k], fmin(tri[3 + k], tri[6 + k])), hi = fmax(tri[k], fmax(tri[3 + k], tri[6 + k]));
-            const double slack = 1e-12 * (hi - lo) + 1e-12 * fmax(fabs(lo), fabs(hi));
-            inside = q[k] >= lo - slack && q[k] <= hi + slack;
+            inside = q[k] >= lo - 1e-9 * mag && q[k] <= hi + 1e-9 * mag;
         }
         if (inside)
             return h * h * nn;
