@@ -1,6 +1,7 @@
 #!/bin/sh
-# sanitize.sh: builds cbvh a second time with ASan + UBSan in a temporary folder and runs `make check` there
-# (which replays the fuzz corpora), then replays the corpora once more with every finding input.
+# sanitize.sh: builds cbvh again with ASan + UBSan in a temporary folder and runs `make check` there
+# (which replays the fuzz corpora) and the finding inputs; then builds with ThreadSanitizer and runs the
+# programs that start threads (test_threads: concurrent queries on one file; test_cook: the parallel build).
 # Usage: tests/sanitize.sh [JOBS]   (from anywhere; the source tree is this script's ../)
 # Exit status 0 when every test passes under the sanitizers. Keeps the build only on failure.
 set -eu
@@ -24,12 +25,26 @@ if [ "$status" -eq 0 ]; then
     # finding inputs are replayed too: they must not crash even before their bugs are fixed
     "$build/tests/fuzz/replay_cook" "$src/tests/fuzz/findings" >>"$log" 2>&1 || status=$?
 fi
+asan_end=$(date +%s)
+if [ "$status" -eq 0 ]; then
+    # ThreadSanitizer: any data race is a failure (halt_on_error), with the default 4 query threads.
+    export TSAN_OPTIONS="halt_on_error=1:second_deadlock_stack=1"
+    mkdir "$build/tsan"
+    (
+        cd "$build/tsan"
+        "$src/configure" -q --enable-sanitizers=thread --disable-tools --disable-shared CFLAGS="-O1 -g" >>"$log" 2>&1
+        make -j"$jobs" lib/libcbvh.la >>"$log" 2>&1
+        make -j"$jobs" check TESTS="tests/test_threads tests/test_cook" >>"$log" 2>&1
+    ) || status=$?
+    cat "$build/tsan/tests/test_threads.log" >>"$log" 2>/dev/null || true
+fi
 end=$(date +%s)
 grep -E '^(PASS|FAIL|SKIP|XFAIL|XPASS|ERROR): ' "$log" 2>/dev/null || true
 grep -E '^# (TOTAL|PASS|SKIP|XFAIL|FAIL|XPASS|ERROR):' "$build/test-suite.log" 2>/dev/null || true
+grep -E '^threads: ' "$log" 2>/dev/null | sed 's/^/ThreadSanitizer: /' || true
 if [ "$status" -ne 0 ]; then
-    echo "sanitize.sh: FAILED after $((end - start)) s; see $log and $build/tests/*.log"
+    echo "sanitize.sh: FAILED after $((end - start)) s; see $log and $build/tests/*.log, $build/tsan/tests/*.log"
     exit 1
 fi
-echo "sanitize.sh: all tests passed under ASan+UBSan in $((end - start)) s"
+echo "sanitize.sh: all tests passed under ASan+UBSan in $((asan_end - start)) s and the threaded ones under ThreadSanitizer in $((end - asan_end)) s"
 rm -rf "$build"
