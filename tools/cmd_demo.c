@@ -6,10 +6,10 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "brute_force.h"
 #include "cli.h"
 #include "commands.h"
 #include "common/file.h"
+#include "support/reference.h"
 #include "support/scene_gen.h"
 
 static const char usage[] =
@@ -134,21 +134,16 @@ static void make_rays(demo *d, cbvh_ray *rays, size_t n)
 /* Closest hit over all triangles in double precision; returns the id or CBVH_NO_HIT. */
 static uint32_t brute_raycast(const demo *d, const cbvh_ray *r, double *t_out, double *margin_out)
 {
-    double o[3], dir[3], best = INFINITY, best_margin = 1;
-    to_double(o, r->org);
-    to_double(dir, r->dir);
+    double best = INFINITY, best_margin = 1;
     uint32_t best_tri = CBVH_NO_HIT;
     for (uint32_t i = 0; i < d->tri_count; i++) {
-        if (!d->valid[i])
-            continue;
-        const double *t9 = d->tris + 9 * (size_t)i;
         double t, u, v, margin;
-        if (bf_ray_triangle(o, dir, r->tmin, fmin(best, (double)r->tmax), t9, t9 + 3, t9 + 6, &t, &u, &v,
-                            &margin) &&
+        /* margin: how far inside the triangle, in barycentrics (the library reports u, v too) */
+        if (d->valid[i] && ref_ray_triangle(d->tris + 9 * (size_t)i, r, &t, &u, &v, &margin) && margin >= 0 &&
             t < best) {
             best = t;
             best_tri = i;
-            best_margin = margin;
+            best_margin = fmin(fmin(u, v), 1.0 - u - v);
         }
     }
     *t_out = best;
@@ -321,24 +316,27 @@ static int shape_touches(const demo *d, shape_kind kind, const shape *s, double 
     for (int a = 0; a < 3; a++)
         c[a] = s->center[a] + f * s->delta[a];
     if (kind == SHAPE_BOX) {
-        double half[3] = { s->half[0] - shrink, s->half[1] - shrink, s->half[2] - shrink };
-        return half[0] >= 0 && half[1] >= 0 && half[2] >= 0 && bf_box_triangle_overlap(c, half, t9, t9 + 3, t9 + 6);
+        double lo[3], hi[3];
+        for (int a = 0; a < 3; a++) {
+            double half = s->half[a] - shrink;
+            if (half < 0)
+                return 0;
+            lo[a] = c[a] - half;
+            hi[a] = c[a] + half;
+        }
+        return ref_triangle_box_overlap(t9, lo, hi, 0.0);
     }
     double r = s->radius - shrink;
     if (r < 0)
         return 0;
-    double d2;
-    if (kind == SHAPE_SPHERE) {
-        d2 = bf_point_triangle_dist2(c, t9, t9 + 3, t9 + 6);
-    } else {
-        double p0[3], p1[3];
-        for (int a = 0; a < 3; a++) {
-            p0[a] = c[a] - s->axis[a];
-            p1[a] = c[a] + s->axis[a];
-        }
-        d2 = bf_segment_triangle_dist2(p0, p1, t9, t9 + 3, t9 + 6);
+    if (kind == SHAPE_SPHERE)
+        return ref_point_triangle_dist2(t9, c) <= r * r;
+    double p0[3], p1[3];
+    for (int a = 0; a < 3; a++) {
+        p0[a] = c[a] - s->axis[a];
+        p1[a] = c[a] + s->axis[a];
     }
-    return d2 <= r * r;
+    return ref_segment_triangle_dist(t9, p0, p1) <= r;
 }
 
 static int run_sweep(const demo *d, shape_kind kind, const shape *s, cbvh_sweep_hit *h)
