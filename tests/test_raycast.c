@@ -13,6 +13,7 @@
 #include "cbvh.h"
 #include "query/ray_box.h"
 #include "query/ray_triangle.h"
+#include "query/raycast.h"
 #include "support/reference.h"
 #include "support/scene_gen.h"
 
@@ -517,6 +518,71 @@ static void test_near_flt_max(void **state)
     cbvh_buffer_free(NULL, buf);
 }
 
+/* F11: a mesh near +-3.4e38 seen from the other side of the float range.
+ * With the origin near -+2e38, a near box plane minus the origin is past
+ * FLT_MAX and rounded to inf in float, so the slab test put the box at
+ * t = inf and missed it, although the ray (its direction as long as that
+ * distance) crosses the mesh near t = 2 (fuzz input
+ * findings/cook-far-side-box-overflow.bin). Soups of 48 triangles within
+ * [2.3e38, 3.3e38] on every axis, under random signs, extents 1e36 to 1e38
+ * (so the origin is sometimes moved next to the mesh, sometimes not), and
+ * rays from [-3.3e38, -1e38] aimed at least 0.1 (barycentric) inside a
+ * random triangle: every traversal, the stream and occluded hit, no later
+ * than the aimed triangle and no earlier than the double reference's
+ * closest crossing. */
+static void test_far_side_boxes(void **state)
+{
+    (void)state;
+    enum { TRIS = 48, RAYS = 100 };
+    uint64_t st = 11;
+    int halved = 0, rays = 0;
+    for (int m = 0; m < 24; m++) {
+        float pos[9 * TRIS], sign[3];
+        uint32_t idx[3 * TRIS];
+        const double spread = 1e38 * pow(10.0, -2.0 * scene_rand_unit(&st));
+        for (int a = 0; a < 3; a++)
+            sign[a] = scene_rand_unit(&st) < 0.5 ? -1.0f : 1.0f;
+        for (int k = 0; k < 9 * TRIS; k++)
+            pos[k] = sign[k % 3] * (float)(3.3e38 - spread * scene_rand_unit(&st));
+        for (uint32_t k = 0; k < 3 * TRIS; k++)
+            idx[k] = k;
+        ref_fixture fx;
+        assert_int_equal(ref_fixture_open(&fx, pos, 3 * TRIS, idx, TRIS, NULL), CBVH_OK);
+        for (int i = 0; i < RAYS; i++) {
+            const uint32_t tri = (uint32_t)(scene_rand_unit(&st) * TRIS) % TRIS;
+            const size_t at = fx.index_of_id[tri];
+            if (at == (size_t)-1)
+                continue; /* dropped as degenerate */
+            const double *t9 = fx.tris.v + 9 * at;
+            const double wb = 0.1 + 0.35 * scene_rand_unit(&st), wc = 0.1 + 0.35 * scene_rand_unit(&st);
+            cbvh_ray r = {{0, 0, 0}, 0, {0, 0, 0}, INFINITY};
+            for (int a = 0; a < 3; a++) {
+                const double target = (1.0 - wb - wc) * t9[a] + wb * t9[3 + a] + wc * t9[6 + a];
+                r.org[a] = -sign[a] * (float)(1e38 + 2.3e38 * scene_rand_unit(&st));
+                r.dir[a] = (float)((target - r.org[a]) / 2.0); /* the target at t = 2 */
+            }
+            double t_aim, u, v, margin;
+            if (!ref_ray_triangle(t9, &r, &t_aim, &u, &v, &margin) || fmin(fmin(u, v), 1.0 - u - v) < 0.05)
+                continue; /* rounding dir moved the aim too close to an edge */
+            struct cbvh_ray_ctx ctx;
+            assert_true(cbvh_ray_prepare(&ctx, &r, fx.file));
+            halved += ctx.box_halve != 0;
+            rays++;
+            ref_ray_hit loose;
+            assert_true(ref_ray_closest(&fx.tris, &r, 1e-6 * fx.diag, &loose));
+            cbvh_hit h;
+            if (!hit_everywhere(fx.file, &r, &h))
+                fail_msg("mesh %d ray %d missed; triangle %u is crossed at t %g", m, i, tri, t_aim);
+            if (!(h.t <= t_aim * (1 + 1e-5) && h.t >= loose.t * (1 - 1e-5)))
+                fail_msg("mesh %d ray %d: t %.9g outside [%.9g, %.9g]", m, i, h.t, loose.t, t_aim);
+        }
+        ref_fixture_close(&fx);
+    }
+    printf("far side: %d rays, %d with halved box tests\n", rays, halved);
+    /* both cases: origins moved next to the mesh, and boxes tested at half scale */
+    assert_true(rays > 2000 && halved > 500 && rays - halved > 500);
+}
+
 /* The F8 fix first let a finite float sum overflow skip the sign test:
  * at coordinates near 1e19 the edge functions are near 2e38, and a ray whose
  * edge functions had opposite signs but a sum past FLT_MAX was reported as a
@@ -873,6 +939,7 @@ int main(void)
         cmocka_unit_test(test_sliver_t),        cmocka_unit_test(test_sliver_barycentrics),
         cmocka_unit_test(test_needle_barycentrics),
         cmocka_unit_test(test_near_flt_max),
+        cmocka_unit_test(test_far_side_boxes),
         cmocka_unit_test(test_overflowing_edge_sums),
     };
     int failed = cmocka_run_group_tests(tests, NULL, NULL);

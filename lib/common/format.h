@@ -104,6 +104,9 @@ static inline uint32_t cbvh_make_leaf(uint32_t first, uint32_t count)
     return CBVH_NODE_LEAF_BIT | ((count - 1u) << CBVH_NODE_COUNT_SHIFT) | first;
 }
 
+/* The largest grid coordinate of a 16-bit box. */
+#define CBVH_Q_MAX 65535u
+
 /* Dequantization, normative: origin + (float)q * scale, each operation rounded
  * to binary32 (no fused multiply-add; the library is built with
  * -ffp-contract=off). The cooker checks conservativeness with this function. */

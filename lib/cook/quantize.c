@@ -6,7 +6,6 @@
 #include "common/format.h"
 #include "cook/cook_internal.h"
 
-#define Q_MAX 65535u
 
 static float float_from_bits(uint32_t u)
 {
@@ -32,13 +31,13 @@ cbvh_result cook_grid_init(cook_grid *g, const float bmin[3], const float bmax[3
         uint32_t lo = 0, hi = 0x7F7FFFFFu;
         while (lo < hi) {
             uint32_t mid = lo + (hi - lo) / 2;
-            if (cbvh_dequantize(Q_MAX, bmin[a], float_from_bits(mid)) >= bmax[a])
+            if (cbvh_dequantize(CBVH_Q_MAX, bmin[a], float_from_bits(mid)) >= bmax[a])
                 hi = mid;
             else
                 lo = mid + 1;
         }
         g->scale[a] = float_from_bits(lo);
-        float top = cbvh_dequantize(Q_MAX, bmin[a], g->scale[a]);
+        float top = cbvh_dequantize(CBVH_Q_MAX, bmin[a], g->scale[a]);
         if (!isfinite(top) || !(top >= bmax[a]))
             return cbvh_fail(err, CBVH_ERROR_BAD_MESH,
                              "the mesh's bounds on axis %c (%g to %g) do not fit a finite 16-bit grid", "xyz"[a],
@@ -58,10 +57,10 @@ static inline int past(const cook_grid *g, int axis, uint32_t q, float v, int st
  * a bound the monotone predicate proves, and a binary search finishes what they do not. */
 static uint32_t smallest_past(const cook_grid *g, int axis, float v, uint32_t lo, int strict)
 {
-    uint32_t hi = Q_MAX + 1; /* past(hi) holds (65536 stands for "none") */
+    uint32_t hi = CBVH_Q_MAX + 1; /* past(hi) holds (65536 stands for "none") */
     if (g->scale[axis] > 0.0f) {
         double e = ((double)v - (double)g->origin[axis]) / (double)g->scale[axis];
-        if (e >= 0.0 && e <= (double)Q_MAX) {
+        if (e >= 0.0 && e <= (double)CBVH_Q_MAX) {
             uint32_t c = (uint32_t)e; /* ceil(e), e >= 0, without a libm call */
             c += (double)c < e;
             c = c < lo ? lo : c;
@@ -73,7 +72,7 @@ static uint32_t smallest_past(const cook_grid *g, int axis, float v, uint32_t lo
                     c--;
                 } else {
                     lo = c + 1;
-                    if (c == Q_MAX)
+                    if (c == CBVH_Q_MAX)
                         break;
                     c++;
                 }
@@ -96,7 +95,7 @@ static uint32_t smallest_past(const cook_grid *g, int axis, float v, uint32_t lo
 static uint32_t smallest_at_least(const cook_grid *g, int axis, float v, uint32_t lo)
 {
     uint32_t q = smallest_past(g, axis, v, lo, 0);
-    return q > Q_MAX ? Q_MAX : q;
+    return q > CBVH_Q_MAX ? CBVH_Q_MAX : q;
 }
 
 /* Largest q with deq(q) <= v (deq(0) = origin <= v is a precondition). */

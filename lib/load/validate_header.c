@@ -82,7 +82,7 @@ static cbvh_result check_grid(const cbvh_file_info *in, cbvh_error *err)
         if (!isfinite(in->grid_origin[a]) || !isfinite(in->grid_scale[a]) || !(in->grid_scale[a] >= 0.0f))
             return CORRUPT("header: grid on axis %s (origin %g, scale %g) must be finite with scale >= 0",
                            axis_name(a), (double)in->grid_origin[a], (double)in->grid_scale[a]);
-        if (!isfinite(cbvh_dequantize(65535u, in->grid_origin[a], in->grid_scale[a])))
+        if (!isfinite(cbvh_dequantize(CBVH_Q_MAX, in->grid_origin[a], in->grid_scale[a])))
             return CORRUPT("header: grid on axis %s overflows: coordinate 65535 dequantizes to infinity",
                            axis_name(a));
         if (!isfinite(in->bounds_min[a]) || !isfinite(in->bounds_max[a]) || !(in->bounds_min[a] <= in->bounds_max[a]))

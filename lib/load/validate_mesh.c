@@ -72,7 +72,7 @@ void cbvh_vertex_bounds_init(cbvh_vertex_bounds *b)
     for (int a = 0; a < 3; a++) {
         b->lo[a] = FLT_MAX;
         b->hi[a] = -FLT_MAX;
-        b->qlo[a] = 65535;
+        b->qlo[a] = CBVH_Q_MAX;
         b->qhi[a] = 0;
     }
 }

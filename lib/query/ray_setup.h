@@ -38,6 +38,8 @@ struct cbvh_ray_ctx {
                            * box test's padded tmax stays finite, so a box at infinity is never entered */
     double t_base;        /* t of shear.org on the caller's ray: 0, or the distance a far origin was moved
                            * (ray_origin.c); the kernels' t and [tmin, tmax] are relative to it */
+    uint32_t box_halve;   /* bit a: a plane - org difference on axis a can overflow (coordinates past
+                           * FLT_MAX / 2), so the box test runs on that axis at half scale (ray_box.h) */
     uint32_t octant;      /* bit a set when rcp[a] has its sign bit set (so -0 counts as negative) */
     uint32_t sort_mask;   /* (1 << octant) << CBVH_NODE_SORT_SHIFT: one AND with the node word */
 };
@@ -89,6 +91,7 @@ static inline int cbvh_ray_setup(struct cbvh_ray_ctx *ctx, const cbvh_ray *ray)
     for (int a = 0; a < 3; a++)
         ctx->rcp[a] = 1.0f / d[a];
     ctx->t_base = 0.0;
+    ctx->box_halve = 0;
     ctx->tmin = ray->tmin;
     ctx->tmax = ray->tmax < CBVH_T_LIMIT ? ray->tmax : CBVH_T_LIMIT;
     ctx->octant = cbvh_octant_of(ctx->rcp);

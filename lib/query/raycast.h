@@ -63,6 +63,14 @@ static inline int cbvh_ray_prepare(struct cbvh_ray_ctx *ctx, const cbvh_ray *ray
     /* Ordered compare: an extent near FLT_MAX gives an infinite product and no move. */
     if (dist > CBVH_FAR_FACTOR * ext)
         cbvh_ray_move_far_origin(ctx, ray, f, ext);
+    /* Every node plane lies in [grid_origin, its q = 65535 plane]: when both
+     * differences to the (moved) origin are finite, so is every plane - org. */
+    for (int a = 0; a < 3; a++) {
+        const float o = ctx->shear.org[a], g0 = f->grid_origin[a];
+        const float g1 = cbvh_dequantize(CBVH_Q_MAX, g0, f->grid_scale[a]);
+        if (isinf(g1 - o) || isinf(o - g0))
+            ctx->box_halve |= 1u << a;
+    }
     return 1;
 }
 

@@ -15,8 +15,9 @@ CBVH_KERNEL int walk_box_test(const struct cbvh_box_ray *restrict box, const cbv
         return cbvh_box_ray_test(box, &nodes[i], tmin, tmax, entry);
     const float *b = float_boxes + 6 * (size_t)i;
     const struct cbvh_slab_select s = box->sel;
-    return cbvh_slab_test(b[s.near_x], b[s.near_y], b[s.near_z], b[s.far_x], b[s.far_y], b[s.far_z], box->org,
-                          box->rcp, tmin, tmax, entry);
+    const float *ps = box->plane_scale;
+    return cbvh_slab_test(b[s.near_x] * ps[0], b[s.near_y] * ps[1], b[s.near_z] * ps[2], b[s.far_x] * ps[0],
+                          b[s.far_y] * ps[1], b[s.far_z] * ps[2], box->org, box->rcp, tmin, tmax, entry);
 }
 
 /* One walk for every stack variant. Both children's boxes are tested at the
@@ -39,7 +40,7 @@ CBVH_KERNEL int cbvh_stack_walk(const struct cbvh_file *restrict f, const struct
 {
     const cbvh_node *restrict nodes = f->nodes;
     struct cbvh_box_ray box;
-    cbvh_box_ray_init(&box, f->grid_origin, f->grid_scale, ray->shear.org, ray->rcp, ray->octant);
+    cbvh_box_ray_init(&box, f->grid_origin, f->grid_scale, ray);
     const float tmin = ray->tmin;
     float tmax = ray->tmax;
     struct {

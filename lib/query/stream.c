@@ -176,6 +176,22 @@ static void batch_flush(const struct cbvh_file *f, struct cbvh_stream_batch *b, 
     b->count = 0;
 }
 
+/* A whole ray on the single-ray sorted walk, its counters added to the stream's. */
+static void solo_ray(const struct cbvh_file *f, const struct cbvh_ray_ctx *ctx, cbvh_hit *hit, uint8_t *occluded,
+                     uint64_t *visited, uint64_t *tested)
+{
+    cbvh_query_stats stats = {0, 0};
+    if (hit) {
+        struct cbvh_best_hit best = {UINT32_MAX, 0.0f, 0.0f, 0.0f};
+        cbvh_closest_subtree(f, ctx, 0, &best, &stats);
+        cbvh_hit_output(f, &best, ctx->t_base, hit);
+    } else {
+        *occluded = (uint8_t)cbvh_any_subtree(f, ctx, 0, &stats);
+    }
+    *visited += stats.nodes_visited;
+    *tested += stats.triangles_tested;
+}
+
 /* Splits the stream into windows, each window into same-octant batches.
  * Exactly one of hits / occluded is given. Invalid rays are misses. */
 static void stream_run(const struct cbvh_file *f, const cbvh_ray *rays, size_t count, cbvh_hit *hits,
@@ -198,6 +214,12 @@ static void stream_run(const struct cbvh_file *f, const cbvh_ray *rays, size_t c
             else
                 occluded[r] = 0;
             octant[j] = cbvh_ray_prepare(&ctx, &rays[r], f) ? (uint8_t)ctx.octant : UINT8_MAX;
+            if (octant[j] != UINT8_MAX && ctx.box_halve) {
+                /* the batch shares one dequantized box between its rays; a ray whose box test needs half
+                 * scale (coordinates past FLT_MAX / 2, ray_box.h) takes the single-ray walk instead */
+                solo_ray(f, &ctx, hits ? &hits[r] : NULL, occluded ? &occluded[r] : NULL, &visited, &tested);
+                octant[j] = UINT8_MAX;
+            }
             if (octant[j] != UINT8_MAX)
                 present |= 1u << octant[j];
         }
