@@ -1,15 +1,25 @@
 #!/bin/sh
 # campaign.sh: a timed libFuzzer campaign for one cbvh fuzz target, from a fuzzing build.
-# Usage: tests/fuzz/campaign.sh TARGET SECONDS [BUILD_DIR]
+# Usage: tests/fuzz/campaign.sh [--keep-going] TARGET SECONDS [BUILD_DIR]
 #   TARGET is open or cook; BUILD_DIR (default .) was configured with
 #   `configure --enable-fuzzing CC=clang --disable-tools` and built with `make tests/fuzz/fuzz_TARGET`.
+#   --keep-going: libFuzzer's fork mode with -ignore_crashes, so the campaign runs for all of
+#   SECONDS and collects every crash instead of stopping at the first one.
 # The working corpus grows in BUILD_DIR/fuzz-corpus/TARGET (seeded from the
 # committed corpus); crashes land in BUILD_DIR/fuzz-artifacts/TARGET and the
 # log in BUILD_DIR/fuzz-TARGET.log, whose last lines give executions and cov/ft.
 set -eu
-target=${1:?usage: campaign.sh open|cook SECONDS [BUILD_DIR]}
-seconds=${2:?usage: campaign.sh open|cook SECONDS [BUILD_DIR]}
+usage="usage: campaign.sh [--keep-going] open|cook SECONDS [BUILD_DIR]"
+mode=
+if [ "${1:-}" = --keep-going ]; then
+    mode="-fork=1 -ignore_crashes=1"
+    shift
+fi
+target=${1:?$usage}
+seconds=${2:?$usage}
 build=${3:-.}
+case "$target" in open|cook) ;; *) echo "campaign.sh: unknown target '$target'; $usage" >&2; exit 2 ;; esac
+case "$seconds" in ''|*[!0-9]*) echo "campaign.sh: SECONDS must be a whole number, not '$seconds'" >&2; exit 2 ;; esac
 here=$(cd "$(dirname "$0")" && pwd)
 bin="$build/tests/fuzz/fuzz_$target"
 [ -x "$bin" ] || { echo "campaign.sh: $bin not built (configure --enable-fuzzing CC=clang; make tests/fuzz/fuzz_$target)" >&2; exit 2; }
@@ -20,9 +30,9 @@ dict=
 [ "$target" = open ] && dict="-dict=$here/cbvh.dict"
 # -max_len: small files reach every section; -timeout: a query that takes a
 # second on a tiny file is a hang; -rss_limit_mb: the loader must not balloon.
-"$bin" $dict -max_total_time="$seconds" -max_len=8192 -timeout=5 -rss_limit_mb=1024 \
+"$bin" $mode $dict -max_total_time="$seconds" -max_len=8192 -timeout=5 -rss_limit_mb=1024 \
     -print_final_stats=1 -artifact_prefix="$artifacts/" \
     "$corpus" "$here/corpus/$target" >"$build/fuzz-$target.log" 2>&1 || status=$?
-tail -n 25 "$build/fuzz-$target.log" | grep -E '^(#|stat::|Done)|ERROR|SUMMARY' || true
+tail -n 25 "$build/fuzz-$target.log" | grep -E '^(#|stat::|Done)|ERROR|SUMMARY' | tail -n 8 || true
 ls "$artifacts" | sed 's/^/artifact: /'
 exit ${status:-0}
