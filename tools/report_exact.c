@@ -34,9 +34,9 @@ int exact_raycast(const exact_tree *tree, const cbvh_ray *ray, cbvh_hit *hit, cb
         return 0;
     /* counting is a constant in each instance, as in the library's walks */
     if (stats)
-        cbvh_stack_walk(tree->file, &ctx, 0, ctx.sort_mask, 0, 0, 1, tree->boxes, &best, stats);
+        cbvh_stack_walk(tree->file, &ctx, 0, ctx.sort_mask, 0, 0, 1, 0, tree->boxes, &best, stats);
     else
-        cbvh_stack_walk(tree->file, &ctx, 0, ctx.sort_mask, 0, 0, 0, tree->boxes, &best, NULL);
+        cbvh_stack_walk(tree->file, &ctx, 0, ctx.sort_mask, 0, 0, 0, 0, tree->boxes, &best, NULL);
     if (best.tri == UINT32_MAX)
         return 0;
     hit->tri = cbvh_original_id(tree->file, best.tri);
@@ -52,6 +52,6 @@ int exact_occluded(const exact_tree *tree, const cbvh_ray *ray, cbvh_query_stats
     if (!cbvh_ray_setup(&ctx, ray))
         return 0;
     if (stats)
-        return cbvh_stack_walk(tree->file, &ctx, 0, ctx.sort_mask, 0, 1, 1, tree->boxes, NULL, stats);
-    return cbvh_stack_walk(tree->file, &ctx, 0, ctx.sort_mask, 0, 1, 0, tree->boxes, NULL, NULL);
+        return cbvh_stack_walk(tree->file, &ctx, 0, ctx.sort_mask, 0, 1, 1, 0, tree->boxes, NULL, stats);
+    return cbvh_stack_walk(tree->file, &ctx, 0, ctx.sort_mask, 0, 1, 0, 0, tree->boxes, NULL, NULL);
 }

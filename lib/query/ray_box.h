@@ -78,29 +78,38 @@ static inline int cbvh_ray_node(const cbvh_node *n, const float origin[3], const
 struct cbvh_box_ray {
     float origin[3], scale[3]; /* the file's grid */
     float org[3], rcp[3];
-    float plane_scale[3];      /* 1, or 0.5 on a halved axis: what float boxes (stack_walk.h) are scaled by */
     struct cbvh_slab_select sel;
 };
 
-/* The box ray of a prepared ray on the file's grid. On an axis of
- * ray->box_halve, grid origin, grid scale and ray origin are halved and the
- * reciprocal doubled: every plane and (plane - org) * rcp is then exactly
- * what it is at full scale (scaling by a power of two commutes with
- * rounding), but a difference past FLT_MAX no longer overflows to inf, which
- * would put a near plane at t = inf and miss a box the ray crosses at a
- * finite t (finding F11: a mesh near 3.4e38 seen from -2e38). */
 static inline void cbvh_box_ray_init(struct cbvh_box_ray *b, const float grid_origin[3], const float grid_scale[3],
-                                     const struct cbvh_ray_ctx *ray)
+                                     const float org[3], const float rcp[3], uint32_t octant)
 {
     for (int a = 0; a < 3; a++) {
-        const float s = ray->box_halve >> a & 1u ? 0.5f : 1.0f;
-        b->origin[a] = grid_origin[a] * s;
-        b->scale[a] = grid_scale[a] * s;
-        b->org[a] = ray->shear.org[a] * s;
-        b->rcp[a] = ray->rcp[a] / s;
-        b->plane_scale[a] = s;
+        b->origin[a] = grid_origin[a];
+        b->scale[a] = grid_scale[a];
+        b->org[a] = org[a];
+        b->rcp[a] = rcp[a];
     }
-    b->sel = cbvh_slab_select_of(ray->octant);
+    b->sel = cbvh_slab_select_of(octant);
+}
+
+/* Puts the box test on the axes of `axes` (a ray's box_halve) at half scale:
+ * grid origin, grid scale and ray origin halved, reciprocal doubled. Every
+ * plane and every (plane - org) * rcp is then exactly what it is at full
+ * scale (scaling by a power of two commutes with rounding), but a plane more
+ * than FLT_MAX from the origin no longer rounds to inf, which would put a
+ * near plane at t = inf and miss a box the ray crosses at a finite t
+ * (finding F11: a mesh near 3.4e38 seen from -2e38). */
+static inline void cbvh_box_ray_halve(struct cbvh_box_ray *b, uint32_t axes)
+{
+    for (int a = 0; a < 3; a++) {
+        if (axes >> a & 1u) {
+            b->origin[a] *= 0.5f;
+            b->scale[a] *= 0.5f;
+            b->org[a] *= 0.5f;
+            b->rcp[a] *= 2.0f;
+        }
+    }
 }
 
 static inline int cbvh_box_ray_test(const struct cbvh_box_ray *b, const cbvh_node *n, float tmin, float tmax,

@@ -1,4 +1,4 @@
-/* ray_origin.c: moving a far ray origin next to the file's bounds, where the triangle test keeps its precision. */
+/* ray_origin.c: far ray origins: moved next to the file's bounds (triangle test precision), axes whose box test needs half scale. */
 #include "query/raycast.h"
 
 /* a + b as s + *err exactly (Knuth's two-sum). */
@@ -92,4 +92,17 @@ static void move_origin(struct cbvh_ray_ctx *ctx, const cbvh_ray *ray, const flo
 void cbvh_ray_move_far_origin(struct cbvh_ray_ctx *ctx, const cbvh_ray *ray, const struct cbvh_file *f, float extent)
 {
     move_origin(ctx, ray, f->info.bounds_min, f->info.bounds_max, extent);
+}
+
+/* Every node plane lies in [grid origin, its CBVH_Q_MAX plane] and rounding
+ * is monotonic: when both differences to the origin are finite, so is every
+ * plane - org on that axis. */
+void cbvh_ray_mark_box_overflow(struct cbvh_ray_ctx *ctx, const struct cbvh_file *f)
+{
+    for (int a = 0; a < 3; a++) {
+        const float o = ctx->shear.org[a], g0 = f->grid_origin[a];
+        const float g1 = cbvh_dequantize(CBVH_Q_MAX, g0, f->grid_scale[a]);
+        if (isinf(g1 - o) || isinf(o - g0))
+            ctx->box_halve |= 1u << a;
+    }
 }

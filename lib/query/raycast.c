@@ -17,15 +17,25 @@ int cbvh_hit_output(const struct cbvh_file *f, const struct cbvh_best_hit *best,
     return 1;
 }
 
-/* A NULL file or ray, an unknown traversal and an invalid ray are all misses. */
+static int known_traversal(cbvh_traversal traversal)
+{
+    return traversal == CBVH_TRAVERSAL_SORTED || traversal == CBVH_TRAVERSAL_UNSORTED ||
+           traversal == CBVH_TRAVERSAL_STACKLESS || traversal == CBVH_TRAVERSAL_DISTANCE;
+}
+
+/* A NULL file or ray, an unknown traversal and an invalid ray are all misses.
+ * A ray whose box test needs half scale takes the halved walk whatever the
+ * traversal (raycast.h): the answer is the same. */
 CBVH_API int cbvh_raycast(const cbvh_file *file, const cbvh_ray *ray, cbvh_traversal traversal, cbvh_hit *hit,
                           cbvh_query_stats *stats)
 {
     struct cbvh_best_hit best = {UINT32_MAX, 0.0f, 0.0f, 0.0f};
     struct cbvh_ray_ctx ctx;
     ctx.t_base = 0.0;
-    if (file && ray && cbvh_ray_prepare(&ctx, ray, file)) {
-        switch (traversal) {
+    if (file && ray && known_traversal(traversal) && cbvh_ray_prepare(&ctx, ray, file)) {
+        if (ctx.box_halve)
+            cbvh_closest_halved(file, &ctx, &best, stats);
+        else switch (traversal) {
         case CBVH_TRAVERSAL_SORTED:
             cbvh_closest_stack(file, &ctx, 1, &best, stats);
             break;
@@ -47,8 +57,10 @@ CBVH_API int cbvh_occluded(const cbvh_file *file, const cbvh_ray *ray, cbvh_trav
                            cbvh_query_stats *stats)
 {
     struct cbvh_ray_ctx ctx;
-    if (!file || !ray || !cbvh_ray_prepare(&ctx, ray, file))
+    if (!file || !ray || !known_traversal(traversal) || !cbvh_ray_prepare(&ctx, ray, file))
         return 0;
+    if (ctx.box_halve)
+        return cbvh_any_halved(file, &ctx, stats);
     switch (traversal) {
     case CBVH_TRAVERSAL_SORTED:
         return cbvh_any_stack(file, &ctx, 1, stats);

@@ -22,6 +22,14 @@ void cbvh_closest_subtree(const struct cbvh_file *f, const struct cbvh_ray_ctx *
                           struct cbvh_best_hit *best, cbvh_query_stats *stats);
 int cbvh_any_subtree(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray, uint32_t root, cbvh_query_stats *stats);
 
+/* The sorted stack walk for a ray with box_halve set (ray_setup.h): its box
+ * test runs at half scale on those axes. Every traversal, stream and
+ * zero-size sweep sends such rays here (the tie rule makes every traversal's
+ * answer the same), so no other walk carries the rescaling. */
+void cbvh_closest_halved(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray, struct cbvh_best_hit *best,
+                         cbvh_query_stats *stats);
+int cbvh_any_halved(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray, cbvh_query_stats *stats);
+
 /* Stack walk ordering children by their box entry distance, computed at run time. */
 void cbvh_closest_distance(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray, struct cbvh_best_hit *best,
                            cbvh_query_stats *stats);
@@ -43,6 +51,10 @@ int cbvh_any_stackless(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray
  * new origin (ctx->t_base: its t on the caller's ray). See ray_origin.c. */
 void cbvh_ray_move_far_origin(struct cbvh_ray_ctx *ctx, const cbvh_ray *ray, const struct cbvh_file *f, float extent);
 
+/* Sets ctx->box_halve: the axes on which a node plane minus the (moved)
+ * origin can overflow. See ray_origin.c. */
+void cbvh_ray_mark_box_overflow(struct cbvh_ray_ctx *ctx, const struct cbvh_file *f);
+
 /* cbvh_ray_setup for a ray cast into file f: also moves an origin far from
  * the file's bounds next to them, so the triangle test keeps its precision.
  * Returns 0 for an invalid ray. Inline: it runs once per ray, and the far
@@ -63,14 +75,10 @@ static inline int cbvh_ray_prepare(struct cbvh_ray_ctx *ctx, const cbvh_ray *ray
     /* Ordered compare: an extent near FLT_MAX gives an infinite product and no move. */
     if (dist > CBVH_FAR_FACTOR * ext)
         cbvh_ray_move_far_origin(ctx, ray, f, ext);
-    /* Every node plane lies in [grid_origin, its q = 65535 plane]: when both
-     * differences to the (moved) origin are finite, so is every plane - org. */
-    for (int a = 0; a < 3; a++) {
-        const float o = ctx->shear.org[a], g0 = f->grid_origin[a];
-        const float g1 = cbvh_dequantize(CBVH_Q_MAX, g0, f->grid_scale[a]);
-        if (isinf(g1 - o) || isinf(o - g0))
-            ctx->box_halve |= 1u << a;
-    }
+    /* Below FLT_MAX / 4 for both, every plane - org is at most about FLT_MAX / 2
+     * (node planes lie within a grid step of the bounds): no overflow. */
+    if (dist > 0.25f * FLT_MAX || ext > 0.25f * FLT_MAX)
+        cbvh_ray_mark_box_overflow(ctx, f);
     return 1;
 }
 

@@ -15,7 +15,7 @@ CBVH_KERNEL int stackless_walk(const struct cbvh_file *restrict f, const struct 
     const cbvh_node *restrict nodes = f->nodes;
     const uint32_t end = f->info.node_count;
     struct cbvh_box_ray box;
-    cbvh_box_ray_init(&box, f->grid_origin, f->grid_scale, ray);
+    cbvh_box_ray_init(&box, f->grid_origin, f->grid_scale, ray->shear.org, ray->rcp, ray->octant);
     const float tmin = ray->tmin;
     float tmax = ray->tmax;
     uint64_t visited = 0, tested = 0;

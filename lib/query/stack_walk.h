@@ -15,9 +15,8 @@ CBVH_KERNEL int walk_box_test(const struct cbvh_box_ray *restrict box, const cbv
         return cbvh_box_ray_test(box, &nodes[i], tmin, tmax, entry);
     const float *b = float_boxes + 6 * (size_t)i;
     const struct cbvh_slab_select s = box->sel;
-    const float *ps = box->plane_scale;
-    return cbvh_slab_test(b[s.near_x] * ps[0], b[s.near_y] * ps[1], b[s.near_z] * ps[2], b[s.far_x] * ps[0],
-                          b[s.far_y] * ps[1], b[s.far_z] * ps[2], box->org, box->rcp, tmin, tmax, entry);
+    return cbvh_slab_test(b[s.near_x], b[s.near_y], b[s.near_z], b[s.far_x], b[s.far_y], b[s.far_z], box->org,
+                          box->rcp, tmin, tmax, entry);
 }
 
 /* One walk for every stack variant. Both children's boxes are tested at the
@@ -29,18 +28,22 @@ CBVH_KERNEL int walk_box_test(const struct cbvh_box_ray *restrict box, const cbv
  * loader checked depth <= CBVH_MAX_DEPTH and a walk pushes at most one node
  * per level, so the stack cannot overflow. The walk covers the subtree of
  * `root` (0: the whole tree): everything it pushes lies in that subtree.
+ * halved: the ray's box_halve axes are tested at half scale (ray_box.h); a
+ * constant, so the instances for every other ray carry none of it.
  * float_boxes: NULL for the file's quantized boxes (every library walk, where
  * the constant folds the choice away); else six floats per node (min xyz,
  * max xyz), for tools that measure another box precision on the same tree
- * and the same walk (cbvh report's exact reference). */
+ * and the same walk (cbvh report's exact reference; never with halved). */
 CBVH_KERNEL int cbvh_stack_walk(const struct cbvh_file *restrict f, const struct cbvh_ray_ctx *restrict ray,
                                 uint32_t root, uint32_t mask, const int by_distance, const int any, const int counting,
-                                const float *restrict float_boxes, struct cbvh_best_hit *restrict best,
-                                cbvh_query_stats *restrict stats)
+                                const int halved, const float *restrict float_boxes,
+                                struct cbvh_best_hit *restrict best, cbvh_query_stats *restrict stats)
 {
     const cbvh_node *restrict nodes = f->nodes;
     struct cbvh_box_ray box;
-    cbvh_box_ray_init(&box, f->grid_origin, f->grid_scale, ray);
+    cbvh_box_ray_init(&box, f->grid_origin, f->grid_scale, ray->shear.org, ray->rcp, ray->octant);
+    if (halved)
+        cbvh_box_ray_halve(&box, ray->box_halve);
     const float tmin = ray->tmin;
     float tmax = ray->tmax;
     struct {

@@ -176,17 +176,17 @@ static void batch_flush(const struct cbvh_file *f, struct cbvh_stream_batch *b, 
     b->count = 0;
 }
 
-/* A whole ray on the single-ray sorted walk, its counters added to the stream's. */
+/* A whole ray on the halved single-ray walk (raycast.h), its counters added to the stream's. */
 static void solo_ray(const struct cbvh_file *f, const struct cbvh_ray_ctx *ctx, cbvh_hit *hit, uint8_t *occluded,
                      uint64_t *visited, uint64_t *tested)
 {
     cbvh_query_stats stats = {0, 0};
     if (hit) {
         struct cbvh_best_hit best = {UINT32_MAX, 0.0f, 0.0f, 0.0f};
-        cbvh_closest_subtree(f, ctx, 0, &best, &stats);
+        cbvh_closest_halved(f, ctx, &best, &stats);
         cbvh_hit_output(f, &best, ctx->t_base, hit);
     } else {
-        *occluded = (uint8_t)cbvh_any_subtree(f, ctx, 0, &stats);
+        *occluded = (uint8_t)cbvh_any_halved(f, ctx, &stats);
     }
     *visited += stats.nodes_visited;
     *tested += stats.triangles_tested;

@@ -109,7 +109,10 @@ int cbvh_sweep_as_ray(const struct cbvh_file *f, const float center[3], const fl
     struct cbvh_best_hit best = {UINT32_MAX, 0.0f, 0.0f, 0.0f};
     if (!cbvh_ray_prepare(&ctx, &ray, f))
         return cbvh_sweep_miss(hit);
-    cbvh_closest_stack(f, &ctx, 1, &best, NULL);
+    if (ctx.box_halve)
+        cbvh_closest_halved(f, &ctx, &best, NULL);
+    else
+        cbvh_closest_stack(f, &ctx, 1, &best, NULL);
     if (best.tri == UINT32_MAX)
         return cbvh_sweep_miss(hit);
     if (hit) {
