@@ -1,7 +1,12 @@
-/* counting_alloc.c: an allocator for tests that counts live blocks and bytes and fails a chosen call. */
+/* counting_alloc.c: an allocator for tests that counts live blocks and bytes and fails a chosen call; the open failure loop. */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
+
+#include <cmocka.h>
 
 #include "support/counting_alloc.h"
 
@@ -49,4 +54,30 @@ cbvh_allocator counting_allocator(counting_alloc *c, long fail_at, int fail_all)
     c->fail_all = fail_all;
     cbvh_allocator a = {counting_alloc_fn, counting_free_fn, c};
     return a;
+}
+
+size_t counting_open_failures(const void *data, size_t size, const char *path, void (*opened)(const cbvh_file *file))
+{
+    for (size_t n = 0;; n++) {
+        counting_alloc c;
+        cbvh_allocator a = counting_allocator(&c, (long)n, 0);
+        cbvh_file *f = NULL;
+        cbvh_error err;
+        cbvh_result r = path ? cbvh_open_path(path, &a, &f, &err) : cbvh_open_memory(data, size, &a, &f, &err);
+        if (r == CBVH_OK) {
+            if (opened)
+                opened(f);
+            cbvh_close(f);
+            if (c.live != 0 || c.live_bytes != 0)
+                fail_msg("closing left %ld blocks (%zu bytes) live", c.live, c.live_bytes);
+            return n;
+        }
+        if (r != CBVH_ERROR_OUT_OF_MEMORY)
+            fail_msg("open with allocation %zu failing: %s (%s)", n, cbvh_result_string(r), err.message);
+        assert_true(err.message[0] != 0);
+        assert_null(f);
+        if (c.live != 0)
+            fail_msg("open with allocation %zu failing leaked %ld blocks", n, c.live);
+        assert_true(n < 10000);
+    }
 }

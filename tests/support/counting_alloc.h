@@ -20,4 +20,12 @@ typedef struct counting_alloc {
  * block not live) aborts, which fails the test. */
 cbvh_allocator counting_allocator(counting_alloc *c, long fail_at, int fail_all);
 
+/* Opens a file (from data[size], or by path when path is not NULL) with
+ * allocation N failing, for N = 0, 1, 2 ... until the open succeeds. Each
+ * failure must be CBVH_ERROR_OUT_OF_MEMORY with a message, no handle and no
+ * live block (a cmocka failure otherwise). On success `opened` (may be NULL)
+ * runs on the file, which is then closed with no block left live. Returns
+ * the number of failure points. */
+size_t counting_open_failures(const void *data, size_t size, const char *path, void (*opened)(const cbvh_file *file));
+
 #endif
