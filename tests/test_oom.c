@@ -100,7 +100,7 @@ static size_t oom_loop_cook(int level, int quantized, int fail_all, const void *
         assert_true(err.message[0] != 0);
         assert_null(out);
         if (c.live != 0)
-            fail_msg("cook with allocation %zu failing leaked %zu blocks", n, c.live);
+            fail_msg("cook with allocation %zu failing leaked %ld blocks", n, c.live);
         assert_true(n < 100000);
     }
 }
