@@ -418,8 +418,38 @@ static void test_watertight(void **state)
     scene_free(&s);
 }
 
+/* A cooked file's own vertices and triangles cooked again with 16-bit
+ * quantized vertices: the same vertex indices, so every shared edge stays
+ * shared (identical positions quantize identically). */
+static cbvh_file *requantized(const cbvh_file *f, void **buffer)
+{
+    cbvh_file_info info;
+    cbvh_file_get_info(f, &info);
+    float *pos = calloc(3 * (size_t)info.vertex_count, sizeof(float));
+    uint32_t *idx = malloc(3 * (size_t)info.triangle_count * sizeof(uint32_t));
+    assert_non_null(pos);
+    assert_non_null(idx);
+    for (uint32_t t = 0; t < info.triangle_count; t++) {
+        float v[3][3];
+        cbvh_triangle_indices(f, t, idx + 3 * (size_t)t);
+        cbvh_triangle_vertices(f, t, v[0], v[1], v[2]);
+        for (int k = 0; k < 3; k++)
+            memcpy(pos + 3 * (size_t)idx[3 * (size_t)t + k], v[k], sizeof v[k]);
+    }
+    cbvh_cook_options o = options(1, 0);
+    cbvh_mesh m = { pos, info.vertex_count, 0, idx, info.triangle_count, NULL };
+    size_t size = 0;
+    cbvh_file *q = NULL;
+    assert_int_equal(cbvh_cook(&m, &o, NULL, buffer, &size, NULL, NULL), CBVH_OK);
+    assert_int_equal(cbvh_open_memory(*buffer, size, NULL, &q, NULL), CBVH_OK);
+    free(pos);
+    free(idx);
+    return q;
+}
+
 /* The dragon (871K triangles, a real scan with borders): a sample of its
- * shared edges and interior vertices, from a cooked file named by CBVH_DRAGON. */
+ * shared edges and interior vertices, from a cooked file named by
+ * CBVH_DRAGON, as cooked (lossless) and cooked again with quantized vertices. */
 static void test_watertight_dragon(void **state)
 {
     (void)state;
@@ -432,11 +462,18 @@ static void test_watertight_dragon(void **state)
     cbvh_error err;
     if (cbvh_open_path(path, NULL, &f, &err) != CBVH_OK)
         fail_msg("CBVH_DRAGON=%s: %s", path, err.message);
-    leak_stats st;
-    size_t skipped = 0;
-    memset(&st, 0, sizeof st);
-    watertight_file(f, 37, 1, &st, &skipped);
-    report_leaks("dragon (every 37th triangle)", &st, skipped);
+    void *buf = NULL;
+    cbvh_file *q = requantized(f, &buf);
+    const cbvh_file *files[2] = { f, q };
+    for (int k = 0; k < 2; k++) {
+        leak_stats st;
+        size_t skipped = 0;
+        memset(&st, 0, sizeof st);
+        watertight_file(files[k], 37, 1, &st, &skipped);
+        report_leaks(k ? "dragon, quantized (every 37th)" : "dragon, lossless (every 37th)", &st, skipped);
+    }
+    cbvh_close(q);
+    cbvh_buffer_free(NULL, buf);
     cbvh_close(f);
 }
 
