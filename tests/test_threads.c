@@ -181,7 +181,7 @@ static void test_threads_agree(void **state)
     assert_true(hits > QUERY_COUNT / 10); /* the queries do touch the mesh */
 
     const char *env_s = getenv("CBVH_THREAD_SECONDS"), *env_n = getenv("CBVH_THREADS");
-    double seconds = env_s ? atof(env_s) : 1.5;
+    double seconds = env_s ? atof(env_s) : 3.0;
     int threads = env_n ? atoi(env_n) : 4;
     if (threads < 2)
         threads = 2;
