@@ -35,4 +35,7 @@ dict=
     "$corpus" "$here/corpus/$target" >"$build/fuzz-$target.log" 2>&1 || status=$?
 tail -n 25 "$build/fuzz-$target.log" | grep -E '^(#|stat::|Done)|ERROR|SUMMARY' | tail -n 8 || true
 ls "$artifacts" | sed 's/^/artifact: /'
+# keep-going mode can end with status 0 after crashes: any artifact fails the campaign
+[ -z "$(ls "$artifacts")" ] || status=${status:-1}
+[ "${status:-0}" = 0 ] || echo "campaign.sh: $target: failed (status ${status}); see $build/fuzz-$target.log" >&2
 exit ${status:-0}
