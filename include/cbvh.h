@@ -285,7 +285,7 @@ typedef struct cbvh_query_stats {
  * (more than 16 times its extent) is moved along the ray next to it first, so
  * rays from 1e20 away still hit a unit mesh; t is reported on the caller's ray.
  * A ray whose origin lies more than FLT_MAX from some node box plane (possible
- * only with coordinates past about 8.5e37) is walked by the sorted traversal
+ * only when some coordinate is past FLT_MAX / 2, 1.7e38) is walked by the sorted traversal
  * whatever `traversal` says, with the box test at half scale so nothing
  * overflows: the answer is the same, the stats are the sorted walk's. */
 CBVH_API int cbvh_raycast(const cbvh_file *file, const cbvh_ray *ray, cbvh_traversal traversal,
