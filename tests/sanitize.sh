@@ -33,8 +33,8 @@ if [ "$status" -eq 0 ]; then
     (
         cd "$build/tsan"
         "$src/configure" -q --enable-sanitizers=thread --disable-tools --disable-shared CFLAGS="-O1 -g" >>"$log" 2>&1
-        make -j"$jobs" lib/libcbvh.la >>"$log" 2>&1
-        make -j"$jobs" check TESTS="tests/test_threads tests/test_cook" >>"$log" 2>&1
+        threaded="tests/test_threads tests/test_cook"
+        make -j"$jobs" check TESTS="$threaded" check_PROGRAMS="$threaded" >>"$log" 2>&1
     ) || status=$?
     cat "$build/tsan/tests/test_threads.log" >>"$log" 2>/dev/null || true
 fi

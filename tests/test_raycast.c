@@ -568,6 +568,9 @@ static void test_far_side_boxes(void **state)
             assert_true(cbvh_ray_prepare(&ctx, &r, fx.file));
             halved += ctx.box_halve != 0;
             rays++;
+            cbvh_hit unknown; /* an unknown traversal stays a miss, halved or not */
+            assert_int_equal(cbvh_raycast(fx.file, &r, (cbvh_traversal)99, &unknown, NULL), 0);
+            assert_int_equal(cbvh_occluded(fx.file, &r, (cbvh_traversal)99, NULL), 0);
             ref_ray_hit loose;
             assert_true(ref_ray_closest(&fx.tris, &r, 1e-6 * fx.diag, &loose));
             cbvh_hit h;

@@ -17,6 +17,7 @@ int cbvh_hit_output(const struct cbvh_file *f, const struct cbvh_best_hit *best,
     return 1;
 }
 
+/* The switches below treat an unknown traversal as a miss; the halved walk asks first. */
 static int known_traversal(cbvh_traversal traversal)
 {
     return traversal == CBVH_TRAVERSAL_SORTED || traversal == CBVH_TRAVERSAL_UNSORTED ||
@@ -32,10 +33,11 @@ CBVH_API int cbvh_raycast(const cbvh_file *file, const cbvh_ray *ray, cbvh_trave
     struct cbvh_best_hit best = {UINT32_MAX, 0.0f, 0.0f, 0.0f};
     struct cbvh_ray_ctx ctx;
     ctx.t_base = 0.0;
-    if (file && ray && known_traversal(traversal) && cbvh_ray_prepare(&ctx, ray, file)) {
-        if (ctx.box_halve)
-            cbvh_closest_halved(file, &ctx, &best, stats);
-        else switch (traversal) {
+    if (file && ray && cbvh_ray_prepare(&ctx, ray, file)) {
+        if (ctx.box_halve) {
+            if (known_traversal(traversal))
+                cbvh_closest_halved(file, &ctx, &best, stats);
+        } else switch (traversal) {
         case CBVH_TRAVERSAL_SORTED:
             cbvh_closest_stack(file, &ctx, 1, &best, stats);
             break;
@@ -57,10 +59,10 @@ CBVH_API int cbvh_occluded(const cbvh_file *file, const cbvh_ray *ray, cbvh_trav
                            cbvh_query_stats *stats)
 {
     struct cbvh_ray_ctx ctx;
-    if (!file || !ray || !known_traversal(traversal) || !cbvh_ray_prepare(&ctx, ray, file))
+    if (!file || !ray || !cbvh_ray_prepare(&ctx, ray, file))
         return 0;
     if (ctx.box_halve)
-        return cbvh_any_halved(file, &ctx, stats);
+        return known_traversal(traversal) ? cbvh_any_halved(file, &ctx, stats) : 0;
     switch (traversal) {
     case CBVH_TRAVERSAL_SORTED:
         return cbvh_any_stack(file, &ctx, 1, stats);
