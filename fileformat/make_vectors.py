@@ -9,6 +9,7 @@ Standard library only (struct, zlib). It does not call the C library: it proves
 the spec is implementable and gives the loader files it did not write itself.
 The vectors are committed; rerunning this script must reproduce them byte for byte.
 """
+import itertools
 import math
 import os
 import struct
@@ -22,6 +23,7 @@ ALIGN = 64
 NODES, TRIANGLES, VERTICES, REMAP, MATERIALS = 1, 2, 3, 4, 5
 RAW, ZLIB = 0, 1
 TRIS_U16, TRIS_U32, TRIS_DELTA16 = 0, 1, 2
+BINARY, WIDE4 = 0, 1  # NODES encodings: the node layouts
 VERTS_F32, VERTS_Q16 = 0, 1
 LEAF_BIT = 0x80000000
 
@@ -126,38 +128,19 @@ def depth_of(n):
     return 1 if n[0] == "leaf" else 1 + max(depth_of(n[1]), depth_of(n[2]))
 
 
-def cook(positions, triangles, max_leaf=4, vertex_format=VERTS_F32, tri_encoding=None, keep_remap=True,
-         materials=None, remap_encoding=None, material_encoding=None, codec=RAW, compat_flags=0):
-    """Returns (header fields, section list) for a mesh, following the spec's cooking rules."""
-    kept = [(i, t) for i, t in enumerate(triangles) if triangle_area([positions[v] for v in t]) > 0]
-    tree = build(kept, positions, max_leaf)
-    cooked = leaves(tree)  # depth-first leaf order
-    # vertices by first use in cooked order
-    vmap, verts = {}, []
-    for _, tri in cooked:
-        for v in tri:
-            if v not in vmap:
-                vmap[v] = len(verts)
-                verts.append(positions[v])
-    ctris = [[vmap[v] for v in tri] for _, tri in cooked]
-    lo, hi = box_of(verts)
-    grid = [grid_for(lo[a], hi[a]) for a in range(3)]
-    if vertex_format == VERTS_Q16:
-        qverts = [[nearest_q(p[a], *grid[a]) for a in range(3)] for p in verts]
-        decoded = [[deq(q[a], *grid[a]) for a in range(3)] for q in qverts]
-        vdata = b"".join(struct.pack("<3H", *q) for q in qverts)
-    else:
-        decoded = verts
-        vdata = b"".join(struct.pack("<3f", *p) for p in verts)
-    bmin, bmax = box_of(decoded)
+def quantized_box(points, grid):
+    """Spec section 6: qmin the largest q with deq(q) <= min, qmax the smallest q >= qmin with deq(q) >= max."""
+    lo, hi = box_of(points)
+    qmin = [largest_at_most(lo[a], *grid[a]) for a in range(3)]
+    return qmin, [smallest_at_least(hi[a], *grid[a], qmin[a]) for a in range(3)]
 
-    # nodes, depth-first, with conservative boxes of the decoded vertices
+
+def place_binary(tree, decoded, grid):
+    """Spec section 5: the nodes depth-first. Returns (NODES bytes, triangles in cooked order, depth, node count)."""
     nodes, next_tri = [], [0]
 
     def emit(n):
-        lo_, hi_ = box_of([decoded[v] for t in leaves_c(n) for v in ctris[t]])
-        qmin = [largest_at_most(lo_[a], *grid[a]) for a in range(3)]
-        qmax = [smallest_at_least(hi_[a], *grid[a], qmin[a]) for a in range(3)]
+        qmin, qmax = quantized_box([decoded[v] for _, tri in leaves(n) for v in tri], grid)
         index = len(nodes)
         nodes.append([qmin, qmax, 0])
         if n[0] == "leaf":
@@ -176,22 +159,111 @@ def cook(positions, triangles, max_leaf=4, vertex_format=VERTS_F32, tri_encoding
         nodes[index][2] = sort << 23 | (len(nodes) - index)
         return (qmin, qmax)
 
-    # the tree over cooked triangle positions: leaf i holds consecutive cooked ids
-    pos_iter = iter(range(len(cooked)))
-
-    def relabel(n):
-        if n[0] == "leaf":
-            return ("leaf", [next(pos_iter) for _ in n[1]])
-        return ("node", relabel(n[1]), relabel(n[2]))
-
-    def leaves_c(n):
-        return n[1] if n[0] == "leaf" else leaves_c(n[1]) + leaves_c(n[2])
-
-    emit(relabel(tree))
+    emit(tree)
     ndata = b"".join(struct.pack("<3H3HI", *q0, *q1, w) for q0, q1, w in nodes)
+    return ndata, leaves(tree), depth_of(tree), len(nodes)
+
+
+W4_ORDERS = list(itertools.permutations(range(4)))  # spec section 5.2's order table: lexicographic
+
+
+def w4_order(boxes, grid, k):
+    """Spec section 5.2: the used slots by increasing dot(qmin + qmax, octant direction k) in binary64 (each
+    term exact, summed x, y, z), ties in slot order, then the unused slots; returns its index in the table."""
+    def key(s):
+        qmin, qmax = boxes[s]
+        return sum((-1 if k >> a & 1 else 1) * float(qmin[a] + qmax[a]) * grid[a][1] for a in range(3))
+    used = sorted((s for s in range(4) if boxes[s] is not None), key=key)  # sorted() is stable: ties in slot order
+    return W4_ORDERS.index(tuple(used + [s for s in range(4) if boxes[s] is None]))
+
+
+def place_wide4(tree, decoded, grid):
+    """Spec section 5.2: the binary tree collapsed into nodes of up to four slots, allocated breadth first.
+    Returns (NODES bytes, triangles in cooked order, depth, node count, triangles in depth-first leaf order)."""
+    boxes = {}
+
+    def qbox(n):
+        if id(n) not in boxes:
+            boxes[id(n)] = quantized_box([decoded[v] for _, tri in leaves(n) for v in tri], grid)
+        return boxes[id(n)]
+
+    def area(n):
+        qmin, qmax = qbox(n)
+        return surface([deq(qmin[a], *grid[a]) for a in range(3)], [deq(qmax[a], *grid[a]) for a in range(3)])
+
+    def collapse(n):
+        if n[0] == "leaf":
+            return [n]  # a mesh whose whole tree is one leaf: a root with that leaf in slot 0
+        slots = [n[1], n[2]]
+        while len(slots) < 4:
+            internal = [s for s in range(len(slots)) if slots[s][0] == "node"]
+            if not internal:
+                break
+            s = max(internal, key=lambda s: (area(slots[s]), -s))  # the largest area, ties: the first slot
+            slots[s:s + 1] = [slots[s][1], slots[s][2]]
+        return slots
+
+    queue, index_of, slots_of, cooked, data = [tree], {}, [], [], b""
+    depth, level_end = 1, 1
+    for i, n in enumerate(queue):
+        if i == level_end:
+            depth, level_end = depth + 1, len(queue)
+        slots = collapse(n)
+        slots_of.append(slots)
+        first_child, first_triangle = len(queue), len(cooked)
+        meta = 0
+        for s, c in enumerate(slots):
+            meta |= 1 << 16 + s
+            if c[0] == "node":
+                meta |= 1 << 20 + s
+                index_of[id(c)] = len(queue)
+                queue.append(c)
+            else:
+                meta |= (len(c[1]) - 1) << 4 * s
+                cooked += c[1]
+        slot_boxes = [qbox(c) for c in slots] + [None] * (4 - len(slots))
+        for k in range(8):
+            meta |= w4_order(slot_boxes, grid, k) << 24 + 5 * k
+        planes = [[b[p // 3][p % 3] if b else 0 for b in slot_boxes] for p in range(6)]
+        data += struct.pack("<24HIIQ", *[q for plane in planes for q in plane], first_child, first_triangle, meta)
+
+    def depth_first(i):
+        out = []
+        for c in slots_of[i]:
+            out += depth_first(index_of[id(c)]) if c[0] == "node" else c[1]
+        return out
+
+    return data, cooked, depth, len(queue), depth_first(0)
+
+
+def cook(positions, triangles, max_leaf=4, vertex_format=VERTS_F32, tri_encoding=None, keep_remap=True,
+         materials=None, remap_encoding=None, material_encoding=None, codec=RAW, compat_flags=0, layout=BINARY):
+    """Returns (header fields, section list) for a mesh, following the spec's cooking rules."""
+    kept = [(i, t) for i, t in enumerate(triangles) if triangle_area([positions[v] for v in t]) > 0]
+    tree = build(kept, positions, max_leaf)
+    lo, hi = box_of([positions[v] for _, tri in kept for v in tri])
+    grid = [grid_for(lo[a], hi[a]) for a in range(3)]
+    if vertex_format == VERTS_Q16:
+        stored = {v: [nearest_q(positions[v][a], *grid[a]) for a in range(3)] for _, tri in kept for v in tri}
+        decoded = {v: [deq(q[a], *grid[a]) for a in range(3)] for v, q in stored.items()}
+    else:
+        stored = decoded = {v: positions[v] for _, tri in kept for v in tri}
+    if layout == BINARY:
+        ndata, cooked, depth, node_count = place_binary(tree, decoded, grid)
+        first_use = cooked
+    else:
+        ndata, cooked, depth, node_count, first_use = place_wide4(tree, decoded, grid)
+    # vertices by first use in the depth-first order of the leaves (spec section 4, DELTA16)
+    vmap = {}
+    for _, tri in first_use:
+        for v in tri:
+            vmap.setdefault(v, len(vmap))
+    vdata = b"".join(struct.pack("<3H" if vertex_format == VERTS_Q16 else "<3f", *stored[v]) for v in vmap)
+    ctris = [[vmap[v] for v in tri] for _, tri in cooked]
+    bmin, bmax = box_of(list(decoded.values()))
 
     if tri_encoding is None:
-        tri_encoding = TRIS_U16 if len(verts) <= 65536 else TRIS_U32
+        tri_encoding = TRIS_U16 if len(vmap) <= 65536 else TRIS_U32
     if tri_encoding == TRIS_U16:
         tdata = b"".join(struct.pack("<3H", *t) for t in ctris)
     elif tri_encoding == TRIS_U32:
@@ -201,7 +273,7 @@ def cook(positions, triangles, max_leaf=4, vertex_format=VERTS_F32, tri_encoding
 
     original = len(triangles) if keep_remap else len(cooked)
     sections = [
-        Section(NODES, 0, ndata, codec),
+        Section(NODES, layout, ndata, codec),
         Section(TRIANGLES, tri_encoding, tdata, codec),
         Section(VERTICES, vertex_format, vdata, codec),
     ]
@@ -217,7 +289,7 @@ def cook(positions, triangles, max_leaf=4, vertex_format=VERTS_F32, tri_encoding
             enc = 0 if max(ids) < 256 else 1 if max(ids) < 65536 else 2
         sections.append(Section(MATERIALS, enc, b"".join(struct.pack("<" + "BHI"[enc], m) for m in ids), codec))
     header = dict(version=1, header_size=HEADER_SIZE, compat=compat_flags, incompat=0,
-                  triangle_count=len(cooked), vertex_count=len(verts), node_count=len(nodes), depth=depth_of(tree),
+                  triangle_count=len(cooked), vertex_count=len(vmap), node_count=node_count, depth=depth,
                   max_leaf_size=max_leaf, original_triangle_count=original,
                   grid_origin=[g[0] for g in grid], grid_scale=[g[1] for g in grid], bounds_min=bmin, bounds_max=bmax,
                   reserved=bytes(12))
@@ -754,7 +826,11 @@ def _():
 @vector("bad-leaves-short", "CORRUPT", "leaves cover triangles [0, 12), triangle_count is 13",
         "a 13th triangle in TRIANGLES (triangle_count 13) that no leaf covers")
 def _():
-    h, s = box(keep_remap=False)
+    return with_uncovered_triangle(*box(keep_remap=False))
+
+
+def with_uncovered_triangle(h, s):
+    """A file without REMAP plus a 13th triangle (triangle_count 13) that no leaf covers."""
     h["triangle_count"] = h["original_triangle_count"] = 13
     s[1].data += s[1].data[:6]
     return serialize(h, s)
@@ -909,6 +985,229 @@ def _():
 def _():
     h, s = box()
     return serialize(h, s + [Section(6, 0, b"new critical data")])
+
+
+# ---------------------------------------------------------------- wide4 vectors (NODES encoding 1, spec section 5.2)
+
+
+def w4box(max_leaf=1, **kw):
+    """The box in wide4 nodes. Leaves of 1: 5 nodes, depth 3, the slots below (u: used, i: internal):
+    node 0 u 1111 i 1110, node 1 u 0011, node 2 u 0111, node 3 u 1111 i 1000, node 4 u 0111."""
+    return cook(*BOX, max_leaf=max_leaf, layout=WIDE4, **kw)
+
+
+def w4_node(sec, i, edit):
+    """Applies edit(first_child, first_triangle, meta, planes) -> the same four to node i of a NODES section;
+    planes[p][s] is plane p (qmin x, y, z, qmax x, y, z) of slot s."""
+    data = bytearray(sec.data)
+    q = list(struct.unpack_from("<24H", data, 64 * i))
+    fc, ft, meta = struct.unpack_from("<IIQ", data, 64 * i + 48)
+    planes = [q[4 * p:4 * p + 4] for p in range(6)]
+    fc, ft, meta, planes = edit(fc, ft, meta, planes)
+    struct.pack_into("<24HIIQ", data, 64 * i, *[v for plane in planes for v in plane], fc, ft, meta)
+    sec.data = bytes(data)
+
+
+def w4_edited(i, edit, **kw):
+    h, s = w4box(**kw)
+    w4_node(s[0], i, edit)
+    return serialize(h, s)
+
+
+def w4_header(max_leaf=1, **fields):
+    """The wide4 box with header fields changed."""
+    h, s = w4box(max_leaf)
+    h.update(fields)
+    return serialize(h, s)
+
+
+@vector("good-w4-single-triangle", "OK", "-", "wide4: 1 triangle, a single-leaf root (node_count 1, depth 1, the leaf in slot 0)")
+def _():
+    return serialize(*cook(*SINGLE, layout=WIDE4))
+
+
+@vector("good-w4-box-raw", "OK", "-", "wide4: box, leaves of at most 2: 3 nodes, depth 2 (root: 2 leaves, 2 internal slots), raw")
+def _():
+    return serialize(*w4box(2))
+
+
+@vector("good-w4-box-zlib", "OK", "-", "good-w4-box-raw with every section zlib-compressed")
+def _():
+    return serialize(*w4box(2, codec=ZLIB))
+
+
+@vector("good-w4-box-leaf1", "OK", "-", "wide4: box, leaves of 1: 5 nodes, depth 3, unused slots in nodes 1, 2 and 4")
+def _():
+    return serialize(*w4box())
+
+
+@vector("good-w4-box-leaf8", "OK", "-", "wide4: box with max_leaf_size 8 (the wide4 limit): one node, two leaves of 6")
+def _():
+    return serialize(*w4box(8))
+
+
+@vector("good-w4-box-q16", "OK", "-", "good-w4-box-raw with 16-bit grid vertices")
+def _():
+    return serialize(*w4box(2, vertex_format=VERTS_Q16))
+
+
+@vector("good-w4-box-far-q16", "OK", "-", "wide4: the box moved 70 km along x, leaves of 2, grid vertices, zlib")
+def _():
+    return serialize(*cook(*BOX_FAR, max_leaf=2, vertex_format=VERTS_Q16, codec=ZLIB, layout=WIDE4))
+
+
+@vector("good-w4-quad-flat", "OK", "-", "wide4: the flat quad, leaves of 1: one node of 2 leaf slots, grid_scale z 0")
+def _():
+    return serialize(*cook(*QUAD, max_leaf=1, layout=WIDE4))
+
+
+@vector("good-w4-remap-materials", "OK", "-", "wide4: box degenerate, leaves of 2: REMAP u16, MATERIALS u8 (1 + 7 x original id)")
+def _():
+    return serialize(*cook(*BOX_DEGENERATE, max_leaf=2, materials=materials_for(BOX_DEGENERATE, 1), layout=WIDE4))
+
+
+@vector("good-w4-remap-u32-materials-u32-zlib", "OK", "-",
+        "as good-w4-remap-materials with REMAP u32, MATERIALS u32 (70000 + 7 x original id), zlib, DELTA16")
+def _():
+    return serialize(*cook(*BOX_DEGENERATE, max_leaf=2, materials=materials_for(BOX_DEGENERATE, 70000),
+                           remap_encoding=1, tri_encoding=TRIS_DELTA16, codec=ZLIB, layout=WIDE4))
+
+
+@vector("good-w4-materials-u16-cooked-ids", "OK", "-", "good-w4-box-raw without REMAP, MATERIALS u16 (1000 + 7 x original id)")
+def _():
+    return serialize(*w4box(2, keep_remap=False, materials=materials_for(BOX, 1000)))
+
+
+@vector("bad-w4-no-slot", "CORRUPT", "node 1: no slot in use", "good-w4-box-leaf1 with node 1's meta 0")
+def _():
+    return w4_edited(1, lambda fc, ft, meta, q: (fc, ft, 0, q))
+
+
+@vector("bad-w4-internal-unused", "CORRUPT", "node 0: slots 0x8 are internal but not in use",
+        "good-w4-box-leaf1 with the root's slot 3 internal but its in-use bit clear")
+def _():
+    return w4_edited(0, lambda fc, ft, meta, q: (fc, ft, meta & ~(1 << 19), q))
+
+
+def set_plane(q, p, s, v):
+    q[p][s] = v
+    return q
+
+
+@vector("bad-w4-unused-box", "CORRUPT", "node 1: unused slot 3 has a nonzero box", "good-w4-box-leaf1 with node 1's unused slot 3 qmax z 1")
+def _():
+    return w4_edited(1, lambda fc, ft, meta, q: (fc, ft, meta, set_plane(q, 5, 3, 1)))
+
+
+@vector("bad-w4-unused-count", "CORRUPT", "node 1: slot 2 is unused but has a triangle count field of 1",
+        "good-w4-box-leaf1 with node 1's unused slot 2 count field 1")
+def _():
+    return w4_edited(1, lambda fc, ft, meta, q: (fc, ft, meta | 1 << 8, q))
+
+
+@vector("bad-w4-internal-count", "CORRUPT", "node 0: slot 1 is internal but has a triangle count field of 1",
+        "good-w4-box-leaf1 with the root's internal slot 1 count field 1")
+def _():
+    return w4_edited(0, lambda fc, ft, meta, q: (fc, ft, meta | 1 << 4, q))
+
+
+@vector("bad-w4-leaf-too-big", "CORRUPT", "node 0: slot 1 is a leaf of 2 triangles, more than max_leaf_size 1",
+        "good-w4-box-raw with max_leaf_size 1")
+def _():
+    return w4_header(2, max_leaf_size=1)
+
+
+@vector("bad-w4-max-leaf-size", "CORRUPT", "max_leaf_size 9 is more than a wide4 leaf holds (8)",
+        "good-w4-box-raw with max_leaf_size 9 (valid for binary nodes, above the wide4 limit)")
+def _():
+    return w4_header(2, max_leaf_size=9)
+
+
+@vector("bad-w4-triangle-count", "CORRUPT", "triangle_count 268435457 is outside 1..268435456",
+        "good-w4-box-leaf1 with triangle_count 2^28 + 1")
+def _():
+    return w4_header(triangle_count=2 ** 28 + 1)
+
+
+@vector("bad-w4-qmin-gt-qmax", "CORRUPT", "node 2: slot 1: qmin 100 > qmax 50 on axis 1",
+        "good-w4-box-leaf1 with node 2's slot 1 qmin y 100 > qmax y 50")
+def _():
+    return w4_edited(2, lambda fc, ft, meta, q: (fc, ft, meta, set_plane(set_plane(q, 1, 1, 100), 4, 1, 50)))
+
+
+@vector("bad-w4-order-index", "CORRUPT", "node 3: order index 24 for octant 5 is not below 24",
+        "good-w4-box-leaf1 with node 3's order for octant 5 = 24")
+def _():
+    return w4_edited(3, lambda fc, ft, meta, q: (fc, ft, meta & ~(31 << 49) | 24 << 49, q))
+
+
+@vector("bad-w4-first-child", "CORRUPT", "node 0: first_child 2, but the nodes before it leave the next child at 1",
+        "good-w4-box-leaf1 with the root's first_child 2 (its 3 children [2, 5) would still fit)")
+def _():
+    return w4_edited(0, lambda fc, ft, meta, q: (2, ft, meta, q))
+
+
+@vector("bad-w4-first-child-self", "CORRUPT", "node 3: first_child 3, but the nodes before it leave the next child at 4",
+        "good-w4-box-leaf1 with node 3's first_child 3: its internal slot would be itself (a loop)")
+def _():
+    return w4_edited(3, lambda fc, ft, meta, q: (3, ft, meta, q))
+
+
+@vector("bad-w4-children-past-end", "CORRUPT", "node 3: children [4, 5) run past node_count 4",
+        "good-w4-box-leaf1 without its last node (node_count 4): node 3's internal child is missing")
+def _():
+    h, s = w4box()
+    h["node_count"] = 4
+    s[0].data = s[0].data[:4 * 64]
+    return serialize(h, s)
+
+
+@vector("bad-w4-unallocated-node", "CORRUPT", "node 5: no node before it has it as a child",
+        "good-w4-box-leaf1 plus a sixth node (a copy of node 4) that no node allocates")
+def _():
+    h, s = w4box()
+    h["node_count"] = 6
+    s[0].data += s[0].data[4 * 64:]
+    return serialize(h, s)
+
+
+@vector("bad-w4-first-triangle", "CORRUPT", "node 2: first_triangle 4, but the leaves before it end at triangle 3",
+        "good-w4-box-leaf1 with node 2's first_triangle 4 instead of 3")
+def _():
+    return w4_edited(2, lambda fc, ft, meta, q: (fc, 4, meta, q))
+
+
+@vector("bad-w4-leaves-past-end", "CORRUPT", "node 4: slot 2's triangles [11, 13) run past triangle_count 12",
+        "good-w4-box-leaf1 with node 4's last leaf holding 2 triangles (max_leaf_size raised to 2)")
+def _():
+    h, s = w4box()
+    h["max_leaf_size"] = 2
+    w4_node(s[0], 4, lambda fc, ft, meta, q: (fc, ft, meta | 1 << 8, q))
+    return serialize(h, s)
+
+
+@vector("bad-w4-leaves-short", "CORRUPT", "leaves cover triangles [0, 12), triangle_count is 13",
+        "good-w4-box-leaf1 without REMAP and a 13th triangle that no leaf covers")
+def _():
+    return with_uncovered_triangle(*w4box(keep_remap=False))
+
+
+@vector("bad-w4-depth-mismatch", "CORRUPT", "the tree's depth is 3, the header says 4", "good-w4-box-leaf1 with header depth 4")
+def _():
+    return w4_header(depth=4)
+
+
+@vector("bad-w4-depth-exceeded", "CORRUPT", "node 4: at depth 3, deeper than the header's depth 2",
+        "good-w4-box-leaf1 with header depth 2")
+def _():
+    return w4_header(depth=2)
+
+
+@vector("unsupported-w4-nodes-encoding-2", "UNSUPPORTED", "encoding 2", "good-w4-box-leaf1 with NODES encoding 2 (a future node layout)")
+def _():
+    h, s = w4box()
+    s[0].encoding = 2
+    return serialize(h, s)
 
 
 def main(argv):

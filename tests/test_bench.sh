@@ -79,21 +79,25 @@ fi
 # ---- report -----------------------------------------------------------------------------------
 
 run 0 "report --gen sphere:2000" "$CBVH" report --gen sphere:2000 --rays 2000 --sample 500 --reps 1 --quiet \
-    --json "$tmp/report.json" --svg "$tmp/report.svg" &&
+    --json "$tmp/report.json" --svg "$tmp/report.svg" --html "$tmp/report.html" &&
     cp "$tmp/out" "$tmp/report.md" &&
     check "... prints the table with error and run-time columns" \
         grep -q '^| mesh | configuration | bytes/tri | open ms | closest MRays/s | any MRays/s | nodes/ray | tris/ray | extra nodes/ray | extra tris/ray | box inflation mean | box inflation worst | flips | wrong tri | t err max | t err RMS | vertex err | leaked rays |' "$tmp/report.md" &&
-    check "... one row per configuration" test "$(grep -c '^| sphere:2000 | leaf ' "$tmp/report.md")" -eq 12 &&
+    check "... one row per configuration" test "$(grep -c '^| sphere:2000 | \(binary\|wide4\) layout, ' "$tmp/report.md")" -eq 13 &&
     check "... no ray leaks through the closed sphere" \
-        test "$(grep '^| sphere:2000 |' "$tmp/report.md" | grep -vc '| 0 / [0-9]* |$')" -eq 0
+        test "$(grep '^| sphere:2000 |' "$tmp/report.md" | grep -vc '| 0 / [0-9]* |$')" -eq 0 &&
+    check "... recommends an exact configuration" grep -q '^\*\*sphere:2000\.\*\* Recommended: ' "$tmp/report.md"
+run 2 "report --html into a missing folder" "$CBVH" report --gen cube --rays 100 --sample 10 --reps 1 --quiet \
+    --html "$tmp/missing/report.html" && check "... names the file" grep -q 'missing/report.html' "$tmp/err"
 
 if [ "$has_python" = 1 ] && [ -f "$tmp/report.json" ]; then
     check "report --json is valid JSON" python3 -m json.tool "$tmp/report.json" /dev/null
     check "report: exact answers with float vertices, bounded error with quantized ones" python3 - "$tmp/report.json" <<'EOF'
 import json, sys
 rows = json.load(open(sys.argv[1]))["rows"]
-assert len(rows) == 12, len(rows)
-raw = [r for r in rows if r["leaf_size"] == 4 and r["vertices"] == "float" and r["boxes"] == "q16" and r["zlib_level"] == 0]
+assert len(rows) == 13, len(rows)
+assert sum(r["layout"] == "wide4 layout" for r in rows) == 1, rows
+raw = [r for r in rows if r["layout"] == "binary layout" and r["leaf_size"] == 16 and r["vertices"] == "float" and r["boxes"] == "q16" and r["zlib_level"] == 0]
 packed = [r for r in rows if r["zlib_level"] > 0]
 assert len(raw) == 5 and len(packed) == 1, (raw, packed)
 assert packed[0]["bytes_per_triangle"] < raw[0]["bytes_per_triangle"], (packed, raw)
@@ -112,24 +116,65 @@ for r in rows:
     if r["traversal"] == "sorted" and r["boxes"] == "q16":
         assert r["extra_nodes_per_ray"] >= 0, r
 EOF
-    check "report --svg is a well-formed SVG with one point per configuration and panel" python3 - "$tmp/report.svg" <<'EOF'
+    check "report --svg is a well-formed SVG: six panels, a marker per configuration in each, a legend" \
+        python3 - "$tmp/report.svg" <<'EOF'
 import sys
 import xml.etree.ElementTree as ET
 root = ET.parse(sys.argv[1]).getroot()
 ns = "{http://www.w3.org/2000/svg}"
 assert root.tag == ns + "svg", root.tag
-circles = root.findall(".//" + ns + "circle")
-assert len(circles) == 3 * 12, len(circles)
+panels = [g for g in root.iter(ns + "g") if g.get("class") == "panel"]
+assert len(panels) == 6, len(panels)
+for k, p in enumerate(panels): # the last is size against open time: the float-box reference is no file
+    points = [t for t in p.iter(ns + "title")]
+    assert len(points) == (13 if k < 5 else 12), (k, len(points))
+    assert sum(1 for x in p.iter(ns + "path") if x.get("class") == "front") == 1
 texts = [t.text or "" for t in root.iter(ns + "text")]
 assert any("ns per ray" in t for t in texts), texts[:5]
+for legend in ("default: binary layout, q16 boxes, float vertices, leaf 16, sorted, raw sections", "layout", "box precision",
+               "vertex precision", "leaf size", "traversal", "sections"):
+    assert legend in texts, legend
+EOF
+    check "report --html: self-contained, six plots with a focusable point per configuration, advice, table" \
+        python3 - "$tmp/report.html" <<'EOF'
+import re, sys
+from html.parser import HTMLParser
+page = open(sys.argv[1], encoding="utf-8").read()
+assert not re.search(r"""(src|href)\s*=|url\(|@import|<link|<script""", page), "refers to something outside the page"
+class Page(HTMLParser):
+    def __init__(self):
+        super().__init__()
+        self.plots, self.stack, self.advice, self.rows = [], [], 0, 0
+    def handle_starttag(self, tag, attrs):
+        a = dict(attrs)
+        cls = a.get("class", "")
+        if tag == "svg" and cls == "plot":
+            self.plots.append({"points": 0, "front": 0, "label": a.get("aria-label", "")})
+        if self.plots and tag == "g" and cls == "pt":
+            assert a.get("tabindex") == "0", a
+            self.plots[-1]["points"] += 1
+        if self.plots and tag == "path" and cls == "front":
+            self.plots[-1]["front"] += 1
+        if tag == "p" and cls == "advice":
+            self.advice += 1
+        if tag == "tr":
+            self.rows += 1
+p = Page()
+p.feed(page)
+plots = [x for x in p.plots if not x["label"].startswith("legend")]
+assert len(plots) == 6, plots
+for k, x in enumerate(plots):
+    assert x["points"] == (13 if k < 5 else 12) and x["front"] == 1, (k, x)
+assert p.advice == 1 and p.rows == 1 + 13, (p.advice, p.rows)
+assert "Recommended: " in page
 EOF
 else
-    skip "report JSON and SVG checks: python3 not found"
+    skip "report JSON, SVG and HTML checks: python3 not found"
 fi
 
 run 0 "report --out DIR" "$CBVH" report --gen cube --rays 500 --sample 100 --reps 1 --quiet --out "$tmp/out-dir" &&
-    check "... writes report.md, report.json, report.svg and the cooked files" \
-        test -s "$tmp/out-dir/report.md" -a -s "$tmp/out-dir/report.json" -a -s "$tmp/out-dir/report.svg" \
-        -a -s "$tmp/out-dir/cube-leaf4.cbvh" -a -s "$tmp/out-dir/cube-leaf4-qverts.cbvh" -a -s "$tmp/out-dir/cube-leaf4-zlib.cbvh"
+    check "... writes report.md, report.json, report.svg, report.html and the cooked files" \
+        test -s "$tmp/out-dir/report.md" -a -s "$tmp/out-dir/report.json" -a -s "$tmp/out-dir/report.svg" -a -s "$tmp/out-dir/report.html" \
+        -a -s "$tmp/out-dir/cube-binary-leaf16.cbvh" -a -s "$tmp/out-dir/cube-binary-leaf16-qverts.cbvh" -a -s "$tmp/out-dir/cube-binary-leaf16-zlib.cbvh" -a -s "$tmp/out-dir/cube-wide4-leaf16.cbvh"
 
 finish

@@ -18,8 +18,10 @@
 
 #include "cbvh.h"
 #include "support/counting_alloc.h"
+#include "support/test_os.h"
 #include "common/endian.h"
 #include "common/format.h"
+#include "layout/binary.h" /* the test parses the binary encoding from the spec on its own */
 
 /* ------------------------------------------------------------------ test meshes */
 
@@ -590,12 +592,13 @@ typedef struct cooked {
 static void cook_and_check(const test_mesh *m, const cbvh_cook_options *o, cooked *c)
 {
     cbvh_cook_options defaults;
-    cbvh_cook_options_init(&defaults);
+    cbvh_cook_options_init(&defaults, sizeof defaults);
     if (!o)
         o = &defaults;
     cbvh_mesh mesh = as_mesh(m);
     cbvh_error err;
     void *data = NULL;
+    cbvh_cook_stats_init(&c->stats, sizeof c->stats);
     cbvh_result r = cbvh_cook(&mesh, o, NULL, &data, &c->size, &c->stats, &err);
     if (r != CBVH_OK)
         fail_msg("cook failed: %d %s", r, err.message);
@@ -649,7 +652,7 @@ static void test_soups(void **state)
             test_mesh m;
             make_soup(&m, sizes[s], 11 + s, 10.0, 1.0, origin3);
             cbvh_cook_options o;
-            cbvh_cook_options_init(&o);
+            cbvh_cook_options_init(&o, sizeof o);
             o.max_leaf_size = leaf[l];
             cooked c;
             cook_and_check(&m, &o, &c);
@@ -745,7 +748,7 @@ static void test_quantized_vertices(void **state)
         test_mesh m;
         make_sphere(&m, 20, 30, 50.0, center);
         cbvh_cook_options o;
-        cbvh_cook_options_init(&o);
+        cbvh_cook_options_init(&o, sizeof o);
         o.vertex_format = CBVH_VERTEX_QUANTIZED16;
         cooked c;
         cook_and_check(&m, &o, &c);
@@ -810,6 +813,7 @@ static void test_weld_and_degenerate(void **state)
     void *data;
     size_t size;
     cbvh_cook_stats st;
+    cbvh_cook_stats_init(&st, sizeof st);
     cbvh_error err;
     assert_int_equal(cbvh_cook(&mesh, NULL, NULL, &data, &size, &st, &err), CBVH_OK);
     assert_int_equal(st.dropped_degenerate, 3);
@@ -851,7 +855,7 @@ static void test_remap_and_materials(void **state)
     make_soup(&m, 200, 4, 5.0, 1.0, origin3);
     m.mat = calloc(m.nt, sizeof(uint32_t));
     cbvh_cook_options o;
-    cbvh_cook_options_init(&o);
+    cbvh_cook_options_init(&o, sizeof o);
     cooked c;
     /* All equal: no MATERIALS section. */
     for (size_t t = 0; t < m.nt; t++)
@@ -892,7 +896,7 @@ static void test_determinism(void **state)
     make_soup(&m, 5000, 77, 50.0, 3.0, origin3);
     for (int variant = 0; variant < 3; variant++) {
         cbvh_cook_options o;
-        cbvh_cook_options_init(&o);
+        cbvh_cook_options_init(&o, sizeof o);
         o.compress_level = variant == 1 ? 6 : 0;
         o.vertex_format = variant == 2 ? CBVH_VERTEX_QUANTIZED16 : CBVH_VERTEX_FLOAT32;
         cooked a, b;
@@ -936,7 +940,7 @@ static void test_depth_limit(void **state)
     }
     for (uint32_t leaf = 1; leaf <= 16; leaf *= 4) {
         cbvh_cook_options o;
-        cbvh_cook_options_init(&o);
+        cbvh_cook_options_init(&o, sizeof o);
         o.max_leaf_size = leaf;
         cooked c;
         cook_and_check(&m, &o, &c);
@@ -961,7 +965,7 @@ static void test_identical_triangles(void **state)
     static const uint32_t leaf[] = { 1, 3, 16 };
     for (int i = 0; i < 3; i++) {
         cbvh_cook_options o;
-        cbvh_cook_options_init(&o);
+        cbvh_cook_options_init(&o, sizeof o);
         o.max_leaf_size = leaf[i];
         cooked c;
         cook_and_check(&m, &o, &c);
@@ -1024,7 +1028,7 @@ static void test_sah_quality(void **state)
     }
     /* Against a median build with unit costs and leaves of 4: cook with those. */
     cbvh_cook_options unit;
-    cbvh_cook_options_init(&unit);
+    cbvh_cook_options_init(&unit, sizeof unit);
     unit.traversal_cost = 1.0f;
     unit.max_leaf_size = 4;
     cooked c;
@@ -1067,6 +1071,7 @@ static void expect_error(const cbvh_mesh *mesh, const cbvh_cook_options *o, cbvh
     size_t size = 1;
     cbvh_error err;
     cbvh_cook_stats st;
+    cbvh_cook_stats_init(&st, sizeof st);
     cbvh_result r = cbvh_cook(mesh, o, NULL, &data, &size, &st, &err);
     if (r != code || err.code != code)
         fail_msg("expected %d, got %d (%s)", code, r, err.message);
@@ -1169,7 +1174,7 @@ static void test_bad_options(void **state)
     make_soup(&m, 10, 1, 1, 1, origin3);
     cbvh_mesh mesh = as_mesh(&m);
     cbvh_cook_options o;
-    cbvh_cook_options_init(&o);
+    cbvh_cook_options_init(&o, sizeof o);
     assert_int_equal(o.max_leaf_size, 16);
     assert_int_equal(o.sah_bins, 32);
     assert_true(o.traversal_cost == 4.0f && o.intersection_cost == 1.0f);
@@ -1196,6 +1201,7 @@ static void test_bad_options(void **state)
     BAD(compress_level, 10);
     BAD(keep_remap, 2);
     BAD(keep_materials, -1);
+    BAD(layout, (cbvh_layout)2);
 #undef BAD
     /* The extremes of each range are accepted. */
     static const uint32_t leaf[] = { 1, 16 }, bins[] = { 4, 256 };
@@ -1261,7 +1267,7 @@ static void test_allocation_failures(void **state)
     m.mat[1] = 2;
     for (int variant = 0; variant < 2; variant++) {
         cbvh_cook_options o;
-        cbvh_cook_options_init(&o);
+        cbvh_cook_options_init(&o, sizeof o);
         o.compress_level = variant ? 9 : 0;
         o.vertex_format = variant ? CBVH_VERTEX_QUANTIZED16 : CBVH_VERTEX_FLOAT32;
         alloc_failure_loop(&m, &o);
@@ -1270,7 +1276,7 @@ static void test_allocation_failures(void **state)
     /* Large enough for the builder's second thread, whose allocations have a fallback. */
     make_soup(&m, 70000, 12, 100, 1, origin3);
     cbvh_cook_options o;
-    cbvh_cook_options_init(&o);
+    cbvh_cook_options_init(&o, sizeof o);
     alloc_failure_loop(&m, &o);
     mesh_free(&m);
 }
@@ -1304,13 +1310,14 @@ static void test_progress(void **state)
     make_soup(&m, 140000, 5, 100, 1, origin3);
     cbvh_mesh mesh = as_mesh(&m);
     cbvh_cook_options o;
-    cbvh_cook_options_init(&o);
+    cbvh_cook_options_init(&o, sizeof o);
     progress_log log = { 0, 0, 0, { 0 } };
     o.progress = on_progress;
     o.progress_user = &log;
     void *data;
     size_t size;
     cbvh_cook_stats st;
+    cbvh_cook_stats_init(&st, sizeof st);
     assert_int_equal(cbvh_cook(&mesh, &o, NULL, &data, &size, &st, NULL), CBVH_OK);
     for (int p = 0; p < 4; p++) {
         assert_true(log.ended[p]);
@@ -1318,6 +1325,171 @@ static void test_progress(void **state)
     }
     assert_true(log.calls >= 8 && log.calls <= 400);
     cbvh_buffer_free(NULL, data);
+    mesh_free(&m);
+}
+
+/* ------------------------------------------------------------------ struct sizes */
+
+/* A progress callback that must never run: it sits past a short options struct. */
+static void progress_not_expected(void *user, cbvh_phase phase, double fraction)
+{
+    (void)user;
+    fail_msg("the library read options->progress past options->struct_size (phase %d, %g)", (int)phase, fraction);
+}
+
+#define GUARD_BYTE 0xA5
+
+static void assert_guard(const void *p, size_t from, size_t to, const char *what)
+{
+    for (size_t i = from; i < to; i++)
+        if (((const uint8_t *)p)[i] != GUARD_BYTE)
+            fail_msg("%s: byte %zu past struct_size %zu was written", what, i, from);
+}
+
+/* A program built against an older cbvh.h has shorter structs: the library reads and writes only
+ * the bytes their struct_size covers, and uses the defaults for options past them. */
+static void test_old_struct_sizes(void **state)
+{
+    (void)state;
+    test_mesh m;
+    make_soup(&m, 2000, 9, 10, 1, origin3);
+    cbvh_mesh mesh = as_mesh(&m);
+
+    /* Options covering max_leaf_size .. vertex_format; whatever lies past them must not count. */
+    const size_t short_options = offsetof(cbvh_cook_options, compress_level);
+    cbvh_cook_options o;
+    memset(&o, GUARD_BYTE, sizeof o);
+    assert_int_equal(cbvh_cook_options_init(&o, short_options), CBVH_OK);
+    assert_guard(&o, short_options, sizeof o, "cbvh_cook_options_init");
+    assert_int_equal(o.struct_size, short_options);
+    assert_int_equal(o.max_leaf_size, 16);
+    o.max_leaf_size = 3;
+    o.compress_level = 9;
+    o.keep_remap = 0;
+    o.progress = progress_not_expected;
+    /* Reference: today's whole struct with the same covered fields and the defaults past them. */
+    cbvh_cook_options whole;
+    cbvh_cook_options_init(&whole, sizeof whole);
+    whole.max_leaf_size = 3;
+
+    /* Stats covering the counts up to (not including) file_size, cooked to memory and to a path. */
+    const size_t short_stats = offsetof(cbvh_cook_stats, file_size);
+    cbvh_cook_stats st, whole_st;
+    memset(&st, GUARD_BYTE, sizeof st);
+    assert_int_equal(cbvh_cook_stats_init(&st, short_stats), CBVH_OK);
+    assert_guard(&st, short_stats, sizeof st, "cbvh_cook_stats_init");
+    cbvh_cook_stats_init(&whole_st, sizeof whole_st);
+
+    void *data, *whole_data;
+    size_t size, whole_size;
+    cbvh_error err;
+    assert_int_equal(cbvh_cook(&mesh, &o, NULL, &data, &size, &st, &err), CBVH_OK);
+    assert_int_equal(cbvh_cook(&mesh, &whole, NULL, &whole_data, &whole_size, &whole_st, &err), CBVH_OK);
+    assert_int_equal(size, whole_size);
+    assert_memory_equal(data, whole_data, size); /* raw, with remap: nothing past struct_size was read */
+    assert_guard(&st, short_stats, sizeof st, "cbvh_cook");
+    assert_int_equal(st.struct_size, short_stats);
+    assert_memory_equal((const uint8_t *)&st + sizeof st.struct_size,
+                        (const uint8_t *)&whole_st + sizeof whole_st.struct_size, short_stats - sizeof st.struct_size);
+    assert_true(st.triangles > 0 && st.nodes > 0);
+
+    /* cbvh_cook_to_path adds its write time to seconds, which this caller's struct does not have. */
+    char dir[512], path[600];
+    test_temp_dir(dir, sizeof dir, "cbvh_sizes");
+    snprintf(path, sizeof path, "%s/out.cbvh", dir);
+    memset(&st, GUARD_BYTE, sizeof st);
+    cbvh_cook_stats_init(&st, short_stats);
+    assert_int_equal(cbvh_cook_to_path(&mesh, &o, NULL, path, &st, &err), CBVH_OK);
+    assert_guard(&st, short_stats, sizeof st, "cbvh_cook_to_path");
+    assert_int_equal(st.nodes, whole_st.nodes);
+    unlink(path);
+    rmdir(dir);
+
+    /* A program built before the layout field: its options end at progress_user, and the default layout
+     * (binary) applies whatever lies past them. */
+    cbvh_buffer_free(NULL, data);
+    memset(&o, GUARD_BYTE, sizeof o);
+    cbvh_cook_options_init(&o, offsetof(cbvh_cook_options, layout));
+    o.max_leaf_size = 3;
+    o.layout = CBVH_LAYOUT_WIDE4;
+    assert_int_equal(cbvh_cook(&mesh, &o, NULL, &data, &size, NULL, &err), CBVH_OK);
+    assert_int_equal(size, whole_size);
+    assert_memory_equal(data, whole_data, size);
+
+    cbvh_buffer_free(NULL, data);
+    cbvh_buffer_free(NULL, whole_data);
+    mesh_free(&m);
+}
+
+/* Expects cbvh_cook to refuse `o` and `st` with a message holding `a` and `b`, writing no output. */
+static void expect_size_error(const cbvh_mesh *mesh, const cbvh_cook_options *o, cbvh_cook_stats *st,
+                              const char *a, const char *b)
+{
+    void *data = (void *)1;
+    size_t size = 1;
+    cbvh_error err;
+    cbvh_cook_stats before;
+    if (st)
+        memcpy(&before, st, sizeof before);
+    assert_int_equal(cbvh_cook(mesh, o, NULL, &data, &size, st, &err), CBVH_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(err.code, CBVH_ERROR_INVALID_ARGUMENT);
+    assert_null(data);
+    assert_int_equal(size, 0);
+    if (!strstr(err.message, a) || !strstr(err.message, b))
+        fail_msg("message '%s' lacks '%s' or '%s'", err.message, a, b);
+    if (st)
+        assert_memory_equal(&before, st, sizeof before);
+}
+
+/* A struct_size of zero, of a pointer, or past this library's struct is an invalid argument. */
+static void test_bad_struct_sizes(void **state)
+{
+    (void)state;
+    test_mesh m;
+    make_soup(&m, 50, 10, 10, 1, origin3);
+    cbvh_mesh mesh = as_mesh(&m);
+    cbvh_cook_options o;
+    cbvh_cook_stats st;
+    char expect[160];
+
+    assert_int_equal(cbvh_cook_options_init(NULL, sizeof o), CBVH_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(cbvh_cook_stats_init(NULL, sizeof st), CBVH_ERROR_INVALID_ARGUMENT);
+
+    /* Too small to hold struct_size itself: nothing is written. */
+    memset(&o, GUARD_BYTE, sizeof o);
+    assert_int_equal(cbvh_cook_options_init(&o, 0), CBVH_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(cbvh_cook_options_init(&o, sizeof o.struct_size - 1), CBVH_ERROR_INVALID_ARGUMENT);
+    assert_guard(&o, 0, sizeof o, "cbvh_cook_options_init with size 0");
+    memset(&st, GUARD_BYTE, sizeof st);
+    assert_int_equal(cbvh_cook_stats_init(&st, 0), CBVH_ERROR_INVALID_ARGUMENT);
+    assert_guard(&st, 0, sizeof st, "cbvh_cook_stats_init with size 0");
+
+    /* sizeof a pointer (a common slip) holds the size but no field: recorded, refused, explained. */
+    cbvh_cook_options_init(&o, sizeof &o);
+    assert_int_equal(o.struct_size, sizeof &o);
+    assert_guard(&o, sizeof o.struct_size, sizeof o, "cbvh_cook_options_init with sizeof a pointer");
+    snprintf(expect, sizeof expect, "options->struct_size is %zu; it must be %zu to %zu", sizeof &o,
+             offsetof(cbvh_cook_options, max_leaf_size) + sizeof o.max_leaf_size, sizeof o);
+    expect_size_error(&mesh, &o, NULL, expect, "cbvh_cook_options_init(options, sizeof *options)");
+    o.struct_size = 0;
+    expect_size_error(&mesh, &o, NULL, "options->struct_size is 0;", "cbvh_cook_options_init");
+
+    /* Larger than this library's struct: a program built against a newer header. */
+    assert_int_equal(cbvh_cook_options_init(&o, sizeof o + 8), CBVH_ERROR_INVALID_ARGUMENT);
+    snprintf(expect, sizeof expect, "options->struct_size is %zu, larger than this library's cbvh_cook_options",
+             sizeof o + 8);
+    expect_size_error(&mesh, &o, NULL, expect, "newer cbvh.h");
+
+    /* Stats: checked before any work, and left as they were. */
+    cbvh_cook_options_init(&o, sizeof o);
+    cbvh_cook_stats_init(&st, sizeof st);
+    st.struct_size = offsetof(cbvh_cook_stats, input_triangles);
+    expect_size_error(&mesh, &o, &st, "stats->struct_size is", "cbvh_cook_stats_init(stats, sizeof *stats)");
+    st.struct_size = sizeof st + 1;
+    expect_size_error(&mesh, &o, &st, "stats->struct_size is", "newer cbvh.h");
+    assert_int_equal(cbvh_cook_to_path(&mesh, &o, NULL, "/tmp/cbvh-never-written.cbvh", &st, NULL),
+                     CBVH_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(access("/tmp/cbvh-never-written.cbvh", F_OK), -1);
     mesh_free(&m);
 }
 
@@ -1353,10 +1525,8 @@ static uint8_t *read_whole(const char *path, size_t *size)
 static void test_cook_to_path(void **state)
 {
     (void)state;
-    const char *tmp = getenv("TMPDIR");
     char dir[512];
-    snprintf(dir, sizeof dir, "%s/test_cook.XXXXXX", tmp && *tmp ? tmp : "/tmp");
-    assert_non_null(mkdtemp(dir));
+    test_temp_dir(dir, sizeof dir, "test_cook");
     char path[600], missing[600];
     snprintf(path, sizeof path, "%s/out.cbvh", dir);
     snprintf(missing, sizeof missing, "%s/no/such/dir/out.cbvh", dir);
@@ -1373,6 +1543,7 @@ static void test_cook_to_path(void **state)
     fputs("old content", f);
     fclose(f);
     cbvh_cook_stats st;
+    cbvh_cook_stats_init(&st, sizeof st);
     cbvh_error err;
     assert_int_equal(cbvh_cook_to_path(&mesh, NULL, NULL, path, &st, &err), CBVH_OK);
     size_t size;
@@ -1401,7 +1572,7 @@ static void test_cook_to_path(void **state)
     /* A destination that is a folder: rename fails, the temporary file is removed. */
     char sub[600];
     snprintf(sub, sizeof sub, "%s/sub", dir);
-    assert_int_equal(mkdir(sub, 0700), 0);
+    assert_int_equal(test_mkdir(sub), 0);
     char inner[700];
     snprintf(inner, sizeof inner, "%s/x", sub);
     f = fopen(inner, "wb");
@@ -1437,7 +1608,7 @@ static void round_trip(const test_mesh *m, const cbvh_cook_options *o)
     cook_and_check(m, o, &c);
     cbvh_file *file = open_cooked(&c);
     cbvh_file_info info;
-    cbvh_file_get_info(file, &info);
+    cbvh_file_get_info(file, &info, sizeof info);
     assert_int_equal(info.format_version, 1);
     assert_int_equal(info.triangle_count, c.stats.triangles);
     assert_int_equal(info.vertex_count, c.stats.vertices);
@@ -1484,7 +1655,7 @@ static void test_loader_round_trip(void **state)
     for (int i = 0; i < 3; i++) {
         for (int variant = 0; variant < 3; variant++) {
             cbvh_cook_options o;
-            cbvh_cook_options_init(&o);
+            cbvh_cook_options_init(&o, sizeof o);
             o.compress_level = variant == 1 ? 4 : 0;
             o.vertex_format = variant == 2 ? CBVH_VERTEX_QUANTIZED16 : CBVH_VERTEX_FLOAT32;
             round_trip(&meshes[i], &o);
@@ -1508,7 +1679,7 @@ static void test_quantized_collapse(void **state)
     test_mesh m = { pos, idx, NULL, 10, 6 };
     for (int q = 0; q < 2; q++) {
         cbvh_cook_options o;
-        cbvh_cook_options_init(&o);
+        cbvh_cook_options_init(&o, sizeof o);
         o.vertex_format = q ? CBVH_VERTEX_QUANTIZED16 : CBVH_VERTEX_FLOAT32;
         cooked c;
         cook_and_check(&m, &o, &c);
@@ -1516,7 +1687,7 @@ static void test_quantized_collapse(void **state)
         assert_int_equal(c.stats.triangles, q ? 4 : 6);
         cbvh_file *file = open_cooked(&c);
         cbvh_file_info info;
-        cbvh_file_get_info(file, &info);
+        cbvh_file_get_info(file, &info, sizeof info);
         for (int a = 0; a < 3; a++)
             assert_true(q ? info.bounds_max[a] < 4.25f : info.bounds_max[a] == 4.5f);
         for (uint32_t t = 0; t < 6; t++) {
@@ -1557,6 +1728,8 @@ int main(void)
         cmocka_unit_test(test_bad_options),
         cmocka_unit_test(test_allocation_failures),
         cmocka_unit_test(test_progress),
+        cmocka_unit_test(test_old_struct_sizes),
+        cmocka_unit_test(test_bad_struct_sizes),
         cmocka_unit_test(test_cook_to_path),
         cmocka_unit_test(test_loader_round_trip),
         cmocka_unit_test(test_quantized_collapse),

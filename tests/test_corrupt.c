@@ -1,4 +1,4 @@
-/* test_corrupt.c: exhaustive structured corruption of small cooked files: every truncation, every byte of header, table and nodes changed, sections moved, overlapped and pointed past the end. */
+/* test_corrupt.c: exhaustive structured corruption of small cooked files in both node layouts: every truncation, every byte of header, table and nodes changed, sections moved, overlapped and pointed past the end. */
 #include <math.h>
 #include <setjmp.h>
 #include <signal.h>
@@ -16,17 +16,19 @@
 #include "fuzz/file_edit.h"
 #include "fuzz/fuzz_support.h"
 #include "support/scene_gen.h"
+#include "support/test_os.h"
 
 enum { HDR_VERSION = 8, HDR_COMPAT = 16, HDR_INCOMPAT = 20, HDR_SECTION_COUNT = 24, HDR_RESERVED = 112,
        TABLE = 128, ENTRY = 40, E_TYPE = 0, E_CODEC = 4, E_OFFSET = 8, E_STORED = 16, E_SIZE = 24, E_ENCODING = 36 };
 
-/* A small valid file of each kind, cooked once. */
+/* A small valid file of each kind, cooked once: raw, zlib and quantized, in each node layout. */
 typedef struct sample {
     const char *name;
     uint8_t *bytes;
     size_t size;
 } sample;
-static sample samples[3];
+enum { SAMPLE_COUNT = 6 };
+static sample samples[SAMPLE_COUNT];
 
 /* Outcome counts, printed at the end for the robustness report. */
 typedef struct tally {
@@ -39,6 +41,9 @@ static uint64_t rd64(const uint8_t *p) { return (uint64_t)rd32(p) | (uint64_t)rd
 static void wr32(uint8_t *p, uint32_t v) { for (int i = 0; i < 4; i++) p[i] = (uint8_t)(v >> (8 * i)); }
 static void wr64(uint8_t *p, uint64_t v) { wr32(p, (uint32_t)v); wr32(p + 4, (uint32_t)(v >> 32)); }
 
+/* A watchdog turns a hang into a failure; Windows has no alarm(), so there a hang shows as the run's timeout. */
+#ifdef SIGALRM
+#define WATCHDOG(seconds) alarm(seconds)
 static void on_alarm(int sig)
 {
     (void)sig;
@@ -47,8 +52,11 @@ static void on_alarm(int sig)
         _exit(3);
     _exit(3);
 }
+#else
+#define WATCHDOG(seconds) ((void)0)
+#endif
 
-static int cook_sample(sample *s, const char *name, int quantized, int level)
+static int cook_sample(sample *s, const char *name, cbvh_layout layout, int quantized, int level)
 {
     scene sc;
     float c[3] = { 1.0f, 2.0f, -3.0f };
@@ -59,13 +67,14 @@ static int cook_sample(sample *s, const char *name, int quantized, int level)
         sc.material_ids[t] = (uint32_t)(t % 5);
     cbvh_mesh m = { sc.positions, sc.vertex_count, 0, sc.indices, sc.triangle_count, sc.material_ids };
     cbvh_cook_options o;
-    cbvh_cook_options_init(&o);
+    cbvh_cook_options_init(&o, sizeof o);
     /* The cook defaults of the samples' first layout (leaves of 4, unit costs): the structural
      * edits assume, e.g., that no section starts at the 64-byte boundary below the file's end. */
     o.max_leaf_size = 4;
     o.traversal_cost = 1.0f;
     o.vertex_format = quantized ? CBVH_VERTEX_QUANTIZED16 : CBVH_VERTEX_FLOAT32;
     o.compress_level = level;
+    o.layout = layout;
     void *out = NULL;
     cbvh_result r = cbvh_cook(&m, &o, NULL, &out, &s->size, NULL, NULL);
     scene_free(&sc);
@@ -81,8 +90,13 @@ static int cook_sample(sample *s, const char *name, int quantized, int level)
 static int group_setup(void **state)
 {
     (void)state;
+#ifdef SIGALRM
     signal(SIGALRM, on_alarm);
-    if (cook_sample(&samples[0], "raw", 0, 0) || cook_sample(&samples[1], "zlib", 0, 6) || cook_sample(&samples[2], "quantized", 1, 0))
+#endif
+    const cbvh_layout b = CBVH_LAYOUT_BINARY, w = CBVH_LAYOUT_WIDE4;
+    if (cook_sample(&samples[0], "raw", b, 0, 0) || cook_sample(&samples[1], "zlib", b, 0, 6) ||
+        cook_sample(&samples[2], "quantized", b, 1, 0) || cook_sample(&samples[3], "w4-raw", w, 0, 0) ||
+        cook_sample(&samples[4], "w4-zlib", w, 0, 6) || cook_sample(&samples[5], "w4-q16", w, 1, 0))
         return -1;
     return 0;
 }
@@ -90,7 +104,7 @@ static int group_setup(void **state)
 static int group_teardown(void **state)
 {
     (void)state;
-    for (int i = 0; i < 3; i++)
+    for (int i = 0; i < SAMPLE_COUNT; i++)
         free(samples[i].bytes);
     printf("corruption totals: %zu files tried: %zu rejected corrupt, %zu unsupported, %zu other errors, %zu benign opened\n",
            totals.tried, totals.corrupt, totals.unsupported, totals.other_error, totals.opened);
@@ -105,7 +119,7 @@ static cbvh_result try_open(const uint8_t *bytes, size_t size, tally *t)
     guard_copy(&g, bytes, size);
     cbvh_file *f = NULL;
     cbvh_error err;
-    alarm(20);
+    WATCHDOG(20);
     cbvh_result r = cbvh_open_memory(g.data, size, NULL, &f, &err);
     t->tried++;
     if (r == CBVH_OK) {
@@ -121,7 +135,7 @@ static cbvh_result try_open(const uint8_t *bytes, size_t size, tally *t)
         else
             t->other_error++;
     }
-    alarm(0);
+    WATCHDOG(0);
     guard_release(&g);
     return r;
 }
@@ -150,7 +164,7 @@ static void assert_same_answers(const uint8_t *a, size_t na, const uint8_t *b, s
     assert_int_equal(cbvh_open_memory(a, na, NULL, &fa, NULL), CBVH_OK);
     assert_int_equal(cbvh_open_memory(b, nb, NULL, &fb, NULL), CBVH_OK);
     cbvh_file_info info;
-    cbvh_file_get_info(fa, &info);
+    cbvh_file_get_info(fa, &info, sizeof info);
     uint64_t rng = 99;
     for (int i = 0; i < 256; i++) {
         cbvh_ray r;
@@ -173,24 +187,51 @@ static void assert_same_answers(const uint8_t *a, size_t na, const uint8_t *b, s
     cbvh_close(fb);
 }
 
+/* A file cut to `len` bytes is damaged, never valid-but-newer nor anything else: CBVH_ERROR_CORRUPT. */
+static void expect_truncation_corrupt(const uint8_t *bytes, size_t len, const char *how, tally *t)
+{
+    cbvh_result r = try_open(bytes, len, t);
+    if (r != CBVH_ERROR_CORRUPT)
+        fail_msg("truncated to %zu bytes (%s): %s, expected %s", len, how, cbvh_result_string(r),
+                 cbvh_result_string(CBVH_ERROR_CORRUPT));
+}
+
 static void test_truncation(void **state)
 {
     (void)state;
-    for (int s = 0; s < 3; s++) {
+    for (int s = 0; s < SAMPLE_COUNT; s++) {
         tally t = { 0 };
         for (size_t len = 0; len < samples[s].size; len++)
-            assert_int_not_equal(try_open(samples[s].bytes, len, &t), CBVH_OK);
+            expect_truncation_corrupt(samples[s].bytes, len, "as cut", &t);
         /* truncated with the size field and CRCs made to match the shorter file */
         uint8_t *copy = malloc(samples[s].size);
         for (size_t len = 128; len < samples[s].size; len++) {
             memcpy(copy, samples[s].bytes, len);
             fuzz_repair_checksums(copy, len);
-            assert_int_not_equal(try_open(copy, len, &t), CBVH_OK);
+            expect_truncation_corrupt(copy, len, "with repaired size and CRCs", &t);
         }
         free(copy);
         assert_int_equal(t.opened, 0);
         print_tally("truncated", samples[s].name, &t);
     }
+}
+
+/* Byte `at` of a wide4 node changed (spec section 5.2): first_child and first_triangle must equal running
+ * counts and an unused slot must be all zero, so changing them is corrupt; the octant orders (meta bits
+ * 24..63, bytes 59..63) only order the visit and are valid while every index is below 24. */
+static int expected_wide4_node(const uint8_t *orig, const uint8_t *mut, size_t at)
+{
+    const uint64_t meta = rd64(mut + 56);
+    if (at < 48 && !(rd64(orig + 56) >> (16 + at % 8 / 2) & 1u))
+        return CBVH_ERROR_CORRUPT;
+    if (at >= 48 && at < 56)
+        return CBVH_ERROR_CORRUPT;
+    if (at < 59)
+        return -1;
+    for (int k = 0; k < 8; k++)
+        if ((meta >> (24 + 5 * k) & 31u) >= 24)
+            return CBVH_ERROR_CORRUPT;
+    return CBVH_OK;
 }
 
 /* Where a byte change with repaired checksums must land: -1 any outcome
@@ -216,16 +257,22 @@ static int expected_code(const uint8_t *orig, const uint8_t *mut, size_t pos)
         if (field < 4 && !(rd32(e) & 0x80000000u) && rd32(e) > 5)
             return CBVH_ERROR_UNSUPPORTED;
         if (field >= E_ENCODING) {
-            static const uint32_t known[6] = { 0, 1, 3, 2, 2, 3 }; /* encodings per type 1..5 */
+            static const uint32_t known[6] = { 0, 2, 3, 2, 2, 3 }; /* encodings per type 1..5 (NODES: binary, wide4) */
             uint32_t type = rd32(e), enc = rd32(e + E_ENCODING);
             if (type >= 1 && type <= 5 && enc >= known[type])
                 return CBVH_ERROR_UNSUPPORTED;
         }
         return -1;
     }
-    /* the sort byte (bits 23..30) of an internal node changes only the visit order */
     uint64_t noff = rd64(orig + TABLE + E_OFFSET), nend = noff + rd64(orig + TABLE + E_STORED);
-    if (rd32(orig + TABLE + E_TYPE) == 1 && rd32(orig + TABLE + E_CODEC) == 0 && pos >= noff && pos < nend && (pos - noff) % 16 >= 12) {
+    if (rd32(orig + TABLE + E_TYPE) != 1 || rd32(orig + TABLE + E_CODEC) != 0 || pos < noff || pos >= nend)
+        return -1;
+    if (rd32(orig + TABLE + E_ENCODING) == 1) {
+        size_t node = (size_t)(noff + (pos - noff) / 64 * 64);
+        return expected_wide4_node(orig + node, mut + node, (size_t)(pos - noff) % 64);
+    }
+    /* the sort byte (bits 23..30) of an internal node changes only the visit order */
+    if ((pos - noff) % 16 >= 12) {
         size_t word_at = (size_t)(noff + (pos - noff) / 16 * 16 + 12);
         uint32_t before = rd32(orig + word_at), after = rd32(mut + word_at);
         if (!(before & 0x80000000u) && ((before ^ after) & ~0x7F800000u) == 0)
@@ -267,7 +314,7 @@ static void flip_range(const sample *s, size_t lo, size_t hi, size_t samples_wan
 static void test_byte_changes(void **state)
 {
     (void)state;
-    for (int i = 0; i < 3; i++) {
+    for (int i = 0; i < SAMPLE_COUNT; i++) {
         const sample *s = &samples[i];
         uint32_t count = rd32(s->bytes + HDR_SECTION_COUNT);
         tally as_is = { 0 }, repaired = { 0 }, as_is_s = { 0 }, repaired_s = { 0 };
@@ -374,7 +421,7 @@ static void edit_append(uint8_t *b, size_t *n, void *arg)
 static void test_structure(void **state)
 {
     (void)state;
-    for (int i = 0; i < 3; i++) {
+    for (int i = 0; i < SAMPLE_COUNT; i++) {
         const sample *s = &samples[i];
         tally t = { 0 }, benign = { 0 };
         int count = (int)rd32(s->bytes + HDR_SECTION_COUNT);
@@ -391,14 +438,14 @@ static void test_structure(void **state)
                 past_end p3 = { k, UINT64_MAX, big[j], big[j] };                   /* runs past, sizes agree */
                 past_end p4 = { k, UINT64_MAX, UINT64_MAX, big[j] };               /* declared size huge */
                 if (p1.offset != rd64(s->bytes + TABLE + (size_t)k * ENTRY + E_OFFSET)) /* else no change */
-                    assert_int_not_equal(open_table_edit(s, &t, edit_past_end, &p1), CBVH_OK);
-                assert_int_not_equal(open_table_edit(s, &t, edit_past_end, &p2), CBVH_OK);
-                assert_int_not_equal(open_table_edit(s, &t, edit_past_end, &p3), CBVH_OK);
-                assert_int_not_equal(open_table_edit(s, &t, edit_past_end, &p4), CBVH_OK);
+                    assert_int_equal(open_table_edit(s, &t, edit_past_end, &p1), CBVH_ERROR_CORRUPT);
+                assert_int_equal(open_table_edit(s, &t, edit_past_end, &p2), CBVH_ERROR_CORRUPT);
+                assert_int_equal(open_table_edit(s, &t, edit_past_end, &p3), CBVH_ERROR_CORRUPT);
+                assert_int_equal(open_table_edit(s, &t, edit_past_end, &p4), CBVH_ERROR_CORRUPT);
             }
         const uint32_t counts[] = { 0, 1, 2, (uint32_t)count - 1, (uint32_t)count + 1, 16, 17, 0xFFFFFFFFu };
         for (size_t j = 0; j < sizeof counts / sizeof counts[0]; j++)
-            assert_int_not_equal(open_table_edit(s, &t, edit_count, (void *)&counts[j]), CBVH_OK);
+            assert_int_equal(open_table_edit(s, &t, edit_count, (void *)&counts[j]), CBVH_ERROR_CORRUPT);
         const size_t extras[] = { 1, 63, 64, 4096 };
         for (size_t j = 0; j < sizeof extras / sizeof extras[0]; j++)
             assert_int_equal(open_table_edit(s, &t, edit_append, (void *)&extras[j]), CBVH_ERROR_CORRUPT);
@@ -480,7 +527,22 @@ static void test_structure(void **state)
             assert_int_equal(open_edit(&e, &t, NULL, NULL), CBVH_ERROR_CORRUPT);
             memcpy(e.s[vi].data + 4, saved, 4);
         }
-        for (uint32_t n = 0; n < rd32(e.header + 40); n++) {
+        for (uint32_t n = 0; e.s[ni].encoding == 1 && n < rd32(e.header + 40); n++) {
+            uint8_t *node = e.s[ni].data + 64 * n; /* wide4: the first node with a leaf slot */
+            const uint64_t meta = rd64(node + 56);
+            const uint32_t first_triangle = rd32(node + 52), leaves = (uint32_t)(meta >> 16 & ~(meta >> 20)) & 15u;
+            if (!leaves)
+                continue;
+            const int slot = leaves & 1u ? 0 : leaves & 2u ? 1 : leaves & 4u ? 2 : 3;
+            wr32(node + 52, tcount + 1); /* first triangle past the end */
+            assert_int_equal(open_edit(&e, &t, NULL, NULL), CBVH_ERROR_CORRUPT);
+            wr32(node + 52, first_triangle);
+            wr64(node + 56, meta | 7ull << 4 * slot); /* 8 triangles: more than max_leaf_size 4 */
+            assert_int_equal(open_edit(&e, &t, NULL, NULL), CBVH_ERROR_CORRUPT);
+            wr64(node + 56, meta);
+            break;
+        }
+        for (uint32_t n = 0; e.s[ni].encoding == 0 && n < rd32(e.header + 40); n++) {
             uint8_t *w = e.s[ni].data + 16 * n + 12;
             uint32_t word = rd32(w);
             if (!(word & 0x80000000u))
@@ -513,8 +575,8 @@ static void test_structure(void **state)
 static void test_paths(void **state)
 {
     (void)state;
-    char dir[] = "/tmp/cbvh_corrupt_XXXXXX";
-    assert_non_null(mkdtemp(dir));
+    char dir[200];
+    test_temp_dir(dir, sizeof dir, "cbvh_corrupt");
     char path[256];
     snprintf(path, sizeof path, "%s/f.cbvh", dir);
     const sample *s = &samples[1];
@@ -532,6 +594,7 @@ static void test_paths(void **state)
             cbvh_close(f);
         } else {
             fuzz_check_error(r, &err);
+            assert_int_equal(r, CBVH_ERROR_CORRUPT);
         }
     }
     cbvh_file *f = NULL;

@@ -1,4 +1,4 @@
-/* test_crc32.c: the loader's CRC32 (carry-less multiply kernel plus zlib tail) against zlib's crc32 itself. */
+/* test_crc32.c: the CRC32 (carry-less multiply kernel plus zlib tail) against zlib's crc32 itself. */
 #include <stdarg.h>
 #include <stddef.h>
 #include <setjmp.h>
@@ -7,7 +7,7 @@
 #include <cmocka.h>
 #include <zlib.h>
 
-#include "load/load.h"
+#include "common/crc32.h"
 
 static uint64_t rng_state = 0x1234567887654321ull;
 static uint8_t next_byte(void)

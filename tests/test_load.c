@@ -16,6 +16,7 @@
 
 #include "cbvh.h"
 #include "support/counting_alloc.h"
+#include "support/test_os.h"
 
 /* ------------------------------------------------------------------ inputs */
 
@@ -44,13 +45,14 @@ static input load_vector(const char *name)
     FILE *fp = fopen(vector_path(name), "rb");
     if (!fp)
         fail_msg("cannot open %s", vector_path(name));
-    assert_int_equal(posix_memalign((void **)&in.data, 64, 1 << 16), 0);
+    assert_non_null(in.data = test_aligned_alloc(1 << 16, 64));
     in.size = fread(in.data, 1, 1 << 16, fp);
     assert_true(feof(fp));
     fclose(fp);
     return in;
 }
 
+#if CBVH_HAVE_COOKER /* the cooked-file tests; a runtime-only build skips them */
 /* A random mesh: positions in a box, random indices (a few triangles come out degenerate and are dropped). */
 typedef struct random_mesh {
     float *positions;
@@ -96,7 +98,7 @@ static input cook_input(const char *name, const random_mesh *m, int compress, cb
                         int keep_remap)
 {
     cbvh_cook_options o;
-    cbvh_cook_options_init(&o);
+    cbvh_cook_options_init(&o, sizeof o);
     o.compress_level = compress;
     o.vertex_format = format;
     o.keep_remap = keep_remap;
@@ -107,14 +109,17 @@ static input cook_input(const char *name, const random_mesh *m, int compress, cb
     if (r != CBVH_OK)
         fail_msg("cook %s: %s", name, err.message);
     input in = { name, NULL, size };
-    assert_int_equal(posix_memalign((void **)&in.data, 64, size), 0);
+    assert_non_null(in.data = test_aligned_alloc(size, 64));
     memcpy(in.data, data, size);
     cbvh_buffer_free(NULL, data);
     return in;
 }
+#endif
 
 static const char *const valid_vectors[] = { "good-box-raw", "good-box-zlib", "good-box-q16",
-                                             "good-remap-u32-materials-u32-zlib", "good-single-triangle" };
+                                             "good-remap-u32-materials-u32-zlib", "good-single-triangle",
+                                             "good-w4-box-leaf1", "good-w4-remap-u32-materials-u32-zlib",
+                                             "good-w4-single-triangle" };
 #define VALID_VECTOR_COUNT (sizeof valid_vectors / sizeof valid_vectors[0])
 
 /* ------------------------------------------------------------------ comparisons */
@@ -122,8 +127,8 @@ static const char *const valid_vectors[] = { "good-box-raw", "good-box-zlib", "g
 static void assert_same_info(const cbvh_file *a, const cbvh_file *b)
 {
     cbvh_file_info x, y;
-    cbvh_file_get_info(a, &x);
-    cbvh_file_get_info(b, &y);
+    cbvh_file_get_info(a, &x, sizeof x);
+    cbvh_file_get_info(b, &y, sizeof y);
     assert_int_equal(x.format_version, y.format_version);
     assert_int_equal(x.section_count, y.section_count);
     assert_int_equal(x.triangle_count, y.triangle_count);
@@ -161,7 +166,7 @@ static void assert_same_info(const cbvh_file *a, const cbvh_file *b)
 static void touch_everything(const cbvh_file *f)
 {
     cbvh_file_info info;
-    cbvh_file_get_info(f, &info);
+    cbvh_file_get_info(f, &info, sizeof info);
     double sum = 0;
     for (uint32_t id = 0; id < info.triangle_count * 2u + 2u; id++) {
         float v[3][3];
@@ -201,7 +206,7 @@ static void test_path_and_memory_agree(void **state)
         assert_same_info(by_path, by_memory);
         cbvh_close(by_path);
         cbvh_close(by_memory);
-        free(in.data);
+        test_aligned_free(in.data);
     }
 }
 
@@ -218,7 +223,7 @@ static void test_unaligned_buffer(void **state)
     assert_int_equal(open_counted(in.data, in.size, -1, &c, &aligned, &err), CBVH_OK);
     size_t in_place_bytes = c.live_bytes;
     cbvh_file_info info;
-    cbvh_file_get_info(aligned, &info);
+    cbvh_file_get_info(aligned, &info, sizeof info);
     uint64_t known = 0;
     for (uint32_t i = 0; i < info.section_count; i++) {
         cbvh_section_info s;
@@ -241,7 +246,7 @@ static void test_unaligned_buffer(void **state)
     cbvh_close(aligned);
     assert_int_equal(c.live, 0);
     free(shifted);
-    free(in.data);
+    test_aligned_free(in.data);
 }
 
 /* Every prefix of a valid file is corrupt, cleanly, without leaks. */
@@ -267,7 +272,7 @@ static void test_truncations(void **state)
     for (size_t i = 0; i < VALID_VECTOR_COUNT; i++) {
         input in = load_vector(valid_vectors[i]);
         check_truncations(&in, 1);
-        free(in.data);
+        test_aligned_free(in.data);
     }
 }
 
@@ -289,7 +294,7 @@ static void test_flipped_bytes(void **state)
             in.data[i] ^= (uint8_t)(1u << bit);
         }
     }
-    free(in.data);
+    test_aligned_free(in.data);
 }
 
 /* Recomputes every CRC of a file, so a change reaches the structural checks behind them. */
@@ -345,11 +350,12 @@ static void check_changes(const input *in, size_t from)
 static void test_changes_behind_crcs(void **state)
 {
     (void)state;
-    static const char *const names[] = { "good-box-raw", "good-remap-u32-materials-u32-zlib", "good-box-delta16" };
+    static const char *const names[] = { "good-box-raw", "good-remap-u32-materials-u32-zlib", "good-box-delta16",
+                                         "good-w4-box-leaf1", "good-w4-remap-u32-materials-u32-zlib" };
     for (size_t i = 0; i < sizeof names / sizeof names[0]; i++) {
         input in = load_vector(names[i]);
         check_changes(&in, 12); /* everything after the magic and the version */
-        free(in.data);
+        test_aligned_free(in.data);
     }
 }
 
@@ -373,8 +379,55 @@ static void test_allocation_failures(void **state)
         memcpy(shifted + 1, in.data, in.size);
         check_allocation_failures(shifted + 1, in.size, NULL);
         free(shifted);
-        free(in.data);
+        test_aligned_free(in.data);
     }
+}
+
+/* cbvh_file_get_info writes only the bytes the caller's size covers (a program built against an older
+ * cbvh.h has a shorter struct) and refuses sizes out of range without writing anything. */
+static void test_info_struct_size(void **state)
+{
+    (void)state;
+    input in = load_vector("good-box-raw");
+    cbvh_file *f;
+    assert_int_equal(cbvh_open_memory(in.data, in.size, NULL, &f, NULL), CBVH_OK);
+    cbvh_file_info whole, part;
+    assert_int_equal(cbvh_file_get_info(f, &whole, sizeof whole), CBVH_OK);
+    assert_int_equal(whole.struct_size, sizeof whole);
+    assert_true(whole.triangle_count > 0 && whole.node_count > 0);
+
+    const size_t short_size = offsetof(cbvh_file_info, depth); /* through node_count */
+    memset(&part, 0xA5, sizeof part);
+    assert_int_equal(cbvh_file_get_info(f, &part, short_size), CBVH_OK);
+    assert_int_equal(part.struct_size, short_size);
+    assert_int_equal(part.node_count, whole.node_count);
+    assert_memory_equal((const uint8_t *)&part + sizeof part.struct_size,
+                        (const uint8_t *)&whole + sizeof whole.struct_size, short_size - sizeof whole.struct_size);
+    for (size_t i = short_size; i < sizeof part; i++)
+        if (((const uint8_t *)&part)[i] != 0xA5)
+            fail_msg("byte %zu past struct_size %zu was written", i, short_size);
+
+    /* A program built before the layout field. */
+    memset(&part, 0xA5, sizeof part);
+    assert_int_equal(cbvh_file_get_info(f, &part, offsetof(cbvh_file_info, layout)), CBVH_OK);
+    assert_int_equal(part.triangle_count, whole.triangle_count);
+    assert_true(part.grid_scale[2] == whole.grid_scale[2]);
+    for (size_t i = offsetof(cbvh_file_info, layout); i < sizeof part; i++)
+        if (((const uint8_t *)&part)[i] != 0xA5)
+            fail_msg("byte %zu past struct_size %zu was written", i, offsetof(cbvh_file_info, layout));
+
+    const size_t bad[] = { 0, 1, sizeof(size_t), offsetof(cbvh_file_info, format_version) + 3, sizeof part + 1,
+                           sizeof part + 4096 };
+    for (size_t k = 0; k < sizeof bad / sizeof bad[0]; k++) {
+        memset(&part, 0xA5, sizeof part);
+        assert_int_equal(cbvh_file_get_info(f, &part, bad[k]), CBVH_ERROR_INVALID_ARGUMENT);
+        for (size_t i = 0; i < sizeof part; i++)
+            if (((const uint8_t *)&part)[i] != 0xA5)
+                fail_msg("struct_size %zu refused, yet byte %zu was written", bad[k], i);
+    }
+    assert_int_equal(cbvh_file_get_info(f, NULL, sizeof whole), CBVH_ERROR_INVALID_ARGUMENT);
+    cbvh_close(f);
+    free(in.data);
 }
 
 static void test_arguments(void **state)
@@ -396,40 +449,141 @@ static void test_arguments(void **state)
     cbvh_close(f);
     cbvh_close(NULL);
     cbvh_file_info info;
-    cbvh_file_get_info(NULL, &info);
+    memset(&info, 0xA5, sizeof info);
+    assert_int_equal(cbvh_file_get_info(NULL, &info, sizeof info), CBVH_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(info.struct_size, sizeof info);
     assert_int_equal(info.triangle_count, 0);
     float v[3][3];
     assert_int_equal(cbvh_file_get_triangle(NULL, 0, v[0], v[1], v[2]), 0);
     assert_int_equal(cbvh_file_get_material(NULL, 0), 0);
     assert_int_equal(cbvh_file_get_section(NULL, 0, NULL), 0);
-    free(in.data);
+    test_aligned_free(in.data);
 }
 
+/* Both ways of opening a path report the same errors. */
 static void test_path_errors(void **state)
 {
     (void)state;
-    char dir[] = "/tmp/cbvh-test-load-XXXXXX";
-    assert_non_null(mkdtemp(dir));
+    cbvh_result (*const opens[])(const char *, const cbvh_allocator *, cbvh_file **, cbvh_error *) = {
+        cbvh_open_path, cbvh_open_path_read
+    };
+    char dir[200];
+    test_temp_dir(dir, sizeof dir, "cbvh-test-load");
     char path[256];
-    cbvh_file *f = NULL;
-    cbvh_error err;
-    snprintf(path, sizeof path, "%s/missing.cbvh", dir);
-    assert_int_equal(cbvh_open_path(path, NULL, &f, &err), CBVH_ERROR_IO);
-    assert_non_null(strstr(err.message, "missing.cbvh"));
-    assert_int_equal(cbvh_open_path(dir, NULL, &f, &err), CBVH_ERROR_IO);
-    assert_non_null(strstr(err.message, "not a regular file"));
     snprintf(path, sizeof path, "%s/empty.cbvh", dir);
     FILE *fp = fopen(path, "wb");
     assert_non_null(fp);
     fclose(fp);
-    assert_int_equal(cbvh_open_path(path, NULL, &f, &err), CBVH_ERROR_CORRUPT);
-    assert_non_null(strstr(err.message, "empty"));
-    assert_null(f);
+    char missing[256];
+    snprintf(missing, sizeof missing, "%s/missing.cbvh", dir);
+    for (size_t i = 0; i < sizeof opens / sizeof opens[0]; i++) {
+        cbvh_file *f = NULL;
+        cbvh_error err;
+        assert_int_equal(opens[i](missing, NULL, &f, &err), CBVH_ERROR_IO);
+        assert_non_null(strstr(err.message, "missing.cbvh"));
+        assert_int_equal(opens[i](dir, NULL, &f, &err), CBVH_ERROR_IO);
+        assert_non_null(strstr(err.message, "not a regular file"));
+        assert_int_equal(opens[i](path, NULL, &f, &err), CBVH_ERROR_CORRUPT);
+        assert_non_null(strstr(err.message, "empty"));
+        assert_null(f);
+        assert_int_equal(opens[i](NULL, NULL, &f, &err), CBVH_ERROR_INVALID_ARGUMENT);
+    }
     unlink(path);
     rmdir(dir);
 }
 
+/* Closest hits of a grid of rays along each axis through the bounds: the same on a and b. */
+static void assert_same_hits(const cbvh_file *a, const cbvh_file *b)
+{
+    cbvh_file_info info;
+    cbvh_file_get_info(a, &info, sizeof info);
+    uint32_t hits = 0;
+    for (int axis = 0; axis < 3; axis++) {
+        const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+        for (int i = 0; i <= 16; i++) {
+            for (int j = 0; j <= 16; j++) {
+                cbvh_ray ray = { { 0, 0, 0 }, 0.0f, { 0, 0, 0 }, INFINITY };
+                ray.org[u] = info.bounds_min[u] + (info.bounds_max[u] - info.bounds_min[u]) * (float)i / 16.0f;
+                ray.org[v] = info.bounds_min[v] + (info.bounds_max[v] - info.bounds_min[v]) * (float)j / 16.0f;
+                ray.org[axis] = info.bounds_min[axis] - 1.0f;
+                ray.dir[axis] = 1.0f;
+                cbvh_hit x, y;
+                int hit_a = cbvh_raycast(a, &ray, CBVH_TRAVERSAL_SORTED, &x, NULL);
+                assert_int_equal(hit_a, cbvh_raycast(b, &ray, CBVH_TRAVERSAL_SORTED, &y, NULL));
+                if (hit_a) {
+                    assert_int_equal(x.tri, y.tri);
+                    assert_memory_equal(&x.t, &y.t, sizeof x.t);
+                    hits++;
+                }
+            }
+        }
+    }
+    assert_true(hits > 0);
+}
+
+/* cbvh_open_path_read copies the file: truncating it after the open (which would make a mapping fault)
+ * changes nothing, and the copy is the file's, freed at close. */
+static void test_read_mode_survives_truncation(void **state)
+{
+    (void)state;
+    char dir[200];
+    test_temp_dir(dir, sizeof dir, "cbvh-test-load");
+    char path[256];
+    snprintf(path, sizeof path, "%s/hot.cbvh", dir);
+    for (size_t i = 0; i < VALID_VECTOR_COUNT; i++) {
+        input in = load_vector(valid_vectors[i]);
+        FILE *fp = fopen(path, "wb");
+        assert_non_null(fp);
+        assert_int_equal(fwrite(in.data, 1, in.size, fp), in.size);
+        assert_int_equal(fclose(fp), 0);
+        counting_alloc c;
+        cbvh_allocator a = counting_allocator(&c, -1, 0);
+        cbvh_file *f = NULL, *reference = NULL;
+        cbvh_error err;
+        assert_int_equal(cbvh_open_path_read(path, &a, &f, &err), CBVH_OK);
+        assert_true(c.live_bytes >= in.size); /* the whole file is in memory */
+        fp = fopen(path, "wb"); /* truncated to 0 bytes, as `cp` over it would start */
+        assert_non_null(fp);
+        assert_int_equal(fclose(fp), 0);
+        assert_int_equal(cbvh_open_memory(in.data, in.size, NULL, &reference, &err), CBVH_OK);
+        assert_same_info(f, reference);
+        assert_same_hits(f, reference);
+        unlink(path); /* and removed */
+        assert_same_hits(f, reference);
+        cbvh_close(f);
+        assert_int_equal(c.live, 0);
+        cbvh_close(reference);
+        test_aligned_free(in.data);
+    }
+    rmdir(dir);
+}
+
+/* Every allocation of a read-mode open failed in turn: a clean out-of-memory error, nothing leaked. */
+static void test_read_mode_allocation_failures(void **state)
+{
+    (void)state;
+    const char *path = vector_path("good-remap-u32-materials-u32-zlib");
+    long n = 0;
+    for (;; n++) {
+        counting_alloc c;
+        cbvh_allocator a = counting_allocator(&c, n, 0);
+        cbvh_file *f = NULL;
+        cbvh_error err;
+        cbvh_result r = cbvh_open_path_read(path, &a, &f, &err);
+        if (r == CBVH_OK) {
+            cbvh_close(f);
+            assert_int_equal(c.live, 0);
+            break;
+        }
+        assert_int_equal(r, CBVH_ERROR_OUT_OF_MEMORY);
+        assert_null(f);
+        assert_int_equal(c.live, 0);
+    }
+    assert_true(n >= 2); /* the handle and the file's bytes at least */
+}
+
 /* ------------------------------------------------------------------ tests on cooked files */
+#if CBVH_HAVE_COOKER
 
 static int degenerate_input(const random_mesh *m, size_t t)
 {
@@ -460,7 +614,7 @@ static int same_as_input(const random_mesh *m, size_t t, float v[3][3], const cb
 static void check_round_trip(const cbvh_file *f, const random_mesh *m)
 {
     cbvh_file_info info;
-    cbvh_file_get_info(f, &info);
+    cbvh_file_get_info(f, &info, sizeof info);
     size_t kept = 0;
     uint32_t first_material = CBVH_NO_HIT;
     int all_equal = 1;
@@ -500,7 +654,7 @@ static int compare_records(const void *a, const void *b)
 static void check_cooked_ids(const cbvh_file *f, const random_mesh *m)
 {
     cbvh_file_info info;
-    cbvh_file_get_info(f, &info);
+    cbvh_file_get_info(f, &info, sizeof info);
     assert_int_equal(info.has_remap, 0);
     assert_int_equal(info.vertex_format, CBVH_VERTEX_FLOAT32); /* exact comparison */
     record *got = calloc(info.triangle_count, sizeof *got);
@@ -548,7 +702,7 @@ static void test_cooked_files(void **state)
                     check_cooked_ids(f, &m);
                 cbvh_close(f);
                 assert_int_equal(c.live, 0);
-                free(in.data);
+                test_aligned_free(in.data);
             }
     free_random_mesh(&m);
 }
@@ -557,8 +711,8 @@ static void test_cooked_files(void **state)
 static void test_cooked_sizes_by_path(void **state)
 {
     (void)state;
-    char dir[] = "/tmp/cbvh-test-load-XXXXXX";
-    assert_non_null(mkdtemp(dir));
+    char dir[200];
+    test_temp_dir(dir, sizeof dir, "cbvh-test-load");
     char path[256];
     snprintf(path, sizeof path, "%s/mesh.cbvh", dir);
     static const size_t sizes[][2] = { { 3, 1 }, { 4, 2 }, { 10, 7 }, { 100, 300 }, { 100000, 60000 } };
@@ -568,7 +722,7 @@ static void test_cooked_sizes_by_path(void **state)
             for (size_t k = 0; k < 3 * sizes[i][1]; k++)
                 m.indices[k] = (uint32_t)(k % 3 + k / 3);
         cbvh_cook_options o;
-        cbvh_cook_options_init(&o);
+        cbvh_cook_options_init(&o, sizeof o);
         o.compress_level = (int)(i % 2) * 9;
         cbvh_error err;
         if (cbvh_cook_to_path(&m.mesh, &o, NULL, path, NULL, &err) != CBVH_OK)
@@ -592,10 +746,19 @@ static void test_cooked_truncations_and_allocations(void **state)
         input in = cook_input("small cooked", &m, compress, CBVH_VERTEX_FLOAT32, 1);
         check_truncations(&in, 61);
         check_allocation_failures(in.data, in.size, NULL);
-        free(in.data);
+        test_aligned_free(in.data);
     }
     free_random_mesh(&m);
 }
+
+#else
+static void test_cooked_files_need_the_cooker(void **state)
+{
+    (void)state;
+    print_message("this runtime-only build (no cooker) cannot cook files: the cooked-file tests skip\n");
+    skip();
+}
+#endif
 
 int main(void)
 {
@@ -607,10 +770,17 @@ int main(void)
         cmocka_unit_test(test_changes_behind_crcs),
         cmocka_unit_test(test_allocation_failures),
         cmocka_unit_test(test_arguments),
+        cmocka_unit_test(test_info_struct_size),
         cmocka_unit_test(test_path_errors),
+        cmocka_unit_test(test_read_mode_survives_truncation),
+        cmocka_unit_test(test_read_mode_allocation_failures),
+#if CBVH_HAVE_COOKER
         cmocka_unit_test(test_cooked_files),
         cmocka_unit_test(test_cooked_sizes_by_path),
         cmocka_unit_test(test_cooked_truncations_and_allocations),
+#else
+        cmocka_unit_test(test_cooked_files_need_the_cooker),
+#endif
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

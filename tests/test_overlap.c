@@ -14,6 +14,7 @@
 #include "query/triangle_box.h"
 #include "support/reference.h"
 #include "support/scene_gen.h"
+#include "support/layouts.h"
 
 static double rnd(uint64_t *st, double lo, double hi) { return lo + (hi - lo) * scene_rand_unit(st); }
 
@@ -136,7 +137,7 @@ static void test_overlaps(void **state)
             assert_true(scene_sphere(&s, 3000, (float[3]){0, 0, 0}, 1.0f));
         else
             assert_true(scene_terrain(&s, 3000, 40.0f));
-        assert_int_equal(ref_fixture_open(&fx, s.positions, s.vertex_count, s.indices, s.triangle_count, NULL),
+        assert_int_equal(ref_fixture_open(&fx, s.positions, s.vertex_count, s.indices, s.triangle_count, test_options()),
                          CBVH_OK);
         run_overlaps(&fx, 300, 50 + (uint64_t)m);
         ref_fixture_close(&fx);
@@ -187,7 +188,7 @@ static void test_invalid_input(void **state)
     scene s;
     ref_fixture fx;
     assert_true(scene_sphere(&s, 200, (float[3]){0, 0, 0}, 1.0f));
-    assert_int_equal(ref_fixture_open(&fx, s.positions, s.vertex_count, s.indices, s.triangle_count, NULL), CBVH_OK);
+    assert_int_equal(ref_fixture_open(&fx, s.positions, s.vertex_count, s.indices, s.triangle_count, test_options()), CBVH_OK);
     const float lo[3] = {-2, -2, -2}, hi[3] = {2, 2, 2}, nan3[3] = {0, NAN, 0}, c[3] = {0, 0, 0};
     assert_true(cbvh_overlap_box(fx.file, lo, hi, NULL, NULL, NULL, 0) == fx.tris.count);
     assert_int_equal(cbvh_overlap_box(fx.file, hi, lo, NULL, NULL, NULL, 0), 0); /* min > max */
@@ -226,7 +227,7 @@ static void test_sliver_overlaps(void **state)
         }
         const uint32_t idx[3] = {0, 1, 2};
         ref_fixture fx;
-        assert_int_equal(ref_fixture_open(&fx, p, 3, idx, 1, NULL), CBVH_OK);
+        assert_int_equal(ref_fixture_open(&fx, p, 3, idx, 1, test_options()), CBVH_OK);
         uint64_t st = 5 + (uint64_t)e;
         for (int i = 0; i < 200; i++) {
             float center[3], radius;
@@ -272,5 +273,5 @@ int main(void)
         cmocka_unit_test(test_invalid_input),
         cmocka_unit_test(test_sliver_overlaps),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return TEST_RUN_LAYOUTS(tests, 0);
 }

@@ -16,6 +16,7 @@
 #include "query/raycast.h"
 #include "support/reference.h"
 #include "support/scene_gen.h"
+#include "support/layouts.h"
 
 #define PI 3.14159265358979323846
 
@@ -291,7 +292,7 @@ static void test_soup(void **state)
     scene s;
     ref_fixture fx;
     assert_true(scene_soup(&s, 3000, 0.1f, 7));
-    open_scene(&fx, &s, NULL);
+    open_scene(&fx, &s, test_options());
     check_fixture(&fx, 4000, 1);
     ref_fixture_close(&fx);
     scene_free(&s);
@@ -303,12 +304,12 @@ static void test_sphere_and_terrain(void **state)
     scene s;
     ref_fixture fx;
     assert_true(scene_sphere(&s, 4000, (float[3]){0.5f, -0.25f, 2.0f}, 3.0f));
-    open_scene(&fx, &s, NULL);
+    open_scene(&fx, &s, test_options());
     check_fixture(&fx, 3000, 2);
     ref_fixture_close(&fx);
     scene_free(&s);
     assert_true(scene_terrain(&s, 4000, 50.0f));
-    open_scene(&fx, &s, NULL);
+    open_scene(&fx, &s, test_options());
     check_fixture(&fx, 3000, 3);
     ref_fixture_close(&fx);
     scene_free(&s);
@@ -323,7 +324,7 @@ static void test_cook_variants(void **state)
     assert_true(scene_soup(&s, 1500, 0.15f, 99));
     for (int variant = 0; variant < 5; variant++) {
         cbvh_cook_options o;
-        cbvh_cook_options_init(&o);
+        test_options_init(&o);
         if (variant == 0)
             o.vertex_format = CBVH_VERTEX_QUANTIZED16;
         if (variant == 1)
@@ -351,7 +352,7 @@ static void test_closed_mesh_no_leaks(void **state)
     ref_fixture fx;
     const float c[3] = {0.1f, 0.2f, 0.3f};
     assert_true(scene_sphere(&s, 20000, c, 1.0f));
-    open_scene(&fx, &s, NULL);
+    open_scene(&fx, &s, test_options());
     uint64_t st = 5;
     long missed = 0, total = 0;
     for (size_t vtx = 0; vtx < s.vertex_count; vtx++) {
@@ -392,7 +393,7 @@ static void test_far_from_origin(void **state)
     scene s;
     ref_fixture fx;
     assert_true(scene_sphere(&s, 3000, (float[3]){70000.0f, -70000.0f, 35000.0f}, 10.0f));
-    open_scene(&fx, &s, NULL);
+    open_scene(&fx, &s, test_options());
     check_fixture(&fx, 2000, 4);
     ref_fixture_close(&fx);
     scene_free(&s);
@@ -547,7 +548,7 @@ static void test_far_side_boxes(void **state)
         for (uint32_t k = 0; k < 3 * TRIS; k++)
             idx[k] = k;
         ref_fixture fx;
-        assert_int_equal(ref_fixture_open(&fx, pos, 3 * TRIS, idx, TRIS, NULL), CBVH_OK);
+        assert_int_equal(ref_fixture_open(&fx, pos, 3 * TRIS, idx, TRIS, test_options()), CBVH_OK);
         for (int i = 0; i < RAYS; i++) {
             const uint32_t tri = (uint32_t)(scene_rand_unit(&st) * TRIS) % TRIS;
             const size_t at = fx.index_of_id[tri];
@@ -654,7 +655,7 @@ static void test_far_origin_hits(void **state)
     scene sc;
     ref_fixture fx;
     assert_true(scene_sphere(&sc, 2000, (float[3]){0.3f, -0.2f, 0.1f}, 1.0f));
-    open_scene(&fx, &sc, NULL);
+    open_scene(&fx, &sc, test_options());
     uint64_t st = 99;
     int rays = 0;
     while (rays < 500) {
@@ -850,7 +851,7 @@ static void test_invalid_rays(void **state)
     scene s;
     ref_fixture fx;
     assert_true(scene_sphere(&s, 500, (float[3]){0, 0, 0}, 1.0f));
-    open_scene(&fx, &s, NULL);
+    open_scene(&fx, &s, test_options());
     const cbvh_ray good = {{0, 0, -5}, 0.0f, {0, 0, 1}, INFINITY};
     cbvh_ray bad[12];
     for (int k = 0; k < 12; k++)
@@ -908,7 +909,7 @@ static void test_stats(void **state)
     scene s;
     ref_fixture fx;
     assert_true(scene_sphere(&s, 20000, (float[3]){0, 0, 0}, 1.0f));
-    open_scene(&fx, &s, NULL);
+    open_scene(&fx, &s, test_options());
     cbvh_query_stats st[4];
     memset(st, 0, sizeof(st));
     uint64_t rng = 77;
@@ -945,7 +946,7 @@ int main(void)
         cmocka_unit_test(test_far_side_boxes),
         cmocka_unit_test(test_overflowing_edge_sums),
     };
-    int failed = cmocka_run_group_tests(tests, NULL, NULL);
+    int failed = TEST_RUN_LAYOUTS(tests, 1);
     fprintf(stderr, "test_raycast: %ld reference checks\n", checks_done);
     return failed;
 }

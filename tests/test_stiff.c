@@ -12,8 +12,10 @@
 
 #include "cbvh.h"
 #include "common/file.h"
+#include "layout/tree.h"
 #include "support/reference.h"
 #include "support/scene_gen.h"
+#include "support/layouts.h"
 
 /* ------------------------------------------------------------------ */
 /* Helpers                                                            */
@@ -22,7 +24,7 @@
 static cbvh_cook_options options(int quantized, int level)
 {
     cbvh_cook_options o;
-    cbvh_cook_options_init(&o);
+    test_options_init(&o);
     o.vertex_format = quantized ? CBVH_VERTEX_QUANTIZED16 : CBVH_VERTEX_FLOAT32;
     o.compress_level = level;
     return o;
@@ -111,16 +113,18 @@ static void assert_agreement(const char *what, const agree_stats *st)
                  st->clear_hits, st->missed, st->early, st->off_plane, st->disagree_paths);
 }
 
-/* Every node box (dequantized exactly as the traversal does) contains every
- * vertex of every triangle below it. Returns the number of boxes checked. */
-static size_t check_conservative(const cbvh_file *f, uint32_t node, float lo_out[3], float hi_out[3], size_t *bad)
+/* Every box of the subtree r (dequantized exactly as the traversal does,
+ * through the layout interface) contains every vertex of every triangle
+ * below it; `box` is r's own (CBVH_NO_BOX for a root without one). Fills the
+ * subtree's vertex bounds and returns the number of boxes checked. */
+static size_t check_conservative(const cbvh_file *f, cbvh_ref r, uint32_t box, float lo_out[3], float hi_out[3],
+                                 size_t *bad)
 {
-    const cbvh_node *n = &f->nodes[node];
-    float lo[3], hi[3], sub_lo[3] = { INFINITY, INFINITY, INFINITY }, sub_hi[3] = { -INFINITY, -INFINITY, -INFINITY };
-    cbvh_node_box(f, n, lo, hi);
-    size_t checked = 1;
-    if (cbvh_node_is_leaf(n->word)) {
-        uint32_t first = cbvh_leaf_first(n->word), count = cbvh_leaf_count(n->word);
+    float sub_lo[3] = { INFINITY, INFINITY, INFINITY }, sub_hi[3] = { -INFINITY, -INFINITY, -INFINITY };
+    size_t checked = 0;
+    if (cbvh_tree_is_leaf(f, f->layout, r)) {
+        uint32_t first, count;
+        cbvh_tree_leaf(f, f->layout, r, &first, &count);
         for (uint32_t t = first; t < first + count; t++) {
             float v[3][3];
             cbvh_triangle_vertices(f, t, v[0], v[1], v[2]);
@@ -131,23 +135,34 @@ static size_t check_conservative(const cbvh_file *f, uint32_t node, float lo_out
                 }
         }
     } else {
-        uint32_t first = node + 1, second = first + cbvh_node_subtree_size(f->nodes[first].word);
-        if (cbvh_node_is_leaf(f->nodes[first].word))
-            second = first + 1;
-        float a_lo[3], a_hi[3], b_lo[3], b_hi[3];
-        checked += check_conservative(f, first, a_lo, a_hi, bad);
-        checked += check_conservative(f, second, b_lo, b_hi, bad);
-        for (int a = 0; a < 3; a++) {
-            sub_lo[a] = fminf(a_lo[a], b_lo[a]);
-            sub_hi[a] = fmaxf(a_hi[a], b_hi[a]);
+        struct cbvh_child c[CBVH_TREE_WIDTH];
+        const uint32_t n = cbvh_tree_children(f, f->layout, r, CBVH_NO_OCTANT, c);
+        for (uint32_t k = 0; k < n; k++) {
+            float c_lo[3], c_hi[3];
+            checked += check_conservative(f, c[k].ref, c[k].box, c_lo, c_hi, bad);
+            for (int a = 0; a < 3; a++) {
+                sub_lo[a] = fminf(sub_lo[a], c_lo[a]);
+                sub_hi[a] = fmaxf(sub_hi[a], c_hi[a]);
+            }
         }
     }
-    for (int a = 0; a < 3; a++)
-        if (!(lo[a] <= sub_lo[a] && hi[a] >= sub_hi[a]))
-            (*bad)++;
+    if (box != CBVH_NO_BOX) {
+        float lo[3], hi[3];
+        cbvh_tree_box(f, f->layout, box, lo, hi);
+        checked++;
+        for (int a = 0; a < 3; a++)
+            if (!(lo[a] <= sub_lo[a] && hi[a] >= sub_hi[a]))
+                (*bad)++;
+    }
     memcpy(lo_out, sub_lo, sizeof sub_lo);
     memcpy(hi_out, sub_hi, sizeof sub_hi);
     return checked;
+}
+
+/* check_conservative over the whole tree. */
+static size_t check_tree_conservative(const cbvh_file *f, float lo[3], float hi[3], size_t *bad)
+{
+    return check_conservative(f, cbvh_tree_root(f, f->layout), cbvh_tree_root_box(f, f->layout), lo, hi, bad);
 }
 
 /* ------------------------------------------------------------------ */
@@ -291,7 +306,7 @@ static void watertight_file(const cbvh_file *f, uint32_t stride, int origins_per
     topology tp;
     topology_build(f, &tp);
     cbvh_file_info info;
-    cbvh_file_get_info(f, &info);
+    cbvh_file_get_info(f, &info, sizeof info);
     double rad = 0;
     for (int a = 0; a < 3; a++) {
         rad += ((double)info.bounds_max[a] - info.bounds_min[a]) * ((double)info.bounds_max[a] - info.bounds_min[a]);
@@ -424,7 +439,7 @@ static void test_watertight(void **state)
 static cbvh_file *requantized(const cbvh_file *f, void **buffer)
 {
     cbvh_file_info info;
-    cbvh_file_get_info(f, &info);
+    cbvh_file_get_info(f, &info, sizeof info);
     float *pos = calloc(3 * (size_t)info.vertex_count, sizeof(float));
     uint32_t *idx = malloc(3 * (size_t)info.triangle_count * sizeof(uint32_t));
     assert_non_null(pos);
@@ -509,7 +524,7 @@ static void test_scales(void **state)
             assert_int_equal(ref_fixture_open(&fx, pos, base.vertex_count, base.indices, base.triangle_count, &o), CBVH_OK);
             size_t bad = 0, checked;
             float lo[3], hi[3];
-            checked = check_conservative(fx.file, 0, lo, hi, &bad);
+            checked = check_tree_conservative(fx.file, lo, hi, &bad);
             if (bad)
                 fail_msg("scale %g offset %g: %zu of %zu node boxes not conservative", cases[ci].scale, cases[ci].offset, bad, checked);
             agree_stats st;
@@ -550,7 +565,7 @@ static void test_huge_extent(void **state)
         cbvh_mesh m = { p, 4, 0, idx, 4, NULL };
         void *buf = NULL;
         size_t n = 0;
-        cbvh_result r = cbvh_cook(&m, NULL, NULL, &buf, &n, NULL, NULL);
+        cbvh_result r = cbvh_cook(&m, test_options(), NULL, &buf, &n, NULL, NULL);
         if (r != CBVH_OK) {
             printf(" 1e%d: cook %s;", e, cbvh_result_string(r));
             continue;
@@ -613,6 +628,7 @@ static void test_degenerate_meshes(void **state)
             cbvh_mesh m = { mc->pos, mc->vertex_count, 0, mc->idx, mc->triangle_count, NULL };
             cbvh_cook_options o = options(q, 0);
             cbvh_cook_stats stats;
+            cbvh_cook_stats_init(&stats, sizeof stats);
             cbvh_error err;
             void *buf = NULL;
             size_t n = 0;
@@ -633,7 +649,7 @@ static void test_degenerate_meshes(void **state)
             assert_int_equal(ref_fixture_open(&fx, mc->pos, mc->vertex_count, mc->idx, mc->triangle_count, &o), CBVH_OK);
             size_t bad = 0;
             float lo[3], hi[3];
-            check_conservative(fx.file, 0, lo, hi, &bad);
+            check_tree_conservative(fx.file, lo, hi, &bad);
             assert_int_equal(bad, 0);
             agree_stats st;
             memset(&st, 0, sizeof st);
@@ -871,5 +887,5 @@ int main(void)
         cmocka_unit_test(test_huge_extent),      cmocka_unit_test(test_sliver_accuracy), cmocka_unit_test(test_degenerate_meshes), cmocka_unit_test(test_extreme_rays),
         cmocka_unit_test(test_extreme_sweeps),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return TEST_RUN_LAYOUTS(tests, 0);
 }

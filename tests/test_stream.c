@@ -18,6 +18,7 @@
 #include "query/stream.h"
 #include "support/reference.h"
 #include "support/scene_gen.h"
+#include "support/layouts.h"
 
 /* Kernel settings of cbvh_stream_set_kernel: best, scalar, SSE2, AVX2. */
 static const int kernels[4] = {0, 1, 2, 3};
@@ -86,7 +87,7 @@ static void check_stream(const ref_fixture *fx, const cbvh_ray *rays, size_t cou
 
 static void open_scene(ref_fixture *fx, scene *s)
 {
-    assert_int_equal(ref_fixture_open(fx, s->positions, s->vertex_count, s->indices, s->triangle_count, NULL), CBVH_OK);
+    assert_int_equal(ref_fixture_open(fx, s->positions, s->vertex_count, s->indices, s->triangle_count, test_options()), CBVH_OK);
 }
 
 /* Counts around the SIMD widths, the batch size (256) and the octant window (2048). */
@@ -219,5 +220,5 @@ int main(void)
         cmocka_unit_test(test_box_kernels_agree),
         cmocka_unit_test(test_null_arguments),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return TEST_RUN_LAYOUTS(tests, 1);
 }

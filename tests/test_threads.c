@@ -14,6 +14,7 @@
 
 #include "cbvh.h"
 #include "support/scene_gen.h"
+#include "support/layouts.h"
 
 enum { QUERY_COUNT = 2048, STREAM_SIZE = 16, KINDS = 10, MAX_THREADS = 16 };
 
@@ -152,12 +153,12 @@ static void test_threads_agree(void **state)
     void *buf = NULL;
     size_t size = 0;
     cbvh_cook_options o;
-    cbvh_cook_options_init(&o);
+    test_options_init(&o);
     o.compress_level = 1;
     assert_int_equal(cbvh_cook(&m, &o, NULL, &buf, &size, NULL, NULL), CBVH_OK);
     assert_int_equal(cbvh_open_memory(buf, size, NULL, &file, NULL), CBVH_OK);
     cbvh_file_info info;
-    cbvh_file_get_info(file, &info);
+    cbvh_file_get_info(file, &info, sizeof info);
     uint64_t rng = 7;
     double ext = 0;
     for (int k = 0; k < 3; k++)
@@ -217,5 +218,5 @@ static void test_threads_agree(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = { cmocka_unit_test(test_threads_agree) };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return TEST_RUN_LAYOUTS(tests, 0);
 }

@@ -31,6 +31,7 @@ run 2 "cook with three paths" "$CBVH" cook gen:cube a b
 run 2 "cook --leaf-size 0" "$CBVH" cook --leaf-size 0 gen:cube "$tmp/x.cbvh"
 run 2 "cook --leaf-size 17" "$CBVH" cook --leaf-size 17 gen:cube "$tmp/x.cbvh"
 run 2 "cook --bins x" "$CBVH" cook --bins x gen:cube "$tmp/x.cbvh"
+run 2 "cook --layout wide8" "$CBVH" cook --layout wide8 gen:cube "$tmp/x.cbvh"
 run 2 "cook --compress=10" "$CBVH" cook --compress=10 gen:cube "$tmp/x.cbvh"
 run 2 "cook --unknown" "$CBVH" cook --unknown gen:cube "$tmp/x.cbvh"
 run 2 "cook --json=1 (no value allowed)" "$CBVH" cook --json=1 gen:cube "$tmp/x.cbvh"
@@ -55,7 +56,8 @@ run 0 "cook gen:cube summary" "$CBVH" cook gen:cube "$tmp/cube.cbvh" &&
     check "the summary counts 12 triangles" grep -q "12 triangles" "$tmp/out"
 
 for opts in "--compress" "--compress=9" "--quantize-vertices" "--no-remap" "--no-materials" "--leaf-size 1" \
-    "--leaf-size 16 --bins 4" "--traversal-cost 2 --intersection-cost 0.5"; do
+    "--leaf-size 16 --bins 4" "--traversal-cost 2 --intersection-cost 0.5" "--layout wide4" \
+    "--layout wide4 --leaf-size 1 --compress" "--layout binary"; do
     # shellcheck disable=SC2086
     run 0 "cook gen:demo $opts" "$CBVH" cook --quiet $opts gen:demo "$tmp/opt.cbvh" &&
         run 0 "verify gen:demo $opts" "$CBVH" verify "$tmp/opt.cbvh"
@@ -67,6 +69,11 @@ check "--compress makes the file smaller" test "$(wc -c <"$tmp/z.cbvh")" -lt "$(
 "$CBVH" cook --quiet gen:terrain:20000 "$tmp/det1.cbvh" >/dev/null
 "$CBVH" cook --quiet gen:terrain:20000 "$tmp/det2.cbvh" >/dev/null
 check "cooking is deterministic (gen:terrain)" cmp -s "$tmp/det1.cbvh" "$tmp/det2.cbvh"
+"$CBVH" cook --quiet --layout wide4 gen:terrain:20000 "$tmp/det3.cbvh" >/dev/null
+"$CBVH" cook --quiet --layout wide4 gen:terrain:20000 "$tmp/det4.cbvh" >/dev/null
+check "cooking is deterministic (gen:terrain, wide4)" cmp -s "$tmp/det3.cbvh" "$tmp/det4.cbvh"
+run 0 "info of a wide4 file" "$CBVH" info "$tmp/det3.cbvh" && check "info names the wide4 layout" grep -q "^layout: wide4" "$tmp/out"
+run 0 "info of a binary file" "$CBVH" info "$tmp/det1.cbvh" && check "info names the binary layout" grep -q "^layout: binary" "$tmp/out"
 
 # ---- cook --json, info, info --json ------------------------------------------------------
 
@@ -218,6 +225,11 @@ check "sorted raycast agrees with the brute force" awk '
 for tr in stackless unsorted distance stream; do
     "$CBVH" raycast --traversal "$tr" "$tmp/soup.cbvh" <"$tmp/rays.txt" >"$tmp/hits-$tr.txt"
     check "raycast --traversal $tr gives the same answers as sorted" cmp -s "$tmp/hits-sorted.txt" "$tmp/hits-$tr.txt"
+done
+run 0 "cook the soup OBJ with --layout wide4" "$CBVH" cook --quiet --layout wide4 "$tmp/soup.obj" "$tmp/soup-w4.cbvh"
+for tr in sorted stackless unsorted distance stream; do
+    "$CBVH" raycast --traversal "$tr" "$tmp/soup-w4.cbvh" <"$tmp/rays.txt" >"$tmp/hits-w4-$tr.txt"
+    check "wide4 raycast --traversal $tr gives the binary layout's answers" cmp -s "$tmp/hits-sorted.txt" "$tmp/hits-w4-$tr.txt"
 done
 awk '{ print ($1 == -1) ? 0 : 1 }' "$tmp/hits-sorted.txt" >"$tmp/expect-any.txt"
 for tr in sorted stackless stream; do

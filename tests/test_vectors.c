@@ -81,6 +81,7 @@ typedef struct good {
     uint32_t triangle_count, vertex_count, node_count, depth, max_leaf_size;
     uint32_t has_remap, vertex_format, index_encoding, compat_flags, section_count;
     uint32_t material_base; /* materials are base + 7 x original id; 0: no MATERIALS section */
+    uint32_t layout;        /* cbvh_layout of the nodes */
 } good;
 
 typedef struct expectation {
@@ -92,23 +93,25 @@ typedef struct expectation {
 
 #define BAD(name, text) { name, CBVH_ERROR_CORRUPT, text, { 0 } }
 #define NEWER(name, text) { name, CBVH_ERROR_UNSUPPORTED, text, { 0 } }
+#define BIN CBVH_LAYOUT_BINARY
+#define W4 CBVH_LAYOUT_WIDE4
 
 static const expectation expectations[] = {
-    { "good-single-triangle", CBVH_OK, "", { MESH_SINGLE, 1, 3, 1, 1, 4, 0, 0, 0, 0, 3, 0 } },
-    { "good-box-raw", CBVH_OK, "", { MESH_BOX, 12, 8, 15, 4, 2, 1, 0, 0, 0, 4, 0 } },
-    { "good-box-zlib", CBVH_OK, "", { MESH_BOX, 12, 8, 15, 4, 2, 1, 0, 0, 0, 4, 0 } },
-    { "good-box-u32", CBVH_OK, "", { MESH_BOX, 12, 8, 15, 4, 2, 1, 0, 1, 0, 4, 0 } },
-    { "good-box-delta16", CBVH_OK, "", { MESH_BOX, 12, 8, 15, 4, 2, 1, 0, 2, 0, 4, 0 } },
-    { "good-box-q16", CBVH_OK, "", { MESH_BOX, 12, 8, 15, 4, 2, 1, 1, 0, 0, 4, 0 } },
-    { "good-box-far-q16", CBVH_OK, "", { MESH_BOX_FAR, 12, 8, 15, 4, 2, 1, 1, 0, 0, 4, 0 } },
-    { "good-quad-flat", CBVH_OK, "", { MESH_QUAD, 2, 4, 3, 2, 1, 1, 0, 0, 0, 4, 0 } },
-    { "good-remap-materials", CBVH_OK, "", { MESH_BOX_DEGENERATE, 12, 8, 15, 4, 2, 1, 0, 0, 0, 5, 1 } },
+    { "good-single-triangle", CBVH_OK, "", { MESH_SINGLE, 1, 3, 1, 1, 4, 0, 0, 0, 0, 3, 0, BIN } },
+    { "good-box-raw", CBVH_OK, "", { MESH_BOX, 12, 8, 15, 4, 2, 1, 0, 0, 0, 4, 0, BIN } },
+    { "good-box-zlib", CBVH_OK, "", { MESH_BOX, 12, 8, 15, 4, 2, 1, 0, 0, 0, 4, 0, BIN } },
+    { "good-box-u32", CBVH_OK, "", { MESH_BOX, 12, 8, 15, 4, 2, 1, 0, 1, 0, 4, 0, BIN } },
+    { "good-box-delta16", CBVH_OK, "", { MESH_BOX, 12, 8, 15, 4, 2, 1, 0, 2, 0, 4, 0, BIN } },
+    { "good-box-q16", CBVH_OK, "", { MESH_BOX, 12, 8, 15, 4, 2, 1, 1, 0, 0, 4, 0, BIN } },
+    { "good-box-far-q16", CBVH_OK, "", { MESH_BOX_FAR, 12, 8, 15, 4, 2, 1, 1, 0, 0, 4, 0, BIN } },
+    { "good-quad-flat", CBVH_OK, "", { MESH_QUAD, 2, 4, 3, 2, 1, 1, 0, 0, 0, 4, 0, BIN } },
+    { "good-remap-materials", CBVH_OK, "", { MESH_BOX_DEGENERATE, 12, 8, 15, 4, 2, 1, 0, 0, 0, 5, 1, BIN } },
     { "good-remap-u32-materials-u32-zlib", CBVH_OK, "",
-      { MESH_BOX_DEGENERATE, 12, 8, 15, 4, 2, 1, 0, 2, 0, 5, 70000 } },
-    { "good-remap-sparse", CBVH_OK, "", { MESH_QUAD_SPARSE, 2, 4, 3, 2, 1, 1, 0, 0, 0, 5, 3 } },
-    { "good-materials-u16-cooked-ids", CBVH_OK, "", { MESH_BOX, 12, 8, 15, 4, 2, 0, 0, 0, 0, 4, 1000 } },
-    { "good-ancillary", CBVH_OK, "", { MESH_BOX, 12, 8, 15, 4, 2, 1, 0, 0, 0, 6, 0 } },
-    { "good-compat-flags", CBVH_OK, "", { MESH_BOX, 12, 8, 15, 4, 2, 1, 0, 0, 0x80000005u, 4, 0 } },
+      { MESH_BOX_DEGENERATE, 12, 8, 15, 4, 2, 1, 0, 2, 0, 5, 70000, BIN } },
+    { "good-remap-sparse", CBVH_OK, "", { MESH_QUAD_SPARSE, 2, 4, 3, 2, 1, 1, 0, 0, 0, 5, 3, BIN } },
+    { "good-materials-u16-cooked-ids", CBVH_OK, "", { MESH_BOX, 12, 8, 15, 4, 2, 0, 0, 0, 0, 4, 1000, BIN } },
+    { "good-ancillary", CBVH_OK, "", { MESH_BOX, 12, 8, 15, 4, 2, 1, 0, 0, 0, 6, 0, BIN } },
+    { "good-compat-flags", CBVH_OK, "", { MESH_BOX, 12, 8, 15, 4, 2, 1, 0, 0, 0x80000005u, 4, 0, BIN } },
     BAD("bad-empty", "empty"),
     BAD("bad-magic", "bad magic at byte 1"),
     BAD("bad-text-mode", "text-mode"),
@@ -175,6 +178,38 @@ static const expectation expectations[] = {
     NEWER("unsupported-codec", "codec 2"),
     NEWER("unsupported-encoding", "encoding 3"),
     NEWER("unsupported-critical-section", "critical section type 6"),
+    { "good-w4-single-triangle", CBVH_OK, "", { MESH_SINGLE, 1, 3, 1, 1, 4, 0, 0, 0, 0, 3, 0, W4 } },
+    { "good-w4-box-raw", CBVH_OK, "", { MESH_BOX, 12, 8, 3, 2, 2, 1, 0, 0, 0, 4, 0, W4 } },
+    { "good-w4-box-zlib", CBVH_OK, "", { MESH_BOX, 12, 8, 3, 2, 2, 1, 0, 0, 0, 4, 0, W4 } },
+    { "good-w4-box-leaf1", CBVH_OK, "", { MESH_BOX, 12, 8, 5, 3, 1, 1, 0, 0, 0, 4, 0, W4 } },
+    { "good-w4-box-leaf8", CBVH_OK, "", { MESH_BOX, 12, 8, 1, 1, 8, 1, 0, 0, 0, 4, 0, W4 } },
+    { "good-w4-box-q16", CBVH_OK, "", { MESH_BOX, 12, 8, 3, 2, 2, 1, 1, 0, 0, 4, 0, W4 } },
+    { "good-w4-box-far-q16", CBVH_OK, "", { MESH_BOX_FAR, 12, 8, 3, 2, 2, 1, 1, 0, 0, 4, 0, W4 } },
+    { "good-w4-quad-flat", CBVH_OK, "", { MESH_QUAD, 2, 4, 1, 1, 1, 1, 0, 0, 0, 4, 0, W4 } },
+    { "good-w4-remap-materials", CBVH_OK, "", { MESH_BOX_DEGENERATE, 12, 8, 3, 2, 2, 1, 0, 0, 0, 5, 1, W4 } },
+    { "good-w4-remap-u32-materials-u32-zlib", CBVH_OK, "",
+      { MESH_BOX_DEGENERATE, 12, 8, 3, 2, 2, 1, 0, 2, 0, 5, 70000, W4 } },
+    { "good-w4-materials-u16-cooked-ids", CBVH_OK, "", { MESH_BOX, 12, 8, 3, 2, 2, 0, 0, 0, 0, 4, 1000, W4 } },
+    BAD("bad-w4-no-slot", "node 1: no slot in use"),
+    BAD("bad-w4-internal-unused", "node 0: slots 0x8 are internal but not in use"),
+    BAD("bad-w4-unused-box", "node 1: unused slot 3 has a nonzero box"),
+    BAD("bad-w4-unused-count", "node 1: slot 2 is unused but has a triangle count field of 1"),
+    BAD("bad-w4-internal-count", "node 0: slot 1 is internal but has a triangle count field of 1"),
+    BAD("bad-w4-leaf-too-big", "node 0: slot 1 is a leaf of 2 triangles, more than max_leaf_size 1"),
+    BAD("bad-w4-max-leaf-size", "max_leaf_size 9 is more than a wide4 leaf holds (8)"),
+    BAD("bad-w4-triangle-count", "triangle_count 268435457 is outside 1..268435456"),
+    BAD("bad-w4-qmin-gt-qmax", "node 2: slot 1: qmin 100 > qmax 50 on axis 1"),
+    BAD("bad-w4-order-index", "node 3: order index 24 for octant 5 is not below 24"),
+    BAD("bad-w4-first-child", "node 0: first_child 2, but the nodes before it leave the next child at 1"),
+    BAD("bad-w4-first-child-self", "node 3: first_child 3, but the nodes before it leave the next child at 4"),
+    BAD("bad-w4-children-past-end", "node 3: children [4, 5) run past node_count 4"),
+    BAD("bad-w4-unallocated-node", "node 5: no node before it has it as a child"),
+    BAD("bad-w4-first-triangle", "node 2: first_triangle 4, but the leaves before it end at triangle 3"),
+    BAD("bad-w4-leaves-past-end", "node 4: slot 2's triangles [11, 13) run past triangle_count 12"),
+    BAD("bad-w4-leaves-short", "leaves cover triangles [0, 12), triangle_count is 13"),
+    BAD("bad-w4-depth-mismatch", "the tree's depth is 3, the header says 4"),
+    BAD("bad-w4-depth-exceeded", "node 4: at depth 3, deeper than the header's depth 2"),
+    NEWER("unsupported-w4-nodes-encoding-2", "section 0 (NODES): encoding 2 is unknown"),
 };
 
 #define EXPECTATION_COUNT (sizeof expectations / sizeof expectations[0])
@@ -242,6 +277,7 @@ static void check_info(const cbvh_file_info *in, const good *g, const mesh *m)
     assert_int_equal(in->compat_flags, g->compat_flags);
     assert_int_equal(in->incompat_flags, 0);
     assert_int_equal(in->section_count, g->section_count);
+    assert_int_equal(in->layout, g->layout);
     for (int a = 0; a < 3; a++) {
         float lo = INFINITY, hi = -INFINITY;
         for (uint32_t j = 0; j < m->triangle_count; j++)
@@ -261,7 +297,7 @@ static void check_info(const cbvh_file_info *in, const good *g, const mesh *m)
 static void check_triangles(const cbvh_file *f, const good *g, const mesh *m)
 {
     cbvh_file_info info;
-    cbvh_file_get_info(f, &info);
+    cbvh_file_get_info(f, &info, sizeof info);
     float v[3][3];
     int used[14] = { 0 };
     uint32_t ids = g->has_remap ? m->triangle_count : g->triangle_count;
@@ -292,7 +328,7 @@ static void check_triangles(const cbvh_file *f, const good *g, const mesh *m)
 static void check_sections(const cbvh_file *f, uint32_t file_size)
 {
     cbvh_file_info info;
-    cbvh_file_get_info(f, &info);
+    cbvh_file_get_info(f, &info, sizeof info);
     assert_int_equal(info.file_size, file_size);
     cbvh_section_info s, prev = { 0 };
     for (uint32_t i = 0; i < info.section_count; i++) {
@@ -333,7 +369,7 @@ static void check_vector(const expectation *e)
         }
         const mesh *m = &meshes[e->g.mesh];
         cbvh_file_info info;
-        cbvh_file_get_info(f, &info);
+        cbvh_file_get_info(f, &info, sizeof info);
         check_info(&info, &e->g, m);
         check_sections(f, (uint32_t)size);
         check_triangles(f, &e->g, m);
@@ -348,6 +384,140 @@ static void test_expectations(void **state)
     (void)state;
     for (size_t i = 0; i < EXPECTATION_COUNT; i++)
         check_vector(&expectations[i]);
+}
+
+/* ------------------------------------------------------------------ wide4 answers */
+
+/* A wide4 vector, the binary vector of the same mesh, and how the C cooker makes the same mesh in wide4. */
+typedef struct twin {
+    const char *wide4, *binary;
+    int mesh;
+    uint32_t max_leaf_size;
+    cbvh_vertex_format vertex_format;
+} twin;
+
+static const twin twins[] = {
+    { "good-w4-single-triangle", "good-single-triangle", MESH_SINGLE, 4, CBVH_VERTEX_FLOAT32 },
+    { "good-w4-box-raw", "good-box-raw", MESH_BOX, 2, CBVH_VERTEX_FLOAT32 },
+    { "good-w4-box-leaf1", "good-box-raw", MESH_BOX, 1, CBVH_VERTEX_FLOAT32 },
+    { "good-w4-box-leaf8", "good-box-raw", MESH_BOX, 8, CBVH_VERTEX_FLOAT32 },
+    { "good-w4-box-q16", "good-box-q16", MESH_BOX, 2, CBVH_VERTEX_QUANTIZED16 },
+    { "good-w4-box-far-q16", "good-box-far-q16", MESH_BOX_FAR, 2, CBVH_VERTEX_QUANTIZED16 },
+    { "good-w4-quad-flat", "good-quad-flat", MESH_QUAD, 1, CBVH_VERTEX_FLOAT32 },
+    { "good-w4-remap-materials", "good-remap-materials", MESH_BOX_DEGENERATE, 2, CBVH_VERTEX_FLOAT32 },
+};
+
+static double next_unit(uint64_t *state)
+{
+    *state = *state * 6364136223846793005ull + 1442695040888963407ull;
+    return (double)(*state >> 11) * (1.0 / 9007199254740992.0);
+}
+
+enum { RAYS_PER_PAIR = 4000 };
+
+/* A point of the file's bounds grown by `grow` of the extent (at least 1) on each side. */
+static void point_near(const cbvh_file_info *info, double grow, uint64_t *rng, float out[3])
+{
+    for (int a = 0; a < 3; a++) {
+        double lo = info->bounds_min[a], hi = info->bounds_max[a], pad = grow * fmax(hi - lo, 1.0);
+        out[a] = (float)(lo - pad + next_unit(rng) * (hi - lo + 2 * pad));
+    }
+}
+
+static int share_a_vertex(const cbvh_file *a, uint32_t ta, const cbvh_file *b, uint32_t tb)
+{
+    float va[3][3], vb[3][3];
+    if (!cbvh_file_get_triangle(a, ta, va[0], va[1], va[2]) || !cbvh_file_get_triangle(b, tb, vb[0], vb[1], vb[2]))
+        return 0;
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++)
+            if (memcmp(va[i], vb[j], sizeof va[i]) == 0)
+                return 1;
+    return 0;
+}
+
+/* The same triangles in two trees answer every ray alike with every traversal: hit or miss, the closest t
+ * exactly, the same triangle unless two are crossed at that t (then they share an edge or a corner), and
+ * occluded. Rays go from around the mesh to points of its triangles, a quarter of them along an axis. */
+static void assert_same_answers(const cbvh_file *a, const cbvh_file *b, const mesh *m, const char *what)
+{
+    cbvh_file_info info;
+    cbvh_file_get_info(a, &info, sizeof info);
+    uint64_t rng = 2024;
+    size_t hits = 0;
+    for (int i = 0; i < RAYS_PER_PAIR; i++) {
+        cbvh_ray r;
+        float target[3];
+        point_near(&info, 1.0, &rng, r.org);
+        uint32_t j = (uint32_t)(next_unit(&rng) * m->triangle_count);
+        while (degenerate(m, j))
+            j = (j + 1) % m->triangle_count;
+        double u = next_unit(&rng), v = next_unit(&rng) * (1.0 - u);
+        for (int k = 0; k < 3; k++)
+            target[k] = (float)((1.0 - u - v) * m->v[m->t[j][0]][k] + u * m->v[m->t[j][1]][k] + v * m->v[m->t[j][2]][k]);
+        for (int k = 0; k < 3; k++)
+            r.dir[k] = target[k] - r.org[k];
+        if (i % 4 == 0) { /* along an axis: from outside the bounds, straight at the target */
+            int axis = i / 4 % 3;
+            for (int k = 0; k < 3; k++)
+                r.org[k] = k == axis ? r.org[k] : target[k], r.dir[k] = k == axis ? target[k] - r.org[k] : 0.0f;
+        }
+        r.tmin = 0.0f;
+        r.tmax = INFINITY;
+        for (int t = 0; t < 4; t++) {
+            cbvh_hit ha, hb;
+            const int ga = cbvh_raycast(a, &r, (cbvh_traversal)t, &ha, NULL);
+            const int gb = cbvh_raycast(b, &r, (cbvh_traversal)t, &hb, NULL);
+            if (ga != gb || (ga && (ha.t != hb.t || (ha.tri != hb.tri && !share_a_vertex(a, ha.tri, b, hb.tri)))))
+                fail_msg("%s: ray %d, traversal %d: %s %u at t %.9g against %s %u at t %.9g", what, i, t,
+                         ga ? "hit" : "miss", ha.tri, ga ? ha.t : 0.0, gb ? "hit" : "miss", hb.tri, gb ? hb.t : 0.0);
+            hits += (size_t)ga;
+            assert_int_equal(cbvh_occluded(a, &r, (cbvh_traversal)t, NULL), ga);
+            assert_int_equal(cbvh_occluded(b, &r, (cbvh_traversal)t, NULL), gb);
+        }
+    }
+    if (hits < 4 * RAYS_PER_PAIR * 3 / 4) /* the rays aim at points of the mesh: most of them hit */
+        fail_msg("%s: %zu hits of %d rays and traversals", what, hits, 4 * RAYS_PER_PAIR);
+}
+
+/* Each wide4 vector answers as the binary vector of its mesh and as the C cooker's wide4 file of that mesh:
+ * an encoder written from the spec alone and the library's cooker build different trees (median split,
+ * binned SAH) that must hold the same triangles. */
+static void test_wide4_answers(void **state)
+{
+    (void)state;
+    for (size_t i = 0; i < sizeof twins / sizeof twins[0]; i++) {
+        const twin *w = &twins[i];
+        const mesh *m = &meshes[w->mesh];
+        char path[4096];
+        cbvh_file *wide = NULL, *binary = NULL, *cooked = NULL;
+        snprintf(path, sizeof path, "%s/%s.cbvh", vectors_dir(), w->wide4);
+        assert_int_equal(cbvh_open_path(path, NULL, &wide, NULL), CBVH_OK);
+        snprintf(path, sizeof path, "%s/%s.cbvh", vectors_dir(), w->binary);
+        assert_int_equal(cbvh_open_path(path, NULL, &binary, NULL), CBVH_OK);
+        assert_same_answers(wide, binary, m, w->wide4);
+        uint32_t vertex_count = 0;
+        for (uint32_t t = 0; t < 3 * m->triangle_count; t++)
+            vertex_count = m->t[t / 3][t % 3] + 1 > vertex_count ? m->t[t / 3][t % 3] + 1 : vertex_count;
+        const cbvh_mesh input = { &m->v[0][0], vertex_count, 0, &m->t[0][0], m->triangle_count, NULL };
+        cbvh_cook_options o;
+        cbvh_cook_options_init(&o, sizeof o);
+        o.layout = CBVH_LAYOUT_WIDE4;
+        o.max_leaf_size = w->max_leaf_size;
+        o.vertex_format = w->vertex_format;
+        void *bytes = NULL;
+        size_t size = 0;
+        assert_int_equal(cbvh_cook(&input, &o, NULL, &bytes, &size, NULL, NULL), CBVH_OK);
+        assert_int_equal(cbvh_open_memory(bytes, size, NULL, &cooked, NULL), CBVH_OK);
+        cbvh_file_info info;
+        cbvh_file_get_info(cooked, &info, sizeof info);
+        assert_int_equal(info.layout, CBVH_LAYOUT_WIDE4);
+        assert_same_answers(wide, cooked, m, w->wide4);
+        cbvh_close(cooked);
+        cbvh_buffer_free(NULL, bytes);
+        cbvh_close(binary);
+        cbvh_close(wide);
+    }
 }
 
 /* The prefix of a vector's name says its class; every file on disk has an expectation. */
@@ -388,6 +558,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_every_file_is_expected),
         cmocka_unit_test(test_expectations),
+        cmocka_unit_test(test_wide4_answers),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

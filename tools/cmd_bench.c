@@ -197,7 +197,7 @@ static int prepare_cbvh(bench_state *s)
     const char *path = s->mesh.cbvh_path;
     if (!s->mesh.is_cbvh) {
         cbvh_cook_options opt;
-        cbvh_cook_options_init(&opt);
+        cbvh_cook_options_init(&opt, sizeof opt);
         opt.progress = progress_cook_callback;
         opt.progress_user = &s->prog;
         cbvh_mesh view = bench_mesh_view(&s->mesh);
@@ -205,6 +205,7 @@ static int prepare_cbvh(bench_state *s)
         size_t size = 0;
         cbvh_error err;
         double start = bench_clock(s->cpu_clock);
+        cbvh_cook_stats_init(&s->cook, sizeof s->cook);
         cbvh_result r = cbvh_cook(&view, &opt, NULL, &data, &size, &s->cook, &err);
         double seconds = bench_clock(s->cpu_clock) - start;
         progress_done(&s->prog);
@@ -226,7 +227,7 @@ static int prepare_cbvh(bench_state *s)
     if (status)
         return status;
     cbvh_file_info info;
-    cbvh_file_get_info(s->file, &info);
+    cbvh_file_get_info(s->file, &info, sizeof info);
     b->bytes = info.file_size;
     b->structure_bytes = info.file_size;
     if (!s->cooked)

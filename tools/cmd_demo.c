@@ -487,7 +487,7 @@ out:
 static int demo_load(demo *d, const cbvh_file *f)
 {
     cbvh_file_info info;
-    cbvh_file_get_info(f, &info);
+    cbvh_file_get_info(f, &info, sizeof info);
     d->file = f;
     d->tri_count = f->original_triangle_count;
     d->tris = malloc(9 * (size_t)d->tri_count * sizeof(double));
@@ -553,8 +553,9 @@ int cmd_demo(int argc, char **argv)
 
     cbvh_mesh mesh = { s.positions, s.vertex_count, 0, s.indices, s.triangle_count, s.material_ids };
     cbvh_cook_options opt;
-    cbvh_cook_options_init(&opt);
+    cbvh_cook_options_init(&opt, sizeof opt);
     cbvh_cook_stats st;
+    cbvh_cook_stats_init(&st, sizeof st);
     cbvh_error err;
     double t0 = cli_now();
     cbvh_result res = cbvh_cook_to_path(&mesh, &opt, NULL, path, &st, &err);

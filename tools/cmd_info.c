@@ -3,6 +3,7 @@
 #include <string.h>
 
 #include "cli.h"
+#include "common/encodings.h"
 #include "commands.h"
 #include "json.h"
 #include "tree_stats.h"
@@ -28,18 +29,8 @@ static const char *codec_name(uint32_t codec) { return codec == CBVH_CODEC_RAW ?
 
 static const char *encoding_name(uint32_t type, uint32_t encoding)
 {
-    static const char *const tris[] = { "u16x3", "u32x3", "delta16" };
-    static const char *const verts[] = { "f32x3", "q16x3" };
-    static const char *const widths[] = { "u16", "u32" };
-    static const char *const mats[] = { "u8", "u16", "u32" };
-    switch (type) {
-    case CBVH_SECTION_NODES: return encoding == 0 ? "q16-node" : "?";
-    case CBVH_SECTION_TRIANGLES: return encoding < 3 ? tris[encoding] : "?";
-    case CBVH_SECTION_VERTICES: return encoding < 2 ? verts[encoding] : "?";
-    case CBVH_SECTION_REMAP: return encoding < 2 ? widths[encoding] : "?";
-    case CBVH_SECTION_MATERIALS: return encoding < 3 ? mats[encoding] : "?";
-    }
-    return "?";
+    const cbvh_encoding *e = cbvh_encoding_of(type, encoding);
+    return e ? e->name : "?";
 }
 
 static void json_vec3(json_writer *w, const char *key, const float v[3])
@@ -66,6 +57,7 @@ static void print_json(const char *path, const cbvh_file *f, const tree_stats *t
     json_uint(&w, "original_triangles", f->original_triangle_count);
     json_uint(&w, "vertices", in->vertex_count);
     json_string(&w, "vertex_format", in->vertex_format == CBVH_VERTEX_QUANTIZED16 ? "quantized16" : "float32");
+    json_string(&w, "layout", in->layout == CBVH_LAYOUT_WIDE4 ? "wide4" : "binary");
     json_bool(&w, "remap", (int)in->has_remap);
     json_bool(&w, "materials", (int)in->has_materials);
     json_vec3(&w, "bounds_min", in->bounds_min);
@@ -114,7 +106,7 @@ static void print_json(const char *path, const cbvh_file *f, const tree_stats *t
     json_begin_object(&w, "box_inflation");
     json_double(&w, "mean", ts->inflation_mean);
     json_double(&w, "max", ts->inflation_max);
-    json_uint(&w, "max_node", ts->inflation_max_node);
+    json_uint(&w, "max_node", ts->inflation_max_box);
     json_double(&w, "leaf_mean", ts->leaf_inflation_mean);
     json_double(&w, "internal_mean", ts->internal_inflation_mean);
     json_end_object(&w);
@@ -135,6 +127,8 @@ static void print_text(const char *path, const cbvh_file *f, const tree_stats *t
            in->has_remap ? "remapped" : "cooked order", (unsigned)in->vertex_count,
            in->vertex_format == CBVH_VERTEX_QUANTIZED16 ? "quantized16" : "float32",
            in->has_materials ? "stored" : "none");
+    printf("layout: %s\n", in->layout == CBVH_LAYOUT_WIDE4 ? "wide4 (4 children per 64-byte node)"
+                                                         : "binary (2 children per 16-byte node)");
     printf("bounds: [%g %g %g] - [%g %g %g]\n", in->bounds_min[0], in->bounds_min[1], in->bounds_min[2],
            in->bounds_max[0], in->bounds_max[1], in->bounds_max[2]);
     printf("grid: origin [%g %g %g], scale [%g %g %g]\n", in->grid_origin[0], in->grid_origin[1],
@@ -161,7 +155,7 @@ static void print_text(const char *path, const cbvh_file *f, const tree_stats *t
     printf("box inflation (surface area, 16-bit vs exact): mean %.3f%% (leaves %.3f%%, internal %.3f%%), "
            "worst %.3f%% at node %u\n",
            100.0 * ts->inflation_mean, 100.0 * ts->leaf_inflation_mean, 100.0 * ts->internal_inflation_mean,
-           100.0 * ts->inflation_max, (unsigned)ts->inflation_max_node);
+           100.0 * ts->inflation_max, (unsigned)ts->inflation_max_box);
 }
 
 int cmd_info(int argc, char **argv)

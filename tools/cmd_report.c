@@ -14,10 +14,10 @@
 #include "commands.h"
 #include "json.h"
 #include "progress.h"
+#include "report.h"
 #include "report_exact.h"
 #include "support/rays.h"
 #include "support/reference.h"
-#include "svg_plot.h"
 #include "tree_stats.h"
 
 static const char usage[] =
@@ -30,7 +30,9 @@ static const char usage[] =
     "    the file's 16-bit quantized boxes;\n"
     "  - vertices: lossless float against 16-bit quantized;\n"
     "  - sections: raw against zlib-compressed (file size and open time);\n"
-    "  - leaf sizes 1, 2, 4, 8, 16;\n"
+    "  - node layouts: binary (the default) and wide4;\n"
+    "  - leaf sizes (most triangles per leaf) 1, 2, 4, 8 and the default 16; quantized vertices,\n"
+    "    zlib sections and the traversals at the default;\n"
     "  - traversals: sorted by the precomputed sort byte, unsorted, distance-sorted at run time,\n"
     "    stackless, batched streams.\n"
     "Error columns: box inflation (surface area over the exact box, mean and worst), extra nodes\n"
@@ -40,7 +42,9 @@ static const char usage[] =
     "shared edges and vertices (rays from inside a closed mesh aimed exactly at its vertices and\n"
     "edge midpoints that miss; closed meshes only). Run time: MRays/s closest and any hit on\n"
     "incoherent rays (one thread, median of the repetitions), open time, bytes per triangle.\n"
-    "A markdown table goes to stdout.\n"
+    "A markdown table goes to stdout, with a recommendation per mesh: the fastest configuration\n"
+    "that answers exactly like the brute force (the default when within the timing noise), and\n"
+    "what smaller files and lossy choices cost.\n"
     "\n"
     "Options:\n"
     "  --gen SPEC      add a generated scene (sphere:N, terrain:N, soup:N, cube, demo)\n"
@@ -48,58 +52,56 @@ static const char usage[] =
     "  --sample N      of which the first N are checked by brute force (default 2000)\n"
     "  --seed S        ray generator seed (default 1)\n"
     "  --reps R        timed repetitions, the median is reported (default 3)\n"
-    "  --out DIR       write report.md, report.json, report.svg and the cooked files into DIR\n"
+    "  --out DIR       write report.md, report.json, report.svg, report.html and the cooked files\n"
+    "                  into DIR\n"
     "  --cpu-time      time with CPU clocks instead of the wall clock (steadier on a busy machine)\n"
     "  --json FILE     write the figures as JSON to FILE\n"
-    "  --svg FILE      write a plot of error against run time to FILE\n"
+    "  --svg FILE      write the plots of error against run time to FILE (one SVG picture)\n"
+    "  --html FILE     write one self-contained page to FILE: per mesh the recommendation, a plot\n"
+    "                  per error measure against run time (point per configuration, Pareto front,\n"
+    "                  details on hover or keyboard focus) and the summary table\n"
     "  --quiet         no progress display\n"
     "  -h, --help      show this help\n"
     "\n"
     "Exit status: 0 done, 1 an input is not a usable mesh, 2 usage or I/O error.\n";
 
-enum { OPT_GEN = 1, OPT_RAYS, OPT_SAMPLE, OPT_SEED, OPT_REPS, OPT_CPU, OPT_OUT, OPT_JSON, OPT_SVG, OPT_QUIET };
+enum { OPT_GEN = 1, OPT_RAYS, OPT_SAMPLE, OPT_SEED, OPT_REPS, OPT_CPU, OPT_OUT, OPT_JSON, OPT_SVG, OPT_HTML, OPT_QUIET };
 
 static const cli_option options[] = {
     { "gen", CLI_ARG_REQUIRED, OPT_GEN },   { "rays", CLI_ARG_REQUIRED, OPT_RAYS },
     { "sample", CLI_ARG_REQUIRED, OPT_SAMPLE }, { "seed", CLI_ARG_REQUIRED, OPT_SEED },
     { "reps", CLI_ARG_REQUIRED, OPT_REPS }, { "cpu-time", CLI_ARG_NONE, OPT_CPU },
     { "out", CLI_ARG_REQUIRED, OPT_OUT },
-    { "json", CLI_ARG_REQUIRED, OPT_JSON }, { "svg", CLI_ARG_REQUIRED, OPT_SVG },
+    { "json", CLI_ARG_REQUIRED, OPT_JSON }, { "svg", CLI_ARG_REQUIRED, OPT_SVG }, { "html", CLI_ARG_REQUIRED, OPT_HTML },
     { "quiet", CLI_ARG_NONE, OPT_QUIET },   { NULL, 0, 0 },
 };
 
-/* A hit on another triangle within this fraction of the diagonal is a tie on a shared edge, not a wrong triangle. */
-#define TIE_TOLERANCE 1e-5
 /* Vertices and edge midpoints aimed at by the leak test, at most, each. */
 #define LEAK_TARGETS 5000
 
 /* The cooks of one mesh: every leaf size with lossless vertices, then at the
- * default leaf size quantized vertices, and zlib sections (smaller files, a
- * slower open, the same queries). */
+ * default leaf size (cbvh_cook_options_init's) quantized vertices, zlib
+ * sections (smaller files, a slower open, the same queries) and each other
+ * node layout. A new choice of the format is one more line here. */
+#define DEFAULT_LEAF_SIZE 0 /* cbvh_cook_options_init's max_leaf_size */
 static const struct {
-    uint32_t leaf;
+    cbvh_layout layout;
+    uint32_t leaf; /* max_leaf_size, or DEFAULT_LEAF_SIZE */
     int quantized_vertices;
     int compress; /* zlib level, 0 for raw sections */
-} cook_configs[] = { { 1, 0, 0 }, { 2, 0, 0 }, { 4, 0, 0 }, { 8, 0, 0 }, { 16, 0, 0 }, { 4, 1, 0 }, { 4, 0, 6 } };
+} cook_configs[] = {
+    { CBVH_LAYOUT_BINARY, 1, 0, 0 },
+    { CBVH_LAYOUT_BINARY, 2, 0, 0 },
+    { CBVH_LAYOUT_BINARY, 4, 0, 0 },
+    { CBVH_LAYOUT_BINARY, 8, 0, 0 },
+    { CBVH_LAYOUT_BINARY, DEFAULT_LEAF_SIZE, 0, 0 },
+    { CBVH_LAYOUT_BINARY, DEFAULT_LEAF_SIZE, 1, 0 },
+    { CBVH_LAYOUT_BINARY, DEFAULT_LEAF_SIZE, 0, 6 },
+    { CBVH_LAYOUT_WIDE4, DEFAULT_LEAF_SIZE, 0, 0 },
+};
+/* Names of the layouts, by cbvh_layout value (as `cbvh cook --layout` spells them). */
+static const char *const layout_names[] = { "binary", "wide4" };
 #define COOK_COUNT (sizeof cook_configs / sizeof cook_configs[0])
-#define DEFAULT_LEAF 4
-
-typedef struct report_row {
-    const char *mesh;
-    char config[64];
-    uint32_t leaf;
-    int quantized_vertices, float_boxes, compress;
-    const char *traversal;
-    double bytes_per_triangle, open_seconds;
-    double closest_mrays, any_mrays;
-    double nodes_per_ray, tris_per_ray, extra_nodes, extra_tris;
-    double inflation_mean, inflation_worst;
-    uint64_t compared, flips, wrong_triangle;
-    double t_err_max, t_err_rms;
-    double vertex_error;
-    int64_t leaks; /* -1: the mesh is not closed */
-    uint64_t leak_rays;
-} report_row;
 
 typedef struct report_state {
     const char *command;
@@ -107,7 +109,7 @@ typedef struct report_state {
     uint64_t seed;
     unsigned reps;
     int cpu_clock;
-    const char *out_dir, *json_path, *svg_path;
+    const char *out_dir, *json_path, *svg_path, *html_path;
     progress prog;
     report_row *rows;
     size_t row_count, row_capacity;
@@ -365,7 +367,7 @@ static int measure(const report_state *s, mesh_ctx *c, bench_kernel kernel, cons
         const float *d = c->rays[i].dir;
         double len = sqrt((double)d[0] * d[0] + (double)d[1] * d[1] + (double)d[2] * d[2]);
         double err = fabs((double)h->t - c->ref_t[i]) * len / c->diagonal;
-        if (h->tri != c->ref_tri[i] && err > TIE_TOLERANCE)
+        if (h->tri != c->ref_tri[i] && err > REPORT_TIE_TOLERANCE)
             row->wrong_triangle++;
         sum2 += err * err;
         worst = fmax(worst, err);
@@ -401,6 +403,14 @@ static report_row *new_row(report_state *s)
     return r;
 }
 
+/* The max_leaf_size of cook k. */
+static uint32_t leaf_size(size_t k)
+{
+    cbvh_cook_options defaults;
+    cbvh_cook_options_init(&defaults, sizeof defaults);
+    return cook_configs[k].leaf == DEFAULT_LEAF_SIZE ? defaults.max_leaf_size : cook_configs[k].leaf;
+}
+
 /* A file name for the cooked file of a configuration: the mesh's base name without odd characters. */
 static void cooked_path(const report_state *s, const mesh_ctx *c, size_t k, char *path, size_t size)
 {
@@ -411,27 +421,50 @@ static void cooked_path(const report_state *s, const mesh_ctx *c, size_t k, char
     for (; *base && n + 1 < sizeof clean; base++)
         clean[n++] = (isalnum((unsigned char)*base) || *base == '_' || *base == '-') ? *base : '_';
     clean[n] = '\0';
-    snprintf(path, size, "%s/%s-leaf%u%s%s.cbvh", s->out_dir, clean, (unsigned)cook_configs[k].leaf,
-             cook_configs[k].quantized_vertices ? "-qverts" : "", cook_configs[k].compress ? "-zlib" : "");
+    snprintf(path, size, "%s/%s-%s-leaf%u%s%s.cbvh", s->out_dir, clean, layout_names[cook_configs[k].layout],
+             (unsigned)leaf_size(k), cook_configs[k].quantized_vertices ? "-qverts" : "",
+             cook_configs[k].compress ? "-zlib" : "");
+}
+
+/* Each dimension's value and the configuration's name, from the row's choices. */
+static void describe_row(report_row *row, const char *layout)
+{
+    snprintf(row->value[REPORT_DIM_LAYOUT], sizeof row->value[0], "%s layout", layout);
+    snprintf(row->value[REPORT_DIM_BOXES], sizeof row->value[0], "%s boxes", row->float_boxes ? "float" : "q16");
+    snprintf(row->value[REPORT_DIM_VERTICES], sizeof row->value[0], "%s vertices",
+             row->quantized_vertices ? "q16" : "float");
+    snprintf(row->value[REPORT_DIM_LEAF], sizeof row->value[0], "leaf %u", (unsigned)row->leaf);
+    snprintf(row->value[REPORT_DIM_TRAVERSAL], sizeof row->value[0], "%s", row->traversal);
+    if (row->compress)
+        snprintf(row->value[REPORT_DIM_SECTIONS], sizeof row->value[0], "zlib %d", row->compress);
+    else
+        snprintf(row->value[REPORT_DIM_SECTIONS], sizeof row->value[0], "raw sections");
+    size_t n = 0;
+    for (int d = 0; d < REPORT_DIM_COUNT; d++)
+        n += (size_t)snprintf(row->config + n, n < sizeof row->config ? sizeof row->config - n : 0, "%s%s",
+                              d ? ", " : "", row->value[d]);
 }
 
 static int measure_cook(report_state *s, mesh_ctx *c, size_t k, int *step, int steps)
 {
-    uint32_t leaf = cook_configs[k].leaf;
+    uint32_t leaf = leaf_size(k);
     int qverts = cook_configs[k].quantized_vertices, compress = cook_configs[k].compress;
-    int is_default = leaf == DEFAULT_LEAF && !qverts && !compress;
+    cbvh_cook_options opt;
+    cbvh_cook_options_init(&opt, sizeof opt);
+    int is_default = cook_configs[k].leaf == DEFAULT_LEAF_SIZE && !qverts && !compress &&
+                     cook_configs[k].layout == opt.layout;
     char label[128];
-    snprintf(label, sizeof label, "%s: cook leaf %u%s%s", c->label, (unsigned)leaf, qverts ? ", quantized vertices" : "",
-             compress ? ", zlib" : "");
+    snprintf(label, sizeof label, "%s: cook %s leaf %u%s%s", c->label, layout_names[cook_configs[k].layout],
+             (unsigned)leaf, qverts ? ", quantized vertices" : "", compress ? ", zlib" : "");
     progress_update(&s->prog, label, (double)(*step)++ / steps);
 
-    cbvh_cook_options opt;
-    cbvh_cook_options_init(&opt);
+    opt.layout = cook_configs[k].layout;
     opt.max_leaf_size = leaf;
     opt.vertex_format = qverts ? CBVH_VERTEX_QUANTIZED16 : CBVH_VERTEX_FLOAT32;
     opt.compress_level = compress;
     cbvh_mesh view = bench_mesh_view(&c->mesh);
     cbvh_cook_stats stats;
+    cbvh_cook_stats_init(&stats, sizeof stats);
     cbvh_error err;
     char path[1024];
     int status = 0;
@@ -496,13 +529,15 @@ static int measure_cook(report_state *s, mesh_ctx *c, size_t k, int *step, int s
             *row = base;
         }
         row->mesh = c->mesh.name;
+        row->triangles = c->mesh.triangle_count;
         row->leaf = leaf;
         row->quantized_vertices = qverts;
         row->compress = compress;
         row->float_boxes = v < 0;
+        row->reference = v < 0;
+        row->is_default = is_default && v == 0;
         row->traversal = v < 0 ? "sorted" : engine.name;
-        snprintf(row->config, sizeof row->config, "leaf %u, %s boxes, %s vertices, %s%s", (unsigned)leaf,
-                 v < 0 ? "float" : "q16", qverts ? "q16" : "float", row->traversal, compress ? ", zlib" : "");
+        describe_row(row, layout_names[cook_configs[k].layout]);
         row->bytes_per_triangle = (double)size / (double)c->mesh.triangle_count;
         row->open_seconds = v < 0 ? -1.0 : open_seconds;
         row->extra_nodes = row->nodes_per_ray - base.nodes_per_ray;
@@ -597,25 +632,26 @@ static void print_table(const report_state *s, FILE *out)
     fprintf(out, "%zu incoherent rays per configuration (one thread, median of %u, %s), %zu checked against a "
                  "double-precision brute force; errors relative to the scene diagonal.\n\n",
             s->rays, s->reps, s->cpu_clock ? "CPU time" : "wall-clock time", s->sample);
-    fprintf(out, "| mesh | configuration | bytes/tri | open ms | closest MRays/s | any MRays/s | nodes/ray | tris/ray "
-                 "| extra nodes/ray | extra tris/ray | box inflation mean | box inflation worst | flips | wrong tri "
-                 "| t err max | t err RMS | vertex err | leaked rays |\n");
-    fprintf(out, "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+    char cell[256];
+    for (int c = 0; c < REPORT_COLUMN_COUNT; c++)
+        fprintf(out, "| %s ", report_column_title(c));
+    fputs("|\n", out);
+    for (int c = 0; c < REPORT_COLUMN_COUNT; c++)
+        fputs(c < 2 ? "|---" : "|---:", out);
+    fputs("|\n", out);
     for (size_t i = 0; i < s->row_count; i++) {
-        const report_row *r = &s->rows[i];
-        fprintf(out, "| %s | %s | %.2f | ", r->mesh, r->config, r->bytes_per_triangle);
-        if (r->open_seconds >= 0.0)
-            fprintf(out, "%.3f | ", r->open_seconds * 1e3);
-        else
-            fprintf(out, "- | ");
-        fprintf(out, "%.3f | %.3f | %.1f | %.2f | %+.2f | %+.3f | %.4f | %.3f | %llu | %llu | %.2e | %.2e | %.2e | ",
-                r->closest_mrays, r->any_mrays, r->nodes_per_ray, r->tris_per_ray, r->extra_nodes, r->extra_tris,
-                r->inflation_mean, r->inflation_worst, (unsigned long long)r->flips,
-                (unsigned long long)r->wrong_triangle, r->t_err_max, r->t_err_rms, r->vertex_error);
-        if (r->leaks >= 0)
-            fprintf(out, "%lld / %llu |\n", (long long)r->leaks, (unsigned long long)r->leak_rays);
-        else
-            fprintf(out, "n/a (not closed) |\n");
+        for (int c = 0; c < REPORT_COLUMN_COUNT; c++) {
+            report_cell(&s->rows[i], c, cell, sizeof cell);
+            fprintf(out, "| %s ", cell);
+        }
+        fputs("|\n", out);
+    }
+    char advice[2048];
+    for (size_t i = 0; i < s->row_count;) {
+        size_t n = report_mesh_rows(s->rows + i, s->row_count - i);
+        report_recommend(s->rows + i, n, advice, sizeof advice);
+        fprintf(out, "\n**%s.** %s\n", s->rows[i].mesh, advice);
+        i += n;
     }
 }
 
@@ -635,13 +671,16 @@ static int write_json(const report_state *s, const char *path)
     json_uint(&w, "seed", s->seed);
     json_uint(&w, "reps", s->reps);
     json_string(&w, "clock", s->cpu_clock ? "cpu" : "wall");
-    json_double(&w, "tie_tolerance", TIE_TOLERANCE);
+    json_double(&w, "tie_tolerance", REPORT_TIE_TOLERANCE);
     json_begin_array(&w, "rows");
     for (size_t i = 0; i < s->row_count; i++) {
         const report_row *r = &s->rows[i];
         json_begin_object(&w, NULL);
         json_string(&w, "mesh", r->mesh);
         json_string(&w, "configuration", r->config);
+        json_bool(&w, "default", r->is_default);
+        json_bool(&w, "reference", r->reference);
+        json_string(&w, "layout", r->value[REPORT_DIM_LAYOUT]);
         json_uint(&w, "leaf_size", r->leaf);
         json_string(&w, "boxes", r->float_boxes ? "float" : "q16");
         json_string(&w, "vertices", r->quantized_vertices ? "q16" : "float");
@@ -684,48 +723,21 @@ static int write_json(const report_state *s, const char *path)
     return 0;
 }
 
-static int write_svg(const report_state *s, const char *path)
+/* Writes one of the pages (report_svg_write, report_html_write) to path. */
+static int write_page(const report_state *s, const char *path,
+                      int (*writer)(FILE *, const report_row *, size_t, const report_setup *))
 {
-    size_t n = s->row_count;
-    svg_point *pts = malloc(3 * (n ? n : 1) * sizeof *pts);
-    char (*labels)[160] = malloc((n ? n : 1) * sizeof *labels);
-    if (!pts || !labels) {
-        free(pts);
-        free(labels);
-        cli_error(s->command, NULL, "out of memory");
-        return CLI_EXIT_USAGE;
-    }
-    int many = n > 0 && strcmp(s->rows[0].mesh, s->rows[n - 1].mesh) != 0;
-    for (size_t i = 0; i < n; i++) {
-        const report_row *r = &s->rows[i];
-        const char *base = strrchr(r->mesh, '/') ? strrchr(r->mesh, '/') + 1 : r->mesh;
-        snprintf(labels[i], sizeof labels[i], "%s%sL%u %s%s %s%s", many ? base : "", many ? " " : "", (unsigned)r->leaf,
-                 r->float_boxes ? "floatbox" : "q16box", r->quantized_vertices ? " q16vert" : "", r->traversal,
-                 r->compress ? " zlib" : "");
-        double ns = r->closest_mrays > 0.0 ? 1e3 / r->closest_mrays : NAN;
-        pts[i] = (svg_point){ ns, r->t_err_rms, labels[i] };
-        pts[n + i] = (svg_point){ ns, r->extra_nodes + r->extra_tris, labels[i] };
-        pts[2 * n + i] = (svg_point){ ns, r->bytes_per_triangle, labels[i] };
-    }
-    const svg_panel panels[3] = {
-        { "Distance error against run time", { "closest hit, ns per ray", 1 }, { "RMS |t - t_ref| / diagonal", 1 }, pts, n },
-        { "Extra work against run time", { "closest hit, ns per ray", 1 },
-          { "extra nodes + triangles per ray vs exact float boxes", 0 }, pts + n, n },
-        { "Size against run time", { "closest hit, ns per ray", 1 }, { "file bytes per triangle", 0 }, pts + 2 * n, n },
-    };
+    report_setup setup = { s->rays, s->sample, s->reps, s->cpu_clock };
     FILE *out = fopen(path, "w");
-    int status = 0;
     if (!out) {
         cli_error(s->command, path, "cannot write: %s", strerror(errno));
-        status = CLI_EXIT_USAGE;
-    } else if ((svg_plot_write(out, "cbvh report: error and run time per configuration", panels, 3) != 0) |
-               fclose(out)) {
-        cli_error(s->command, path, "write failed");
-        status = CLI_EXIT_USAGE;
+        return CLI_EXIT_USAGE;
     }
-    free(pts);
-    free(labels);
-    return status;
+    if ((writer(out, s->rows, s->row_count, &setup) != 0) | fclose(out)) {
+        cli_error(s->command, path, "write failed (or out of memory)");
+        return CLI_EXIT_USAGE;
+    }
+    return 0;
 }
 
 static int write_outputs(const report_state *s)
@@ -747,8 +759,8 @@ static int write_outputs(const report_state *s)
             return CLI_EXIT_USAGE;
         }
     }
-    const char *json = s->json_path, *svg = s->svg_path;
-    char json_default[1024], svg_default[1024];
+    const char *json = s->json_path, *svg = s->svg_path, *html = s->html_path;
+    char json_default[1024], svg_default[1024], html_default[1024];
     if (s->out_dir && !json) {
         snprintf(json_default, sizeof json_default, "%s/report.json", s->out_dir);
         json = json_default;
@@ -757,10 +769,16 @@ static int write_outputs(const report_state *s)
         snprintf(svg_default, sizeof svg_default, "%s/report.svg", s->out_dir);
         svg = svg_default;
     }
+    if (s->out_dir && !html) {
+        snprintf(html_default, sizeof html_default, "%s/report.html", s->out_dir);
+        html = html_default;
+    }
     if (json)
         status = write_json(s, json);
     if (!status && svg)
-        status = write_svg(s, svg);
+        status = write_page(s, svg, report_svg_write);
+    if (!status && html)
+        status = write_page(s, html, report_html_write);
     return status;
 }
 
@@ -821,6 +839,7 @@ int cmd_report(int argc, char **argv)
         case OPT_OUT: s.out_dir = value; break;
         case OPT_JSON: s.json_path = value; break;
         case OPT_SVG: s.svg_path = value; break;
+        case OPT_HTML: s.html_path = value; break;
         case OPT_QUIET: quiet = 1; break;
         }
     }

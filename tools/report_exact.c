@@ -2,17 +2,17 @@
 #include <stdlib.h>
 
 #include "common/file.h"
-#include "query/stack_walk.h"
+#include "query/walk.h"
 #include "report_exact.h"
 #include "tree_stats.h"
 
 int exact_tree_build(exact_tree *tree, const cbvh_file *file)
 {
-    uint32_t n = file->info.node_count;
-    float *boxes = malloc((size_t)n * 6 * sizeof(float));
+    uint32_t n = cbvh_tree_box_count(file, file->layout);
+    float *boxes = malloc((size_t)n * 6 * sizeof(float)), root[6];
     if (!boxes)
         return 0;
-    tree_exact_boxes(file, boxes);
+    tree_exact_boxes(file, boxes, root);
     tree->file = file;
     tree->boxes = boxes;
     tree->node_count = n;
@@ -25,6 +25,18 @@ void exact_tree_free(exact_tree *tree)
     tree->boxes = NULL;
 }
 
+static const struct cbvh_walk_mode exact_closest = {.order = CBVH_WALK_SORTED};
+static const struct cbvh_walk_mode exact_any = {.order = CBVH_WALK_SORTED, .any = 1};
+
+/* The library's sorted walk on the exact float boxes: same tree, same order, same triangle test. */
+static int exact_walk(const exact_tree *tree, const struct cbvh_ray_ctx *ctx, const struct cbvh_walk_mode mode,
+                      struct cbvh_best_hit *best, cbvh_query_stats *stats)
+{
+    const struct cbvh_file *f = tree->file;
+    return cbvh_walk(f, f->layout, ctx, cbvh_tree_root(f, f->layout), cbvh_tree_root_box(f, f->layout), mode,
+                     tree->boxes, best, stats);
+}
+
 int exact_raycast(const exact_tree *tree, const cbvh_ray *ray, cbvh_hit *hit, cbvh_query_stats *stats)
 {
     struct cbvh_ray_ctx ctx;
@@ -32,11 +44,7 @@ int exact_raycast(const exact_tree *tree, const cbvh_ray *ray, cbvh_hit *hit, cb
     hit->tri = CBVH_NO_HIT;
     if (!cbvh_ray_setup(&ctx, ray))
         return 0;
-    /* counting is a constant in each instance, as in the library's walks */
-    if (stats)
-        cbvh_stack_walk(tree->file, &ctx, 0, ctx.sort_mask, 0, 0, 1, 0, tree->boxes, &best, stats);
-    else
-        cbvh_stack_walk(tree->file, &ctx, 0, ctx.sort_mask, 0, 0, 0, 0, tree->boxes, &best, NULL);
+    exact_walk(tree, &ctx, exact_closest, &best, stats);
     if (best.tri == UINT32_MAX)
         return 0;
     hit->tri = cbvh_original_id(tree->file, best.tri);
@@ -51,7 +59,5 @@ int exact_occluded(const exact_tree *tree, const cbvh_ray *ray, cbvh_query_stats
     struct cbvh_ray_ctx ctx;
     if (!cbvh_ray_setup(&ctx, ray))
         return 0;
-    if (stats)
-        return cbvh_stack_walk(tree->file, &ctx, 0, ctx.sort_mask, 0, 1, 1, 0, tree->boxes, NULL, stats);
-    return cbvh_stack_walk(tree->file, &ctx, 0, ctx.sort_mask, 0, 1, 0, 0, tree->boxes, NULL, NULL);
+    return exact_walk(tree, &ctx, exact_any, NULL, stats);
 }

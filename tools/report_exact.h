@@ -12,7 +12,7 @@
  * triangle test, so the only difference from cbvh_raycast is box quantization. */
 typedef struct exact_tree {
     const cbvh_file *file; /* not owned; must outlive the tree */
-    float *boxes;          /* 6 per node in cbvh_node_q order: min x,y,z then max x,y,z */
+    float *boxes;          /* 6 per box id (layout/tree.h): min x,y,z then max x,y,z */
     uint32_t node_count;
 } exact_tree;
 

@@ -3,13 +3,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "layout/tree.h"
 #include "tree_stats.h"
-
-uint32_t tree_escape(const struct cbvh_file *f, uint32_t i)
-{
-    uint32_t word = f->nodes[i].word;
-    return i + (cbvh_node_is_leaf(word) ? 1u : cbvh_node_subtree_size(word));
-}
 
 double tree_box_area(const float lo[3], const float hi[3])
 {
@@ -17,108 +12,145 @@ double tree_box_area(const float lo[3], const float hi[3])
     return 2.0 * (dx * dy + dy * dz + dz * dx);
 }
 
-void tree_exact_boxes(const struct cbvh_file *f, float *boxes)
+static void box_empty(float b[6])
 {
-    const uint32_t n = f->info.node_count;
-    /* Children come after their parent in depth-first order, so one backward pass sees
-     * every child's box before its parent needs it. */
-    for (uint32_t i = n; i-- > 0;) {
-        uint32_t word = f->nodes[i].word;
-        float *b = boxes + 6 * (size_t)i;
-        if (cbvh_node_is_leaf(word)) {
-            for (int a = 0; a < 3; a++) {
-                b[a] = FLT_MAX;
-                b[3 + a] = -FLT_MAX;
-            }
-            uint32_t first = cbvh_leaf_first(word), count = cbvh_leaf_count(word);
-            for (uint32_t t = first; t < first + count; t++) {
-                float v[3][3];
-                cbvh_triangle_vertices(f, t, v[0], v[1], v[2]);
-                for (int k = 0; k < 3; k++)
-                    for (int a = 0; a < 3; a++) {
-                        if (v[k][a] < b[a])
-                            b[a] = v[k][a];
-                        if (v[k][a] > b[3 + a])
-                            b[3 + a] = v[k][a];
-                    }
-            }
-        } else {
-            uint32_t c0 = i + 1, c1 = tree_escape(f, c0);
-            const float *b0 = boxes + 6 * (size_t)c0, *b1 = boxes + 6 * (size_t)c1;
-            for (int a = 0; a < 3; a++) {
-                b[a] = b0[a] < b1[a] ? b0[a] : b1[a];
-                b[3 + a] = b0[3 + a] > b1[3 + a] ? b0[3 + a] : b1[3 + a];
-            }
-        }
+    for (int a = 0; a < 3; a++) {
+        b[a] = FLT_MAX;
+        b[3 + a] = -FLT_MAX;
     }
 }
 
-double tree_node_inflation(const struct cbvh_file *f, uint32_t i, const float *exact_boxes)
+static void box_grow(float b[6], const float lo[3], const float hi[3])
+{
+    for (int a = 0; a < 3; a++) {
+        b[a] = lo[a] < b[a] ? lo[a] : b[a];
+        b[3 + a] = hi[a] > b[3 + a] ? hi[a] : b[3 + a];
+    }
+}
+
+/* The exact bounds of the subtree `r` into b, and of each box below it into boxes. The loader
+ * bounded the depth, so the recursion is at most CBVH_MAX_DEPTH deep. */
+static void exact_subtree(const struct cbvh_file *f, cbvh_ref r, float *boxes, float b[6])
+{
+    box_empty(b);
+    if (cbvh_tree_is_leaf(f, f->layout, r)) {
+        uint32_t first, count;
+        cbvh_tree_leaf(f, f->layout, r, &first, &count);
+        for (uint32_t t = first; t < first + count; t++) {
+            float v[3][3];
+            cbvh_triangle_vertices(f, t, v[0], v[1], v[2]);
+            for (int k = 0; k < 3; k++)
+                box_grow(b, v[k], v[k]);
+        }
+        return;
+    }
+    struct cbvh_child c[CBVH_TREE_WIDTH];
+    const uint32_t n = cbvh_tree_children(f, f->layout, r, CBVH_NO_OCTANT, c);
+    for (uint32_t k = 0; k < n; k++) {
+        float *cb = boxes + 6 * (size_t)c[k].box;
+        exact_subtree(f, c[k].ref, boxes, cb);
+        box_grow(b, cb, cb + 3);
+    }
+}
+
+void tree_exact_boxes(const struct cbvh_file *f, float *boxes, float root[6])
+{
+    const uint32_t root_box = cbvh_tree_root_box(f, f->layout);
+    exact_subtree(f, cbvh_tree_root(f, f->layout), boxes, root);
+    if (root_box != CBVH_NO_BOX)
+        memcpy(boxes + 6 * (size_t)root_box, root, 6 * sizeof(float));
+}
+
+double tree_box_inflation(const struct cbvh_file *f, uint32_t box, const float *exact_boxes)
 {
     float lo[3], hi[3];
-    cbvh_node_box(f, &f->nodes[i], lo, hi);
-    const float *e = exact_boxes + 6 * (size_t)i;
+    cbvh_tree_box(f, f->layout, box, lo, hi);
+    const float *e = exact_boxes + 6 * (size_t)box;
     double exact = tree_box_area(e, e + 3);
     return exact > 0 ? tree_box_area(lo, hi) / exact - 1.0 : 0.0;
+}
+
+/* What the recursion over the tree accumulates. */
+struct stats_walk {
+    const struct cbvh_file *f;
+    const float *exact;
+    double root_area, root_exact, ct, ci;
+    double sum_inflation, sum_leaf_inflation;
+    uint64_t boxes, leaf_boxes, leaf_triangles;
+    tree_stats *out;
+};
+
+/* The subtree r, whose box is `box` (CBVH_NO_BOX for a root without one), at depth `depth`. */
+static void stats_subtree(struct stats_walk *w, cbvh_ref r, uint32_t box, uint32_t depth)
+{
+    const struct cbvh_file *f = w->f;
+    tree_stats *out = w->out;
+    const int leaf = cbvh_tree_is_leaf(f, f->layout, r);
+    uint32_t first = 0, count = 0;
+    if (leaf)
+        cbvh_tree_leaf(f, f->layout, r, &first, &count);
+    if (depth > out->depth)
+        out->depth = depth;
+    if (box != CBVH_NO_BOX) {
+        float lo[3], hi[3];
+        cbvh_tree_box(f, f->layout, box, lo, hi);
+        const float *e = w->exact + 6 * (size_t)box;
+        const double area = w->root_area > 0 ? tree_box_area(lo, hi) / w->root_area : 0;
+        const double exact = w->root_exact > 0 ? tree_box_area(e, e + 3) / w->root_exact : 0;
+        const double inflation = tree_box_inflation(f, box, w->exact);
+        const double cost = leaf ? w->ci * count : w->ct;
+        w->boxes++;
+        w->sum_inflation += inflation;
+        if (inflation > out->inflation_max) {
+            out->inflation_max = inflation;
+            out->inflation_max_box = box;
+        }
+        out->sah_cost += cost * area;
+        out->sah_cost_exact += cost * exact;
+        if (leaf) {
+            w->leaf_boxes++;
+            w->sum_leaf_inflation += inflation;
+        }
+    } else if (!leaf) {
+        out->sah_cost += w->ct; /* a root without a box of its own is entered at its full area */
+        out->sah_cost_exact += w->ct;
+    }
+    if (leaf) {
+        out->leaves++;
+        out->leaf_histogram[count]++;
+        w->leaf_triangles += count;
+        return;
+    }
+    struct cbvh_child c[CBVH_TREE_WIDTH];
+    const uint32_t n = cbvh_tree_children(f, f->layout, r, CBVH_NO_OCTANT, c);
+    for (uint32_t k = 0; k < n; k++)
+        stats_subtree(w, c[k].ref, c[k].box, depth + 1);
 }
 
 int tree_stats_compute(const struct cbvh_file *f, double traversal_cost, double intersection_cost,
                        tree_stats *out)
 {
-    const uint32_t n = f->info.node_count;
-    float *boxes = malloc(6 * (size_t)n * sizeof(float));
-    uint8_t *depth = malloc(n);
-    if (!boxes || !depth) {
-        free(boxes);
-        free(depth);
+    const uint32_t box_count = cbvh_tree_box_count(f, f->layout);
+    float *boxes = malloc(6 * (size_t)box_count * sizeof(float));
+    if (!boxes)
         return 0;
-    }
     memset(out, 0, sizeof *out);
-    tree_exact_boxes(f, boxes);
-
-    float rlo[3], rhi[3];
-    cbvh_node_box(f, &f->nodes[0], rlo, rhi);
-    double root_area = tree_box_area(rlo, rhi), root_exact = tree_box_area(boxes, boxes + 3);
-    double sum_inflation = 0, sum_leaf_inflation = 0;
-    uint64_t leaf_triangles = 0;
-    depth[0] = 1;
-    for (uint32_t i = 0; i < n; i++) {
-        uint32_t word = f->nodes[i].word;
-        float lo[3], hi[3];
-        cbvh_node_box(f, &f->nodes[i], lo, hi);
-        const float *e = boxes + 6 * (size_t)i;
-        double area = root_area > 0 ? tree_box_area(lo, hi) / root_area : 0;
-        double exact = root_exact > 0 ? tree_box_area(e, e + 3) / root_exact : 0;
-        double inflation = tree_node_inflation(f, i, boxes);
-        sum_inflation += inflation;
-        if (inflation > out->inflation_max) {
-            out->inflation_max = inflation;
-            out->inflation_max_node = i;
-        }
-        if (depth[i] > out->depth)
-            out->depth = depth[i];
-        if (cbvh_node_is_leaf(word)) {
-            uint32_t count = cbvh_leaf_count(word);
-            out->leaves++;
-            out->leaf_histogram[count]++;
-            leaf_triangles += count;
-            out->sah_cost += intersection_cost * count * area;
-            out->sah_cost_exact += intersection_cost * count * exact;
-            sum_leaf_inflation += inflation;
-        } else {
-            /* The loader checked the links and the depth limit, so children are in range. */
-            uint32_t c0 = i + 1, c1 = tree_escape(f, c0);
-            depth[c0] = depth[c1] = (uint8_t)(depth[i] + 1);
-            out->sah_cost += traversal_cost * area;
-            out->sah_cost_exact += traversal_cost * exact;
-        }
-    }
-    out->nodes = n;
-    out->mean_leaf_size = out->leaves ? (double)leaf_triangles / out->leaves : 0;
-    out->inflation_mean = n ? sum_inflation / n : 0;
-    out->leaf_inflation_mean = out->leaves ? sum_leaf_inflation / out->leaves : 0;
-    out->internal_inflation_mean = n > out->leaves ? (sum_inflation - sum_leaf_inflation) / (n - out->leaves) : 0;
+    float root[6], qlo[3], qhi[3];
+    tree_exact_boxes(f, boxes, root);
+    const uint32_t root_box = cbvh_tree_root_box(f, f->layout);
+    if (root_box != CBVH_NO_BOX)
+        cbvh_tree_box(f, f->layout, root_box, qlo, qhi);
+    else
+        memcpy(qlo, root, sizeof qlo), memcpy(qhi, root + 3, sizeof qhi);
+    struct stats_walk w = {f, boxes, tree_box_area(qlo, qhi), tree_box_area(root, root + 3), traversal_cost,
+                           intersection_cost, 0, 0, 0, 0, 0, out};
+    stats_subtree(&w, cbvh_tree_root(f, f->layout), root_box, 1);
+    out->nodes = f->info.node_count;
+    out->mean_leaf_size = out->leaves ? (double)w.leaf_triangles / out->leaves : 0;
+    out->inflation_mean = w.boxes ? w.sum_inflation / (double)w.boxes : 0;
+    out->leaf_inflation_mean = w.leaf_boxes ? w.sum_leaf_inflation / (double)w.leaf_boxes : 0;
+    out->internal_inflation_mean =
+        w.boxes > w.leaf_boxes ? (w.sum_inflation - w.sum_leaf_inflation) / (double)(w.boxes - w.leaf_boxes) : 0;
     free(boxes);
-    free(depth);
     return 1;
 }

@@ -1,24 +1,19 @@
 /* alloc.c: allocation through the caller's hooks, with the C library as default. */
 #include <stdint.h>
-#include <stdlib.h>
 
 #include "common/alloc.h"
+#include "common/os.h"
 
 static void *default_alloc(void *user, size_t size, size_t align)
 {
     (void)user;
-    if (align < sizeof(void *))
-        align = sizeof(void *);
-    void *p = NULL;
-    if (posix_memalign(&p, align, size) != 0)
-        return NULL;
-    return p;
+    return cbvh_os_aligned_alloc(size, align);
 }
 
 static void default_free(void *user, void *ptr)
 {
     (void)user;
-    free(ptr);
+    cbvh_os_aligned_free(ptr);
 }
 
 cbvh_allocator cbvh_allocator_resolve(const cbvh_allocator *allocator)

@@ -5,7 +5,7 @@
 #include <stddef.h>
 #include "cbvh.h"
 
-/* Resolves NULL to the default allocator (aligned_alloc / free). */
+/* Resolves NULL to the default allocator (posix_memalign or _aligned_malloc, in common/os.h). */
 cbvh_allocator cbvh_allocator_resolve(const cbvh_allocator *allocator);
 
 /* Allocates `size` bytes aligned to `align` (power of two <= 64); NULL on failure

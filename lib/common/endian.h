@@ -20,6 +20,12 @@ static inline float cbvh_read_f32(const uint8_t *p)
     memcpy(&f, &u, 4);
     return f;
 }
+static inline void cbvh_write_u16(uint8_t *p, uint16_t v)
+{
+    p[0] = (uint8_t)v;
+    p[1] = (uint8_t)(v >> 8);
+}
+
 static inline void cbvh_write_u32(uint8_t *p, uint32_t v)
 {
     p[0] = (uint8_t)v; p[1] = (uint8_t)(v >> 8); p[2] = (uint8_t)(v >> 16); p[3] = (uint8_t)(v >> 24);

@@ -3,13 +3,10 @@
 #define CBVH_COMMON_ERROR_H
 
 #include "cbvh.h"
+#include "common/compiler.h"
 
 /* Sets err (if not NULL) and returns code, so callers write `return cbvh_fail(err, CODE, "...", ...)`. */
-cbvh_result cbvh_fail(cbvh_error *err, cbvh_result code, const char *fmt, ...)
-#ifdef __GNUC__
-    __attribute__((format(printf, 3, 4)))
-#endif
-    ;
+cbvh_result cbvh_fail(cbvh_error *err, cbvh_result code, const char *fmt, ...) CBVH_PRINTF(3, 4);
 
 /* Clears err to CBVH_OK with an empty message. */
 void cbvh_error_clear(cbvh_error *err);

@@ -18,7 +18,8 @@ struct cbvh_file {
     cbvh_file_info info;
     cbvh_section_info sections[CBVH_MAX_SECTIONS];
 
-    const cbvh_node *nodes;      /* info.node_count, depth-first order, root at 0 */
+    const void *nodes;           /* the NODES section: read through layout/tree.h only */
+    uint32_t layout;             /* the node layout (cbvh_layout): which module reads the nodes */
     const void *triangles;       /* info.triangle_count entries in cooked (leaf) order */
     uint32_t triangle_encoding;  /* CBVH_TRIS_* */
     const void *vertices;        /* info.vertex_count entries */
@@ -98,15 +99,6 @@ static inline uint32_t cbvh_original_id(const struct cbvh_file *f, uint32_t tri)
     if (f->remap_encoding == CBVH_REMAP_U16)
         return ((const uint16_t *)f->remap)[tri];
     return ((const uint32_t *)f->remap)[tri];
-}
-
-/* A node's box, dequantized on the file's grid. */
-static inline void cbvh_node_box(const struct cbvh_file *f, const cbvh_node *n, float lo[3], float hi[3])
-{
-    for (int a = 0; a < 3; a++) {
-        lo[a] = cbvh_dequantize(n->qmin[a], f->grid_origin[a], f->grid_scale[a]);
-        hi[a] = cbvh_dequantize(n->qmax[a], f->grid_origin[a], f->grid_scale[a]);
-    }
 }
 
 #endif

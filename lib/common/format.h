@@ -53,56 +53,20 @@ enum {
 
 enum { CBVH_CODEC_RAW = 0, CBVH_CODEC_ZLIB = 1 };
 
-/* Element encodings per section. */
-enum { CBVH_NODES_Q16 = 0 };                                     /* 16 bytes per node */
-enum { CBVH_TRIS_U16 = 0, CBVH_TRIS_U32 = 1, CBVH_TRIS_DELTA16 = 2 }; /* 6, 12, 8 bytes */
-enum { CBVH_VERTS_F32 = 0, CBVH_VERTS_Q16 = 1 };                  /* 12, 6 bytes */
-enum { CBVH_REMAP_U16 = 0, CBVH_REMAP_U32 = 1 };                  /* 2, 4 bytes */
-enum { CBVH_MATS_U8 = 0, CBVH_MATS_U16 = 1, CBVH_MATS_U32 = 2 };  /* 1, 2, 4 bytes */
+/* Element encodings per section (element sizes, names and limits: common/encodings.h). */
+enum { CBVH_NODES_Q16 = 0, CBVH_NODES_W4 = 1 };                  /* binary, wide4 layout */
+enum { CBVH_TRIS_U16 = 0, CBVH_TRIS_U32 = 1, CBVH_TRIS_DELTA16 = 2 };
+enum { CBVH_VERTS_F32 = 0, CBVH_VERTS_Q16 = 1 };
+enum { CBVH_REMAP_U16 = 0, CBVH_REMAP_U32 = 1 };
+enum { CBVH_MATS_U8 = 0, CBVH_MATS_U16 = 1, CBVH_MATS_U32 = 2 };
 
-/* Limits. Nodes: 23 bits of subtree size in an internal node's word.
- * Triangles: 27 bits of first-triangle index in a leaf's word. Depth: the
- * sorted traversal's fixed stack. */
-#define CBVH_MAX_NODES 0x7FFFFFu
-#define CBVH_MAX_TRIANGLES 0x7FFFFFFu
+/* Limits of any file; each layout has narrower ones of its own
+ * (layout/binary.h, layout/wide4.h). Nodes and triangles: what a wide4 child
+ * reference can name. Depth: the walks' fixed stacks. */
+#define CBVH_MAX_NODES 0x7FFFFFFFu
+#define CBVH_MAX_TRIANGLES 0x10000000u
 #define CBVH_MAX_LEAF_SIZE 16u
 #define CBVH_MAX_DEPTH 64u
-
-/* A node: a conservative 16-bit box on the file's grid plus one word.
- *   internal: bit 31 = 0, bits 30..23 = sort byte, bits 22..0 = subtree size
- *             in nodes (the escape link is index + size; the first child is
- *             index + 1, the second child is the first child's escape).
- *   leaf:     bit 31 = 1, bits 30..27 = triangle count - 1, bits 26..0 =
- *             first triangle (in cooked order); its escape is index + 1.
- * Sort byte bit k, for ray octant k (bit 0: dir.x < 0, bit 1: dir.y < 0,
- * bit 2: dir.z < 0, signs taken from the reciprocal direction): set when the
- * second child is nearer and is visited first. */
-typedef struct cbvh_node {
-    uint16_t qmin[3];
-    uint16_t qmax[3];
-    uint32_t word;
-} cbvh_node;
-
-#define CBVH_NODE_LEAF_BIT 0x80000000u
-#define CBVH_NODE_SIZE_MASK 0x7FFFFFu
-#define CBVH_NODE_SORT_SHIFT 23
-#define CBVH_NODE_COUNT_SHIFT 27
-#define CBVH_NODE_FIRST_MASK 0x7FFFFFFu
-
-static inline int cbvh_node_is_leaf(uint32_t word) { return (word & CBVH_NODE_LEAF_BIT) != 0; }
-static inline uint32_t cbvh_node_subtree_size(uint32_t word) { return word & CBVH_NODE_SIZE_MASK; }
-static inline uint32_t cbvh_node_sort_byte(uint32_t word) { return (word >> CBVH_NODE_SORT_SHIFT) & 0xFFu; }
-static inline uint32_t cbvh_leaf_first(uint32_t word) { return word & CBVH_NODE_FIRST_MASK; }
-static inline uint32_t cbvh_leaf_count(uint32_t word) { return ((word >> CBVH_NODE_COUNT_SHIFT) & 0xFu) + 1u; }
-
-static inline uint32_t cbvh_make_internal(uint32_t subtree_size, uint32_t sort_byte)
-{
-    return (sort_byte << CBVH_NODE_SORT_SHIFT) | subtree_size;
-}
-static inline uint32_t cbvh_make_leaf(uint32_t first, uint32_t count)
-{
-    return CBVH_NODE_LEAF_BIT | ((count - 1u) << CBVH_NODE_COUNT_SHIFT) | first;
-}
 
 /* The largest grid coordinate of a 16-bit box. */
 #define CBVH_Q_MAX 65535u

@@ -2,28 +2,61 @@
 #include <math.h>
 #include <stdint.h>
 #include <string.h>
-#include <time.h>
 
 #include "common/alloc.h"
 #include "common/error.h"
 #include "common/format.h"
+#include "common/struct_size.h"
+#include "common/os.h"
 #include "cook/cook_internal.h"
 
-CBVH_API void cbvh_cook_options_init(cbvh_cook_options *options)
+#define OPTIONS_SIZE_MIN CBVH_STRUCT_SIZE_MIN(cbvh_cook_options, max_leaf_size)
+#define STATS_SIZE_MIN CBVH_STRUCT_SIZE_MIN(cbvh_cook_stats, input_triangles)
+
+/* The defaults of cbvh.h, in a whole struct of this library's size. */
+static void default_options(cbvh_cook_options *o)
 {
-    if (!options)
-        return;
-    memset(options, 0, sizeof *options);
+    memset(o, 0, sizeof *o);
+    o->struct_size = sizeof *o;
     /* Fewer, larger leaves: each node skipped is a dependent cache miss saved,
      * and a leaf's triangles sit together in memory (measurements in cbvh.h). */
-    options->max_leaf_size = 16;
-    options->sah_bins = 32;
-    options->traversal_cost = 4.0f;
-    options->intersection_cost = 1.0f;
-    options->vertex_format = CBVH_VERTEX_FLOAT32;
-    options->compress_level = 0;
-    options->keep_remap = 1;
-    options->keep_materials = 1;
+    o->max_leaf_size = 16;
+    o->sah_bins = 32;
+    o->traversal_cost = 4.0f;
+    o->intersection_cost = 1.0f;
+    o->vertex_format = CBVH_VERTEX_FLOAT32;
+    o->compress_level = 0;
+    o->keep_remap = 1;
+    o->keep_materials = 1;
+}
+
+/* Records `size` in the struct_size that leads the caller's struct `s` when it covers that field (so that
+ * cbvh_cook can explain a bad one); returns whether it is in range. */
+static int record_struct_size(void *s, size_t size, size_t smallest, size_t largest)
+{
+    if (!s || size < sizeof(size_t))
+        return 0;
+    *(size_t *)s = size;
+    return cbvh_struct_size_ok(size, smallest, largest);
+}
+
+CBVH_API cbvh_result cbvh_cook_options_init(cbvh_cook_options *options, size_t struct_size)
+{
+    if (!record_struct_size(options, struct_size, OPTIONS_SIZE_MIN, sizeof *options))
+        return CBVH_ERROR_INVALID_ARGUMENT;
+    cbvh_cook_options defaults;
+    default_options(&defaults);
+    defaults.struct_size = struct_size;
+    memcpy(options, &defaults, struct_size);
+    return CBVH_OK;
+}
+
+CBVH_API cbvh_result cbvh_cook_stats_init(cbvh_cook_stats *stats, size_t struct_size)
+{
+    if (!record_struct_size(stats, struct_size, STATS_SIZE_MIN, sizeof *stats))
+        return CBVH_ERROR_INVALID_ARGUMENT;
+    memset((uint8_t *)stats + sizeof stats->struct_size, 0, struct_size - sizeof stats->struct_size);
+    return CBVH_OK;
 }
 
 CBVH_API void cbvh_buffer_free(const cbvh_allocator *allocator, void *data)
@@ -32,9 +65,41 @@ CBVH_API void cbvh_buffer_free(const cbvh_allocator *allocator, void *data)
     cbvh_free(&a, data);
 }
 
+/* The error for a caller's struct `name` (of type `type`, filled by `init`) whose struct_size is out of range. */
+static cbvh_result check_struct_size(const char *name, const char *type, const char *init, size_t size,
+                                     size_t smallest, size_t largest, cbvh_error *err)
+{
+    if (cbvh_struct_size_ok(size, smallest, largest))
+        return CBVH_OK;
+    if (size > largest)
+        return cbvh_fail(err, CBVH_ERROR_INVALID_ARGUMENT,
+                         "%s->struct_size is %zu, larger than this library's %s (%zu bytes): the program was "
+                         "built against a newer cbvh.h than the library it runs with",
+                         name, size, type, largest);
+    return cbvh_fail(err, CBVH_ERROR_INVALID_ARGUMENT,
+                     "%s->struct_size is %zu; it must be %zu to %zu: fill the struct with %s(%s, sizeof *%s)", name,
+                     size, smallest, largest, init, name, name);
+}
+
+/* The caller's options over the defaults, as far as its struct_size reaches. */
+static cbvh_result read_options(const cbvh_cook_options *user, cbvh_cook_options *o, cbvh_error *err)
+{
+    default_options(o);
+    if (!user)
+        return CBVH_OK;
+    cbvh_result r = check_struct_size("options", "cbvh_cook_options", "cbvh_cook_options_init", user->struct_size,
+                                      OPTIONS_SIZE_MIN, sizeof *o, err);
+    if (r == CBVH_OK)
+        memcpy(o, user, user->struct_size);
+    return r;
+}
+
 static cbvh_result check_options(const cbvh_cook_options *o, cbvh_error *err)
 {
     const cbvh_result bad = CBVH_ERROR_INVALID_ARGUMENT;
+    if (o->layout != CBVH_LAYOUT_BINARY && o->layout != CBVH_LAYOUT_WIDE4)
+        return cbvh_fail(err, bad, "options->layout is %d; it must be CBVH_LAYOUT_BINARY (0) or CBVH_LAYOUT_WIDE4 (1)",
+                         (int)o->layout);
     if (o->max_leaf_size < 1 || o->max_leaf_size > CBVH_MAX_LEAF_SIZE)
         return cbvh_fail(err, bad, "options->max_leaf_size is %u; it must be 1 to %u", o->max_leaf_size,
                          CBVH_MAX_LEAF_SIZE);
@@ -79,13 +144,6 @@ static cbvh_result check_mesh(const cbvh_mesh *m, cbvh_error *err)
     return CBVH_OK;
 }
 
-static double now(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
 /* Everything a cook owns between phases, freed in one place. */
 typedef struct cook_state {
     cbvh_allocator a;
@@ -99,38 +157,40 @@ typedef struct cook_state {
 
 static void state_free(cook_state *s)
 {
-    cook_sections_free(&s->a, &s->sections);
+    cbvh_cook_sections_free(&s->a, &s->sections);
     cook_layout_free(&s->a, &s->layout);
     cook_tree_free(&s->a, &s->tree);
     cbvh_free(&s->a, s->quantized);
-    cook_mesh_free(&s->a, &s->mesh);
+    cbvh_cook_mesh_free(&s->a, &s->mesh);
 }
 
 /* Grid from the kept mesh's bounds; with quantized vertices the positions move onto it, and
  * the tree is then built from what readers decode, so every box stays conservative. */
 static cbvh_result make_grid(cook_state *s, const cbvh_cook_options *o, cbvh_cook_stats *st, cbvh_error *err)
 {
-    cbvh_result r = cook_grid_init(&s->grid, s->mesh.bounds_min, s->mesh.bounds_max, err);
+    cbvh_result r = cbvh_cook_grid_init(&s->grid, s->mesh.bounds_min, s->mesh.bounds_max, err);
     if (r != CBVH_OK || o->vertex_format != CBVH_VERTEX_QUANTIZED16)
         return r;
     s->quantized = cbvh_alloc_array(&s->a, s->mesh.vertex_count, 3 * sizeof(uint16_t), 64);
     if (!s->quantized)
         return cbvh_fail(err, CBVH_ERROR_OUT_OF_MEMORY, "out of memory while quantizing %u vertices",
                          s->mesh.vertex_count);
-    st->vertex_max_error = cook_quantize_vertices(&s->grid, s->mesh.positions, s->quantized, s->mesh.vertex_count);
+    st->vertex_max_error =
+        cbvh_cook_quantize_vertices(&s->grid, s->mesh.positions, s->quantized, s->mesh.vertex_count);
     /* A triangle smaller than the grid step can lose its area on the grid: readers
      * would hold a segment that no ray and no overlap can report, so it goes. */
-    if (cook_drop_collapsed(&s->mesh) > 0 && s->mesh.triangle_count == 0)
+    if (cbvh_cook_drop_collapsed(&s->mesh) > 0 && s->mesh.triangle_count == 0)
         return cbvh_fail(err, CBVH_ERROR_EMPTY_MESH,
                          "all triangles collapsed to zero area on the 16-bit vertex grid (quantized vertices)");
-    return cook_mesh_bounds(&s->mesh, err);
+    return cbvh_cook_mesh_bounds(&s->mesh, err);
 }
 
 static cbvh_result write_file(cook_state *s, const cbvh_mesh *mesh, const cbvh_cook_options *o,
                               const cook_progress *progress, uint8_t **out, size_t *out_size, cbvh_cook_stats *st,
                               cbvh_error *err)
 {
-    cbvh_result r = cook_sections_encode(&s->layout, &s->mesh, s->quantized, mesh, o, &s->a, &s->sections, err);
+    cbvh_result r =
+        cbvh_cook_sections_encode(&s->layout, &s->mesh, s->quantized, mesh, o, &s->a, &s->sections, err);
     if (r != CBVH_OK)
         return r;
     cook_header h;
@@ -145,8 +205,8 @@ static cbvh_result write_file(cook_state *s, const cbvh_mesh *mesh, const cbvh_c
     memcpy(h.grid_scale, s->grid.scale, sizeof h.grid_scale);
     memcpy(h.bounds_min, s->mesh.bounds_min, sizeof h.bounds_min);
     memcpy(h.bounds_max, s->mesh.bounds_max, sizeof h.bounds_max);
-    return cook_write_file(&h, &s->sections, o->compress_level, &s->a, progress, out, out_size,
-                           st->section_stored_size, st->section_size, err);
+    return cbvh_cook_write_file(&h, &s->sections, o->compress_level, &s->a, progress, out, out_size,
+                                st->section_stored_size, st->section_size, err);
 }
 
 static void fill_stats(const cook_state *s, cbvh_cook_stats *st)
@@ -170,12 +230,16 @@ CBVH_API cbvh_result cbvh_cook(const cbvh_mesh *mesh, const cbvh_cook_options *o
         return cbvh_fail(err, CBVH_ERROR_INVALID_ARGUMENT, "out_data and out_size must not be NULL");
     *out_data = NULL;
     *out_size = 0;
-    cbvh_cook_options defaults;
-    cbvh_cook_options_init(&defaults);
-    const cbvh_cook_options *o = options ? options : &defaults;
+    cbvh_cook_options options_read;
+    const cbvh_cook_options *o = &options_read;
     cbvh_result r = check_mesh(mesh, err);
     if (r == CBVH_OK)
+        r = read_options(options, &options_read, err);
+    if (r == CBVH_OK)
         r = check_options(o, err);
+    if (r == CBVH_OK && stats)
+        r = check_struct_size("stats", "cbvh_cook_stats", "cbvh_cook_stats_init", stats->struct_size,
+                              STATS_SIZE_MIN, sizeof *stats, err);
     if (r != CBVH_OK)
         return r;
 
@@ -186,42 +250,45 @@ CBVH_API cbvh_result cbvh_cook(const cbvh_mesh *mesh, const cbvh_cook_options *o
     memset(&s, 0, sizeof s);
     s.a = cbvh_allocator_resolve(allocator);
     cook_progress progress = { o->progress, o->progress_user, CBVH_PHASE_PREPARE };
-    const cook_build_params params = { o->max_leaf_size, o->sah_bins, o->traversal_cost, o->intersection_cost };
+    /* a wide4 leaf holds at most 8 triangles: a larger limit acts as 8 */
+    const uint32_t max_leaf = o->layout == CBVH_LAYOUT_WIDE4 && o->max_leaf_size > CBVH_W4_MAX_LEAF
+                                  ? CBVH_W4_MAX_LEAF : o->max_leaf_size;
+    const cook_build_params params = { max_leaf, o->sah_bins, o->traversal_cost, o->intersection_cost };
     uint8_t *file = NULL;
     size_t file_size = 0;
 
-    double t0 = now();
+    double t0 = cbvh_os_seconds();
     cook_report(&progress, 0.0);
-    r = cook_prepare(mesh, &s.a, &progress, &s.mesh, err);
+    r = cbvh_cook_prepare(mesh, &s.a, &progress, &s.mesh, err);
     if (r == CBVH_OK)
         r = make_grid(&s, o, &st, err);
-    double t1 = now();
+    double t1 = cbvh_os_seconds();
     st.seconds[CBVH_PHASE_PREPARE] = t1 - t0;
     if (r == CBVH_OK) {
         progress.phase = CBVH_PHASE_BUILD;
         cook_report(&progress, 0.0);
         r = cook_build(&s.mesh, &params, &s.a, &progress, &s.tree, err);
     }
-    double t2 = now();
+    double t2 = cbvh_os_seconds();
     st.seconds[CBVH_PHASE_BUILD] = t2 - t1;
     if (r == CBVH_OK) {
         progress.phase = CBVH_PHASE_LAYOUT;
         cook_report(&progress, 0.0);
         /* The reported SAH cost uses unit costs whatever the build's costs, so trees cooked
          * with different options compare (and `cbvh info` computes the same figure). */
-        r = cook_layout_build(&s.tree, &s.mesh, &s.grid, 1.0f, 1.0f, &s.a, &s.layout, err);
+        r = cook_layout_build(&s.tree, &s.mesh, &s.grid, o->layout, 1.0f, 1.0f, &s.a, &s.layout, err);
         cook_tree_free(&s.a, &s.tree);
         if (r == CBVH_OK)
             cook_report(&progress, 1.0);
     }
-    double t3 = now();
+    double t3 = cbvh_os_seconds();
     st.seconds[CBVH_PHASE_LAYOUT] = t3 - t2;
     if (r == CBVH_OK) {
         progress.phase = CBVH_PHASE_WRITE;
         cook_report(&progress, 0.0);
         r = write_file(&s, mesh, o, &progress, &file, &file_size, &st, err);
     }
-    st.seconds[CBVH_PHASE_WRITE] = now() - t3;
+    st.seconds[CBVH_PHASE_WRITE] = cbvh_os_seconds() - t3;
 
     if (r == CBVH_OK) {
         fill_stats(&s, &st);
@@ -230,7 +297,9 @@ CBVH_API cbvh_result cbvh_cook(const cbvh_mesh *mesh, const cbvh_cook_options *o
         *out_size = file_size;
     }
     state_free(&s);
-    if (stats)
-        *stats = st;
+    if (stats) {
+        st.struct_size = stats->struct_size;
+        memcpy(stats, &st, stats->struct_size);
+    }
     return r;
 }

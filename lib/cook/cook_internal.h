@@ -6,6 +6,8 @@
 
 #include "cbvh.h"
 #include "common/format.h"
+#include "layout/binary.h"
+#include "layout/wide4.h"
 
 /* The user's progress callback, bound to the phase being reported. */
 typedef struct cook_progress {
@@ -34,18 +36,18 @@ typedef struct cook_mesh {
 } cook_mesh;
 
 /* Validates and cleans `mesh` (see mesh_prepare.c). On failure `out` holds nothing. */
-cbvh_result cook_prepare(const cbvh_mesh *mesh, const cbvh_allocator *a, const cook_progress *progress,
-                         cook_mesh *out, cbvh_error *err);
-void cook_mesh_free(const cbvh_allocator *a, cook_mesh *m);
+cbvh_result cbvh_cook_prepare(const cbvh_mesh *mesh, const cbvh_allocator *a, const cook_progress *progress,
+                              cook_mesh *out, cbvh_error *err);
+void cbvh_cook_mesh_free(const cbvh_allocator *a, cook_mesh *m);
 
 /* Drops the kept triangles whose current positions have zero area (quantized
  * vertices can collapse a small triangle onto a segment or a point), keeping
  * the order, and counts them in dropped_degenerate. Returns how many. Vertices
  * only they used stay in positions; the layout writes used vertices only. */
-uint32_t cook_drop_collapsed(cook_mesh *m);
+uint32_t cbvh_cook_drop_collapsed(cook_mesh *m);
 
 /* Sets m->bounds_min/max from the positions the triangles use; CBVH_ERROR_BAD_MESH when an extent overflows a float. */
-cbvh_result cook_mesh_bounds(cook_mesh *m, cbvh_error *err);
+cbvh_result cbvh_cook_mesh_bounds(cook_mesh *m, cbvh_error *err);
 
 /* ---- quantize: the file's 16-bit grid (spec section 6) ---- */
 
@@ -56,7 +58,7 @@ typedef struct cook_grid {
 
 /* grid_origin = bmin, grid_scale = smallest float with deq(65535) >= bmax.
  * Fails with CBVH_ERROR_BAD_MESH when no finite scale reaches bmax. */
-cbvh_result cook_grid_init(cook_grid *g, const float bmin[3], const float bmax[3], cbvh_error *err);
+cbvh_result cbvh_cook_grid_init(cook_grid *g, const float bmin[3], const float bmax[3], cbvh_error *err);
 
 /* Conservative box: qmin the largest q with deq(q) <= lo, qmax the smallest q >= qmin with deq(q) >= hi.
  * Precondition: bmin <= lo <= hi <= bmax of the grid's bounds. */
@@ -64,7 +66,7 @@ void cook_quantize_box(const cook_grid *g, const float lo[3], const float hi[3],
 
 /* Moves every position to its nearest grid point: writes the grid coordinates to q (3 per vertex)
  * and the decoded values back into positions. Returns the largest |decoded - input|. */
-double cook_quantize_vertices(const cook_grid *g, float *positions, uint16_t *q, uint32_t count);
+double cbvh_cook_quantize_vertices(const cook_grid *g, float *positions, uint16_t *q, uint32_t count);
 
 /* ---- build: binned SAH tree over the prepared triangles ---- */
 
@@ -97,7 +99,9 @@ void cook_tree_free(const cbvh_allocator *a, cook_tree *t);
 /* ---- layout: depth-first file order ---- */
 
 typedef struct cook_layout {
-    cbvh_node *nodes;           /* node_count, depth-first, words and quantized boxes final */
+    uint32_t layout;            /* cbvh_layout */
+    void *nodes;                /* node_count nodes, final: binary: cbvh_node structs in depth-first order;
+                                 * wide4: the file's 64-byte nodes, breadth first (layout/wide4.h) */
     uint32_t node_count;
     uint32_t leaf_count;
     uint32_t depth;
@@ -105,14 +109,25 @@ typedef struct cook_layout {
     uint32_t triangle_count;
     uint32_t *triangles;        /* 3 per cooked triangle, new vertex ids (first-use order) */
     uint32_t *triangle_source;  /* cooked triangle -> prepared triangle id */
+    uint32_t *visit_order;      /* cooked triangles in the order vertices are numbered by first use: the
+                                 * leaves' depth-first order (wide4), or NULL for cooked order (binary,
+                                 * which stores leaves depth first) */
     uint32_t vertex_count;
     uint32_t *vertex_source;    /* new vertex id -> prepared vertex id */
     double sah_cost;            /* of the quantized tree, relative to the root's area */
 } cook_layout;
 
-cbvh_result cook_layout_build(const cook_tree *t, const cook_mesh *m, const cook_grid *g,
+cbvh_result cook_layout_build(const cook_tree *t, const cook_mesh *m, const cook_grid *g, cbvh_layout layout,
                               float traversal_cost, float intersection_cost, const cbvh_allocator *a,
                               cook_layout *out, cbvh_error *err);
+
+/* Half the surface area of a quantized box as readers decode it (the SAH's and the collapse's measure). */
+double cook_quantized_half_area(const cook_grid *g, const uint16_t qmin[3], const uint16_t qmax[3]);
+
+/* The wide layout's placement (place_wide4.c): fills out's nodes, node and leaf counts, depth, largest
+ * leaf, SAH cost and triangle_source (out->triangle_count set, triangle_source NULL on entry). */
+cbvh_result cook_place_wide4(const cook_tree *t, const cook_grid *g, float traversal_cost, float intersection_cost,
+                             const cbvh_allocator *a, cook_layout *out, cbvh_error *err);
 void cook_layout_free(const cbvh_allocator *a, cook_layout *l);
 
 /* ---- sections: little-endian payloads in the narrowest encoding the spec allows ---- */
@@ -133,10 +148,10 @@ typedef struct cook_sections {
 } cook_sections;
 
 /* quantized: the 3 grid coordinates per prepared vertex, or NULL for float vertices. */
-cbvh_result cook_sections_encode(const cook_layout *l, const cook_mesh *m, const uint16_t *quantized,
-                                 const cbvh_mesh *input, const cbvh_cook_options *o, const cbvh_allocator *a,
-                                 cook_sections *out, cbvh_error *err);
-void cook_sections_free(const cbvh_allocator *a, cook_sections *s);
+cbvh_result cbvh_cook_sections_encode(const cook_layout *l, const cook_mesh *m, const uint16_t *quantized,
+                                      const cbvh_mesh *input, const cbvh_cook_options *o,
+                                      const cbvh_allocator *a, cook_sections *out, cbvh_error *err);
+void cbvh_cook_sections_free(const cbvh_allocator *a, cook_sections *s);
 
 /* ---- write: header, table, aligned (optionally zlib) sections, CRCs ---- */
 
@@ -147,9 +162,10 @@ typedef struct cook_header {
 } cook_header;
 
 /* Writes the whole file into one buffer from `a` (64-byte aligned). stored_size[type] and
- * size[type] receive each section's sizes (indexed by section type, 6 entries). */
-cbvh_result cook_write_file(const cook_header *h, const cook_sections *s, int compress_level,
-                            const cbvh_allocator *a, const cook_progress *progress, uint8_t **out,
-                            size_t *out_size, uint64_t stored_size[6], uint64_t size[6], cbvh_error *err);
+ * size[type] receive each section's sizes (indexed by section type). */
+cbvh_result cbvh_cook_write_file(const cook_header *h, const cook_sections *s, int compress_level,
+                                 const cbvh_allocator *a, const cook_progress *progress, uint8_t **out,
+                                 size_t *out_size, uint64_t stored_size[CBVH_STATS_SECTION_TYPES],
+                                 uint64_t size[CBVH_STATS_SECTION_TYPES], cbvh_error *err);
 
 #endif

@@ -1,4 +1,4 @@
-/* layout.c: depth-first file order of the built tree: quantized boxes, subtree sizes, sort bytes, triangle and vertex order. */
+/* layout.c: the file order of the built tree: the binary layout's depth-first placement (quantized boxes, subtree sizes, sort bytes), the wide one's by place_wide4.c, then triangle and vertex order. */
 #include <string.h>
 
 #include "common/alloc.h"
@@ -19,7 +19,7 @@ typedef struct node_info {
     uint32_t depth;  /* nodes from the root, root = 1 */
 } node_info;
 
-static double quantized_half_area(const cook_grid *g, const uint16_t qmin[3], const uint16_t qmax[3])
+double cook_quantized_half_area(const cook_grid *g, const uint16_t qmin[3], const uint16_t qmax[3])
 {
     double d[3];
     for (int a = 0; a < 3; a++)
@@ -64,7 +64,7 @@ static void measure_subtrees(const cook_tree *t, const cook_grid *g, node_info *
         info[i].size = 1 + l->size + r->size;
         info[i].tris = l->tris + r->tris;
         /* Larger surface area first: more rays enter it, and ties keep the build order. */
-        info[i].first = quantized_half_area(g, r->qmin, r->qmax) > quantized_half_area(g, l->qmin, l->qmax)
+        info[i].first = cook_quantized_half_area(g, r->qmin, r->qmax) > cook_quantized_half_area(g, l->qmin, l->qmax)
                             ? n->child + 1 : n->child;
     }
 }
@@ -80,7 +80,7 @@ static void place(const cook_tree *t, const cook_grid *g, node_info *restrict in
     for (uint32_t i = 0; i < t->node_count; i++) {
         const cook_bnode *n = &t->nodes[i];
         const node_info *me = &info[i];
-        cbvh_node *out = &l->nodes[me->out];
+        cbvh_node *out = (cbvh_node *)l->nodes + me->out;
         memcpy(out->qmin, me->qmin, sizeof out->qmin);
         memcpy(out->qmax, me->qmax, sizeof out->qmax);
         depth = me->depth > depth ? me->depth : depth;
@@ -109,7 +109,7 @@ static int delta16_fits(uint32_t base, uint32_t v)
     return d >= INT16_MIN && d <= INT16_MAX;
 }
 
-/* Vertices numbered by first use in cooked triangle order: neighbouring triangles get
+/* Vertices numbered by first use in the leaves' depth-first order: neighbouring triangles get
  * neighbouring indices, which keeps DELTA16 deltas small and compresses well. With `copies`,
  * a triangle whose deltas would not fit in i16 (it reuses a vertex first used long before, as
  * across the root's split plane) gets fresh copies of its stale vertices, bit-identical
@@ -128,8 +128,10 @@ static cbvh_result order_vertices(const cook_mesh *m, cook_layout *l, int copies
     const uint32_t *restrict idx = m->indices;
     const uint32_t *restrict src = l->triangle_source;
     uint32_t *restrict tris = l->triangles;
+    const uint32_t *restrict visit = l->visit_order;
     uint32_t count = 0;
-    for (uint32_t t = 0; t < l->triangle_count; t++) {
+    for (uint32_t i = 0; i < l->triangle_count; i++) {
+        const uint32_t t = visit ? visit[i] : i;
         uint32_t v[3], id[3];
         for (int c = 0; c < 3; c++) {
             v[c] = idx[3 * (size_t)src[t] + (size_t)c];
@@ -162,10 +164,10 @@ static double sah_cost(const cbvh_node *nodes, uint32_t count, const cook_grid *
 {
     double sum = 0.0;
     for (uint32_t i = 0; i < count; i++) {
-        double area = quantized_half_area(g, nodes[i].qmin, nodes[i].qmax);
+        double area = cook_quantized_half_area(g, nodes[i].qmin, nodes[i].qmax);
         sum += cbvh_node_is_leaf(nodes[i].word) ? ci * cbvh_leaf_count(nodes[i].word) * area : ct * area;
     }
-    double root = quantized_half_area(g, nodes[0].qmin, nodes[0].qmax);
+    double root = cook_quantized_half_area(g, nodes[0].qmin, nodes[0].qmax);
     return root > 0.0 ? sum / root : 0.0;
 }
 
@@ -175,33 +177,58 @@ void cook_layout_free(const cbvh_allocator *a, cook_layout *l)
     cbvh_free(a, l->triangles);
     cbvh_free(a, l->triangle_source);
     cbvh_free(a, l->vertex_source);
+    cbvh_free(a, l->visit_order);
     memset(l, 0, sizeof *l);
 }
 
-cbvh_result cook_layout_build(const cook_tree *t, const cook_mesh *m, const cook_grid *g,
-                              float traversal_cost, float intersection_cost, const cbvh_allocator *a,
-                              cook_layout *out, cbvh_error *err)
+/* The binary layout: every build node becomes a file node. */
+static cbvh_result place_binary(const cook_tree *t, const cook_grid *g, float traversal_cost, float intersection_cost,
+                                const cbvh_allocator *a, cook_layout *out, cbvh_error *err)
 {
-    memset(out, 0, sizeof *out);
-    if (t->node_count > CBVH_MAX_NODES)
+    if (out->triangle_count > CBVH_BINARY_MAX_TRIANGLES)
         return cbvh_fail(err, CBVH_ERROR_LIMIT,
-                         "the tree has %u nodes; a file holds at most %u (raise max_leaf_size or split the mesh)",
-                         t->node_count, CBVH_MAX_NODES);
+                         "the mesh has %u triangles; a binary-layout file holds at most %u (use the wide4 layout or "
+                         "split the mesh)",
+                         out->triangle_count, CBVH_BINARY_MAX_TRIANGLES);
+    if (t->node_count > CBVH_BINARY_MAX_NODES)
+        return cbvh_fail(err, CBVH_ERROR_LIMIT,
+                         "the tree has %u nodes; a binary-layout file holds at most %u (use the wide4 layout, raise "
+                         "max_leaf_size or split the mesh)",
+                         t->node_count, CBVH_BINARY_MAX_NODES);
     node_info *info = cbvh_alloc_array(a, t->node_count, sizeof(node_info), 64);
     out->nodes = cbvh_alloc_array(a, t->node_count, sizeof(cbvh_node), 64);
-    out->triangles = cbvh_alloc_array(a, m->triangle_count, 3 * sizeof(uint32_t), 64);
-    out->triangle_source = cbvh_alloc_array(a, m->triangle_count, sizeof(uint32_t), 64);
-    if (!info || !out->nodes || !out->triangles || !out->triangle_source) {
+    out->triangle_source = cbvh_alloc_array(a, out->triangle_count, sizeof(uint32_t), 64);
+    if (!info || !out->nodes || !out->triangle_source) {
         cbvh_free(a, info);
-        cook_layout_free(a, out);
         return cbvh_fail(err, CBVH_ERROR_OUT_OF_MEMORY, "out of memory while laying out %u nodes", t->node_count);
     }
     out->node_count = t->node_count;
     out->leaf_count = t->leaf_count;
-    out->triangle_count = m->triangle_count;
     measure_subtrees(t, g, info);
     place(t, g, info, out);
     cbvh_free(a, info);
+    out->sah_cost = sah_cost(out->nodes, out->node_count, g, traversal_cost, intersection_cost);
+    return CBVH_OK;
+}
+
+cbvh_result cook_layout_build(const cook_tree *t, const cook_mesh *m, const cook_grid *g, cbvh_layout layout,
+                              float traversal_cost, float intersection_cost, const cbvh_allocator *a,
+                              cook_layout *out, cbvh_error *err)
+{
+    memset(out, 0, sizeof *out);
+    out->layout = layout;
+    out->triangle_count = m->triangle_count;
+    out->triangles = cbvh_alloc_array(a, m->triangle_count, 3 * sizeof(uint32_t), 64);
+    if (!out->triangles)
+        return cbvh_fail(err, CBVH_ERROR_OUT_OF_MEMORY, "out of memory while laying out %u triangles",
+                         m->triangle_count);
+    cbvh_result r = layout == CBVH_LAYOUT_WIDE4
+                        ? cook_place_wide4(t, g, traversal_cost, intersection_cost, a, out, err)
+                        : place_binary(t, g, traversal_cost, intersection_cost, a, out, err);
+    if (r != CBVH_OK) {
+        cook_layout_free(a, out);
+        return r;
+    }
     if (out->depth > CBVH_MAX_DEPTH) {
         uint32_t depth = out->depth;
         cook_layout_free(a, out);
@@ -210,11 +237,10 @@ cbvh_result cook_layout_build(const cook_tree *t, const cook_mesh *m, const cook
     }
     /* Copies are made only where a delta would not fit, so with few vertices (u16 indices)
      * or a mesh whose deltas all fit there are none. */
-    cbvh_result r = order_vertices(m, out, m->vertex_count > 65536, a);
+    r = order_vertices(m, out, m->vertex_count > 65536, a);
     if (r != CBVH_OK) {
         cook_layout_free(a, out);
         return cbvh_fail(err, CBVH_ERROR_OUT_OF_MEMORY, "out of memory while ordering %u vertices", m->vertex_count);
     }
-    out->sah_cost = sah_cost(out->nodes, out->node_count, g, traversal_cost, intersection_cost);
     return CBVH_OK;
 }

@@ -148,7 +148,7 @@ static void drop_degenerate(const cbvh_mesh *mesh, const uint32_t *restrict map,
     m->triangle_count = kept > UINT32_MAX ? UINT32_MAX : (uint32_t)kept;
 }
 
-uint32_t cook_drop_collapsed(cook_mesh *m)
+uint32_t cbvh_cook_drop_collapsed(cook_mesh *m)
 {
     const float *restrict pos = m->positions;
     uint32_t *restrict idx = m->indices;
@@ -194,9 +194,9 @@ static cbvh_result drop_unused(cook_mesh *m, uint32_t welded, const cbvh_allocat
     return CBVH_OK;
 }
 
-cbvh_result cook_mesh_bounds(cook_mesh *m, cbvh_error *err)
+cbvh_result cbvh_cook_mesh_bounds(cook_mesh *m, cbvh_error *err)
 {
-    /* Over the vertices the triangles use: after cook_drop_collapsed some are unused and the
+    /* Over the vertices the triangles use: after cbvh_cook_drop_collapsed some are unused and the
      * file, which stores used vertices only, must carry their exact bounds. */
     const float *p = m->positions;
     const uint32_t *idx = m->indices;
@@ -219,7 +219,7 @@ cbvh_result cook_mesh_bounds(cook_mesh *m, cbvh_error *err)
     return CBVH_OK;
 }
 
-void cook_mesh_free(const cbvh_allocator *a, cook_mesh *m)
+void cbvh_cook_mesh_free(const cbvh_allocator *a, cook_mesh *m)
 {
     cbvh_free(a, m->positions);
     cbvh_free(a, m->indices);
@@ -227,8 +227,8 @@ void cook_mesh_free(const cbvh_allocator *a, cook_mesh *m)
     memset(m, 0, sizeof *m);
 }
 
-cbvh_result cook_prepare(const cbvh_mesh *mesh, const cbvh_allocator *a, const cook_progress *progress,
-                         cook_mesh *out, cbvh_error *err)
+cbvh_result cbvh_cook_prepare(const cbvh_mesh *mesh, const cbvh_allocator *a, const cook_progress *progress,
+                              cook_mesh *out, cbvh_error *err)
 {
     memset(out, 0, sizeof *out);
     const size_t tris = mesh->triangle_count;
@@ -259,7 +259,7 @@ cbvh_result cook_prepare(const cbvh_mesh *mesh, const cbvh_allocator *a, const c
     }
     if (r != CBVH_OK) {
         cbvh_free(a, map);
-        cook_mesh_free(a, out);
+        cbvh_cook_mesh_free(a, out);
         return r;
     }
     cook_report(progress, 0.5);
@@ -268,7 +268,7 @@ cbvh_result cook_prepare(const cbvh_mesh *mesh, const cbvh_allocator *a, const c
     out->original_ids = cbvh_alloc_array(a, tris, sizeof(uint32_t), 64);
     if (!out->indices || !out->original_ids) {
         cbvh_free(a, map);
-        cook_mesh_free(a, out);
+        cbvh_cook_mesh_free(a, out);
         return out_of_memory(err, "triangles");
     }
     drop_degenerate(mesh, map, out);
@@ -284,9 +284,9 @@ cbvh_result cook_prepare(const cbvh_mesh *mesh, const cbvh_allocator *a, const c
     else if (drop_unused(out, welded, a) != CBVH_OK)
         r = out_of_memory(err, "vertex renumbering");
     else
-        r = cook_mesh_bounds(out, err);
+        r = cbvh_cook_mesh_bounds(out, err);
     if (r != CBVH_OK) {
-        cook_mesh_free(a, out);
+        cbvh_cook_mesh_free(a, out);
         return r;
     }
     cook_report(progress, 1.0);

@@ -22,7 +22,7 @@ static inline float deq(const cook_grid *g, int axis, uint32_t q)
     return cbvh_dequantize(q, g->origin[axis], g->scale[axis]);
 }
 
-cbvh_result cook_grid_init(cook_grid *g, const float bmin[3], const float bmax[3], cbvh_error *err)
+cbvh_result cbvh_cook_grid_init(cook_grid *g, const float bmin[3], const float bmax[3], cbvh_error *err)
 {
     for (int a = 0; a < 3; a++) {
         g->origin[a] = bmin[a];
@@ -117,7 +117,7 @@ void cook_quantize_box(const cook_grid *g, const float lo[3], const float hi[3],
     }
 }
 
-double cook_quantize_vertices(const cook_grid *g, float *positions, uint16_t *q, uint32_t count)
+double cbvh_cook_quantize_vertices(const cook_grid *g, float *positions, uint16_t *q, uint32_t count)
 {
     double worst = 0.0;
     for (size_t i = 0; i < 3 * (size_t)count; i++) {

@@ -1,10 +1,10 @@
 /* sah_build.c: binned SAH BVH builder, with median splits to stay within the format's depth limit. */
 #include <float.h>
-#include <pthread.h>
 #include <stdatomic.h>
 #include <string.h>
 
-#if defined(__SSE2__)
+#include "common/compiler.h"
+#if defined(CBVH_SSE2)
 #include <emmintrin.h>
 #define COOK_SSE2 1 /* box and centroid operations four lanes at once; results equal the scalar code's */
 #endif
@@ -12,6 +12,7 @@
 #include "common/alloc.h"
 #include "common/error.h"
 #include "common/format.h"
+#include "common/os.h"
 #include "cook/cook_internal.h"
 
 #define MAX_BINS 256
@@ -544,11 +545,10 @@ typedef struct worker_job {
     task root;
 } worker_job;
 
-static void *worker_main(void *arg)
+static void worker_main(void *arg)
 {
     worker_job *job = arg;
     build_from(&job->b, &job->root, NULL);
-    return NULL;
 }
 
 /* Prepares a job for the subtree rt (all allocation here, on the calling thread: the
@@ -639,11 +639,11 @@ cbvh_result cook_build(const cook_mesh *m, const cook_build_params *params, cons
         build_from(&b, &root, &report);
     } else {
         worker_job job;
-        pthread_t thread;
+        struct cbvh_os_thread thread;
         int threaded = rt.end - rt.begin >= PARALLEL_MIN && worker_init(&job, &b, &rt, a);
         if (threaded) {
             report.other = &job.b;
-            if (pthread_create(&thread, NULL, worker_main, &job) != 0) {
+            if (cbvh_os_thread_start(&thread, worker_main, &job) != 0) {
                 report.other = NULL;
                 cbvh_free(a, job.b.w);
                 cbvh_free(a, job.b.nodes);
@@ -654,7 +654,7 @@ cbvh_result cook_build(const cook_mesh *m, const cook_build_params *params, cons
             build_from(&b, &rt, &report);
         build_from(&b, &lt, &report);
         if (threaded) {
-            pthread_join(thread, NULL);
+            cbvh_os_thread_join(&thread);
             merge_worker(&b, &job.b, rt.node);
             cbvh_free(a, job.b.w);
             cbvh_free(a, job.b.nodes);

@@ -2,6 +2,7 @@
 #include <string.h>
 
 #include "common/alloc.h"
+#include "common/encodings.h"
 #include "common/endian.h"
 #include "common/error.h"
 #include "common/format.h"
@@ -13,9 +14,11 @@ static inline void put_u16(uint8_t *p, uint32_t v)
     p[1] = (uint8_t)(v >> 8);
 }
 
+/* A new section of `count` elements of `encoding`, appended to `out`; NULL when out of memory. */
 static uint8_t *section_alloc(const cbvh_allocator *a, cook_sections *out, uint32_t type, uint32_t encoding,
-                              size_t count, size_t elem)
+                              size_t count)
 {
+    const size_t elem = cbvh_element_size(type, encoding);
     cook_section *s = &out->s[out->count];
     s->data = cbvh_alloc_array(a, count, elem, 64);
     if (!s->data)
@@ -27,13 +30,21 @@ static uint8_t *section_alloc(const cbvh_allocator *a, cook_sections *out, uint3
     return s->data;
 }
 
+/* Wide4 nodes are laid out in their file bytes already; binary ones are serialized here. */
 static int encode_nodes(const cook_layout *l, const cbvh_allocator *a, cook_sections *out)
 {
-    uint8_t *p = section_alloc(a, out, CBVH_SECTION_NODES, CBVH_NODES_Q16, l->node_count, 16);
+    if (l->layout == CBVH_LAYOUT_WIDE4) {
+        uint8_t *w = section_alloc(a, out, CBVH_SECTION_NODES, CBVH_NODES_W4, l->node_count);
+        if (w)
+            memcpy(w, l->nodes, (size_t)l->node_count * cbvh_element_size(CBVH_SECTION_NODES, CBVH_NODES_W4));
+        return w != NULL;
+    }
+    const size_t elem = cbvh_element_size(CBVH_SECTION_NODES, CBVH_NODES_Q16);
+    uint8_t *p = section_alloc(a, out, CBVH_SECTION_NODES, CBVH_NODES_Q16, l->node_count);
     if (!p)
         return 0;
-    for (uint32_t i = 0; i < l->node_count; i++, p += 16) {
-        const cbvh_node *n = &l->nodes[i];
+    for (uint32_t i = 0; i < l->node_count; i++, p += elem) {
+        const cbvh_node *n = (const cbvh_node *)l->nodes + i;
         for (int k = 0; k < 3; k++) {
             put_u16(p + 2 * k, n->qmin[k]);
             put_u16(p + 6 + 2 * k, n->qmax[k]);
@@ -51,7 +62,7 @@ static int delta_fits(int64_t d)
 /* u16 when every index fits, else DELTA16 when every triangle's deltas fit in i16, else u32. */
 static uint32_t triangle_encoding(const cook_layout *l)
 {
-    if (l->vertex_count <= 65536)
+    if (l->vertex_count <= (uint64_t)cbvh_encoding_of(CBVH_SECTION_TRIANGLES, CBVH_TRIS_U16)->max_value + 1)
         return CBVH_TRIS_U16;
     const uint32_t *t = l->triangles;
     for (size_t i = 0; i < (size_t)l->triangle_count; i++, t += 3)
@@ -62,13 +73,13 @@ static uint32_t triangle_encoding(const cook_layout *l)
 
 static int encode_triangles(const cook_layout *l, const cbvh_allocator *a, cook_sections *out)
 {
-    static const size_t elem[3] = { 6, 12, 8 };
     const uint32_t enc = triangle_encoding(l);
-    uint8_t *p = section_alloc(a, out, CBVH_SECTION_TRIANGLES, enc, l->triangle_count, elem[enc]);
+    const size_t elem = cbvh_element_size(CBVH_SECTION_TRIANGLES, enc);
+    uint8_t *p = section_alloc(a, out, CBVH_SECTION_TRIANGLES, enc, l->triangle_count);
     if (!p)
         return 0;
     const uint32_t *t = l->triangles;
-    for (uint32_t i = 0; i < l->triangle_count; i++, t += 3, p += elem[enc]) {
+    for (uint32_t i = 0; i < l->triangle_count; i++, t += 3, p += elem) {
         if (enc == CBVH_TRIS_U16) {
             put_u16(p, t[0]);
             put_u16(p + 2, t[1]);
@@ -90,8 +101,8 @@ static int encode_vertices(const cook_layout *l, const cook_mesh *m, const uint1
                            const cbvh_allocator *a, cook_sections *out)
 {
     const uint32_t enc = quantized ? CBVH_VERTS_Q16 : CBVH_VERTS_F32;
-    const size_t elem = quantized ? 6 : 12;
-    uint8_t *p = section_alloc(a, out, CBVH_SECTION_VERTICES, enc, l->vertex_count, elem);
+    const size_t elem = cbvh_element_size(CBVH_SECTION_VERTICES, enc);
+    uint8_t *p = section_alloc(a, out, CBVH_SECTION_VERTICES, enc, l->vertex_count);
     if (!p)
         return 0;
     for (uint32_t v = 0; v < l->vertex_count; v++, p += elem) {
@@ -106,18 +117,32 @@ static int encode_vertices(const cook_layout *l, const cook_mesh *m, const uint1
     return 1;
 }
 
-/* Values of `count` u32 as u16 (small) or u32. */
-static int encode_ids(const cbvh_allocator *a, cook_sections *out, uint32_t type, uint32_t enc16, uint32_t enc32,
-                      int narrow, const uint32_t *values, uint32_t count)
+/* The narrowest encoding of an id section (REMAP, MATERIALS: their encodings go narrowest first) that holds
+ * `largest`. */
+static uint32_t id_encoding(uint32_t type, uint32_t largest)
 {
-    uint8_t *p = section_alloc(a, out, type, narrow ? enc16 : enc32, count, narrow ? 2 : 4);
+    uint32_t enc = 0;
+    while (cbvh_encoding_of(type, enc)->max_value < largest)
+        enc++;
+    return enc;
+}
+
+/* `count` ids as a section of `type` in the narrowest encoding that holds `largest`. */
+static int encode_ids(const cbvh_allocator *a, cook_sections *out, uint32_t type, uint32_t largest,
+                      const uint32_t *values, uint32_t count)
+{
+    const uint32_t enc = id_encoding(type, largest);
+    const size_t elem = cbvh_element_size(type, enc);
+    uint8_t *p = section_alloc(a, out, type, enc, count);
     if (!p)
         return 0;
-    for (uint32_t i = 0; i < count; i++) {
-        if (narrow)
-            put_u16(p + 2 * (size_t)i, values[i]);
+    for (uint32_t i = 0; i < count; i++, p += elem) {
+        if (elem == 1)
+            *p = (uint8_t)values[i];
+        else if (elem == 2)
+            put_u16(p, values[i]);
         else
-            cbvh_write_u32(p + 4 * (size_t)i, values[i]);
+            cbvh_write_u32(p, values[i]);
     }
     return 1;
 }
@@ -137,8 +162,7 @@ static int encode_remap(const cook_layout *l, const cook_mesh *m, const cbvh_coo
     if (identity)
         return 1;
     out->original_triangle_count = m->input_triangle_count;
-    return encode_ids(a, out, CBVH_SECTION_REMAP, CBVH_REMAP_U16, CBVH_REMAP_U32,
-                      m->input_triangle_count <= 65536, scratch, l->triangle_count);
+    return encode_ids(a, out, CBVH_SECTION_REMAP, m->input_triangle_count - 1, scratch, l->triangle_count);
 }
 
 /* MATERIALS: left out when not given, not wanted, or all equal; u8, u16 or u32 by the largest id. */
@@ -157,30 +181,19 @@ static int encode_materials(const cook_layout *l, const cook_mesh *m, const cbvh
     }
     if (all_equal)
         return 1;
-    if (largest > 0xFFFF)
-        return encode_ids(a, out, CBVH_SECTION_MATERIALS, CBVH_MATS_U16, CBVH_MATS_U32, 0, scratch,
-                          l->triangle_count);
-    if (largest > 0xFF)
-        return encode_ids(a, out, CBVH_SECTION_MATERIALS, CBVH_MATS_U16, CBVH_MATS_U32, 1, scratch,
-                          l->triangle_count);
-    uint8_t *p = section_alloc(a, out, CBVH_SECTION_MATERIALS, CBVH_MATS_U8, l->triangle_count, 1);
-    if (!p)
-        return 0;
-    for (uint32_t t = 0; t < l->triangle_count; t++)
-        p[t] = (uint8_t)scratch[t];
-    return 1;
+    return encode_ids(a, out, CBVH_SECTION_MATERIALS, largest, scratch, l->triangle_count);
 }
 
-void cook_sections_free(const cbvh_allocator *a, cook_sections *s)
+void cbvh_cook_sections_free(const cbvh_allocator *a, cook_sections *s)
 {
     for (uint32_t i = 0; i < s->count; i++)
         cbvh_free(a, s->s[i].data);
     memset(s, 0, sizeof *s);
 }
 
-cbvh_result cook_sections_encode(const cook_layout *l, const cook_mesh *m, const uint16_t *quantized,
-                                 const cbvh_mesh *input, const cbvh_cook_options *o, const cbvh_allocator *a,
-                                 cook_sections *out, cbvh_error *err)
+cbvh_result cbvh_cook_sections_encode(const cook_layout *l, const cook_mesh *m, const uint16_t *quantized,
+                                      const cbvh_mesh *input, const cbvh_cook_options *o,
+                                      const cbvh_allocator *a, cook_sections *out, cbvh_error *err)
 {
     memset(out, 0, sizeof *out);
     uint32_t *scratch = cbvh_alloc_array(a, l->triangle_count, sizeof(uint32_t), 64);
@@ -189,7 +202,7 @@ cbvh_result cook_sections_encode(const cook_layout *l, const cook_mesh *m, const
              encode_materials(l, m, input, o, scratch, a, out);
     cbvh_free(a, scratch);
     if (!ok) {
-        cook_sections_free(a, out);
+        cbvh_cook_sections_free(a, out);
         return cbvh_fail(err, CBVH_ERROR_OUT_OF_MEMORY, "out of memory while encoding the sections");
     }
     return CBVH_OK;

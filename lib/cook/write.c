@@ -3,23 +3,15 @@
 #include <zlib.h>
 
 #include "common/alloc.h"
+#include "common/crc32.h"
 #include "common/endian.h"
 #include "common/error.h"
 #include "common/format.h"
+#include "common/zlib_alloc.h"
 #include "cook/cook_internal.h"
 
 /* zlib works in 32-bit chunks; feed it at most this much at a time. */
 #define ZCHUNK ((uint64_t)1 << 30)
-
-static voidpf zlib_alloc(voidpf opaque, uInt items, uInt size)
-{
-    return cbvh_alloc_array((const cbvh_allocator *)opaque, items, size, 16);
-}
-
-static void zlib_free(voidpf opaque, voidpf ptr)
-{
-    cbvh_free((const cbvh_allocator *)opaque, ptr);
-}
 
 /* One zlib stream of `size` bytes into a buffer from `a`; *out stays NULL when the
  * stream would not be smaller than the input (the section is then stored raw). */
@@ -29,9 +21,7 @@ static cbvh_result deflate_section(const uint8_t *in, uint64_t size, int level, 
     *out = NULL;
     z_stream zs;
     memset(&zs, 0, sizeof zs);
-    zs.zalloc = zlib_alloc;
-    zs.zfree = zlib_free;
-    zs.opaque = a;
+    cbvh_zlib_use_allocator(&zs, a);
     if (deflateInit(&zs, level) != Z_OK)
         return CBVH_ERROR_OUT_OF_MEMORY;
     uint64_t bound = deflateBound(&zs, (uLong)size);
@@ -77,18 +67,6 @@ static uint64_t align_up(uint64_t x)
     return (x + CBVH_SECTION_ALIGN - 1) & ~(uint64_t)(CBVH_SECTION_ALIGN - 1);
 }
 
-static uint32_t crc32_of(const uint8_t *p, uint64_t size)
-{
-    uLong crc = crc32(0L, Z_NULL, 0);
-    while (size > 0) {
-        uInt n = (uInt)(size < ZCHUNK ? size : ZCHUNK);
-        crc = crc32(crc, p, n);
-        p += n;
-        size -= n;
-    }
-    return (uint32_t)crc;
-}
-
 static void write_f32x3(uint8_t *p, const float v[3])
 {
     for (int k = 0; k < 3; k++)
@@ -104,7 +82,7 @@ static void write_header(uint8_t *file, const cook_header *h, uint32_t section_c
     cbvh_write_u32(file + CBVH_HDR_INCOMPAT_FLAGS, 0);
     cbvh_write_u32(file + CBVH_HDR_SECTION_COUNT, section_count);
     cbvh_write_u32(file + CBVH_HDR_TABLE_CRC,
-                   crc32_of(file + CBVH_HEADER_SIZE, (uint64_t)section_count * CBVH_SECTION_ENTRY_SIZE));
+                   cbvh_crc32(0, file + CBVH_HEADER_SIZE, (uint64_t)section_count * CBVH_SECTION_ENTRY_SIZE));
     cbvh_write_u32(file + CBVH_HDR_TRIANGLE_COUNT, h->triangle_count);
     cbvh_write_u32(file + CBVH_HDR_VERTEX_COUNT, h->vertex_count);
     cbvh_write_u32(file + CBVH_HDR_NODE_COUNT, h->node_count);
@@ -117,12 +95,14 @@ static void write_header(uint8_t *file, const cook_header *h, uint32_t section_c
     write_f32x3(file + CBVH_HDR_BOUNDS_MIN, h->bounds_min);
     write_f32x3(file + CBVH_HDR_BOUNDS_MAX, h->bounds_max);
     cbvh_write_u64(file + CBVH_HDR_FILE_SIZE, file_size);
-    cbvh_write_u32(file + CBVH_HDR_HEADER_CRC, crc32_of(file, CBVH_HDR_HEADER_CRC));
+    cbvh_write_u32(file + CBVH_HDR_HEADER_CRC, cbvh_crc32(0, file, CBVH_HDR_HEADER_CRC));
 }
 
-cbvh_result cook_write_file(const cook_header *h, const cook_sections *s, int compress_level,
-                            const cbvh_allocator *alloc, const cook_progress *progress, uint8_t **out,
-                            size_t *out_size, uint64_t stored_size[6], uint64_t size[6], cbvh_error *err)
+cbvh_result cbvh_cook_write_file(const cook_header *h, const cook_sections *s, int compress_level,
+                                 const cbvh_allocator *alloc, const cook_progress *progress, uint8_t **out,
+                                 size_t *out_size, uint64_t stored_size[CBVH_STATS_SECTION_TYPES],
+                                 uint64_t size[CBVH_STATS_SECTION_TYPES],
+                                 cbvh_error *err)
 {
     cbvh_allocator a = *alloc;
     uint8_t *packed[COOK_SLOTS] = { NULL };
@@ -157,7 +137,7 @@ cbvh_result cook_write_file(const cook_header *h, const cook_sections *s, int co
             cbvh_write_u64(e + CBVH_SEC_OFFSET, offset[i]);
             cbvh_write_u64(e + CBVH_SEC_STORED_SIZE, packed_size[i]);
             cbvh_write_u64(e + CBVH_SEC_SIZE, s->s[i].size);
-            cbvh_write_u32(e + CBVH_SEC_CRC, crc32_of(stored, packed_size[i]));
+            cbvh_write_u32(e + CBVH_SEC_CRC, cbvh_crc32(0, stored, packed_size[i]));
             cbvh_write_u32(e + CBVH_SEC_ENCODING, s->s[i].encoding);
             stored_size[s->s[i].type] = packed_size[i];
             size[s->s[i].type] = s->s[i].size;

@@ -1,17 +1,22 @@
 /* file_info.c: what an opened file says about itself: info, sections, triangles and materials by original id. */
 #include <string.h>
 
+#include "common/struct_size.h"
 #include "load/load.h"
 
-void cbvh_file_get_info(const cbvh_file *file, cbvh_file_info *info)
+cbvh_result cbvh_file_get_info(const cbvh_file *file, cbvh_file_info *info, size_t struct_size)
 {
-    if (!info)
-        return;
-    if (!file) {
-        memset(info, 0, sizeof *info);
-        return;
-    }
-    *info = file->info;
+    const size_t smallest = CBVH_STRUCT_SIZE_MIN(cbvh_file_info, format_version);
+    if (!info || !cbvh_struct_size_ok(struct_size, smallest, sizeof *info))
+        return CBVH_ERROR_INVALID_ARGUMENT;
+    cbvh_file_info whole;
+    if (file)
+        whole = file->info;
+    else
+        memset(&whole, 0, sizeof whole);
+    whole.struct_size = struct_size;
+    memcpy(info, &whole, struct_size);
+    return file ? CBVH_OK : CBVH_ERROR_INVALID_ARGUMENT;
 }
 
 int cbvh_file_get_section(const cbvh_file *file, uint32_t index, cbvh_section_info *section)

@@ -5,17 +5,8 @@
 
 #include "common/alloc.h"
 #include "common/error.h"
+#include "common/zlib_alloc.h"
 #include "load/load.h"
-
-static voidpf zlib_alloc(voidpf opaque, uInt items, uInt size)
-{
-    return cbvh_alloc_array(opaque, items, size, 16);
-}
-
-static void zlib_free(voidpf opaque, voidpf address)
-{
-    cbvh_free(opaque, address);
-}
 
 /* Hands zlib the next piece of a buffer longer than a uInt can say. */
 static void feed(Bytef **next, uInt *avail, uint8_t **cursor, uint64_t *left)
@@ -87,9 +78,7 @@ cbvh_result cbvh_inflate_section(const cbvh_allocator *a, const uint8_t *src, ui
         return cbvh_fail(err, CBVH_ERROR_OUT_OF_MEMORY, "section %u: cannot allocate %llu bytes to inflate into",
                          section_index, (unsigned long long)size);
     z_stream zs = { 0 };
-    zs.zalloc = zlib_alloc;
-    zs.zfree = zlib_free;
-    zs.opaque = (voidpf)a;
+    cbvh_zlib_use_allocator(&zs, a);
     int ret = inflateInit(&zs);
     cbvh_result r;
     if (ret == Z_OK) {

@@ -51,6 +51,9 @@ static cbvh_result place_sections(struct cbvh_file *f, const cbvh_section_map *m
             return r;
     }
     f->nodes = where[CBVH_SECTION_NODES - 1];
+    f->layout = f->sections[map->index[CBVH_SECTION_NODES - 1]].encoding == CBVH_NODES_W4 ? CBVH_LAYOUT_WIDE4
+                                                                                          : CBVH_LAYOUT_BINARY;
+    f->info.layout = f->layout;
     f->triangles = where[CBVH_SECTION_TRIANGLES - 1];
     f->vertices = where[CBVH_SECTION_VERTICES - 1];
     f->remap = where[CBVH_SECTION_REMAP - 1];

@@ -5,11 +5,13 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "common/compiler.h"
 #include "common/file.h"
+#include "common/crc32.h"
+#include "common/encodings.h"
 
 /* Index in f->sections of each known section type (0 = NODES .. 4 = MATERIALS), -1 when absent;
  * crc_pending: a raw section used in place whose CRC is checked chunk by chunk with its content. */
-#define CBVH_KNOWN_SECTIONS 5
 typedef struct cbvh_section_map {
     int index[CBVH_KNOWN_SECTIONS];
     int crc_pending[CBVH_KNOWN_SECTIONS];
@@ -21,15 +23,6 @@ static inline int cbvh_in_place(const struct cbvh_file *f)
 {
     return (uintptr_t)f->bytes % 4 == 0;
 }
-
-/* CRC32 of `size` more bytes, zlib style (start from 0, feed the result back to continue), any size:
- * by carry-less multiplication when the CPU has it, else with zlib. */
-uint32_t cbvh_crc32(uint32_t crc, const uint8_t *data, uint64_t size);
-
-/* The PCLMULQDQ kernel: the running (uninverted) state after `size` more bytes, size >= 64 and a
- * multiple of 16; callable only when cbvh_crc32_pclmul_available() says so. */
-uint32_t cbvh_crc32_pclmul(uint32_t crc, const uint8_t *data, size_t size);
-int cbvh_crc32_pclmul_available(void);
 
 /* Checks the 128-byte header of f->bytes (f->size bytes) and fills f->info,
  * f->grid_origin, f->grid_scale and f->original_triangle_count. */
@@ -59,6 +52,13 @@ typedef struct cbvh_tree_walk {
 } cbvh_tree_walk;
 cbvh_result cbvh_tree_check(const struct cbvh_file *f, void *walk, uint32_t begin, uint32_t end, cbvh_error *err);
 cbvh_result cbvh_tree_finish(const struct cbvh_file *f, const cbvh_tree_walk *walk, cbvh_error *err);
+
+/* Wide4 nodes: slots, links, levels and leaf ranges (format spec section 5.2). Start from a zeroed walk. */
+typedef struct cbvh_w4_walk {
+    uint32_t next_child, next_triangle, level_end, depth;
+} cbvh_w4_walk;
+cbvh_result cbvh_w4_tree_check(const struct cbvh_file *f, void *walk, uint32_t begin, uint32_t end, cbvh_error *err);
+cbvh_result cbvh_w4_tree_finish(const struct cbvh_file *f, const cbvh_w4_walk *walk, cbvh_error *err);
 
 /* Triangles: every vertex index below vertex_count (no state). */
 cbvh_result cbvh_indices_check(const struct cbvh_file *f, void *unused, uint32_t begin, uint32_t end,

@@ -1,26 +1,12 @@
 /* validate_table.c: checks the section table, the file layout and every section's CRC (format spec sections 2, 4). */
 #include <string.h>
 
+#include "common/encodings.h"
 #include "common/endian.h"
 #include "common/error.h"
 #include "load/load.h"
 
 #define CORRUPT(...) cbvh_fail(err, CBVH_ERROR_CORRUPT, __VA_ARGS__)
-
-/* What the reader knows of each section type: element size per encoding (0 = unknown encoding). */
-typedef struct known_section {
-    const char *name;
-    int required;
-    uint8_t element_size[3];
-} known_section;
-
-static const known_section known[CBVH_KNOWN_SECTIONS] = {
-    { "NODES", 1, { 16, 0, 0 } },
-    { "TRIANGLES", 1, { 6, 12, 8 } },
-    { "VERTICES", 1, { 12, 6, 0 } },
-    { "REMAP", 0, { 2, 4, 0 } },
-    { "MATERIALS", 0, { 1, 2, 4 } },
-};
 
 static uint64_t element_count(const cbvh_file_info *in, uint32_t type)
 {
@@ -66,7 +52,8 @@ static cbvh_result check_content(const cbvh_file_info *in, const cbvh_section_in
                                  cbvh_section_map *map, cbvh_error *err)
 {
     const cbvh_section_info *s = &sections[i];
-    if (s->type < 1 || s->type > CBVH_KNOWN_SECTIONS) {
+    const cbvh_section_kind *k = cbvh_section_kind_of(s->type);
+    if (!k) {
         for (uint32_t j = 0; j < i; j++)
             if (sections[j].type == s->type)
                 return CORRUPT("section %u: second section of type 0x%x (the first is section %u)", i, s->type, j);
@@ -75,21 +62,21 @@ static cbvh_result check_content(const cbvh_file_info *in, const cbvh_section_in
         return cbvh_fail(err, CBVH_ERROR_UNSUPPORTED, "section %u: critical section type %u is unknown to this reader",
                          i, s->type);
     }
-    const known_section *k = &known[s->type - 1];
     if (map->index[s->type - 1] >= 0)
         return CORRUPT("section %u: second %s section (the first is section %d)", i, k->name, map->index[s->type - 1]);
     map->index[s->type - 1] = (int)i;
     if (s->codec != CBVH_CODEC_RAW && s->codec != CBVH_CODEC_ZLIB)
         return cbvh_fail(err, CBVH_ERROR_UNSUPPORTED, "section %u (%s): codec %u is unknown to this reader", i,
                          k->name, s->codec);
-    if (s->encoding >= 3 || k->element_size[s->encoding] == 0)
+    const uint32_t element_size = cbvh_element_size(s->type, s->encoding);
+    if (element_size == 0)
         return cbvh_fail(err, CBVH_ERROR_UNSUPPORTED, "section %u (%s): encoding %u is unknown to this reader", i,
                          k->name, s->encoding);
-    uint64_t expected = element_count(in, s->type) * k->element_size[s->encoding];
+    uint64_t expected = element_count(in, s->type) * element_size;
     if (s->size != expected)
         return CORRUPT("section %u (%s): size %llu, expected %llu (%llu elements of %u bytes)", i, k->name,
                        (unsigned long long)s->size, (unsigned long long)expected,
-                       (unsigned long long)element_count(in, s->type), k->element_size[s->encoding]);
+                       (unsigned long long)element_count(in, s->type), element_size);
     if (s->codec == CBVH_CODEC_RAW && s->stored_size != s->size)
         return CORRUPT("section %u (%s): raw section with stored_size %llu != size %llu", i, k->name,
                        (unsigned long long)s->stored_size, (unsigned long long)s->size);
@@ -143,9 +130,9 @@ cbvh_result cbvh_validate_table(struct cbvh_file *f, cbvh_section_map *map, cbvh
     if (prev_end != file_size)
         return CORRUPT("trailing bytes: the last section ends at byte %llu but the file has %llu bytes",
                        (unsigned long long)prev_end, (unsigned long long)file_size);
-    for (int t = 0; t < CBVH_KNOWN_SECTIONS; t++)
-        if (known[t].required && map->index[t] < 0)
-            return CORRUPT("required section %s is missing", known[t].name);
+    for (uint32_t type = 1; type <= CBVH_KNOWN_SECTIONS; type++)
+        if (cbvh_section_kind_of(type)->required && map->index[type - 1] < 0)
+            return CORRUPT("required section %s is missing", cbvh_section_kind_of(type)->name);
     if (map->index[CBVH_SECTION_REMAP - 1] < 0 && f->original_triangle_count != f->info.triangle_count)
         return CORRUPT("header byte %d: original_triangle_count %u != triangle_count %u without a REMAP section",
                        CBVH_HDR_ORIGINAL_TRIANGLES, f->original_triangle_count, f->info.triangle_count);

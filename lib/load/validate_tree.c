@@ -1,5 +1,6 @@
 /* validate_tree.c: checks every node in one linear, resumable pass (format spec section 5): boxes, links, depth, leaves. */
 #include "common/error.h"
+#include "layout/binary.h"
 #include "load/load.h"
 
 #define CORRUPT(...) cbvh_fail(err, CBVH_ERROR_CORRUPT, __VA_ARGS__)
@@ -45,11 +46,17 @@ cbvh_result cbvh_tree_check(const struct cbvh_file *f, void *walk_state, uint32_
                             cbvh_error *err)
 {
     cbvh_tree_walk *restrict w = walk_state;
-    const cbvh_node *restrict nodes = f->nodes;
+    const cbvh_node *restrict nodes = (const cbvh_node *)f->nodes;
     const uint32_t node_count = f->info.node_count;
     const uint32_t triangle_count = f->info.triangle_count;
     const uint32_t max_leaf = f->info.max_leaf_size;
     const uint32_t header_depth = f->info.depth;
+    if (begin == 0 && node_count > CBVH_BINARY_MAX_NODES)
+        return CORRUPT("node_count %u is more than a binary-layout file holds (%u)", node_count,
+                       CBVH_BINARY_MAX_NODES);
+    if (begin == 0 && triangle_count > CBVH_BINARY_MAX_TRIANGLES)
+        return CORRUPT("triangle_count %u is more than a binary-layout file holds (%u)", triangle_count,
+                       CBVH_BINARY_MAX_TRIANGLES);
     if (begin == 0 && subtree_size(nodes[0].word) != node_count)
         return CORRUPT("node 0: subtree size %u, but its parent leaves it nodes [0, %u)", subtree_size(nodes[0].word),
                        node_count);
@@ -123,7 +130,7 @@ cbvh_result cbvh_tree_check(const struct cbvh_file *f, void *walk_state, uint32_
 cbvh_result cbvh_tree_finish(const struct cbvh_file *f, const cbvh_tree_walk *w, cbvh_error *err)
 {
     if (w->bad_box)
-        return find_bad_box(f->nodes, f->info.node_count, err);
+        return find_bad_box((const cbvh_node *)f->nodes, f->info.node_count, err);
     if (w->max_depth != f->info.depth)
         return CORRUPT("the tree's depth is %u, the header says %u", w->max_depth, f->info.depth);
     if (w->next_triangle != f->info.triangle_count)

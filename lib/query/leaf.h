@@ -67,11 +67,10 @@ CBVH_KERNEL void leaf_triangle(const void *restrict tris, const int tri_enc, con
  * closest hit so far; hits at t == *tmax still compete by index), returns 0.
  * *tested receives the number of triangles tested. The file's arrays and
  * grid are read into locals once per leaf. */
-CBVH_KERNEL int leaf_loop(const struct cbvh_file *restrict f, uint32_t word, const struct cbvh_ray_shear *restrict s,
-                          float tmin, float *restrict tmax, struct cbvh_best_hit *restrict best, const int any,
-                          const int tri_enc, const int vert_enc, uint32_t *restrict tested)
+CBVH_KERNEL int leaf_loop(const struct cbvh_file *restrict f, uint32_t first, uint32_t count,
+                          const struct cbvh_ray_shear *restrict s, float tmin, float *restrict tmax,
+                          struct cbvh_best_hit *restrict best, const int any, const int tri_enc, const int vert_enc)
 {
-    const uint32_t first = cbvh_leaf_first(word), count = cbvh_leaf_count(word);
     const void *restrict tris = f->triangles;
     const void *restrict verts = f->vertices;
     const float origin[3] = {f->grid_origin[0], f->grid_origin[1], f->grid_origin[2]};
@@ -82,10 +81,8 @@ CBVH_KERNEL int leaf_loop(const struct cbvh_file *restrict f, uint32_t word, con
         leaf_triangle(tris, tri_enc, verts, vert_enc, origin, scale, k, a, b, c);
         if (!cbvh_ray_triangle(s, a, b, c, tmin, best_t, &t, &u, &v))
             continue;
-        if (any) {
-            *tested = k - first + 1u;
+        if (any)
             return 1;
-        }
         if (cbvh_hit_better(t, k, best_t, best->tri)) {
             best_t = t;
             best->tri = k;
@@ -95,43 +92,33 @@ CBVH_KERNEL int leaf_loop(const struct cbvh_file *restrict f, uint32_t word, con
         }
     }
     *tmax = best_t;
-    *tested = count;
     return 0;
 }
 
-/* The leaf step of every single-ray walk. Any-hit: returns 1 when the leaf
- * occludes the ray. Closest-hit: updates best and *tmax, returns 0. When
- * counting, adds the triangles tested to *tested. The common encodings get
+/* The leaf step of every single-ray walk: the leaf's cooked triangles
+ * [first, first + count). Any-hit: returns 1 when the leaf occludes the ray.
+ * Closest-hit: updates best and *tmax, returns 0. The common encodings get
  * their own loop (one switch per leaf, not per triangle); U32 indices go
  * through the generic one. */
-CBVH_KERNEL int cbvh_leaf_visit(const struct cbvh_file *restrict f, uint32_t word, const struct cbvh_ray_ctx *ray,
-                                const int any, const int counting, float *restrict tmax,
-                                struct cbvh_best_hit *restrict best, uint64_t *restrict tested)
+CBVH_KERNEL int cbvh_leaf_visit(const struct cbvh_file *restrict f, uint32_t first, uint32_t count,
+                                const struct cbvh_ray_ctx *ray, const int any, float *restrict tmax,
+                                struct cbvh_best_hit *restrict best)
 {
     const struct cbvh_ray_shear *s = &ray->shear;
     const float tmin = ray->tmin;
-    uint32_t count;
-    int hit;
     switch (f->triangle_encoding << 1 | f->vertex_encoding) {
     case CBVH_TRIS_DELTA16 << 1 | CBVH_VERTS_F32:
-        hit = leaf_loop(f, word, s, tmin, tmax, best, any, CBVH_TRIS_DELTA16, CBVH_VERTS_F32, &count);
-        break;
+        return leaf_loop(f, first, count, s, tmin, tmax, best, any, CBVH_TRIS_DELTA16, CBVH_VERTS_F32);
     case CBVH_TRIS_U16 << 1 | CBVH_VERTS_F32:
-        hit = leaf_loop(f, word, s, tmin, tmax, best, any, CBVH_TRIS_U16, CBVH_VERTS_F32, &count);
-        break;
+        return leaf_loop(f, first, count, s, tmin, tmax, best, any, CBVH_TRIS_U16, CBVH_VERTS_F32);
     case CBVH_TRIS_DELTA16 << 1 | CBVH_VERTS_Q16:
-        hit = leaf_loop(f, word, s, tmin, tmax, best, any, CBVH_TRIS_DELTA16, CBVH_VERTS_Q16, &count);
-        break;
+        return leaf_loop(f, first, count, s, tmin, tmax, best, any, CBVH_TRIS_DELTA16, CBVH_VERTS_Q16);
     case CBVH_TRIS_U16 << 1 | CBVH_VERTS_Q16:
-        hit = leaf_loop(f, word, s, tmin, tmax, best, any, CBVH_TRIS_U16, CBVH_VERTS_Q16, &count);
-        break;
+        return leaf_loop(f, first, count, s, tmin, tmax, best, any, CBVH_TRIS_U16, CBVH_VERTS_Q16);
     default:
-        hit = leaf_loop(f, word, s, tmin, tmax, best, any, (int)f->triangle_encoding, (int)f->vertex_encoding, &count);
-        break;
+        return leaf_loop(f, first, count, s, tmin, tmax, best, any, (int)f->triangle_encoding,
+                         (int)f->vertex_encoding);
     }
-    if (counting)
-        *tested += count;
-    return hit;
 }
 
 /* Adds a walk's counters to the caller's stats. */

@@ -1,9 +1,9 @@
-/* overlap.c: box and sphere overlap queries: stackless walk, exact per-triangle tests, callback and/or output array. */
+/* overlap.c: box and sphere overlap queries: the shape walk (shape_walk.h), exact per-triangle tests, callback and/or output array. */
 #include <math.h>
 
 #include "query/closest.h"
 #include "query/sweep_walk.h"
-#include "query/tree.h"
+#include "query/shape_walk.h"
 #include "query/triangle_box.h"
 
 /* Where overlapping triangles go. */
@@ -48,36 +48,41 @@ static int region_triangle(const struct overlap_region *r, cbvh_v3 a, cbvh_v3 b,
                                    v3(0, 0, 0), 0.0, &t, &n);
 }
 
-/* Stackless walk: the order does not matter when every overlap is reported.
- * Node boxes are closed, so a region touching a box is not culled. */
+/* An overlap as the shape walk sees it. */
+struct overlap_query {
+    const struct cbvh_file *f;
+    const struct overlap_region *region;
+    struct overlap_sink *sink;
+};
+
+/* Node boxes are closed, so a region touching a box is not culled. */
+static int overlap_enter(void *query, const float lo[3], const float hi[3])
+{
+    const struct overlap_region *r = ((const struct overlap_query *)query)->region;
+    return !(lo[0] > r->hi[0] || hi[0] < r->lo[0] || lo[1] > r->hi[1] || hi[1] < r->lo[1] || lo[2] > r->hi[2] ||
+             hi[2] < r->lo[2]);
+}
+
+static int overlap_leaf(void *query, uint32_t first, uint32_t count)
+{
+    const struct overlap_query *q = query;
+    for (uint32_t k = first; k < first + count; k++) {
+        float a[3], b[3], c[3];
+        cbvh_triangle_vertices(q->f, k, a, b, c);
+        if (region_triangle(q->region, v3_from_f(a), v3_from_f(b), v3_from_f(c)) &&
+            sink_report(q->sink, cbvh_original_id(q->f, k)))
+            return 1;
+    }
+    return 0;
+}
+
+/* Stored order: the order does not matter when every overlap is reported. */
 static size_t overlap_walk(const struct cbvh_file *f, const struct overlap_region *region, struct overlap_sink *sink)
 {
-    const cbvh_node *nodes = f->nodes;
-    const uint32_t end = f->info.node_count;
+    struct overlap_query q = {f, region, sink};
     if (sink->out && sink->capacity == 0)
         return 0; /* out is full before the first report */
-    uint32_t i = 0;
-    while (i < end) {
-        const uint32_t word = nodes[i].word;
-        float lo[3], hi[3];
-        cbvh_node_box(f, &nodes[i], lo, hi);
-        if (lo[0] > region->hi[0] || hi[0] < region->lo[0] || lo[1] > region->hi[1] || hi[1] < region->lo[1] ||
-            lo[2] > region->hi[2] || hi[2] < region->lo[2]) {
-            i += cbvh_node_span(word);
-            continue;
-        }
-        if (cbvh_node_is_leaf(word)) {
-            const uint32_t tri0 = cbvh_leaf_first(word), tri_end = tri0 + cbvh_leaf_count(word);
-            for (uint32_t k = tri0; k < tri_end; k++) {
-                float a[3], b[3], c[3];
-                cbvh_triangle_vertices(f, k, a, b, c);
-                if (region_triangle(region, v3_from_f(a), v3_from_f(b), v3_from_f(c)) &&
-                    sink_report(sink, cbvh_original_id(f, k)))
-                    return sink->reported;
-            }
-        }
-        i++;
-    }
+    cbvh_shape_walk(f, f->layout, CBVH_NO_OCTANT, overlap_enter, overlap_leaf, &q);
     return sink->reported;
 }
 

@@ -5,6 +5,7 @@
 #include <stdint.h>
 
 #include "common/format.h"
+#include "layout/tree.h"
 #include "query/ray_setup.h"
 
 /* Ize 2013 ("Robust BVH ray traversal"): scaling the far distance by
@@ -13,14 +14,7 @@
  * about 3.6e-7; 2^-21 (4.8e-7) is the next power of two above it. */
 #define CBVH_BOX_PAD 0x1.00001p0f
 
-/* The node's six grid coordinates as one array: qmin x,y,z then qmax x,y,z. */
-static inline const uint16_t *cbvh_node_q(const cbvh_node *n)
-{
-    /* qmin and qmax are adjacent uint16_t[3] arrays at offsets 0 and 6 (format.h, spec section 5) */
-    return (const uint16_t *)(const void *)n;
-}
-
-/* For each axis, the index into cbvh_node_q() of the plane the ray meets first
+/* For each axis, the grid coordinate index (cbvh_tree_box_coord) of the plane the ray meets first
  * (near) and last (far): the minimum for a positive reciprocal, else the maximum. */
 struct cbvh_slab_select {
     uint32_t near_x, near_y, near_z, far_x, far_y, far_z;
@@ -42,7 +36,7 @@ static inline struct cbvh_slab_select cbvh_slab_select_of(uint32_t octant)
  * a NaN distance (0 * inf, an origin on a slab plane with a zero direction
  * component) fails both and never decides anything. Returns 1 on overlap of
  * [tmin, tmax] with the box, and the entry distance in *entry. */
-static inline int cbvh_slab_test(float nx, float ny, float nz, float fx, float fy, float fz,
+CBVH_KERNEL int cbvh_slab_test(float nx, float ny, float nz, float fx, float fy, float fz,
                                  const float org[3], const float rcp[3], float tmin, float tmax,
                                  float *entry)
 {
@@ -57,21 +51,6 @@ static inline int cbvh_slab_test(float nx, float ny, float nz, float fx, float f
     tfar = tfz < tfar ? tfz : tfar;
     *entry = tnear;
     return tnear <= tfar * CBVH_BOX_PAD;
-}
-
-/* Ray against node n's box on the grid (origin, scale), dequantizing only
- * the six values the test needs with the normative arithmetic. */
-static inline int cbvh_ray_node(const cbvh_node *n, const float origin[3], const float scale[3],
-                                struct cbvh_slab_select sel, const float org[3], const float rcp[3],
-                                float tmin, float tmax, float *entry)
-{
-    const uint16_t *q = cbvh_node_q(n);
-    return cbvh_slab_test(cbvh_dequantize(q[sel.near_x], origin[0], scale[0]),
-                          cbvh_dequantize(q[sel.near_y], origin[1], scale[1]),
-                          cbvh_dequantize(q[sel.near_z], origin[2], scale[2]),
-                          cbvh_dequantize(q[sel.far_x], origin[0], scale[0]),
-                          cbvh_dequantize(q[sel.far_y], origin[1], scale[1]),
-                          cbvh_dequantize(q[sel.far_z], origin[2], scale[2]), org, rcp, tmin, tmax, entry);
 }
 
 /* A ray as the walks test it against nodes: everything kept in locals for the walk's duration. */
@@ -112,10 +91,20 @@ static inline void cbvh_box_ray_halve(struct cbvh_box_ray *b, uint32_t axes)
     }
 }
 
-static inline int cbvh_box_ray_test(const struct cbvh_box_ray *b, const cbvh_node *n, float tmin, float tmax,
-                                    float *entry)
+/* Ray against box `box` of the file's tree, dequantizing only the six
+ * values the test needs with the normative arithmetic. */
+CBVH_KERNEL int cbvh_box_ray_test(const struct cbvh_box_ray *b, const struct cbvh_file *f, const uint32_t layout,
+                                    uint32_t box, float tmin, float tmax, float *entry)
 {
-    return cbvh_ray_node(n, b->origin, b->scale, b->sel, b->org, b->rcp, tmin, tmax, entry);
+    const struct cbvh_slab_select s = b->sel;
+    const float *o = b->origin, *sc = b->scale;
+    return cbvh_slab_test(cbvh_dequantize(cbvh_tree_box_coord(f, layout, box, s.near_x), o[0], sc[0]),
+                          cbvh_dequantize(cbvh_tree_box_coord(f, layout, box, s.near_y), o[1], sc[1]),
+                          cbvh_dequantize(cbvh_tree_box_coord(f, layout, box, s.near_z), o[2], sc[2]),
+                          cbvh_dequantize(cbvh_tree_box_coord(f, layout, box, s.far_x), o[0], sc[0]),
+                          cbvh_dequantize(cbvh_tree_box_coord(f, layout, box, s.far_y), o[1], sc[1]),
+                          cbvh_dequantize(cbvh_tree_box_coord(f, layout, box, s.far_z), o[2], sc[2]), b->org, b->rcp,
+                          tmin, tmax, entry);
 }
 
 #endif

@@ -7,16 +7,13 @@
 #include <stdint.h>
 
 #include "cbvh.h"
+#include "common/compiler.h"
 #include "common/format.h"
 
 /* Kernels are written once with constant flags (any-hit, counting) and
  * instantiated per flag set; forcing inlining makes each instance lose the
  * code its flags switch off. */
-#if defined(__GNUC__)
-#define CBVH_KERNEL static inline __attribute__((always_inline))
-#else
-#define CBVH_KERNEL static inline
-#endif
+#define CBVH_KERNEL CBVH_FORCE_INLINE
 
 /* The largest t a ray reports: FLT_MAX / 2, so tmax * CBVH_BOX_PAD cannot overflow. */
 #define CBVH_T_LIMIT 0x1.fffffep126f
@@ -40,8 +37,8 @@ struct cbvh_ray_ctx {
                            * (ray_origin.c); the kernels' t and [tmin, tmax] are relative to it */
     uint32_t box_halve;   /* bit a: a plane - org difference on axis a can overflow (coordinates past
                            * FLT_MAX / 2), so the box test runs on that axis at half scale (ray_box.h) */
-    uint32_t octant;      /* bit a set when rcp[a] has its sign bit set (so -0 counts as negative) */
-    uint32_t sort_mask;   /* (1 << octant) << CBVH_NODE_SORT_SHIFT: one AND with the node word */
+    uint32_t octant;      /* bit a set when rcp[a] has its sign bit set (so -0 counts as negative): selects
+                           * the precomputed child order (layout/tree.h) */
 };
 
 /* The octant of a reciprocal direction, from its sign bits. Every kernel
@@ -95,7 +92,6 @@ static inline int cbvh_ray_setup(struct cbvh_ray_ctx *ctx, const cbvh_ray *ray)
     ctx->tmin = ray->tmin;
     ctx->tmax = ray->tmax < CBVH_T_LIMIT ? ray->tmax : CBVH_T_LIMIT;
     ctx->octant = cbvh_octant_of(ctx->rcp);
-    ctx->sort_mask = (1u << ctx->octant) << CBVH_NODE_SORT_SHIFT;
     cbvh_shear_setup(&ctx->shear, o, d);
     return 1;
 }

@@ -5,14 +5,6 @@
 #include "query/ray_setup.h"
 #include "query/triangle_frame.h"
 
-#if defined(__GNUC__)
-#define CBVH_LIKELY(x) __builtin_expect(!!(x), 1)
-#define CBVH_COLD __attribute__((noinline, cold))
-#else
-#define CBVH_LIKELY(x) (x)
-#define CBVH_COLD
-#endif
-
 /* Edge functions of the sheared triangle when float could not decide them:
  * one of them is 0, infinite or NaN (coordinates beyond about 1e12 relative
  * to the origin overflow coord^2 products), or their sum overflows. Returns

@@ -3,39 +3,38 @@
 #define CBVH_QUERY_RAYCAST_H
 
 #include "common/file.h"
+#include "layout/tree.h"
 #include "query/leaf.h"
 #include "query/ray_setup.h"
 
 /* Each kernel takes a validated ray; closest-hit kernels fill *best (cooked
- * index, UINT32_MAX for none). stats may be NULL: the counting variants are
- * separate instances, so the uncounted path does no bookkeeping. */
+ * index, UINT32_MAX for none). stats may be NULL. */
 
-/* Stack walk; sorted = 1 orders children by the node's sort byte, 0 takes the first child first. */
-void cbvh_closest_stack(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray, int sorted,
-                        struct cbvh_best_hit *best, cbvh_query_stats *stats);
-int cbvh_any_stack(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray, int sorted, cbvh_query_stats *stats);
+/* The closest hit, or whether any triangle occludes the ray, by the walk
+ * `traversal` names (an unknown value walks sorted; the public entry points
+ * reject it first). A ray with box_halve set (ray_setup.h) takes the sorted
+ * walk with its box test at half scale on those axes, whatever the
+ * traversal: the tie rule makes every traversal's answer the same, so no
+ * other walk carries the rescaling. */
+void cbvh_closest(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray, cbvh_traversal traversal,
+                  struct cbvh_best_hit *best, cbvh_query_stats *stats);
+int cbvh_any(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray, cbvh_traversal traversal,
+             cbvh_query_stats *stats);
 
-/* Sorted stack walks of the subtree of node `root` only (the streams'
- * per-ray tails, stream.c): best and the result are as for the whole tree
- * restricted to the subtree's triangles. stats may be NULL. */
-void cbvh_closest_subtree(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray, uint32_t root,
+/* Sorted walks of the subtree `root` only, whose box the caller found
+ * entered (the streams' per-ray tails, stream.c): best and the result are as
+ * for the whole tree restricted to the subtree's triangles. Not for box_halve
+ * rays. */
+void cbvh_closest_subtree(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray, cbvh_ref root,
                           struct cbvh_best_hit *best, cbvh_query_stats *stats);
-int cbvh_any_subtree(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray, uint32_t root, cbvh_query_stats *stats);
+int cbvh_any_subtree(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray, cbvh_ref root, cbvh_query_stats *stats);
 
-/* The sorted stack walk for a ray with box_halve set (ray_setup.h): its box
- * test runs at half scale on those axes. Every traversal, stream and
- * zero-size sweep sends such rays here (the tie rule makes every traversal's
- * answer the same), so no other walk carries the rescaling. */
-void cbvh_closest_halved(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray, struct cbvh_best_hit *best,
-                         cbvh_query_stats *stats);
-int cbvh_any_halved(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray, cbvh_query_stats *stats);
+/* Test hook, not exported: 1 makes the wide layout's walks test a node's
+ * children one box at a time instead of with SIMD (the fallback of builds
+ * without SIMD), so tests can compare both; 0 (the default) restores SIMD. */
+void cbvh_walk_set_scalar(int scalar);
 
-/* Stack walk ordering children by their box entry distance, computed at run time. */
-void cbvh_closest_distance(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray, struct cbvh_best_hit *best,
-                           cbvh_query_stats *stats);
-int cbvh_any_distance(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray, cbvh_query_stats *stats);
-
-/* Stackless walk over escape links. */
+/* Stackless walk over escape links (binary layout). */
 void cbvh_closest_stackless(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray, struct cbvh_best_hit *best,
                             cbvh_query_stats *stats);
 int cbvh_any_stackless(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray, cbvh_query_stats *stats);

@@ -4,7 +4,6 @@
 #include "query/ray_box.h"
 #include "query/raycast.h"
 #include "query/stream.h"
-#include "query/tree.h"
 
 /* Rays are grouped by octant within windows of this many input rays, so a
  * batch shares one sort-byte mask and one near/far plane selection. */
@@ -39,88 +38,97 @@ static void solo_tail(const struct cbvh_file *f, struct cbvh_stream_batch *b, ui
         box_ray[CBVH_LANE_TMAX] = b->best[r].t;
 }
 
-/* Walks the tree once for the batch. At each node the box is dequantized
+/* Walks the tree once for the batch. At each box the planes are dequantized
  * once and all live rays [0, n) of `live` are tested and partitioned (the
  * survivors move to the front); the children are visited with the survivors
  * only. A child's walk only permutes the prefix it gets, so the parent's
- * prefix still holds the same rays when the second child is popped, and the
+ * prefix still holds the same rays when the next child is popped, and the
  * box test there sees each ray's current tmax. The triangle test and the tie
- * rule are those of the single-ray walks, so every ray gets the same hit. */
-CBVH_KERNEL void stream_walk(const struct cbvh_file *restrict f, struct cbvh_stream_batch *restrict b, uint32_t octant,
-                             cbvh_stream_box_fn box_test, const int any, const int counting, uint8_t *restrict occluded,
-                             uint64_t *restrict visited, uint64_t *restrict tested)
+ * rule are those of the single-ray walks, so every ray gets the same hit.
+ * Children come through the layout interface (layout/tree.h) in the
+ * precomputed order of the batch's octant. */
+CBVH_KERNEL void stream_walk(const struct cbvh_file *restrict f, const uint32_t layout,
+                             struct cbvh_stream_batch *restrict b, uint32_t octant, cbvh_stream_box_fn box_test,
+                             const int any, const int counting, uint8_t *restrict occluded, uint64_t *restrict visited,
+                             uint64_t *restrict tested)
 {
     cbvh_query_stats solo = {0, 0};
-    const cbvh_node *restrict nodes = f->nodes;
     const float origin[3] = {f->grid_origin[0], f->grid_origin[1], f->grid_origin[2]};
     const float scale[3] = {f->grid_scale[0], f->grid_scale[1], f->grid_scale[2]};
     const struct cbvh_slab_select sel = cbvh_slab_select_of(octant);
-    const uint32_t mask = (1u << octant) << CBVH_NODE_SORT_SHIFT;
     uint16_t live[CBVH_STREAM_BATCH];
     struct {
-        uint32_t node, count;
-    } stack[CBVH_MAX_DEPTH];
-    uint32_t sp = 0, i = 0, n = b->count;
+        uint32_t box;
+        cbvh_ref ref;
+        uint32_t count;
+    } stack[(CBVH_TREE_WIDTH - 1u) * CBVH_MAX_DEPTH + 1u];
+    uint32_t sp = 0, n = b->count, box = cbvh_tree_root_box(f, layout);
+    cbvh_ref r = cbvh_tree_root(f, layout);
     uint64_t nv = 0, nt = 0;
 
     for (uint32_t j = 0; j < n; j++)
         live[j] = (uint16_t)j;
     for (;;) {
-        const cbvh_node *node = &nodes[i];
-        const uint16_t *q = cbvh_node_q(node);
-        const float near[3] = {cbvh_dequantize(q[sel.near_x], origin[0], scale[0]),
-                               cbvh_dequantize(q[sel.near_y], origin[1], scale[1]),
-                               cbvh_dequantize(q[sel.near_z], origin[2], scale[2])};
-        const float far[3] = {cbvh_dequantize(q[sel.far_x], origin[0], scale[0]),
-                              cbvh_dequantize(q[sel.far_y], origin[1], scale[1]),
-                              cbvh_dequantize(q[sel.far_z], origin[2], scale[2])};
-        const uint32_t word = node->word;
-        nv += n;
-        uint32_t m = box_test(b, live, n, near, far);
-        if (m > 0 && m <= CBVH_STREAM_SOLO && !cbvh_node_is_leaf(word)) {
+        uint32_t m = n;
+        if (box != CBVH_NO_BOX) {
+            const float near[3] = {
+                cbvh_dequantize(cbvh_tree_box_coord(f, layout, box, sel.near_x), origin[0], scale[0]),
+                cbvh_dequantize(cbvh_tree_box_coord(f, layout, box, sel.near_y), origin[1], scale[1]),
+                cbvh_dequantize(cbvh_tree_box_coord(f, layout, box, sel.near_z), origin[2], scale[2])};
+            const float far[3] = {
+                cbvh_dequantize(cbvh_tree_box_coord(f, layout, box, sel.far_x), origin[0], scale[0]),
+                cbvh_dequantize(cbvh_tree_box_coord(f, layout, box, sel.far_y), origin[1], scale[1]),
+                cbvh_dequantize(cbvh_tree_box_coord(f, layout, box, sel.far_z), origin[2], scale[2])};
+            nv += n;
+            m = box_test(b, live, n, near, far);
+        }
+        const int leaf = m > 0 && cbvh_tree_is_leaf(f, layout, r);
+        if (m > 0 && m <= CBVH_STREAM_SOLO && !leaf) {
             /* Too few rays left to share the nodes below: each finishes the
              * subtree on its own, with the single-ray walk and its current tmax. */
             for (uint32_t j = 0; j < m; j++)
-                solo_tail(f, b, live[j], i, any, occluded, counting ? &solo : NULL);
+                solo_tail(f, b, live[j], r, any, occluded, counting ? &solo : NULL);
             m = 0;
         }
-        if (m > 0 && !cbvh_node_is_leaf(word)) {
-            uint32_t first = i + 1u, second = cbvh_second_child(nodes, i);
-            if (word & mask) {
-                uint32_t tmp = first;
-                first = second;
-                second = tmp;
+        if (m > 0 && !leaf) {
+            struct cbvh_child c[CBVH_TREE_WIDTH];
+            const uint32_t k = cbvh_tree_children(f, layout, r, octant, c);
+            for (uint32_t j = k; j-- > 1;) {
+                stack[sp].box = c[j].box;
+                stack[sp].ref = c[j].ref;
+                stack[sp].count = m;
+                sp++;
             }
-            stack[sp].node = second;
-            stack[sp].count = m;
-            sp++;
-            i = first;
+            box = c[0].box;
+            r = c[0].ref;
             n = m;
             continue;
         }
         if (m > 0) {
-            const uint32_t tri0 = cbvh_leaf_first(word), tri_end = tri0 + cbvh_leaf_count(word);
+            uint32_t tri0, tri_count;
+            cbvh_tree_leaf(f, layout, r, &tri0, &tri_count);
+            const uint32_t tri_end = tri0 + tri_count;
             float a[3], v1[3], v2[3], t, u, v;
-            nt += (uint64_t)m * (tri_end - tri0);
+            nt += (uint64_t)m * tri_count;
             /* Triangles outside, rays inside: each triangle is fetched once per batch visit. */
             for (uint32_t k = tri0; k < tri_end; k++) {
                 cbvh_triangle_vertices(f, k, a, v1, v2);
                 for (uint32_t j = 0; j < m; j++) {
-                    const uint32_t r = live[j];
-                    float *box_ray = b->box_ray[r];
+                    const uint32_t ray = live[j];
+                    float *box_ray = b->box_ray[ray];
                     const float tmin = box_ray[CBVH_LANE_TMIN], tmax = box_ray[CBVH_LANE_TMAX];
-                    if (!cbvh_ray_triangle(&b->ctx[r].shear, a, v1, v2, tmin, tmax, &t, &u, &v))
+                    if (!cbvh_ray_triangle(&b->ctx[ray].shear, a, v1, v2, tmin, tmax, &t, &u, &v))
                         continue;
                     if (any) {
                         /* Occluded: a negative tmax fails every later box and triangle test. */
-                        occluded[b->ray_index[r]] = 1;
+                        occluded[b->ray_index[ray]] = 1;
                         box_ray[CBVH_LANE_TMAX] = -1.0f;
-                    } else if (cbvh_hit_better(t, k, tmax, b->best[r].tri)) {
+                    } else if (cbvh_hit_better(t, k, tmax, b->best[ray].tri)) {
                         box_ray[CBVH_LANE_TMAX] = t;
-                        b->best[r].tri = k;
-                        b->best[r].t = t;
-                        b->best[r].u = u;
-                        b->best[r].v = v;
+                        b->best[ray].tri = k;
+                        b->best[ray].t = t;
+                        b->best[ray].u = u;
+                        b->best[ray].v = v;
                     }
                 }
             }
@@ -128,11 +136,33 @@ CBVH_KERNEL void stream_walk(const struct cbvh_file *restrict f, struct cbvh_str
         if (sp == 0)
             break;
         sp--;
-        i = stack[sp].node;
+        box = stack[sp].box;
+        r = stack[sp].ref;
         n = stack[sp].count;
     }
     *visited += nv + solo.nodes_visited;
     *tested += nt + solo.triangles_tested;
+}
+
+/* The stream walk for the file's layout; one instance per layout and flag set. */
+static void stream_walk_file(const struct cbvh_file *f, struct cbvh_stream_batch *b, uint32_t octant,
+                             cbvh_stream_box_fn box_test, int any, int counting, uint8_t *occluded, uint64_t *visited,
+                             uint64_t *tested)
+{
+    const uint32_t layout = f->layout;
+#define STREAM_WALK(L, ANY, COUNTING) stream_walk(f, L, b, octant, box_test, ANY, COUNTING, occluded, visited, tested)
+    if (layout == CBVH_LAYOUT_WIDE4) {
+        if (any)
+            counting ? STREAM_WALK(CBVH_LAYOUT_WIDE4, 1, 1) : STREAM_WALK(CBVH_LAYOUT_WIDE4, 1, 0);
+        else
+            counting ? STREAM_WALK(CBVH_LAYOUT_WIDE4, 0, 1) : STREAM_WALK(CBVH_LAYOUT_WIDE4, 0, 0);
+    } else {
+        if (any)
+            counting ? STREAM_WALK(CBVH_LAYOUT_BINARY, 1, 1) : STREAM_WALK(CBVH_LAYOUT_BINARY, 1, 0);
+        else
+            counting ? STREAM_WALK(CBVH_LAYOUT_BINARY, 0, 1) : STREAM_WALK(CBVH_LAYOUT_BINARY, 0, 0);
+    }
+#undef STREAM_WALK
 }
 
 /* Adds a validated ray to the batch. */
@@ -161,17 +191,11 @@ static void batch_flush(const struct cbvh_file *f, struct cbvh_stream_batch *b, 
     if (b->count == 0)
         return;
     if (hits) {
-        if (counting)
-            stream_walk(f, b, octant, box_test, 0, 1, NULL, visited, tested);
-        else
-            stream_walk(f, b, octant, box_test, 0, 0, NULL, visited, tested);
+        stream_walk_file(f, b, octant, box_test, 0, counting, NULL, visited, tested);
         for (uint32_t r = 0; r < b->count; r++)
             cbvh_hit_output(f, &b->best[r], b->ctx[r].t_base, &hits[b->ray_index[r]]);
     } else {
-        if (counting)
-            stream_walk(f, b, octant, box_test, 1, 1, occluded, visited, tested);
-        else
-            stream_walk(f, b, octant, box_test, 1, 0, occluded, visited, tested);
+        stream_walk_file(f, b, octant, box_test, 1, counting, occluded, visited, tested);
     }
     b->count = 0;
 }
@@ -183,10 +207,10 @@ static void solo_ray(const struct cbvh_file *f, const struct cbvh_ray_ctx *ctx, 
     cbvh_query_stats stats = {0, 0};
     if (hit) {
         struct cbvh_best_hit best = {UINT32_MAX, 0.0f, 0.0f, 0.0f};
-        cbvh_closest_halved(f, ctx, &best, &stats);
+        cbvh_closest(f, ctx, CBVH_TRAVERSAL_SORTED, &best, &stats);
         cbvh_hit_output(f, &best, ctx->t_base, hit);
     } else {
-        *occluded = (uint8_t)cbvh_any_halved(f, ctx, &stats);
+        *occluded = (uint8_t)cbvh_any(f, ctx, CBVH_TRAVERSAL_SORTED, &stats);
     }
     *visited += stats.nodes_visited;
     *tested += stats.triangles_tested;

@@ -5,6 +5,7 @@
 
 #include <stdatomic.h>
 
+#include "common/cpu.h"
 #include "query/ray_box.h"
 #include "query/stream.h"
 
@@ -39,7 +40,7 @@ cbvh_stream_box_fn cbvh_stream_box_kernel(void)
 {
     int which = atomic_load_explicit(&stream_kernel_setting, memory_order_relaxed);
 #ifdef CBVH_HAVE_SIMD
-    int avx2 = __builtin_cpu_supports("avx2") != 0;
+    int avx2 = (cbvh_cpu_features() & CBVH_CPU_AVX2) != 0;
     if (which == 0)
         return avx2 ? cbvh_stream_box_avx2 : cbvh_stream_box_sse2;
     if (which == 2)

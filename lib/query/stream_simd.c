@@ -46,7 +46,7 @@ uint32_t cbvh_stream_box_sse2(const struct cbvh_stream_batch *restrict batch, ui
     return w;
 }
 
-__attribute__((target("avx2"))) uint32_t cbvh_stream_box_avx2(const struct cbvh_stream_batch *restrict batch,
+CBVH_TARGET("avx2") uint32_t cbvh_stream_box_avx2(const struct cbvh_stream_batch *restrict batch,
                                                                uint16_t *restrict live, uint32_t n,
                                                                const float near[3], const float far[3])
 {

@@ -1,4 +1,4 @@
-/* fuzz_cook.c: libFuzzer target: cook a mesh decoded from the bytes (NaN, inf, huge values, bad indices included); a clean error or a file that opens and answers like brute force. */
+/* fuzz_cook.c: libFuzzer target: cook a mesh decoded from the bytes (NaN, inf, huge values, bad indices included) in both node layouts; a clean error or files that open, answer like brute force and like each other. */
 #include <float.h>
 #include <math.h>
 #include <stdint.h>
@@ -43,7 +43,7 @@ static int decode(decoded *d, const uint8_t *data, size_t size)
     if (size < 3)
         return 0;
     uint8_t flags = data[0];
-    cbvh_cook_options_init(&d->opt);
+    cbvh_cook_options_init(&d->opt, sizeof d->opt);
     d->opt.vertex_format = (flags & 1) ? CBVH_VERTEX_QUANTIZED16 : CBVH_VERTEX_FLOAT32;
     d->opt.compress_level = levels[(flags >> 1) & 3];
     d->opt.keep_remap = !(flags & 8);
@@ -150,7 +150,7 @@ static void compare_with_brute_force(const cbvh_file *f, const decoded *d, uint6
     const cbvh_mesh *m = &d->mesh;
     size_t stride = m->position_stride / sizeof(float);
     cbvh_file_info info;
-    cbvh_file_get_info(f, &info);
+    cbvh_file_get_info(f, &info, sizeof info);
     for (int i = 0; i < 16; i++) {
         seed = seed * 6364136223846793005ull + 1442695040888963407ull;
         size_t t = (size_t)(seed >> 33) % m->triangle_count;
@@ -189,88 +189,157 @@ static void compare_with_brute_force(const cbvh_file *f, const decoded *d, uint6
     }
 }
 
-int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
+/* Cooks the mesh in one node layout and checks the file: a clean error (NULL, the code in *result), or a
+ * deterministic file that opens from the guarded copy *g, keeps every kept triangle and material under its
+ * id, misses no clear hit and passes the strict query checks (the open file is returned). */
+static cbvh_file *cook_and_check(const decoded *d, cbvh_layout layout, size_t size, guard_buffer *g, cbvh_result *result)
 {
-    static decoded d;
-    if (!decode(&d, data, size))
-        return 0;
+    cbvh_cook_options opt = d->opt;
+    opt.layout = layout;
     void *out = NULL;
     size_t out_size = 0;
     cbvh_cook_stats stats;
+    cbvh_cook_stats_init(&stats, sizeof stats);
     cbvh_error err;
     memset(&err, 0, sizeof err);
-    cbvh_result r = cbvh_cook(&d.mesh, &d.opt, NULL, &out, &out_size, &stats, &err);
-    int fault = mesh_fault(&d);
+    cbvh_result r = *result = cbvh_cook(&d->mesh, &opt, NULL, &out, &out_size, &stats, &err);
+    int fault = mesh_fault(d);
     if (r != CBVH_OK) {
         fuzz_check_error(r, &err);
         FUZZ_CHECK(out == NULL, "failed cook returned a buffer");
         FUZZ_CHECK(r == CBVH_ERROR_BAD_MESH || r == CBVH_ERROR_EMPTY_MESH || r == CBVH_ERROR_LIMIT,
                    "cook failed with %s: %s", cbvh_result_string(r), err.message);
-        FUZZ_CHECK(r != CBVH_ERROR_EMPTY_MESH || fault == 0 || d.mesh.triangle_count == 0,
+        FUZZ_CHECK(r != CBVH_ERROR_EMPTY_MESH || fault == 0 || d->mesh.triangle_count == 0,
                    "bad mesh reported as empty: %s", err.message);
-        return 0;
+        return NULL;
     }
     FUZZ_CHECK(fault == 0, "cook accepted a mesh with %s", fault == 2 ? "an index out of range" : "a non-finite coordinate");
     FUZZ_CHECK(out != NULL && out_size == stats.file_size, "cook returned %zu bytes, stats say %llu", out_size,
                (unsigned long long)stats.file_size);
-    FUZZ_CHECK(stats.input_triangles == d.mesh.triangle_count && stats.triangles + stats.dropped_degenerate == stats.input_triangles,
+    FUZZ_CHECK(stats.input_triangles == d->mesh.triangle_count && stats.triangles + stats.dropped_degenerate == stats.input_triangles,
                "stats: %llu in, %llu kept, %llu dropped", (unsigned long long)stats.input_triangles,
                (unsigned long long)stats.triangles, (unsigned long long)stats.dropped_degenerate);
 
     /* deterministic */
     void *again = NULL;
     size_t again_size = 0;
-    FUZZ_CHECK(cbvh_cook(&d.mesh, &d.opt, NULL, &again, &again_size, NULL, NULL) == CBVH_OK, "second cook failed");
+    FUZZ_CHECK(cbvh_cook(&d->mesh, &opt, NULL, &again, &again_size, NULL, NULL) == CBVH_OK, "second cook failed");
     FUZZ_CHECK(again_size == out_size && memcmp(again, out, out_size) == 0, "two cooks of one mesh differ");
     cbvh_buffer_free(NULL, again);
 
-    guard_buffer g;
-    guard_copy(&g, out, out_size);
+    guard_copy(g, out, out_size);
     cbvh_buffer_free(NULL, out);
     cbvh_file *f = NULL;
-    r = cbvh_open_memory(g.data, g.size, NULL, &f, &err);
+    r = cbvh_open_memory(g->data, g->size, NULL, &f, &err);
     FUZZ_CHECK(r == CBVH_OK, "the cooker's own file does not open: %s", err.message);
     cbvh_file_info info;
-    cbvh_file_get_info(f, &info);
+    cbvh_file_get_info(f, &info, sizeof info);
     FUZZ_CHECK(info.triangle_count == stats.triangles && info.node_count == stats.nodes && info.depth == stats.depth,
                "header and stats disagree");
+    FUZZ_CHECK(info.layout == (uint32_t)layout, "cooked layout %u, asked for %u", info.layout, (unsigned)layout);
 
     /* every kept triangle is the input triangle (exactly when lossless,
      * within the reported error when quantized); dropped ones are absent */
-    size_t stride = d.mesh.position_stride / sizeof(float), present = 0;
+    size_t stride = d->mesh.position_stride / sizeof(float), present = 0;
     /* when every kept triangle has the same id the file stores none and reports 0 */
     int all_equal = 1;
     uint32_t first_material = 0;
-    for (size_t t = 0, seen = 0; t < d.mesh.triangle_count; t++) {
+    for (size_t t = 0, seen = 0; t < d->mesh.triangle_count; t++) {
         float v[3][3];
-        if (!d.opt.keep_remap || !cbvh_file_get_triangle(f, (uint32_t)t, v[0], v[1], v[2]))
+        if (!d->opt.keep_remap || !cbvh_file_get_triangle(f, (uint32_t)t, v[0], v[1], v[2]))
             continue;
         if (seen++ == 0)
-            first_material = d.materials[t];
-        all_equal &= d.materials[t] == first_material;
+            first_material = d->materials[t];
+        all_equal &= d->materials[t] == first_material;
     }
-    if (d.opt.keep_remap) {
-        for (size_t t = 0; t < d.mesh.triangle_count; t++) {
+    if (d->opt.keep_remap) {
+        for (size_t t = 0; t < d->mesh.triangle_count; t++) {
             float v[3][3];
             if (!cbvh_file_get_triangle(f, (uint32_t)t, v[0], v[1], v[2]))
                 continue;
             present++;
             for (int k = 0; k < 3; k++)
                 for (int a = 0; a < 3; a++) {
-                    float in = d.positions[d.indices[3 * t + k] * stride + a];
-                    double tol = d.opt.vertex_format == CBVH_VERTEX_QUANTIZED16 ? stats.vertex_max_error : 0;
+                    float in = d->positions[d->indices[3 * t + k] * stride + a];
+                    double tol = d->opt.vertex_format == CBVH_VERTEX_QUANTIZED16 ? stats.vertex_max_error : 0;
                     FUZZ_CHECK(fabs((double)v[k][a] - in) <= tol, "triangle %zu vertex %d axis %d: %.9g stored as %.9g (error %g)",
                                t, k, a, in, v[k][a], tol);
                 }
-            uint32_t want = d.mesh.material_ids && d.opt.keep_materials && !all_equal ? d.materials[t] : 0;
+            uint32_t want = d->mesh.material_ids && d->opt.keep_materials && !all_equal ? d->materials[t] : 0;
             FUZZ_CHECK(cbvh_file_get_material(f, (uint32_t)t) == want, "triangle %zu material %u, expected %u", t,
                        cbvh_file_get_material(f, (uint32_t)t), want);
         }
         FUZZ_CHECK(present == stats.triangles, "%zu triangles readable, %llu kept", present, (unsigned long long)stats.triangles);
-        compare_with_brute_force(f, &d, size);
+        compare_with_brute_force(f, d, size);
     }
-    fuzz_check_queries(f, g.data, g.size, size, 1);
-    cbvh_close(f);
-    guard_release(&g);
+    fuzz_check_queries(f, g->data, g->size, size, 1);
+    return f;
+}
+
+/* The two layouts hold the same triangles, so they answer every ray alike: hit or miss, the closest t
+ * exactly, occluded, with every traversal. The triangle may differ only when two are hit at that same t,
+ * which a file reporting (its triangle, t) shows for its own; without REMAP the ids are cooked ids and
+ * differ anyway. Rays go from outside the bounds through points of random triangles, and between random
+ * points around the bounds. */
+static void compare_layouts(const cbvh_file *binary, const cbvh_file *wide, const decoded *d, uint64_t seed)
+{
+    const cbvh_mesh *m = &d->mesh;
+    const size_t stride = m->position_stride / sizeof(float);
+    cbvh_file_info info;
+    cbvh_file_get_info(binary, &info, sizeof info);
+    double ext = 0;
+    for (int k = 0; k < 3; k++)
+        ext = fmax(ext, (double)info.bounds_max[k] - info.bounds_min[k]);
+    for (int i = 0; i < 32; i++) {
+        seed = seed * 6364136223846793005ull + 1442695040888963407ull;
+        cbvh_ray r;
+        const size_t t = (size_t)(seed >> 33) % m->triangle_count;
+        const double a = (double)((seed >> 8) & 255) / 256.0, b = (double)((seed >> 16) & 255) / 256.0 * (1 - a);
+        const uint32_t axis = i % 8 == 6 ? (uint32_t)(seed >> 62) % 3 : 3; /* some rays along an axis */
+        for (uint32_t k = 0; k < 3; k++) {
+            double target = (1 - a - b) * m->positions[m->indices[3 * t] * stride + k] +
+                            a * m->positions[m->indices[3 * t + 1] * stride + k] +
+                            b * m->positions[m->indices[3 * t + 2] * stride + k];
+            const double off = (double)((int)((seed >> (20 + 8 * k)) & 255) - 128) / 64.0;
+            if (i & 1) /* between two points around the bounds */
+                target = info.bounds_min[k] + ((double)((seed >> (44 + 6 * k)) & 63) / 32.0 - 0.5) * (ext + 1);
+            r.org[k] = (float)(axis == 3 || axis == k ? target + (off == 0 ? 1 : off) * (ext + 1) : target);
+            r.dir[k] = (float)(target - r.org[k]);
+        }
+        r.tmin = 0;
+        r.tmax = INFINITY;
+        for (int k = 0; k < 4; k++) {
+            cbvh_hit hb, hw;
+            const int gb = cbvh_raycast(binary, &r, (cbvh_traversal)k, &hb, NULL);
+            const int gw = cbvh_raycast(wide, &r, (cbvh_traversal)k, &hw, NULL);
+            FUZZ_CHECK(gb == gw && (!gb || hb.t == hw.t),
+                       "ray %d traversal %d: binary %s tri %u t %.9g, wide4 %s tri %u t %.9g", i, k, gb ? "hits" : "misses",
+                       hb.tri, gb ? hb.t : 0.0, gw ? "hits" : "misses", hw.tri, gw ? hw.t : 0.0);
+            FUZZ_CHECK(cbvh_occluded(binary, &r, (cbvh_traversal)k, NULL) == cbvh_occluded(wide, &r, (cbvh_traversal)k, NULL),
+                       "ray %d traversal %d: binary and wide4 disagree on occluded", i, k);
+        }
+    }
+}
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
+{
+    static decoded d;
+    if (!decode(&d, data, size))
+        return 0;
+    guard_buffer gb, gw;
+    cbvh_result rb, rw;
+    cbvh_file *binary = cook_and_check(&d, CBVH_LAYOUT_BINARY, size, &gb, &rb);
+    cbvh_file *wide = cook_and_check(&d, CBVH_LAYOUT_WIDE4, size, &gw, &rw);
+    FUZZ_CHECK(rb == rw, "binary cook: %s, wide4 cook: %s", cbvh_result_string(rb), cbvh_result_string(rw));
+    if (binary && wide)
+        compare_layouts(binary, wide, &d, size);
+    if (binary) {
+        cbvh_close(binary);
+        guard_release(&gb);
+    }
+    if (wide) {
+        cbvh_close(wide);
+        guard_release(&gw);
+    }
     return 0;
 }

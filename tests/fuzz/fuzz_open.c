@@ -22,7 +22,7 @@ static void open_and_query(const guard_buffer *g, uint64_t seed)
     }
     FUZZ_CHECK(f != NULL, "open succeeded with a NULL file");
     cbvh_file_info info;
-    cbvh_file_get_info(f, &info);
+    cbvh_file_get_info(f, &info, sizeof info);
     FUZZ_CHECK(info.file_size == g->size, "file_size %llu for %zu bytes", (unsigned long long)info.file_size, g->size);
     FUZZ_CHECK(info.format_version == CBVH_FORMAT_VERSION, "opened format version %u", info.format_version);
     FUZZ_CHECK(info.triangle_count >= 1 && info.node_count >= 1 && info.depth >= 1 && info.depth <= 64,

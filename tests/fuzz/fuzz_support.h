@@ -27,11 +27,17 @@ void guard_release(guard_buffer *g);
  * CRC. Any bytes are accepted (out-of-range fields are left as they are). */
 void fuzz_repair_checksums(uint8_t *bytes, size_t size);
 
+/* MinGW-w64 checks formats against the C99 printf it is built with (__USE_MINGW_ANSI_STDIO). */
+#ifdef __MINGW32__
+#define FUZZ_PRINTF gnu_printf
+#else
+#define FUZZ_PRINTF printf
+#endif
 /* Fails loudly (message on stderr, then abort) so libFuzzer, the replay
  * driver and cmocka programs all stop on a broken invariant. */
 void fuzz_fail(const char *fmt, ...)
 #ifdef __GNUC__
-    __attribute__((format(printf, 1, 2), noreturn))
+    __attribute__((format(FUZZ_PRINTF, 1, 2), noreturn))
 #endif
     ;
 #define FUZZ_CHECK(cond, ...) do { if (!(cond)) fuzz_fail(__VA_ARGS__); } while (0)

@@ -8,6 +8,7 @@
 #include "cbvh.h"
 #include "file_edit.h"
 #include "support/scene_gen.h"
+#include "support/test_os.h"
 
 static const char *out_dir;
 
@@ -15,7 +16,7 @@ static void write_file(const char *sub, const char *name, const void *data, size
 {
     char path[4096];
     snprintf(path, sizeof path, "%s/%s", out_dir, sub);
-    if (mkdir(path, 0777) != 0 && errno != EEXIST) {
+    if (test_mkdir(path) != 0 && errno != EEXIST) {
         perror(path);
         exit(1);
     }
@@ -28,14 +29,15 @@ static void write_file(const char *sub, const char *name, const void *data, size
     printf("%s/%s: %zu bytes\n", sub, name, size);
 }
 
-static uint8_t *cook(const scene *s, int quantized, int level, int keep_remap, size_t *size)
+static uint8_t *cook(const scene *s, cbvh_layout layout, int quantized, int level, int keep_remap, size_t *size)
 {
     cbvh_mesh m = { s->positions, s->vertex_count, 0, s->indices, s->triangle_count, s->material_ids };
     cbvh_cook_options o;
-    cbvh_cook_options_init(&o);
+    cbvh_cook_options_init(&o, sizeof o);
     o.vertex_format = quantized ? CBVH_VERTEX_QUANTIZED16 : CBVH_VERTEX_FLOAT32;
     o.compress_level = level;
     o.keep_remap = keep_remap;
+    o.layout = layout;
     void *out = NULL;
     cbvh_error err;
     if (cbvh_cook(&m, &o, NULL, &out, size, NULL, &err) != CBVH_OK) {
@@ -48,10 +50,10 @@ static uint8_t *cook(const scene *s, int quantized, int level, int keep_remap, s
     return copy;
 }
 
-static void write_cooked(const scene *s, int quantized, int level, int keep_remap, const char *name)
+static void write_cooked(const scene *s, cbvh_layout layout, int quantized, int level, int keep_remap, const char *name)
 {
     size_t n;
-    uint8_t *file = cook(s, quantized, level, keep_remap, &n);
+    uint8_t *file = cook(s, layout, quantized, level, keep_remap, &n);
     write_file("open", name, file, n);
     free(file);
 }
@@ -121,13 +123,14 @@ static void write_cook_seed(const char *name, uint8_t flags, const int8_t *coord
     write_file("cook", name, buf, n);
 }
 
-/* The fuzz_cook input format with float coordinates, for a generated scene of at most 255 vertices. */
-static void write_cook_seed_float(const char *name, uint8_t flags, const scene *sc)
+/* The fuzz_cook input format with float coordinates, for a generated scene of at most 255 vertices;
+ * `leaf_bins` is byte 1 (max_leaf_size - 1, SAH bins). */
+static void write_cook_seed_float(const char *name, uint8_t flags, uint8_t leaf_bins, const scene *sc)
 {
     static uint8_t buf[65536];
     size_t n = 0;
     buf[n++] = flags;
-    buf[n++] = 0x23;
+    buf[n++] = leaf_bins;
     buf[n++] = (uint8_t)sc->vertex_count;
     memcpy(buf + n, sc->positions, 12 * sc->vertex_count); /* little-endian host */
     n += 12 * sc->vertex_count;
@@ -143,7 +146,7 @@ int main(int argc, char **argv)
         return 2;
     }
     out_dir = argv[1];
-    mkdir(out_dir, 0777);
+    test_mkdir(out_dir);
     scene sphere, cube, soup;
     float c[3] = { 0.5f, -1.0f, 2.0f }, lo[3] = { -1, -1, -1 }, hi[3] = { 1, 2, 3 };
     if (!scene_sphere(&sphere, 40, c, 1.5f) || !scene_cube(&cube, lo, hi) || !scene_soup(&soup, 24, 0.3f, 7))
@@ -152,8 +155,9 @@ int main(int argc, char **argv)
     for (size_t t = 0; t < soup.triangle_count; t++)
         soup.material_ids[t] = (uint32_t)(t % 3) * 70000u; /* needs u32 materials */
 
+    const cbvh_layout binary = CBVH_LAYOUT_BINARY, wide4 = CBVH_LAYOUT_WIDE4;
     size_t n;
-    uint8_t *raw = cook(&sphere, 0, 0, 1, &n);
+    uint8_t *raw = cook(&sphere, binary, 0, 0, 1, &n);
     write_file("open", "good-sphere-raw.cbvh", raw, n);
     write_transcoded(raw, n, 1, 1, 0, "good-sphere-tris-u32-remap-u32.cbvh");
     write_transcoded(raw, n, 2, 0, 0, "good-sphere-tris-delta16.cbvh");
@@ -168,10 +172,21 @@ int main(int argc, char **argv)
     write_file("open", "unsupported-version2.cbvh", bad, n);
     free(bad);
     free(raw);
-    write_cooked(&sphere, 0, 6, 1, "good-sphere-zlib.cbvh");
-    write_cooked(&sphere, 1, 0, 1, "good-sphere-q16.cbvh");
-    write_cooked(&cube, 0, 0, 0, "good-cube-noremap.cbvh");
-    write_cooked(&soup, 1, 9, 1, "good-soup-materials-q16-zlib.cbvh");
+    write_cooked(&sphere, binary, 0, 6, 1, "good-sphere-zlib.cbvh");
+    write_cooked(&sphere, binary, 1, 0, 1, "good-sphere-q16.cbvh");
+    write_cooked(&cube, binary, 0, 0, 0, "good-cube-noremap.cbvh");
+    write_cooked(&soup, binary, 1, 9, 1, "good-soup-materials-q16-zlib.cbvh");
+
+    /* the wide4 layout: the same kinds, and a truncated one */
+    raw = cook(&sphere, wide4, 0, 0, 1, &n);
+    write_file("open", "good-w4-sphere-raw.cbvh", raw, n);
+    write_transcoded(raw, n, 1, 1, 0, "good-w4-sphere-tris-u32-remap-u32.cbvh");
+    write_transcoded(raw, n, 2, 1, 1, "good-w4-sphere-delta16-zlib.cbvh");
+    write_file("open", "bad-w4-truncated.cbvh", raw, n - 1);
+    free(raw);
+    write_cooked(&sphere, wide4, 1, 0, 1, "good-w4-sphere-q16.cbvh");
+    write_cooked(&cube, wide4, 0, 0, 0, "good-w4-cube-noremap.cbvh");
+    write_cooked(&soup, wide4, 1, 9, 1, "good-w4-soup-materials-q16-zlib.cbvh");
 
     /* cook seeds: a tetrahedron, a cube with a degenerate and a duplicated
      * triangle, a bad index, a sliver */
@@ -188,9 +203,14 @@ int main(int argc, char **argv)
     static const int8_t sliver[] = { -127, 0, 0, 127, 0, 0, 0, 1, 0, 0, -1, 0 };
     static const uint8_t sliver_t[] = { 0, 1, 2, 1, 0, 3 };
     write_cook_seed("sliver.bin", 2, sliver, 4, sliver_t, 2, 0);
-    if (sphere.vertex_count <= 255)
-        write_cook_seed_float("sphere-float.bin", 0, &sphere);
-    write_cook_seed_float("cube-float-q16.bin", 1, &cube);
+    if (sphere.vertex_count <= 255) {
+        write_cook_seed_float("sphere-float.bin", 0, 0x23, &sphere);
+        /* every input is cooked in both layouts: leaves of 1 make a deep wide4 tree, leaves of 16 are
+         * more than a wide4 leaf holds (the cooker uses 8) */
+        write_cook_seed_float("sphere-float-leaf1.bin", 0, 0x20, &sphere);
+        write_cook_seed_float("sphere-float-leaf16-zlib.bin", 4, 0x2F, &sphere);
+    }
+    write_cook_seed_float("cube-float-q16.bin", 1, 0x23, &cube);
     scene_free(&sphere);
     scene_free(&cube);
     scene_free(&soup);

@@ -9,6 +9,7 @@
 #include <cmocka.h>
 
 #include "support/counting_alloc.h"
+#include "support/test_os.h"
 
 /* Each block starts PREFIX bytes into a 64-aligned allocation, after its size,
  * which keeps any alignment the library may ask for (at most 64). */
@@ -23,7 +24,7 @@ static void *counting_alloc_fn(void *user, size_t size, size_t align)
     if (n == c->fail_at || (c->fail_all && c->fail_at >= 0 && n > c->fail_at))
         return NULL;
     void *p = NULL;
-    if (size > SIZE_MAX - PREFIX || posix_memalign(&p, PREFIX, size + PREFIX) != 0)
+    if (size > SIZE_MAX - PREFIX || !(p = test_aligned_alloc(size + PREFIX, PREFIX)))
         return NULL;
     memcpy(p, &size, sizeof size);
     c->live++;
@@ -44,7 +45,7 @@ static void counting_free_fn(void *user, void *ptr)
     memcpy(&size, p, sizeof size);
     c->live--;
     c->live_bytes -= size;
-    free(p);
+    test_aligned_free(p);
 }
 
 cbvh_allocator counting_allocator(counting_alloc *c, long fail_at, int fail_all)

@@ -2,7 +2,7 @@
 #include <limits.h>
 #include <zlib.h>
 
-#include "load/load.h"
+#include "common/crc32.h"
 
 /* zlib's crc32() takes at most UINT_MAX bytes per call. */
 static uint32_t crc32_zlib(uint32_t crc, const uint8_t *data, uint64_t size)

@@ -1,7 +1,9 @@
 /* crc32_pclmul.c: CRC32 by carry-less multiplication (x86 PCLMULQDQ), folding 64 bytes per step. */
 #include "config.h"
 
-#include "load/load.h"
+#include "common/compiler.h"
+#include "common/cpu.h"
+#include "common/crc32.h"
 
 #ifdef CBVH_HAVE_SIMD
 #include <immintrin.h>
@@ -15,7 +17,7 @@ static const uint64_t fold_16_bytes[2] = { 0x01751997d0u, 0x00ccaa009eu };
 static const uint64_t fold_96_bits = 0x0163cd6124u;
 static const uint64_t barrett[2] = { 0x01db710641u, 0x01f7011641u };
 
-__attribute__((target("pclmul,sse4.1"))) static inline __m128i fold(__m128i acc, __m128i k, __m128i next)
+CBVH_TARGET("pclmul,sse4.1") static inline __m128i fold(__m128i acc, __m128i k, __m128i next)
 {
     __m128i lo = _mm_clmulepi64_si128(acc, k, 0x00);
     __m128i hi = _mm_clmulepi64_si128(acc, k, 0x11);
@@ -28,7 +30,7 @@ static inline __m128i load(const uint8_t *p)
 }
 
 /* `crc` is the running state before the final inversion; size >= 64 and a multiple of 16. */
-__attribute__((target("pclmul,sse4.1"))) uint32_t cbvh_crc32_pclmul(uint32_t crc, const uint8_t *restrict p,
+CBVH_TARGET("pclmul,sse4.1") uint32_t cbvh_crc32_pclmul(uint32_t crc, const uint8_t *restrict p,
                                                                     size_t size)
 {
     __m128i a = _mm_xor_si128(load(p), _mm_cvtsi32_si128((int)crc));
@@ -67,7 +69,8 @@ __attribute__((target("pclmul,sse4.1"))) uint32_t cbvh_crc32_pclmul(uint32_t crc
 
 int cbvh_crc32_pclmul_available(void)
 {
-    return __builtin_cpu_supports("pclmul") && __builtin_cpu_supports("sse4.1");
+    const unsigned needed = CBVH_CPU_PCLMUL | CBVH_CPU_SSE41;
+    return (cbvh_cpu_features() & needed) == needed;
 }
 #else
 int cbvh_crc32_pclmul_available(void)

@@ -1,0 +1,193 @@
+/* place_wide4.c: the cooker's side of the 4-wide layout: the binary build tree collapsed into 64-byte nodes, breadth first. */
+#include <string.h>
+
+#include "common/alloc.h"
+#include "common/endian.h"
+#include "common/error.h"
+#include "cook/cook_internal.h"
+#include "layout/wide4.h"
+
+/* The children of build node b, as build node ids: its two children, then the
+ * internal one with the largest quantized area opened into its two, until
+ * there are four or none is internal (ties: the first in the list). So nodes
+ * fill up before leaves are chosen, and the children keep the build's
+ * spatial grouping in slot order. Returns how many (1 for a leaf root). */
+static uint32_t collapse(const cook_tree *t, const double *area, uint32_t b, uint32_t kids[CBVH_W4_WIDTH])
+{
+    const cook_bnode *n = &t->nodes[b];
+    if (n->count) {
+        kids[0] = b;
+        return 1;
+    }
+    uint32_t k = 2;
+    kids[0] = n->child;
+    kids[1] = n->child + 1;
+    while (k < CBVH_W4_WIDTH) {
+        uint32_t open = CBVH_W4_WIDTH;
+        for (uint32_t s = 0; s < k; s++)
+            if (!t->nodes[kids[s]].count && (open == CBVH_W4_WIDTH || area[kids[s]] > area[kids[open]]))
+                open = s;
+        if (open == CBVH_W4_WIDTH)
+            break;
+        const uint32_t c = t->nodes[kids[open]].child;
+        memmove(kids + open + 2, kids + open + 1, (k - open - 1) * sizeof kids[0]);
+        kids[open] = c;
+        kids[open + 1] = c + 1;
+        k++;
+    }
+    return k;
+}
+
+/* The index in cbvh_wide4_orders of the slot order nearest first for octant
+ * k (spec section 5.2): used slots by increasing dot(center, octant
+ * direction), computed in binary64 from the quantized boxes as
+ * sum over x, y, z of +-(qmin + qmax) * grid_scale (exact terms, summed in
+ * that order); ties keep the slot order; unused slots last. */
+static uint32_t octant_order(const cook_grid *g, const uint16_t q[6][4], uint32_t used, uint32_t k)
+{
+    double key[4];
+    uint8_t slots[4];
+    uint32_t n = 0;
+    for (uint32_t s = 0; s < 4; s++) {
+        if (!(used >> s & 1u))
+            continue;
+        double dot = 0.0;
+        for (uint32_t a = 0; a < 3; a++) {
+            const double d = (double)((uint32_t)q[a][s] + q[3 + a][s]) * (double)g->scale[a];
+            dot += k >> a & 1u ? -d : d;
+        }
+        uint32_t j = n++;
+        for (; j > 0 && dot < key[j - 1]; j--) {
+            key[j] = key[j - 1];
+            slots[j] = slots[j - 1];
+        }
+        key[j] = dot;
+        slots[j] = (uint8_t)s;
+    }
+    for (uint32_t s = 0; s < 4; s++)
+        if (!(used >> s & 1u))
+            slots[n++] = (uint8_t)s;
+    for (uint32_t o = 0; o < CBVH_W4_ORDERS; o++)
+        if (memcmp(cbvh_wide4_orders[o], slots, 4) == 0)
+            return o;
+    return 0; /* unreachable: the table holds every order of four slots */
+}
+
+/* The cooked triangles in the depth-first order of the leaves (slots in
+ * order): the placement stores leaves breadth first, where leaves of
+ * different levels that share vertices lie far apart; numbering vertices in
+ * this order keeps a triangle's vertex ids close (DELTA16 fits without
+ * copies) and a leaf's vertices together, as in the binary layout. */
+static cbvh_result depth_first_triangles(const uint8_t *nodes, uint32_t depth, const cbvh_allocator *a,
+                                         uint32_t *visit)
+{
+    uint32_t *stack = cbvh_alloc_array(a, (size_t)(CBVH_W4_WIDTH - 1u) * depth + 1u, sizeof(uint32_t), 64);
+    if (!stack)
+        return CBVH_ERROR_OUT_OF_MEMORY;
+    uint32_t sp = 0, n = 0;
+    stack[sp++] = 0;
+    while (sp > 0) {
+        const uint32_t i = stack[--sp];
+        const uint8_t *node = cbvh_w4_node(nodes, i);
+        const uint64_t meta = cbvh_w4_meta(node);
+        const uint32_t used = cbvh_w4_used(meta), internal = cbvh_w4_internal(meta);
+        /* slots in order: internal children pushed last-first, so the first is walked next; a leaf's
+         * triangles are emitted when its slot comes, before the internal slots after it */
+        uint32_t pending = 0, pend[CBVH_W4_WIDTH];
+        for (uint32_t s = 0; s < CBVH_W4_WIDTH; s++) {
+            if (!(used >> s & 1u))
+                continue;
+            const uint32_t ref = cbvh_w4_child_ref(node, meta, s);
+            if (internal >> s & 1u) {
+                pend[pending++] = ref;
+                continue;
+            }
+            for (uint32_t k = 0; k < cbvh_w4_ref_count(ref); k++)
+                visit[n++] = cbvh_w4_ref_first(ref) + k;
+        }
+        while (pending > 0)
+            stack[sp++] = pend[--pending];
+    }
+    cbvh_free(a, stack);
+    return CBVH_OK;
+}
+
+cbvh_result cook_place_wide4(const cook_tree *t, const cook_grid *g, float traversal_cost, float intersection_cost,
+                             const cbvh_allocator *a, cook_layout *out, cbvh_error *err)
+{
+    /* At most one wide node per internal build node. */
+    const uint32_t capacity = t->node_count - t->leaf_count > 0 ? t->node_count - t->leaf_count : 1;
+    uint16_t(*box)[6] = cbvh_alloc_array(a, t->node_count, sizeof *box, 64);
+    double *area = cbvh_alloc_array(a, t->node_count, sizeof(double), 64);
+    uint32_t *build_of = cbvh_alloc_array(a, capacity, sizeof(uint32_t), 64); /* wide node -> build node */
+    uint8_t *nodes = cbvh_alloc_array(a, capacity, CBVH_W4_NODE_SIZE, 64);
+    out->triangle_source = cbvh_alloc_array(a, out->triangle_count, sizeof(uint32_t), 64);
+    if (!box || !area || !build_of || !nodes || !out->triangle_source) {
+        cbvh_free(a, box);
+        cbvh_free(a, area);
+        cbvh_free(a, build_of);
+        cbvh_free(a, nodes);
+        return cbvh_fail(err, CBVH_ERROR_OUT_OF_MEMORY, "out of memory while laying out %u wide nodes", capacity);
+    }
+    for (uint32_t i = 0; i < t->node_count; i++) {
+        cook_quantize_box(g, t->nodes[i].lo, t->nodes[i].hi, box[i], box[i] + 3);
+        area[i] = cook_quantized_half_area(g, box[i], box[i] + 3);
+    }
+    /* Breadth first: node i's internal children take the next free node indices and its leaves the next
+     * cooked triangles, both in slot order, as the spec's validation rule expects. */
+    uint32_t node_count = 1, next_triangle = 0, depth = 1, level_end = 1, max_leaf = 0;
+    double sah = traversal_cost * area[0];
+    build_of[0] = 0;
+    for (uint32_t i = 0; i < node_count; i++) {
+        if (i == level_end) {
+            depth++;
+            level_end = node_count;
+        }
+        uint32_t kids[CBVH_W4_WIDTH], count[CBVH_W4_WIDTH] = {0, 0, 0, 0}, order[8], used = 0, internal = 0;
+        uint16_t q[6][4];
+        memset(q, 0, sizeof q);
+        const uint32_t k = collapse(t, area, build_of[i], kids);
+        uint8_t *node = nodes + (size_t)i * CBVH_W4_NODE_SIZE;
+        cbvh_write_u32(node + CBVH_W4_FIRST_CHILD, node_count);
+        cbvh_write_u32(node + CBVH_W4_FIRST_TRIANGLE, next_triangle);
+        for (uint32_t s = 0; s < k; s++) {
+            const cook_bnode *c = &t->nodes[kids[s]];
+            used |= 1u << s;
+            for (uint32_t p = 0; p < 6; p++)
+                q[p][s] = box[kids[s]][p];
+            if (c->count) {
+                count[s] = c->count;
+                for (uint32_t j = 0; j < c->count; j++)
+                    out->triangle_source[next_triangle + j] = t->prims[c->child + j];
+                next_triangle += c->count;
+                max_leaf = c->count > max_leaf ? c->count : max_leaf;
+                sah += intersection_cost * c->count * area[kids[s]];
+            } else {
+                internal |= 1u << s;
+                build_of[node_count++] = kids[s];
+                sah += traversal_cost * area[kids[s]];
+            }
+        }
+        for (uint32_t o = 0; o < 8; o++)
+            order[o] = octant_order(g, q, used, o);
+        for (uint32_t p = 0; p < 6; p++)
+            for (uint32_t s = 0; s < 4; s++)
+                cbvh_write_u16(node + CBVH_W4_Q + 8u * p + 2u * s, q[p][s]);
+        cbvh_write_u64(node + CBVH_W4_META, cbvh_w4_make_meta(count, used, internal, order));
+    }
+    const double root_area = area[0];
+    cbvh_free(a, box);
+    cbvh_free(a, area);
+    cbvh_free(a, build_of);
+    out->nodes = nodes;
+    out->node_count = node_count;
+    out->leaf_count = t->leaf_count;
+    out->depth = depth;
+    out->max_leaf_count = max_leaf;
+    out->sah_cost = root_area > 0.0 ? sah / root_area : 0.0;
+    out->visit_order = cbvh_alloc_array(a, out->triangle_count, sizeof(uint32_t), 64);
+    if (!out->visit_order || depth_first_triangles(nodes, depth, a, out->visit_order) != CBVH_OK)
+        return cbvh_fail(err, CBVH_ERROR_OUT_OF_MEMORY, "out of memory while ordering %u triangles",
+                         out->triangle_count);
+    return CBVH_OK;
+}

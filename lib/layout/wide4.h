@@ -1,0 +1,115 @@
+/* wide4.h: the 4-wide node layout (NODES encoding W4, spec section 5.2): every fact about its node bytes. */
+#ifndef CBVH_LAYOUT_WIDE4_H
+#define CBVH_LAYOUT_WIDE4_H
+
+#include <stdint.h>
+#include <string.h>
+
+#include "common/endian.h"
+
+/* A node is 64 bytes, one cache line, and holds the boxes of its up to four
+ * children (slots) in structure-of-arrays order, so one 8-byte load gives a
+ * plane of all four:
+ *   u16 q[6][4]   plane k (0..2 qmin x, y, z; 3..5 qmax x, y, z) of slot s at q[k][s]
+ *   u32 first_child     node index of the first internal child; the internal
+ *                       children are consecutive nodes, in slot order
+ *   u32 first_triangle  cooked index of the first triangle of the first leaf
+ *                       child; leaf children's triangles follow each other in
+ *                       slot order
+ *   u64 meta            bits 4s..4s+3: triangle count - 1 of slot s (a leaf)
+ *                       bits 16..19: the slots in use (slot s: bit 16 + s)
+ *                       bits 20..23: the internal slots
+ *                       bits 24 + 5k .. 28 + 5k: for ray octant k (spec
+ *                       section 5), the index (cbvh_wide4_orders) of the
+ *                       slot order a sorted walk visits the children in.
+ * A child is named on a walk's stack by a reference (layout/tree.h): an
+ * internal child by its node index (bit 31 clear), a leaf by
+ * CBVH_W4_LEAF_BIT | (count - 1) << 28 | first triangle. So a file holds up to
+ * 2^28 triangles and 2^31 nodes, and a leaf up to 8 triangles. The box of
+ * slot s of node n has the box id 4 n + s. */
+
+#define CBVH_W4_NODE_SIZE 64u
+#define CBVH_W4_WIDTH 4u
+#define CBVH_W4_LEAF_BIT 0x80000000u
+#define CBVH_W4_COUNT_SHIFT 28
+#define CBVH_W4_FIRST_MASK 0x0FFFFFFFu
+#define CBVH_W4_MAX_LEAF 8u
+#define CBVH_W4_MAX_TRIANGLES 0x10000000u
+#define CBVH_W4_MAX_NODES 0x7FFFFFFFu
+#define CBVH_W4_ORDERS 24u
+
+/* Byte offsets in a node. */
+enum { CBVH_W4_Q = 0, CBVH_W4_FIRST_CHILD = 48, CBVH_W4_FIRST_TRIANGLE = 52, CBVH_W4_META = 56 };
+
+/* The 24 orders of four slots, lexicographic: entry o lists the slots in visit order. */
+static const uint8_t cbvh_wide4_orders[CBVH_W4_ORDERS][4] = {
+    {0, 1, 2, 3}, {0, 1, 3, 2}, {0, 2, 1, 3}, {0, 2, 3, 1}, {0, 3, 1, 2}, {0, 3, 2, 1},
+    {1, 0, 2, 3}, {1, 0, 3, 2}, {1, 2, 0, 3}, {1, 2, 3, 0}, {1, 3, 0, 2}, {1, 3, 2, 0},
+    {2, 0, 1, 3}, {2, 0, 3, 1}, {2, 1, 0, 3}, {2, 1, 3, 0}, {2, 3, 0, 1}, {2, 3, 1, 0},
+    {3, 0, 1, 2}, {3, 0, 2, 1}, {3, 1, 0, 2}, {3, 1, 2, 0}, {3, 2, 0, 1}, {3, 2, 1, 0}};
+
+static inline const uint8_t *cbvh_w4_node(const void *nodes, uint32_t n)
+{
+    return (const uint8_t *)nodes + (size_t)n * CBVH_W4_NODE_SIZE;
+}
+
+/* Plane k of slot s. The file is little-endian, and so is every host the library builds for (configure checks). */
+static inline uint32_t cbvh_w4_plane(const uint8_t *node, uint32_t k, uint32_t s)
+{
+    uint16_t q;
+    memcpy(&q, node + CBVH_W4_Q + 8u * k + 2u * s, sizeof q);
+    return q;
+}
+
+/* Set bits of a 4-bit mask, from a table of nibbles (no popcount instruction in the x86-64 baseline). */
+static inline uint32_t cbvh_w4_popcount(uint32_t mask4)
+{
+    return (uint32_t)(0x4332322132212110ull >> (4u * mask4)) & 0xFu;
+}
+
+static inline uint64_t cbvh_w4_meta(const uint8_t *node) { return cbvh_read_u64(node + CBVH_W4_META); }
+static inline uint32_t cbvh_w4_first_child(const uint8_t *node) { return cbvh_read_u32(node + CBVH_W4_FIRST_CHILD); }
+static inline uint32_t cbvh_w4_first_triangle(const uint8_t *node)
+{
+    return cbvh_read_u32(node + CBVH_W4_FIRST_TRIANGLE);
+}
+static inline uint32_t cbvh_w4_used(uint64_t meta) { return (uint32_t)(meta >> 16) & 0xFu; }
+static inline uint32_t cbvh_w4_internal(uint64_t meta) { return (uint32_t)(meta >> 20) & 0xFu; }
+static inline uint32_t cbvh_w4_count(uint64_t meta, uint32_t s) { return ((uint32_t)(meta >> (4u * s)) & 0xFu) + 1u; }
+static inline uint32_t cbvh_w4_order(uint64_t meta, uint32_t octant)
+{
+    return (uint32_t)(meta >> (24u + 5u * octant)) & 0x1Fu;
+}
+
+static inline uint64_t cbvh_w4_make_meta(const uint32_t count[4], uint32_t used, uint32_t internal,
+                                         const uint32_t order[8])
+{
+    uint64_t m = (uint64_t)used << 16 | (uint64_t)internal << 20;
+    for (uint32_t s = 0; s < 4; s++)
+        if ((used & ~internal) >> s & 1u)
+            m |= (uint64_t)(count[s] - 1u) << (4u * s);
+    for (uint32_t k = 0; k < 8; k++)
+        m |= (uint64_t)order[k] << (24u + 5u * k);
+    return m;
+}
+
+/* The reference of slot s of a node (used, meta as read): an internal child's
+ * node index, or a leaf's packed triangle range. */
+static inline uint32_t cbvh_w4_child_ref(const uint8_t *node, uint64_t meta, uint32_t s)
+{
+    const uint32_t below = (1u << s) - 1u, internal = cbvh_w4_internal(meta);
+    if (internal >> s & 1u)
+        return cbvh_w4_first_child(node) + cbvh_w4_popcount(internal & below);
+    uint32_t first = cbvh_w4_first_triangle(node);
+    const uint32_t leaves = cbvh_w4_used(meta) & ~internal & below;
+    for (uint32_t t = 0; t < s; t++)
+        if (leaves >> t & 1u)
+            first += cbvh_w4_count(meta, t);
+    return CBVH_W4_LEAF_BIT | (cbvh_w4_count(meta, s) - 1u) << CBVH_W4_COUNT_SHIFT | first;
+}
+
+static inline int cbvh_w4_ref_is_leaf(uint32_t ref) { return (ref & CBVH_W4_LEAF_BIT) != 0; }
+static inline uint32_t cbvh_w4_ref_first(uint32_t ref) { return ref & CBVH_W4_FIRST_MASK; }
+static inline uint32_t cbvh_w4_ref_count(uint32_t ref) { return ((ref >> CBVH_W4_COUNT_SHIFT) & 7u) + 1u; }
+
+#endif

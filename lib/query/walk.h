@@ -1,0 +1,262 @@
+/* walk.h: the one single-ray traversal core: closest or any hit, children ordered by the precomputed sort, by distance, or not. */
+#ifndef CBVH_QUERY_WALK_H
+#define CBVH_QUERY_WALK_H
+
+#ifdef CBVH_HAVE_SIMD
+#include <immintrin.h>
+#endif
+
+#include "layout/tree.h"
+#include "query/leaf.h"
+#include "query/ray_box.h"
+#include "query/ray_setup.h"
+
+#if defined(__GNUC__)
+#define CBVH_PREFETCH(p) __builtin_prefetch(p)
+#else
+#define CBVH_PREFETCH(p) ((void)(p))
+#endif
+
+/* How a walk orders the children a ray enters. */
+enum cbvh_walk_order {
+    CBVH_WALK_SORTED,   /* the precomputed order for the ray's octant (the sort byte): no run-time sort */
+    CBVH_WALK_UNSORTED, /* stored order */
+    CBVH_WALK_DISTANCE  /* by box entry distance, computed at run time */
+};
+
+/* A walk's variant, a compile-time constant in each instance (the kernel is
+ * force-inlined into its callers, so every instance loses what its mode
+ * switches off). Named instances live in raycast_walks.c. */
+struct cbvh_walk_mode {
+    enum cbvh_walk_order order;
+    int any;    /* any hit: stop at the first triangle hit */
+    int halved; /* the ray's box_halve axes are tested at half scale (ray_box.h) */
+    int scalar; /* wide layout: test the children one box at a time, not with SIMD (the fallback, and its test) */
+};
+
+/* Box `box` against the ray: quantized from the file, or float_boxes[6 box ...]. */
+CBVH_KERNEL int walk_box_test(const struct cbvh_box_ray *restrict box, const struct cbvh_file *restrict f,
+                              const uint32_t layout, const float *restrict float_boxes, uint32_t id, float tmin,
+                              float tmax, float *entry)
+{
+    if (!float_boxes)
+        return cbvh_box_ray_test(box, f, layout, id, tmin, tmax, entry);
+    const struct cbvh_slab_select s = box->sel;
+    const float *b = float_boxes + 6 * (size_t)id;
+    return cbvh_slab_test(b[s.near_x], b[s.near_y], b[s.near_z], b[s.far_x], b[s.far_y], b[s.far_z], box->org,
+                          box->rcp, tmin, tmax, entry);
+}
+
+/* Two hit children in visit order: swapped when the second is nearer by
+ * `order` (the sort byte bit of the ray's octant, or the entry distance). */
+CBVH_KERNEL uint32_t walk_order_pair(const enum cbvh_walk_order order, int second_first, cbvh_ref a, float ea,
+                                     cbvh_ref b, float eb, cbvh_ref out[CBVH_TREE_WIDTH],
+                                     float entry[CBVH_TREE_WIDTH])
+{
+    const int swap = order == CBVH_WALK_SORTED ? second_first : order == CBVH_WALK_DISTANCE ? eb < ea : 0;
+    out[0] = swap ? b : a;
+    entry[0] = swap ? eb : ea;
+    out[1] = swap ? a : b;
+    entry[1] = swap ? ea : eb;
+    return 2;
+}
+
+#ifdef CBVH_HAVE_SIMD
+/* The four slots' planes k (layout/wide4.h) dequantized with the normative
+ * arithmetic, lane s for slot s: (float)q * scale, then origin + that. */
+CBVH_KERNEL __m128 walk_w4_planes(const uint8_t *restrict node, uint32_t k, __m128 origin, __m128 scale)
+{
+    const __m128i q = _mm_loadl_epi64((const __m128i *)(const void *)(node + CBVH_W4_Q + 8u * k));
+    const __m128 qf = _mm_cvtepi32_ps(_mm_unpacklo_epi16(q, _mm_setzero_si128()));
+    return _mm_add_ps(origin, _mm_mul_ps(qf, scale));
+}
+
+/* The slab test of ray_box.h on the four slots at once, lane for lane the
+ * same operations in the same order: MAXPS(a, b) is `a > b ? a : b` and
+ * MINPS(a, b) is `a < b ? a : b` (b when either is NaN), so a NaN distance
+ * is ignored as in the scalar test. Returns the hit bits (bit s: slot s) and
+ * each slot's entry distance. */
+CBVH_KERNEL uint32_t walk_w4_test_sse2(const uint8_t *restrict node, const struct cbvh_box_ray *restrict box,
+                                       float tmin, float tmax, float entry[CBVH_W4_WIDTH])
+{
+    const struct cbvh_slab_select s = box->sel;
+    const __m128 ox = _mm_set1_ps(box->origin[0]), oy = _mm_set1_ps(box->origin[1]), oz = _mm_set1_ps(box->origin[2]);
+    const __m128 sx = _mm_set1_ps(box->scale[0]), sy = _mm_set1_ps(box->scale[1]), sz = _mm_set1_ps(box->scale[2]);
+    const __m128 px = _mm_set1_ps(box->org[0]), py = _mm_set1_ps(box->org[1]), pz = _mm_set1_ps(box->org[2]);
+    const __m128 rx = _mm_set1_ps(box->rcp[0]), ry = _mm_set1_ps(box->rcp[1]), rz = _mm_set1_ps(box->rcp[2]);
+    __m128 tnear = _mm_set1_ps(tmin), tfar = _mm_set1_ps(tmax);
+    tnear = _mm_max_ps(_mm_mul_ps(_mm_sub_ps(walk_w4_planes(node, s.near_x, ox, sx), px), rx), tnear);
+    tnear = _mm_max_ps(_mm_mul_ps(_mm_sub_ps(walk_w4_planes(node, s.near_y, oy, sy), py), ry), tnear);
+    tnear = _mm_max_ps(_mm_mul_ps(_mm_sub_ps(walk_w4_planes(node, s.near_z, oz, sz), pz), rz), tnear);
+    tfar = _mm_min_ps(_mm_mul_ps(_mm_sub_ps(walk_w4_planes(node, s.far_x, ox, sx), px), rx), tfar);
+    tfar = _mm_min_ps(_mm_mul_ps(_mm_sub_ps(walk_w4_planes(node, s.far_y, oy, sy), py), ry), tfar);
+    tfar = _mm_min_ps(_mm_mul_ps(_mm_sub_ps(walk_w4_planes(node, s.far_z, oz, sz), pz), rz), tfar);
+    _mm_storeu_ps(entry, tnear);
+    return (uint32_t)_mm_movemask_ps(_mm_cmple_ps(tnear, _mm_mul_ps(tfar, _mm_set1_ps(CBVH_BOX_PAD))));
+}
+#endif
+
+/* walk_children_hit for the wide layout: the used slots' boxes against the
+ * ray (four at once with SIMD, or one at a time for float boxes and the
+ * scalar mode), the hit ones in the node's order for the ray's octant, slot
+ * order, or by entry distance. */
+CBVH_KERNEL uint32_t walk_w4_children_hit(const struct cbvh_file *restrict f, cbvh_ref r,
+                                          const struct cbvh_box_ray *restrict box, const float *restrict float_boxes,
+                                          const enum cbvh_walk_order order, const int scalar, uint32_t octant,
+                                          float tmin, float tmax, cbvh_ref out[CBVH_TREE_WIDTH],
+                                          float entry[CBVH_TREE_WIDTH], uint64_t *restrict boxes_tested)
+{
+    const uint8_t *restrict node = cbvh_w4_node(f->nodes, r);
+    const uint64_t meta = cbvh_w4_meta(node);
+    const uint32_t used = cbvh_w4_used(meta);
+    float e[CBVH_W4_WIDTH];
+    uint32_t hits = 0;
+    *boxes_tested += cbvh_w4_popcount(used);
+#ifdef CBVH_HAVE_SIMD
+    if (!float_boxes && !scalar) {
+        hits = walk_w4_test_sse2(node, box, tmin, tmax, e) & used;
+    } else
+#endif
+    {
+        (void)scalar;
+        for (uint32_t s = 0; s < CBVH_W4_WIDTH; s++)
+            if ((used >> s & 1u) &&
+                walk_box_test(box, f, CBVH_LAYOUT_WIDE4, float_boxes, CBVH_W4_WIDTH * r + s, tmin, tmax, &e[s]))
+                hits |= 1u << s;
+    }
+    if (!hits)
+        return 0;
+    if (!(hits & (hits - 1u))) { /* one child: no order to choose */
+        const uint32_t s = (hits >> 1) - (hits >> 3); /* the slot of a one-bit mask: 1, 2, 4, 8 -> 0, 1, 2, 3 */
+        out[0] = cbvh_w4_child_ref(node, meta, s);
+        entry[0] = e[s];
+        return 1;
+    }
+    const uint8_t *slots = cbvh_wide4_orders[order == CBVH_WALK_SORTED ? cbvh_w4_order(meta, octant) : 0];
+    uint32_t n = 0;
+    for (uint32_t k = 0; k < CBVH_W4_WIDTH; k++) {
+        const uint32_t s = slots[k];
+        if (hits >> s & 1u) {
+            cbvh_ref rs = cbvh_w4_child_ref(node, meta, s);
+            float es = e[s];
+            uint32_t j = n++;
+            /* by distance: insertion in entry order, ties keep the slot order */
+            for (; order == CBVH_WALK_DISTANCE && j > 0 && es < entry[j - 1]; j--) {
+                out[j] = out[j - 1];
+                entry[j] = entry[j - 1];
+            }
+            out[j] = rs;
+            entry[j] = es;
+        }
+    }
+    return n;
+}
+
+/* The children of r whose boxes the ray enters within [tmin, tmax], in visit
+ * order, with their entry distances; *boxes_tested grows by the boxes tested.
+ * Returns how many. Binary layout: the two children's boxes are tested first,
+ * and the sort byte is read only when both are hit. Wide layout: above. */
+CBVH_KERNEL uint32_t walk_children_hit(const struct cbvh_file *restrict f, const uint32_t layout, cbvh_ref r,
+                                       const struct cbvh_box_ray *restrict box, const float *restrict float_boxes,
+                                       const enum cbvh_walk_order order, uint32_t octant, float tmin, float tmax,
+                                       cbvh_ref out[CBVH_TREE_WIDTH], float entry[CBVH_TREE_WIDTH],
+                                       uint64_t *restrict boxes_tested, const int scalar)
+{
+    if (layout == CBVH_LAYOUT_WIDE4)
+        return walk_w4_children_hit(f, r, box, float_boxes, order, scalar, octant, tmin, tmax, out, entry,
+                                    boxes_tested);
+    struct cbvh_child c[CBVH_TREE_WIDTH];
+    cbvh_tree_children(f, layout, r, CBVH_NO_OCTANT, c);
+    float e0, e1;
+    const int h0 = walk_box_test(box, f, layout, float_boxes, c[0].box, tmin, tmax, &e0);
+    const int h1 = walk_box_test(box, f, layout, float_boxes, c[1].box, tmin, tmax, &e1);
+    *boxes_tested += 2;
+    if (h0 && h1)
+        return walk_order_pair(order, cbvh_tree_second_first(f, layout, r, octant), c[0].ref, e0, c[1].ref, e1, out,
+                               entry);
+    out[0] = h0 ? c[0].ref : c[1].ref;
+    entry[0] = h0 ? e0 : e1;
+    return (uint32_t)(h0 | h1);
+}
+
+/* The walk. A node's children are tested at the node, so a missed child is
+ * never pushed, and the farther ones are pushed with their entry distances:
+ * one popped after the ray became shorter than that is dropped without a
+ * second box test. The loader checked depth <= CBVH_MAX_DEPTH, and a walk
+ * pushes at most CBVH_TREE_WIDTH - 1 references per level, so the stack
+ * cannot overflow. The walk covers the subtree of `root`, whose box the
+ * caller tested (or root_box, tested here when not CBVH_NO_BOX). The result:
+ * any hit: 1 when a triangle occludes the ray; closest: 0, with best filled.
+ * Counters go to stats when not NULL (a few adds per node).
+ * float_boxes: NULL for the file's quantized boxes (every library walk, where
+ * the constant folds the choice away); else six floats per box id (min xyz,
+ * max xyz), for tools that measure another box precision on the same tree and
+ * the same walk (cbvh report's exact reference; never with halved). */
+CBVH_KERNEL int cbvh_walk(const struct cbvh_file *restrict f, const uint32_t layout,
+                          const struct cbvh_ray_ctx *restrict ray, cbvh_ref root, uint32_t root_box,
+                          const struct cbvh_walk_mode mode, const float *restrict float_boxes,
+                          struct cbvh_best_hit *restrict best, cbvh_query_stats *restrict stats)
+{
+    struct cbvh_box_ray box;
+    cbvh_box_ray_init(&box, f->grid_origin, f->grid_scale, ray->shear.org, ray->rcp, ray->octant);
+    if (mode.halved)
+        cbvh_box_ray_halve(&box, ray->box_halve);
+    const float tmin = ray->tmin;
+    float tmax = ray->tmax;
+    struct {
+        cbvh_ref ref;
+        float entry;
+    } stack[(CBVH_TREE_WIDTH - 1u) * CBVH_MAX_DEPTH];
+    uint32_t sp = 0;
+    cbvh_ref r = root;
+    uint64_t visited = 0, tested = 0;
+    int hit = 0;
+
+    if (root_box != CBVH_NO_BOX) {
+        float entry;
+        visited++;
+        if (!walk_box_test(&box, f, layout, float_boxes, root_box, tmin, tmax, &entry))
+            goto done;
+    }
+    for (;;) {
+        if (!cbvh_tree_is_leaf(f, layout, r)) {
+            cbvh_ref c[CBVH_TREE_WIDTH];
+            float e[CBVH_TREE_WIDTH];
+            const uint32_t n = walk_children_hit(f, layout, r, &box, float_boxes, mode.order, ray->octant, tmin, tmax,
+                                                 c, e, &visited, mode.scalar);
+            if (n > 0) {
+                for (uint32_t k = n; k-- > 1;) {
+                    stack[sp].ref = c[k];
+                    stack[sp].entry = e[k];
+                    sp++;
+                    /* a wide node is one cache line: start fetching the farther children now */
+                    if (layout == CBVH_LAYOUT_WIDE4 && !cbvh_w4_ref_is_leaf(c[k]))
+                        CBVH_PREFETCH(cbvh_w4_node(f->nodes, c[k]));
+                }
+                r = c[0];
+                continue;
+            }
+        } else {
+            uint32_t first, count;
+            cbvh_tree_leaf(f, layout, r, &first, &count);
+            tested += count;
+            if (cbvh_leaf_visit(f, first, count, ray, mode.any, &tmax, best)) {
+                hit = 1;
+                break;
+            }
+        }
+        /* Pop the next reference still in reach: the padded test of ray_box.h with the current tmax. */
+        do {
+            if (sp == 0)
+                goto done;
+            sp--;
+        } while (!(stack[sp].entry <= tmax * CBVH_BOX_PAD));
+        r = stack[sp].ref;
+    }
+done:
+    if (stats)
+        cbvh_stats_add(stats, visited, tested);
+    return hit;
+}
+
+#endif
