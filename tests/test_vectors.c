@@ -482,7 +482,7 @@ static void assert_same_answers(const cbvh_file *a, const cbvh_file *b, const me
 
 /* Each wide4 vector answers as the binary vector of its mesh and as the C cooker's wide4 file of that mesh:
  * an encoder written from the spec alone and the library's cooker build different trees (median split,
- * binned SAH) that must hold the same triangles. */
+ * binned SAH) that must hold the same triangles. A runtime-only build has no cooker and checks the first. */
 static void test_wide4_answers(void **state)
 {
     (void)state;
@@ -496,6 +496,7 @@ static void test_wide4_answers(void **state)
         snprintf(path, sizeof path, "%s/%s.cbvh", vectors_dir(), w->binary);
         assert_int_equal(cbvh_open_path(path, NULL, &binary, NULL), CBVH_OK);
         assert_same_answers(wide, binary, m, w->wide4);
+#if CBVH_HAVE_COOKER /* a runtime-only build compares the two vectors only */
         uint32_t vertex_count = 0;
         for (uint32_t t = 0; t < 3 * m->triangle_count; t++)
             vertex_count = m->t[t / 3][t % 3] + 1 > vertex_count ? m->t[t / 3][t % 3] + 1 : vertex_count;
@@ -515,6 +516,7 @@ static void test_wide4_answers(void **state)
         assert_same_answers(wide, cooked, m, w->wide4);
         cbvh_close(cooked);
         cbvh_buffer_free(NULL, bytes);
+#endif
         cbvh_close(binary);
         cbvh_close(wide);
     }
