@@ -194,6 +194,8 @@ typedef struct cbvh_cook_stats {
     uint64_t section_stored_size[CBVH_STATS_SECTION_TYPES]; /* indexed by cbvh_section_type, 0 when absent */
     uint64_t section_size[CBVH_STATS_SECTION_TYPES];        /* uncompressed */
     double seconds[CBVH_STATS_PHASES]; /* indexed by cbvh_phase */
+    uint64_t peak_memory;          /* most bytes the cook held allocated at once, the file it returns
+                                    * included (not the caller's mesh) */
 } cbvh_cook_stats;
 
 /* Zeroes `stats` and sets stats->struct_size to `struct_size`, which must be sizeof *stats as the

@@ -1220,6 +1220,37 @@ static void test_bad_options(void **state)
 
 /* ------------------------------------------------------------------ allocation failures, progress */
 
+/* stats.peak_memory is what the cook held at once through the caller's allocator: the same figure as an
+ * allocator that counts every block it hands out (the library's block headers included), on both layouts,
+ * raw and compressed. The figure must also hold the file itself. */
+static void test_peak_memory(void **state)
+{
+    (void)state;
+    test_mesh m;
+    const double center[3] = { 0, 0, 0 };
+    make_sphere(&m, 60, 90, 1.0, center);
+    cbvh_mesh mesh = as_mesh(&m);
+    for (int layout = CBVH_LAYOUT_BINARY; layout <= CBVH_LAYOUT_WIDE4; layout++)
+        for (int level = 0; level <= 6; level += 6) {
+            cbvh_cook_options o;
+            cbvh_cook_options_init(&o, sizeof o);
+            o.layout = (cbvh_layout)layout;
+            o.compress_level = level;
+            cbvh_cook_stats st;
+            cbvh_cook_stats_init(&st, sizeof st);
+            counting_alloc c;
+            cbvh_allocator a = counting_allocator(&c, -1, 0);
+            void *data = NULL;
+            size_t size = 0;
+            assert_int_equal(cbvh_cook(&mesh, &o, &a, &data, &size, &st, NULL), CBVH_OK);
+            assert_int_equal(st.peak_memory, c.peak_bytes);
+            assert_true(st.peak_memory >= size + 12 * st.triangles); /* the file, and the triangles once */
+            assert_int_equal(c.live, 1);
+            cbvh_buffer_free(&a, data);
+        }
+    mesh_free(&m);
+}
+
 /* Fails allocation n for every n a successful cook makes: each run either fails cleanly
  * (out of memory, nothing leaked) or, where a failure has a fallback (the builder's second
  * thread), succeeds with the very same bytes. */
@@ -1731,6 +1762,7 @@ int main(void)
         cmocka_unit_test(test_old_struct_sizes),
         cmocka_unit_test(test_bad_struct_sizes),
         cmocka_unit_test(test_cook_to_path),
+        cmocka_unit_test(test_peak_memory),
         cmocka_unit_test(test_loader_round_trip),
         cmocka_unit_test(test_quantized_collapse),
     };

@@ -133,6 +133,7 @@ static void print_json(const char *in, const char *out, const cook_input *input,
     json_double(&w, "sah_cost", st->sah_cost);
     json_end_object(&w);
     json_uint(&w, "file_size", st->file_size);
+    json_uint(&w, "peak_memory", st->peak_memory);
     json_double(&w, "bytes_per_triangle", (double)st->file_size * per_tri);
     json_begin_array(&w, "sections");
     for (uint32_t t = CBVH_SECTION_NODES; t <= CBVH_SECTION_MATERIALS; t++) {
@@ -183,6 +184,8 @@ static void print_summary(const char *in, const char *out, const cook_input *inp
         printf("  vertex error: %.3g (worst coordinate)\n", st->vertex_max_error);
     printf("  time: import %.3f s, prepare %.3f s, build %.3f s, layout %.3f s, write %.3f s, total %.3f s\n",
            import_seconds, st->seconds[0], st->seconds[1], st->seconds[2], st->seconds[3], total_seconds);
+    printf("  memory: cook peak %.1f MB, %.1f bytes/triangle (the imported mesh not included)\n",
+           (double)st->peak_memory / 1e6, (double)st->peak_memory * per_tri);
 }
 
 int cmd_cook(int argc, char **argv)

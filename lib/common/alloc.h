@@ -16,4 +16,18 @@ void cbvh_free(const cbvh_allocator *a, void *ptr);
 /* count * elem bytes, or NULL when the product overflows or the allocation fails. */
 void *cbvh_alloc_array(const cbvh_allocator *a, size_t count, size_t elem, size_t align);
 
+/* A meter between a caller and its allocator: it counts the bytes held through it and the most held
+ * at once. Each block carries a 64-byte header (its size), so a block from the meter's allocator goes
+ * back to it, never to `inner`. Not thread-safe: allocate from one thread at a time. */
+typedef struct cbvh_meter {
+    cbvh_allocator inner;
+    size_t held, peak;
+} cbvh_meter;
+
+/* Hooks that allocate from m->inner and count in m. */
+cbvh_allocator cbvh_meter_allocator(cbvh_meter *m);
+
+/* Counts `size` bytes held elsewhere (add != 0) or given back (add == 0). */
+void cbvh_meter_count(cbvh_meter *m, size_t size, int add);
+
 #endif

@@ -146,7 +146,8 @@ static cbvh_result check_mesh(const cbvh_mesh *m, cbvh_error *err)
 
 /* Everything a cook owns between phases, freed in one place. */
 typedef struct cook_state {
-    cbvh_allocator a;
+    cbvh_meter meter;           /* counts what the cook holds; its inner allocator is the caller's */
+    cbvh_allocator a;           /* allocates through the meter */
     cook_mesh mesh;
     uint16_t *quantized;
     cook_grid grid;
@@ -185,6 +186,20 @@ static cbvh_result make_grid(cook_state *s, const cbvh_cook_options *o, cbvh_coo
     return cbvh_cook_mesh_bounds(&s->mesh, err);
 }
 
+static void fill_stats(const cook_state *s, cbvh_cook_stats *st)
+{
+    st->input_triangles = s->mesh.input_triangle_count;
+    st->dropped_degenerate = s->mesh.dropped_degenerate;
+    st->triangles = s->layout.triangle_count;
+    st->vertices = s->layout.vertex_count;
+    st->nodes = s->layout.node_count;
+    st->leaves = s->layout.leaf_count;
+    st->depth = s->layout.depth;
+    st->sah_cost = s->layout.sah_cost;
+}
+
+/* Encodes the sections, then frees the mesh and the layout before the file is put together, so the
+ * cook never holds them and the file at once. */
 static cbvh_result write_file(cook_state *s, const cbvh_mesh *mesh, const cbvh_cook_options *o,
                               const cook_progress *progress, uint8_t **out, size_t *out_size, cbvh_cook_stats *st,
                               cbvh_error *err)
@@ -205,20 +220,13 @@ static cbvh_result write_file(cook_state *s, const cbvh_mesh *mesh, const cbvh_c
     memcpy(h.grid_scale, s->grid.scale, sizeof h.grid_scale);
     memcpy(h.bounds_min, s->mesh.bounds_min, sizeof h.bounds_min);
     memcpy(h.bounds_max, s->mesh.bounds_max, sizeof h.bounds_max);
-    return cbvh_cook_write_file(&h, &s->sections, o->compress_level, &s->a, progress, out, out_size,
+    fill_stats(s, st);
+    cook_layout_free(&s->a, &s->layout);
+    cbvh_free(&s->a, s->quantized);
+    s->quantized = NULL;
+    cbvh_cook_mesh_free(&s->a, &s->mesh);
+    return cbvh_cook_write_file(&h, &s->sections, o->compress_level, &s->meter, progress, out, out_size,
                                 st->section_stored_size, st->section_size, err);
-}
-
-static void fill_stats(const cook_state *s, cbvh_cook_stats *st)
-{
-    st->input_triangles = s->mesh.input_triangle_count;
-    st->dropped_degenerate = s->mesh.dropped_degenerate;
-    st->triangles = s->layout.triangle_count;
-    st->vertices = s->layout.vertex_count;
-    st->nodes = s->layout.node_count;
-    st->leaves = s->layout.leaf_count;
-    st->depth = s->layout.depth;
-    st->sah_cost = s->layout.sah_cost;
 }
 
 CBVH_API cbvh_result cbvh_cook(const cbvh_mesh *mesh, const cbvh_cook_options *options,
@@ -248,7 +256,8 @@ CBVH_API cbvh_result cbvh_cook(const cbvh_mesh *mesh, const cbvh_cook_options *o
     st.input_vertices = mesh->vertex_count;
     cook_state s;
     memset(&s, 0, sizeof s);
-    s.a = cbvh_allocator_resolve(allocator);
+    s.meter.inner = cbvh_allocator_resolve(allocator);
+    s.a = cbvh_meter_allocator(&s.meter);
     cook_progress progress = { o->progress, o->progress_user, CBVH_PHASE_PREPARE };
     /* a wide4 leaf holds at most 8 triangles: a larger limit acts as 8 */
     const uint32_t max_leaf = o->layout == CBVH_LAYOUT_WIDE4 && o->max_leaf_size > CBVH_W4_MAX_LEAF
@@ -290,8 +299,8 @@ CBVH_API cbvh_result cbvh_cook(const cbvh_mesh *mesh, const cbvh_cook_options *o
     }
     st.seconds[CBVH_PHASE_WRITE] = cbvh_os_seconds() - t3;
 
+    st.peak_memory = s.meter.peak;
     if (r == CBVH_OK) {
-        fill_stats(&s, &st);
         st.file_size = file_size;
         *out_data = file;
         *out_size = file_size;

@@ -5,6 +5,7 @@
 #include <stdint.h>
 
 #include "cbvh.h"
+#include "common/alloc.h"
 #include "common/format.h"
 #include "layout/binary.h"
 #include "layout/wide4.h"
@@ -161,11 +162,13 @@ typedef struct cook_header {
     float bounds_min[3], bounds_max[3];
 } cook_header;
 
-/* Writes the whole file into one buffer from `a` (64-byte aligned). stored_size[type] and
- * size[type] receive each section's sizes (indexed by section type). */
-cbvh_result cbvh_cook_write_file(const cook_header *h, const cook_sections *s, int compress_level,
-                                 const cbvh_allocator *a, const cook_progress *progress, uint8_t **out,
-                                 size_t *out_size, uint64_t stored_size[CBVH_STATS_SECTION_TYPES],
+/* Writes the whole file into one buffer (64-byte aligned) from meter->inner, the caller's allocator;
+ * its temporaries come through the meter, and each section's data is freed as soon as it is stored
+ * (the sections keep their types and sizes). stored_size[type] and size[type] receive each section's
+ * sizes (indexed by section type). */
+cbvh_result cbvh_cook_write_file(const cook_header *h, cook_sections *s, int compress_level, cbvh_meter *meter,
+                                 const cook_progress *progress, uint8_t **out, size_t *out_size,
+                                 uint64_t stored_size[CBVH_STATS_SECTION_TYPES],
                                  uint64_t size[CBVH_STATS_SECTION_TYPES], cbvh_error *err);
 
 #endif

@@ -98,21 +98,25 @@ static void write_header(uint8_t *file, const cook_header *h, uint32_t section_c
     cbvh_write_u32(file + CBVH_HDR_HEADER_CRC, cbvh_crc32(0, file, CBVH_HDR_HEADER_CRC));
 }
 
-cbvh_result cbvh_cook_write_file(const cook_header *h, const cook_sections *s, int compress_level,
-                                 const cbvh_allocator *alloc, const cook_progress *progress, uint8_t **out,
-                                 size_t *out_size, uint64_t stored_size[CBVH_STATS_SECTION_TYPES],
-                                 uint64_t size[CBVH_STATS_SECTION_TYPES],
-                                 cbvh_error *err)
+cbvh_result cbvh_cook_write_file(const cook_header *h, cook_sections *s, int compress_level, cbvh_meter *meter,
+                                 const cook_progress *progress, uint8_t **out, size_t *out_size,
+                                 uint64_t stored_size[CBVH_STATS_SECTION_TYPES],
+                                 uint64_t size[CBVH_STATS_SECTION_TYPES], cbvh_error *err)
 {
-    cbvh_allocator a = *alloc;
+    cbvh_allocator a = cbvh_meter_allocator(meter);
     uint8_t *packed[COOK_SLOTS] = { NULL };
     uint64_t packed_size[COOK_SLOTS] = { 0 }, offset[COOK_SLOTS] = { 0 };
     cbvh_result r = CBVH_OK;
     *out = NULL;
     *out_size = 0;
 
+    /* A section that compresses gives its raw bytes back at once. */
     for (uint32_t i = 0; i < s->count && compress_level > 0 && r == CBVH_OK; i++) {
         r = deflate_section(s->s[i].data, s->s[i].size, compress_level, &a, &packed[i], &packed_size[i]);
+        if (packed[i]) {
+            cbvh_free(&a, s->s[i].data);
+            s->s[i].data = NULL;
+        }
         cook_report(progress, 0.9 * (i + 1) / s->count);
     }
 
@@ -123,10 +127,13 @@ cbvh_result cbvh_cook_write_file(const cook_header *h, const cook_sections *s, i
         offset[i] = align_up(end);
         end = offset[i] + packed_size[i];
     }
+    /* The file is the caller's (cbvh_buffer_free), so it comes from the meter's inner allocator,
+     * counted by hand; each section goes as soon as it is copied. */
     uint8_t *file = NULL;
     if (r == CBVH_OK && (uint64_t)(size_t)end == end)
-        file = cbvh_alloc(&a, (size_t)end, 64);
+        file = cbvh_alloc(&meter->inner, (size_t)end, 64);
     if (r == CBVH_OK && file) {
+        cbvh_meter_count(meter, (size_t)end, 1);
         memset(file, 0, (size_t)end);
         for (uint32_t i = 0; i < s->count; i++) {
             const uint8_t *stored = packed[i] ? packed[i] : s->s[i].data;
@@ -137,12 +144,17 @@ cbvh_result cbvh_cook_write_file(const cook_header *h, const cook_sections *s, i
             cbvh_write_u64(e + CBVH_SEC_OFFSET, offset[i]);
             cbvh_write_u64(e + CBVH_SEC_STORED_SIZE, packed_size[i]);
             cbvh_write_u64(e + CBVH_SEC_SIZE, s->s[i].size);
-            cbvh_write_u32(e + CBVH_SEC_CRC, cbvh_crc32(0, stored, packed_size[i]));
+            cbvh_write_u32(e + CBVH_SEC_CRC, cbvh_crc32(0, file + offset[i], packed_size[i]));
             cbvh_write_u32(e + CBVH_SEC_ENCODING, s->s[i].encoding);
             stored_size[s->s[i].type] = packed_size[i];
             size[s->s[i].type] = s->s[i].size;
+            cbvh_free(&a, packed[i]);
+            packed[i] = NULL;
+            cbvh_free(&a, s->s[i].data);
+            s->s[i].data = NULL;
         }
         write_header(file, h, s->count, end);
+        cbvh_meter_count(meter, (size_t)end, 0); /* handed to the caller */
         *out = file;
         *out_size = (size_t)end;
     } else if (r == CBVH_OK) {

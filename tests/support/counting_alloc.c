@@ -30,6 +30,7 @@ static void *counting_alloc_fn(void *user, size_t size, size_t align)
     c->live++;
     c->peak_live = c->live > c->peak_live ? c->live : c->peak_live;
     c->live_bytes += size;
+    c->peak_bytes = c->live_bytes > c->peak_bytes ? c->live_bytes : c->peak_bytes;
     return (uint8_t *)p + PREFIX;
 }
 

@@ -13,6 +13,7 @@ typedef struct counting_alloc {
     long live;         /* blocks not yet freed */
     long peak_live;
     size_t live_bytes; /* their sizes, as asked for */
+    size_t peak_bytes; /* the most live_bytes reached */
 } counting_alloc;
 
 /* Resets c and returns allocator hooks that count into it. Misuse by the
