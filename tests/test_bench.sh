@@ -83,7 +83,7 @@ run 0 "report --gen sphere:2000" "$CBVH" report --gen sphere:2000 --rays 2000 --
     cp "$tmp/out" "$tmp/report.md" &&
     check "... prints the table with error and run-time columns" \
         grep -q '^| mesh | configuration | bytes/tri | open ms | closest MRays/s | any MRays/s | nodes/ray | tris/ray | extra nodes/ray | extra tris/ray | box inflation mean | box inflation worst | flips | wrong tri | t err max | t err RMS | vertex err | leaked rays |' "$tmp/report.md" &&
-    check "... one row per configuration" test "$(grep -c '^| sphere:2000 | \(binary\|wide4\) layout, ' "$tmp/report.md")" -eq 13 &&
+    check "... one row per configuration" test "$(grep -c '^| sphere:2000 | \(binary\|wide4\) layout, ' "$tmp/report.md")" -eq 16 &&
     check "... no ray leaks through the closed sphere" \
         test "$(grep '^| sphere:2000 |' "$tmp/report.md" | grep -vc '| 0 / [0-9]* |$')" -eq 0 &&
     check "... recommends an exact configuration" grep -q '^\*\*sphere:2000\.\*\* Recommended: ' "$tmp/report.md"
@@ -95,11 +95,17 @@ if [ "$has_python" = 1 ] && [ -f "$tmp/report.json" ]; then
     check "report: exact answers with float vertices, bounded error with quantized ones" python3 - "$tmp/report.json" <<'EOF'
 import json, sys
 rows = json.load(open(sys.argv[1]))["rows"]
-assert len(rows) == 13, len(rows)
-assert sum(r["layout"] == "wide4 layout" for r in rows) == 1, rows
-raw = [r for r in rows if r["layout"] == "binary layout" and r["leaf_size"] == 16 and r["vertices"] == "float" and r["boxes"] == "q16" and r["zlib_level"] == 0]
+assert len(rows) == 16, len(rows)
+# wide4 (the default): leaf 1, 2, 4; at leaf 8 the float-box reference and four traversals, quantized
+# vertices, zlib; binary: leaf 8, and at leaf 16 its five traversals (the stackless walk is binary's only)
+assert sum(r["layout"] == "wide4 layout" for r in rows) == 10, rows
+assert sum(r["layout"] == "binary layout" for r in rows) == 6, rows
+assert sorted(r["traversal"] for r in rows if r["layout"] == "binary layout" and r["leaf_size"] == 16) == \
+    ["distance", "sorted", "stackless", "stream", "unsorted"], rows
+raw = [r for r in rows if r["layout"] == "wide4 layout" and r["leaf_size"] == 8 and r["vertices"] == "float" and r["boxes"] == "q16" and r["zlib_level"] == 0]
 packed = [r for r in rows if r["zlib_level"] > 0]
-assert len(raw) == 5 and len(packed) == 1, (raw, packed)
+assert len(raw) == 4 and len(packed) == 1, (raw, packed)
+assert sum(r["default"] for r in rows) == 1 and [r for r in rows if r["default"]][0]["layout"] == "wide4 layout", rows
 assert packed[0]["bytes_per_triangle"] < raw[0]["bytes_per_triangle"], (packed, raw)
 for r in rows:
     assert r["leaked_rays"] == 0 and r["leak_test_rays"] > 0, r
@@ -127,11 +133,11 @@ panels = [g for g in root.iter(ns + "g") if g.get("class") == "panel"]
 assert len(panels) == 6, len(panels)
 for k, p in enumerate(panels): # the last is size against open time: the float-box reference is no file
     points = [t for t in p.iter(ns + "title")]
-    assert len(points) == (13 if k < 5 else 12), (k, len(points))
+    assert len(points) == (16 if k < 5 else 15), (k, len(points))
     assert sum(1 for x in p.iter(ns + "path") if x.get("class") == "front") == 1
 texts = [t.text or "" for t in root.iter(ns + "text")]
 assert any("ns per ray" in t for t in texts), texts[:5]
-for legend in ("default: binary layout, q16 boxes, float vertices, leaf 16, sorted, raw sections", "layout", "box precision",
+for legend in ("default: wide4 layout, q16 boxes, float vertices, leaf 8, sorted, raw sections", "layout", "box precision",
                "vertex precision", "leaf size", "traversal", "sections"):
     assert legend in texts, legend
 EOF
@@ -164,8 +170,8 @@ p.feed(page)
 plots = [x for x in p.plots if not x["label"].startswith("legend")]
 assert len(plots) == 6, plots
 for k, x in enumerate(plots):
-    assert x["points"] == (13 if k < 5 else 12) and x["front"] == 1, (k, x)
-assert p.advice == 1 and p.rows == 1 + 13, (p.advice, p.rows)
+    assert x["points"] == (16 if k < 5 else 15) and x["front"] == 1, (k, x)
+assert p.advice == 1 and p.rows == 1 + 16, (p.advice, p.rows)
 assert "Recommended: " in page
 EOF
 else
@@ -175,6 +181,6 @@ fi
 run 0 "report --out DIR" "$CBVH" report --gen cube --rays 500 --sample 100 --reps 1 --quiet --out "$tmp/out-dir" &&
     check "... writes report.md, report.json, report.svg, report.html and the cooked files" \
         test -s "$tmp/out-dir/report.md" -a -s "$tmp/out-dir/report.json" -a -s "$tmp/out-dir/report.svg" -a -s "$tmp/out-dir/report.html" \
-        -a -s "$tmp/out-dir/cube-binary-leaf16.cbvh" -a -s "$tmp/out-dir/cube-binary-leaf16-qverts.cbvh" -a -s "$tmp/out-dir/cube-binary-leaf16-zlib.cbvh" -a -s "$tmp/out-dir/cube-wide4-leaf16.cbvh"
+        -a -s "$tmp/out-dir/cube-wide4-leaf8.cbvh" -a -s "$tmp/out-dir/cube-wide4-leaf8-qverts.cbvh" -a -s "$tmp/out-dir/cube-wide4-leaf8-zlib.cbvh" -a -s "$tmp/out-dir/cube-binary-leaf16.cbvh"
 
 finish

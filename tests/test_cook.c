@@ -72,6 +72,14 @@ static cbvh_mesh as_mesh(const test_mesh *m)
     return r;
 }
 
+/* The defaults with the binary layout, which the parser below reads (the default layout is wide4, whose
+ * bytes test_vectors checks against an independent encoder). */
+static void binary_options(cbvh_cook_options *o)
+{
+    cbvh_cook_options_init(o, sizeof *o);
+    o->layout = CBVH_LAYOUT_BINARY;
+}
+
 /* Triangles of random size scattered in a box of half size `spread` around `center`. */
 static void make_soup(test_mesh *m, size_t nt, uint64_t seed, double spread, double size, const double center[3])
 {
@@ -592,7 +600,7 @@ typedef struct cooked {
 static void cook_and_check(const test_mesh *m, const cbvh_cook_options *o, cooked *c)
 {
     cbvh_cook_options defaults;
-    cbvh_cook_options_init(&defaults, sizeof defaults);
+    binary_options(&defaults);
     if (!o)
         o = &defaults;
     cbvh_mesh mesh = as_mesh(m);
@@ -652,7 +660,7 @@ static void test_soups(void **state)
             test_mesh m;
             make_soup(&m, sizes[s], 11 + s, 10.0, 1.0, origin3);
             cbvh_cook_options o;
-            cbvh_cook_options_init(&o, sizeof o);
+            binary_options(&o);
             o.max_leaf_size = leaf[l];
             cooked c;
             cook_and_check(&m, &o, &c);
@@ -748,7 +756,7 @@ static void test_quantized_vertices(void **state)
         test_mesh m;
         make_sphere(&m, 20, 30, 50.0, center);
         cbvh_cook_options o;
-        cbvh_cook_options_init(&o, sizeof o);
+        binary_options(&o);
         o.vertex_format = CBVH_VERTEX_QUANTIZED16;
         cooked c;
         cook_and_check(&m, &o, &c);
@@ -815,7 +823,9 @@ static void test_weld_and_degenerate(void **state)
     cbvh_cook_stats st;
     cbvh_cook_stats_init(&st, sizeof st);
     cbvh_error err;
-    assert_int_equal(cbvh_cook(&mesh, NULL, NULL, &data, &size, &st, &err), CBVH_OK);
+    cbvh_cook_options o;
+    binary_options(&o);
+    assert_int_equal(cbvh_cook(&mesh, &o, NULL, &data, &size, &st, &err), CBVH_OK);
     assert_int_equal(st.dropped_degenerate, 3);
     assert_int_equal(st.triangles, 4);
     assert_int_equal(st.vertices, 4); /* v4, v5 welded, v6, v7 unused */
@@ -855,7 +865,7 @@ static void test_remap_and_materials(void **state)
     make_soup(&m, 200, 4, 5.0, 1.0, origin3);
     m.mat = calloc(m.nt, sizeof(uint32_t));
     cbvh_cook_options o;
-    cbvh_cook_options_init(&o, sizeof o);
+    binary_options(&o);
     cooked c;
     /* All equal: no MATERIALS section. */
     for (size_t t = 0; t < m.nt; t++)
@@ -896,7 +906,7 @@ static void test_determinism(void **state)
     make_soup(&m, 5000, 77, 50.0, 3.0, origin3);
     for (int variant = 0; variant < 3; variant++) {
         cbvh_cook_options o;
-        cbvh_cook_options_init(&o, sizeof o);
+        binary_options(&o);
         o.compress_level = variant == 1 ? 6 : 0;
         o.vertex_format = variant == 2 ? CBVH_VERTEX_QUANTIZED16 : CBVH_VERTEX_FLOAT32;
         cooked a, b;
@@ -940,7 +950,7 @@ static void test_depth_limit(void **state)
     }
     for (uint32_t leaf = 1; leaf <= 16; leaf *= 4) {
         cbvh_cook_options o;
-        cbvh_cook_options_init(&o, sizeof o);
+        binary_options(&o);
         o.max_leaf_size = leaf;
         cooked c;
         cook_and_check(&m, &o, &c);
@@ -965,7 +975,7 @@ static void test_identical_triangles(void **state)
     static const uint32_t leaf[] = { 1, 3, 16 };
     for (int i = 0; i < 3; i++) {
         cbvh_cook_options o;
-        cbvh_cook_options_init(&o, sizeof o);
+        binary_options(&o);
         o.max_leaf_size = leaf[i];
         cooked c;
         cook_and_check(&m, &o, &c);
@@ -1028,7 +1038,7 @@ static void test_sah_quality(void **state)
     }
     /* Against a median build with unit costs and leaves of 4: cook with those. */
     cbvh_cook_options unit;
-    cbvh_cook_options_init(&unit, sizeof unit);
+    binary_options(&unit);
     unit.traversal_cost = 1.0f;
     unit.max_leaf_size = 4;
     cooked c;
@@ -1182,6 +1192,7 @@ static void test_bad_options(void **state)
     assert_int_equal(o.compress_level, 0);
     assert_int_equal(o.keep_remap, 1);
     assert_int_equal(o.keep_materials, 1);
+    assert_int_equal(o.layout, CBVH_LAYOUT_WIDE4);
 #define BAD(field, value)                                                                  \
     do {                                                                                   \
         cbvh_cook_options b = o;                                                           \
@@ -1211,6 +1222,7 @@ static void test_bad_options(void **state)
         b.sah_bins = bins[i];
         b.compress_level = 9 * i;
         b.traversal_cost = (float)i;
+        b.layout = CBVH_LAYOUT_BINARY; /* for the parser */
         cooked c;
         cook_and_check(&m, &b, &c);
         cooked_free(&c);
@@ -1233,7 +1245,7 @@ static void test_peak_memory(void **state)
     for (int layout = CBVH_LAYOUT_BINARY; layout <= CBVH_LAYOUT_WIDE4; layout++)
         for (int level = 0; level <= 6; level += 6) {
             cbvh_cook_options o;
-            cbvh_cook_options_init(&o, sizeof o);
+            binary_options(&o);
             o.layout = (cbvh_layout)layout;
             o.compress_level = level;
             cbvh_cook_stats st;
@@ -1296,11 +1308,12 @@ static void test_allocation_failures(void **state)
     make_grid(&m, 12, 1.0, 3);
     m.mat = calloc(m.nt, sizeof(uint32_t));
     m.mat[1] = 2;
-    for (int variant = 0; variant < 2; variant++) {
+    for (int variant = 0; variant < 4; variant++) {
         cbvh_cook_options o;
         cbvh_cook_options_init(&o, sizeof o);
-        o.compress_level = variant ? 9 : 0;
-        o.vertex_format = variant ? CBVH_VERTEX_QUANTIZED16 : CBVH_VERTEX_FLOAT32;
+        o.layout = variant & 2 ? CBVH_LAYOUT_WIDE4 : CBVH_LAYOUT_BINARY;
+        o.compress_level = variant & 1 ? 9 : 0;
+        o.vertex_format = variant & 1 ? CBVH_VERTEX_QUANTIZED16 : CBVH_VERTEX_FLOAT32;
         alloc_failure_loop(&m, &o);
     }
     mesh_free(&m);
@@ -1437,12 +1450,12 @@ static void test_old_struct_sizes(void **state)
     rmdir(dir);
 
     /* A program built before the layout field: its options end at progress_user, and the default layout
-     * (binary) applies whatever lies past them. */
+     * (wide4) applies whatever lies past them. */
     cbvh_buffer_free(NULL, data);
     memset(&o, GUARD_BYTE, sizeof o);
     cbvh_cook_options_init(&o, offsetof(cbvh_cook_options, layout));
     o.max_leaf_size = 3;
-    o.layout = CBVH_LAYOUT_WIDE4;
+    o.layout = CBVH_LAYOUT_BINARY;
     assert_int_equal(cbvh_cook(&mesh, &o, NULL, &data, &size, NULL, &err), CBVH_OK);
     assert_int_equal(size, whole_size);
     assert_memory_equal(data, whole_data, size);
@@ -1686,7 +1699,7 @@ static void test_loader_round_trip(void **state)
     for (int i = 0; i < 3; i++) {
         for (int variant = 0; variant < 3; variant++) {
             cbvh_cook_options o;
-            cbvh_cook_options_init(&o, sizeof o);
+            binary_options(&o);
             o.compress_level = variant == 1 ? 4 : 0;
             o.vertex_format = variant == 2 ? CBVH_VERTEX_QUANTIZED16 : CBVH_VERTEX_FLOAT32;
             round_trip(&meshes[i], &o);
@@ -1710,7 +1723,7 @@ static void test_quantized_collapse(void **state)
     test_mesh m = { pos, idx, NULL, 10, 6 };
     for (int q = 0; q < 2; q++) {
         cbvh_cook_options o;
-        cbvh_cook_options_init(&o, sizeof o);
+        binary_options(&o);
         o.vertex_format = q ? CBVH_VERTEX_QUANTIZED16 : CBVH_VERTEX_FLOAT32;
         cooked c;
         cook_and_check(&m, &o, &c);

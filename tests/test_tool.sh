@@ -73,7 +73,9 @@ check "cooking is deterministic (gen:terrain)" cmp -s "$tmp/det1.cbvh" "$tmp/det
 "$CBVH" cook --quiet --layout wide4 gen:terrain:20000 "$tmp/det4.cbvh" >/dev/null
 check "cooking is deterministic (gen:terrain, wide4)" cmp -s "$tmp/det3.cbvh" "$tmp/det4.cbvh"
 run 0 "info of a wide4 file" "$CBVH" info "$tmp/det3.cbvh" && check "info names the wide4 layout" grep -q "^layout: wide4" "$tmp/out"
-run 0 "info of a binary file" "$CBVH" info "$tmp/det1.cbvh" && check "info names the binary layout" grep -q "^layout: binary" "$tmp/out"
+run 0 "info of a default file" "$CBVH" info "$tmp/det1.cbvh" && check "info names the default, wide4 layout" grep -q "^layout: wide4" "$tmp/out"
+"$CBVH" cook --quiet --layout binary gen:terrain:20000 "$tmp/det5.cbvh" >/dev/null
+run 0 "info of a binary file" "$CBVH" info "$tmp/det5.cbvh" && check "info names the binary layout" grep -q "^layout: binary" "$tmp/out"
 
 # ---- cook --json, info, info --json ------------------------------------------------------
 

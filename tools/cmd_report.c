@@ -30,11 +30,12 @@ static const char usage[] =
     "    the file's 16-bit quantized boxes;\n"
     "  - vertices: lossless float against 16-bit quantized;\n"
     "  - sections: raw against zlib-compressed (file size and open time);\n"
-    "  - node layouts: binary (the default) and wide4;\n"
-    "  - leaf sizes (most triangles per leaf) 1, 2, 4, 8 and the default 16; quantized vertices,\n"
-    "    zlib sections and the traversals at the default;\n"
-    "  - traversals: sorted by the precomputed sort byte, unsorted, distance-sorted at run time,\n"
-    "    stackless, batched streams.\n"
+    "  - node layouts: wide4 (the default) and binary;\n"
+    "  - leaf sizes (most triangles per leaf) 1, 2, 4 and the default (16, which a wide4 leaf\n"
+    "    holds as 8); quantized vertices and zlib sections at the default; the binary layout\n"
+    "    at leaf sizes 8 and 16;\n"
+    "  - traversals, on each layout at the default leaf size: sorted by the precomputed child\n"
+    "    order, unsorted, distance-sorted at run time, stackless (binary only), batched streams.\n"
     "Error columns: box inflation (surface area over the exact box, mean and worst), extra nodes\n"
     "and triangles visited per ray against the exact-float reference, hit/miss flips and wrong\n"
     "triangles against a double-precision brute force on a sample of the rays, distance error\n"
@@ -90,14 +91,14 @@ static const struct {
     int quantized_vertices;
     int compress; /* zlib level, 0 for raw sections */
 } cook_configs[] = {
-    { CBVH_LAYOUT_BINARY, 1, 0, 0 },
-    { CBVH_LAYOUT_BINARY, 2, 0, 0 },
-    { CBVH_LAYOUT_BINARY, 4, 0, 0 },
+    { CBVH_LAYOUT_WIDE4, 1, 0, 0 },
+    { CBVH_LAYOUT_WIDE4, 2, 0, 0 },
+    { CBVH_LAYOUT_WIDE4, 4, 0, 0 },
+    { CBVH_LAYOUT_WIDE4, DEFAULT_LEAF_SIZE, 0, 0 },
+    { CBVH_LAYOUT_WIDE4, DEFAULT_LEAF_SIZE, 1, 0 },
+    { CBVH_LAYOUT_WIDE4, DEFAULT_LEAF_SIZE, 0, 6 },
     { CBVH_LAYOUT_BINARY, 8, 0, 0 },
     { CBVH_LAYOUT_BINARY, DEFAULT_LEAF_SIZE, 0, 0 },
-    { CBVH_LAYOUT_BINARY, DEFAULT_LEAF_SIZE, 1, 0 },
-    { CBVH_LAYOUT_BINARY, DEFAULT_LEAF_SIZE, 0, 6 },
-    { CBVH_LAYOUT_WIDE4, DEFAULT_LEAF_SIZE, 0, 0 },
 };
 /* Names of the layouts, by cbvh_layout value (as `cbvh cook --layout` spells them). */
 static const char *const layout_names[] = { "binary", "wide4" };
@@ -403,12 +404,13 @@ static report_row *new_row(report_state *s)
     return r;
 }
 
-/* The max_leaf_size of cook k. */
+/* The largest leaf cook k allows: its max_leaf_size, which a wide4 leaf caps at CBVH_WIDE4_MAX_LEAF. */
 static uint32_t leaf_size(size_t k)
 {
     cbvh_cook_options defaults;
     cbvh_cook_options_init(&defaults, sizeof defaults);
-    return cook_configs[k].leaf == DEFAULT_LEAF_SIZE ? defaults.max_leaf_size : cook_configs[k].leaf;
+    uint32_t leaf = cook_configs[k].leaf == DEFAULT_LEAF_SIZE ? defaults.max_leaf_size : cook_configs[k].leaf;
+    return cook_configs[k].layout == CBVH_LAYOUT_WIDE4 && leaf > CBVH_WIDE4_MAX_LEAF ? CBVH_WIDE4_MAX_LEAF : leaf;
 }
 
 /* A file name for the cooked file of a configuration: the mesh's base name without odd characters. */
@@ -506,18 +508,24 @@ static int measure_cook(report_state *s, mesh_ctx *c, size_t k, int *step, int s
     status = CLI_EXIT_USAGE;
     if (!measure(s, c, exact_kernel, &exact, &base))
         goto done;
-    /* One row per traversal for the default cook, the sorted traversal for the others,
-     * and the reference layout itself for the default cook. */
-    int variants = is_default ? BENCH_CBVH_VARIANTS : 1;
+    /* One row per traversal for each layout's cook at the default leaf size (but the stackless walk,
+     * which only the binary layout has), the sorted traversal for the others, and the reference
+     * layout itself for the default cook. */
+    const int every_traversal = cook_configs[k].leaf == DEFAULT_LEAF_SIZE && !qverts && !compress;
+    int variants = every_traversal ? BENCH_CBVH_VARIANTS : 1;
     for (int v = -1; v < variants; v++) {
         if (v < 0 && !is_default)
             continue;
-        report_row *row = new_row(s);
-        if (!row)
-            goto done;
         bench_cbvh engine;
         if (v >= 0) {
             bench_cbvh_variant(&engine, file, v);
+            if (engine.traversal == CBVH_TRAVERSAL_STACKLESS && cook_configs[k].layout != CBVH_LAYOUT_BINARY)
+                continue;
+        }
+        report_row *row = new_row(s);
+        if (!row)
+            goto done;
+        if (v >= 0) {
             if (v > 0)
                 (*step)++;
             snprintf(label, sizeof label, "%s: leaf %u%s, %s", c->label, (unsigned)leaf, qverts ? " qverts" : "",
@@ -614,7 +622,7 @@ static int report_mesh(report_state *s, const char *source, int generated)
         cli_error(s->command, NULL, "out of memory or cannot start a thread");
         return CLI_EXIT_USAGE;
     }
-    int step = 0, steps = (int)COOK_COUNT + BENCH_CBVH_VARIANTS - 1;
+    int step = 0, steps = (int)COOK_COUNT + 2 * (BENCH_CBVH_VARIANTS - 1);
     for (size_t k = 0; k < COOK_COUNT && !status; k++)
         status = measure_cook(s, &c, k, &step, steps);
     progress_done(&s->prog);

@@ -89,7 +89,8 @@ static void stats_subtree(struct stats_walk *w, cbvh_ref r, uint32_t box, uint32
     uint32_t first = 0, count = 0;
     if (leaf)
         cbvh_tree_leaf(f, f->layout, r, &first, &count);
-    if (depth > out->depth)
+    /* depth counts nodes, as the header's does: a wide4 leaf is a slot of its parent, not a node */
+    if (!(leaf && f->layout == CBVH_LAYOUT_WIDE4) && depth > out->depth)
         out->depth = depth;
     if (box != CBVH_NO_BOX) {
         float lo[3], hi[3];

@@ -28,6 +28,7 @@ static void default_options(cbvh_cook_options *o)
     o->compress_level = 0;
     o->keep_remap = 1;
     o->keep_materials = 1;
+    o->layout = CBVH_LAYOUT_WIDE4;
 }
 
 /* Records `size` in the struct_size that leads the caller's struct `s` when it covers that field (so that

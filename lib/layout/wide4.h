@@ -5,6 +5,7 @@
 #include <stdint.h>
 #include <string.h>
 
+#include "cbvh.h"
 #include "common/endian.h"
 
 /* A node is 64 bytes, one cache line, and holds the boxes of its up to four
@@ -33,7 +34,7 @@
 #define CBVH_W4_LEAF_BIT 0x80000000u
 #define CBVH_W4_COUNT_SHIFT 28
 #define CBVH_W4_FIRST_MASK 0x0FFFFFFFu
-#define CBVH_W4_MAX_LEAF 8u
+#define CBVH_W4_MAX_LEAF CBVH_WIDE4_MAX_LEAF
 #define CBVH_W4_MAX_TRIANGLES 0x10000000u
 #define CBVH_W4_MAX_NODES 0x7FFFFFFFu
 #define CBVH_W4_ORDERS 24u
