@@ -293,11 +293,7 @@ run 0 "raycast of invalid rays (NaN, zero direction, tmin > tmax)" sh -c "'$CBVH
 
 # ---- real meshes, one per assimp format family ----------------------------------------------
 
-models=${CBVH_ASSIMP_MODELS:-}
-if [ -z "$models" ] && command -v dpkg >/dev/null 2>&1; then
-    models=$(dpkg -L assimp-testmodels 2>/dev/null | grep '/models$' | head -1)
-fi
-[ -z "$models" ] && [ -d /usr/share/assimp/models ] && models=/usr/share/assimp/models
+models=$(assimp_models)
 if [ -n "$models" ] && [ -d "$models" ]; then
     for m in OBJ/spider.obj PLY/Wuson.ply PLY/cube_binary.ply STL/Spider_binary.stl STL/Spider_ascii.stl \
         glTF2/BoxTextured-glTF/BoxTextured.gltf glTF2/BoxTextured-glTF-Binary/BoxTextured.glb \

@@ -2,7 +2,7 @@
 #
 # The sourcing script sets `name` (used in messages and the temporary folder's name) first.
 # Provides: CBVH (the built tool), tmp (a mktemp folder removed at exit), pass/fail/skip counters,
-# run EXPECTED_STATUS NAME CMD..., check NAME CMD..., has_python, json_valid FILE, and finish.
+# run EXPECTED_STATUS NAME CMD..., check NAME CMD..., has_python, json_valid FILE, assimp_models, and finish.
 
 CBVH=${CBVH_TOOL:-./tools/cbvh}
 [ -x "$CBVH" ] || { echo "$name: $CBVH is not built"; exit 99; }
@@ -44,6 +44,16 @@ check() {
 has_python=0
 command -v python3 >/dev/null 2>&1 && has_python=1
 json_valid() { python3 -m json.tool "$1" >/dev/null 2>&1; }
+
+# assimp_models: prints the folder of Debian's assimp-testmodels ($CBVH_ASSIMP_MODELS first), or nothing.
+assimp_models() {
+    m=${CBVH_ASSIMP_MODELS:-}
+    if [ -z "$m" ] && command -v dpkg >/dev/null 2>&1; then
+        m=$(dpkg -L assimp-testmodels 2>/dev/null | grep '/models$' | head -1)
+    fi
+    [ -z "$m" ] && [ -d /usr/share/assimp/models ] && m=/usr/share/assimp/models
+    echo "$m"
+}
 
 # The closing line counts the checks; the exit status tells automake.
 finish() {

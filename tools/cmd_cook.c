@@ -2,6 +2,8 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/resource.h>
+#include <sys/stat.h>
 
 #include "cli.h"
 #include "common/format.h"
@@ -39,8 +41,18 @@ static const char usage[] =
     "  --no-remap              do not store original triangle ids: queries report cooked ids\n"
     "  --no-materials          do not store material ids\n"
     "  --quiet                 no progress display (it is shown only on a terminal anyway)\n"
-    "  --json                  print statistics as JSON on stdout\n"
+    "  --json                  print statistics as JSON on stdout; a failed cook prints\n"
+    "                          {\"input\", \"output\", \"error\": {\"status\", \"message\"}}\n"
+    "  --max-memory MB         stop an import or cook that would hold more than MB megabytes\n"
+    "                          of address space (exit status 1); default 1024 + 64 x the\n"
+    "                          input file's size in MB; 0: no limit\n"
     "  -h, --help              show this help\n"
+    "\n"
+    "OUT must not be IN itself (also through a link): that is refused, exit status 2. An OUT\n"
+    "that is a device, a FIFO or a folder is refused likewise; an OUT that is a symbolic link\n"
+    "is replaced by the new file, and the file it pointed to stays as it was. A new OUT gets\n"
+    "mode 0666 less the umask; a replaced one keeps its mode. Interrupted (SIGINT, SIGTERM,\n"
+    "SIGHUP), a cook leaves no temporary file behind.\n"
     "\n"
     "Exit status: 0 cooked, 1 the input is not a usable mesh, 2 usage or I/O error.\n";
 
@@ -55,7 +67,8 @@ enum {
     OPT_NO_REMAP,
     OPT_NO_MATERIALS,
     OPT_QUIET,
-    OPT_JSON
+    OPT_JSON,
+    OPT_MAX_MEMORY
 };
 
 static const cli_option options[] = {
@@ -70,6 +83,7 @@ static const cli_option options[] = {
     { "no-materials", CLI_ARG_NONE, OPT_NO_MATERIALS },
     { "quiet", CLI_ARG_NONE, OPT_QUIET },
     { "json", CLI_ARG_NONE, OPT_JSON },
+    { "max-memory", CLI_ARG_REQUIRED, OPT_MAX_MEMORY },
     { NULL, 0, 0 },
 };
 
@@ -79,15 +93,17 @@ typedef struct cook_input {
     int generated;
 } cook_input;
 
-/* Returns an exit status; on success `in` holds the mesh. */
-static int load_input(const char *path, cook_input *in)
+/* Returns an exit status; on success `in` holds the mesh, else `message` says why. */
+static int load_input(const char *path, cook_input *in, char *message, size_t message_size)
 {
     memset(in, 0, sizeof *in);
     if (!strncmp(path, "gen:", 4)) {
         scene s;
-        if (!scene_from_spec(&s, path + 4))
-            return cli_usage_error("cook", "%s: not a generated scene (gen:sphere:N, gen:terrain:N, "
-                                           "gen:soup:N, gen:cube, gen:demo)", path);
+        if (!scene_from_spec(&s, path + 4)) {
+            snprintf(message, message_size, "not a generated scene (gen:sphere:N, gen:terrain:N, gen:soup:N, "
+                                            "gen:cube, gen:demo)");
+            return CLI_EXIT_USAGE;
+        }
         in->generated = 1;
         in->mesh.positions = s.positions;
         in->mesh.vertex_count = s.vertex_count;
@@ -97,11 +113,56 @@ static int load_input(const char *path, cook_input *in)
         in->mesh.mesh_instances = 1;
         return CLI_EXIT_OK;
     }
-    char message[512];
-    int rc = import_assimp(path, &in->mesh, message, sizeof message);
-    if (rc)
-        cli_error("cook", path, "%s", message);
-    return rc;
+    return import_assimp(path, &in->mesh, message, message_size);
+}
+
+/* A failed cook: the message on standard error, and with --json also as JSON on standard output. */
+static int report_failure(int json, const char *in, const char *out, const char *file, int status,
+                          const char *message)
+{
+    cli_error("cook", file, "%s", message);
+    if (json) {
+        json_writer w;
+        json_init(&w, stdout);
+        json_begin_object(&w, NULL);
+        json_string(&w, "input", in);
+        json_string(&w, "output", out);
+        json_begin_object(&w, "error");
+        json_uint(&w, "status", (uint64_t)status);
+        json_string(&w, "file", file);
+        json_string(&w, "message", message);
+        json_end_object(&w);
+        json_end_object(&w);
+        json_finish(&w);
+    }
+    return status;
+}
+
+/* Refuses an output that is the input itself (same device and inode, whatever the names and links). */
+static int same_file(const char *in, const char *out)
+{
+    struct stat a, b;
+    return stat(in, &a) == 0 && stat(out, &b) == 0 && a.st_dev == b.st_dev && a.st_ino == b.st_ino;
+}
+
+/* Caps the address space at `megabytes` (0: no cap); the default grows with the input file's size. */
+static void limit_memory(const char *in, uint64_t megabytes, int given)
+{
+    struct stat st;
+    if (!given)
+        megabytes = 1024 + (stat(in, &st) == 0 ? 64 * ((uint64_t)st.st_size >> 20) : 0);
+    if (megabytes == 0 || !strncmp(in, "gen:", 4))
+        return;
+    struct rlimit rl;
+    if (getrlimit(RLIMIT_AS, &rl) != 0)
+        return;
+    rlim_t want = (rlim_t)(megabytes << 20);
+    if (rl.rlim_max != RLIM_INFINITY && want > rl.rlim_max)
+        want = rl.rlim_max;
+    if (rl.rlim_cur == RLIM_INFINITY || want < rl.rlim_cur) {
+        rl.rlim_cur = want;
+        (void)setrlimit(RLIMIT_AS, &rl);
+    }
 }
 
 static void print_json(const char *in, const char *out, const cook_input *input, const cbvh_cook_stats *st,
@@ -193,7 +254,8 @@ int cmd_cook(int argc, char **argv)
     cbvh_cook_options opt;
     cbvh_cook_options_init(&opt, sizeof opt);
     const char *paths[2] = { NULL, NULL };
-    int npaths = 0, quiet = 0, json = 0;
+    int npaths = 0, quiet = 0, json = 0, memory_given = 0;
+    uint32_t max_memory = 0;
 
     cli_parser p;
     cli_init(&p, "cook", usage, argc, argv);
@@ -238,22 +300,35 @@ int cmd_cook(int argc, char **argv)
         case OPT_NO_MATERIALS: opt.keep_materials = 0; break;
         case OPT_QUIET: quiet = 1; break;
         case OPT_JSON: json = 1; break;
+        case OPT_MAX_MEMORY:
+            ok = cli_parse_u32("cook", "max-memory", value, 0, UINT32_MAX, &max_memory);
+            memory_given = 1;
+            break;
         }
         if (!ok)
             return CLI_EXIT_USAGE;
     }
     if (npaths != 2)
         return cli_usage_error("cook", "expected an input and an output file");
+    if (same_file(paths[0], paths[1]))
+        return report_failure(json, paths[0], paths[1], paths[1], CLI_EXIT_USAGE,
+                              "is the input file itself: cooking would replace the asset (choose another output)");
+    limit_memory(paths[0], max_memory, memory_given);
 
     progress prog;
     progress_init(&prog, quiet);
     double t0 = cli_now();
     progress_update(&prog, "import", -1);
     cook_input input;
-    int rc = load_input(paths[0], &input);
+    char message[640];
+    int rc = load_input(paths[0], &input, message, sizeof message);
     progress_done(&prog);
-    if (rc)
-        return rc;
+    if (rc) {
+        if (strstr(message, "bad_alloc") || strstr(message, "out of memory"))
+            snprintf(message + strlen(message), sizeof message - strlen(message),
+                     " (the memory limit was reached: --max-memory MB raises it, 0 removes it)");
+        return report_failure(json, paths[0], paths[1], paths[0], rc, message);
+    }
     double import_seconds = cli_now() - t0;
 
     cbvh_mesh mesh = { input.mesh.positions, input.mesh.vertex_count, 0, input.mesh.indices,
@@ -269,7 +344,8 @@ int cmd_cook(int argc, char **argv)
     if (res != CBVH_OK) {
         /* Mesh problems belong to the input, I/O problems to the output. */
         const char *culprit = (res == CBVH_ERROR_IO || res == CBVH_ERROR_INVALID_ARGUMENT) ? paths[1] : paths[0];
-        rc = cli_report("cook", culprit, &err);
+        snprintf(message, sizeof message, "%s: %s", cbvh_result_string(err.code), err.message);
+        rc = report_failure(json, paths[0], paths[1], culprit, cli_exit_for(err.code), message);
     } else if (json) {
         print_json(paths[0], paths[1], &input, &stats, import_seconds, total_seconds);
     } else {

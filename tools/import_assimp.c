@@ -21,6 +21,7 @@ typedef struct import_state {
     int counting;           /* first pass: count only; second pass: fill */
     uint64_t vertex_total;  /* vertices counted or written so far */
     uint64_t triangle_total;
+    unsigned char *instanced; /* per scene mesh: a node refers to it */
     char *message;
     size_t message_size;
 } import_state;
@@ -54,6 +55,11 @@ static int import_mesh_instance(import_state *s, const struct aiMesh *mesh, cons
 {
     imported_mesh *out = s->out;
     uint64_t base = s->vertex_total;
+    if ((mesh->mNumVertices && !mesh->mVertices) || (mesh->mNumFaces && !mesh->mFaces)) {
+        snprintf(s->message, s->message_size, "mesh '%s' lists %u vertices and %u faces but lacks their arrays",
+                 mesh->mName.data, mesh->mNumVertices, mesh->mNumFaces);
+        return 1;
+    }
     if (!s->counting) {
         float *p = out->positions + 3 * base;
         for (unsigned v = 0; v < mesh->mNumVertices; v++) {
@@ -108,59 +114,96 @@ static int import_node(import_state *s, const struct aiNode *node, const dmat4 *
     }
     dmat4 local = dmat4_from_ai(&node->mTransformation);
     dmat4 xf = dmat4_mul(parent, &local);
+    if (node->mNumMeshes && !node->mMeshes) {
+        snprintf(s->message, s->message_size, "node '%s' lists %u meshes but holds none", node->mName.data,
+                 node->mNumMeshes);
+        return 1;
+    }
     for (unsigned i = 0; i < node->mNumMeshes; i++) {
         unsigned m = node->mMeshes[i];
-        if (m >= s->scene->mNumMeshes) {
-            snprintf(s->message, s->message_size, "node '%s' refers to mesh %u of %u", node->mName.data, m,
-                     s->scene->mNumMeshes);
+        if (m >= s->scene->mNumMeshes || !s->scene->mMeshes || !s->scene->mMeshes[m]) {
+            snprintf(s->message, s->message_size, "node '%s' refers to mesh %u of %u, which is missing",
+                     node->mName.data, m, s->scene->mNumMeshes);
             return 1;
         }
         if (import_mesh_instance(s, s->scene->mMeshes[m], &xf))
             return 1;
+        s->instanced[m] = 1;
     }
-    for (unsigned c = 0; c < node->mNumChildren; c++)
-        if (import_node(s, node->mChildren[c], &xf, depth + 1))
+    /* Some importers (RAW) count more children than they fill: an empty slot holds nothing to import. */
+    for (unsigned c = 0; node->mChildren && c < node->mNumChildren; c++)
+        if (node->mChildren[c] && import_node(s, node->mChildren[c], &xf, depth + 1))
             return 1;
     return 0;
 }
 
-static int import_scene(const struct aiScene *scene, imported_mesh *out, char *message, size_t message_size)
+static const dmat4 identity = { { { 1, 0, 0, 0 }, { 0, 1, 0, 0 }, { 0, 0, 1, 0 }, { 0, 0, 0, 1 } } };
+
+/* The hierarchy depth first, then each mesh that no node refers to, once and untransformed (an importer
+ * that loses a node must not lose its triangles). */
+static int import_pass(import_state *s)
 {
-    static const dmat4 identity = { { { 1, 0, 0, 0 }, { 0, 1, 0, 0 }, { 0, 0, 1, 0 }, { 0, 0, 0, 1 } } };
-    import_state s = { scene, out, 1, 0, 0, message, message_size };
-    if (!scene->mRootNode) {
-        snprintf(message, message_size, "the scene has no node hierarchy");
+    memset(s->instanced, 0, s->scene->mNumMeshes + 1u);
+    if (import_node(s, s->scene->mRootNode, &identity, 0))
         return 1;
-    }
-    if (import_node(&s, scene->mRootNode, &identity, 0))
-        return 1;
-    if (s.triangle_total == 0) {
-        snprintf(message, message_size, "no triangles (%llu points and %llu lines dropped)",
+    for (unsigned m = 0; m < s->scene->mNumMeshes; m++)
+        if (!s->instanced[m] && s->scene->mMeshes && s->scene->mMeshes[m] &&
+            import_mesh_instance(s, s->scene->mMeshes[m], &identity))
+            return 1;
+    return 0;
+}
+
+/* After the counting pass: allocates the arrays and fills them in a second pass. */
+static int import_counted(import_state *s)
+{
+    imported_mesh *out = s->out;
+    if (s->triangle_total == 0) {
+        snprintf(s->message, s->message_size, "no triangles (%llu points and %llu lines dropped)",
                  (unsigned long long)out->dropped_points, (unsigned long long)out->dropped_lines);
         return 1;
     }
     /* Indices are 32-bit in cbvh_mesh. */
-    if (s.vertex_total > UINT32_MAX || s.triangle_total > UINT32_MAX) {
-        snprintf(message, message_size, "too large: %llu vertices, %llu triangles (at most 2^32-1 each)",
-                 (unsigned long long)s.vertex_total, (unsigned long long)s.triangle_total);
+    if (s->vertex_total > UINT32_MAX || s->triangle_total > UINT32_MAX) {
+        snprintf(s->message, s->message_size, "too large: %llu vertices, %llu triangles (at most 2^32-1 each)",
+                 (unsigned long long)s->vertex_total, (unsigned long long)s->triangle_total);
         return 1;
     }
-    out->vertex_count = (size_t)s.vertex_total;
-    out->triangle_count = (size_t)s.triangle_total;
+    out->vertex_count = (size_t)s->vertex_total;
+    out->triangle_count = (size_t)s->triangle_total;
     out->positions = malloc(out->vertex_count * 3 * sizeof(float));
     out->indices = malloc(out->triangle_count * 3 * sizeof(uint32_t));
     out->material_ids = malloc(out->triangle_count * sizeof(uint32_t));
     if (!out->positions || !out->indices || !out->material_ids) {
-        snprintf(message, message_size, "out of memory for %zu vertices and %zu triangles", out->vertex_count,
+        snprintf(s->message, s->message_size, "out of memory for %zu vertices and %zu triangles", out->vertex_count,
                  out->triangle_count);
         return 2;
     }
-    s.counting = 0;
-    s.vertex_total = 0;
-    s.triangle_total = 0;
-    out->material_count = scene->mNumMaterials;
-    return import_node(&s, scene->mRootNode, &identity, 0);
+    s->counting = 0;
+    s->vertex_total = 0;
+    s->triangle_total = 0;
+    out->material_count = s->scene->mNumMaterials;
+    return import_pass(s);
 }
+
+static int import_scene(const struct aiScene *scene, imported_mesh *out, char *message, size_t message_size)
+{
+    import_state s = { scene, out, 1, 0, 0, NULL, message, message_size };
+    if (!scene->mRootNode) {
+        snprintf(message, message_size, "the scene has no node hierarchy");
+        return 1;
+    }
+    s.instanced = malloc(scene->mNumMeshes + 1u);
+    if (!s.instanced) {
+        snprintf(message, message_size, "out of memory for %u meshes", scene->mNumMeshes);
+        return 2;
+    }
+    int rc = import_pass(&s);
+    if (rc == 0)
+        rc = import_counted(&s);
+    free(s.instanced);
+    return rc;
+}
+
 
 /* Inflates a gzip file whole (assimp has no stream interface in its C API). */
 static int read_gzip(const char *path, char **out_data, size_t *out_size, char *message, size_t message_size)

@@ -1,7 +1,10 @@
 /* posix.c: the operating-system calls of os.h on POSIX systems (mmap, posix_memalign, pthreads, rename). */
-#define _DEFAULT_SOURCE /* MAP_POPULATE where the system has it (Linux) */
+#define _GNU_SOURCE /* MAP_POPULATE and O_TMPFILE where the system has them (Linux) */
 #include <errno.h>
 #include <fcntl.h>
+#include <pthread.h>
+#include <signal.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -156,29 +159,160 @@ static void sync_folder(char *temp, const char *path)
     }
 }
 
+/* What may stand at `path` before it is replaced: nothing, a regular file (whose mode the new file keeps, in
+ * *mode) or a symbolic link (replaced itself; what it points to stays as it was). Anything else (a device,
+ * a FIFO, a folder, a socket) is refused: writing it is not replacing a file. */
+static cbvh_result check_target(const char *path, mode_t *mode, int *keep_mode, cbvh_error *err)
+{
+    struct stat st;
+    *keep_mode = 0;
+    if (lstat(path, &st) != 0) {
+        if (errno == ENOENT)
+            return CBVH_OK;
+        return cbvh_fail(err, CBVH_ERROR_IO, "%s: cannot inspect the output path: %s", path, strerror(errno));
+    }
+    if (S_ISLNK(st.st_mode))
+        return CBVH_OK;
+    if (!S_ISREG(st.st_mode)) {
+        const char *what = S_ISDIR(st.st_mode)    ? "a folder"
+                           : S_ISCHR(st.st_mode)  ? "a character device"
+                           : S_ISBLK(st.st_mode)  ? "a block device"
+                           : S_ISFIFO(st.st_mode) ? "a FIFO"
+                           : S_ISSOCK(st.st_mode) ? "a socket"
+                                                  : "not a regular file";
+        return cbvh_fail(err, CBVH_ERROR_INVALID_ARGUMENT,
+                         "%s is %s: a cooked file replaces only a regular file (or a symbolic link)", path, what);
+    }
+    *mode = st.st_mode & 07777;
+    *keep_mode = 1;
+    return CBVH_OK;
+}
+
+/* Blocks (or restores) the signals that end a process at a terminal's or a job system's request, so a
+ * named temporary file is always renamed or removed before the process can die of them. */
+static void hold_signals(sigset_t *saved)
+{
+    sigset_t set;
+    sigemptyset(&set);
+    sigaddset(&set, SIGINT);
+    sigaddset(&set, SIGTERM);
+    sigaddset(&set, SIGHUP);
+    sigaddset(&set, SIGQUIT);
+    pthread_sigmask(SIG_BLOCK, &set, saved);
+}
+
+static void release_signals(const sigset_t *saved)
+{
+    pthread_sigmask(SIG_SETMASK, saved, NULL);
+}
+
+/* Replaces the last six characters of `temp` (mkstemp's XXXXXX) by a name that differs per process, time
+ * and attempt; linkat refuses a name that exists, so a collision only costs another attempt. */
+static void fill_temp_name(char *temp, unsigned attempt)
+{
+    static const char digits[] = "0123456789abcdefghijklmnopqrstuvwxyz";
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    uint64_t x = (uint64_t)getpid() * 0x9E3779B97F4A7C15u ^ (uint64_t)ts.tv_nsec * 0xBF58476D1CE4E5B9u ^
+                 (uint64_t)ts.tv_sec ^ (uint64_t)attempt * 0x94D049BB133111EBu;
+    char *p = temp + strlen(temp) - 6;
+    for (int k = 0; k < 6; k++, x /= 36)
+        p[k] = digits[x % 36];
+}
+
+/* Creates the temporary file: unnamed (O_TMPFILE) where the system can, so that nothing is left behind
+ * whatever ends the process; else named from `temp` (mkstemp's pattern) with the signals held, which
+ * the caller then keeps held until the name is gone. New files get 0666 less the umask. */
+static int create_temp(char *temp, const char *path, int *named, sigset_t *saved)
+{
+    *named = 0;
+#ifdef O_TMPFILE
+    {
+        const char *slash = strrchr(path, '/');
+        int fd;
+        if (!slash) {
+            fd = open(".", O_TMPFILE | O_WRONLY | O_CLOEXEC, 0666);
+        } else {
+            size_t dir_len = (size_t)(slash - path) + 1;
+            char saved_char = temp[dir_len];
+            temp[dir_len] = '\0';
+            fd = open(temp, O_TMPFILE | O_WRONLY | O_CLOEXEC, 0666);
+            temp[dir_len] = saved_char;
+        }
+        if (fd >= 0)
+            return fd;
+    }
+#endif
+    (void)path;
+    hold_signals(saved);
+    *named = 1;
+    /* mkstemp's 0600 becomes 0666 less the umask, read without changing it (umask() is process-wide). */
+    int fd = mkstemp(temp);
+    if (fd >= 0) {
+        mode_t mask = umask(0);
+        umask(mask);
+        if (fchmod(fd, 0666 & ~mask) != 0) {
+            int e = errno;
+            close(fd);
+            unlink(temp);
+            release_signals(saved);
+            *named = 0;
+            errno = e;
+            return -1;
+        }
+    } else {
+        release_signals(saved);
+        *named = 0;
+    }
+    return fd;
+}
+
 cbvh_result cbvh_os_write_file_replacing(const char *path, const uint8_t *data, size_t size, const cbvh_allocator *a,
                                          cbvh_error *err)
 {
+    mode_t mode = 0;
+    int keep_mode;
+    cbvh_result r = check_target(path, &mode, &keep_mode, err);
+    if (r != CBVH_OK)
+        return r;
     char *temp = temp_template(a, path);
     if (!temp)
         return cbvh_fail(err, CBVH_ERROR_OUT_OF_MEMORY, "out of memory for a temporary file name");
-    int fd = mkstemp(temp);
+    sigset_t saved;
+    int named;
+    int fd = create_temp(temp, path, &named, &saved);
     if (fd < 0) {
-        cbvh_result r = cbvh_fail(err, CBVH_ERROR_IO, "cannot create a temporary file beside '%s': %s", path,
-                                  strerror(errno));
+        r = cbvh_fail(err, CBVH_ERROR_IO, "cannot create a temporary file beside '%s': %s", path, strerror(errno));
         cbvh_free(a, temp);
         return r;
     }
     const char *failed = NULL;
     int saved_errno = 0;
-    /* mkstemp makes the file private (0600); a cooked file is an ordinary asset. */
-    if (fchmod(fd, 0644) != 0)
+    if (keep_mode && fchmod(fd, mode) != 0)
         failed = "set the mode of";
     else if (write_all(fd, data, size) != 0)
         failed = "write";
     else if (fsync(fd) != 0)
         failed = "flush";
     saved_errno = errno;
+    if (!failed && !named) {
+        /* Give the unnamed file its temporary name only now, for the instant before the rename. */
+        char proc[64];
+        snprintf(proc, sizeof proc, "/proc/self/fd/%d", fd);
+        hold_signals(&saved);
+        named = 1;
+        int tries = 0;
+        for (;;) {
+            fill_temp_name(temp, (unsigned)tries);
+            if (linkat(AT_FDCWD, proc, AT_FDCWD, temp, AT_SYMLINK_FOLLOW) == 0)
+                break;
+            if (errno != EEXIST || ++tries == 100) {
+                failed = "name";
+                saved_errno = errno;
+                break;
+            }
+        }
+    }
     if (close(fd) != 0 && !failed) {
         failed = "close";
         saved_errno = errno;
@@ -187,14 +321,16 @@ cbvh_result cbvh_os_write_file_replacing(const char *path, const uint8_t *data, 
         failed = "rename into place";
         saved_errno = errno;
     }
-    cbvh_result r = CBVH_OK;
     if (failed) {
-        unlink(temp);
+        if (named)
+            unlink(temp);
         r = cbvh_fail(err, CBVH_ERROR_IO, "cannot %s the temporary file '%s' for '%s': %s", failed, temp, path,
                       strerror(saved_errno));
     } else {
         sync_folder(temp, path);
     }
+    if (named)
+        release_signals(&saved);
     cbvh_free(a, temp);
     return r;
 }
