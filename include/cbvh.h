@@ -222,7 +222,13 @@ CBVH_API cbvh_result cbvh_cook(const cbvh_mesh *mesh, const cbvh_cook_options *o
 
 /* As cbvh_cook, then writes the file to `path` through a temporary file in the
  * same folder renamed into place: an existing file at `path` is replaced only
- * by a complete new one, and no partial file is left behind on failure. */
+ * by a complete new one, and no partial file is left behind on failure. A
+ * `path` that exists and is not a regular file (a device, a FIFO, a folder) is
+ * refused with CBVH_ERROR_IO; a symbolic link is replaced itself (the file it
+ * points to stays as it was). A new file gets mode 0666 less the umask, a
+ * replaced one keeps its mode (POSIX). On Linux the temporary file has no name
+ * until the instant before the rename, during which this thread holds SIGINT,
+ * SIGTERM, SIGHUP and SIGQUIT, so no signal leaves it behind. */
 CBVH_API cbvh_result cbvh_cook_to_path(const cbvh_mesh *mesh, const cbvh_cook_options *options,
                                        const cbvh_allocator *allocator, const char *path,
                                        cbvh_cook_stats *stats, cbvh_error *err);

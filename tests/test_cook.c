@@ -1613,7 +1613,8 @@ static void test_cook_to_path(void **state)
     assert_non_null(strstr(err.message, missing));
     assert_int_equal(count_entries(dir), 1);
 
-    /* A destination that is a folder: rename fails, the temporary file is removed. */
+    /* A destination that is a folder: refused (POSIX: before anything is created; Windows: the rename
+     * fails and the temporary file is removed). */
     char sub[600];
     snprintf(sub, sizeof sub, "%s/sub", dir);
     assert_int_equal(test_mkdir(sub), 0);
@@ -1622,6 +1623,7 @@ static void test_cook_to_path(void **state)
     f = fopen(inner, "wb");
     fclose(f);
     assert_int_equal(cbvh_cook_to_path(&mesh, NULL, NULL, sub, NULL, &err), CBVH_ERROR_IO);
+    assert_non_null(strstr(err.message, sub));
     assert_int_equal(count_entries(dir), 2);
     assert_int_equal(count_entries(sub), 1);
     assert_int_equal(cbvh_cook_to_path(&mesh, NULL, NULL, NULL, NULL, &err), CBVH_ERROR_INVALID_ARGUMENT);

@@ -180,8 +180,8 @@ static cbvh_result check_target(const char *path, mode_t *mode, int *keep_mode, 
                            : S_ISFIFO(st.st_mode) ? "a FIFO"
                            : S_ISSOCK(st.st_mode) ? "a socket"
                                                   : "not a regular file";
-        return cbvh_fail(err, CBVH_ERROR_INVALID_ARGUMENT,
-                         "%s is %s: a cooked file replaces only a regular file (or a symbolic link)", path, what);
+        return cbvh_fail(err, CBVH_ERROR_IO, "%s is %s: a cooked file replaces only a regular file (or a symbolic link)",
+                         path, what);
     }
     *mode = st.st_mode & 07777;
     *keep_mode = 1;
