@@ -2,6 +2,11 @@
 #ifndef CBVH_QUERY_LEAF_H
 #define CBVH_QUERY_LEAF_H
 
+#ifdef CBVH_HAVE_SIMD
+#include <emmintrin.h>
+#endif
+#include <float.h>
+
 #include "common/file.h"
 #include "query/ray_setup.h"
 #include "query/ray_triangle.h"
@@ -62,6 +67,39 @@ CBVH_KERNEL void leaf_triangle(const void *restrict tris, const int tri_enc, con
     }
 }
 
+#ifdef CBVH_HAVE_SIMD
+/* The first test of cbvh_ray_triangle (ray_triangle.h) on four triangles at once, lane for lane the same
+ * float operations in the same order (the build contracts no multiply-add): the vertices relative to the
+ * origin, sheared, then the three edge functions. Returns the bits of the lanes that test rejects for sure
+ * (finite edge functions of both signs); the scalar test then decides every other lane exactly as it would
+ * alone, so answers are the same with or without this filter. tri[j][v][x]: lane j's vertex v. */
+CBVH_KERNEL uint32_t leaf_reject4_sse2(const struct cbvh_ray_shear *restrict s, float tri[4][3][3])
+{
+    const uint32_t kx = s->kx, ky = s->ky, kz = s->kz;
+    const __m128 sx = _mm_set1_ps(s->sx), sy = _mm_set1_ps(s->sy);
+    const __m128 ox = _mm_set1_ps(s->org[kx]), oy = _mm_set1_ps(s->org[ky]), oz = _mm_set1_ps(s->org[kz]);
+    __m128 px[3], py[3];
+    for (int v = 0; v < 3; v++) {
+        const __m128 z = _mm_sub_ps(_mm_setr_ps(tri[0][v][kz], tri[1][v][kz], tri[2][v][kz], tri[3][v][kz]), oz);
+        const __m128 x = _mm_setr_ps(tri[0][v][kx], tri[1][v][kx], tri[2][v][kx], tri[3][v][kx]);
+        const __m128 y = _mm_setr_ps(tri[0][v][ky], tri[1][v][ky], tri[2][v][ky], tri[3][v][ky]);
+        px[v] = _mm_sub_ps(_mm_sub_ps(x, ox), _mm_mul_ps(sx, z));
+        py[v] = _mm_sub_ps(_mm_sub_ps(y, oy), _mm_mul_ps(sy, z));
+    }
+    /* u = cx*by - cy*bx, v = ax*cy - ay*cx, w = bx*ay - by*ax (a, b, c = vertices 0, 1, 2) */
+    const __m128 u = _mm_sub_ps(_mm_mul_ps(px[2], py[1]), _mm_mul_ps(py[2], px[1]));
+    const __m128 v = _mm_sub_ps(_mm_mul_ps(px[0], py[2]), _mm_mul_ps(py[0], px[2]));
+    const __m128 w = _mm_sub_ps(_mm_mul_ps(px[1], py[0]), _mm_mul_ps(py[1], px[0]));
+    const __m128 zero = _mm_setzero_ps();
+    const __m128 sum = _mm_add_ps(_mm_add_ps(u, v), w);
+    const __m128 abs_sum = _mm_andnot_ps(_mm_set1_ps(-0.0f), sum);
+    const __m128 finite = _mm_cmple_ps(abs_sum, _mm_set1_ps(FLT_MAX)); /* false for NaN, as fabsf(..) <= FLT_MAX */
+    const __m128 negative = _mm_or_ps(_mm_or_ps(_mm_cmplt_ps(u, zero), _mm_cmplt_ps(v, zero)), _mm_cmplt_ps(w, zero));
+    const __m128 positive = _mm_or_ps(_mm_or_ps(_mm_cmpgt_ps(u, zero), _mm_cmpgt_ps(v, zero)), _mm_cmpgt_ps(w, zero));
+    return (uint32_t)_mm_movemask_ps(_mm_and_ps(finite, _mm_and_ps(negative, positive)));
+}
+#endif
+
 /* Tests the leaf's triangles [first, first+count) against the ray. Any-hit:
  * returns 1 at the first hit. Closest-hit: updates best and *tmax (the
  * closest hit so far; hits at t == *tmax still compete by index), returns 0.
@@ -69,7 +107,8 @@ CBVH_KERNEL void leaf_triangle(const void *restrict tris, const int tri_enc, con
  * grid are read into locals once per leaf. */
 CBVH_KERNEL int leaf_loop(const struct cbvh_file *restrict f, uint32_t first, uint32_t count,
                           const struct cbvh_ray_shear *restrict s, float tmin, float *restrict tmax,
-                          struct cbvh_best_hit *restrict best, const int any, const int tri_enc, const int vert_enc)
+                          struct cbvh_best_hit *restrict best, const int any, const int scalar, const int tri_enc,
+                          const int vert_enc)
 {
     const void *restrict tris = f->triangles;
     const void *restrict verts = f->vertices;
@@ -77,6 +116,38 @@ CBVH_KERNEL int leaf_loop(const struct cbvh_file *restrict f, uint32_t first, ui
     const float scale[3] = {f->grid_scale[0], f->grid_scale[1], f->grid_scale[2]};
     float best_t = *tmax;
     float t, u, v, a[3], b[3], c[3];
+#ifdef CBVH_HAVE_SIMD
+    /* Four triangles at a time through the SIMD filter; the scalar test on the lanes it keeps, in order. */
+    if (!scalar && count > 1) {
+        for (uint32_t k = first; k < first + count; k += 4) {
+            const uint32_t n = first + count - k < 4 ? first + count - k : 4;
+            float tri[4][3][3];
+            for (uint32_t j = 0; j < 4; j++)
+                leaf_triangle(tris, tri_enc, verts, vert_enc, origin, scale, k + (j < n ? j : 0), tri[j][0],
+                              tri[j][1], tri[j][2]);
+            const uint32_t rejected = leaf_reject4_sse2(s, tri);
+            for (uint32_t j = 0; j < n; j++) {
+                if (rejected >> j & 1u)
+                    continue;
+                if (!cbvh_ray_triangle(s, tri[j][0], tri[j][1], tri[j][2], tmin, best_t, &t, &u, &v))
+                    continue;
+                if (any)
+                    return 1;
+                if (cbvh_hit_better(t, k + j, best_t, best->tri)) {
+                    best_t = t;
+                    best->tri = k + j;
+                    best->t = t;
+                    best->u = u;
+                    best->v = v;
+                }
+            }
+        }
+        *tmax = best_t;
+        return 0;
+    }
+#else
+    (void)scalar;
+#endif
     for (uint32_t k = first; k < first + count; k++) {
         leaf_triangle(tris, tri_enc, verts, vert_enc, origin, scale, k, a, b, c);
         if (!cbvh_ray_triangle(s, a, b, c, tmin, best_t, &t, &u, &v))
@@ -101,22 +172,22 @@ CBVH_KERNEL int leaf_loop(const struct cbvh_file *restrict f, uint32_t first, ui
  * their own loop (one switch per leaf, not per triangle); U32 indices go
  * through the generic one. */
 CBVH_KERNEL int cbvh_leaf_visit(const struct cbvh_file *restrict f, uint32_t first, uint32_t count,
-                                const struct cbvh_ray_ctx *ray, const int any, float *restrict tmax,
-                                struct cbvh_best_hit *restrict best)
+                                const struct cbvh_ray_ctx *ray, const int any, const int scalar,
+                                float *restrict tmax, struct cbvh_best_hit *restrict best)
 {
     const struct cbvh_ray_shear *s = &ray->shear;
     const float tmin = ray->tmin;
     switch (f->triangle_encoding << 1 | f->vertex_encoding) {
     case CBVH_TRIS_DELTA16 << 1 | CBVH_VERTS_F32:
-        return leaf_loop(f, first, count, s, tmin, tmax, best, any, CBVH_TRIS_DELTA16, CBVH_VERTS_F32);
+        return leaf_loop(f, first, count, s, tmin, tmax, best, any, scalar, CBVH_TRIS_DELTA16, CBVH_VERTS_F32);
     case CBVH_TRIS_U16 << 1 | CBVH_VERTS_F32:
-        return leaf_loop(f, first, count, s, tmin, tmax, best, any, CBVH_TRIS_U16, CBVH_VERTS_F32);
+        return leaf_loop(f, first, count, s, tmin, tmax, best, any, scalar, CBVH_TRIS_U16, CBVH_VERTS_F32);
     case CBVH_TRIS_DELTA16 << 1 | CBVH_VERTS_Q16:
-        return leaf_loop(f, first, count, s, tmin, tmax, best, any, CBVH_TRIS_DELTA16, CBVH_VERTS_Q16);
+        return leaf_loop(f, first, count, s, tmin, tmax, best, any, scalar, CBVH_TRIS_DELTA16, CBVH_VERTS_Q16);
     case CBVH_TRIS_U16 << 1 | CBVH_VERTS_Q16:
-        return leaf_loop(f, first, count, s, tmin, tmax, best, any, CBVH_TRIS_U16, CBVH_VERTS_Q16);
+        return leaf_loop(f, first, count, s, tmin, tmax, best, any, scalar, CBVH_TRIS_U16, CBVH_VERTS_Q16);
     default:
-        return leaf_loop(f, first, count, s, tmin, tmax, best, any, (int)f->triangle_encoding,
+        return leaf_loop(f, first, count, s, tmin, tmax, best, any, scalar, (int)f->triangle_encoding,
                          (int)f->vertex_encoding);
     }
 }

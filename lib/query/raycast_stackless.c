@@ -33,7 +33,7 @@ CBVH_KERNEL int stackless_walk(const struct cbvh_file *restrict f, const struct 
         }
         if (cbvh_node_is_leaf(word)) {
             tested += cbvh_leaf_count(word);
-            if (cbvh_leaf_visit(f, cbvh_leaf_first(word), cbvh_leaf_count(word), ray, any, &tmax, best)) {
+            if (cbvh_leaf_visit(f, cbvh_leaf_first(word), cbvh_leaf_count(word), ray, any, 0, &tmax, best)) {
                 hit = 1;
                 break;
             }

@@ -31,7 +31,8 @@ struct cbvh_walk_mode {
     enum cbvh_walk_order order;
     int any;    /* any hit: stop at the first triangle hit */
     int halved; /* the ray's box_halve axes are tested at half scale (ray_box.h) */
-    int scalar; /* wide layout: test the children one box at a time, not with SIMD (the fallback, and its test) */
+    int scalar; /* no SIMD: the children one box at a time, and each leaf triangle without the four-wide
+                 * filter (the fallback, and its test) */
 };
 
 /* Box `box` against the ray: quantized from the file, or float_boxes[6 box ...]. */
@@ -240,7 +241,7 @@ CBVH_KERNEL int cbvh_walk(const struct cbvh_file *restrict f, const uint32_t lay
             uint32_t first, count;
             cbvh_tree_leaf(f, layout, r, &first, &count);
             tested += count;
-            if (cbvh_leaf_visit(f, first, count, ray, mode.any, &tmax, best)) {
+            if (cbvh_leaf_visit(f, first, count, ray, mode.any, mode.scalar, &tmax, best)) {
                 hit = 1;
                 break;
             }
