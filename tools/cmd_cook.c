@@ -1,9 +1,13 @@
 /* cmd_cook.c: `cbvh cook`: import a mesh file (or generate a scene), cook it, write the .cbvh file atomically. */
+#include <errno.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/resource.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
+#include <time.h>
+#include <unistd.h>
 
 #include "cli.h"
 #include "common/format.h"
@@ -15,6 +19,8 @@
 
 static const char usage[] =
     "Usage: cbvh cook [OPTIONS] IN OUT\n"
+    "       cbvh cook [OPTIONS] --output-dir DIR IN...\n"
+    "       cbvh cook [OPTIONS] --manifest FILE [--output-dir DIR] [IN...]\n"
     "\n"
     "Cooks the triangles of IN into the cbvh file OUT. IN is any mesh file assimp reads\n"
     "(OBJ, PLY, STL, glTF/GLB, FBX, DAE, 3DS, IFC, ...; NAME.EXT.gz is inflated first) or a\n"
@@ -43,6 +49,14 @@ static const char usage[] =
     "  --quiet                 no progress display (it is shown only on a terminal anyway)\n"
     "  --json                  print statistics as JSON on stdout; a failed cook prints\n"
     "                          {\"input\", \"output\", \"error\": {\"status\", \"message\"}}\n"
+    "  --output-dir DIR        batch: cook each IN into DIR/STEM.cbvh (STEM: IN's file name\n"
+    "                          without its extension)\n"
+    "  --manifest FILE         batch: the assets of FILE (- for standard input), one a line:\n"
+    "                          IN (into --output-dir) or IN<TAB>OUT; # starts a comment line\n"
+    "  --jobs N                batch: cook N assets at once (default 1), each in a process of\n"
+    "                          its own; one JSON line per asset on stdout (as --json, on one\n"
+    "                          line, in the order they finish), messages on stderr; exit\n"
+    "                          status 0 when every asset cooked, else 1\n"
     "  --max-memory MB         stop an import or cook that would hold more than MB megabytes\n"
     "                          of address space (exit status 1); default 1024 + 64 x the\n"
     "                          input file's size in MB; 0: no limit\n"
@@ -68,7 +82,10 @@ enum {
     OPT_NO_MATERIALS,
     OPT_QUIET,
     OPT_JSON,
-    OPT_MAX_MEMORY
+    OPT_MAX_MEMORY,
+    OPT_OUTPUT_DIR,
+    OPT_MANIFEST,
+    OPT_JOBS
 };
 
 static const cli_option options[] = {
@@ -84,6 +101,9 @@ static const cli_option options[] = {
     { "quiet", CLI_ARG_NONE, OPT_QUIET },
     { "json", CLI_ARG_NONE, OPT_JSON },
     { "max-memory", CLI_ARG_REQUIRED, OPT_MAX_MEMORY },
+    { "output-dir", CLI_ARG_REQUIRED, OPT_OUTPUT_DIR },
+    { "manifest", CLI_ARG_REQUIRED, OPT_MANIFEST },
+    { "jobs", CLI_ARG_REQUIRED, OPT_JOBS },
     { NULL, 0, 0 },
 };
 
@@ -116,25 +136,30 @@ static int load_input(const char *path, cook_input *in, char *message, size_t me
     return import_assimp(path, &in->mesh, message, message_size);
 }
 
+/* A failed cook as JSON: input, output, error {status (the exit status), file (the one at fault), message}. */
+static void report_json(FILE *to, const char *in, const char *out, const char *file, int status, const char *message)
+{
+    json_writer w;
+    json_init(&w, to);
+    json_begin_object(&w, NULL);
+    json_string(&w, "input", in);
+    json_string(&w, "output", out);
+    json_begin_object(&w, "error");
+    json_uint(&w, "status", (uint64_t)status);
+    json_string(&w, "file", file);
+    json_string(&w, "message", message);
+    json_end_object(&w);
+    json_end_object(&w);
+    json_finish(&w);
+}
+
 /* A failed cook: the message on standard error, and with --json also as JSON on standard output. */
 static int report_failure(int json, const char *in, const char *out, const char *file, int status,
                           const char *message)
 {
     cli_error("cook", file, "%s", message);
-    if (json) {
-        json_writer w;
-        json_init(&w, stdout);
-        json_begin_object(&w, NULL);
-        json_string(&w, "input", in);
-        json_string(&w, "output", out);
-        json_begin_object(&w, "error");
-        json_uint(&w, "status", (uint64_t)status);
-        json_string(&w, "file", file);
-        json_string(&w, "message", message);
-        json_end_object(&w);
-        json_end_object(&w);
-        json_finish(&w);
-    }
+    if (json)
+        report_json(stdout, in, out, file, status, message);
     return status;
 }
 
@@ -249,85 +274,36 @@ static void print_summary(const char *in, const char *out, const cook_input *inp
            (double)st->peak_memory / 1e6, (double)st->peak_memory * per_tri);
 }
 
-int cmd_cook(int argc, char **argv)
-{
+/* How every asset of a run is cooked. */
+typedef struct cook_settings {
     cbvh_cook_options opt;
-    cbvh_cook_options_init(&opt, sizeof opt);
-    const char *paths[2] = { NULL, NULL };
-    int npaths = 0, quiet = 0, json = 0, memory_given = 0;
-    uint32_t max_memory = 0;
+    int quiet, json, memory_given;
+    uint32_t max_memory;
+} cook_settings;
 
-    cli_parser p;
-    cli_init(&p, "cook", usage, argc, argv);
-    const char *value;
-    int id;
-    while ((id = cli_next(&p, options, &value)) != CLI_END) {
-        int ok = 1;
-        uint32_t level;
-        switch (id) {
-        case CLI_DONE: return CLI_EXIT_OK;
-        case CLI_ERROR: return CLI_EXIT_USAGE;
-        case CLI_POSITIONAL:
-            if (npaths == 2)
-                return cli_usage_error("cook", "unexpected argument '%s'", value);
-            paths[npaths++] = value;
-            break;
-        case OPT_LEAF:
-            ok = cli_parse_u32("cook", "leaf-size", value, 1, CBVH_MAX_LEAF_SIZE, &opt.max_leaf_size);
-            break;
-        case OPT_LAYOUT:
-            if (strcmp(value, "binary") == 0)
-                opt.layout = CBVH_LAYOUT_BINARY;
-            else if (strcmp(value, "wide4") == 0)
-                opt.layout = CBVH_LAYOUT_WIDE4;
-            else
-                return cli_usage_error("cook", "--layout '%s': expected binary or wide4", value);
-            break;
-        case OPT_BINS: ok = cli_parse_u32("cook", "bins", value, 4, 256, &opt.sah_bins); break;
-        case OPT_TCOST:
-            ok = cli_parse_float("cook", "traversal-cost", value, 0.0f, 1e6f, &opt.traversal_cost);
-            break;
-        case OPT_ICOST:
-            ok = cli_parse_float("cook", "intersection-cost", value, 1e-6f, 1e6f, &opt.intersection_cost);
-            break;
-        case OPT_COMPRESS:
-            level = 6;
-            ok = !value || cli_parse_u32("cook", "compress", value, 1, 9, &level);
-            opt.compress_level = (int)level;
-            break;
-        case OPT_QUANTIZE: opt.vertex_format = CBVH_VERTEX_QUANTIZED16; break;
-        case OPT_NO_REMAP: opt.keep_remap = 0; break;
-        case OPT_NO_MATERIALS: opt.keep_materials = 0; break;
-        case OPT_QUIET: quiet = 1; break;
-        case OPT_JSON: json = 1; break;
-        case OPT_MAX_MEMORY:
-            ok = cli_parse_u32("cook", "max-memory", value, 0, UINT32_MAX, &max_memory);
-            memory_given = 1;
-            break;
-        }
-        if (!ok)
-            return CLI_EXIT_USAGE;
-    }
-    if (npaths != 2)
-        return cli_usage_error("cook", "expected an input and an output file");
-    if (same_file(paths[0], paths[1]))
-        return report_failure(json, paths[0], paths[1], paths[1], CLI_EXIT_USAGE,
+/* Cooks one asset; returns its exit status. */
+static int cook_one(const cook_settings *c, const char *in, const char *out)
+{
+    cbvh_cook_options opt = c->opt;
+    const int json = c->json;
+    if (same_file(in, out))
+        return report_failure(json, in, out, out, CLI_EXIT_USAGE,
                               "is the input file itself: cooking would replace the asset (choose another output)");
-    limit_memory(paths[0], max_memory, memory_given);
+    limit_memory(in, c->max_memory, c->memory_given);
 
     progress prog;
-    progress_init(&prog, quiet);
+    progress_init(&prog, c->quiet);
     double t0 = cli_now();
     progress_update(&prog, "import", -1);
     cook_input input;
     char message[640];
-    int rc = load_input(paths[0], &input, message, sizeof message);
+    int rc = load_input(in, &input, message, sizeof message);
     progress_done(&prog);
     if (rc) {
         if (strstr(message, "bad_alloc") || strstr(message, "out of memory"))
             snprintf(message + strlen(message), sizeof message - strlen(message),
                      " (the memory limit was reached: --max-memory MB raises it, 0 removes it)");
-        return report_failure(json, paths[0], paths[1], paths[0], rc, message);
+        return report_failure(json, in, out, in, rc, message);
     }
     double import_seconds = cli_now() - t0;
 
@@ -338,19 +314,391 @@ int cmd_cook(int argc, char **argv)
     cbvh_cook_stats stats;
     cbvh_error err;
     cbvh_cook_stats_init(&stats, sizeof stats);
-    cbvh_result res = cbvh_cook_to_path(&mesh, &opt, NULL, paths[1], &stats, &err);
+    cbvh_result res = cbvh_cook_to_path(&mesh, &opt, NULL, out, &stats, &err);
     progress_done(&prog);
     double total_seconds = cli_now() - t0;
     if (res != CBVH_OK) {
         /* Mesh problems belong to the input, I/O problems to the output. */
-        const char *culprit = (res == CBVH_ERROR_IO || res == CBVH_ERROR_INVALID_ARGUMENT) ? paths[1] : paths[0];
+        const char *culprit = (res == CBVH_ERROR_IO || res == CBVH_ERROR_INVALID_ARGUMENT) ? out : in;
         snprintf(message, sizeof message, "%s: %s", cbvh_result_string(err.code), err.message);
-        rc = report_failure(json, paths[0], paths[1], culprit, cli_exit_for(err.code), message);
+        rc = report_failure(json, in, out, culprit, cli_exit_for(err.code), message);
     } else if (json) {
-        print_json(paths[0], paths[1], &input, &stats, import_seconds, total_seconds);
+        print_json(in, out, &input, &stats, import_seconds, total_seconds);
     } else {
-        print_summary(paths[0], paths[1], &input, &stats, import_seconds, total_seconds);
+        print_summary(in, out, &input, &stats, import_seconds, total_seconds);
     }
     imported_mesh_free(&input.mesh);
+    return rc;
+}
+
+/* One asset of a batch: its input and output paths (owned). */
+typedef struct batch_item {
+    char *in, *out;
+} batch_item;
+
+typedef struct batch {
+    batch_item *items;
+    size_t count, capacity;
+} batch;
+
+static int batch_add(batch *b, const char *in, const char *out_dir, const char *out)
+{
+    if (b->count == b->capacity) {
+        size_t cap = b->capacity ? 2 * b->capacity : 64;
+        batch_item *grown = realloc(b->items, cap * sizeof *grown);
+        if (!grown)
+            return 0;
+        b->items = grown;
+        b->capacity = cap;
+    }
+    batch_item *it = &b->items[b->count];
+    it->in = strdup(in);
+    if (out) {
+        it->out = strdup(out);
+    } else {
+        /* DIR/STEM.cbvh, STEM: the input's file name without its extension (and without .gz) */
+        const char *base = strrchr(in, '/');
+        base = base ? base + 1 : in;
+        size_t n = strlen(base);
+        if (n > 3 && !strcmp(base + n - 3, ".gz"))
+            n -= 3;
+        const char *dot = NULL;
+        for (size_t k = 1; k < n; k++)
+            if (base[k] == '.')
+                dot = base + k;
+        if (dot)
+            n = (size_t)(dot - base);
+        size_t size = strlen(out_dir) + n + 8;
+        it->out = malloc(size);
+        if (it->out)
+            snprintf(it->out, size, "%s/%.*s.cbvh", out_dir, (int)n, base);
+    }
+    if (!it->in || !it->out) {
+        free(it->in);
+        free(it->out);
+        return 0;
+    }
+    b->count++;
+    return 1;
+}
+
+static void batch_free(batch *b)
+{
+    for (size_t k = 0; k < b->count; k++) {
+        free(b->items[k].in);
+        free(b->items[k].out);
+    }
+    free(b->items);
+}
+
+/* Reads a manifest: a line per asset, "IN" (cooked into the output folder) or "IN<TAB>OUT"; blank lines
+ * and lines starting with # are skipped. Returns an exit status. */
+static int read_manifest(const char *path, const char *out_dir, batch *b)
+{
+    FILE *f = strcmp(path, "-") ? fopen(path, "r") : stdin;
+    if (!f) {
+        cli_error("cook", path, "cannot open the manifest: %s", strerror(errno));
+        return CLI_EXIT_USAGE;
+    }
+    char line[8192];
+    unsigned number = 0;
+    int rc = CLI_EXIT_OK;
+    while (rc == CLI_EXIT_OK && fgets(line, sizeof line, f)) {
+        number++;
+        size_t n = strlen(line);
+        if (n == sizeof line - 1 && line[n - 1] != '\n') {
+            cli_error("cook", path, "line %u: longer than %zu bytes", number, sizeof line - 2);
+            rc = CLI_EXIT_USAGE;
+            break;
+        }
+        while (n && (line[n - 1] == '\n' || line[n - 1] == '\r'))
+            line[--n] = '\0';
+        if (n == 0 || line[0] == '#')
+            continue;
+        char *tab = strchr(line, '\t');
+        if (tab)
+            *tab = '\0';
+        if (!tab && !out_dir) {
+            cli_error("cook", path, "line %u: '%s' names no output (IN<TAB>OUT) and no --output-dir was given",
+                      number, line);
+            rc = CLI_EXIT_USAGE;
+        } else if (!*line || (tab && !tab[1])) {
+            cli_error("cook", path, "line %u: an empty input or output path", number);
+            rc = CLI_EXIT_USAGE;
+        } else if (!batch_add(b, line, out_dir, tab ? tab + 1 : NULL)) {
+            cli_error("cook", path, "out of memory");
+            rc = CLI_EXIT_USAGE;
+        }
+    }
+    if (rc == CLI_EXIT_OK && ferror(f)) {
+        cli_error("cook", path, "cannot read the manifest: %s", strerror(errno));
+        rc = CLI_EXIT_USAGE;
+    }
+    if (f != stdin)
+        fclose(f);
+    return rc;
+}
+
+/* A cook child's JSON object on one line: the pretty printer's newlines and indentation go (strings hold
+ * no raw newline: the writer escapes them). */
+static void print_json_line(const char *text)
+{
+    for (const char *p = text; *p; p++) {
+        if (*p == '\n') {
+            while (p[1] == ' ')
+                p++;
+            continue;
+        }
+        putchar(*p);
+    }
+    putchar('\n');
+    fflush(stdout);
+}
+
+/* A running child: its asset and the pipe its JSON comes through. */
+typedef struct batch_child {
+    pid_t pid;
+    size_t item;
+    int fd;
+    char *text;
+    size_t size, capacity;
+} batch_child;
+
+/* Reads what the child has written so far (the child may fill the pipe before it exits). */
+static void child_drain(batch_child *c)
+{
+    for (;;) {
+        if (c->capacity - c->size < 4096) {
+            size_t cap = c->capacity ? 2 * c->capacity : 16384;
+            char *grown = realloc(c->text, cap);
+            if (!grown)
+                return;
+            c->text = grown;
+            c->capacity = cap;
+        }
+        ssize_t n = read(c->fd, c->text + c->size, c->capacity - c->size - 1);
+        if (n > 0) {
+            c->size += (size_t)n;
+            continue;
+        }
+        if (n < 0 && errno == EINTR)
+            continue;
+        break;
+    }
+    if (c->text)
+        c->text[c->size] = '\0';
+}
+
+/* Cooks every asset of b, `jobs` at a time, each in a child process of its own (an importer that
+ * crashes or exhausts its memory limit takes only its asset down). Prints one JSON line per asset, in
+ * the order they finish; returns 0 when every asset cooked, else 1. */
+static int run_batch(const cook_settings *c, const batch *b, uint32_t jobs)
+{
+    /* Two assets into one output would race: refuse before cooking anything. */
+    for (size_t i = 0; i < b->count; i++)
+        for (size_t k = i + 1; k < b->count; k++)
+            if (!strcmp(b->items[i].out, b->items[k].out)) {
+                cli_error("cook", b->items[k].out, "is the output of both '%s' and '%s'", b->items[i].in,
+                          b->items[k].in);
+                return CLI_EXIT_USAGE;
+            }
+    batch_child *running = calloc(jobs, sizeof *running);
+    if (!running) {
+        cli_error("cook", NULL, "out of memory");
+        return CLI_EXIT_USAGE;
+    }
+    cook_settings child_settings = *c;
+    child_settings.json = 1;
+    child_settings.quiet = 1;
+    fflush(stdout);
+    size_t next = 0, failed = 0, done = 0;
+    uint32_t active = 0;
+    while (done < b->count) {
+        while (active < jobs && next < b->count) {
+            int fds[2];
+            batch_child *slot = NULL;
+            for (uint32_t k = 0; k < jobs && !slot; k++)
+                if (!running[k].pid)
+                    slot = &running[k];
+            if (pipe(fds) != 0) {
+                cli_error("cook", NULL, "cannot create a pipe: %s", strerror(errno));
+                break;
+            }
+            pid_t pid = fork();
+            if (pid == 0) {
+                close(fds[0]);
+                dup2(fds[1], STDOUT_FILENO);
+                close(fds[1]);
+                const int status = cook_one(&child_settings, b->items[next].in, b->items[next].out);
+                fflush(stdout);
+                _exit(status);
+            }
+            close(fds[1]);
+            if (pid < 0) {
+                close(fds[0]);
+                cli_error("cook", NULL, "cannot start a cook: %s", strerror(errno));
+                break;
+            }
+            memset(slot, 0, sizeof *slot);
+            slot->pid = pid;
+            slot->item = next++;
+            slot->fd = fds[0];
+            active++;
+        }
+        if (active == 0) { /* nothing could start: the rest fail */
+            failed += b->count - done;
+            break;
+        }
+        /* Drain every pipe, then reap whichever child ended. */
+        int status;
+        pid_t pid;
+        for (;;) {
+            pid = waitpid(-1, &status, WNOHANG);
+            if (pid != 0)
+                break;
+            for (uint32_t k = 0; k < jobs; k++)
+                if (running[k].pid)
+                    child_drain(&running[k]);
+            struct timespec pause = { 0, 2000000 };
+            nanosleep(&pause, NULL);
+        }
+        if (pid < 0)
+            break;
+        batch_child *ch = NULL;
+        for (uint32_t k = 0; k < jobs && !ch; k++)
+            if (running[k].pid == pid)
+                ch = &running[k];
+        if (!ch)
+            continue;
+        child_drain(ch);
+        close(ch->fd);
+        const batch_item *it = &b->items[ch->item];
+        if (WIFEXITED(status) && ch->text && ch->size > 0) {
+            print_json_line(ch->text);
+            failed += WEXITSTATUS(status) != 0;
+        } else {
+            char message[128];
+            if (WIFSIGNALED(status))
+                snprintf(message, sizeof message, "the cook was ended by signal %d", WTERMSIG(status));
+            else
+                snprintf(message, sizeof message, "the cook ended with status %d and no report",
+                         WIFEXITED(status) ? WEXITSTATUS(status) : -1);
+            char *text = NULL;
+            size_t size = 0;
+            FILE *mem = open_memstream(&text, &size);
+            if (mem) {
+                report_json(mem, it->in, it->out, it->in, CLI_EXIT_BAD_INPUT, message);
+                fclose(mem);
+                print_json_line(text);
+                free(text);
+            }
+            cli_error("cook", it->in, "%s", message);
+            failed++;
+        }
+        free(ch->text);
+        memset(ch, 0, sizeof *ch);
+        active--;
+        done++;
+    }
+    free(running);
+    return failed ? CLI_EXIT_BAD_INPUT : CLI_EXIT_OK;
+}
+
+int cmd_cook(int argc, char **argv)
+{
+    cook_settings c;
+    memset(&c, 0, sizeof c);
+    cbvh_cook_options_init(&c.opt, sizeof c.opt);
+    cbvh_cook_options *const o = &c.opt;
+    const char *out_dir = NULL, *manifest = NULL;
+    uint32_t jobs = 1;
+    batch b;
+    memset(&b, 0, sizeof b);
+    const char **paths = calloc((size_t)argc + 1, sizeof *paths);
+    int npaths = 0;
+    if (!paths) {
+        cli_error("cook", NULL, "out of memory");
+        return CLI_EXIT_USAGE;
+    }
+
+    cli_parser p;
+    cli_init(&p, "cook", usage, argc, argv);
+    const char *value;
+    int id, rc = CLI_EXIT_OK;
+    while (rc == CLI_EXIT_OK && (id = cli_next(&p, options, &value)) != CLI_END) {
+        int ok = 1;
+        uint32_t level;
+        switch (id) {
+        case CLI_DONE: free(paths); return CLI_EXIT_OK;
+        case CLI_ERROR: free(paths); return CLI_EXIT_USAGE;
+        case CLI_POSITIONAL: paths[npaths++] = value; break;
+        case OPT_LEAF:
+            ok = cli_parse_u32("cook", "leaf-size", value, 1, CBVH_MAX_LEAF_SIZE, &o->max_leaf_size);
+            break;
+        case OPT_LAYOUT:
+            if (strcmp(value, "binary") == 0)
+                o->layout = CBVH_LAYOUT_BINARY;
+            else if (strcmp(value, "wide4") == 0)
+                o->layout = CBVH_LAYOUT_WIDE4;
+            else
+                rc = cli_usage_error("cook", "--layout '%s': expected binary or wide4", value);
+            break;
+        case OPT_BINS: ok = cli_parse_u32("cook", "bins", value, 4, 256, &o->sah_bins); break;
+        case OPT_TCOST:
+            ok = cli_parse_float("cook", "traversal-cost", value, 0.0f, 1e6f, &o->traversal_cost);
+            break;
+        case OPT_ICOST:
+            ok = cli_parse_float("cook", "intersection-cost", value, 1e-6f, 1e6f, &o->intersection_cost);
+            break;
+        case OPT_COMPRESS:
+            level = 6;
+            ok = !value || cli_parse_u32("cook", "compress", value, 1, 9, &level);
+            o->compress_level = (int)level;
+            break;
+        case OPT_QUANTIZE: o->vertex_format = CBVH_VERTEX_QUANTIZED16; break;
+        case OPT_NO_REMAP: o->keep_remap = 0; break;
+        case OPT_NO_MATERIALS: o->keep_materials = 0; break;
+        case OPT_QUIET: c.quiet = 1; break;
+        case OPT_JSON: c.json = 1; break;
+        case OPT_MAX_MEMORY:
+            ok = cli_parse_u32("cook", "max-memory", value, 0, UINT32_MAX, &c.max_memory);
+            c.memory_given = 1;
+            break;
+        case OPT_OUTPUT_DIR: out_dir = value; break;
+        case OPT_MANIFEST: manifest = value; break;
+        case OPT_JOBS: ok = cli_parse_u32("cook", "jobs", value, 1, 256, &jobs); break;
+        }
+        if (!ok)
+            rc = CLI_EXIT_USAGE;
+    }
+    if (rc != CLI_EXIT_OK) {
+        free(paths);
+        return rc;
+    }
+    if (!out_dir && !manifest) {
+        if (npaths != 2)
+            rc = cli_usage_error("cook", "expected an input and an output file (or --output-dir DIR with inputs, "
+                                         "or --manifest FILE)");
+        else
+            rc = cook_one(&c, paths[0], paths[1]);
+        free(paths);
+        return rc;
+    }
+    /* A batch: the inputs named on the command line and in the manifest. */
+    struct stat st;
+    if (out_dir && (stat(out_dir, &st) != 0 || !S_ISDIR(st.st_mode)))
+        rc = cli_usage_error("cook", "--output-dir '%s': not an existing folder", out_dir);
+    for (int k = 0; rc == CLI_EXIT_OK && k < npaths; k++)
+        if (!strncmp(paths[k], "gen:", 4) || !batch_add(&b, paths[k], out_dir, NULL))
+            rc = cli_usage_error("cook", "%s: %s", paths[k],
+                                 strncmp(paths[k], "gen:", 4) ? "out of memory" : "a batch cooks files, not generated scenes");
+    if (rc == CLI_EXIT_OK && manifest)
+        rc = read_manifest(manifest, out_dir, &b);
+    if (rc == CLI_EXIT_OK && b.count == 0)
+        rc = cli_usage_error("cook", "the batch names no input");
+    if (rc == CLI_EXIT_OK)
+        rc = run_batch(&c, &b, jobs);
+    batch_free(&b);
+    free(paths);
     return rc;
 }
