@@ -62,6 +62,38 @@ check "... IN<TAB>OUT and IN lines cook where they say" \
     sh -c "cmp -s '$tmp/single/tet1.cbvh' '$tmp/manifest/first.cbvh' && cmp -s '$tmp/single/tet2.cbvh' '$tmp/manifest/tet2.cbvh'"
 run 0 "a manifest on standard input" sh -c "'$CBVH' cook --manifest - --output-dir '$tmp/manifest' <'$tmp/list.txt'"
 
+# Pipeline options: --select, --scale, --up-axis, --depfile.
+cat >"$tmp/scene.obj" <<'OBJ'
+mtllib scene.mtl
+o Visual
+v 0 0 0
+v 1 0 0
+v 0 1 0
+v 0 0 1
+usemtl red
+f 1 2 3
+f 1 2 4
+o UCX_box
+v 5 5 5
+v 6 5 5
+v 5 6 5
+f 5 6 7
+OBJ
+printf 'newmtl red\nKd 1 0 0\n' >"$tmp/scene.mtl"
+run 0 "--select 'UCX_*' keeps the collision node only" "$CBVH" cook --select 'UCX_*' "$tmp/scene.obj" "$tmp/ucx.cbvh" &&
+    check "... one triangle" grep -q " 1 triangles" "$tmp/out"
+run 1 "--select matching no node" "$CBVH" cook --select 'nothing*' "$tmp/scene.obj" "$tmp/none.cbvh" &&
+    check "... says so" grep -q "no triangles in the nodes that --select 'nothing\*' matches" "$tmp/err"
+run 0 "--scale 2 --up-axis z" "$CBVH" cook --scale 2 --up-axis z "$tmp/scene.obj" "$tmp/zup.cbvh"
+run 0 "... info" "$CBVH" info "$tmp/zup.cbvh" &&
+    check "... bounds doubled and turned: +Y up becomes +Z up" grep -q "^bounds: \[0 -10 0\] - \[12 -0 12\]" "$tmp/out"
+run 0 "--depfile" "$CBVH" cook --depfile "$tmp/scene.d" "$tmp/scene.obj" "$tmp/my scene.cbvh" &&
+    check "... names the output (escaped), the asset and its .mtl" \
+        grep -qF "$(printf '%s' "$tmp/my scene.cbvh" | sed 's/ /\\ /g'): $tmp/scene.obj $tmp/scene.mtl" "$tmp/scene.d"
+run 2 "--depfile with a batch" "$CBVH" cook --depfile "$tmp/x.d" --output-dir "$tmp/batch" "$tmp/scene.obj"
+run 2 "--scale 0" "$CBVH" cook --scale 0 "$tmp/scene.obj" "$tmp/x.cbvh"
+run 2 "--up-axis w" "$CBVH" cook --up-axis w "$tmp/scene.obj" "$tmp/x.cbvh"
+
 # Refusals, before anything is cooked.
 printf '%s\n' "$tmp/assets/tet3.obj" >"$tmp/nodir.txt"
 run 2 "a manifest line without an output and no --output-dir" "$CBVH" cook --manifest "$tmp/nodir.txt" &&

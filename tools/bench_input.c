@@ -99,7 +99,7 @@ int bench_mesh_load(const char *command, const char *source, int generated, benc
         return load_cbvh(command, source, out);
     imported_mesh m;
     char message[512];
-    int status = import_assimp(source, &m, message, sizeof message);
+    int status = import_assimp(source, NULL, &m, message, sizeof message);
     if (status != 0) {
         cli_error(command, source, "%s", message);
         return status == 1 ? CLI_EXIT_BAD_INPUT : CLI_EXIT_USAGE;

@@ -49,6 +49,14 @@ static const char usage[] =
     "  --quiet                 no progress display (it is shown only on a terminal anyway)\n"
     "  --json                  print statistics as JSON on stdout; a failed cook prints\n"
     "                          {\"input\", \"output\", \"error\": {\"status\", \"message\"}}\n"
+    "  --select PATTERN        cook only the nodes whose names match the shell pattern\n"
+    "                          (with their subtrees), e.g. 'UCX_*' for collision meshes\n"
+    "  --scale S               multiply every position by S (units: 0.01 turns cm into m)\n"
+    "  --up-axis AXIS          x, y (default) or z: turn the scene so that its up axis,\n"
+    "                          +Y as assimp imports every format, becomes +AXIS (z for\n"
+    "                          Z-up engines), by a right-handed rotation\n"
+    "  --depfile FILE          write a Makefile rule 'OUT: IN SIDE-FILES...' naming every\n"
+    "                          file the import opened (.mtl, .bin ...), for make and ninja\n"
     "  --output-dir DIR        batch: cook each IN into DIR/STEM.cbvh (STEM: IN's file name\n"
     "                          without its extension)\n"
     "  --manifest FILE         batch: the assets of FILE (- for standard input), one a line:\n"
@@ -85,7 +93,11 @@ enum {
     OPT_MAX_MEMORY,
     OPT_OUTPUT_DIR,
     OPT_MANIFEST,
-    OPT_JOBS
+    OPT_JOBS,
+    OPT_SELECT,
+    OPT_SCALE,
+    OPT_UP_AXIS,
+    OPT_DEPFILE
 };
 
 static const cli_option options[] = {
@@ -104,6 +116,10 @@ static const cli_option options[] = {
     { "output-dir", CLI_ARG_REQUIRED, OPT_OUTPUT_DIR },
     { "manifest", CLI_ARG_REQUIRED, OPT_MANIFEST },
     { "jobs", CLI_ARG_REQUIRED, OPT_JOBS },
+    { "select", CLI_ARG_REQUIRED, OPT_SELECT },
+    { "scale", CLI_ARG_REQUIRED, OPT_SCALE },
+    { "up-axis", CLI_ARG_REQUIRED, OPT_UP_AXIS },
+    { "depfile", CLI_ARG_REQUIRED, OPT_DEPFILE },
     { NULL, 0, 0 },
 };
 
@@ -114,7 +130,7 @@ typedef struct cook_input {
 } cook_input;
 
 /* Returns an exit status; on success `in` holds the mesh, else `message` says why. */
-static int load_input(const char *path, cook_input *in, char *message, size_t message_size)
+static int load_input(const char *path, import_options *io, cook_input *in, char *message, size_t message_size)
 {
     memset(in, 0, sizeof *in);
     if (!strncmp(path, "gen:", 4)) {
@@ -133,7 +149,7 @@ static int load_input(const char *path, cook_input *in, char *message, size_t me
         in->mesh.mesh_instances = 1;
         return CLI_EXIT_OK;
     }
-    return import_assimp(path, &in->mesh, message, message_size);
+    return import_assimp(path, io, &in->mesh, message, message_size);
 }
 
 /* A failed cook as JSON: input, output, error {status (the exit status), file (the one at fault), message}. */
@@ -279,7 +295,48 @@ typedef struct cook_settings {
     cbvh_cook_options opt;
     int quiet, json, memory_given;
     uint32_t max_memory;
+    const char *select, *depfile;
+    double scale;
+    char up_axis; /* 'x', 'y' or 'z' */
 } cook_settings;
+
+/* --scale and --up-axis on the imported positions, in double, rounded once. */
+static void transform_positions(const cook_settings *c, imported_mesh *m)
+{
+    if (c->scale == 1.0 && c->up_axis == 'y')
+        return;
+    for (size_t v = 0; v < m->vertex_count; v++) {
+        float *p = m->positions + 3 * v;
+        const double x = c->scale * p[0], y = c->scale * p[1], z = c->scale * p[2];
+        /* +Y to +Z: a quarter turn about +X; +Y to +X: a quarter turn about -Z */
+        const double out[3][3] = { { x, y, z }, { y, -x, z }, { x, -z, y } };
+        const int k = c->up_axis == 'y' ? 0 : c->up_axis == 'x' ? 1 : 2;
+        for (int a = 0; a < 3; a++)
+            p[a] = (float)out[k][a];
+    }
+}
+
+/* Writes `target: dep dep ...` (Makefile syntax; spaces, # and $ escaped) to `path`. Returns 0 or -1. */
+static int write_depfile(const char *path, const char *target, char *const *deps, size_t count)
+{
+    FILE *f = fopen(path, "w");
+    if (!f)
+        return -1;
+    const char *items[2] = { target, NULL };
+    for (size_t k = 0; k <= count; k++) {
+        const char *s = k == 0 ? items[0] : deps[k - 1];
+        for (; *s; s++) {
+            if (*s == ' ' || *s == '#' || *s == '\\')
+                fputc('\\', f);
+            if (*s == '$')
+                fputc('$', f);
+            fputc(*s, f);
+        }
+        fputs(k == 0 ? ":" : "", f);
+        fputs(k < count ? " " : "\n", f);
+    }
+    return fclose(f) == 0 ? 0 : -1;
+}
 
 /* Cooks one asset; returns its exit status. */
 static int cook_one(const cook_settings *c, const char *in, const char *out)
@@ -297,15 +354,21 @@ static int cook_one(const cook_settings *c, const char *in, const char *out)
     progress_update(&prog, "import", -1);
     cook_input input;
     char message[640];
-    int rc = load_input(in, &input, message, sizeof message);
+    import_options io;
+    memset(&io, 0, sizeof io);
+    io.select = c->select;
+    io.record_opened = c->depfile != NULL;
+    int rc = load_input(in, &io, &input, message, sizeof message);
     progress_done(&prog);
     if (rc) {
+        import_options_free(&io);
         if (strstr(message, "bad_alloc") || strstr(message, "out of memory"))
             snprintf(message + strlen(message), sizeof message - strlen(message),
                      " (the memory limit was reached: --max-memory MB raises it, 0 removes it)");
         return report_failure(json, in, out, in, rc, message);
     }
     double import_seconds = cli_now() - t0;
+    transform_positions(c, &input.mesh);
 
     cbvh_mesh mesh = { input.mesh.positions, input.mesh.vertex_count, 0, input.mesh.indices,
                        input.mesh.triangle_count, input.mesh.material_ids };
@@ -322,11 +385,15 @@ static int cook_one(const cook_settings *c, const char *in, const char *out)
         const char *culprit = (res == CBVH_ERROR_IO || res == CBVH_ERROR_INVALID_ARGUMENT) ? out : in;
         snprintf(message, sizeof message, "%s: %s", cbvh_result_string(err.code), err.message);
         rc = report_failure(json, in, out, culprit, cli_exit_for(err.code), message);
+    } else if (c->depfile && write_depfile(c->depfile, out, io.opened, io.opened_count) != 0) {
+        snprintf(message, sizeof message, "cannot write the depfile: %s", strerror(errno));
+        rc = report_failure(json, in, out, c->depfile, CLI_EXIT_USAGE, message);
     } else if (json) {
         print_json(in, out, &input, &stats, import_seconds, total_seconds);
     } else {
         print_summary(in, out, &input, &stats, import_seconds, total_seconds);
     }
+    import_options_free(&io);
     imported_mesh_free(&input.mesh);
     return rc;
 }
@@ -610,6 +677,8 @@ int cmd_cook(int argc, char **argv)
     memset(&c, 0, sizeof c);
     cbvh_cook_options_init(&c.opt, sizeof c.opt);
     cbvh_cook_options *const o = &c.opt;
+    c.scale = 1.0;
+    c.up_axis = 'y';
     const char *out_dir = NULL, *manifest = NULL;
     uint32_t jobs = 1;
     batch b;
@@ -667,6 +736,21 @@ int cmd_cook(int argc, char **argv)
         case OPT_OUTPUT_DIR: out_dir = value; break;
         case OPT_MANIFEST: manifest = value; break;
         case OPT_JOBS: ok = cli_parse_u32("cook", "jobs", value, 1, 256, &jobs); break;
+        case OPT_SELECT: c.select = value; break;
+        case OPT_DEPFILE: c.depfile = value; break;
+        case OPT_SCALE: {
+            char *end = NULL;
+            c.scale = strtod(value, &end);
+            if (!*value || *end || !(c.scale > 0.0) || c.scale > 1e30)
+                rc = cli_usage_error("cook", "--scale '%s': expected a positive number", value);
+            break;
+        }
+        case OPT_UP_AXIS:
+            if ((value[0] == 'x' || value[0] == 'y' || value[0] == 'z') && !value[1])
+                c.up_axis = value[0];
+            else
+                rc = cli_usage_error("cook", "--up-axis '%s': expected x, y or z", value);
+            break;
         }
         if (!ok)
             rc = CLI_EXIT_USAGE;
@@ -685,6 +769,11 @@ int cmd_cook(int argc, char **argv)
         return rc;
     }
     /* A batch: the inputs named on the command line and in the manifest. */
+    if (c.depfile) {
+        free(paths);
+        return cli_usage_error("cook", "--depfile names one file: use it with single cooks (one per asset, as "
+                                       "make and ninja run them)");
+    }
     struct stat st;
     if (out_dir && (stat(out_dir, &st) != 0 || !S_ISDIR(st.st_mode)))
         rc = cli_usage_error("cook", "--output-dir '%s': not an existing folder", out_dir);

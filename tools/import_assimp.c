@@ -1,10 +1,12 @@
 /* import_assimp.c: loads a mesh file with assimp and merges its node hierarchy into one triangle list. */
 #include <errno.h>
+#include <fnmatch.h>
 #include <limits.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
+#include <assimp/cfileio.h>
 #include <assimp/cimport.h>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
@@ -22,6 +24,7 @@ typedef struct import_state {
     uint64_t vertex_total;  /* vertices counted or written so far */
     uint64_t triangle_total;
     unsigned char *instanced; /* per scene mesh: a node refers to it */
+    const char *select;       /* only nodes matching this pattern, with their subtrees (NULL: all) */
     char *message;
     size_t message_size;
 } import_state;
@@ -106,7 +109,7 @@ static int import_mesh_instance(import_state *s, const struct aiMesh *mesh, cons
     return 0;
 }
 
-static int import_node(import_state *s, const struct aiNode *node, const dmat4 *parent, int depth)
+static int import_node(import_state *s, const struct aiNode *node, const dmat4 *parent, int depth, int selected)
 {
     if (depth > IMPORT_MAX_NODE_DEPTH) {
         snprintf(s->message, s->message_size, "node hierarchy deeper than %d levels", IMPORT_MAX_NODE_DEPTH);
@@ -114,12 +117,13 @@ static int import_node(import_state *s, const struct aiNode *node, const dmat4 *
     }
     dmat4 local = dmat4_from_ai(&node->mTransformation);
     dmat4 xf = dmat4_mul(parent, &local);
+    selected = selected || !s->select || fnmatch(s->select, node->mName.data, 0) == 0;
     if (node->mNumMeshes && !node->mMeshes) {
         snprintf(s->message, s->message_size, "node '%s' lists %u meshes but holds none", node->mName.data,
                  node->mNumMeshes);
         return 1;
     }
-    for (unsigned i = 0; i < node->mNumMeshes; i++) {
+    for (unsigned i = 0; selected && i < node->mNumMeshes; i++) {
         unsigned m = node->mMeshes[i];
         if (m >= s->scene->mNumMeshes || !s->scene->mMeshes || !s->scene->mMeshes[m]) {
             snprintf(s->message, s->message_size, "node '%s' refers to mesh %u of %u, which is missing",
@@ -132,7 +136,7 @@ static int import_node(import_state *s, const struct aiNode *node, const dmat4 *
     }
     /* Some importers (RAW) count more children than they fill: an empty slot holds nothing to import. */
     for (unsigned c = 0; node->mChildren && c < node->mNumChildren; c++)
-        if (node->mChildren[c] && import_node(s, node->mChildren[c], &xf, depth + 1))
+        if (node->mChildren[c] && import_node(s, node->mChildren[c], &xf, depth + 1, selected))
             return 1;
     return 0;
 }
@@ -144,9 +148,9 @@ static const dmat4 identity = { { { 1, 0, 0, 0 }, { 0, 1, 0, 0 }, { 0, 0, 1, 0 }
 static int import_pass(import_state *s)
 {
     memset(s->instanced, 0, s->scene->mNumMeshes + 1u);
-    if (import_node(s, s->scene->mRootNode, &identity, 0))
+    if (import_node(s, s->scene->mRootNode, &identity, 0, 0))
         return 1;
-    for (unsigned m = 0; m < s->scene->mNumMeshes; m++)
+    for (unsigned m = 0; !s->select && m < s->scene->mNumMeshes; m++)
         if (!s->instanced[m] && s->scene->mMeshes && s->scene->mMeshes[m] &&
             import_mesh_instance(s, s->scene->mMeshes[m], &identity))
             return 1;
@@ -157,6 +161,10 @@ static int import_pass(import_state *s)
 static int import_counted(import_state *s)
 {
     imported_mesh *out = s->out;
+    if (s->triangle_total == 0 && s->select) {
+        snprintf(s->message, s->message_size, "no triangles in the nodes that --select '%s' matches", s->select);
+        return 1;
+    }
     if (s->triangle_total == 0) {
         snprintf(s->message, s->message_size, "no triangles (%llu points and %llu lines dropped)",
                  (unsigned long long)out->dropped_points, (unsigned long long)out->dropped_lines);
@@ -185,9 +193,10 @@ static int import_counted(import_state *s)
     return import_pass(s);
 }
 
-static int import_scene(const struct aiScene *scene, imported_mesh *out, char *message, size_t message_size)
+static int import_scene(const struct aiScene *scene, const char *select, imported_mesh *out, char *message,
+                        size_t message_size)
 {
-    import_state s = { scene, out, 1, 0, 0, NULL, message, message_size };
+    import_state s = { scene, out, 1, 0, 0, NULL, select, message, message_size };
     if (!scene->mRootNode) {
         snprintf(message, message_size, "the scene has no node hierarchy");
         return 1;
@@ -204,6 +213,100 @@ static int import_scene(const struct aiScene *scene, imported_mesh *out, char *m
     return rc;
 }
 
+
+/* assimp's file system, recording every file an import opens (for --depfile): a stdio file behind each
+ * aiFile, the import_options behind the aiFileIO. */
+static size_t io_read(struct aiFile *f, char *buffer, size_t size, size_t count)
+{
+    return fread(buffer, size, count, (FILE *)(void *)f->UserData);
+}
+
+static size_t io_write(struct aiFile *f, const char *buffer, size_t size, size_t count)
+{
+    return fwrite(buffer, size, count, (FILE *)(void *)f->UserData);
+}
+
+static size_t io_tell(struct aiFile *f)
+{
+    long at = ftell((FILE *)(void *)f->UserData);
+    return at < 0 ? 0 : (size_t)at;
+}
+
+static size_t io_size(struct aiFile *f)
+{
+    FILE *file = (FILE *)(void *)f->UserData;
+    long at = ftell(file);
+    if (at < 0 || fseek(file, 0, SEEK_END) != 0)
+        return 0;
+    long end = ftell(file);
+    fseek(file, at, SEEK_SET);
+    return end < 0 ? 0 : (size_t)end;
+}
+
+static enum aiReturn io_seek(struct aiFile *f, size_t offset, enum aiOrigin origin)
+{
+    int whence = origin == aiOrigin_SET ? SEEK_SET : origin == aiOrigin_CUR ? SEEK_CUR : SEEK_END;
+    if (offset > LONG_MAX)
+        return aiReturn_FAILURE;
+    return fseek((FILE *)(void *)f->UserData, (long)offset, whence) == 0 ? aiReturn_SUCCESS : aiReturn_FAILURE;
+}
+
+static void io_flush(struct aiFile *f)
+{
+    fflush((FILE *)(void *)f->UserData);
+}
+
+static void record_opened(import_options *o, const char *path)
+{
+    for (size_t k = 0; k < o->opened_count; k++)
+        if (!strcmp(o->opened[k], path))
+            return;
+    char **grown = realloc(o->opened, (o->opened_count + 1) * sizeof *grown);
+    if (!grown)
+        return;
+    o->opened = grown;
+    if ((o->opened[o->opened_count] = strdup(path)) != NULL)
+        o->opened_count++;
+}
+
+static struct aiFile *io_open(struct aiFileIO *io, const char *path, const char *mode)
+{
+    FILE *file = fopen(path, mode);
+    if (!file)
+        return NULL;
+    struct aiFile *f = calloc(1, sizeof *f);
+    if (!f) {
+        fclose(file);
+        return NULL;
+    }
+    record_opened((import_options *)(void *)io->UserData, path);
+    f->ReadProc = io_read;
+    f->WriteProc = io_write;
+    f->TellProc = io_tell;
+    f->FileSizeProc = io_size;
+    f->SeekProc = io_seek;
+    f->FlushProc = io_flush;
+    f->UserData = (aiUserData)(void *)file;
+    return f;
+}
+
+static void io_close(struct aiFileIO *io, struct aiFile *f)
+{
+    (void)io;
+    if (!f)
+        return;
+    fclose((FILE *)(void *)f->UserData);
+    free(f);
+}
+
+void import_options_free(import_options *o)
+{
+    for (size_t k = 0; k < o->opened_count; k++)
+        free(o->opened[k]);
+    free(o->opened);
+    o->opened = NULL;
+    o->opened_count = 0;
+}
 
 /* Inflates a gzip file whole (assimp has no stream interface in its C API). */
 static int read_gzip(const char *path, char **out_data, size_t *out_size, char *message, size_t message_size)
@@ -253,9 +356,13 @@ static int read_gzip(const char *path, char **out_data, size_t *out_size, char *
     return 0;
 }
 
-int import_assimp(const char *path, imported_mesh *out, char *message, size_t message_size)
+int import_assimp(const char *path, import_options *o, imported_mesh *out, char *message, size_t message_size)
 {
     memset(out, 0, sizeof *out);
+    import_options none;
+    memset(&none, 0, sizeof none);
+    if (!o)
+        o = &none;
     /* assimp reports "file not found" and "unknown format" alike; tell I/O errors apart first. */
     FILE *probe = fopen(path, "rb");
     if (!probe) {
@@ -283,6 +390,11 @@ int import_assimp(const char *path, imported_mesh *out, char *message, size_t me
             memcpy(hint, dot + 1, (size_t)(path + len - 3 - dot - 1));
         scene = aiImportFileFromMemory(data, (unsigned)size, flags, hint);
         free(data);
+        if (o->record_opened)
+            record_opened(o, path);
+    } else if (o->record_opened) {
+        struct aiFileIO io = { io_open, io_close, (aiUserData)(void *)o };
+        scene = aiImportFileEx(path, flags, &io);
     } else {
         scene = aiImportFile(path, flags);
     }
@@ -290,7 +402,7 @@ int import_assimp(const char *path, imported_mesh *out, char *message, size_t me
         snprintf(message, message_size, "assimp cannot read it: %s", aiGetErrorString());
         return 1;
     }
-    int rc = import_scene(scene, out, message, message_size);
+    int rc = import_scene(scene, o->select, out, message, message_size);
     aiReleaseImport(scene);
     if (rc)
         imported_mesh_free(out);

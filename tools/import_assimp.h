@@ -25,11 +25,22 @@ typedef struct imported_mesh {
     uint32_t material_count; /* materials in the scene */
 } imported_mesh;
 
+/* What an import keeps and records; zeroed means everything, nothing recorded. */
+typedef struct import_options {
+    const char *select;  /* fnmatch(3) pattern: only nodes whose names match, with their subtrees; NULL: all */
+    char **opened;       /* out: every file the import opened (the input, .mtl, .bin ... side files), */
+    size_t opened_count; /* first-opened order, each once; free with import_options_free. Recorded when */
+    int record_opened;   /* record_opened is set. */
+} import_options;
+
 /* Reads `path` with assimp (aiProcess_Triangulate | aiProcess_JoinIdenticalVertices |
  * aiProcess_SortByPType). A name ending in ".gz" is inflated first and read by the format of
  * the name without ".gz" (e.g. mesh.ply.gz). Returns 0 on success; otherwise writes a message to
- * `message` and returns 2 when the file cannot be read, 1 when it is not a usable mesh. */
-int import_assimp(const char *path, imported_mesh *out, char *message, size_t message_size);
+ * `message` and returns 2 when the file cannot be read, 1 when it is not a usable mesh (with
+ * o->select: also when no node matches). `o` may be NULL. */
+int import_assimp(const char *path, import_options *o, imported_mesh *out, char *message, size_t message_size);
+
+void import_options_free(import_options *o);
 
 void imported_mesh_free(imported_mesh *m);
 
