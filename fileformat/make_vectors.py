@@ -21,6 +21,8 @@ HEADER_SIZE = 128
 ENTRY_SIZE = 40
 ALIGN = 64
 NODES, TRIANGLES, VERTICES, REMAP, MATERIALS = 1, 2, 3, 4, 5
+MATERIAL_NAMES = 0x80000006  # ancillary (bit 31)
+MATS_UNIFORM = 3  # MATERIALS encoding: one u32 id for every triangle
 RAW, ZLIB = 0, 1
 TRIS_U16, TRIS_U32, TRIS_DELTA16 = 0, 1, 2
 BINARY, WIDE4 = 0, 1  # NODES encodings: the node layouts
@@ -985,6 +987,119 @@ def _():
 def _():
     h, s = box()
     return serialize(h, s + [Section(6, 0, b"new critical data")])
+
+
+# ---------------------------------------------------------------- material ids and names (spec section 4)
+
+
+def names_data(entries, count=None, offsets=None, tail=b""):
+    """MATERIAL_NAMES encoding 0: u32 count, (u32 id, u32 offset) per name, the names NUL-terminated."""
+    blob, offs = b"", []
+    for _, name in entries:
+        offs.append(len(blob))
+        blob += name.encode("utf-8") + b"\0"
+    offs = offsets if offsets is not None else offs
+    table = b"".join(struct.pack("<II", i, o) for (i, _), o in zip(entries, offs))
+    return struct.pack("<I", len(entries) if count is None else count) + table + blob + tail
+
+
+NAMES = [(3, "Glass"), (7, "Oak"), (7, "Steel \u00fc")]  # sorted by (id, UTF-8 bytes)
+
+
+def uniform_box(material=7, names=None, names_encoding=0, codec=RAW):
+    h, s = box()
+    s.append(Section(MATERIALS, MATS_UNIFORM, struct.pack("<I", material)))
+    if names is not None:
+        s.append(Section(MATERIAL_NAMES, names_encoding, names, codec))
+    return h, s
+
+
+@vector("good-materials-uniform", "OK", "-", "good-box-raw with MATERIALS encoding 3: one u32 id, 7, for every triangle")
+def _():
+    return serialize(*uniform_box())
+
+
+@vector("good-material-names", "OK", "-",
+        "good-materials-uniform plus a MATERIAL_NAMES section: 3 'Glass', 7 'Oak', 7 'Steel \u00fc' (UTF-8)")
+def _():
+    return serialize(*uniform_box(names=names_data(NAMES)))
+
+
+@vector("good-material-names-zlib", "OK", "-", "good-material-names with the MATERIAL_NAMES section zlib-compressed")
+def _():
+    return serialize(*uniform_box(names=names_data(NAMES), codec=ZLIB))
+
+
+@vector("good-material-names-future", "OK", "-",
+        "good-materials-uniform plus a MATERIAL_NAMES section of unknown encoding 1: skipped (no names)")
+def _():
+    return serialize(*uniform_box(names=b"\xff" * 7, names_encoding=1))
+
+
+@vector("bad-materials-uniform-size", "CORRUPT", "size 8, expected 4",
+        "good-materials-uniform with an 8-byte uniform MATERIALS section")
+def _():
+    h, s = box()
+    return serialize(h, s + [Section(MATERIALS, MATS_UNIFORM, struct.pack("<II", 7, 7))])
+
+
+@vector("bad-names-order", "CORRUPT", "not after name 1",
+        "good-material-names with the names of id 7 in decreasing order")
+def _():
+    return serialize(*uniform_box(names=names_data([NAMES[0], NAMES[2], NAMES[1]])))
+
+
+@vector("bad-names-duplicate", "CORRUPT", "name 2 (id 7) is not after",
+        "good-material-names with the same (id, name) twice")
+def _():
+    return serialize(*uniform_box(names=names_data(NAMES[:2] + [NAMES[1]])))
+
+
+@vector("bad-names-offset", "CORRUPT", "name 1 starts at offset 7",
+        "good-material-names with the second offset 7 instead of 6")
+def _():
+    return serialize(*uniform_box(names=names_data(NAMES, offsets=[0, 7, 10])))
+
+
+@vector("bad-names-no-nul", "CORRUPT", "no terminating NUL", "good-material-names without the last name's NUL")
+def _():
+    return serialize(*uniform_box(names=names_data(NAMES)[:-1]))
+
+
+@vector("bad-names-trailing", "CORRUPT", "1 bytes after the last name", "good-material-names with a byte after the last name")
+def _():
+    return serialize(*uniform_box(names=names_data(NAMES, tail=b"x")))
+
+
+@vector("bad-names-count", "CORRUPT", "1000 names do not fit", "good-material-names with a count of 1000")
+def _():
+    return serialize(*uniform_box(names=names_data(NAMES, count=1000)))
+
+
+@vector("bad-names-empty", "CORRUPT", "size 0; it must be 4 to", "good-materials-uniform with an empty MATERIAL_NAMES section")
+def _():
+    return serialize(*uniform_box(names=b""))
+
+
+@vector("bad-names-too-big", "CORRUPT", "size 16777217; it must be 4 to",
+        "good-material-names-zlib whose table entry claims 16 MiB + 1 bytes inflated")
+def _():
+    h, s = uniform_box(names=names_data(NAMES), codec=ZLIB)
+    s[-1].size = (16 << 20) + 1
+    return serialize(h, s)
+
+
+@vector("bad-names-second", "CORRUPT", "second MATERIAL_NAMES section", "good-material-names with its names section twice")
+def _():
+    h, s = uniform_box(names=names_data(NAMES))
+    return serialize(h, s + [Section(MATERIAL_NAMES, 0, names_data(NAMES))])
+
+
+@vector("unsupported-materials-encoding-4", "UNSUPPORTED", "encoding 4", "good-materials-uniform with MATERIALS encoding 4")
+def _():
+    h, s = uniform_box()
+    s[-1].encoding = 4
+    return serialize(h, s)
 
 
 # ---------------------------------------------------------------- wide4 vectors (NODES encoding 1, spec section 5.2)

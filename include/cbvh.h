@@ -104,8 +104,8 @@ typedef struct cbvh_allocator {
 
 /* An indexed triangle mesh. positions: vertex_count xyz triples, `position_stride`
  * bytes apart (0 means 12, tightly packed floats). indices: 3 per triangle.
- * material_ids: one per triangle, or NULL. The cooker reads but never keeps
- * these arrays. */
+ * material_ids: one per triangle, or NULL (their names, if any, go in cbvh_cook_options). The cooker
+ * reads but never keeps these arrays. */
 typedef struct cbvh_mesh {
     const float *positions;
     size_t vertex_count;
@@ -128,6 +128,13 @@ typedef enum cbvh_layout {
     CBVH_LAYOUT_WIDE4 = 1   /* four children per 64-byte node, boxes tested four at a time with SIMD;
                              * the default */
 } cbvh_layout;
+
+/* A material id and its name (UTF-8 by convention; any bytes but NUL), as the cooker stores it in the
+ * file's MATERIAL_NAMES section. */
+typedef struct cbvh_material_name {
+    uint32_t id;
+    const char *name;
+} cbvh_material_name;
 
 /* The most triangles a wide4 leaf holds. */
 #define CBVH_WIDE4_MAX_LEAF 8u
@@ -163,13 +170,19 @@ typedef struct cbvh_cook_options {
     cbvh_vertex_format vertex_format;
     int compress_level;            /* 0 = raw sections (default), 1..9 = zlib level */
     int keep_remap;                /* 1 (default): keep original triangle ids; 0: queries report cooked order */
-    int keep_materials;            /* 1 (default): store material ids when they are not all equal */
+    int keep_materials;            /* 1 (default): store the material ids (one for all when all are equal;
+                                    * nothing when all are 0) and material_names; 0: neither */
     cbvh_progress_fn progress;     /* optional */
     void *progress_user;
     cbvh_layout layout;            /* node layout; default CBVH_LAYOUT_WIDE4 (faster per ray than binary on
                                     * every mesh measured, about as many bytes; binary keeps the stackless
                                     * walk over escape links) */
+    const cbvh_material_name *material_names; /* optional names of material ids, stored sorted by id, then
+                                    * name, exact repeats once; an id may have several names. At most
+                                    * CBVH_MAX_MATERIAL_NAME_BYTES in all (names, NULs and 8 bytes each) */
+    uint32_t material_name_count;
 } cbvh_cook_options;
+
 
 /* Fills `options` with the defaults above and sets options->struct_size to `struct_size`, which must be
  * sizeof *options as the caller sees it (see "Structs that grow"). Returns CBVH_OK, or
@@ -197,7 +210,9 @@ typedef struct cbvh_cook_stats {
     double sah_cost;               /* of the quantized tree, relative to the root's area, unit costs */
     double vertex_max_error;       /* worst |decoded - input| over all coordinates (0 when lossless) */
     uint64_t file_size;
-    uint64_t section_stored_size[CBVH_STATS_SECTION_TYPES]; /* indexed by cbvh_section_type, 0 when absent */
+    uint64_t section_stored_size[CBVH_STATS_SECTION_TYPES]; /* indexed by the section type without its
+                                    * ancillary bit (CBVH_SECTION_NODES .. 6 for MATERIAL_NAMES), 0 when
+                                    * absent */
     uint64_t section_size[CBVH_STATS_SECTION_TYPES];        /* uncompressed */
     double seconds[CBVH_STATS_PHASES]; /* indexed by cbvh_phase */
     uint64_t peak_memory;          /* most bytes the cook held allocated at once, the file it returns
@@ -285,6 +300,11 @@ typedef enum cbvh_section_type {
     CBVH_SECTION_MATERIALS = 5
 } cbvh_section_type;
 
+/* An ancillary section (bit 31 set: readers that do not know it skip it): material names. */
+#define CBVH_SECTION_MATERIAL_NAMES 0x80000006u
+/* The most bytes a MATERIAL_NAMES section holds: 4, then 8 per name plus the name and its NUL. */
+#define CBVH_MAX_MATERIAL_NAME_BYTES (16u << 20)
+
 typedef struct cbvh_section_info {
     uint32_t type;      /* cbvh_section_type, or an unknown ancillary type (bit 31 set) */
     uint32_t codec;     /* 0 raw, 1 zlib */
@@ -314,6 +334,7 @@ typedef struct cbvh_file_info {
     float bounds_min[3], bounds_max[3];
     float grid_origin[3], grid_scale[3];
     uint32_t layout;              /* cbvh_layout of the nodes */
+    uint32_t material_name_count; /* names in the MATERIAL_NAMES section; 0 without one */
 } cbvh_file_info;
 
 /* Describes an opened file: writes the first `struct_size` bytes of *info (struct_size must be
@@ -332,6 +353,13 @@ CBVH_API int cbvh_file_get_triangle(const cbvh_file *file, uint32_t tri, float v
 
 /* Material id of triangle `tri` (original id); 0 when the file stores none. */
 CBVH_API uint32_t cbvh_file_get_material(const cbvh_file *file, uint32_t tri);
+
+/* Material name `index` (0 <= index < info.material_name_count, in increasing id order) and its id in
+ * *id (may be NULL). The name is NUL-terminated and lives as long as the file. NULL when out of range. */
+CBVH_API const char *cbvh_file_get_material_name(const cbvh_file *file, uint32_t index, uint32_t *id);
+
+/* The first name of material id `id` (see cbvh_file_get_material_name), or NULL when it has none. */
+CBVH_API const char *cbvh_file_find_material_name(const cbvh_file *file, uint32_t id);
 
 /* ------------------------------------------------------------------ */
 /* Queries (runtime). None allocates memory; all are thread-safe.      */

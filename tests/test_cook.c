@@ -175,14 +175,19 @@ typedef struct parsed {
     uint32_t section_count, tri_count, vert_count, node_count, depth, max_leaf, orig_count;
     float origin[3], scale[3], bmin[3], bmax[3];
     uint64_t file_size;
-    uint32_t codec[6], encoding[6];
-    uint64_t stored[6], size[6];
+    uint32_t codec[7], encoding[7]; /* indexed by section number: type without the ancillary bit */
+    uint64_t stored[7], size[7];
     cbvh_node *nodes;
     uint32_t *tris;   /* 3 per triangle */
     float *verts;     /* 3 per vertex, decoded */
     uint16_t *qverts; /* 3 per vertex, or NULL */
     uint32_t *remap;  /* or NULL */
     uint32_t *mats;   /* or NULL */
+    int mats_uniform; /* MATERIALS encoding 3: one id for all */
+    uint32_t name_count; /* MATERIAL_NAMES */
+    uint32_t *name_ids;
+    char **names;     /* into name_bytes */
+    uint8_t *name_bytes;
 } parsed;
 
 static void parsed_free(parsed *p)
@@ -193,6 +198,9 @@ static void parsed_free(parsed *p)
     free(p->qverts);
     free(p->remap);
     free(p->mats);
+    free(p->name_ids);
+    free(p->names);
+    free(p->name_bytes);
     memset(p, 0, sizeof *p);
 }
 
@@ -237,12 +245,14 @@ static void parse(const uint8_t *b, size_t size, parsed *p)
     assert_true(p->orig_count >= p->tri_count);
 
     uint64_t end = 128 + 40 * (uint64_t)p->section_count, prev_type = 0;
-    uint8_t *data[6] = { NULL };
+    uint8_t *data[7] = { NULL };
     for (uint32_t i = 0; i < p->section_count; i++) {
         const uint8_t *e = b + 128 + 40 * (size_t)i;
         uint32_t type = cbvh_read_u32(e), codec = cbvh_read_u32(e + 4);
         uint64_t off = cbvh_read_u64(e + 8), stored = cbvh_read_u64(e + 16), dsize = cbvh_read_u64(e + 24);
-        assert_true(type >= 1 && type <= 5 && type > prev_type); /* known, unique, in type order */
+        if (type == 0x80000006u) /* MATERIAL_NAMES: ancillary, number 6 */
+            type = 6;
+        assert_true(type >= 1 && type <= 6 && type > prev_type); /* known, unique, in number order */
         prev_type = type;
         assert_true(codec <= 1);
         assert_int_equal(off % 64, 0);
@@ -343,18 +353,45 @@ static void parse(const uint8_t *b, size_t size, parsed *p)
     } else {
         assert_int_equal(p->orig_count, p->tri_count);
     }
-    /* MATERIALS */
+    /* MATERIALS: u8, u16, u32 per triangle, or one u32 for all (encoding 3) */
     if (data[5]) {
-        static const uint64_t mat_elem[3] = { 1, 2, 4 };
-        assert_true(p->encoding[5] <= 2);
-        assert_int_equal(p->size[5], mat_elem[p->encoding[5]] * p->tri_count);
+        static const uint64_t mat_elem[4] = { 1, 2, 4, 0 };
+        assert_true(p->encoding[5] <= 3);
+        p->mats_uniform = p->encoding[5] == 3;
+        assert_int_equal(p->size[5], p->mats_uniform ? 4 : mat_elem[p->encoding[5]] * p->tri_count);
         p->mats = calloc(p->tri_count, sizeof(uint32_t));
         for (uint32_t t = 0; t < p->tri_count; t++) {
             const uint8_t *e = data[5] + mat_elem[p->encoding[5]] * t;
             p->mats[t] = p->encoding[5] == 0 ? e[0] : p->encoding[5] == 1 ? rd16(e) : cbvh_read_u32(e);
         }
     }
-    for (int t = 0; t < 6; t++)
+    /* MATERIAL_NAMES: u32 count, (u32 id, u32 offset) each, NUL-terminated names tiling the rest in (id, name)
+     * order */
+    if (data[6]) {
+        assert_int_equal(p->encoding[6], 0);
+        assert_true(p->size[6] >= 4);
+        p->name_count = cbvh_read_u32(data[6]);
+        const uint64_t start = 4 + 8 * (uint64_t)p->name_count;
+        assert_true(p->name_count >= 1 && start < p->size[6]);
+        p->name_ids = calloc(p->name_count, sizeof(uint32_t));
+        p->names = calloc(p->name_count, sizeof(char *));
+        p->name_bytes = data[6];
+        data[6] = NULL;
+        uint64_t at = start;
+        for (uint32_t k = 0; k < p->name_count; k++) {
+            p->name_ids[k] = cbvh_read_u32(p->name_bytes + 4 + 8 * (size_t)k);
+            assert_int_equal(start + cbvh_read_u32(p->name_bytes + 8 + 8 * (size_t)k), at);
+            p->names[k] = (char *)p->name_bytes + at;
+            const uint8_t *nul = memchr(p->names[k], 0, (size_t)(p->size[6] - at));
+            assert_non_null(nul);
+            at = (uint64_t)(nul - p->name_bytes) + 1;
+            if (k > 0)
+                assert_true(p->name_ids[k] > p->name_ids[k - 1] ||
+                            (p->name_ids[k] == p->name_ids[k - 1] && strcmp(p->names[k - 1], p->names[k]) < 0));
+        }
+        assert_int_equal(at, p->size[6]);
+    }
+    for (int t = 0; t < 7; t++)
         free(data[t]);
 }
 
@@ -627,7 +664,7 @@ static void cook_and_check(const test_mesh *m, const cbvh_cook_options *o, cooke
     assert_int_equal(c->stats.input_triangles, m->nt);
     assert_int_equal(c->stats.input_vertices, m->nv);
     assert_int_equal(c->stats.triangles + c->stats.dropped_degenerate, m->nt);
-    for (int t = 1; t < 6; t++) {
+    for (int t = 1; t < 7; t++) {
         assert_int_equal(c->stats.section_size[t], p->size[t]);
         assert_int_equal(c->stats.section_stored_size[t], p->stored[t]);
     }
@@ -867,12 +904,26 @@ static void test_remap_and_materials(void **state)
     cbvh_cook_options o;
     binary_options(&o);
     cooked c;
-    /* All equal: no MATERIALS section. */
-    for (size_t t = 0; t < m.nt; t++)
-        m.mat[t] = 3;
+    /* All 0: no MATERIALS section. */
     cook_and_check(&m, &o, &c);
     assert_null(c.p.mats);
     assert_int_equal(c.p.section_count, 4);
+    cooked_free(&c);
+    /* All equal: one id for all (issue 12: it read back as 0 when the section was left out). */
+    for (size_t t = 0; t < m.nt; t++)
+        m.mat[t] = 7;
+    cook_and_check(&m, &o, &c);
+    assert_non_null(c.p.mats);
+    assert_int_equal(c.p.mats_uniform, 1);
+    assert_int_equal(c.p.size[5], 4);
+    assert_int_equal(c.p.section_count, 5);
+    for (uint32_t t = 0; t < c.p.tri_count; t++)
+        assert_int_equal(c.p.mats[t], 7);
+    cbvh_file *f;
+    assert_int_equal(cbvh_open_memory(c.data, c.size, NULL, &f, NULL), CBVH_OK);
+    for (uint32_t t = 0; t < m.nt; t++)
+        assert_int_equal(cbvh_file_get_material(f, t), 7);
+    cbvh_close(f);
     cooked_free(&c);
     static const uint32_t largest[] = { 200, 60000, 70000 };
     for (int e = 0; e < 3; e++) {
@@ -896,6 +947,98 @@ static void test_remap_and_materials(void **state)
     assert_int_equal(c.p.section_count, 3);
     assert_int_equal(c.p.orig_count, c.p.tri_count);
     cooked_free(&c);
+    mesh_free(&m);
+}
+
+/* Names given in any order, with repeats, come out sorted by (id, name), each once; the loader finds them. */
+static void test_material_names(void **state)
+{
+    (void)state;
+    test_mesh m;
+    make_soup(&m, 50, 9, 5.0, 1.0, origin3);
+    static const cbvh_material_name given[] = {
+        { 7, "Steel" }, { 3, "Glass" }, { 7, "Oak" }, { 7, "Steel" }, { 1000000, "\xc3\xbc" }, { 3, "" } };
+    static const cbvh_material_name shuffled[] = {
+        { 1000000, "\xc3\xbc" }, { 3, "" }, { 7, "Oak" }, { 3, "Glass" }, { 7, "Steel" } };
+    static const struct { uint32_t id; const char *name; } want[] = {
+        { 3, "" }, { 3, "Glass" }, { 7, "Oak" }, { 7, "Steel" }, { 1000000, "\xc3\xbc" } };
+    cbvh_cook_options o;
+    binary_options(&o);
+    o.material_names = given;
+    o.material_name_count = 6;
+    for (int level = 0; level <= 9; level += 9) {
+        o.compress_level = level;
+        cooked c, again;
+        cook_and_check(&m, &o, &c);
+        assert_null(c.p.mats); /* no ids given: every triangle has material 0, and names are kept */
+        assert_int_equal(c.p.name_count, 5);
+        cbvh_file *f;
+        assert_int_equal(cbvh_open_memory(c.data, c.size, NULL, &f, NULL), CBVH_OK);
+        cbvh_file_info info;
+        cbvh_file_get_info(f, &info, sizeof info);
+        assert_int_equal(info.material_name_count, 5);
+        for (uint32_t k = 0; k < 5; k++) {
+            uint32_t id;
+            assert_int_equal(c.p.name_ids[k], want[k].id);
+            assert_string_equal(c.p.names[k], want[k].name);
+            assert_string_equal(cbvh_file_get_material_name(f, k, &id), want[k].name);
+            assert_int_equal(id, want[k].id);
+        }
+        assert_string_equal(cbvh_file_find_material_name(f, 3), "");
+        assert_string_equal(cbvh_file_find_material_name(f, 7), "Oak");
+        assert_null(cbvh_file_find_material_name(f, 4));
+        assert_null(cbvh_file_find_material_name(f, 0xFFFFFFFFu));
+        cbvh_close(f);
+        o.material_names = shuffled;
+        o.material_name_count = 5;
+        cook_and_check(&m, &o, &again);
+        assert_int_equal(again.size, c.size);
+        assert_memory_equal(again.data, c.data, c.size);
+        o.material_names = given;
+        o.material_name_count = 6;
+        cooked_free(&again);
+        cooked_free(&c);
+    }
+    o.compress_level = 0;
+    o.keep_materials = 0;
+    cooked c;
+    cook_and_check(&m, &o, &c);
+    assert_int_equal(c.p.name_count, 0);
+    assert_int_equal(c.p.section_count, 4);
+    cooked_free(&c);
+
+    /* Bad names are the caller's error, said before anything is cooked. */
+    o.keep_materials = 1;
+    cbvh_mesh mesh = as_mesh(&m);
+    void *data = NULL;
+    size_t size = 0;
+    cbvh_error err;
+    const cbvh_material_name unnamed[] = { { 1, "a" }, { 2, NULL } };
+    o.material_names = unnamed;
+    o.material_name_count = 2;
+    assert_int_equal(cbvh_cook(&mesh, &o, NULL, &data, &size, NULL, &err), CBVH_ERROR_INVALID_ARGUMENT);
+    assert_non_null(strstr(err.message, "material_names[1].name (material id 2) is NULL"));
+    o.material_names = NULL;
+    assert_int_equal(cbvh_cook(&mesh, &o, NULL, &data, &size, NULL, &err), CBVH_ERROR_INVALID_ARGUMENT);
+    assert_non_null(strstr(err.message, "material_names is NULL"));
+    char *huge = malloc(CBVH_MAX_MATERIAL_NAME_BYTES);
+    assert_non_null(huge);
+    memset(huge, 'x', CBVH_MAX_MATERIAL_NAME_BYTES - 1);
+    huge[CBVH_MAX_MATERIAL_NAME_BYTES - 13] = '\0'; /* 4 + 8 + name + NUL: exactly the limit */
+    const cbvh_material_name big[] = { { 1, huge } };
+    o.material_names = big;
+    o.material_name_count = 1;
+    assert_int_equal(cbvh_cook(&mesh, &o, NULL, &data, &size, NULL, &err), CBVH_OK);
+    cbvh_file *f;
+    assert_int_equal(cbvh_open_memory(data, size, NULL, &f, NULL), CBVH_OK);
+    assert_int_equal(strlen(cbvh_file_find_material_name(f, 1)), CBVH_MAX_MATERIAL_NAME_BYTES - 13);
+    cbvh_close(f);
+    cbvh_buffer_free(NULL, data);
+    huge[CBVH_MAX_MATERIAL_NAME_BYTES - 13] = 'x'; /* one byte more */
+    huge[CBVH_MAX_MATERIAL_NAME_BYTES - 12] = '\0';
+    assert_int_equal(cbvh_cook(&mesh, &o, NULL, &data, &size, NULL, &err), CBVH_ERROR_INVALID_ARGUMENT);
+    assert_non_null(strstr(err.message, "more than the"));
+    free(huge);
     mesh_free(&m);
 }
 
@@ -1766,6 +1909,7 @@ int main(void)
         cmocka_unit_test(test_large_mesh_encodings),
         cmocka_unit_test(test_weld_and_degenerate),
         cmocka_unit_test(test_remap_and_materials),
+        cmocka_unit_test(test_material_names),
         cmocka_unit_test(test_determinism),
         cmocka_unit_test(test_depth_limit),
         cmocka_unit_test(test_identical_triangles),

@@ -75,6 +75,9 @@ static int cook_sample(sample *s, const char *name, cbvh_layout layout, int quan
     o.vertex_format = quantized ? CBVH_VERTEX_QUANTIZED16 : CBVH_VERTEX_FLOAT32;
     o.compress_level = level;
     o.layout = layout;
+    static const cbvh_material_name names[] = { { 0, "stone" }, { 1, "wood" }, { 3, "metal" }, { 3, "steel" } };
+    o.material_names = names; /* a MATERIAL_NAMES section to corrupt too */
+    o.material_name_count = 4;
     void *out = NULL;
     cbvh_result r = cbvh_cook(&m, &o, NULL, &out, &s->size, NULL, NULL);
     scene_free(&sc);
@@ -252,15 +255,19 @@ static int expected_code(const uint8_t *orig, const uint8_t *mut, size_t pos)
     if (pos >= TABLE && pos < TABLE + (size_t)count * ENTRY) {
         size_t field = (pos - TABLE) % ENTRY;
         const uint8_t *e = mut + TABLE + (pos - TABLE) / ENTRY * ENTRY;
+        const int ancillary = (rd32(e) & 0x80000000u) != 0; /* skipped when its codec or encoding is unknown */
         if (field >= E_CODEC && field < E_CODEC + 4 && rd32(e + E_CODEC) > 1)
-            return CBVH_ERROR_UNSUPPORTED;
-        if (field < 4 && !(rd32(e) & 0x80000000u) && rd32(e) > 5)
+            return ancillary ? CBVH_OK : CBVH_ERROR_UNSUPPORTED;
+        if (field < 4 && !ancillary && rd32(e) > 5)
             return CBVH_ERROR_UNSUPPORTED;
         if (field >= E_ENCODING) {
-            static const uint32_t known[6] = { 0, 2, 3, 2, 2, 3 }; /* encodings per type 1..5 (NODES: binary, wide4) */
+            /* encodings per type 1..5 (NODES: binary, wide4; MATERIALS: u8, u16, u32, uniform) */
+            static const uint32_t known[6] = { 0, 2, 3, 2, 2, 4 };
             uint32_t type = rd32(e), enc = rd32(e + E_ENCODING);
             if (type >= 1 && type <= 5 && enc >= known[type])
                 return CBVH_ERROR_UNSUPPORTED;
+            if (type == CBVH_SECTION_MATERIAL_NAMES && enc >= 1)
+                return CBVH_OK;
         }
         return -1;
     }

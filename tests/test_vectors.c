@@ -82,6 +82,8 @@ typedef struct good {
     uint32_t has_remap, vertex_format, index_encoding, compat_flags, section_count;
     uint32_t material_base; /* materials are base + 7 x original id; 0: no MATERIALS section */
     uint32_t layout;        /* cbvh_layout of the nodes */
+    uint32_t uniform_material; /* the one id of a uniform MATERIALS section (material_base 0) */
+    uint32_t name_count;       /* 3: fileformat/make_vectors.py's NAMES, else 0 */
 } good;
 
 typedef struct expectation {
@@ -97,21 +99,36 @@ typedef struct expectation {
 #define W4 CBVH_LAYOUT_WIDE4
 
 static const expectation expectations[] = {
-    { "good-single-triangle", CBVH_OK, "", { MESH_SINGLE, 1, 3, 1, 1, 4, 0, 0, 0, 0, 3, 0, BIN } },
-    { "good-box-raw", CBVH_OK, "", { MESH_BOX, 12, 8, 15, 4, 2, 1, 0, 0, 0, 4, 0, BIN } },
-    { "good-box-zlib", CBVH_OK, "", { MESH_BOX, 12, 8, 15, 4, 2, 1, 0, 0, 0, 4, 0, BIN } },
-    { "good-box-u32", CBVH_OK, "", { MESH_BOX, 12, 8, 15, 4, 2, 1, 0, 1, 0, 4, 0, BIN } },
-    { "good-box-delta16", CBVH_OK, "", { MESH_BOX, 12, 8, 15, 4, 2, 1, 0, 2, 0, 4, 0, BIN } },
-    { "good-box-q16", CBVH_OK, "", { MESH_BOX, 12, 8, 15, 4, 2, 1, 1, 0, 0, 4, 0, BIN } },
-    { "good-box-far-q16", CBVH_OK, "", { MESH_BOX_FAR, 12, 8, 15, 4, 2, 1, 1, 0, 0, 4, 0, BIN } },
-    { "good-quad-flat", CBVH_OK, "", { MESH_QUAD, 2, 4, 3, 2, 1, 1, 0, 0, 0, 4, 0, BIN } },
-    { "good-remap-materials", CBVH_OK, "", { MESH_BOX_DEGENERATE, 12, 8, 15, 4, 2, 1, 0, 0, 0, 5, 1, BIN } },
+    { "good-single-triangle", CBVH_OK, "", { MESH_SINGLE, 1, 3, 1, 1, 4, 0, 0, 0, 0, 3, 0, BIN, 0, 0 } },
+    { "good-box-raw", CBVH_OK, "", { MESH_BOX, 12, 8, 15, 4, 2, 1, 0, 0, 0, 4, 0, BIN, 0, 0 } },
+    { "good-box-zlib", CBVH_OK, "", { MESH_BOX, 12, 8, 15, 4, 2, 1, 0, 0, 0, 4, 0, BIN, 0, 0 } },
+    { "good-box-u32", CBVH_OK, "", { MESH_BOX, 12, 8, 15, 4, 2, 1, 0, 1, 0, 4, 0, BIN, 0, 0 } },
+    { "good-box-delta16", CBVH_OK, "", { MESH_BOX, 12, 8, 15, 4, 2, 1, 0, 2, 0, 4, 0, BIN, 0, 0 } },
+    { "good-box-q16", CBVH_OK, "", { MESH_BOX, 12, 8, 15, 4, 2, 1, 1, 0, 0, 4, 0, BIN, 0, 0 } },
+    { "good-box-far-q16", CBVH_OK, "", { MESH_BOX_FAR, 12, 8, 15, 4, 2, 1, 1, 0, 0, 4, 0, BIN, 0, 0 } },
+    { "good-quad-flat", CBVH_OK, "", { MESH_QUAD, 2, 4, 3, 2, 1, 1, 0, 0, 0, 4, 0, BIN, 0, 0 } },
+    { "good-remap-materials", CBVH_OK, "", { MESH_BOX_DEGENERATE, 12, 8, 15, 4, 2, 1, 0, 0, 0, 5, 1, BIN, 0, 0 } },
     { "good-remap-u32-materials-u32-zlib", CBVH_OK, "",
-      { MESH_BOX_DEGENERATE, 12, 8, 15, 4, 2, 1, 0, 2, 0, 5, 70000, BIN } },
-    { "good-remap-sparse", CBVH_OK, "", { MESH_QUAD_SPARSE, 2, 4, 3, 2, 1, 1, 0, 0, 0, 5, 3, BIN } },
-    { "good-materials-u16-cooked-ids", CBVH_OK, "", { MESH_BOX, 12, 8, 15, 4, 2, 0, 0, 0, 0, 4, 1000, BIN } },
-    { "good-ancillary", CBVH_OK, "", { MESH_BOX, 12, 8, 15, 4, 2, 1, 0, 0, 0, 6, 0, BIN } },
-    { "good-compat-flags", CBVH_OK, "", { MESH_BOX, 12, 8, 15, 4, 2, 1, 0, 0, 0x80000005u, 4, 0, BIN } },
+      { MESH_BOX_DEGENERATE, 12, 8, 15, 4, 2, 1, 0, 2, 0, 5, 70000, BIN, 0, 0 } },
+    { "good-remap-sparse", CBVH_OK, "", { MESH_QUAD_SPARSE, 2, 4, 3, 2, 1, 1, 0, 0, 0, 5, 3, BIN, 0, 0 } },
+    { "good-materials-u16-cooked-ids", CBVH_OK, "", { MESH_BOX, 12, 8, 15, 4, 2, 0, 0, 0, 0, 4, 1000, BIN, 0, 0 } },
+    { "good-ancillary", CBVH_OK, "", { MESH_BOX, 12, 8, 15, 4, 2, 1, 0, 0, 0, 6, 0, BIN, 0, 0 } },
+    { "good-compat-flags", CBVH_OK, "", { MESH_BOX, 12, 8, 15, 4, 2, 1, 0, 0, 0x80000005u, 4, 0, BIN, 0, 0 } },
+    { "good-materials-uniform", CBVH_OK, "", { MESH_BOX, 12, 8, 15, 4, 2, 1, 0, 0, 0, 5, 0, BIN, 7, 0 } },
+    { "good-material-names", CBVH_OK, "", { MESH_BOX, 12, 8, 15, 4, 2, 1, 0, 0, 0, 6, 0, BIN, 7, 3 } },
+    { "good-material-names-zlib", CBVH_OK, "", { MESH_BOX, 12, 8, 15, 4, 2, 1, 0, 0, 0, 6, 0, BIN, 7, 3 } },
+    { "good-material-names-future", CBVH_OK, "", { MESH_BOX, 12, 8, 15, 4, 2, 1, 0, 0, 0, 6, 0, BIN, 7, 0 } },
+    BAD("bad-materials-uniform-size", "size 8, expected 4"),
+    BAD("bad-names-order", "not after name 1"),
+    BAD("bad-names-duplicate", "name 2 (id 7) is not after"),
+    BAD("bad-names-offset", "name 1 starts at offset 7"),
+    BAD("bad-names-no-nul", "no terminating NUL"),
+    BAD("bad-names-trailing", "1 bytes after the last name"),
+    BAD("bad-names-count", "1000 names do not fit"),
+    BAD("bad-names-empty", "size 0; it must be 4 to"),
+    BAD("bad-names-too-big", "size 16777217; it must be 4 to"),
+    BAD("bad-names-second", "second MATERIAL_NAMES section"),
+    NEWER("unsupported-materials-encoding-4", "encoding 4"),
     BAD("bad-empty", "empty"),
     BAD("bad-magic", "bad magic at byte 1"),
     BAD("bad-text-mode", "text-mode"),
@@ -178,18 +195,18 @@ static const expectation expectations[] = {
     NEWER("unsupported-codec", "codec 2"),
     NEWER("unsupported-encoding", "encoding 3"),
     NEWER("unsupported-critical-section", "critical section type 6"),
-    { "good-w4-single-triangle", CBVH_OK, "", { MESH_SINGLE, 1, 3, 1, 1, 4, 0, 0, 0, 0, 3, 0, W4 } },
-    { "good-w4-box-raw", CBVH_OK, "", { MESH_BOX, 12, 8, 3, 2, 2, 1, 0, 0, 0, 4, 0, W4 } },
-    { "good-w4-box-zlib", CBVH_OK, "", { MESH_BOX, 12, 8, 3, 2, 2, 1, 0, 0, 0, 4, 0, W4 } },
-    { "good-w4-box-leaf1", CBVH_OK, "", { MESH_BOX, 12, 8, 5, 3, 1, 1, 0, 0, 0, 4, 0, W4 } },
-    { "good-w4-box-leaf8", CBVH_OK, "", { MESH_BOX, 12, 8, 1, 1, 8, 1, 0, 0, 0, 4, 0, W4 } },
-    { "good-w4-box-q16", CBVH_OK, "", { MESH_BOX, 12, 8, 3, 2, 2, 1, 1, 0, 0, 4, 0, W4 } },
-    { "good-w4-box-far-q16", CBVH_OK, "", { MESH_BOX_FAR, 12, 8, 3, 2, 2, 1, 1, 0, 0, 4, 0, W4 } },
-    { "good-w4-quad-flat", CBVH_OK, "", { MESH_QUAD, 2, 4, 1, 1, 1, 1, 0, 0, 0, 4, 0, W4 } },
-    { "good-w4-remap-materials", CBVH_OK, "", { MESH_BOX_DEGENERATE, 12, 8, 3, 2, 2, 1, 0, 0, 0, 5, 1, W4 } },
+    { "good-w4-single-triangle", CBVH_OK, "", { MESH_SINGLE, 1, 3, 1, 1, 4, 0, 0, 0, 0, 3, 0, W4, 0, 0 } },
+    { "good-w4-box-raw", CBVH_OK, "", { MESH_BOX, 12, 8, 3, 2, 2, 1, 0, 0, 0, 4, 0, W4, 0, 0 } },
+    { "good-w4-box-zlib", CBVH_OK, "", { MESH_BOX, 12, 8, 3, 2, 2, 1, 0, 0, 0, 4, 0, W4, 0, 0 } },
+    { "good-w4-box-leaf1", CBVH_OK, "", { MESH_BOX, 12, 8, 5, 3, 1, 1, 0, 0, 0, 4, 0, W4, 0, 0 } },
+    { "good-w4-box-leaf8", CBVH_OK, "", { MESH_BOX, 12, 8, 1, 1, 8, 1, 0, 0, 0, 4, 0, W4, 0, 0 } },
+    { "good-w4-box-q16", CBVH_OK, "", { MESH_BOX, 12, 8, 3, 2, 2, 1, 1, 0, 0, 4, 0, W4, 0, 0 } },
+    { "good-w4-box-far-q16", CBVH_OK, "", { MESH_BOX_FAR, 12, 8, 3, 2, 2, 1, 1, 0, 0, 4, 0, W4, 0, 0 } },
+    { "good-w4-quad-flat", CBVH_OK, "", { MESH_QUAD, 2, 4, 1, 1, 1, 1, 0, 0, 0, 4, 0, W4, 0, 0 } },
+    { "good-w4-remap-materials", CBVH_OK, "", { MESH_BOX_DEGENERATE, 12, 8, 3, 2, 2, 1, 0, 0, 0, 5, 1, W4, 0, 0 } },
     { "good-w4-remap-u32-materials-u32-zlib", CBVH_OK, "",
-      { MESH_BOX_DEGENERATE, 12, 8, 3, 2, 2, 1, 0, 2, 0, 5, 70000, W4 } },
-    { "good-w4-materials-u16-cooked-ids", CBVH_OK, "", { MESH_BOX, 12, 8, 3, 2, 2, 0, 0, 0, 0, 4, 1000, W4 } },
+      { MESH_BOX_DEGENERATE, 12, 8, 3, 2, 2, 1, 0, 2, 0, 5, 70000, W4, 0, 0 } },
+    { "good-w4-materials-u16-cooked-ids", CBVH_OK, "", { MESH_BOX, 12, 8, 3, 2, 2, 0, 0, 0, 0, 4, 1000, W4, 0, 0 } },
     BAD("bad-w4-no-slot", "node 1: no slot in use"),
     BAD("bad-w4-internal-unused", "node 0: slots 0x8 are internal but not in use"),
     BAD("bad-w4-unused-box", "node 1: unused slot 3 has a nonzero box"),
@@ -271,7 +288,8 @@ static void check_info(const cbvh_file_info *in, const good *g, const mesh *m)
     assert_int_equal(in->depth, g->depth);
     assert_int_equal(in->max_leaf_size, g->max_leaf_size);
     assert_int_equal(in->has_remap, g->has_remap);
-    assert_int_equal(in->has_materials, g->material_base != 0);
+    assert_int_equal(in->has_materials, g->material_base != 0 || g->uniform_material != 0);
+    assert_int_equal(in->material_name_count, g->name_count);
     assert_int_equal(in->vertex_format, g->vertex_format);
     assert_int_equal(in->index_encoding, g->index_encoding);
     assert_int_equal(in->compat_flags, g->compat_flags);
@@ -318,11 +336,39 @@ static void check_triangles(const cbvh_file *f, const good *g, const mesh *m)
             used[j] = 1;
         }
         uint32_t material = cbvh_file_get_material(f, id);
-        assert_int_equal(material, g->material_base ? g->material_base + 7 * j : 0);
+        assert_int_equal(material, g->material_base ? g->material_base + 7 * j : g->uniform_material);
     }
     assert_int_equal(cbvh_file_get_triangle(f, ids, v[0], v[1], v[2]), 0);
     assert_int_equal(cbvh_file_get_triangle(f, 0xFFFFFFFFu, v[0], v[1], v[2]), 0);
     assert_int_equal(cbvh_file_get_material(f, ids), 0);
+}
+
+/* make_vectors.py's NAMES, in the file's (id, name) order, or none. */
+static void check_names(const cbvh_file *f, const good *g)
+{
+    static const struct { uint32_t id; const char *name; } names[3] = {
+        { 3, "Glass" }, { 7, "Oak" }, { 7, "Steel \xc3\xbc" } };
+    uint32_t id = 0;
+    for (uint32_t k = 0; k < g->name_count; k++) {
+        const char *name = cbvh_file_get_material_name(f, k, &id);
+        assert_non_null(name);
+        assert_string_equal(name, names[k].name);
+        assert_int_equal(id, names[k].id);
+        assert_ptr_equal(cbvh_file_get_material_name(f, k, NULL), name);
+    }
+    assert_null(cbvh_file_get_material_name(f, g->name_count, &id));
+    /* the first name of an id; ids without one (below, between, above) have none */
+    for (uint32_t want = 0; want < 10; want++) {
+        const char *found = cbvh_file_find_material_name(f, want);
+        const char *first = NULL;
+        for (int k = (int)g->name_count - 1; k >= 0; k--)
+            if (names[k].id == want)
+                first = names[k].name;
+        if (first)
+            assert_string_equal(found, first);
+        else
+            assert_null(found);
+    }
 }
 
 static void check_sections(const cbvh_file *f, uint32_t file_size)
@@ -373,6 +419,7 @@ static void check_vector(const expectation *e)
         check_info(&info, &e->g, m);
         check_sections(f, (uint32_t)size);
         check_triangles(f, &e->g, m);
+        check_names(f, &e->g);
         cbvh_close(f);
     }
     free(shifted);

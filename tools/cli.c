@@ -178,6 +178,8 @@ const char *cli_section_name(uint32_t type)
     static const char *const names[] = { "unknown", "nodes", "triangles", "vertices", "remap", "materials" };
     if (type < sizeof names / sizeof names[0])
         return names[type];
+    if ((type | 0x80000000u) == CBVH_SECTION_MATERIAL_NAMES) /* its type, or its number in cook stats */
+        return "material-names";
     return (type & 0x80000000u) ? "ancillary" : "unknown";
 }
 

@@ -14,6 +14,7 @@
 #include "commands.h"
 #include "import_assimp.h"
 #include "json.h"
+#include "material_map.h"
 #include "progress.h"
 #include "support/scene_gen.h"
 
@@ -28,7 +29,10 @@ static const char usage[] =
     "All meshes of the scene are merged with their node transforms applied, depth-first over\n"
     "the node hierarchy (a node's meshes in order, then its children in order), triangles in\n"
     "mesh order: that order gives the original triangle ids that queries report. The material\n"
-    "id of a triangle is its mesh's assimp material index. Points and lines are dropped.\n"
+    "id of a triangle is its mesh's assimp material index (or the --material-map id of its\n"
+    "name); the names of the materials used are stored too (cbvh info lists them). A side file\n"
+    "the asset names but that is not there (a .mtl) is warned about: the asset's materials\n"
+    "then change. Points and lines are dropped.\n"
     "OUT is written through a temporary file renamed into place: an existing OUT is replaced\n"
     "only by a complete file, and nothing is left behind on failure.\n"
     "\n"
@@ -45,9 +49,13 @@ static const char usage[] =
     "  --quantize-vertices     store vertices as 16-bit grid coordinates (lossy; the error\n"
     "                          is reported)\n"
     "  --no-remap              do not store original triangle ids: queries report cooked ids\n"
-    "  --no-materials          do not store material ids\n"
+    "  --no-materials          do not store material ids and names\n"
+    "  --material-map FILE     material ids by name: lines NAME<TAB>ID (ID 0..4294967295),\n"
+    "                          '*<TAB>ID' for every other name, # comments; a material the\n"
+    "                          map does not name fails the cook (exit status 1)\n"
     "  --quiet                 no progress display (it is shown only on a terminal anyway)\n"
-    "  --json                  print statistics as JSON on stdout; a failed cook prints\n"
+    "  --json                  print statistics (and warnings) as JSON on stdout; a failed\n"
+    "                          cook prints\n"
     "                          {\"input\", \"output\", \"error\": {\"status\", \"message\"}}\n"
     "  --select PATTERN        cook only the nodes whose names match the shell pattern\n"
     "                          (with their subtrees), e.g. 'UCX_*' for collision meshes\n"
@@ -56,7 +64,8 @@ static const char usage[] =
     "                          +Y as assimp imports every format, becomes +AXIS (z for\n"
     "                          Z-up engines), by a right-handed rotation\n"
     "  --depfile FILE          write a Makefile rule 'OUT: IN SIDE-FILES...' naming every\n"
-    "                          file the import opened (.mtl, .bin ...), for make and ninja\n"
+    "                          file the import opened (.mtl, .bin ...) and the material map,\n"
+    "                          for make and ninja\n"
     "  --output-dir DIR        batch: cook each IN into DIR/STEM.cbvh (STEM: IN's file name\n"
     "                          without its extension)\n"
     "  --manifest FILE         batch: the assets of FILE (- for standard input), one a line:\n"
@@ -97,7 +106,8 @@ enum {
     OPT_SELECT,
     OPT_SCALE,
     OPT_UP_AXIS,
-    OPT_DEPFILE
+    OPT_DEPFILE,
+    OPT_MATERIAL_MAP
 };
 
 static const cli_option options[] = {
@@ -120,6 +130,7 @@ static const cli_option options[] = {
     { "scale", CLI_ARG_REQUIRED, OPT_SCALE },
     { "up-axis", CLI_ARG_REQUIRED, OPT_UP_AXIS },
     { "depfile", CLI_ARG_REQUIRED, OPT_DEPFILE },
+    { "material-map", CLI_ARG_REQUIRED, OPT_MATERIAL_MAP },
     { NULL, 0, 0 },
 };
 
@@ -206,8 +217,15 @@ static void limit_memory(const char *in, uint64_t megabytes, int given)
     }
 }
 
+/* What a cook knew besides its statistics: the names it stored and the side files it missed. */
+typedef struct cook_notes {
+    const cbvh_material_name *names;
+    uint32_t name_count;
+    const path_list *missing;
+} cook_notes;
+
 static void print_json(const char *in, const char *out, const cook_input *input, const cbvh_cook_stats *st,
-                       double import_seconds, double total_seconds)
+                       const cook_notes *notes, double import_seconds, double total_seconds)
 {
     static const char *const phase_names[] = { "prepare", "build", "layout", "write" };
     double per_tri = st->triangles ? 1.0 / (double)st->triangles : 0;
@@ -237,8 +255,20 @@ static void print_json(const char *in, const char *out, const cook_input *input,
     json_uint(&w, "file_size", st->file_size);
     json_uint(&w, "peak_memory", st->peak_memory);
     json_double(&w, "bytes_per_triangle", (double)st->file_size * per_tri);
+    json_begin_array(&w, "material_names");
+    for (uint32_t k = 0; k < notes->name_count; k++) {
+        json_begin_object(&w, NULL);
+        json_uint(&w, "id", notes->names[k].id);
+        json_string(&w, "name", notes->names[k].name);
+        json_end_object(&w);
+    }
+    json_end_array(&w);
+    json_begin_array(&w, "missing_files");
+    for (size_t k = 0; k < notes->missing->count; k++)
+        json_string(&w, NULL, notes->missing->paths[k]);
+    json_end_array(&w);
     json_begin_array(&w, "sections");
-    for (uint32_t t = CBVH_SECTION_NODES; t <= CBVH_SECTION_MATERIALS; t++) {
+    for (uint32_t t = CBVH_SECTION_NODES; t < CBVH_STATS_SECTION_TYPES; t++) {
         if (!st->section_size[t])
             continue;
         json_begin_object(&w, NULL);
@@ -261,7 +291,7 @@ static void print_json(const char *in, const char *out, const cook_input *input,
 }
 
 static void print_summary(const char *in, const char *out, const cook_input *input, const cbvh_cook_stats *st,
-                          double import_seconds, double total_seconds)
+                          const cook_notes *notes, double import_seconds, double total_seconds)
 {
     double per_tri = st->triangles ? 1.0 / (double)st->triangles : 0;
     printf("%s -> %s: %llu triangles", in, out, (unsigned long long)st->triangles);
@@ -275,13 +305,19 @@ static void print_summary(const char *in, const char *out, const cook_input *inp
     printf("  file: %llu bytes, %.2f bytes/triangle (", (unsigned long long)st->file_size,
            (double)st->file_size * per_tri);
     const char *sep = "";
-    for (uint32_t t = CBVH_SECTION_NODES; t <= CBVH_SECTION_MATERIALS; t++) {
+    for (uint32_t t = CBVH_SECTION_NODES; t < CBVH_STATS_SECTION_TYPES; t++) {
         if (!st->section_size[t])
             continue;
         printf("%s%s %.2f", sep, cli_section_name(t), (double)st->section_stored_size[t] * per_tri);
         sep = ", ";
     }
     printf(")\n");
+    if (notes->name_count > 0) {
+        printf("  material names:");
+        for (uint32_t k = 0; k < notes->name_count; k++)
+            printf("%s %u '%s'", k ? "," : "", (unsigned)notes->names[k].id, notes->names[k].name);
+        printf("\n");
+    }
     if (st->vertex_max_error > 0)
         printf("  vertex error: %.3g (worst coordinate)\n", st->vertex_max_error);
     printf("  time: import %.3f s, prepare %.3f s, build %.3f s, layout %.3f s, write %.3f s, total %.3f s\n",
@@ -295,7 +331,8 @@ typedef struct cook_settings {
     cbvh_cook_options opt;
     int quiet, json, memory_given;
     uint32_t max_memory;
-    const char *select, *depfile;
+    const char *select, *depfile, *material_map_path;
+    material_map map; /* read from material_map_path (when given) before anything cooks */
     double scale;
     char up_axis; /* 'x', 'y' or 'z' */
 } cook_settings;
@@ -316,15 +353,17 @@ static void transform_positions(const cook_settings *c, imported_mesh *m)
     }
 }
 
-/* Writes `target: dep dep ...` (Makefile syntax; spaces, # and $ escaped) to `path`. Returns 0 or -1. */
-static int write_depfile(const char *path, const char *target, char *const *deps, size_t count)
+/* Writes `target: dep dep ... [extra]` (Makefile syntax; spaces, # and $ escaped) to `path`; `extra` may be
+ * NULL. Returns 0 or -1. */
+static int write_depfile(const char *path, const char *target, char *const *deps, size_t deps_count,
+                         const char *extra)
 {
     FILE *f = fopen(path, "w");
     if (!f)
         return -1;
-    const char *items[2] = { target, NULL };
+    const size_t count = deps_count + (extra != NULL);
     for (size_t k = 0; k <= count; k++) {
-        const char *s = k == 0 ? items[0] : deps[k - 1];
+        const char *s = k == 0 ? target : k <= deps_count ? deps[k - 1] : extra;
         for (; *s; s++) {
             if (*s == ' ' || *s == '#' || *s == '\\')
                 fputc('\\', f);
@@ -357,7 +396,6 @@ static int cook_one(const cook_settings *c, const char *in, const char *out)
     import_options io;
     memset(&io, 0, sizeof io);
     io.select = c->select;
-    io.record_opened = c->depfile != NULL;
     int rc = load_input(in, &io, &input, message, sizeof message);
     progress_done(&prog);
     if (rc) {
@@ -369,6 +407,21 @@ static int cook_one(const cook_settings *c, const char *in, const char *out)
     }
     double import_seconds = cli_now() - t0;
     transform_positions(c, &input.mesh);
+    for (size_t k = 0; k < io.missing.count; k++)
+        cli_error("cook", in, "warning: the asset refers to '%s', which was not found: its materials may be "
+                  "missing or numbered differently", io.missing.paths[k]);
+    cbvh_material_name *names = NULL;
+    uint32_t name_count = 0;
+    rc = material_names_prepare(&input.mesh, c->material_map_path ? &c->map : NULL, c->material_map_path, &names,
+                                &name_count, message, sizeof message);
+    if (rc) {
+        import_options_free(&io);
+        imported_mesh_free(&input.mesh);
+        return report_failure(json, in, out, rc == 1 ? in : c->material_map_path, rc, message);
+    }
+    opt.material_names = names;
+    opt.material_name_count = name_count;
+    const cook_notes notes = { names, name_count, &io.missing };
 
     cbvh_mesh mesh = { input.mesh.positions, input.mesh.vertex_count, 0, input.mesh.indices,
                        input.mesh.triangle_count, input.mesh.material_ids };
@@ -385,14 +438,16 @@ static int cook_one(const cook_settings *c, const char *in, const char *out)
         const char *culprit = (res == CBVH_ERROR_IO || res == CBVH_ERROR_INVALID_ARGUMENT) ? out : in;
         snprintf(message, sizeof message, "%s: %s", cbvh_result_string(err.code), err.message);
         rc = report_failure(json, in, out, culprit, cli_exit_for(err.code), message);
-    } else if (c->depfile && write_depfile(c->depfile, out, io.opened, io.opened_count) != 0) {
+    } else if (c->depfile &&
+               write_depfile(c->depfile, out, io.opened.paths, io.opened.count, c->material_map_path) != 0) {
         snprintf(message, sizeof message, "cannot write the depfile: %s", strerror(errno));
         rc = report_failure(json, in, out, c->depfile, CLI_EXIT_USAGE, message);
     } else if (json) {
-        print_json(in, out, &input, &stats, import_seconds, total_seconds);
+        print_json(in, out, &input, &stats, &notes, import_seconds, total_seconds);
     } else {
-        print_summary(in, out, &input, &stats, import_seconds, total_seconds);
+        print_summary(in, out, &input, &stats, &notes, import_seconds, total_seconds);
     }
+    free(names);
     import_options_free(&io);
     imported_mesh_free(&input.mesh);
     return rc;
@@ -738,6 +793,7 @@ int cmd_cook(int argc, char **argv)
         case OPT_JOBS: ok = cli_parse_u32("cook", "jobs", value, 1, 256, &jobs); break;
         case OPT_SELECT: c.select = value; break;
         case OPT_DEPFILE: c.depfile = value; break;
+        case OPT_MATERIAL_MAP: c.material_map_path = value; break;
         case OPT_SCALE: {
             char *end = NULL;
             c.scale = strtod(value, &end);
@@ -755,6 +811,10 @@ int cmd_cook(int argc, char **argv)
         if (!ok)
             rc = CLI_EXIT_USAGE;
     }
+    char message[640];
+    if (rc == CLI_EXIT_OK && c.material_map_path &&
+        (rc = material_map_read(c.material_map_path, &c.map, message, sizeof message)) != 0)
+        cli_error("cook", NULL, "%s", message);
     if (rc != CLI_EXIT_OK) {
         free(paths);
         return rc;
@@ -766,6 +826,7 @@ int cmd_cook(int argc, char **argv)
         else
             rc = cook_one(&c, paths[0], paths[1]);
         free(paths);
+        material_map_free(&c.map);
         return rc;
     }
     /* A batch: the inputs named on the command line and in the manifest. */
@@ -789,5 +850,6 @@ int cmd_cook(int argc, char **argv)
         rc = run_batch(&c, &b, jobs);
     batch_free(&b);
     free(paths);
+    material_map_free(&c.map);
     return rc;
 }

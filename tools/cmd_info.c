@@ -17,7 +17,8 @@ static const char usage[] =
     "tree (node visit and triangle test both cost 1, relative to the root's surface area) with\n"
     "the dequantized boxes and with exact boxes; bytes per triangle by section; and the error\n"
     "of the 16-bit node boxes: the mean and worst surface-area inflation of each node's\n"
-    "dequantized box over the exact float box of the triangles below it.\n"
+    "dequantized box over the exact float box of the triangles below it; the material\n"
+    "ids (per triangle, one for all, or none) and the material names the file stores.\n"
     "\n"
     "Options:\n"
     "  --json       print the same as JSON on stdout\n"
@@ -31,6 +32,14 @@ static const char *encoding_name(uint32_t type, uint32_t encoding)
 {
     const cbvh_encoding *e = cbvh_encoding_of(type, encoding);
     return e ? e->name : "?";
+}
+
+/* How the file stores material ids, as info prints it: "per-triangle", "uniform" or "none". */
+static const char *materials_kind(const cbvh_file *f)
+{
+    if (!f->materials)
+        return "none";
+    return f->material_encoding == CBVH_MATS_UNIFORM ? "uniform" : "per-triangle";
 }
 
 static void json_vec3(json_writer *w, const char *key, const float v[3])
@@ -60,6 +69,19 @@ static void print_json(const char *path, const cbvh_file *f, const tree_stats *t
     json_string(&w, "layout", in->layout == CBVH_LAYOUT_WIDE4 ? "wide4" : "binary");
     json_bool(&w, "remap", (int)in->has_remap);
     json_bool(&w, "materials", (int)in->has_materials);
+    json_string(&w, "material_ids", materials_kind(f));
+    if (f->materials && f->material_encoding == CBVH_MATS_UNIFORM)
+        json_uint(&w, "material_uniform_id", *(const uint32_t *)f->materials);
+    json_begin_array(&w, "material_names");
+    for (uint32_t k = 0; k < in->material_name_count; k++) {
+        uint32_t id;
+        const char *name = cbvh_file_get_material_name(f, k, &id);
+        json_begin_object(&w, NULL);
+        json_uint(&w, "id", id);
+        json_string(&w, "name", name);
+        json_end_object(&w);
+    }
+    json_end_array(&w);
     json_vec3(&w, "bounds_min", in->bounds_min);
     json_vec3(&w, "bounds_max", in->bounds_max);
     json_vec3(&w, "grid_origin", in->grid_origin);
@@ -122,11 +144,19 @@ static void print_text(const char *path, const cbvh_file *f, const tree_stats *t
            (unsigned long long)in->file_size, (double)in->file_size * per_tri);
     printf("flags: compatible 0x%08x, incompatible 0x%08x\n", (unsigned)in->compat_flags,
            (unsigned)in->incompat_flags);
-    printf("triangles: %u (original ids below %u, %s), vertices: %u (%s), materials: %s\n",
-           (unsigned)in->triangle_count, (unsigned)f->original_triangle_count,
-           in->has_remap ? "remapped" : "cooked order", (unsigned)in->vertex_count,
-           in->vertex_format == CBVH_VERTEX_QUANTIZED16 ? "quantized16" : "float32",
-           in->has_materials ? "stored" : "none");
+    printf("triangles: %u (original ids below %u, %s), vertices: %u (%s)\n", (unsigned)in->triangle_count,
+           (unsigned)f->original_triangle_count, in->has_remap ? "remapped" : "cooked order",
+           (unsigned)in->vertex_count, in->vertex_format == CBVH_VERTEX_QUANTIZED16 ? "quantized16" : "float32");
+    if (f->materials && f->material_encoding == CBVH_MATS_UNIFORM)
+        printf("materials: id %u for every triangle", (unsigned)*(const uint32_t *)f->materials);
+    else
+        printf("materials: %s", f->materials ? "an id per triangle" : "none (every id is 0)");
+    printf(", %u names\n", (unsigned)in->material_name_count);
+    for (uint32_t k = 0; k < in->material_name_count; k++) {
+        uint32_t id;
+        const char *name = cbvh_file_get_material_name(f, k, &id);
+        printf("  material %u: %s\n", (unsigned)id, name);
+    }
     printf("layout: %s\n", in->layout == CBVH_LAYOUT_WIDE4 ? "wide4 (4 children per 64-byte node)"
                                                          : "binary (2 children per 16-byte node)");
     printf("bounds: [%g %g %g] - [%g %g %g]\n", in->bounds_min[0], in->bounds_min[1], in->bounds_min[2],

@@ -8,6 +8,7 @@
 
 #include <assimp/cfileio.h>
 #include <assimp/cimport.h>
+#include <assimp/material.h>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 #include <zlib.h>
@@ -190,6 +191,20 @@ static int import_counted(import_state *s)
     s->vertex_total = 0;
     s->triangle_total = 0;
     out->material_count = s->scene->mNumMaterials;
+    if (out->material_count > 0) {
+        out->material_names = calloc(out->material_count, sizeof *out->material_names);
+        if (!out->material_names) {
+            snprintf(s->message, s->message_size, "out of memory for %u material names", out->material_count);
+            return 2;
+        }
+    }
+    for (uint32_t k = 0; k < out->material_count; k++) {
+        struct aiString name;
+        if (s->scene->mMaterials[k] &&
+            aiGetMaterialString(s->scene->mMaterials[k], AI_MATKEY_NAME, &name) == aiReturn_SUCCESS &&
+            name.length > 0 && memchr(name.data, 0, name.length) == NULL)
+            out->material_names[k] = strdup(name.data); /* NULL (no name) when out of memory */
+    }
     return import_pass(s);
 }
 
@@ -256,30 +271,43 @@ static void io_flush(struct aiFile *f)
     fflush((FILE *)(void *)f->UserData);
 }
 
-static void record_opened(import_options *o, const char *path)
+static void path_list_add(path_list *l, const char *path)
 {
-    for (size_t k = 0; k < o->opened_count; k++)
-        if (!strcmp(o->opened[k], path))
+    for (size_t k = 0; k < l->count; k++)
+        if (!strcmp(l->paths[k], path))
             return;
-    char **grown = realloc(o->opened, (o->opened_count + 1) * sizeof *grown);
+    char **grown = realloc(l->paths, (l->count + 1) * sizeof *grown);
     if (!grown)
         return;
-    o->opened = grown;
-    if ((o->opened[o->opened_count] = strdup(path)) != NULL)
-        o->opened_count++;
+    l->paths = grown;
+    if ((l->paths[l->count] = strdup(path)) != NULL)
+        l->count++;
+}
+
+static void path_list_free(path_list *l)
+{
+    for (size_t k = 0; k < l->count; k++)
+        free(l->paths[k]);
+    free(l->paths);
+    l->paths = NULL;
+    l->count = 0;
 }
 
 static struct aiFile *io_open(struct aiFileIO *io, const char *path, const char *mode)
 {
+    import_options *o = (import_options *)(void *)io->UserData;
     FILE *file = fopen(path, mode);
-    if (!file)
+    if (!file) {
+        if (errno == ENOENT) /* assimp looks for a side file as named and as "./" + name: report it once */
+            path_list_add(&o->missing, strncmp(path, "./", 2) ? path : path + 2);
         return NULL;
+    }
     struct aiFile *f = calloc(1, sizeof *f);
     if (!f) {
         fclose(file);
         return NULL;
     }
-    record_opened((import_options *)(void *)io->UserData, path);
+    path_list_add(&o->opened, path);
     f->ReadProc = io_read;
     f->WriteProc = io_write;
     f->TellProc = io_tell;
@@ -301,11 +329,8 @@ static void io_close(struct aiFileIO *io, struct aiFile *f)
 
 void import_options_free(import_options *o)
 {
-    for (size_t k = 0; k < o->opened_count; k++)
-        free(o->opened[k]);
-    free(o->opened);
-    o->opened = NULL;
-    o->opened_count = 0;
+    path_list_free(&o->opened);
+    path_list_free(&o->missing);
 }
 
 /* Inflates a gzip file whole (assimp has no stream interface in its C API). */
@@ -390,22 +415,21 @@ int import_assimp(const char *path, import_options *o, imported_mesh *out, char 
             memcpy(hint, dot + 1, (size_t)(path + len - 3 - dot - 1));
         scene = aiImportFileFromMemory(data, (unsigned)size, flags, hint);
         free(data);
-        if (o->record_opened)
-            record_opened(o, path);
-    } else if (o->record_opened) {
+        path_list_add(&o->opened, path);
+    } else {
         struct aiFileIO io = { io_open, io_close, (aiUserData)(void *)o };
         scene = aiImportFileEx(path, flags, &io);
-    } else {
-        scene = aiImportFile(path, flags);
     }
     if (!scene) {
         snprintf(message, message_size, "assimp cannot read it: %s", aiGetErrorString());
+        import_options_free(&none);
         return 1;
     }
     int rc = import_scene(scene, o->select, out, message, message_size);
     aiReleaseImport(scene);
     if (rc)
         imported_mesh_free(out);
+    import_options_free(&none);
     return rc;
 }
 
@@ -414,6 +438,10 @@ void imported_mesh_free(imported_mesh *m)
     free(m->positions);
     free(m->indices);
     free(m->material_ids);
+    for (uint32_t k = 0; m->material_names && k < m->material_count; k++)
+        free(m->material_names[k]);
+    free(m->material_names);
+    m->material_names = NULL;
     m->positions = NULL;
     m->indices = NULL;
     m->material_ids = NULL;

@@ -23,19 +23,27 @@ typedef struct imported_mesh {
     uint64_t dropped_lines;  /* line primitives dropped */
     uint32_t mesh_instances; /* mesh references emitted */
     uint32_t material_count; /* materials in the scene */
+    char **material_names;   /* material_count names (assimp's AI_MATKEY_NAME; NULL when it has none), or
+                              * NULL when there are no materials */
 } imported_mesh;
 
-/* What an import keeps and records; zeroed means everything, nothing recorded. */
+/* A list of file names, each once, in first-seen order. */
+typedef struct path_list {
+    char **paths;
+    size_t count;
+} path_list;
+
+/* What an import keeps and what it records; zeroed means everything. */
 typedef struct import_options {
-    const char *select;  /* fnmatch(3) pattern: only nodes whose names match, with their subtrees; NULL: all */
-    char **opened;       /* out: every file the import opened (the input, .mtl, .bin ... side files), */
-    size_t opened_count; /* first-opened order, each once; free with import_options_free. Recorded when */
-    int record_opened;   /* record_opened is set. */
+    const char *select; /* fnmatch(3) pattern: only nodes whose names match, with their subtrees; NULL: all */
+    path_list opened;   /* out: every file the import opened (the input, .mtl, .bin ... side files) */
+    path_list missing;  /* out: files the import looked for and did not find (a .mtl the asset names ...) */
 } import_options;
 
 /* Reads `path` with assimp (aiProcess_Triangulate | aiProcess_JoinIdenticalVertices |
- * aiProcess_SortByPType). A name ending in ".gz" is inflated first and read by the format of
- * the name without ".gz" (e.g. mesh.ply.gz). Returns 0 on success; otherwise writes a message to
+ * aiProcess_SortByPType), through a file system that records in `o` what the import opened and what
+ * it looked for in vain. A name ending in ".gz" is inflated first and read by the format of the name
+ * without ".gz" (e.g. mesh.ply.gz; side files are then not read). Returns 0 on success; otherwise writes a message to
  * `message` and returns 2 when the file cannot be read, 1 when it is not a usable mesh (with
  * o->select: also when no node matches). `o` may be NULL. */
 int import_assimp(const char *path, import_options *o, imported_mesh *out, char *message, size_t message_size);

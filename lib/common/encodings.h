@@ -14,40 +14,60 @@
  * table lives in the header (a static inline lookup) because the tools link the shared library, which
  * exports only cbvh.h's names. */
 
-#define CBVH_KNOWN_SECTIONS 5 /* types 1 (NODES) .. 5 (MATERIALS) */
-#define CBVH_MAX_ENCODINGS 3  /* encodings 0 .. 2 of any known type */
+/* A known section's number is its type without the ancillary bit: 1 (NODES) .. 6 (MATERIAL_NAMES). Numbers
+ * are unique across critical and ancillary types, so they index tables (and cbvh_cook_stats' arrays). */
+#define CBVH_KNOWN_SECTIONS 6
+#define CBVH_MAX_ENCODINGS 4 /* encodings 0 .. 3 of any known type */
 
 typedef struct cbvh_encoding {
     uint32_t element_size; /* bytes per element; 0: no such encoding */
     uint32_t max_value;    /* largest index or id one element holds (index and id encodings), else 0 */
     const char *name;      /* as `cbvh info` prints it */
+    int uniform;           /* one element stands for every triangle (MATERIALS' uniform id) */
 } cbvh_encoding;
 
 typedef struct cbvh_section_kind {
-    const char *name; /* as the spec and the loader's messages spell it */
-    int required;     /* a file without it is corrupt */
+    const char *name;     /* as the spec and the loader's messages spell it */
+    int required;         /* a file without it is corrupt */
+    int ancillary;        /* its type has the ancillary bit */
+    int sized_by_content; /* its size is any number of elements, checked against its content */
     cbvh_encoding encodings[CBVH_MAX_ENCODINGS];
 } cbvh_section_kind;
+
+/* The index (number - 1) of the known section type `type` in tables of CBVH_KNOWN_SECTIONS entries, or -1 for
+ * any other type. */
+static inline int cbvh_section_slot(uint32_t type)
+{
+    const uint32_t number = type & ~CBVH_SECTION_ANCILLARY_BIT;
+    const int ancillary = (type & CBVH_SECTION_ANCILLARY_BIT) != 0;
+    if (number < 1 || number > CBVH_KNOWN_SECTIONS)
+        return -1;
+    return ancillary == (number == (CBVH_SECTION_MATERIAL_NAMES & ~CBVH_SECTION_ANCILLARY_BIT)) ? (int)number - 1
+                                                                                                : -1;
+}
 
 /* The known section type `type` (CBVH_SECTION_*), or NULL for any other. */
 static inline const cbvh_section_kind *cbvh_section_kind_of(uint32_t type)
 {
     static const cbvh_section_kind kinds[CBVH_KNOWN_SECTIONS] = {
-        { "NODES", 1,
+        { "NODES", 1, 0, 0,
           { [CBVH_NODES_Q16] = { CBVH_NODE_SIZE, 0, "q16-node" },
             [CBVH_NODES_W4] = { CBVH_W4_NODE_SIZE, 0, "wide4-node" } } },
-        { "TRIANGLES", 1,
+        { "TRIANGLES", 1, 0, 0,
           { [CBVH_TRIS_U16] = { 6, 0xFFFFu, "u16x3" },
             [CBVH_TRIS_U32] = { 12, 0xFFFFFFFFu, "u32x3" },
             [CBVH_TRIS_DELTA16] = { 8, 0xFFFFFFFFu, "delta16" } } }, /* u32 base, two i16 deltas */
-        { "VERTICES", 1, { [CBVH_VERTS_F32] = { 12, 0, "f32x3" }, [CBVH_VERTS_Q16] = { 6, 0, "q16x3" } } },
-        { "REMAP", 0, { [CBVH_REMAP_U16] = { 2, 0xFFFFu, "u16" }, [CBVH_REMAP_U32] = { 4, 0xFFFFFFFFu, "u32" } } },
-        { "MATERIALS", 0,
-          { [CBVH_MATS_U8] = { 1, 0xFFu, "u8" },
-            [CBVH_MATS_U16] = { 2, 0xFFFFu, "u16" },
-            [CBVH_MATS_U32] = { 4, 0xFFFFFFFFu, "u32" } } },
+        { "VERTICES", 1, 0, 0, { [CBVH_VERTS_F32] = { 12, 0, "f32x3" }, [CBVH_VERTS_Q16] = { 6, 0, "q16x3" } } },
+        { "REMAP", 0, 0, 0, { [CBVH_REMAP_U16] = { 2, 0xFFFFu, "u16" }, [CBVH_REMAP_U32] = { 4, 0xFFFFFFFFu, "u32" } } },
+        { "MATERIALS", 0, 0, 0,
+          { [CBVH_MATS_U8] = { 1, 0xFFu, "u8", 0 },
+            [CBVH_MATS_U16] = { 2, 0xFFFFu, "u16", 0 },
+            [CBVH_MATS_U32] = { 4, 0xFFFFFFFFu, "u32", 0 },
+            [CBVH_MATS_UNIFORM] = { 4, 0xFFFFFFFFu, "uniform", 1 } } },
+        { "MATERIAL_NAMES", 0, 1, 1, { [CBVH_NAMES_TABLE] = { 1, 0, "id-name-table", 0 } } },
     };
-    return type >= 1 && type <= CBVH_KNOWN_SECTIONS ? &kinds[type - 1] : NULL;
+    const int slot = cbvh_section_slot(type);
+    return slot >= 0 ? &kinds[slot] : NULL;
 }
 
 /* Encoding `encoding` of section type `type`, or NULL when either is unknown. */

@@ -30,14 +30,15 @@ struct cbvh_file {
                                   * original_triangle_count entries, CBVH_NO_HIT for dropped ids; or, when
                                   * unmap_sorted, cooked ids sorted by original id (triangle_count entries) */
     uint32_t unmap_sorted;
-    const void *materials;       /* per cooked triangle; NULL = all 0 */
+    const void *materials;       /* per cooked triangle, or one for all (CBVH_MATS_UNIFORM); NULL = all 0 */
     uint32_t material_encoding;  /* CBVH_MATS_* */
+    const uint8_t *material_names; /* the MATERIAL_NAMES section (info.material_name_count names), or NULL */
 
     float grid_origin[3];
     float grid_scale[3];
     uint32_t original_triangle_count; /* original ids are below it (= triangle_count without remap) */
 
-    /* Memory owned by the file (inflated or realigned sections, unmap), freed at close. */
+    /* Memory owned by the file (inflated or realigned known sections, unmap), freed at close. */
     void *owned[CBVH_MAX_SECTIONS + 1];
     uint32_t owned_count;
 };

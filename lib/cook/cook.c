@@ -121,6 +121,17 @@ static cbvh_result check_options(const cbvh_cook_options *o, cbvh_error *err)
         return cbvh_fail(err, bad, "options->keep_remap is %d; it must be 0 or 1", o->keep_remap);
     if (o->keep_materials != 0 && o->keep_materials != 1)
         return cbvh_fail(err, bad, "options->keep_materials is %d; it must be 0 or 1", o->keep_materials);
+    if (o->material_name_count > 0 && !o->material_names)
+        return cbvh_fail(err, bad, "options->material_names is NULL but material_name_count is %u",
+                         o->material_name_count);
+    for (uint32_t i = 0; i < o->material_name_count; i++)
+        if (!o->material_names[i].name)
+            return cbvh_fail(err, bad, "options->material_names[%u].name (material id %u) is NULL", i,
+                             o->material_names[i].id);
+    if (o->material_name_count > 0 && cbvh_cook_material_names_size(o) > CBVH_MAX_MATERIAL_NAME_BYTES)
+        return cbvh_fail(err, bad, "options->material_names: %u names take %llu bytes in the file, more than the "
+                         "%u a file holds", o->material_name_count,
+                         (unsigned long long)cbvh_cook_material_names_size(o), CBVH_MAX_MATERIAL_NAME_BYTES);
     return CBVH_OK;
 }
 

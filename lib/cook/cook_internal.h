@@ -133,7 +133,10 @@ void cook_layout_free(const cbvh_allocator *a, cook_layout *l);
 
 /* ---- sections: little-endian payloads in the narrowest encoding the spec allows ---- */
 
-enum { COOK_SLOT_NODES, COOK_SLOT_TRIANGLES, COOK_SLOT_VERTICES, COOK_SLOT_REMAP, COOK_SLOT_MATERIALS, COOK_SLOTS };
+enum {
+    COOK_SLOT_NODES, COOK_SLOT_TRIANGLES, COOK_SLOT_VERTICES, COOK_SLOT_REMAP, COOK_SLOT_MATERIALS,
+    COOK_SLOT_MATERIAL_NAMES, COOK_SLOTS
+};
 
 typedef struct cook_section {
     uint32_t type;              /* cbvh_section_type */
@@ -147,6 +150,10 @@ typedef struct cook_sections {
     uint32_t count;             /* present sections, s[0 .. count) in file order */
     uint32_t original_triangle_count;
 } cook_sections;
+
+/* Bytes of the MATERIAL_NAMES section for o's names, counting an exact repeat once each time (an upper
+ * bound, checked against CBVH_MAX_MATERIAL_NAME_BYTES before the cook starts). */
+uint64_t cbvh_cook_material_names_size(const cbvh_cook_options *o);
 
 /* quantized: the 3 grid coordinates per prepared vertex, or NULL for float vertices. */
 cbvh_result cbvh_cook_sections_encode(const cook_layout *l, const cook_mesh *m, const uint16_t *quantized,

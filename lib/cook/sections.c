@@ -1,4 +1,5 @@
 /* sections.c: section payloads in the narrowest encoding the spec allows (section 4), little-endian. */
+#include <stdlib.h>
 #include <string.h>
 
 #include "common/alloc.h"
@@ -165,7 +166,8 @@ static int encode_remap(const cook_layout *l, const cook_mesh *m, const cbvh_coo
     return encode_ids(a, out, CBVH_SECTION_REMAP, m->input_triangle_count - 1, scratch, l->triangle_count);
 }
 
-/* MATERIALS: left out when not given, not wanted, or all equal; u8, u16 or u32 by the largest id. */
+/* MATERIALS: left out when not given, not wanted, or all 0; one uniform id when all are equal; else u8, u16
+ * or u32 by the largest id. */
 static int encode_materials(const cook_layout *l, const cook_mesh *m, const cbvh_mesh *input,
                             const cbvh_cook_options *o, uint32_t *scratch, const cbvh_allocator *a,
                             cook_sections *out)
@@ -179,9 +181,67 @@ static int encode_materials(const cook_layout *l, const cook_mesh *m, const cbvh
         largest = scratch[t] > largest ? scratch[t] : largest;
         all_equal &= scratch[t] == scratch[0];
     }
-    if (all_equal)
+    if (all_equal && largest == 0)
         return 1;
+    if (all_equal) {
+        uint8_t *p = section_alloc(a, out, CBVH_SECTION_MATERIALS, CBVH_MATS_UNIFORM, 1);
+        if (p)
+            cbvh_write_u32(p, largest);
+        return p != NULL;
+    }
     return encode_ids(a, out, CBVH_SECTION_MATERIALS, largest, scratch, l->triangle_count);
+}
+
+/* Orders names by id, then by their bytes (strcmp compares them as unsigned char), as the spec's table is. */
+static int compare_names(const void *xp, const void *yp)
+{
+    const cbvh_material_name *x = *(const cbvh_material_name *const *)xp, *y = *(const cbvh_material_name *const *)yp;
+    if (x->id != y->id)
+        return x->id < y->id ? -1 : 1;
+    return strcmp(x->name, y->name);
+}
+
+uint64_t cbvh_cook_material_names_size(const cbvh_cook_options *o)
+{
+    uint64_t size = 4;
+    for (uint32_t i = 0; i < o->material_name_count; i++)
+        size += 8 + strlen(o->material_names[i].name) + 1;
+    return size;
+}
+
+/* MATERIAL_NAMES: the caller's names sorted (the order is total, so the bytes do not depend on the order
+ * given), exact repeats once; left out when there are none. */
+static int encode_material_names(const cbvh_cook_options *o, const cbvh_allocator *a, cook_sections *out)
+{
+    if (!o->keep_materials || o->material_name_count == 0)
+        return 1;
+    const cbvh_material_name **sorted = cbvh_alloc_array(a, o->material_name_count, sizeof *sorted, 64);
+    if (!sorted)
+        return 0;
+    for (uint32_t i = 0; i < o->material_name_count; i++)
+        sorted[i] = &o->material_names[i];
+    qsort(sorted, o->material_name_count, sizeof *sorted, compare_names);
+    uint32_t n = 0;
+    for (uint32_t i = 0; i < o->material_name_count; i++)
+        if (n == 0 || compare_names(&sorted[n - 1], &sorted[i]) != 0)
+            sorted[n++] = sorted[i];
+    uint64_t size = 4 + 8 * (uint64_t)n;
+    for (uint32_t i = 0; i < n; i++)
+        size += strlen(sorted[i]->name) + 1;
+    uint8_t *p = section_alloc(a, out, CBVH_SECTION_MATERIAL_NAMES, CBVH_NAMES_TABLE, (size_t)size);
+    if (p) {
+        cbvh_write_u32(p, n);
+        uint8_t *names = p + 4 + 8 * (size_t)n, *at = names;
+        for (uint32_t i = 0; i < n; i++) {
+            const size_t len = strlen(sorted[i]->name) + 1;
+            cbvh_write_u32(p + 4 + 8 * (size_t)i, sorted[i]->id);
+            cbvh_write_u32(p + 8 + 8 * (size_t)i, (uint32_t)(at - names));
+            memcpy(at, sorted[i]->name, len);
+            at += len;
+        }
+    }
+    cbvh_free(a, sorted);
+    return p != NULL;
 }
 
 void cbvh_cook_sections_free(const cbvh_allocator *a, cook_sections *s)
@@ -199,7 +259,7 @@ cbvh_result cbvh_cook_sections_encode(const cook_layout *l, const cook_mesh *m, 
     uint32_t *scratch = cbvh_alloc_array(a, l->triangle_count, sizeof(uint32_t), 64);
     int ok = scratch && encode_nodes(l, a, out) && encode_triangles(l, a, out) &&
              encode_vertices(l, m, quantized, a, out) && encode_remap(l, m, o, scratch, a, out) &&
-             encode_materials(l, m, input, o, scratch, a, out);
+             encode_materials(l, m, input, o, scratch, a, out) && encode_material_names(o, a, out);
     cbvh_free(a, scratch);
     if (!ok) {
         cbvh_cook_sections_free(a, out);

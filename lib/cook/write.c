@@ -146,8 +146,8 @@ cbvh_result cbvh_cook_write_file(const cook_header *h, cook_sections *s, int com
             cbvh_write_u64(e + CBVH_SEC_SIZE, s->s[i].size);
             cbvh_write_u32(e + CBVH_SEC_CRC, cbvh_crc32(0, file + offset[i], packed_size[i]));
             cbvh_write_u32(e + CBVH_SEC_ENCODING, s->s[i].encoding);
-            stored_size[s->s[i].type] = packed_size[i];
-            size[s->s[i].type] = s->s[i].size;
+            stored_size[s->s[i].type & ~CBVH_SECTION_ANCILLARY_BIT] = packed_size[i];
+            size[s->s[i].type & ~CBVH_SECTION_ANCILLARY_BIT] = s->s[i].size;
             cbvh_free(&a, packed[i]);
             packed[i] = NULL;
             cbvh_free(&a, s->s[i].data);

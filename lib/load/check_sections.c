@@ -13,8 +13,11 @@
 static cbvh_result check_section(const struct cbvh_file *f, const cbvh_section_map *map, uint32_t type,
                                  const void *data, cbvh_range_check check, void *state, cbvh_error *err)
 {
-    const uint32_t index = (uint32_t)map->index[type - 1];
-    const int crc_pending = map->crc_pending[type - 1];
+    const int slot = cbvh_section_slot(type);
+    if (slot < 0) /* callers pass known types only */
+        return CBVH_OK;
+    const uint32_t index = (uint32_t)map->index[slot];
+    const int crc_pending = map->crc_pending[slot];
     const uint32_t size = cbvh_element_size(type, f->sections[index].encoding);
     const uint8_t *bytes = data;
     const uint32_t count = (uint32_t)(f->sections[index].size / size);
@@ -56,6 +59,11 @@ cbvh_result cbvh_check_sections(struct cbvh_file *f, const cbvh_section_map *map
         r = check_section(f, map, CBVH_SECTION_REMAP, f->remap, cbvh_remap_check, &unmap, err);
     if (r == CBVH_OK && f->materials)
         r = check_section(f, map, CBVH_SECTION_MATERIALS, f->materials, NULL, NULL, err);
+    if (r == CBVH_OK && f->material_names)
+        r = check_section(f, map, CBVH_SECTION_MATERIAL_NAMES, f->material_names, NULL, NULL, err);
+    if (r == CBVH_OK && f->material_names)
+        r = cbvh_material_names_check(f, &f->sections[map->index[cbvh_section_slot(CBVH_SECTION_MATERIAL_NAMES)]],
+                                      &f->info.material_name_count, err);
     if (r == CBVH_OK)
         r = wide ? cbvh_w4_tree_finish(f, &w4_walk, err) : cbvh_tree_finish(f, &walk, err);
     if (r == CBVH_OK)

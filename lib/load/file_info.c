@@ -1,6 +1,7 @@
 /* file_info.c: what an opened file says about itself: info, sections, triangles and materials by original id. */
 #include <string.h>
 
+#include "common/endian.h"
 #include "common/struct_size.h"
 #include "load/load.h"
 
@@ -75,6 +76,42 @@ uint32_t cbvh_file_get_material(const cbvh_file *file, uint32_t tri)
     switch (file->material_encoding) {
     case CBVH_MATS_U8: return ((const uint8_t *)file->materials)[cooked];
     case CBVH_MATS_U16: return ((const uint16_t *)file->materials)[cooked];
-    default: return ((const uint32_t *)file->materials)[cooked];
+    case CBVH_MATS_U32: return ((const uint32_t *)file->materials)[cooked];
+    default: return ((const uint32_t *)file->materials)[0]; /* CBVH_MATS_UNIFORM: one id for all */
     }
+}
+
+/* Entry `index` of the MATERIAL_NAMES table (validated at open: in range, names NUL-terminated). */
+static const char *name_entry(const struct cbvh_file *f, uint32_t index, uint32_t *id)
+{
+    const uint8_t *e = f->material_names + 4 + 8 * (size_t)index;
+    *id = cbvh_read_u32(e);
+    return (const char *)f->material_names + 4 + 8 * (size_t)f->info.material_name_count + cbvh_read_u32(e + 4);
+}
+
+const char *cbvh_file_get_material_name(const cbvh_file *file, uint32_t index, uint32_t *id)
+{
+    uint32_t unused;
+    if (!file || index >= file->info.material_name_count)
+        return NULL;
+    return name_entry(file, index, id ? id : &unused);
+}
+
+const char *cbvh_file_find_material_name(const cbvh_file *file, uint32_t id)
+{
+    if (!file)
+        return NULL;
+    uint32_t lo = 0, hi = file->info.material_name_count, entry_id;
+    while (lo < hi) { /* the first entry whose id is >= id */
+        uint32_t mid = lo + (hi - lo) / 2;
+        name_entry(file, mid, &entry_id);
+        if (entry_id < id)
+            lo = mid + 1;
+        else
+            hi = mid;
+    }
+    if (lo == file->info.material_name_count)
+        return NULL;
+    const char *name = name_entry(file, lo, &entry_id);
+    return entry_id == id ? name : NULL;
 }

@@ -9,7 +9,7 @@
 
 void cbvh_file_own(struct cbvh_file *f, void *p)
 {
-    /* At most the five known sections, the unmap table and a read() buffer: the table cannot fill up. */
+    /* At most the six known sections, the unmap table and a read() buffer: the table cannot fill up. */
     assert(f->owned_count < sizeof f->owned / sizeof f->owned[0]);
     f->owned[f->owned_count++] = p;
 }
@@ -51,13 +51,14 @@ static cbvh_result place_sections(struct cbvh_file *f, const cbvh_section_map *m
             return r;
     }
     f->nodes = where[CBVH_SECTION_NODES - 1];
-    f->layout = f->sections[map->index[CBVH_SECTION_NODES - 1]].encoding == CBVH_NODES_W4 ? CBVH_LAYOUT_WIDE4
+    f->layout = f->sections[map->index[cbvh_section_slot(CBVH_SECTION_NODES)]].encoding == CBVH_NODES_W4 ? CBVH_LAYOUT_WIDE4
                                                                                           : CBVH_LAYOUT_BINARY;
     f->info.layout = f->layout;
     f->triangles = where[CBVH_SECTION_TRIANGLES - 1];
     f->vertices = where[CBVH_SECTION_VERTICES - 1];
     f->remap = where[CBVH_SECTION_REMAP - 1];
     f->materials = where[CBVH_SECTION_MATERIALS - 1];
+    f->material_names = where[cbvh_section_slot(CBVH_SECTION_MATERIAL_NAMES)];
     f->triangle_encoding = f->sections[map->index[CBVH_SECTION_TRIANGLES - 1]].encoding;
     f->vertex_encoding = f->sections[map->index[CBVH_SECTION_VERTICES - 1]].encoding;
     if (f->remap)

@@ -84,6 +84,12 @@ cbvh_result cbvh_unmap_begin(struct cbvh_file *f, cbvh_unmap_build *b, cbvh_erro
 cbvh_result cbvh_remap_check(const struct cbvh_file *f, void *build, uint32_t begin, uint32_t end, cbvh_error *err);
 cbvh_result cbvh_unmap_finish(const struct cbvh_file *f, const cbvh_unmap_build *b, cbvh_error *err);
 
+/* MATERIAL_NAMES (section `s`, at f->material_names): a count, then entries of (id, offset) in increasing
+ * (id, name) order, each offset where its NUL-terminated name starts, the names tiling the rest; stores the
+ * count in *count. */
+cbvh_result cbvh_material_names_check(const struct cbvh_file *f, const cbvh_section_info *s, uint32_t *count,
+                                      cbvh_error *err);
+
 /* Runs the element checks over every known section, with the pending CRCs, chunk by chunk. */
 cbvh_result cbvh_check_sections(struct cbvh_file *f, const cbvh_section_map *map, cbvh_error *err);
 

@@ -8,9 +8,14 @@
 
 #define CORRUPT(...) cbvh_fail(err, CBVH_ERROR_CORRUPT, __VA_ARGS__)
 
-static uint64_t element_count(const cbvh_file_info *in, uint32_t type)
+/* Elements a section of `type` in `encoding` holds (sized_by_content kinds: whatever their size says). */
+static uint64_t element_count(const cbvh_file_info *in, const cbvh_section_info *s)
 {
-    switch (type) {
+    if (cbvh_encoding_of(s->type, s->encoding)->uniform)
+        return 1;
+    if (cbvh_section_kind_of(s->type)->sized_by_content)
+        return s->size / cbvh_element_size(s->type, s->encoding);
+    switch (s->type) {
     case CBVH_SECTION_NODES: return in->node_count;
     case CBVH_SECTION_VERTICES: return in->vertex_count;
     default: return in->triangle_count; /* TRIANGLES, REMAP, MATERIALS: one per cooked triangle */
@@ -47,36 +52,41 @@ static cbvh_result check_layout(const uint8_t *b, uint64_t file_size, const cbvh
     return CBVH_OK;
 }
 
-/* Type, codec, encoding and sizes of a known section; unknown ancillary ones are skipped whatever they hold. */
+/* Type, codec, encoding and sizes of a known section. Ancillary ones that this reader does not know, or
+ * whose codec or encoding it does not know, are skipped whatever they hold. */
 static cbvh_result check_content(const cbvh_file_info *in, const cbvh_section_info *sections, uint32_t i,
                                  cbvh_section_map *map, cbvh_error *err)
 {
     const cbvh_section_info *s = &sections[i];
+    const int slot = cbvh_section_slot(s->type);
     const cbvh_section_kind *k = cbvh_section_kind_of(s->type);
-    if (!k) {
-        for (uint32_t j = 0; j < i; j++)
-            if (sections[j].type == s->type)
-                return CORRUPT("section %u: second section of type 0x%x (the first is section %u)", i, s->type, j);
-        if (s->type & CBVH_SECTION_ANCILLARY_BIT)
-            return CBVH_OK;
+    for (uint32_t j = 0; j < i; j++)
+        if (sections[j].type == s->type)
+            return k ? CORRUPT("section %u: second %s section (the first is section %u)", i, k->name, j)
+                     : CORRUPT("section %u: second section of type 0x%x (the first is section %u)", i, s->type, j);
+    const int known_codec = s->codec == CBVH_CODEC_RAW || s->codec == CBVH_CODEC_ZLIB;
+    if ((s->type & CBVH_SECTION_ANCILLARY_BIT) &&
+        (!k || !known_codec || !cbvh_encoding_of(s->type, s->encoding)))
+        return CBVH_OK;
+    if (!k || slot < 0)
         return cbvh_fail(err, CBVH_ERROR_UNSUPPORTED, "section %u: critical section type %u is unknown to this reader",
                          i, s->type);
-    }
-    if (map->index[s->type - 1] >= 0)
-        return CORRUPT("section %u: second %s section (the first is section %d)", i, k->name, map->index[s->type - 1]);
-    map->index[s->type - 1] = (int)i;
-    if (s->codec != CBVH_CODEC_RAW && s->codec != CBVH_CODEC_ZLIB)
+    map->index[slot] = (int)i;
+    if (!known_codec)
         return cbvh_fail(err, CBVH_ERROR_UNSUPPORTED, "section %u (%s): codec %u is unknown to this reader", i,
                          k->name, s->codec);
     const uint32_t element_size = cbvh_element_size(s->type, s->encoding);
     if (element_size == 0)
         return cbvh_fail(err, CBVH_ERROR_UNSUPPORTED, "section %u (%s): encoding %u is unknown to this reader", i,
                          k->name, s->encoding);
-    uint64_t expected = element_count(in, s->type) * element_size;
+    if (k->sized_by_content && (s->size < 4 || s->size > CBVH_MAX_MATERIAL_NAME_BYTES))
+        return CORRUPT("section %u (%s): size %llu; it must be 4 to %u bytes", i, k->name,
+                       (unsigned long long)s->size, CBVH_MAX_MATERIAL_NAME_BYTES);
+    uint64_t expected = element_count(in, s) * element_size;
     if (s->size != expected)
         return CORRUPT("section %u (%s): size %llu, expected %llu (%llu elements of %u bytes)", i, k->name,
                        (unsigned long long)s->size, (unsigned long long)expected,
-                       (unsigned long long)element_count(in, s->type), element_size);
+                       (unsigned long long)element_count(in, s), element_size);
     if (s->codec == CBVH_CODEC_RAW && s->stored_size != s->size)
         return CORRUPT("section %u (%s): raw section with stored_size %llu != size %llu", i, k->name,
                        (unsigned long long)s->stored_size, (unsigned long long)s->size);
@@ -118,8 +128,8 @@ cbvh_result cbvh_validate_table(struct cbvh_file *f, cbvh_section_map *map, cbvh
         if (r != CBVH_OK)
             return r;
         /* A raw known section used in place has its CRC checked with its content, chunk by chunk. */
-        const int t = s->type >= 1 && s->type <= CBVH_KNOWN_SECTIONS ? (int)s->type - 1 : -1;
-        if (t >= 0 && s->codec == CBVH_CODEC_RAW && cbvh_in_place(f)) {
+        const int t = cbvh_section_slot(s->type);
+        if (t >= 0 && map->index[t] == (int)i && s->codec == CBVH_CODEC_RAW && cbvh_in_place(f)) {
             map->crc_pending[t] = 1;
             continue;
         }
@@ -131,9 +141,9 @@ cbvh_result cbvh_validate_table(struct cbvh_file *f, cbvh_section_map *map, cbvh
         return CORRUPT("trailing bytes: the last section ends at byte %llu but the file has %llu bytes",
                        (unsigned long long)prev_end, (unsigned long long)file_size);
     for (uint32_t type = 1; type <= CBVH_KNOWN_SECTIONS; type++)
-        if (cbvh_section_kind_of(type)->required && map->index[type - 1] < 0)
+        if (cbvh_section_kind_of(type) && cbvh_section_kind_of(type)->required && map->index[type - 1] < 0)
             return CORRUPT("required section %s is missing", cbvh_section_kind_of(type)->name);
-    if (map->index[CBVH_SECTION_REMAP - 1] < 0 && f->original_triangle_count != f->info.triangle_count)
+    if (map->index[cbvh_section_slot(CBVH_SECTION_REMAP)] < 0 && f->original_triangle_count != f->info.triangle_count)
         return CORRUPT("header byte %d: original_triangle_count %u != triangle_count %u without a REMAP section",
                        CBVH_HDR_ORIGINAL_TRIANGLES, f->original_triangle_count, f->info.triangle_count);
     return CBVH_OK;

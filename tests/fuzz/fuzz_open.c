@@ -34,6 +34,21 @@ static void open_and_query(const guard_buffer *g, uint64_t seed)
     }
     cbvh_section_info none;
     FUZZ_CHECK(!cbvh_file_get_section(f, info.section_count, &none), "section past the count described");
+    /* material names: each one readable, in (id, name) order, and found by its id */
+    uint32_t prev_id = 0;
+    const char *prev = NULL;
+    for (uint32_t k = 0; k < info.material_name_count; k++) {
+        uint32_t id;
+        const char *name = cbvh_file_get_material_name(f, k, &id);
+        FUZZ_CHECK(name != NULL, "material name %u of %u missing", k, info.material_name_count);
+        FUZZ_CHECK(!prev || id > prev_id || (id == prev_id && strcmp(prev, name) < 0),
+                   "material name %u out of (id, name) order", k);
+        const char *first = cbvh_file_find_material_name(f, id);
+        FUZZ_CHECK(first && (first == name || (prev && prev_id == id)), "material name %u not found by id %u", k, id);
+        prev = name;
+        prev_id = id;
+    }
+    FUZZ_CHECK(!cbvh_file_get_material_name(f, info.material_name_count, NULL), "material name past the count");
     fuzz_check_queries(f, g->data, g->size, seed, 0);
     cbvh_close(f);
 }

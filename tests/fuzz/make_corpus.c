@@ -38,6 +38,10 @@ static uint8_t *cook(const scene *s, cbvh_layout layout, int quantized, int leve
     o.compress_level = level;
     o.keep_remap = keep_remap;
     o.layout = layout;
+    /* scenes with material ids get names too (a MATERIAL_NAMES section) */
+    static const cbvh_material_name names[] = { { 0, "stone" }, { 9, "glass" }, { 70000, "wood" }, { 140000, "metal" } };
+    o.material_names = s->material_ids ? names : NULL;
+    o.material_name_count = s->material_ids ? 4 : 0;
     void *out = NULL;
     cbvh_error err;
     if (cbvh_cook(&m, &o, NULL, &out, size, NULL, &err) != CBVH_OK) {
@@ -186,6 +190,12 @@ int main(int argc, char **argv)
     free(raw);
     write_cooked(&sphere, wide4, 1, 0, 1, "good-w4-sphere-q16.cbvh");
     write_cooked(&cube, wide4, 0, 0, 0, "good-w4-cube-noremap.cbvh");
+    /* one material for all triangles (MATERIALS' uniform encoding) */
+    cube.material_ids = malloc(cube.triangle_count * sizeof(uint32_t));
+    for (size_t t = 0; t < cube.triangle_count; t++)
+        cube.material_ids[t] = 9;
+    write_cooked(&cube, binary, 0, 0, 1, "good-cube-uniform-material-names.cbvh");
+    write_cooked(&cube, wide4, 0, 6, 1, "good-w4-cube-uniform-material-names-zlib.cbvh");
     write_cooked(&soup, wide4, 1, 9, 1, "good-w4-soup-materials-q16-zlib.cbvh");
 
     /* cook seeds: a tetrahedron, a cube with a degenerate and a duplicated
