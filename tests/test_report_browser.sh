@@ -9,6 +9,10 @@
 name=test_report_browser.sh
 . "$(dirname "$0")/tool_test_lib.sh"
 
+if [ "${CBVH_SKIP_BROWSER:-0}" = 1 ]; then
+    echo "$name: SKIP: CBVH_SKIP_BROWSER=1 (quickstart's distcheck: the browser test ran in the main check)"
+    exit 77
+fi
 chromium=${CBVH_CHROMIUM:-}
 if [ -z "$chromium" ]; then
     for c in chromium chromium-browser google-chrome; do

@@ -99,6 +99,9 @@ assert cook["file_size"] == info["file_size"]
 assert sum(info["tree"]["leaf_histogram"].values()) == info["tree"]["leaves"]
 assert info["box_inflation"]["max"] >= info["box_inflation"]["mean"] >= 0
 assert abs(cook["tree"]["sah_cost"] - info["tree"]["sah_cost"]) <= 1e-3 * info["tree"]["sah_cost"]
+# the worst box is named by its node (a wide4 node carries its children's boxes: and a child slot)
+assert info["layout"] == "wide4" and info["box_inflation"]["max_node"] < info["tree"]["nodes"], info
+assert 0 <= info["box_inflation"]["max_slot"] < 4, info
 EOF
     "$CBVH" cook --quiet gen:cube "$tmp/we\"ird\\name.cbvh" >/dev/null &&
         "$CBVH" info --json "$tmp/we\"ird\\name.cbvh" >"$tmp/weird.json"

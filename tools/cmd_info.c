@@ -17,7 +17,9 @@ static const char usage[] =
     "tree (node visit and triangle test both cost 1, relative to the root's surface area) with\n"
     "the dequantized boxes and with exact boxes; bytes per triangle by section; and the error\n"
     "of the 16-bit node boxes: the mean and worst surface-area inflation of each node's\n"
-    "dequantized box over the exact float box of the triangles below it; the material\n"
+    "dequantized box over the exact float box of the triangles below it (the worst one\n"
+    "named by its node, and with wide4 its child slot: a wide4 node holds its children's\n"
+    "boxes); the material\n"
     "ids (per triangle, one for all, or none) and the material names the file stores.\n"
     "\n"
     "Options:\n"
@@ -40,6 +42,15 @@ static const char *materials_kind(const cbvh_file *f)
     if (!f->materials)
         return "none";
     return f->material_encoding == CBVH_MATS_UNIFORM ? "uniform" : "per-triangle";
+}
+
+/* The node and (wide4: the child slot) that box id `box` names: a binary node carries its own box, a wide4
+ * node its children's (layout/tree.h). */
+static void box_place(const cbvh_file *f, uint32_t box, uint32_t *node, uint32_t *slot)
+{
+    const int wide = f->info.layout == CBVH_LAYOUT_WIDE4;
+    *node = wide ? box / CBVH_W4_WIDTH : box;
+    *slot = wide ? box % CBVH_W4_WIDTH : 0;
 }
 
 static void json_vec3(json_writer *w, const char *key, const float v[3])
@@ -128,7 +139,11 @@ static void print_json(const char *path, const cbvh_file *f, const tree_stats *t
     json_begin_object(&w, "box_inflation");
     json_double(&w, "mean", ts->inflation_mean);
     json_double(&w, "max", ts->inflation_max);
-    json_uint(&w, "max_node", ts->inflation_max_box);
+    uint32_t node, slot;
+    box_place(f, ts->inflation_max_box, &node, &slot);
+    json_uint(&w, "max_node", node);
+    if (in->layout == CBVH_LAYOUT_WIDE4)
+        json_uint(&w, "max_slot", slot);
     json_double(&w, "leaf_mean", ts->leaf_inflation_mean);
     json_double(&w, "internal_mean", ts->internal_inflation_mean);
     json_end_object(&w);
@@ -182,10 +197,15 @@ static void print_text(const char *path, const cbvh_file *f, const tree_stats *t
             printf("  %u: %llu", (unsigned)k, (unsigned long long)ts->leaf_histogram[k]);
     printf("\nSAH cost: %.3f with the 16-bit boxes, %.3f with exact boxes (%+.2f%%)\n", ts->sah_cost,
            ts->sah_cost_exact, ts->sah_cost_exact > 0 ? 100.0 * (ts->sah_cost / ts->sah_cost_exact - 1.0) : 0.0);
+    uint32_t node, slot;
+    box_place(f, ts->inflation_max_box, &node, &slot);
     printf("box inflation (surface area, 16-bit vs exact): mean %.3f%% (leaves %.3f%%, internal %.3f%%), "
-           "worst %.3f%% at node %u\n",
+           "worst %.3f%% at node %u",
            100.0 * ts->inflation_mean, 100.0 * ts->leaf_inflation_mean, 100.0 * ts->internal_inflation_mean,
-           100.0 * ts->inflation_max, (unsigned)ts->inflation_max_box);
+           100.0 * ts->inflation_max, (unsigned)node);
+    if (in->layout == CBVH_LAYOUT_WIDE4)
+        printf(", child slot %u", (unsigned)slot);
+    printf("\n");
 }
 
 int cmd_info(int argc, char **argv)
