@@ -23,6 +23,7 @@ ALIGN = 64
 NODES, TRIANGLES, VERTICES, REMAP, MATERIALS = 1, 2, 3, 4, 5
 MATERIAL_NAMES = 0x80000006  # ancillary (bit 31)
 MATS_UNIFORM = 3  # MATERIALS encoding: one u32 id for every triangle
+REMAP_U24 = 2  # REMAP encoding: 3 bytes per id
 RAW, ZLIB = 0, 1
 TRIS_U16, TRIS_U32, TRIS_DELTA16 = 0, 1, 2
 BINARY, WIDE4 = 0, 1  # NODES encodings: the node layouts
@@ -280,8 +281,11 @@ def cook(positions, triangles, max_leaf=4, vertex_format=VERTS_F32, tri_encoding
         Section(VERTICES, vertex_format, vdata, codec),
     ]
     if keep_remap and ([i for i, _ in cooked] != list(range(len(triangles))) or remap_encoding is not None):
-        enc = remap_encoding if remap_encoding is not None else (0 if original <= 65536 else 1)
-        sections.append(Section(REMAP, enc, b"".join(struct.pack("<" + "HI"[enc], i) for i, _ in cooked), codec))
+        enc = remap_encoding
+        if enc is None:  # u16, else u24, else u32
+            enc = 0 if original <= 65536 else REMAP_U24 if original <= 1 << 24 else 1
+        width = {0: 2, 1: 4, REMAP_U24: 3}[enc]
+        sections.append(Section(REMAP, enc, b"".join(i.to_bytes(width, "little") for i, _ in cooked), codec))
     elif keep_remap:
         original = len(cooked)
     if materials is not None:
@@ -463,6 +467,21 @@ def _():
         "the quad's 2 triangles at original ids 1 and 4 of 5 (ids 0, 2, 3 degenerate), REMAP u16, MATERIALS u8 (3 + 7 x id)")
 def _():
     return serialize(*cook(*QUAD_SPARSE, max_leaf=1, materials=materials_for(QUAD_SPARSE, 3), remap_encoding=0))
+
+
+@vector("good-remap-u24", "OK", "-", "as good-remap-materials with REMAP u24 (3 bytes per original id)")
+def _():
+    return serialize(*cook(*BOX_DEGENERATE, max_leaf=2, materials=materials_for(BOX_DEGENERATE, 1),
+                           remap_encoding=REMAP_U24))
+
+
+@vector("bad-remap-u24-range", "CORRUPT", "original id 16777215",
+        "good-remap-u24 with the first id 0xFFFFFF, past original_triangle_count 14")
+def _():
+    h, s = cook(*BOX_DEGENERATE, max_leaf=2, materials=materials_for(BOX_DEGENERATE, 1), remap_encoding=REMAP_U24)
+    r = find(s, REMAP)
+    r.data = b"\xff\xff\xff" + r.data[3:]
+    return serialize(h, s)
 
 
 @vector("good-materials-u16-cooked-ids", "OK", "-",

@@ -63,6 +63,12 @@ status=0
     make -j"$jobs" >>"$log" 2>&1
     built=$(date +%s)
     echo "mingw_wine.sh: built in $((built - start)) s; running the tests under wine"
+    # The first wine start creates a new prefix: two tests starting at once on a new one race for its
+    # server (seen on a fresh machine: "chdir to /tmp/wine-*/server-*: No such file or directory"). So the
+    # prefix is made first, and one server stays up for the whole run.
+    wineboot -i >>"$log" 2>&1
+    wineserver -w
+    wineserver -p >>"$log" 2>&1
     make -j"$jobs" check LOG_COMPILER=wine >>"$log" 2>&1
 ) || status=$?
 end=$(date +%s)

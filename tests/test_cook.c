@@ -338,13 +338,15 @@ static void parse(const uint8_t *b, size_t size, parsed *p)
     }
     /* REMAP */
     if (data[4]) {
-        uint32_t narrow = p->orig_count <= 65536;
-        assert_int_equal(p->encoding[4], narrow ? 0 : 1);
-        assert_int_equal(p->size[4], (narrow ? 2 : 4) * (uint64_t)p->tri_count);
+        /* the narrowest that holds the ids: u16 (encoding 0), u24 (2), u32 (1) */
+        const uint32_t width = p->orig_count <= 65536 ? 2 : p->orig_count <= (1u << 24) ? 3 : 4;
+        assert_int_equal(p->encoding[4], width == 2 ? 0 : width == 3 ? 2 : 1);
+        assert_int_equal(p->size[4], width * (uint64_t)p->tri_count);
         p->remap = calloc(p->tri_count, sizeof(uint32_t));
         uint8_t *seen = calloc(p->orig_count, 1);
         for (uint32_t t = 0; t < p->tri_count; t++) {
-            p->remap[t] = narrow ? rd16(data[4] + 2 * (size_t)t) : cbvh_read_u32(data[4] + 4 * (size_t)t);
+            const uint8_t *e = data[4] + width * (size_t)t;
+            p->remap[t] = width == 2 ? rd16(e) : width == 3 ? rd16(e) | (uint32_t)e[2] << 16 : cbvh_read_u32(e);
             assert_true(p->remap[t] < p->orig_count);
             assert_int_equal(seen[p->remap[t]], 0);
             seen[p->remap[t]] = 1;
@@ -835,7 +837,7 @@ static void test_large_mesh_encodings(void **state)
     cook_and_check(&m, NULL, &c);
     assert_int_equal(c.p.encoding[2], 2);
     assert_true(c.p.vert_count >= 301 * 301);
-    assert_int_equal(c.p.encoding[4], 1); /* REMAP u32: 180000 triangles */
+    assert_int_equal(c.p.encoding[4], 2); /* REMAP u24: 180000 triangles (u32 past 2^24) */
     cooked_free(&c);
     mesh_free(&m);
 }

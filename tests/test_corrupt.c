@@ -261,8 +261,9 @@ static int expected_code(const uint8_t *orig, const uint8_t *mut, size_t pos)
         if (field < 4 && !ancillary && rd32(e) > 5)
             return CBVH_ERROR_UNSUPPORTED;
         if (field >= E_ENCODING) {
-            /* encodings per type 1..5 (NODES: binary, wide4; MATERIALS: u8, u16, u32, uniform) */
-            static const uint32_t known[6] = { 0, 2, 3, 2, 2, 4 };
+            /* encodings per type 1..5 (NODES: binary, wide4; REMAP: u16, u32, u24; MATERIALS: u8, u16, u32,
+             * uniform) */
+            static const uint32_t known[6] = { 0, 2, 3, 2, 3, 4 };
             uint32_t type = rd32(e), enc = rd32(e + E_ENCODING);
             if (type >= 1 && type <= 5 && enc >= known[type])
                 return CBVH_ERROR_UNSUPPORTED;

@@ -111,6 +111,8 @@ static const expectation expectations[] = {
     { "good-remap-u32-materials-u32-zlib", CBVH_OK, "",
       { MESH_BOX_DEGENERATE, 12, 8, 15, 4, 2, 1, 0, 2, 0, 5, 70000, BIN, 0, 0 } },
     { "good-remap-sparse", CBVH_OK, "", { MESH_QUAD_SPARSE, 2, 4, 3, 2, 1, 1, 0, 0, 0, 5, 3, BIN, 0, 0 } },
+    { "good-remap-u24", CBVH_OK, "", { MESH_BOX_DEGENERATE, 12, 8, 15, 4, 2, 1, 0, 0, 0, 5, 1, BIN, 0, 0 } },
+    BAD("bad-remap-u24-range", "original id 16777215"),
     { "good-materials-u16-cooked-ids", CBVH_OK, "", { MESH_BOX, 12, 8, 15, 4, 2, 0, 0, 0, 0, 4, 1000, BIN, 0, 0 } },
     { "good-ancillary", CBVH_OK, "", { MESH_BOX, 12, 8, 15, 4, 2, 1, 0, 0, 0, 6, 0, BIN, 0, 0 } },
     { "good-compat-flags", CBVH_OK, "", { MESH_BOX, 12, 8, 15, 4, 2, 1, 0, 0, 0x80000005u, 4, 0, BIN, 0, 0 } },

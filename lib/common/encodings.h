@@ -58,7 +58,10 @@ static inline const cbvh_section_kind *cbvh_section_kind_of(uint32_t type)
             [CBVH_TRIS_U32] = { 12, 0xFFFFFFFFu, "u32x3" },
             [CBVH_TRIS_DELTA16] = { 8, 0xFFFFFFFFu, "delta16" } } }, /* u32 base, two i16 deltas */
         { "VERTICES", 1, 0, 0, { [CBVH_VERTS_F32] = { 12, 0, "f32x3" }, [CBVH_VERTS_Q16] = { 6, 0, "q16x3" } } },
-        { "REMAP", 0, 0, 0, { [CBVH_REMAP_U16] = { 2, 0xFFFFu, "u16" }, [CBVH_REMAP_U32] = { 4, 0xFFFFFFFFu, "u32" } } },
+        { "REMAP", 0, 0, 0,
+          { [CBVH_REMAP_U16] = { 2, 0xFFFFu, "u16", 0 },
+            [CBVH_REMAP_U32] = { 4, 0xFFFFFFFFu, "u32", 0 },
+            [CBVH_REMAP_U24] = { 3, 0xFFFFFFu, "u24", 0 } } },
         { "MATERIALS", 0, 0, 0,
           { [CBVH_MATS_U8] = { 1, 0xFFu, "u8", 0 },
             [CBVH_MATS_U16] = { 2, 0xFFFFu, "u16", 0 },

@@ -99,6 +99,10 @@ static inline uint32_t cbvh_original_id(const struct cbvh_file *f, uint32_t tri)
         return tri;
     if (f->remap_encoding == CBVH_REMAP_U16)
         return ((const uint16_t *)f->remap)[tri];
+    if (f->remap_encoding == CBVH_REMAP_U24) {
+        const uint8_t *p = (const uint8_t *)f->remap + 3u * (size_t)tri;
+        return (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16;
+    }
     return ((const uint32_t *)f->remap)[tri];
 }
 

@@ -57,7 +57,7 @@ enum { CBVH_CODEC_RAW = 0, CBVH_CODEC_ZLIB = 1 };
 enum { CBVH_NODES_Q16 = 0, CBVH_NODES_W4 = 1 };                  /* binary, wide4 layout */
 enum { CBVH_TRIS_U16 = 0, CBVH_TRIS_U32 = 1, CBVH_TRIS_DELTA16 = 2 };
 enum { CBVH_VERTS_F32 = 0, CBVH_VERTS_Q16 = 1 };
-enum { CBVH_REMAP_U16 = 0, CBVH_REMAP_U32 = 1 };
+enum { CBVH_REMAP_U16 = 0, CBVH_REMAP_U32 = 1, CBVH_REMAP_U24 = 2 };
 enum { CBVH_MATS_U8 = 0, CBVH_MATS_U16 = 1, CBVH_MATS_U32 = 2, CBVH_MATS_UNIFORM = 3 };
 enum { CBVH_NAMES_TABLE = 0 }; /* MATERIAL_NAMES: u32 count, (u32 id, u32 offset) entries, NUL-ended names */
 

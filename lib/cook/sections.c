@@ -118,14 +118,18 @@ static int encode_vertices(const cook_layout *l, const cook_mesh *m, const uint1
     return 1;
 }
 
-/* The narrowest encoding of an id section (REMAP, MATERIALS: their encodings go narrowest first) that holds
- * `largest`. */
+/* The narrowest per-triangle encoding of an id section (REMAP, MATERIALS) that holds `largest`. */
 static uint32_t id_encoding(uint32_t type, uint32_t largest)
 {
-    uint32_t enc = 0;
-    while (cbvh_encoding_of(type, enc)->max_value < largest)
-        enc++;
-    return enc;
+    uint32_t best = 0, best_size = UINT32_MAX;
+    for (uint32_t enc = 0; enc < CBVH_MAX_ENCODINGS; enc++) {
+        const cbvh_encoding *e = cbvh_encoding_of(type, enc);
+        if (e && !e->uniform && e->max_value >= largest && e->element_size < best_size) {
+            best = enc;
+            best_size = e->element_size;
+        }
+    }
+    return best;
 }
 
 /* `count` ids as a section of `type` in the narrowest encoding that holds `largest`. */
@@ -138,12 +142,16 @@ static int encode_ids(const cbvh_allocator *a, cook_sections *out, uint32_t type
     if (!p)
         return 0;
     for (uint32_t i = 0; i < count; i++, p += elem) {
-        if (elem == 1)
+        if (elem == 1) {
             *p = (uint8_t)values[i];
-        else if (elem == 2)
+        } else if (elem == 2) {
             put_u16(p, values[i]);
-        else
+        } else if (elem == 3) {
+            put_u16(p, values[i]);
+            p[2] = (uint8_t)(values[i] >> 16);
+        } else {
             cbvh_write_u32(p, values[i]);
+        }
     }
     return 1;
 }
