@@ -202,7 +202,10 @@ def place_wide4(tree, decoded, grid):
             internal = [s for s in range(len(slots)) if slots[s][0] == "node"]
             if not internal:
                 break
-            s = max(internal, key=lambda s: (area(slots[s]), -s))  # the largest area, ties: the first slot
+            # the first internal slot whose children are both leaves (it would make a node of two slots),
+            # else the largest area (ties: the first slot)
+            twins = [s for s in internal if slots[s][1][0] == "leaf" and slots[s][2][0] == "leaf"]
+            s = twins[0] if twins else max(internal, key=lambda s: (area(slots[s]), -s))
             slots[s:s + 1] = [slots[s][1], slots[s][2]]
         return slots
 
