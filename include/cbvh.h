@@ -14,6 +14,8 @@ extern "C" {
 #define CBVH_VERSION_MINOR 1
 #define CBVH_VERSION_PATCH 0
 #define CBVH_VERSION_STRING "0.1.0"
+/* The same as one number, major x 10000 + minor x 100 + patch: ordered as versions are. */
+#define CBVH_VERSION_NUMBER (CBVH_VERSION_MAJOR * 10000u + CBVH_VERSION_MINOR * 100u + CBVH_VERSION_PATCH)
 
 /* Newest file format version this library reads and the one it writes. */
 #define CBVH_FORMAT_VERSION 1
@@ -54,6 +56,11 @@ typedef enum cbvh_result {
 
 /* A short, static, English description of a result code; never NULL. */
 CBVH_API const char *cbvh_result_string(cbvh_result result);
+
+/* The version of the library running (CBVH_VERSION_NUMBER and CBVH_VERSION_STRING as it was built), which
+ * may differ from the cbvh.h a program was compiled with when the library is shared. */
+CBVH_API uint32_t cbvh_version(void);
+CBVH_API const char *cbvh_version_string(void);
 
 /* Detailed error: the code plus a message saying what is wrong and where
  * (for files: section, node or byte offset; for meshes: triangle or vertex).
@@ -335,6 +342,8 @@ typedef struct cbvh_file_info {
     float grid_origin[3], grid_scale[3];
     uint32_t layout;              /* cbvh_layout of the nodes */
     uint32_t material_name_count; /* names in the MATERIAL_NAMES section; 0 without one */
+    uint32_t original_triangle_count; /* original triangle ids are below it: the size of a side table
+                                       * indexed by the ids queries report (= triangle_count without REMAP) */
 } cbvh_file_info;
 
 /* Describes an opened file: writes the first `struct_size` bytes of *info (struct_size must be

@@ -385,6 +385,20 @@ static void test_allocation_failures(void **state)
 
 /* cbvh_file_get_info writes only the bytes the caller's size covers (a program built against an older
  * cbvh.h has a shorter struct) and refuses sizes out of range without writing anything. */
+/* The run-time version is the header's, as a number ordered like versions and as the string. */
+static void test_version(void **state)
+{
+    (void)state;
+    unsigned major, minor, patch;
+    assert_int_equal(sscanf(cbvh_version_string(), "%u.%u.%u", &major, &minor, &patch), 3);
+    assert_int_equal(cbvh_version(), major * 10000u + minor * 100u + patch);
+    assert_int_equal(cbvh_version(), CBVH_VERSION_NUMBER);
+    assert_string_equal(cbvh_version_string(), CBVH_VERSION_STRING);
+    assert_int_equal(major, CBVH_VERSION_MAJOR);
+    assert_int_equal(minor, CBVH_VERSION_MINOR);
+    assert_int_equal(patch, CBVH_VERSION_PATCH);
+}
+
 static void test_info_struct_size(void **state)
 {
     (void)state;
@@ -771,6 +785,7 @@ int main(void)
         cmocka_unit_test(test_changes_behind_crcs),
         cmocka_unit_test(test_allocation_failures),
         cmocka_unit_test(test_arguments),
+        cmocka_unit_test(test_version),
         cmocka_unit_test(test_info_struct_size),
         cmocka_unit_test(test_path_errors),
         cmocka_unit_test(test_read_mode_survives_truncation),

@@ -292,6 +292,8 @@ static void check_info(const cbvh_file_info *in, const good *g, const mesh *m)
     assert_int_equal(in->has_remap, g->has_remap);
     assert_int_equal(in->has_materials, g->material_base != 0 || g->uniform_material != 0);
     assert_int_equal(in->material_name_count, g->name_count);
+    /* original ids: the input's triangles, the dropped ones included, when remapped; else cooked ids */
+    assert_int_equal(in->original_triangle_count, g->has_remap ? m->triangle_count : g->triangle_count);
     assert_int_equal(in->vertex_format, g->vertex_format);
     assert_int_equal(in->index_encoding, g->index_encoding);
     assert_int_equal(in->compat_flags, g->compat_flags);

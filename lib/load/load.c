@@ -66,6 +66,7 @@ static cbvh_result place_sections(struct cbvh_file *f, const cbvh_section_map *m
     if (f->materials)
         f->material_encoding = f->sections[map->index[CBVH_SECTION_MATERIALS - 1]].encoding;
     f->info.has_remap = f->remap != NULL;
+    f->info.original_triangle_count = f->original_triangle_count;
     f->info.has_materials = f->materials != NULL;
     f->info.vertex_format = f->vertex_encoding;
     f->info.index_encoding = f->triangle_encoding;
