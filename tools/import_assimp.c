@@ -298,7 +298,9 @@ static struct aiFile *io_open(struct aiFileIO *io, const char *path, const char 
     import_options *o = (import_options *)(void *)io->UserData;
     FILE *file = fopen(path, mode);
     if (!file) {
-        if (errno == ENOENT) /* assimp looks for a side file as named and as "./" + name: report it once */
+        /* assimp looks for a side file as named, as "./" + name, and when that fails under names it pastes
+         * together from the folder and the path (they hold "//"): the first name is the one to report */
+        if (errno == ENOENT && !strstr(path, "//"))
             path_list_add(&o->missing, strncmp(path, "./", 2) ? path : path + 2);
         return NULL;
     }
