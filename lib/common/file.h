@@ -43,30 +43,33 @@ struct cbvh_file {
     uint32_t owned_count;
 };
 
+/* Triangle k's three vertex indices from a TRIANGLES section of encoding `enc` (CBVH_TRIS_*). Inlined
+ * with a constant encoding, the switch folds away (the query kernels' leaf loops). */
+static inline void cbvh_indices_decode(const void *tris, int enc, uint32_t k, uint32_t idx[3])
+{
+    if (enc == CBVH_TRIS_DELTA16) { /* u32 base, i16 d1, i16 d2 */
+        const uint8_t *t = (const uint8_t *)tris + 8u * (size_t)k;
+        const int16_t *d = (const int16_t *)(const void *)(t + 4);
+        idx[0] = *(const uint32_t *)(const void *)t;
+        idx[1] = idx[0] + (uint32_t)(int32_t)d[0];
+        idx[2] = idx[0] + (uint32_t)(int32_t)d[1];
+    } else if (enc == CBVH_TRIS_U16) {
+        const uint16_t *t = (const uint16_t *)tris + 3u * (size_t)k;
+        idx[0] = t[0];
+        idx[1] = t[1];
+        idx[2] = t[2];
+    } else {
+        const uint32_t *t = (const uint32_t *)tris + 3u * (size_t)k;
+        idx[0] = t[0];
+        idx[1] = t[1];
+        idx[2] = t[2];
+    }
+}
+
 /* Cooked triangle index -> its three vertex indices. */
 static inline void cbvh_triangle_indices(const struct cbvh_file *f, uint32_t tri, uint32_t idx[3])
 {
-    switch (f->triangle_encoding) {
-    case CBVH_TRIS_U16: {
-        const uint16_t *t = (const uint16_t *)f->triangles + 3u * (size_t)tri;
-        idx[0] = t[0]; idx[1] = t[1]; idx[2] = t[2];
-        break;
-    }
-    case CBVH_TRIS_U32: {
-        const uint32_t *t = (const uint32_t *)f->triangles + 3u * (size_t)tri;
-        idx[0] = t[0]; idx[1] = t[1]; idx[2] = t[2];
-        break;
-    }
-    default: { /* CBVH_TRIS_DELTA16: u32 base, i16 d1, i16 d2 */
-        const uint8_t *t = (const uint8_t *)f->triangles + 8u * (size_t)tri;
-        uint32_t base = *(const uint32_t *)t;
-        const int16_t *d = (const int16_t *)(t + 4);
-        idx[0] = base;
-        idx[1] = base + (uint32_t)(int32_t)d[0];
-        idx[2] = base + (uint32_t)(int32_t)d[1];
-        break;
-    }
-    }
+    cbvh_indices_decode(f->triangles, (int)f->triangle_encoding, tri, idx);
 }
 
 /* Vertex index -> position, decoded exactly as the cooker decoded it. */

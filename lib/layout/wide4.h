@@ -95,17 +95,20 @@ static inline uint64_t cbvh_w4_make_meta(const uint32_t count[4], uint32_t used,
 }
 
 /* The reference of slot s of a node (used, meta as read): an internal child's
- * node index, or a leaf's packed triangle range. */
+ * node index, or a leaf's packed triangle range. A leaf's first triangle is
+ * the node's first plus the counts of the leaf slots before it: their number
+ * plus the sum of their count nibbles (the nibbles of other slots are 0, as
+ * the loader checked; each is at most 7, so two fit a byte). */
 static inline uint32_t cbvh_w4_child_ref(const uint8_t *node, uint64_t meta, uint32_t s)
 {
     const uint32_t below = (1u << s) - 1u, internal = cbvh_w4_internal(meta);
     if (internal >> s & 1u)
         return cbvh_w4_first_child(node) + cbvh_w4_popcount(internal & below);
-    uint32_t first = cbvh_w4_first_triangle(node);
+    const uint32_t nibbles = (uint32_t)meta & ((1u << (4u * s)) - 1u);
+    const uint32_t pairs = (nibbles & 0x0F0Fu) + (nibbles >> 4 & 0x0F0Fu);
     const uint32_t leaves = cbvh_w4_used(meta) & ~internal & below;
-    for (uint32_t t = 0; t < s; t++)
-        if (leaves >> t & 1u)
-            first += cbvh_w4_count(meta, t);
+    const uint32_t first =
+        cbvh_w4_first_triangle(node) + cbvh_w4_popcount(leaves) + (pairs & 0xFFu) + (pairs >> 8);
     return CBVH_W4_LEAF_BIT | (cbvh_w4_count(meta, s) - 1u) << CBVH_W4_COUNT_SHIFT | first;
 }
 

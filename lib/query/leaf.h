@@ -33,25 +33,8 @@ CBVH_KERNEL void leaf_triangle(const void *restrict tris, const int tri_enc, con
                                const int vert_enc, const float *restrict grid_origin,
                                const float *restrict grid_scale, uint32_t k, float a[3], float b[3], float c[3])
 {
-    uint32_t i0, i1, i2;
-    if (tri_enc == CBVH_TRIS_DELTA16) { /* u32 base, i16 d1, i16 d2 */
-        const uint8_t *t = (const uint8_t *)tris + 8u * (size_t)k;
-        const int16_t *d = (const int16_t *)(const void *)(t + 4);
-        i0 = *(const uint32_t *)(const void *)t;
-        i1 = i0 + (uint32_t)(int32_t)d[0];
-        i2 = i0 + (uint32_t)(int32_t)d[1];
-    } else if (tri_enc == CBVH_TRIS_U16) {
-        const uint16_t *t = (const uint16_t *)tris + 3u * (size_t)k;
-        i0 = t[0];
-        i1 = t[1];
-        i2 = t[2];
-    } else {
-        const uint32_t *t = (const uint32_t *)tris + 3u * (size_t)k;
-        i0 = t[0];
-        i1 = t[1];
-        i2 = t[2];
-    }
-    const uint32_t idx[3] = {i0, i1, i2};
+    uint32_t idx[3];
+    cbvh_indices_decode(tris, tri_enc, k, idx);
     float *const out[3] = {a, b, c};
     for (int v = 0; v < 3; v++) {
         if (vert_enc == CBVH_VERTS_F32) {
@@ -68,23 +51,57 @@ CBVH_KERNEL void leaf_triangle(const void *restrict tris, const int tri_enc, con
 }
 
 #ifdef CBVH_HAVE_SIMD
+/* Vertex i as (x, y, z, 0): two loads for floats (never past the vertex's 12 bytes), or dequantized. */
+CBVH_KERNEL __m128 leaf_vertex4(const void *restrict verts, const int vert_enc, const float *restrict grid_origin,
+                                const float *restrict grid_scale, uint32_t i)
+{
+    if (vert_enc == CBVH_VERTS_F32) {
+        const float *q = (const float *)verts + 3u * (size_t)i;
+        return _mm_movelh_ps(_mm_loadl_pi(_mm_setzero_ps(), (const __m64 *)(const void *)q), _mm_load_ss(q + 2));
+    }
+    const uint16_t *q = (const uint16_t *)verts + 3u * (size_t)i;
+    return _mm_setr_ps(cbvh_dequantize(q[0], grid_origin[0], grid_scale[0]),
+                       cbvh_dequantize(q[1], grid_origin[1], grid_scale[1]),
+                       cbvh_dequantize(q[2], grid_origin[2], grid_scale[2]), 0.0f);
+}
+
+/* Triangles k + lane[j] (j = 0..3) as coordinate vectors: c[v][a] holds axis a of vertex v, lane j for
+ * triangle k + lane[j]. */
+CBVH_KERNEL void leaf_gather4(const void *restrict tris, const int tri_enc, const void *restrict verts,
+                              const int vert_enc, const float *restrict grid_origin,
+                              const float *restrict grid_scale, uint32_t k, const uint32_t lane[4], __m128 c[3][3])
+{
+    uint32_t idx[4][3];
+    for (uint32_t j = 0; j < 4; j++)
+        cbvh_indices_decode(tris, tri_enc, k + lane[j], idx[j]);
+    for (uint32_t v = 0; v < 3; v++) {
+        __m128 r0 = leaf_vertex4(verts, vert_enc, grid_origin, grid_scale, idx[0][v]);
+        __m128 r1 = leaf_vertex4(verts, vert_enc, grid_origin, grid_scale, idx[1][v]);
+        __m128 r2 = leaf_vertex4(verts, vert_enc, grid_origin, grid_scale, idx[2][v]);
+        __m128 r3 = leaf_vertex4(verts, vert_enc, grid_origin, grid_scale, idx[3][v]);
+        _MM_TRANSPOSE4_PS(r0, r1, r2, r3);
+        c[v][0] = r0;
+        c[v][1] = r1;
+        c[v][2] = r2;
+    }
+}
+
 /* The first test of cbvh_ray_triangle (ray_triangle.h) on four triangles at once, lane for lane the same
  * float operations in the same order (the build contracts no multiply-add): the vertices relative to the
  * origin, sheared, then the three edge functions. Returns the bits of the lanes that test rejects for sure
  * (finite edge functions of both signs); the scalar test then decides every other lane exactly as it would
- * alone, so answers are the same with or without this filter. tri[j][v][x]: lane j's vertex v. */
-CBVH_KERNEL uint32_t leaf_reject4_sse2(const struct cbvh_ray_shear *restrict s, float tri[4][3][3])
+ * alone, so answers are the same with or without this filter. c[v][a]: axis a of vertex v, a lane per
+ * triangle (leaf_gather4). */
+CBVH_KERNEL uint32_t leaf_reject4_sse2(const struct cbvh_ray_shear *restrict s, const __m128 c[3][3])
 {
     const uint32_t kx = s->kx, ky = s->ky, kz = s->kz;
     const __m128 sx = _mm_set1_ps(s->sx), sy = _mm_set1_ps(s->sy);
     const __m128 ox = _mm_set1_ps(s->org[kx]), oy = _mm_set1_ps(s->org[ky]), oz = _mm_set1_ps(s->org[kz]);
     __m128 px[3], py[3];
     for (int v = 0; v < 3; v++) {
-        const __m128 z = _mm_sub_ps(_mm_setr_ps(tri[0][v][kz], tri[1][v][kz], tri[2][v][kz], tri[3][v][kz]), oz);
-        const __m128 x = _mm_setr_ps(tri[0][v][kx], tri[1][v][kx], tri[2][v][kx], tri[3][v][kx]);
-        const __m128 y = _mm_setr_ps(tri[0][v][ky], tri[1][v][ky], tri[2][v][ky], tri[3][v][ky]);
-        px[v] = _mm_sub_ps(_mm_sub_ps(x, ox), _mm_mul_ps(sx, z));
-        py[v] = _mm_sub_ps(_mm_sub_ps(y, oy), _mm_mul_ps(sy, z));
+        const __m128 z = _mm_sub_ps(c[v][kz], oz);
+        px[v] = _mm_sub_ps(_mm_sub_ps(c[v][kx], ox), _mm_mul_ps(sx, z));
+        py[v] = _mm_sub_ps(_mm_sub_ps(c[v][ky], oy), _mm_mul_ps(sy, z));
     }
     /* u = cx*by - cy*bx, v = ax*cy - ay*cx, w = bx*ay - by*ax (a, b, c = vertices 0, 1, 2) */
     const __m128 u = _mm_sub_ps(_mm_mul_ps(px[2], py[1]), _mm_mul_ps(py[2], px[1]));
@@ -121,15 +138,16 @@ CBVH_KERNEL int leaf_loop(const struct cbvh_file *restrict f, uint32_t first, ui
     if (!scalar && count > 1) {
         for (uint32_t k = first; k < first + count; k += 4) {
             const uint32_t n = first + count - k < 4 ? first + count - k : 4;
-            float tri[4][3][3];
-            for (uint32_t j = 0; j < 4; j++)
-                leaf_triangle(tris, tri_enc, verts, vert_enc, origin, scale, k + (j < n ? j : 0), tri[j][0],
-                              tri[j][1], tri[j][2]);
-            const uint32_t rejected = leaf_reject4_sse2(s, tri);
+            /* lanes past the leaf's end repeat its triangle k; their answers are ignored */
+            const uint32_t lane[4] = {0, n > 1 ? 1u : 0u, n > 2 ? 2u : 0u, n > 3 ? 3u : 0u};
+            __m128 c4[3][3];
+            leaf_gather4(tris, tri_enc, verts, vert_enc, origin, scale, k, lane, c4);
+            const uint32_t kept = ~leaf_reject4_sse2(s, c4) & ((1u << n) - 1u);
             for (uint32_t j = 0; j < n; j++) {
-                if (rejected >> j & 1u)
+                if (!(kept >> j & 1u))
                     continue;
-                if (!cbvh_ray_triangle(s, tri[j][0], tri[j][1], tri[j][2], tmin, best_t, &t, &u, &v))
+                leaf_triangle(tris, tri_enc, verts, vert_enc, origin, scale, k + j, a, b, c);
+                if (!cbvh_ray_triangle(s, a, b, c, tmin, best_t, &t, &u, &v))
                     continue;
                 if (any)
                     return 1;

@@ -11,12 +11,6 @@
 #include "query/ray_box.h"
 #include "query/ray_setup.h"
 
-#if defined(__GNUC__)
-#define CBVH_PREFETCH(p) __builtin_prefetch(p)
-#else
-#define CBVH_PREFETCH(p) ((void)(p))
-#endif
-
 /* How a walk orders the children a ray enters. */
 enum cbvh_walk_order {
     CBVH_WALK_SORTED,   /* the precomputed order for the ray's octant (the sort byte): no run-time sort */
@@ -62,14 +56,54 @@ CBVH_KERNEL uint32_t walk_order_pair(const enum cbvh_walk_order order, int secon
     return 2;
 }
 
+/* The ray as the wide layout's SIMD box test reads it, set up once per walk
+ * (rebroadcasting a dozen scalars at every node cost about a tenth of a
+ * walk's instructions): for each of the six planes the test uses (near x, y,
+ * z, far x, y, z; layout/wide4.h's plane index k), its byte offset in a node
+ * and its axis' grid origin and scale, ray origin and reciprocal in all four
+ * lanes. Without SIMD it is empty and unused. */
+struct cbvh_w4_simd_ray {
 #ifdef CBVH_HAVE_SIMD
-/* The four slots' planes k (layout/wide4.h) dequantized with the normative
- * arithmetic, lane s for slot s: (float)q * scale, then origin + that. */
-CBVH_KERNEL __m128 walk_w4_planes(const uint8_t *restrict node, uint32_t k, __m128 origin, __m128 scale)
+    __m128 origin[6], scale[6], org[6], rcp[6];
+    __m128 tmin;
+    uint32_t offset[6];
+#else
+    int unused;
+#endif
+};
+
+CBVH_KERNEL void walk_w4_simd_ray_init(struct cbvh_w4_simd_ray *w, const struct cbvh_box_ray *restrict box,
+                                       float tmin)
 {
-    const __m128i q = _mm_loadl_epi64((const __m128i *)(const void *)(node + CBVH_W4_Q + 8u * k));
+#ifdef CBVH_HAVE_SIMD
+    const struct cbvh_slab_select s = box->sel;
+    const uint32_t plane[6] = {s.near_x, s.near_y, s.near_z, s.far_x, s.far_y, s.far_z};
+    for (uint32_t j = 0; j < 6; j++) {
+        const uint32_t a = j % 3u;
+        w->offset[j] = CBVH_W4_Q + 8u * plane[j];
+        w->origin[j] = _mm_set1_ps(box->origin[a]);
+        w->scale[j] = _mm_set1_ps(box->scale[a]);
+        w->org[j] = _mm_set1_ps(box->org[a]);
+        w->rcp[j] = _mm_set1_ps(box->rcp[a]);
+    }
+    w->tmin = _mm_set1_ps(tmin);
+#else
+    (void)box;
+    (void)tmin;
+    w->unused = 0;
+#endif
+}
+
+#ifdef CBVH_HAVE_SIMD
+/* Plane j of the four slots (struct cbvh_w4_simd_ray) as a distance along the
+ * ray, lane s for slot s, with the normative arithmetic of ray_box.h:
+ * ((origin + (float)q * scale) - org) * rcp. */
+CBVH_KERNEL __m128 walk_w4_plane_distance(const uint8_t *restrict node, const struct cbvh_w4_simd_ray *restrict w,
+                                          uint32_t j)
+{
+    const __m128i q = _mm_loadl_epi64((const __m128i *)(const void *)(node + w->offset[j]));
     const __m128 qf = _mm_cvtepi32_ps(_mm_unpacklo_epi16(q, _mm_setzero_si128()));
-    return _mm_add_ps(origin, _mm_mul_ps(qf, scale));
+    return _mm_mul_ps(_mm_sub_ps(_mm_add_ps(w->origin[j], _mm_mul_ps(qf, w->scale[j])), w->org[j]), w->rcp[j]);
 }
 
 /* The slab test of ray_box.h on the four slots at once, lane for lane the
@@ -77,21 +111,16 @@ CBVH_KERNEL __m128 walk_w4_planes(const uint8_t *restrict node, uint32_t k, __m1
  * MINPS(a, b) is `a < b ? a : b` (b when either is NaN), so a NaN distance
  * is ignored as in the scalar test. Returns the hit bits (bit s: slot s) and
  * each slot's entry distance. */
-CBVH_KERNEL uint32_t walk_w4_test_sse2(const uint8_t *restrict node, const struct cbvh_box_ray *restrict box,
-                                       float tmin, float tmax, float entry[CBVH_W4_WIDTH])
+CBVH_KERNEL uint32_t walk_w4_test_sse2(const uint8_t *restrict node, const struct cbvh_w4_simd_ray *restrict w,
+                                       float tmax, float entry[CBVH_W4_WIDTH])
 {
-    const struct cbvh_slab_select s = box->sel;
-    const __m128 ox = _mm_set1_ps(box->origin[0]), oy = _mm_set1_ps(box->origin[1]), oz = _mm_set1_ps(box->origin[2]);
-    const __m128 sx = _mm_set1_ps(box->scale[0]), sy = _mm_set1_ps(box->scale[1]), sz = _mm_set1_ps(box->scale[2]);
-    const __m128 px = _mm_set1_ps(box->org[0]), py = _mm_set1_ps(box->org[1]), pz = _mm_set1_ps(box->org[2]);
-    const __m128 rx = _mm_set1_ps(box->rcp[0]), ry = _mm_set1_ps(box->rcp[1]), rz = _mm_set1_ps(box->rcp[2]);
-    __m128 tnear = _mm_set1_ps(tmin), tfar = _mm_set1_ps(tmax);
-    tnear = _mm_max_ps(_mm_mul_ps(_mm_sub_ps(walk_w4_planes(node, s.near_x, ox, sx), px), rx), tnear);
-    tnear = _mm_max_ps(_mm_mul_ps(_mm_sub_ps(walk_w4_planes(node, s.near_y, oy, sy), py), ry), tnear);
-    tnear = _mm_max_ps(_mm_mul_ps(_mm_sub_ps(walk_w4_planes(node, s.near_z, oz, sz), pz), rz), tnear);
-    tfar = _mm_min_ps(_mm_mul_ps(_mm_sub_ps(walk_w4_planes(node, s.far_x, ox, sx), px), rx), tfar);
-    tfar = _mm_min_ps(_mm_mul_ps(_mm_sub_ps(walk_w4_planes(node, s.far_y, oy, sy), py), ry), tfar);
-    tfar = _mm_min_ps(_mm_mul_ps(_mm_sub_ps(walk_w4_planes(node, s.far_z, oz, sz), pz), rz), tfar);
+    __m128 tnear = w->tmin, tfar = _mm_set1_ps(tmax);
+    tnear = _mm_max_ps(walk_w4_plane_distance(node, w, 0), tnear);
+    tnear = _mm_max_ps(walk_w4_plane_distance(node, w, 1), tnear);
+    tnear = _mm_max_ps(walk_w4_plane_distance(node, w, 2), tnear);
+    tfar = _mm_min_ps(walk_w4_plane_distance(node, w, 3), tfar);
+    tfar = _mm_min_ps(walk_w4_plane_distance(node, w, 4), tfar);
+    tfar = _mm_min_ps(walk_w4_plane_distance(node, w, 5), tfar);
     _mm_storeu_ps(entry, tnear);
     return (uint32_t)_mm_movemask_ps(_mm_cmple_ps(tnear, _mm_mul_ps(tfar, _mm_set1_ps(CBVH_BOX_PAD))));
 }
@@ -102,7 +131,8 @@ CBVH_KERNEL uint32_t walk_w4_test_sse2(const uint8_t *restrict node, const struc
  * scalar mode), the hit ones in the node's order for the ray's octant, slot
  * order, or by entry distance. */
 CBVH_KERNEL uint32_t walk_w4_children_hit(const struct cbvh_file *restrict f, cbvh_ref r,
-                                          const struct cbvh_box_ray *restrict box, const float *restrict float_boxes,
+                                          const struct cbvh_box_ray *restrict box,
+                                          const struct cbvh_w4_simd_ray *restrict w, const float *restrict float_boxes,
                                           const enum cbvh_walk_order order, const int scalar, uint32_t octant,
                                           float tmin, float tmax, cbvh_ref out[CBVH_TREE_WIDTH],
                                           float entry[CBVH_TREE_WIDTH], uint64_t *restrict boxes_tested)
@@ -115,7 +145,7 @@ CBVH_KERNEL uint32_t walk_w4_children_hit(const struct cbvh_file *restrict f, cb
     *boxes_tested += cbvh_w4_popcount(used);
 #ifdef CBVH_HAVE_SIMD
     if (!float_boxes && !scalar) {
-        hits = walk_w4_test_sse2(node, box, tmin, tmax, e) & used;
+        hits = walk_w4_test_sse2(node, w, tmax, e) & used;
     } else
 #endif
     {
@@ -158,13 +188,14 @@ CBVH_KERNEL uint32_t walk_w4_children_hit(const struct cbvh_file *restrict f, cb
  * Returns how many. Binary layout: the two children's boxes are tested first,
  * and the sort byte is read only when both are hit. Wide layout: above. */
 CBVH_KERNEL uint32_t walk_children_hit(const struct cbvh_file *restrict f, const uint32_t layout, cbvh_ref r,
-                                       const struct cbvh_box_ray *restrict box, const float *restrict float_boxes,
+                                       const struct cbvh_box_ray *restrict box,
+                                       const struct cbvh_w4_simd_ray *restrict w, const float *restrict float_boxes,
                                        const enum cbvh_walk_order order, uint32_t octant, float tmin, float tmax,
                                        cbvh_ref out[CBVH_TREE_WIDTH], float entry[CBVH_TREE_WIDTH],
                                        uint64_t *restrict boxes_tested, const int scalar)
 {
     if (layout == CBVH_LAYOUT_WIDE4)
-        return walk_w4_children_hit(f, r, box, float_boxes, order, scalar, octant, tmin, tmax, out, entry,
+        return walk_w4_children_hit(f, r, box, w, float_boxes, order, scalar, octant, tmin, tmax, out, entry,
                                     boxes_tested);
     struct cbvh_child c[CBVH_TREE_WIDTH];
     cbvh_tree_children(f, layout, r, CBVH_NO_OCTANT, c);
@@ -204,6 +235,9 @@ CBVH_KERNEL int cbvh_walk(const struct cbvh_file *restrict f, const uint32_t lay
         cbvh_box_ray_halve(&box, ray->box_halve);
     const float tmin = ray->tmin;
     float tmax = ray->tmax;
+    struct cbvh_w4_simd_ray w;
+    if (layout == CBVH_LAYOUT_WIDE4 && !float_boxes && !mode.scalar)
+        walk_w4_simd_ray_init(&w, &box, tmin);
     struct {
         cbvh_ref ref;
         float entry;
@@ -223,7 +257,7 @@ CBVH_KERNEL int cbvh_walk(const struct cbvh_file *restrict f, const uint32_t lay
         if (!cbvh_tree_is_leaf(f, layout, r)) {
             cbvh_ref c[CBVH_TREE_WIDTH];
             float e[CBVH_TREE_WIDTH];
-            const uint32_t n = walk_children_hit(f, layout, r, &box, float_boxes, mode.order, ray->octant, tmin, tmax,
+            const uint32_t n = walk_children_hit(f, layout, r, &box, &w, float_boxes, mode.order, ray->octant, tmin, tmax,
                                                  c, e, &visited, mode.scalar);
             if (n > 0) {
                 for (uint32_t k = n; k-- > 1;) {
