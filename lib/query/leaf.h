@@ -186,9 +186,10 @@ CBVH_KERNEL int leaf_loop(const struct cbvh_file *restrict f, uint32_t first, ui
 
 /* The leaf step of every single-ray walk: the leaf's cooked triangles
  * [first, first + count). Any-hit: returns 1 when the leaf occludes the ray.
- * Closest-hit: updates best and *tmax, returns 0. The common encodings get
- * their own loop (one switch per leaf, not per triangle); U32 indices go
- * through the generic one. */
+ * Closest-hit: updates best and *tmax, returns 0. The encodings the cooker
+ * writes for lossless files (DELTA16 or U16 indices, float vertices) get
+ * loops of their own (one switch per leaf, not per triangle); the others go
+ * through the generic one, which keeps every walk instance small. */
 CBVH_KERNEL int cbvh_leaf_visit(const struct cbvh_file *restrict f, uint32_t first, uint32_t count,
                                 const struct cbvh_ray_ctx *ray, const int any, const int scalar,
                                 float *restrict tmax, struct cbvh_best_hit *restrict best)
@@ -200,10 +201,6 @@ CBVH_KERNEL int cbvh_leaf_visit(const struct cbvh_file *restrict f, uint32_t fir
         return leaf_loop(f, first, count, s, tmin, tmax, best, any, scalar, CBVH_TRIS_DELTA16, CBVH_VERTS_F32);
     case CBVH_TRIS_U16 << 1 | CBVH_VERTS_F32:
         return leaf_loop(f, first, count, s, tmin, tmax, best, any, scalar, CBVH_TRIS_U16, CBVH_VERTS_F32);
-    case CBVH_TRIS_DELTA16 << 1 | CBVH_VERTS_Q16:
-        return leaf_loop(f, first, count, s, tmin, tmax, best, any, scalar, CBVH_TRIS_DELTA16, CBVH_VERTS_Q16);
-    case CBVH_TRIS_U16 << 1 | CBVH_VERTS_Q16:
-        return leaf_loop(f, first, count, s, tmin, tmax, best, any, scalar, CBVH_TRIS_U16, CBVH_VERTS_Q16);
     default:
         return leaf_loop(f, first, count, s, tmin, tmax, best, any, scalar, (int)f->triangle_encoding,
                          (int)f->vertex_encoding);

@@ -11,11 +11,9 @@
 static const struct cbvh_walk_mode closest_sorted = {.order = CBVH_WALK_SORTED};
 static const struct cbvh_walk_mode closest_unsorted = {.order = CBVH_WALK_UNSORTED};
 static const struct cbvh_walk_mode closest_distance = {.order = CBVH_WALK_DISTANCE};
-static const struct cbvh_walk_mode closest_halved = {.order = CBVH_WALK_SORTED, .halved = 1};
 static const struct cbvh_walk_mode any_sorted = {.order = CBVH_WALK_SORTED, .any = 1};
 static const struct cbvh_walk_mode any_unsorted = {.order = CBVH_WALK_UNSORTED, .any = 1};
 static const struct cbvh_walk_mode any_distance = {.order = CBVH_WALK_DISTANCE, .any = 1};
-static const struct cbvh_walk_mode any_halved = {.order = CBVH_WALK_SORTED, .any = 1, .halved = 1};
 
 static atomic_int walk_scalar_setting;
 
@@ -24,25 +22,18 @@ void cbvh_walk_set_scalar(int scalar)
     atomic_store_explicit(&walk_scalar_setting, scalar, memory_order_relaxed);
 }
 
-/* The mode with the scalar child test (wide layout). */
-CBVH_KERNEL struct cbvh_walk_mode scalar_of(struct cbvh_walk_mode mode)
-{
-    mode.scalar = 1;
-    return mode;
-}
-
 /* The walk of the subtree `root` (whose box the caller tested) or, when
  * `whole`, of the whole tree, for the file's layout: one instance per layout
- * and mode, every choice a constant. */
+ * and mode, every choice a constant but the wide layout's scalar switch. */
 CBVH_KERNEL int walk_file(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray, const int whole, cbvh_ref root,
                           const struct cbvh_walk_mode mode, struct cbvh_best_hit *best, cbvh_query_stats *stats)
 {
     if (f->layout == CBVH_LAYOUT_WIDE4) {
         const uint32_t layout = CBVH_LAYOUT_WIDE4;
         const cbvh_ref start = whole ? cbvh_tree_root(f, layout) : root;
-        if (atomic_load_explicit(&walk_scalar_setting, memory_order_relaxed))
-            return cbvh_walk(f, layout, ray, start, CBVH_NO_BOX, scalar_of(mode), NULL, best, stats);
-        return cbvh_walk(f, layout, ray, start, CBVH_NO_BOX, mode, NULL, best, stats);
+        struct cbvh_walk_mode wide = mode;
+        wide.scalar = atomic_load_explicit(&walk_scalar_setting, memory_order_relaxed) != 0;
+        return cbvh_walk(f, layout, ray, start, CBVH_NO_BOX, wide, NULL, best, stats);
     }
     const uint32_t layout = CBVH_LAYOUT_BINARY;
     if (whole)
@@ -55,8 +46,8 @@ CBVH_KERNEL int walk_file(const struct cbvh_file *f, const struct cbvh_ray_ctx *
 void cbvh_closest(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray, cbvh_traversal traversal,
                   struct cbvh_best_hit *best, cbvh_query_stats *stats)
 {
-    if (ray->box_halve) {
-        walk_file(f, ray, 1, 0, closest_halved, best, stats);
+    if (ray->box_halve) { /* raycast.h: the sorted walk, whose set-up halves the box test */
+        walk_file(f, ray, 1, 0, closest_sorted, best, stats);
         return;
     }
     switch (traversal) {
@@ -82,7 +73,7 @@ int cbvh_any(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray, cbvh_tra
              cbvh_query_stats *stats)
 {
     if (ray->box_halve)
-        return walk_file(f, ray, 1, 0, any_halved, NULL, stats);
+        return walk_file(f, ray, 1, 0, any_sorted, NULL, stats);
     switch (traversal) {
     case CBVH_TRAVERSAL_UNSORTED:
         return walk_file(f, ray, 1, 0, any_unsorted, NULL, stats);

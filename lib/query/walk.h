@@ -20,13 +20,15 @@ enum cbvh_walk_order {
 
 /* A walk's variant, a compile-time constant in each instance (the kernel is
  * force-inlined into its callers, so every instance loses what its mode
- * switches off). Named instances live in raycast_walks.c. */
+ * switches off), but for `scalar` in the wide layout's. Named instances live
+ * in raycast_walks.c. A ray's box_halve (ray_setup.h) is read at run time by
+ * every walk: it changes only the set-up of the box test. */
 struct cbvh_walk_mode {
     enum cbvh_walk_order order;
     int any;    /* any hit: stop at the first triangle hit */
-    int halved; /* the ray's box_halve axes are tested at half scale (ray_box.h) */
     int scalar; /* no SIMD: the children one box at a time, and each leaf triangle without the four-wide
-                 * filter (the fallback, and its test) */
+                 * filter (the fallback, and its test); the wide layout's instances read it at run time
+                 * (cbvh_walk_set_scalar), a predictable branch, rather than doubling their code */
 };
 
 /* Box `box` against the ray: quantized from the file, or float_boxes[6 box ...]. */
@@ -223,7 +225,7 @@ CBVH_KERNEL uint32_t walk_children_hit(const struct cbvh_file *restrict f, const
  * float_boxes: NULL for the file's quantized boxes (every library walk, where
  * the constant folds the choice away); else six floats per box id (min xyz,
  * max xyz), for tools that measure another box precision on the same tree and
- * the same walk (cbvh report's exact reference; never with halved). */
+ * the same walk (cbvh report's exact reference, whose rays have no box_halve). */
 CBVH_KERNEL int cbvh_walk(const struct cbvh_file *restrict f, const uint32_t layout,
                           const struct cbvh_ray_ctx *restrict ray, cbvh_ref root, uint32_t root_box,
                           const struct cbvh_walk_mode mode, const float *restrict float_boxes,
@@ -231,12 +233,12 @@ CBVH_KERNEL int cbvh_walk(const struct cbvh_file *restrict f, const uint32_t lay
 {
     struct cbvh_box_ray box;
     cbvh_box_ray_init(&box, f->grid_origin, f->grid_scale, ray->shear.org, ray->rcp, ray->octant);
-    if (mode.halved)
+    if (ray->box_halve && !float_boxes)
         cbvh_box_ray_halve(&box, ray->box_halve);
     const float tmin = ray->tmin;
     float tmax = ray->tmax;
     struct cbvh_w4_simd_ray w;
-    if (layout == CBVH_LAYOUT_WIDE4 && !float_boxes && !mode.scalar)
+    if (layout == CBVH_LAYOUT_WIDE4 && !float_boxes)
         walk_w4_simd_ray_init(&w, &box, tmin);
     struct {
         cbvh_ref ref;
