@@ -24,6 +24,8 @@
 #define CBVH_FORCE_INLINE static inline __attribute__((always_inline))
 #define CBVH_LIKELY(x) __builtin_expect(!!(x), 1)
 #define CBVH_COLD __attribute__((noinline, cold))
+/* A helper kept out of line: the kernels' many instances call one copy (a path taken once per hit). */
+#define CBVH_NOINLINE static __attribute__((noinline, unused))
 /* Compiles one function for an instruction set the rest of the build does not assume; callers check
  * cbvh_cpu_features() first (common/cpu.h). */
 #define CBVH_TARGET(features) __attribute__((target(features)))
@@ -38,6 +40,7 @@
 #define CBVH_FORCE_INLINE static __forceinline
 #define CBVH_LIKELY(x) (x)
 #define CBVH_COLD __declspec(noinline)
+#define CBVH_NOINLINE static __inline __declspec(noinline)
 /* MSVC compiles any intrinsic in any function without flags: the run-time dispatch alone keeps AVX2 code
  * off CPUs without it. */
 #define CBVH_TARGET(features)
@@ -54,6 +57,7 @@
 #define CBVH_FORCE_INLINE static inline
 #define CBVH_LIKELY(x) (x)
 #define CBVH_COLD
+#define CBVH_NOINLINE static inline
 #define CBVH_TARGET(features)
 #define CBVH_PRINTF(format_arg, first_arg)
 #define CBVH_PREFETCH(p) ((void)(p))

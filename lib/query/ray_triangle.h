@@ -110,8 +110,9 @@ CBVH_COLD static void cbvh_barycentrics_to_boundary(const struct cbvh_triangle_f
  * double: errors relative to the edge lengths, not to the area (the sheared
  * edge functions, products of coordinates relative to the origin, cancel on
  * slivers and put the barycentric point far from the hit: finding F6). Only
- * for accepted hits. edge: the sheared edge functions (u, v, w scaled). */
-CBVH_KERNEL void cbvh_plane_barycentrics(const struct cbvh_ray_shear *restrict s, const float *restrict a,
+ * for accepted hits, so out of line: one copy serves every walk instance.
+ * edge: the sheared edge functions (u, v, w scaled). */
+CBVH_NOINLINE void cbvh_plane_barycentrics(const struct cbvh_ray_shear *restrict s, const float *restrict a,
                                          const float *restrict b, const float *restrict c, double t,
                                          const double edge[3], float *u, float *v)
 {
