@@ -142,10 +142,9 @@ CBVH_KERNEL int leaf_loop(const struct cbvh_file *restrict f, uint32_t first, ui
             const uint32_t lane[4] = {0, n > 1 ? 1u : 0u, n > 2 ? 2u : 0u, n > 3 ? 3u : 0u};
             __m128 c4[3][3];
             leaf_gather4(tris, tri_enc, verts, vert_enc, origin, scale, k, lane, c4);
-            const uint32_t kept = ~leaf_reject4_sse2(s, c4) & ((1u << n) - 1u);
-            for (uint32_t j = 0; j < n; j++) {
-                if (!(kept >> j & 1u))
-                    continue;
+            /* the lanes the filter keeps, lowest first: the slot of a one-bit mask 1, 2, 4, 8 is 0, 1, 2, 3 */
+            for (uint32_t kept = ~leaf_reject4_sse2(s, c4) & ((1u << n) - 1u); kept; kept &= kept - 1u) {
+                const uint32_t low = kept & (0u - kept), j = (low >> 1) - (low >> 3);
                 leaf_triangle(tris, tri_enc, verts, vert_enc, origin, scale, k + j, a, b, c);
                 if (!cbvh_ray_triangle(s, a, b, c, tmin, best_t, &t, &u, &v))
                     continue;

@@ -79,14 +79,21 @@ CBVH_KERNEL void walk_w4_simd_ray_init(struct cbvh_w4_simd_ray *w, const struct 
 {
 #ifdef CBVH_HAVE_SIMD
     const struct cbvh_slab_select s = box->sel;
-    const uint32_t plane[6] = {s.near_x, s.near_y, s.near_z, s.far_x, s.far_y, s.far_z};
-    for (uint32_t j = 0; j < 6; j++) {
-        const uint32_t a = j % 3u;
-        w->offset[j] = CBVH_W4_Q + 8u * plane[j];
-        w->origin[j] = _mm_set1_ps(box->origin[a]);
-        w->scale[j] = _mm_set1_ps(box->scale[a]);
-        w->org[j] = _mm_set1_ps(box->org[a]);
-        w->rcp[j] = _mm_set1_ps(box->rcp[a]);
+    const __m128 origin[3] = {_mm_set1_ps(box->origin[0]), _mm_set1_ps(box->origin[1]), _mm_set1_ps(box->origin[2])};
+    const __m128 scale[3] = {_mm_set1_ps(box->scale[0]), _mm_set1_ps(box->scale[1]), _mm_set1_ps(box->scale[2])};
+    const __m128 org[3] = {_mm_set1_ps(box->org[0]), _mm_set1_ps(box->org[1]), _mm_set1_ps(box->org[2])};
+    const __m128 rcp[3] = {_mm_set1_ps(box->rcp[0]), _mm_set1_ps(box->rcp[1]), _mm_set1_ps(box->rcp[2])};
+    w->offset[0] = CBVH_W4_Q + 8u * s.near_x;
+    w->offset[1] = CBVH_W4_Q + 8u * s.near_y;
+    w->offset[2] = CBVH_W4_Q + 8u * s.near_z;
+    w->offset[3] = CBVH_W4_Q + 8u * s.far_x;
+    w->offset[4] = CBVH_W4_Q + 8u * s.far_y;
+    w->offset[5] = CBVH_W4_Q + 8u * s.far_z;
+    for (uint32_t j = 0; j < 6; j++) { /* plane j is on axis j % 3 */
+        w->origin[j] = origin[j % 3u];
+        w->scale[j] = scale[j % 3u];
+        w->org[j] = org[j % 3u];
+        w->rcp[j] = rcp[j % 3u];
     }
     w->tmin = _mm_set1_ps(tmin);
 #else
