@@ -74,12 +74,13 @@ typedef struct cbvh_error {
 /* Structs that grow                                                   */
 /* ------------------------------------------------------------------ */
 
-/* cbvh_cook_options, cbvh_cook_stats and cbvh_file_info gain fields in later
- * versions, always at the end. Each starts with `struct_size`, the size of the
- * struct as the caller was compiled, so a program built against an older cbvh.h
- * keeps working with a newer library. The caller hands its sizeof to the first
- * function that receives the struct (cbvh_cook_options_init,
- * cbvh_cook_stats_init, cbvh_file_get_info), which records it in struct_size;
+/* cbvh_cook_options, cbvh_cook_stats, cbvh_file_info and cbvh_query_options
+ * gain fields in later versions, always at the end. Each starts with
+ * `struct_size`, the size of the struct as the caller was compiled, so a
+ * program built against an older cbvh.h keeps working with a newer library.
+ * The caller hands its sizeof to the first function that receives the struct
+ * (cbvh_cook_options_init, cbvh_cook_stats_init, cbvh_file_get_info,
+ * cbvh_query_options_init), which records it in struct_size;
  * from then on the library reads and writes only the first struct_size bytes:
  * options past them take their defaults, stats and info past them are not
  * written. For example:
@@ -431,6 +432,83 @@ CBVH_API int cbvh_raycast(const cbvh_file *file, const cbvh_ray *ray, cbvh_trave
 /* Any hit (occlusion): returns 1 as soon as any triangle is hit in [tmin, tmax]. */
 CBVH_API int cbvh_occluded(const cbvh_file *file, const cbvh_ray *ray, cbvh_traversal traversal,
                            cbvh_query_stats *stats);
+
+/* ------------------------------------------------------------------ */
+/* Raycasts with options: culling, a hit filter, the full hit record    */
+/* ------------------------------------------------------------------ */
+
+/* Which faces a raycast ignores. A triangle's front face is the side its
+ * geometric normal points to: n = (v1 - v0) x (v2 - v0), the vertices in the
+ * order the mesh gave them (counter-clockwise seen from the front). */
+typedef enum cbvh_cull {
+    CBVH_CULL_NONE = 0,  /* both faces are hit (default) */
+    CBVH_CULL_BACK = 1,  /* a ray reaching a triangle's back face passes through it */
+    CBVH_CULL_FRONT = 2  /* a ray reaching a triangle's front face passes through it */
+} cbvh_cull;
+
+/* A hit with what a game asks of it: the original triangle id (CBVH_NO_HIT
+ * for a miss), t and the barycentrics u, v as in cbvh_hit; the unit geometric
+ * normal, on the front side (see cbvh_cull; computed in double from the
+ * stored vertices, so exact to float rounding even on slivers); front = 1
+ * when the ray came from the front side (dir . normal < 0), else 0; and the
+ * triangle's material id (cbvh_file_get_material). */
+typedef struct cbvh_hit_record {
+    uint32_t tri;
+    float t, u, v;
+    float normal[3];
+    int front;
+    uint32_t material;
+} cbvh_hit_record;
+
+/* What a hit filter decides about a candidate hit. */
+typedef enum cbvh_filter_result {
+    CBVH_FILTER_ACCEPT = 0, /* the hit counts */
+    CBVH_FILTER_REJECT = 1, /* the ray passes through this triangle; the query goes on */
+    CBVH_FILTER_STOP = 2    /* the hit counts and the query ends with it as the answer */
+} cbvh_filter_result;
+
+/* A hit filter, called on the querying thread for each candidate: a
+ * triangle the ray hits within [tmin, tmax], past culling, that would
+ * count: for a closest-hit query one at least as near as every hit accepted
+ * so far, for an any-hit query every one. Any value other than the three
+ * counts as CBVH_FILTER_ACCEPT. It may not query the same walk again or
+ * close the file. All hits: a filter that records each candidate and
+ * returns CBVH_FILTER_REJECT sees every triangle the ray hits exactly once,
+ * in no particular order (a ray through a shared edge or vertex hits each
+ * triangle there that the watertight test accepts). */
+typedef cbvh_filter_result (*cbvh_hit_filter_fn)(void *user, const cbvh_hit_record *candidate);
+
+/* Per-query options (a struct that grows, see "Structs that grow"): set
+ * with cbvh_query_options_init, then change the fields wanted. */
+typedef struct cbvh_query_options {
+    size_t struct_size;
+    cbvh_traversal traversal;  /* default CBVH_TRAVERSAL_SORTED */
+    cbvh_cull cull;            /* default CBVH_CULL_NONE */
+    cbvh_hit_filter_fn filter; /* default NULL: every hit counts */
+    void *filter_user;         /* the filter's first argument */
+} cbvh_query_options;
+
+/* Fills *options with the defaults for a caller whose sizeof *options is
+ * struct_size. Returns CBVH_OK, or CBVH_ERROR_INVALID_ARGUMENT when options
+ * is NULL or struct_size is out of range. */
+CBVH_API cbvh_result cbvh_query_options_init(cbvh_query_options *options, size_t struct_size);
+
+/* Closest hit under `options` (NULL: the defaults). Returns CBVH_OK with
+ * *hit filled (hit->tri = CBVH_NO_HIT for a miss); or, with *hit a miss,
+ * CBVH_ERROR_INVALID_ARGUMENT when file, ray or hit is NULL, the ray is
+ * invalid (see cbvh_ray: NaN or infinite values, a zero direction, tmin < 0
+ * or tmin > tmax), options->struct_size is out of range, or traversal or cull
+ * is not one of its enum's values. Without culling and filter the answer is
+ * cbvh_raycast's, on every traversal. A filter that returns STOP can make the
+ * answer depend on the order the traversal visits triangles in. */
+CBVH_API cbvh_result cbvh_raycast_with(const cbvh_file *file, const cbvh_ray *ray, const cbvh_query_options *options,
+                                       cbvh_hit_record *hit, cbvh_query_stats *stats);
+
+/* Any hit under `options`: *occluded = 1 when some triangle the ray hits in
+ * [tmin, tmax] passes culling and the filter, else 0. Errors as
+ * cbvh_raycast_with, with *occluded = 0. */
+CBVH_API cbvh_result cbvh_occluded_with(const cbvh_file *file, const cbvh_ray *ray, const cbvh_query_options *options,
+                                        int *occluded, cbvh_query_stats *stats);
 
 /* Batched streams: `count` rays (any coherence) traversed together, each node
  * dequantized once per batch visit, live rays partitioned in place. Results

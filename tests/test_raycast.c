@@ -931,6 +931,244 @@ static void test_stats(void **state)
     scene_free(&s);
 }
 
+/* ------------------------------------------------------------------ */
+/* Raycasts with options: culling, filters, all hits, the hit record    */
+/* ------------------------------------------------------------------ */
+
+#define MAX_CANDIDATES 512
+
+/* Every candidate a filter saw: ids, records, how many times. */
+typedef struct candidates {
+    cbvh_hit_record rec[MAX_CANDIDATES];
+    int n, overflow;
+    cbvh_filter_result answer; /* what the filter returns */
+} candidates;
+
+static cbvh_filter_result record_candidate(void *user, const cbvh_hit_record *c)
+{
+    candidates *all = user;
+    if (all->n < MAX_CANDIDATES)
+        all->rec[all->n++] = *c;
+    else
+        all->overflow = 1;
+    return all->answer;
+}
+
+static cbvh_filter_result reject_odd(void *user, const cbvh_hit_record *c)
+{
+    (void)user;
+    return c->tri & 1u ? CBVH_FILTER_REJECT : CBVH_FILTER_ACCEPT;
+}
+
+/* Triangle id's normal from the input arrays (its winding as given), in double. */
+static void input_normal(const scene *s, uint32_t id, double n[3])
+{
+    const float *p0 = s->positions + 3 * (size_t)s->indices[3 * (size_t)id];
+    const float *p1 = s->positions + 3 * (size_t)s->indices[3 * (size_t)id + 1];
+    const float *p2 = s->positions + 3 * (size_t)s->indices[3 * (size_t)id + 2];
+    double e1[3], e2[3];
+    for (int a = 0; a < 3; a++) {
+        e1[a] = (double)p1[a] - p0[a];
+        e2[a] = (double)p2[a] - p0[a];
+    }
+    n[0] = e1[1] * e2[2] - e1[2] * e2[1];
+    n[1] = e1[2] * e2[0] - e1[0] * e2[2];
+    n[2] = e1[0] * e2[1] - e1[1] * e2[0];
+}
+
+/* The cosine between the ray and triangle id's normal; negative: the ray meets the front face. */
+static double facing_cosine(const scene *s, uint32_t id, const cbvh_ray *ray)
+{
+    double n[3], dot = 0.0, nn = 0.0, dd = 0.0;
+    input_normal(s, id, n);
+    for (int a = 0; a < 3; a++) {
+        dot += n[a] * ray->dir[a];
+        nn += n[a] * n[a];
+        dd += (double)ray->dir[a] * ray->dir[a];
+    }
+    return dot / sqrt(nn * dd);
+}
+
+/* The nearest candidate that `keep` keeps: its index, -1 for none, -2 when a second one is within tol. */
+static int nearest_kept(const candidates *all, const scene *s, const cbvh_ray *ray, int keep, double tol)
+{
+    int best = -1, tie = 0;
+    for (int i = 0; i < all->n; i++) {
+        const cbvh_hit_record *c = &all->rec[i];
+        const int kept = keep == 0 ? facing_cosine(s, c->tri, ray) < 0.0 : (c->tri & 1u) == 0;
+        if (!kept)
+            continue;
+        if (best < 0 || c->t < all->rec[best].t - tol) {
+            tie = best >= 0 && c->t > all->rec[best].t - tol;
+            best = i;
+        } else if (c->t <= all->rec[best].t + tol) {
+            tie = 1;
+        }
+    }
+    return tie ? -2 : best;
+}
+
+/* One ray of test_query_options: the record against cbvh_raycast and the input mesh, all hits against
+ * the brute-force reference, culling and a filter against the all-hits list, STOP and occlusion. */
+static void check_options_ray(const ref_fixture *fx, const scene *s, const cbvh_ray *ray, long *culled_checks)
+{
+    cbvh_query_options o;
+    assert_int_equal(cbvh_query_options_init(&o, sizeof o), CBVH_OK);
+    cbvh_hit_record rec;
+    cbvh_hit plain;
+    for (int k = 0; k < 4; k++) {
+        o.traversal = traversals[k];
+        const int hit = cbvh_raycast(fx->file, ray, traversals[k], &plain, NULL);
+        assert_int_equal(cbvh_raycast_with(fx->file, ray, &o, &rec, NULL), CBVH_OK);
+        assert_int_equal(rec.tri, plain.tri);
+        if (!hit)
+            continue;
+        assert_true(rec.t == plain.t && rec.u == plain.u && rec.v == plain.v);
+        double n[3], len = 0.0, dot = 0.0;
+        input_normal(s, rec.tri, n);
+        for (int a = 0; a < 3; a++)
+            len += n[a] * n[a];
+        len = sqrt(len);
+        for (int a = 0; a < 3; a++) {
+            assert_true(fabs(rec.normal[a] - n[a] / len) < 1e-5);
+            dot += (double)rec.normal[a] * ray->dir[a];
+        }
+        assert_int_equal(rec.front, dot < 0.0);
+        assert_int_equal(rec.material, cbvh_file_get_material(fx->file, rec.tri));
+    }
+    /* All hits: every robust reference hit once, nothing that is not a hit. */
+    static candidates all;
+    all.n = 0;
+    all.overflow = 0;
+    all.answer = CBVH_FILTER_REJECT;
+    o.traversal = CBVH_TRAVERSAL_SORTED;
+    o.filter = record_candidate;
+    o.filter_user = &all;
+    assert_int_equal(cbvh_raycast_with(fx->file, ray, &o, &rec, NULL), CBVH_OK);
+    assert_int_equal(rec.tri, CBVH_NO_HIT);
+    assert_false(all.overflow);
+    const double tol = t_tolerance(fx, ray, 0.0), slack = 2e-5 * fx->diag;
+    for (size_t i = 0; i < fx->tris.count; i++) {
+        double t, u, v, m;
+        const int crossed = ref_ray_triangle(fx->tris.v + 9 * i, ray, &t, &u, &v, &m);
+        int seen = 0;
+        for (int j = 0; j < all.n; j++)
+            seen += all.rec[j].tri == fx->tris.id[i];
+        assert_true(seen <= 1);
+        if (crossed && m > slack && t > ray->tmin + tol && t < ray->tmax - tol && !seen)
+            fail_msg("all hits: triangle %u crossed at t %g (margin %g) was not reported", fx->tris.id[i], t, m);
+        if (seen && !(crossed && m >= -slack))
+            fail_msg("all hits: triangle %u reported, but the ray misses it", fx->tris.id[i]);
+    }
+    /* Culling and a filter: the nearest of the hits they keep (unless two are as near). */
+    const int keeps[2] = {0, 1};
+    for (int q = 0; q < 2; q++) {
+        for (int j = 0; j < all.n; j++)
+            if (q == 0 && fabs(facing_cosine(s, all.rec[j].tri, ray)) < 1e-4)
+                return; /* grazing: which face the ray meets is not for the test to say */
+        const int want = nearest_kept(&all, s, ray, keeps[q], 4 * t_tolerance(fx, ray, all.n ? all.rec[0].t : 0.0));
+        cbvh_query_options c;
+        cbvh_query_options_init(&c, sizeof c);
+        if (q == 0)
+            c.cull = CBVH_CULL_BACK;
+        else
+            c.filter = reject_odd;
+        int occluded = -1;
+        assert_int_equal(cbvh_raycast_with(fx->file, ray, &c, &rec, NULL), CBVH_OK);
+        assert_int_equal(cbvh_occluded_with(fx->file, ray, &c, &occluded, NULL), CBVH_OK);
+        assert_int_equal(occluded, want != -1);
+        if (want >= 0) {
+            assert_int_equal(rec.tri, all.rec[want].tri);
+            (*culled_checks)++;
+        } else if (want == -1) {
+            assert_int_equal(rec.tri, CBVH_NO_HIT);
+        }
+        if (q == 0 && rec.tri != CBVH_NO_HIT)
+            assert_int_equal(rec.front, 1);
+        /* the front faces culled instead: what is left are the back faces */
+        c.cull = q == 0 ? CBVH_CULL_FRONT : CBVH_CULL_NONE;
+        assert_int_equal(cbvh_raycast_with(fx->file, ray, &c, &rec, NULL), CBVH_OK);
+        if (q == 0 && rec.tri != CBVH_NO_HIT)
+            assert_int_equal(rec.front, 0);
+    }
+    /* STOP ends the query at the first candidate, which is the answer. */
+    if (all.n > 0) {
+        all.n = 0;
+        all.answer = CBVH_FILTER_STOP;
+        assert_int_equal(cbvh_raycast_with(fx->file, ray, &o, &rec, NULL), CBVH_OK);
+        assert_int_equal(all.n, 1);
+        assert_int_equal(rec.tri, all.rec[0].tri);
+        assert_true(rec.t == all.rec[0].t);
+    }
+}
+
+static void test_query_options(void **state)
+{
+    (void)state;
+    scene s, soup;
+    ref_fixture fx;
+    /* a closed sphere (outward and inward faces) with a soup of random windings inside and around it */
+    assert_true(scene_sphere(&s, 2000, (float[3]){0.0f, 0.0f, 0.0f}, 2.0f));
+    assert_true(scene_soup(&soup, 1500, 0.4f, 11));
+    assert_true(scene_append(&s, &soup, 3));
+    scene_free(&soup);
+    open_scene(&fx, &s, test_options());
+    uint64_t st = 21;
+    long culled_checks = 0;
+    for (int r = 0; r < 1500; r++) {
+        const cbvh_ray ray = ref_make_ray(&fx, &st, r % REF_RAY_KINDS);
+        if (ref_ray_valid(&ray))
+            check_options_ray(&fx, &s, &ray, &culled_checks);
+    }
+    printf("query options: %ld culled or filtered answers checked\n", culled_checks);
+    assert_true(culled_checks > 1000);
+
+    /* bad arguments: an error, never a silent miss */
+    const cbvh_ray ray = {{0.0f, 0.0f, -10.0f}, 0.0f, {0.0f, 0.0f, 1.0f}, INFINITY};
+    cbvh_query_options o;
+    cbvh_hit_record rec;
+    int occluded = 7;
+    assert_int_equal(cbvh_query_options_init(NULL, sizeof o), CBVH_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(cbvh_query_options_init(&o, 1), CBVH_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(cbvh_query_options_init(&o, sizeof o + 8), CBVH_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(cbvh_query_options_init(&o, sizeof o), CBVH_OK);
+    assert_int_equal(cbvh_raycast_with(fx.file, &ray, &o, &rec, NULL), CBVH_OK);
+    assert_true(rec.tri != CBVH_NO_HIT && rec.front == 1);
+    assert_int_equal(cbvh_raycast_with(fx.file, &ray, NULL, &rec, NULL), CBVH_OK);
+    assert_true(rec.tri != CBVH_NO_HIT);
+    assert_int_equal(cbvh_raycast_with(fx.file, &ray, &o, NULL, NULL), CBVH_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(cbvh_raycast_with(NULL, &ray, &o, &rec, NULL), CBVH_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(rec.tri, CBVH_NO_HIT);
+    assert_int_equal(cbvh_occluded_with(fx.file, NULL, &o, &occluded, NULL), CBVH_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(occluded, 0);
+    assert_int_equal(cbvh_occluded_with(fx.file, &ray, &o, NULL, NULL), CBVH_ERROR_INVALID_ARGUMENT);
+    o.cull = (cbvh_cull)3;
+    assert_int_equal(cbvh_raycast_with(fx.file, &ray, &o, &rec, NULL), CBVH_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(rec.tri, CBVH_NO_HIT);
+    o.cull = CBVH_CULL_NONE;
+    o.traversal = (cbvh_traversal)99;
+    assert_int_equal(cbvh_occluded_with(fx.file, &ray, &o, &occluded, NULL), CBVH_ERROR_INVALID_ARGUMENT);
+    o.traversal = CBVH_TRAVERSAL_SORTED;
+    o.struct_size = 0;
+    assert_int_equal(cbvh_raycast_with(fx.file, &ray, &o, &rec, NULL), CBVH_ERROR_INVALID_ARGUMENT);
+    o.struct_size = sizeof o + 8;
+    assert_int_equal(cbvh_raycast_with(fx.file, &ray, &o, &rec, NULL), CBVH_ERROR_INVALID_ARGUMENT);
+    /* a caller compiled when the options ended at traversal: culling and filter take their defaults */
+    o.struct_size = offsetof(cbvh_query_options, cull);
+    o.cull = (cbvh_cull)3;
+    assert_int_equal(cbvh_raycast_with(fx.file, &ray, &o, &rec, NULL), CBVH_OK);
+    assert_true(rec.tri != CBVH_NO_HIT);
+    o.struct_size = sizeof o;
+    o.cull = CBVH_CULL_NONE;
+    const cbvh_ray bad[3] = {{{NAN, 0.0f, 0.0f}, 0.0f, {0.0f, 0.0f, 1.0f}, INFINITY},
+                             {{0.0f, 0.0f, -10.0f}, 0.0f, {0.0f, 0.0f, 0.0f}, INFINITY},
+                             {{0.0f, 0.0f, -10.0f}, 2.0f, {0.0f, 0.0f, 1.0f}, 1.0f}};
+    for (int i = 0; i < 3; i++)
+        assert_int_equal(cbvh_raycast_with(fx.file, &bad[i], &o, &rec, NULL), CBVH_ERROR_INVALID_ARGUMENT);
+    ref_fixture_close(&fx);
+    scene_free(&s);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -945,6 +1183,7 @@ int main(void)
         cmocka_unit_test(test_near_flt_max),
         cmocka_unit_test(test_far_side_boxes),
         cmocka_unit_test(test_overflowing_edge_sums),
+        cmocka_unit_test(test_query_options),
     };
     int failed = TEST_RUN_LAYOUTS(tests, 1);
     fprintf(stderr, "test_raycast: %ld reference checks\n", checks_done);

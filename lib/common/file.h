@@ -95,6 +95,19 @@ static inline void cbvh_triangle_vertices(const struct cbvh_file *f, uint32_t tr
     cbvh_vertex_position(f, idx[2], v2);
 }
 
+/* Cooked triangle index -> its material id (0 without a MATERIALS section). */
+static inline uint32_t cbvh_cooked_material(const struct cbvh_file *f, uint32_t cooked)
+{
+    if (!f->materials)
+        return 0;
+    switch (f->material_encoding) {
+    case CBVH_MATS_U8: return ((const uint8_t *)f->materials)[cooked];
+    case CBVH_MATS_U16: return ((const uint16_t *)f->materials)[cooked];
+    case CBVH_MATS_U32: return ((const uint32_t *)f->materials)[cooked];
+    default: return ((const uint32_t *)f->materials)[0]; /* CBVH_MATS_UNIFORM: one id for all */
+    }
+}
+
 /* Cooked triangle index -> original id as queries report it. */
 static inline uint32_t cbvh_original_id(const struct cbvh_file *f, uint32_t tri)
 {

@@ -18,4 +18,14 @@ static inline int cbvh_struct_size_ok(size_t size, size_t smallest, size_t large
     return size >= smallest && size <= largest;
 }
 
+/* What every *_init function does first: records size in the struct's first field (when s is not NULL and
+ * the field fits), and says whether the size is in range. */
+static inline int cbvh_struct_size_record(void *s, size_t size, size_t smallest, size_t largest)
+{
+    if (!s || size < sizeof(size_t))
+        return 0;
+    *(size_t *)s = size;
+    return cbvh_struct_size_ok(size, smallest, largest);
+}
+
 #endif

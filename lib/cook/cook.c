@@ -31,19 +31,10 @@ static void default_options(cbvh_cook_options *o)
     o->layout = CBVH_LAYOUT_WIDE4;
 }
 
-/* Records `size` in the struct_size that leads the caller's struct `s` when it covers that field (so that
- * cbvh_cook can explain a bad one); returns whether it is in range. */
-static int record_struct_size(void *s, size_t size, size_t smallest, size_t largest)
-{
-    if (!s || size < sizeof(size_t))
-        return 0;
-    *(size_t *)s = size;
-    return cbvh_struct_size_ok(size, smallest, largest);
-}
-
+/* struct_size is recorded even when out of range, so that cbvh_cook can explain a bad one. */
 CBVH_API cbvh_result cbvh_cook_options_init(cbvh_cook_options *options, size_t struct_size)
 {
-    if (!record_struct_size(options, struct_size, OPTIONS_SIZE_MIN, sizeof *options))
+    if (!cbvh_struct_size_record(options, struct_size, OPTIONS_SIZE_MIN, sizeof *options))
         return CBVH_ERROR_INVALID_ARGUMENT;
     cbvh_cook_options defaults;
     default_options(&defaults);
@@ -54,7 +45,7 @@ CBVH_API cbvh_result cbvh_cook_options_init(cbvh_cook_options *options, size_t s
 
 CBVH_API cbvh_result cbvh_cook_stats_init(cbvh_cook_stats *stats, size_t struct_size)
 {
-    if (!record_struct_size(stats, struct_size, STATS_SIZE_MIN, sizeof *stats))
+    if (!cbvh_struct_size_record(stats, struct_size, STATS_SIZE_MIN, sizeof *stats))
         return CBVH_ERROR_INVALID_ARGUMENT;
     memset((uint8_t *)stats + sizeof stats->struct_size, 0, struct_size - sizeof stats->struct_size);
     return CBVH_OK;

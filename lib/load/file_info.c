@@ -73,12 +73,7 @@ uint32_t cbvh_file_get_material(const cbvh_file *file, uint32_t tri)
     uint32_t cooked;
     if (!file || !file->materials || !cooked_index(file, tri, &cooked))
         return 0;
-    switch (file->material_encoding) {
-    case CBVH_MATS_U8: return ((const uint8_t *)file->materials)[cooked];
-    case CBVH_MATS_U16: return ((const uint16_t *)file->materials)[cooked];
-    case CBVH_MATS_U32: return ((const uint32_t *)file->materials)[cooked];
-    default: return ((const uint32_t *)file->materials)[0]; /* CBVH_MATS_UNIFORM: one id for all */
-    }
+    return cbvh_cooked_material(file, cooked);
 }
 
 /* Entry `index` of the MATERIAL_NAMES table (validated at open: in range, names NUL-terminated). */

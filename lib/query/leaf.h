@@ -26,6 +26,42 @@ static inline int cbvh_hit_better(float t, uint32_t tri, float best_t, uint32_t 
     return t < best_t || (t == best_t && tri < best_tri);
 }
 
+/* The culling and hit filter of a query with options (raycast.c fills it in). check says what becomes of
+ * cooked triangle k, which the ray hits at t (the kernels' t) with barycentrics u, v: a
+ * cbvh_filter_result. It is called through the pointer, so the kernels, which tools and tests also
+ * compile, name no library function. */
+struct cbvh_hit_gate {
+    int (*check)(const struct cbvh_hit_gate *gate, const struct cbvh_file *f, uint32_t k, float t, float u,
+                 float v);
+    cbvh_cull cull;
+    cbvh_hit_filter_fn filter;
+    void *user;
+    double t_base; /* the kernels' t plus this is t on the caller's ray */
+    float dir[3];  /* the caller's ray direction */
+};
+
+/* Triangle k, hit at t in the ray's current range: any hit: 1 (the walk stops) unless the gate rejects it;
+ * closest hit: it becomes the best when nearer than the best so far (cbvh_hit_better) and the gate, when
+ * there is one, does not reject it; returns 1 when the gate says to stop there. The gate is asked only
+ * about hits that would count, so a plain query pays one NULL test per hit. */
+CBVH_KERNEL int leaf_take(const struct cbvh_file *restrict f, const struct cbvh_hit_gate *gate, uint32_t k, float t,
+                          float u, float v, const int any, float *restrict best_t, struct cbvh_best_hit *restrict best)
+{
+    if (!any && !cbvh_hit_better(t, k, *best_t, best->tri))
+        return 0;
+    const int verdict = gate ? gate->check(gate, f, k, t, u, v) : CBVH_FILTER_ACCEPT;
+    if (verdict == CBVH_FILTER_REJECT)
+        return 0;
+    if (any)
+        return 1;
+    *best_t = t;
+    best->tri = k;
+    best->t = t;
+    best->u = u;
+    best->v = v;
+    return verdict == CBVH_FILTER_STOP;
+}
+
 /* Triangle k's vertex indices and positions for encodings that are
  * compile-time constants in the specialised leaf loops below (the switch
  * then folds away), or run-time values in the generic one. */
@@ -119,13 +155,14 @@ CBVH_KERNEL uint32_t leaf_reject4_sse2(const struct cbvh_ray_shear *restrict s, 
 
 /* Tests the leaf's triangles [first, first+count) against the ray. Any-hit:
  * returns 1 at the first hit. Closest-hit: updates best and *tmax (the
- * closest hit so far; hits at t == *tmax still compete by index), returns 0.
+ * closest hit so far; hits at t == *tmax still compete by index), returns 0,
+ * or 1 when a query's filter stopped the walk (the ray's gate, leaf_take).
  * *tested receives the number of triangles tested. The file's arrays and
  * grid are read into locals once per leaf. */
 CBVH_KERNEL int leaf_loop(const struct cbvh_file *restrict f, uint32_t first, uint32_t count,
-                          const struct cbvh_ray_shear *restrict s, float tmin, float *restrict tmax,
-                          struct cbvh_best_hit *restrict best, const int any, const int scalar, const int tri_enc,
-                          const int vert_enc)
+                          const struct cbvh_ray_shear *restrict s, const struct cbvh_hit_gate *gate, float tmin,
+                          float *restrict tmax, struct cbvh_best_hit *restrict best, const int any, const int scalar,
+                          const int tri_enc, const int vert_enc)
 {
     const void *restrict tris = f->triangles;
     const void *restrict verts = f->vertices;
@@ -146,17 +183,9 @@ CBVH_KERNEL int leaf_loop(const struct cbvh_file *restrict f, uint32_t first, ui
             for (uint32_t kept = ~leaf_reject4_sse2(s, c4) & ((1u << n) - 1u); kept; kept &= kept - 1u) {
                 const uint32_t low = kept & (0u - kept), j = (low >> 1) - (low >> 3);
                 leaf_triangle(tris, tri_enc, verts, vert_enc, origin, scale, k + j, a, b, c);
-                if (!cbvh_ray_triangle(s, a, b, c, tmin, best_t, &t, &u, &v))
-                    continue;
-                if (any)
+                if (cbvh_ray_triangle(s, a, b, c, tmin, best_t, &t, &u, &v) &&
+                    leaf_take(f, gate, k + j, t, u, v, any, &best_t, best))
                     return 1;
-                if (cbvh_hit_better(t, k + j, best_t, best->tri)) {
-                    best_t = t;
-                    best->tri = k + j;
-                    best->t = t;
-                    best->u = u;
-                    best->v = v;
-                }
             }
         }
         *tmax = best_t;
@@ -167,17 +196,9 @@ CBVH_KERNEL int leaf_loop(const struct cbvh_file *restrict f, uint32_t first, ui
 #endif
     for (uint32_t k = first; k < first + count; k++) {
         leaf_triangle(tris, tri_enc, verts, vert_enc, origin, scale, k, a, b, c);
-        if (!cbvh_ray_triangle(s, a, b, c, tmin, best_t, &t, &u, &v))
-            continue;
-        if (any)
+        if (cbvh_ray_triangle(s, a, b, c, tmin, best_t, &t, &u, &v) &&
+            leaf_take(f, gate, k, t, u, v, any, &best_t, best))
             return 1;
-        if (cbvh_hit_better(t, k, best_t, best->tri)) {
-            best_t = t;
-            best->tri = k;
-            best->t = t;
-            best->u = u;
-            best->v = v;
-        }
     }
     *tmax = best_t;
     return 0;
@@ -185,7 +206,7 @@ CBVH_KERNEL int leaf_loop(const struct cbvh_file *restrict f, uint32_t first, ui
 
 /* The leaf step of every single-ray walk: the leaf's cooked triangles
  * [first, first + count). Any-hit: returns 1 when the leaf occludes the ray.
- * Closest-hit: updates best and *tmax, returns 0. The encodings the cooker
+ * Closest-hit: updates best and *tmax, returns 0 (1: a filter stopped the walk). The encodings the cooker
  * writes for lossless files (DELTA16 or U16 indices, float vertices) get
  * loops of their own (one switch per leaf, not per triangle); the others go
  * through the generic one, which keeps every walk instance small. */
@@ -197,11 +218,11 @@ CBVH_KERNEL int cbvh_leaf_visit(const struct cbvh_file *restrict f, uint32_t fir
     const float tmin = ray->tmin;
     switch (f->triangle_encoding << 1 | f->vertex_encoding) {
     case CBVH_TRIS_DELTA16 << 1 | CBVH_VERTS_F32:
-        return leaf_loop(f, first, count, s, tmin, tmax, best, any, scalar, CBVH_TRIS_DELTA16, CBVH_VERTS_F32);
+        return leaf_loop(f, first, count, s, ray->gate, tmin, tmax, best, any, scalar, CBVH_TRIS_DELTA16, CBVH_VERTS_F32);
     case CBVH_TRIS_U16 << 1 | CBVH_VERTS_F32:
-        return leaf_loop(f, first, count, s, tmin, tmax, best, any, scalar, CBVH_TRIS_U16, CBVH_VERTS_F32);
+        return leaf_loop(f, first, count, s, ray->gate, tmin, tmax, best, any, scalar, CBVH_TRIS_U16, CBVH_VERTS_F32);
     default:
-        return leaf_loop(f, first, count, s, tmin, tmax, best, any, scalar, (int)f->triangle_encoding,
+        return leaf_loop(f, first, count, s, ray->gate, tmin, tmax, best, any, scalar, (int)f->triangle_encoding,
                          (int)f->vertex_encoding);
     }
 }

@@ -39,6 +39,8 @@ struct cbvh_ray_ctx {
                            * FLT_MAX / 2), so the box test runs on that axis at half scale (ray_box.h) */
     uint32_t octant;      /* bit a set when rcp[a] has its sign bit set (so -0 counts as negative): selects
                            * the precomputed child order (layout/tree.h) */
+    const struct cbvh_hit_gate *gate; /* NULL, or the culling and hit filter of a query with options
+                                       * (raycast.c), asked about each candidate hit (leaf.h) */
 };
 
 /* The octant of a reciprocal direction, from its sign bits. Every kernel
@@ -89,6 +91,7 @@ static inline int cbvh_ray_setup(struct cbvh_ray_ctx *ctx, const cbvh_ray *ray)
         ctx->rcp[a] = 1.0f / d[a];
     ctx->t_base = 0.0;
     ctx->box_halve = 0;
+    ctx->gate = NULL;
     ctx->tmin = ray->tmin;
     ctx->tmax = ray->tmax < CBVH_T_LIMIT ? ray->tmax : CBVH_T_LIMIT;
     ctx->octant = cbvh_octant_of(ctx->rcp);

@@ -1,4 +1,8 @@
 /* raycast.c: the public single-ray entry points, cbvh_raycast and cbvh_occluded. */
+#include <math.h>
+#include <string.h>
+
+#include "common/struct_size.h"
 #include "query/raycast.h"
 
 int cbvh_hit_output(const struct cbvh_file *f, const struct cbvh_best_hit *best, double t_base, cbvh_hit *hit)
@@ -43,4 +47,141 @@ CBVH_API int cbvh_occluded(const cbvh_file *file, const cbvh_ray *ray, cbvh_trav
     if (!file || !ray || !known_traversal(traversal) || !cbvh_ray_prepare(&ctx, ray, file))
         return 0;
     return cbvh_any(file, &ctx, traversal, stats);
+}
+
+/* ------------------------------------------------------------------ */
+/* Raycasts with options                                               */
+/* ------------------------------------------------------------------ */
+
+#define QUERY_OPTIONS_SIZE_MIN CBVH_STRUCT_SIZE_MIN(cbvh_query_options, traversal)
+
+static void query_options_defaults(cbvh_query_options *o)
+{
+    memset(o, 0, sizeof *o);
+    o->struct_size = sizeof *o;
+    o->traversal = CBVH_TRAVERSAL_SORTED;
+    o->cull = CBVH_CULL_NONE;
+}
+
+CBVH_API cbvh_result cbvh_query_options_init(cbvh_query_options *options, size_t struct_size)
+{
+    if (!cbvh_struct_size_record(options, struct_size, QUERY_OPTIONS_SIZE_MIN, sizeof *options))
+        return CBVH_ERROR_INVALID_ARGUMENT;
+    cbvh_query_options defaults;
+    query_options_defaults(&defaults);
+    defaults.struct_size = struct_size;
+    memcpy(options, &defaults, struct_size);
+    return CBVH_OK;
+}
+
+/* The record of cooked triangle k hit at the kernels' t: the normal from the edges in double, scaled by
+ * their largest component first so that neither tiny nor huge coordinates underflow or overflow it. */
+static void record_fill(const struct cbvh_file *f, uint32_t k, double t_base, float t, float u, float v,
+                        const float dir[3], cbvh_hit_record *r)
+{
+    float p[3][3];
+    cbvh_triangle_vertices(f, k, p[0], p[1], p[2]);
+    double e1[3], e2[3], big = 0.0;
+    for (int a = 0; a < 3; a++) {
+        e1[a] = (double)p[1][a] - p[0][a];
+        e2[a] = (double)p[2][a] - p[0][a];
+        big = fmax(big, fmax(fabs(e1[a]), fabs(e2[a])));
+    }
+    double n[3] = {0.0, 0.0, 0.0}, len = 0.0, facing = 0.0;
+    if (big > 0.0) {
+        for (int a = 0; a < 3; a++) {
+            e1[a] /= big;
+            e2[a] /= big;
+        }
+        n[0] = e1[1] * e2[2] - e1[2] * e2[1];
+        n[1] = e1[2] * e2[0] - e1[0] * e2[2];
+        n[2] = e1[0] * e2[1] - e1[1] * e2[0];
+        len = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    }
+    for (int a = 0; a < 3; a++) {
+        r->normal[a] = len > 0.0 ? (float)(n[a] / len) : 0.0f;
+        facing += n[a] * dir[a];
+    }
+    r->tri = cbvh_original_id(f, k);
+    r->t = t_base == 0.0 ? t : (float)(t_base + t);
+    r->u = u;
+    r->v = v;
+    r->front = facing < 0.0;
+    r->material = cbvh_cooked_material(f, k);
+}
+
+/* The gate's check (leaf.h): culling first, then the caller's filter. */
+static int gate_check(const struct cbvh_hit_gate *gate, const struct cbvh_file *f, uint32_t k, float t, float u,
+                      float v)
+{
+    cbvh_hit_record r;
+    record_fill(f, k, gate->t_base, t, u, v, gate->dir, &r);
+    if ((gate->cull == CBVH_CULL_BACK && !r.front) || (gate->cull == CBVH_CULL_FRONT && r.front))
+        return CBVH_FILTER_REJECT;
+    if (!gate->filter)
+        return CBVH_FILTER_ACCEPT;
+    const cbvh_filter_result verdict = gate->filter(gate->user, &r);
+    return verdict == CBVH_FILTER_REJECT || verdict == CBVH_FILTER_STOP ? (int)verdict : CBVH_FILTER_ACCEPT;
+}
+
+/* Checks the arguments of a query with options and prepares its ray and gate. */
+static cbvh_result query_prepare(const cbvh_file *file, const cbvh_ray *ray, const cbvh_query_options *options,
+                                 cbvh_query_options *o, struct cbvh_ray_ctx *ctx, struct cbvh_hit_gate *gate)
+{
+    query_options_defaults(o);
+    if (options) {
+        if (!cbvh_struct_size_ok(options->struct_size, QUERY_OPTIONS_SIZE_MIN, sizeof *options))
+            return CBVH_ERROR_INVALID_ARGUMENT;
+        memcpy(o, options, options->struct_size);
+    }
+    if (!file || !ray || !known_traversal(o->traversal) ||
+        (o->cull != CBVH_CULL_NONE && o->cull != CBVH_CULL_BACK && o->cull != CBVH_CULL_FRONT) ||
+        !cbvh_ray_prepare(ctx, ray, file))
+        return CBVH_ERROR_INVALID_ARGUMENT;
+    gate->check = gate_check;
+    gate->cull = o->cull;
+    gate->filter = o->filter;
+    gate->user = o->filter_user;
+    gate->t_base = ctx->t_base;
+    for (int a = 0; a < 3; a++)
+        gate->dir[a] = ray->dir[a];
+    /* without culling or filter every hit counts: the plain walk */
+    ctx->gate = o->cull != CBVH_CULL_NONE || o->filter ? gate : NULL;
+    return CBVH_OK;
+}
+
+CBVH_API cbvh_result cbvh_raycast_with(const cbvh_file *file, const cbvh_ray *ray, const cbvh_query_options *options,
+                                       cbvh_hit_record *hit, cbvh_query_stats *stats)
+{
+    if (!hit)
+        return CBVH_ERROR_INVALID_ARGUMENT;
+    memset(hit, 0, sizeof *hit);
+    hit->tri = CBVH_NO_HIT;
+    cbvh_query_options o;
+    struct cbvh_ray_ctx ctx;
+    struct cbvh_hit_gate gate;
+    const cbvh_result r = query_prepare(file, ray, options, &o, &ctx, &gate);
+    if (r != CBVH_OK)
+        return r;
+    struct cbvh_best_hit best = {UINT32_MAX, 0.0f, 0.0f, 0.0f};
+    cbvh_closest(file, &ctx, o.traversal, &best, stats);
+    if (best.tri != UINT32_MAX)
+        record_fill(file, best.tri, ctx.t_base, best.t, best.u, best.v, ray->dir, hit);
+    return CBVH_OK;
+}
+
+CBVH_API cbvh_result cbvh_occluded_with(const cbvh_file *file, const cbvh_ray *ray, const cbvh_query_options *options,
+                                        int *occluded, cbvh_query_stats *stats)
+{
+    if (!occluded)
+        return CBVH_ERROR_INVALID_ARGUMENT;
+    *occluded = 0;
+    cbvh_query_options o;
+    struct cbvh_ray_ctx ctx;
+    struct cbvh_hit_gate gate;
+    const cbvh_result r = query_prepare(file, ray, options, &o, &ctx, &gate);
+    if (r != CBVH_OK)
+        return r;
+    *occluded = cbvh_any(file, &ctx, o.traversal, stats);
+    return CBVH_OK;
 }

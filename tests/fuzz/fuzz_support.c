@@ -252,6 +252,18 @@ static uint64_t box_limit(const cbvh_file_info *in)
     return (slots < cap ? slots : cap) + 1u;
 }
 
+/* Counts the candidates of a query whose filter rejects every one. */
+typedef struct fuzz_hits {
+    size_t count;
+} fuzz_hits;
+
+static cbvh_filter_result fuzz_collect(void *user, const cbvh_hit_record *hit)
+{
+    (void)hit;
+    ((fuzz_hits *)user)->count++;
+    return CBVH_FILTER_REJECT;
+}
+
 static const char *traversal_name[4] = { "sorted", "stackless", "unsorted", "distance" };
 
 /* One ray through every ray query; `strict` compares them with each other. */
@@ -275,6 +287,22 @@ static void check_ray(check_ctx *c, const cbvh_ray *r)
             FUZZ_CHECK(occ == got[0], "%s: occluded %d but raycast %d", traversal_name[t], occ, got[0]);
         c->queries += 2;
     }
+    /* with options: no culling or filter answers as the plain raycast; with culling, a filter rejecting
+     * every candidate leaves a miss and sees at most one candidate per triangle */
+    cbvh_query_options q;
+    cbvh_query_options_init(&q, sizeof q);
+    cbvh_hit_record rec;
+    const cbvh_result qr = cbvh_raycast_with(c->f, r, &q, &rec, NULL);
+    FUZZ_CHECK(qr == (ray_valid(r) ? CBVH_OK : CBVH_ERROR_INVALID_ARGUMENT), "raycast_with returned %d", (int)qr);
+    FUZZ_CHECK(rec.tri == hits[0].tri && (!got[0] || rec.t == hits[0].t), "raycast_with differs from raycast");
+    fuzz_hits all = { 0 };
+    q.filter = fuzz_collect;
+    q.filter_user = &all;
+    q.cull = CBVH_CULL_BACK;
+    cbvh_raycast_with(c->f, r, &q, &rec, NULL);
+    FUZZ_CHECK(rec.tri == CBVH_NO_HIT && all.count <= c->info.triangle_count,
+               "all hits: %zu candidates for %u triangles, answer %u", all.count, c->info.triangle_count, rec.tri);
+    c->queries += 2;
     cbvh_hit sh;
     uint8_t socc = 0x77;
     memset(&sh, 0x5A, sizeof sh);
