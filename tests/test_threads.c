@@ -16,7 +16,7 @@
 #include "support/scene_gen.h"
 #include "support/layouts.h"
 
-enum { QUERY_COUNT = 2048, STREAM_SIZE = 16, KINDS = 10, MAX_THREADS = 16 };
+enum { QUERY_COUNT = 2048, STREAM_SIZE = 16, KINDS = 11, MAX_THREADS = 16 };
 
 /* One query's answer, compared bytewise between threads. */
 typedef struct answer {
@@ -38,6 +38,17 @@ static int hash_id(void *user, uint32_t tri)
     f->h = (f->h ^ tri) * 0x100000001B3ull;
     f->count++;
     return 0;
+}
+
+/* A hit filter that folds every candidate into a hash (independent of their order) and rejects it. */
+static cbvh_filter_result hash_candidate(void *user, const cbvh_hit_record *hit)
+{
+    fnv *f = user;
+    uint32_t bits;
+    memcpy(&bits, &hit->t, 4);
+    f->h += ((uint64_t)hit->tri << 32 | bits) * 0x9E3779B97F4A7C15ull;
+    f->count++;
+    return CBVH_FILTER_REJECT;
 }
 
 /* Query i: its kind is i % KINDS; every thread computes it the same way. */
@@ -94,6 +105,27 @@ static void run_query(size_t i, answer *a)
             memcpy(a->normal, s.normal, sizeof a->normal);
         }
         break;
+    case 9: { /* with options: back faces culled, or every hit through a filter */
+        cbvh_query_options q;
+        cbvh_hit_record rec;
+        fnv f = { 0, 0 };
+        cbvh_query_options_init(&q, sizeof q);
+        if ((i / KINDS) % 2) {
+            q.filter = hash_candidate;
+            q.filter_user = &f;
+        } else {
+            q.cull = CBVH_CULL_BACK;
+        }
+        cbvh_raycast_with(file, r, &q, &rec, NULL);
+        a->tri = rec.tri;
+        if (rec.tri != CBVH_NO_HIT) {
+            a->t = rec.t; a->u = rec.u; a->v = rec.v;
+            memcpy(a->normal, rec.normal, sizeof a->normal);
+        }
+        a->hash = f.h;
+        a->count = f.count;
+        break;
+    }
     default: {
         fnv f = { 1469598103934665603ull, 0 };
         float lo[3], hi[3];
