@@ -25,7 +25,9 @@ MATERIAL_NAMES = 0x80000006  # ancillary (bit 31)
 MATS_UNIFORM = 3  # MATERIALS encoding: one u32 id for every triangle
 REMAP_U24 = 2  # REMAP encoding: 3 bytes per id
 RAW, ZLIB = 0, 1
-TRIS_U16, TRIS_U32, TRIS_DELTA16 = 0, 1, 2
+TRIS_U16, TRIS_U32, TRIS_DELTA16, TRIS_LOCAL8 = 0, 1, 2, 4  # 3 is reserved (unsupported-encoding)
+LOCAL8_BLOCK, LOCAL8_WINDOW = 8, 256
+INCOMPAT_W4_DEPTH_FIRST = 0x2
 BINARY, WIDE4 = 0, 1  # NODES encodings: the node layouts
 VERTS_F32, VERTS_Q16 = 0, 1
 LEAF_BIT = 0x80000000
@@ -180,8 +182,9 @@ def w4_order(boxes, grid, k):
     return W4_ORDERS.index(tuple(used + [s for s in range(4) if boxes[s] is None]))
 
 
-def place_wide4(tree, decoded, grid):
-    """Spec section 5.2: the binary tree collapsed into nodes of up to four slots, allocated breadth first.
+def place_wide4(tree, decoded, grid, depth_first=False):
+    """Spec section 5.2: the binary tree collapsed into nodes of up to four slots, allocated breadth first; the
+    leaves hold the triangles breadth first (node order), or depth first (INCOMPAT_W4_DEPTH_FIRST).
     Returns (NODES bytes, triangles in cooked order, depth, node count, triangles in depth-first leaf order)."""
     boxes = {}
 
@@ -209,42 +212,97 @@ def place_wide4(tree, decoded, grid):
             slots[s:s + 1] = [slots[s][1], slots[s][2]]
         return slots
 
-    queue, index_of, slots_of, cooked, data = [tree], {}, [], [], b""
+    queue, index_of, slots_of, first_child_of = [tree], {}, [], []
     depth, level_end = 1, 1
     for i, n in enumerate(queue):
         if i == level_end:
             depth, level_end = depth + 1, len(queue)
         slots = collapse(n)
         slots_of.append(slots)
-        first_child, first_triangle = len(queue), len(cooked)
+        first_child_of.append(len(queue))
+        for c in slots:
+            if c[0] == "node":
+                index_of[id(c)] = len(queue)
+                queue.append(c)
+
+    def own_triangles(i):
+        return [t for c in slots_of[i] if c[0] == "leaf" for t in c[1]]
+
+    def triangles_depth_first(i):
+        out = own_triangles(i)
+        for c in slots_of[i]:
+            if c[0] == "node":
+                out += triangles_depth_first(index_of[id(c)])
+        return out
+
+    order = depth_first_nodes(slots_of, index_of) if depth_first else range(len(queue))
+    first_triangle_of, cooked = {}, []
+    for i in order:
+        first_triangle_of[i] = len(cooked)
+        cooked += own_triangles(i)
+    data = b""
+    for i, slots in enumerate(slots_of):
         meta = 0
         for s, c in enumerate(slots):
             meta |= 1 << 16 + s
             if c[0] == "node":
                 meta |= 1 << 20 + s
-                index_of[id(c)] = len(queue)
-                queue.append(c)
             else:
                 meta |= (len(c[1]) - 1) << 4 * s
-                cooked += c[1]
         slot_boxes = [qbox(c) for c in slots] + [None] * (4 - len(slots))
         for k in range(8):
             meta |= w4_order(slot_boxes, grid, k) << 24 + 5 * k
         planes = [[b[p // 3][p % 3] if b else 0 for b in slot_boxes] for p in range(6)]
-        data += struct.pack("<24HIIQ", *[q for plane in planes for q in plane], first_child, first_triangle, meta)
+        data += struct.pack("<24HIIQ", *[q for plane in planes for q in plane], first_child_of[i],
+                            first_triangle_of[i], meta)
+    return data, cooked, depth, len(queue), triangles_depth_first(0)
 
-    def depth_first(i):
-        out = []
-        for c in slots_of[i]:
-            out += depth_first(index_of[id(c)]) if c[0] == "node" else c[1]
-        return out
 
-    return data, cooked, depth, len(queue), depth_first(0)
+def depth_first_nodes(slots_of, index_of):
+    """Node indices in depth-first order: a node, then its internal children's subtrees in slot order."""
+    out, stack = [], [0]
+    while stack:
+        i = stack.pop()
+        out.append(i)
+        stack += reversed([index_of[id(c)] for c in slots_of[i] if c[0] == "node"])
+    return out
+
+
+def number_local8(cooked):
+    """Spec section 4, LOCAL8: vertices by first use in cooked order; a block of LOCAL8_BLOCK triangles gives a
+    fresh copy to a vertex numbered more than LOCAL8_WINDOW - 3 x LOCAL8_BLOCK below the block's first new id.
+    Returns (source vertex of each new id, new ids of each cooked triangle)."""
+    latest, order, ctris = {}, [], []
+    reach = LOCAL8_WINDOW - 3 * LOCAL8_BLOCK
+    for k, (_, tri) in enumerate(cooked):
+        if k % LOCAL8_BLOCK == 0:
+            window = max(len(order) - reach, 0)
+        ids = []
+        for v in tri:
+            if v not in latest or latest[v] < window:
+                latest[v] = len(order)
+                order.append(v)
+            ids.append(latest[v])
+        ctris.append(ids)
+    return order, ctris
+
+
+def local8_bytes(ctris):
+    """Blocks of LOCAL8_BLOCK triangles: u32 base (the block's smallest id), then 3 u8 offsets a triangle."""
+    out = b""
+    for b in range(0, len(ctris), LOCAL8_BLOCK):
+        block = ctris[b:b + LOCAL8_BLOCK]
+        base = min(v for t in block for v in t)
+        offsets = [v - base for t in block for v in t] + [0] * (3 * (LOCAL8_BLOCK - len(block)))
+        out += struct.pack("<I", base) + bytes(offsets)
+    return out
 
 
 def cook(positions, triangles, max_leaf=4, vertex_format=VERTS_F32, tri_encoding=None, keep_remap=True,
-         materials=None, remap_encoding=None, material_encoding=None, codec=RAW, compat_flags=0, layout=BINARY):
-    """Returns (header fields, section list) for a mesh, following the spec's cooking rules."""
+         materials=None, remap_encoding=None, material_encoding=None, codec=RAW, compat_flags=0, layout=BINARY,
+         depth_first=False):
+    """Returns (header fields, section list) for a mesh, following the spec's cooking rules (as they were
+    before LOCAL8 and depth-first wide4 leaves unless asked: the older vectors keep their bytes)."""
     kept = [(i, t) for i, t in enumerate(triangles) if triangle_area([positions[v] for v in t]) > 0]
     tree = build(kept, positions, max_leaf)
     lo, hi = box_of([positions[v] for _, tri in kept for v in tri])
@@ -258,19 +316,25 @@ def cook(positions, triangles, max_leaf=4, vertex_format=VERTS_F32, tri_encoding
         ndata, cooked, depth, node_count = place_binary(tree, decoded, grid)
         first_use = cooked
     else:
-        ndata, cooked, depth, node_count, first_use = place_wide4(tree, decoded, grid)
-    # vertices by first use in the depth-first order of the leaves (spec section 4, DELTA16)
-    vmap = {}
-    for _, tri in first_use:
-        for v in tri:
-            vmap.setdefault(v, len(vmap))
-    vdata = b"".join(struct.pack("<3H" if vertex_format == VERTS_Q16 else "<3f", *stored[v]) for v in vmap)
-    ctris = [[vmap[v] for v in tri] for _, tri in cooked]
+        ndata, cooked, depth, node_count, first_use = place_wide4(tree, decoded, grid, depth_first)
+    if tri_encoding == TRIS_LOCAL8:
+        vorder, ctris = number_local8(cooked)
+    else:
+        # vertices by first use in the depth-first order of the leaves (spec section 4, DELTA16)
+        vmap = {}
+        for _, tri in first_use:
+            for v in tri:
+                vmap.setdefault(v, len(vmap))
+        vorder = list(vmap)
+        ctris = [[vmap[v] for v in tri] for _, tri in cooked]
+    vdata = b"".join(struct.pack("<3H" if vertex_format == VERTS_Q16 else "<3f", *stored[v]) for v in vorder)
     bmin, bmax = box_of(list(decoded.values()))
 
     if tri_encoding is None:
-        tri_encoding = TRIS_U16 if len(vmap) <= 65536 else TRIS_U32
-    if tri_encoding == TRIS_U16:
+        tri_encoding = TRIS_U16 if len(vorder) <= 65536 else TRIS_U32
+    if tri_encoding == TRIS_LOCAL8:
+        tdata = local8_bytes(ctris)
+    elif tri_encoding == TRIS_U16:
         tdata = b"".join(struct.pack("<3H", *t) for t in ctris)
     elif tri_encoding == TRIS_U32:
         tdata = b"".join(struct.pack("<3I", *t) for t in ctris)
@@ -297,8 +361,9 @@ def cook(positions, triangles, max_leaf=4, vertex_format=VERTS_F32, tri_encoding
         if enc is None:
             enc = 0 if max(ids) < 256 else 1 if max(ids) < 65536 else 2
         sections.append(Section(MATERIALS, enc, b"".join(struct.pack("<" + "BHI"[enc], m) for m in ids), codec))
-    header = dict(version=1, header_size=HEADER_SIZE, compat=compat_flags, incompat=0,
-                  triangle_count=len(cooked), vertex_count=len(vmap), node_count=node_count, depth=depth,
+    header = dict(version=1, header_size=HEADER_SIZE, compat=compat_flags,
+                  incompat=INCOMPAT_W4_DEPTH_FIRST if depth_first else 0,
+                  triangle_count=len(cooked), vertex_count=len(vorder), node_count=node_count, depth=depth,
                   max_leaf_size=max_leaf, original_triangle_count=original,
                   grid_origin=[g[0] for g in grid], grid_scale=[g[1] for g in grid], bounds_min=bmin, bounds_max=bmax,
                   reserved=bytes(12))
@@ -373,6 +438,9 @@ def box_mesh(offset=0.0):
 
 
 BOX = box_mesh()
+# the box and a copy 10 along x: with leaves of 1 its wide4 tree has two nodes with children on one level, so
+# the leaves' breadth-first and depth-first orders differ
+TWO_BOXES = (BOX[0] + box_mesh(10.0)[0], BOX[1] + [tuple(v + 8 for v in t) for t in BOX[1]])
 BOX_FAR = box_mesh(70000.0)
 QUAD = ([(0.0, 0.0, 2.5), (4.0, 0.0, 2.5), (4.0, 2.0, 2.5), (0.0, 2.0, 2.5)], [(0, 1, 2), (0, 2, 3)])
 # The box with two degenerate triangles (dropped by the cooker) at original ids 3 and 9.
@@ -1338,6 +1406,92 @@ def _():
         "good-w4-box-leaf1 with header depth 2")
 def _():
     return w4_header(depth=2)
+
+
+@vector("good-box-local8", "OK", "-",
+        "good-box-raw with LOCAL8 triangles (TRIANGLES encoding 4): 2 blocks, the second holding 4 triangles")
+def _():
+    return serialize(*box(tri_encoding=TRIS_LOCAL8))
+
+
+@vector("bad-local8-index", "CORRUPT", "LOCAL8 base 7 plus offset",
+        "good-box-local8 with block 0's base 7: base plus its largest offset is past vertex_count 8")
+def _():
+    h, s = box(tri_encoding=TRIS_LOCAL8)
+    patched(s[1], 0, "<I", 7)
+    return serialize(h, s)
+
+
+@vector("bad-local8-padding", "CORRUPT", "offset 1 of slot 4, past triangle_count 12, must be 0",
+        "good-box-local8 with an offset of 1 in block 1's slot 4 (triangle 12, past the last)")
+def _():
+    h, s = box(tri_encoding=TRIS_LOCAL8)
+    patched(s[1], 28 + 4 + 3 * 4, "<B", 1)
+    return serialize(h, s)
+
+
+@vector("bad-local8-size", "CORRUPT", "expected 56 (2 elements of 28 bytes)",
+        "good-box-local8 with a third, empty block (84 bytes for 12 triangles)")
+def _():
+    h, s = box(tri_encoding=TRIS_LOCAL8)
+    s[1].data += bytes(28)
+    return serialize(h, s)
+
+
+@vector("good-two-boxes", "OK", "-", "two boxes 10 apart along x, 24 triangles, leaves of 1, binary nodes")
+def _():
+    return serialize(*cook(*TWO_BOXES, max_leaf=1))
+
+
+def w4_two_boxes(**kw):
+    return cook(*TWO_BOXES, max_leaf=1, layout=WIDE4, **kw)
+
+
+@vector("good-w4-two-boxes", "OK", "-",
+        "good-two-boxes in wide4 nodes, leaves breadth first (as cooked before the depth-first flag)")
+def _():
+    return serialize(*w4_two_boxes())
+
+
+@vector("good-w4-two-boxes-local8", "OK", "-",
+        "good-two-boxes in wide4 nodes with incompat flag 0x2 (leaves depth first) and LOCAL8 triangles, as the "
+        "cooker writes it")
+def _():
+    h, s = w4_two_boxes(depth_first=True, tri_encoding=TRIS_LOCAL8)
+    assert find(s, NODES).data != find(w4_two_boxes()[1], NODES).data, "the two orders must differ here"
+    return serialize(h, s)
+
+
+@vector("good-w4-local8-q16-zlib", "OK", "-",
+        "wide4 box with 2 degenerate triangles dropped, depth-first leaves, LOCAL8, grid vertices, REMAP u16, "
+        "MATERIALS u8 (1 + 7 x original id), every section zlib")
+def _():
+    return serialize(*cook(*BOX_DEGENERATE, max_leaf=2, layout=WIDE4, depth_first=True, tri_encoding=TRIS_LOCAL8,
+                           vertex_format=VERTS_Q16, materials=materials_for(BOX_DEGENERATE, 1), codec=ZLIB))
+
+
+@vector("bad-w4-depth-first-unflagged", "CORRUPT", "but the leaves before it end at triangle",
+        "good-w4-two-boxes-local8 without incompat flag 0x2: its leaves do not tile breadth first")
+def _():
+    h, s = w4_two_boxes(depth_first=True, tri_encoding=TRIS_LOCAL8)
+    h["incompat"] = 0
+    return serialize(h, s)
+
+
+@vector("bad-w4-flag-breadth-first", "CORRUPT", "in depth-first order end at triangle",
+        "good-w4-two-boxes with incompat flag 0x2: its leaves do not tile depth first")
+def _():
+    h, s = w4_two_boxes()
+    h["incompat"] = INCOMPAT_W4_DEPTH_FIRST
+    return serialize(h, s)
+
+
+@vector("bad-depth-first-binary", "CORRUPT", "depth-first flag is set on a binary-layout file",
+        "good-box-raw with incompat flag 0x2, which only wide4 nodes may have")
+def _():
+    h, s = box()
+    h["incompat"] = INCOMPAT_W4_DEPTH_FIRST
+    return serialize(h, s)
 
 
 @vector("unsupported-w4-nodes-encoding-2", "UNSUPPORTED", "encoding 2", "good-w4-box-leaf1 with NODES encoding 2 (a future node layout)")

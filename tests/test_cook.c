@@ -295,18 +295,27 @@ static void parse(const uint8_t *b, size_t size, parsed *p)
         }
         p->nodes[i].word = cbvh_read_u32(n + 12);
     }
-    /* TRIANGLES */
-    static const uint64_t tri_elem[3] = { 6, 12, 8 };
-    assert_true(p->encoding[2] <= 2);
-    assert_int_equal(p->size[2], tri_elem[p->encoding[2]] * p->tri_count);
+    /* TRIANGLES: u16 x 3, u32 x 3, DELTA16 (u32 base, two i16 deltas), or LOCAL8 (encoding 4: blocks of 8
+     * triangles, a u32 base and 3 u8 offsets each; the last block's unused offsets 0) */
+    static const uint64_t tri_elem[5] = { 6, 12, 8, 0, 28 };
+    const uint32_t tri_enc = p->encoding[2];
+    assert_true(tri_enc <= 2 || tri_enc == 4);
+    const uint64_t tri_elements = tri_enc == 4 ? (p->tri_count + 7u) / 8u : p->tri_count;
+    assert_int_equal(p->size[2], tri_elem[tri_enc] * tri_elements);
     p->tris = calloc(3 * (size_t)p->tri_count, sizeof(uint32_t));
     for (uint32_t t = 0; t < p->tri_count; t++) {
-        const uint8_t *e = data[2] + tri_elem[p->encoding[2]] * t;
+        const uint8_t *e = data[2] + tri_elem[tri_enc] * (tri_enc == 4 ? t / 8u : t);
         uint32_t *o = p->tris + 3 * (size_t)t;
-        if (p->encoding[2] == 0) {
+        if (tri_enc == 0) {
             o[0] = rd16(e); o[1] = rd16(e + 2); o[2] = rd16(e + 4);
-        } else if (p->encoding[2] == 1) {
+        } else if (tri_enc == 1) {
             o[0] = cbvh_read_u32(e); o[1] = cbvh_read_u32(e + 4); o[2] = cbvh_read_u32(e + 8);
+        } else if (tri_enc == 4) {
+            const uint64_t base = cbvh_read_u32(e);
+            for (int c = 0; c < 3; c++) {
+                assert_true(base + e[4 + 3 * (t % 8u) + (uint32_t)c] < p->vert_count);
+                o[c] = (uint32_t)(base + e[4 + 3 * (t % 8u) + (uint32_t)c]);
+            }
         } else {
             int64_t base = cbvh_read_u32(e);
             o[0] = (uint32_t)base;
@@ -317,11 +326,15 @@ static void parse(const uint8_t *b, size_t size, parsed *p)
         for (int c = 0; c < 3; c++)
             assert_true(o[c] < p->vert_count);
     }
-    /* The narrowest triangle encoding the spec names. */
-    if (p->vert_count <= 65536)
-        assert_int_equal(p->encoding[2], 0);
-    else
-        assert_int_not_equal(p->encoding[2], 0);
+    for (uint32_t t = p->tri_count; tri_enc == 4 && t % 8u != 0; t++)
+        for (uint32_t c = 0; c < 3; c++)
+            assert_int_equal(data[2][28 * (size_t)(t / 8u) + 4 + 3 * (t % 8u) + c], 0);
+    /* The narrowest encoding the spec names: LOCAL8 unless another takes fewer bytes, and then u16 when every
+     * index fits. */
+    if (tri_enc != 4 && p->vert_count <= 65536)
+        assert_int_equal(tri_enc, 0);
+    else if (tri_enc != 4)
+        assert_int_not_equal(tri_enc, 0);
     /* VERTICES */
     assert_true(p->encoding[3] <= 1);
     assert_int_equal(p->size[3], (p->encoding[3] ? 6 : 12) * (uint64_t)p->vert_count);
@@ -718,7 +731,11 @@ static void test_grid_and_sphere(void **state)
     make_grid(&m, 60, 3.0, 5);
     cooked c;
     cook_and_check(&m, NULL, &c);
-    assert_int_equal(c.p.vert_count, 61 * 61);
+    /* LOCAL8 indices (encoding 4) with the copies its windows need, fewer bytes than u16 indices to each
+     * vertex once (the narrowest other encoding) */
+    assert_int_equal(c.p.encoding[2], 4);
+    assert_true(c.p.vert_count >= 61 * 61);
+    assert_true(c.p.size[2] + c.p.size[3] < 6 * (uint64_t)c.p.tri_count + 12 * 61 * 61);
     cooked_free(&c);
     mesh_free(&m);
 
@@ -827,7 +844,8 @@ static void test_quantized_vertices(void **state)
     }
 }
 
-/* More than 65536 vertices: DELTA16 triangles (vertex copies where a delta would not fit). */
+/* More than 65536 vertices: LOCAL8 triangles, with fewer bytes than DELTA16 (the narrowest other encoding)
+ * would take with each vertex once. */
 static void test_large_mesh_encodings(void **state)
 {
     (void)state;
@@ -835,9 +853,45 @@ static void test_large_mesh_encodings(void **state)
     make_grid(&m, 300, 10.0, 9);
     cooked c;
     cook_and_check(&m, NULL, &c);
-    assert_int_equal(c.p.encoding[2], 2);
+    assert_int_equal(c.p.encoding[2], 4);
     assert_true(c.p.vert_count >= 301 * 301);
+    assert_true(c.p.size[2] + c.p.size[3] < 8 * (uint64_t)c.p.tri_count + 12 * 301 * 301);
     assert_int_equal(c.p.encoding[4], 2); /* REMAP u24: 180000 triangles (u32 past 2^24) */
+    cooked_free(&c);
+    mesh_free(&m);
+}
+
+/* nt triangles whose corners are drawn at random from a pool of nv random points in the unit cube: in any
+ * triangle order most corners were first used long before, so LOCAL8 would copy nearly every one. */
+static void make_pool_soup(test_mesh *m, size_t nv, size_t nt, uint64_t seed)
+{
+    rng_seed(seed);
+    mesh_alloc(m, nv, nt);
+    for (size_t i = 0; i < 3 * nv; i++)
+        m->pos[i] = (float)rng_unit();
+    for (size_t i = 0; i < 3 * nt; i++)
+        m->idx[i] = (uint32_t)(rng_unit() * (double)nv);
+}
+
+/* When LOCAL8's copies cost more than they save, the cooker keeps each vertex once with the narrowest other
+ * encoding: u16 for a small pool, DELTA16 (with its own copies) past 65536 vertices. */
+static void test_pool_encodings(void **state)
+{
+    (void)state;
+    test_mesh m;
+    make_pool_soup(&m, 2000, 20000, 11);
+    cooked c;
+    cook_and_check(&m, NULL, &c);
+    assert_int_equal(c.p.encoding[2], 0);
+    assert_int_equal(c.p.vert_count, 2000);
+    assert_int_equal(c.p.size[2] + c.p.size[3], 6 * (uint64_t)c.p.tri_count + 12 * 2000);
+    cooked_free(&c);
+    mesh_free(&m);
+
+    make_pool_soup(&m, 70000, 100000, 12);
+    cook_and_check(&m, NULL, &c);
+    assert_int_equal(c.p.encoding[2], 2);
+    assert_true(c.p.vert_count >= 70000 - 100); /* a few points no kept triangle uses may be dropped */
     cooked_free(&c);
     mesh_free(&m);
 }
@@ -1909,6 +1963,7 @@ int main(void)
         cmocka_unit_test(test_zero_and_flat),
         cmocka_unit_test(test_quantized_vertices),
         cmocka_unit_test(test_large_mesh_encodings),
+        cmocka_unit_test(test_pool_encodings),
         cmocka_unit_test(test_weld_and_degenerate),
         cmocka_unit_test(test_remap_and_materials),
         cmocka_unit_test(test_material_names),

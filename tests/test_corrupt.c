@@ -248,8 +248,13 @@ static int expected_code(const uint8_t *orig, const uint8_t *mut, size_t pos)
     }
     if (pos >= HDR_COMPAT && pos < HDR_COMPAT + 4)
         return CBVH_OK; /* old readers ignore compatible flags */
-    if (pos >= HDR_INCOMPAT && pos < HDR_INCOMPAT + 4)
-        return CBVH_ERROR_UNSUPPORTED;
+    if (pos >= HDR_INCOMPAT && pos < HDR_INCOMPAT + 4) {
+        /* bits this reader does not know are unsupported; the wide4 depth-first bit (CBVH_INCOMPAT_W4_DEPTH_FIRST)
+         * changes how the leaves must tile the triangles: a tree whose two orders differ turns corrupt */
+        if (rd32(mut + HDR_INCOMPAT) & ~0x2u)
+            return CBVH_ERROR_UNSUPPORTED;
+        return -1;
+    }
     if (pos >= HDR_RESERVED && pos < HDR_RESERVED + 12)
         return CBVH_ERROR_CORRUPT;
     if (pos >= TABLE && pos < TABLE + (size_t)count * ENTRY) {
@@ -261,11 +266,11 @@ static int expected_code(const uint8_t *orig, const uint8_t *mut, size_t pos)
         if (field < 4 && !ancillary && rd32(e) > 5)
             return CBVH_ERROR_UNSUPPORTED;
         if (field >= E_ENCODING) {
-            /* encodings per type 1..5 (NODES: binary, wide4; REMAP: u16, u32, u24; MATERIALS: u8, u16, u32,
-             * uniform) */
-            static const uint32_t known[6] = { 0, 2, 3, 2, 3, 4 };
+            /* encodings per type 1..5 (NODES: binary, wide4; TRIANGLES: u16, u32, DELTA16, LOCAL8 = 4, 3 is
+             * reserved; REMAP: u16, u32, u24; MATERIALS: u8, u16, u32, uniform) */
+            static const uint32_t known[6] = { 0, 2, 5, 2, 3, 4 };
             uint32_t type = rd32(e), enc = rd32(e + E_ENCODING);
-            if (type >= 1 && type <= 5 && enc >= known[type])
+            if (type >= 1 && type <= 5 && (enc >= known[type] || (type == 2 && enc == 3)))
                 return CBVH_ERROR_UNSUPPORTED;
             if (type == CBVH_SECTION_MATERIAL_NAMES && enc >= 1)
                 return CBVH_OK;
@@ -517,12 +522,14 @@ static void test_structure(void **state)
         int ti = edit_find(&e, 2), ri = edit_find(&e, 4), vi = edit_find(&e, 3), ni = edit_find(&e, 1);
         uint32_t vcount = rd32(e.header + 36), tcount = rd32(e.header + 32);
         uint8_t saved[16];
-        assert_int_equal(e.s[ti].encoding, 0); /* u16 for this small mesh */
-        memcpy(saved, e.s[ti].data, 2);
-        e.s[ti].data[0] = (uint8_t)vcount;
-        e.s[ti].data[1] = (uint8_t)(vcount >> 8);
+        /* the first index (u16), or the first block's base (LOCAL8), made vertex_count */
+        assert_true(e.s[ti].encoding == 0 || e.s[ti].encoding == 4); /* u16 or LOCAL8 for this small mesh */
+        const size_t index_bytes = e.s[ti].encoding == 0 ? 2 : 4;
+        memcpy(saved, e.s[ti].data, index_bytes);
+        wr32(saved + 8, vcount);
+        memcpy(e.s[ti].data, saved + 8, index_bytes);
         assert_int_equal(open_edit(&e, &t, NULL, NULL), CBVH_ERROR_CORRUPT);
-        memcpy(e.s[ti].data, saved, 2);
+        memcpy(e.s[ti].data, saved, index_bytes);
         if (ri >= 0) {
             memcpy(saved, e.s[ri].data, 2);
             memcpy(e.s[ri].data, e.s[ri].data + 2, 2);

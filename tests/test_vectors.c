@@ -15,12 +15,13 @@
 /* ------------------------------------------------------------------ the meshes the vectors were made from */
 
 typedef struct mesh {
-    float v[8][3];
-    uint32_t t[14][3];
+    float v[16][3];
+    uint32_t t[24][3];
     uint32_t triangle_count;
 } mesh;
 
-enum { MESH_SINGLE, MESH_BOX, MESH_BOX_FAR, MESH_QUAD, MESH_BOX_DEGENERATE, MESH_QUAD_SPARSE, MESH_COUNT };
+enum { MESH_SINGLE, MESH_BOX, MESH_BOX_FAR, MESH_QUAD, MESH_BOX_DEGENERATE, MESH_QUAD_SPARSE, MESH_TWO_BOXES,
+       MESH_COUNT };
 
 static mesh meshes[MESH_COUNT];
 
@@ -72,6 +73,17 @@ static void make_meshes(void)
     const uint32_t pt[5][3] = { { 0, 0, 1 }, { 0, 1, 2 }, { 1, 1, 1 }, { 2, 3, 2 }, { 0, 2, 3 } };
     memcpy(p->t, pt, sizeof pt);
     p->triangle_count = 5;
+    /* make_vectors.py's TWO_BOXES: the box, then a copy 10 along x (vertices 8..15) */
+    mesh *two = &meshes[MESH_TWO_BOXES];
+    make_box(two, 0.0f, 0);
+    mesh copy;
+    make_box(&copy, 10.0f, 0);
+    for (int i = 0; i < 8; i++)
+        memcpy(two->v[8 + i], copy.v[i], sizeof copy.v[i]);
+    for (uint32_t j = 0; j < copy.triangle_count; j++)
+        for (int k = 0; k < 3; k++)
+            two->t[two->triangle_count + j][k] = copy.t[j][k] + 8;
+    two->triangle_count += copy.triangle_count;
 }
 
 /* ------------------------------------------------------------------ expectations (fileformat/README.md) */
@@ -84,6 +96,7 @@ typedef struct good {
     uint32_t layout;        /* cbvh_layout of the nodes */
     uint32_t uniform_material; /* the one id of a uniform MATERIALS section (material_base 0) */
     uint32_t name_count;       /* 3: fileformat/make_vectors.py's NAMES, else 0 */
+    uint32_t incompat_flags;   /* 0x2: wide4 leaves depth first */
 } good;
 
 typedef struct expectation {
@@ -229,6 +242,17 @@ static const expectation expectations[] = {
     BAD("bad-w4-depth-mismatch", "the tree's depth is 3, the header says 4"),
     BAD("bad-w4-depth-exceeded", "node 4: at depth 3, deeper than the header's depth 2"),
     NEWER("unsupported-w4-nodes-encoding-2", "section 0 (NODES): encoding 2 is unknown"),
+    { "good-box-local8", CBVH_OK, "", { MESH_BOX, 12, 8, 15, 4, 2, 1, 0, 4, 0, 4, 0, BIN, 0, 0 } },
+    BAD("bad-local8-index", "LOCAL8 base 7 plus offset"),
+    BAD("bad-local8-padding", "offset 1 of slot 4, past triangle_count 12, must be 0"),
+    BAD("bad-local8-size", "expected 56 (2 elements of 28 bytes)"),
+    { "good-two-boxes", CBVH_OK, "", { MESH_TWO_BOXES, 24, 16, 47, 6, 1, 1, 0, 0, 0, 4, 0, BIN, 0, 0 } },
+    { "good-w4-two-boxes", CBVH_OK, "", { MESH_TWO_BOXES, 24, 16, 10, 4, 1, 1, 0, 0, 0, 4, 0, W4, 0, 0 } },
+    { "good-w4-two-boxes-local8", CBVH_OK, "", { MESH_TWO_BOXES, 24, 16, 10, 4, 1, 1, 0, 4, 0, 4, 0, W4, 0, 0, 2 } },
+    { "good-w4-local8-q16-zlib", CBVH_OK, "", { MESH_BOX_DEGENERATE, 12, 8, 3, 2, 2, 1, 1, 4, 0, 5, 1, W4, 0, 0, 2 } },
+    BAD("bad-w4-depth-first-unflagged", "but the leaves before it end at triangle"),
+    BAD("bad-w4-flag-breadth-first", "in depth-first order end at triangle"),
+    BAD("bad-depth-first-binary", "depth-first flag is set on a binary-layout file"),
 };
 
 #define EXPECTATION_COUNT (sizeof expectations / sizeof expectations[0])
@@ -297,7 +321,7 @@ static void check_info(const cbvh_file_info *in, const good *g, const mesh *m)
     assert_int_equal(in->vertex_format, g->vertex_format);
     assert_int_equal(in->index_encoding, g->index_encoding);
     assert_int_equal(in->compat_flags, g->compat_flags);
-    assert_int_equal(in->incompat_flags, 0);
+    assert_int_equal(in->incompat_flags, g->incompat_flags);
     assert_int_equal(in->section_count, g->section_count);
     assert_int_equal(in->layout, g->layout);
     for (int a = 0; a < 3; a++) {
@@ -456,6 +480,9 @@ static const twin twins[] = {
     { "good-w4-box-far-q16", "good-box-far-q16", MESH_BOX_FAR, 2, CBVH_VERTEX_QUANTIZED16 },
     { "good-w4-quad-flat", "good-quad-flat", MESH_QUAD, 1, CBVH_VERTEX_FLOAT32 },
     { "good-w4-remap-materials", "good-remap-materials", MESH_BOX_DEGENERATE, 2, CBVH_VERTEX_FLOAT32 },
+    { "good-w4-two-boxes", "good-two-boxes", MESH_TWO_BOXES, 1, CBVH_VERTEX_FLOAT32 },
+    { "good-w4-two-boxes-local8", "good-two-boxes", MESH_TWO_BOXES, 1, CBVH_VERTEX_FLOAT32 },
+    { "good-w4-local8-q16-zlib", "good-box-q16", MESH_BOX_DEGENERATE, 2, CBVH_VERTEX_QUANTIZED16 },
 };
 
 static double next_unit(uint64_t *state)

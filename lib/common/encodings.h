@@ -17,13 +17,14 @@
 /* A known section's number is its type without the ancillary bit: 1 (NODES) .. 6 (MATERIAL_NAMES). Numbers
  * are unique across critical and ancillary types, so they index tables (and cbvh_cook_stats' arrays). */
 #define CBVH_KNOWN_SECTIONS 6
-#define CBVH_MAX_ENCODINGS 4 /* encodings 0 .. 3 of any known type */
+#define CBVH_MAX_ENCODINGS 5 /* encodings 0 .. 4 of any known type */
 
 typedef struct cbvh_encoding {
     uint32_t element_size; /* bytes per element; 0: no such encoding */
     uint32_t max_value;    /* largest index or id one element holds (index and id encodings), else 0 */
     const char *name;      /* as `cbvh info` prints it */
     int uniform;           /* one element stands for every triangle (MATERIALS' uniform id) */
+    uint32_t group;        /* entries one element holds (TRIANGLES LOCAL8: a block of 8 triangles); 0: one */
 } cbvh_encoding;
 
 typedef struct cbvh_section_kind {
@@ -56,7 +57,8 @@ static inline const cbvh_section_kind *cbvh_section_kind_of(uint32_t type)
         { "TRIANGLES", 1, 0, 0,
           { [CBVH_TRIS_U16] = { 6, 0xFFFFu, "u16x3" },
             [CBVH_TRIS_U32] = { 12, 0xFFFFFFFFu, "u32x3" },
-            [CBVH_TRIS_DELTA16] = { 8, 0xFFFFFFFFu, "delta16" } } }, /* u32 base, two i16 deltas */
+            [CBVH_TRIS_DELTA16] = { 8, 0xFFFFFFFFu, "delta16" },     /* u32 base, two i16 deltas */
+            [CBVH_TRIS_LOCAL8] = { CBVH_LOCAL8_BLOCK_SIZE, 0xFFFFFFFFu, "local8", 0, CBVH_LOCAL8_BLOCK } } },
         { "VERTICES", 1, 0, 0, { [CBVH_VERTS_F32] = { 12, 0, "f32x3" }, [CBVH_VERTS_Q16] = { 6, 0, "q16x3" } } },
         { "REMAP", 0, 0, 0,
           { [CBVH_REMAP_U16] = { 2, 0xFFFFu, "u16", 0 },
@@ -80,6 +82,16 @@ static inline const cbvh_encoding *cbvh_encoding_of(uint32_t type, uint32_t enco
     if (!k || encoding >= CBVH_MAX_ENCODINGS || k->encodings[encoding].element_size == 0)
         return NULL;
     return &k->encodings[encoding];
+}
+
+/* Elements a section in encoding e holds for `entries` entries (triangles, vertices, nodes): one for a
+ * uniform encoding, one per group of entries for a grouped one (the last group may be partly used). */
+static inline uint64_t cbvh_elements_for(const cbvh_encoding *e, uint64_t entries)
+{
+    if (e->uniform)
+        return 1;
+    const uint64_t group = e->group ? e->group : 1;
+    return (entries + group - 1) / group;
 }
 
 /* Bytes per element of `encoding` in section `type`; 0 when either is unknown. */

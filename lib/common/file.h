@@ -47,7 +47,14 @@ struct cbvh_file {
  * with a constant encoding, the switch folds away (the query kernels' leaf loops). */
 static inline void cbvh_indices_decode(const void *tris, int enc, uint32_t k, uint32_t idx[3])
 {
-    if (enc == CBVH_TRIS_DELTA16) { /* u32 base, i16 d1, i16 d2 */
+    if (enc == CBVH_TRIS_LOCAL8) { /* blocks of a u32 base and 3 u8 offsets a triangle */
+        const uint8_t *b = (const uint8_t *)tris + (size_t)CBVH_LOCAL8_BLOCK_SIZE * (k / CBVH_LOCAL8_BLOCK);
+        const uint8_t *o = b + 4u + 3u * (k % CBVH_LOCAL8_BLOCK);
+        const uint32_t base = *(const uint32_t *)(const void *)b;
+        idx[0] = base + o[0];
+        idx[1] = base + o[1];
+        idx[2] = base + o[2];
+    } else if (enc == CBVH_TRIS_DELTA16) { /* u32 base, i16 d1, i16 d2 */
         const uint8_t *t = (const uint8_t *)tris + 8u * (size_t)k;
         const int16_t *d = (const int16_t *)(const void *)(t + 4);
         idx[0] = *(const uint32_t *)(const void *)t;

@@ -38,6 +38,11 @@ enum {
     CBVH_HDR_HEADER_CRC = 124  /* CRC32 of bytes [0,124) */
 };
 
+/* Header incompat_flags bits a reader of this version knows (spec section 2). Bit 0 is reserved: its test
+ * vector stands for a feature no reader knows. */
+#define CBVH_INCOMPAT_W4_DEPTH_FIRST 0x2u /* wide4 leaves hold the triangles in depth-first order (5.2) */
+#define CBVH_INCOMPAT_KNOWN CBVH_INCOMPAT_W4_DEPTH_FIRST
+
 /* Section table entry field offsets. */
 enum {
     CBVH_SEC_TYPE = 0,
@@ -55,7 +60,12 @@ enum { CBVH_CODEC_RAW = 0, CBVH_CODEC_ZLIB = 1 };
 
 /* Element encodings per section (element sizes, names and limits: common/encodings.h). */
 enum { CBVH_NODES_Q16 = 0, CBVH_NODES_W4 = 1 };                  /* binary, wide4 layout */
-enum { CBVH_TRIS_U16 = 0, CBVH_TRIS_U32 = 1, CBVH_TRIS_DELTA16 = 2 };
+enum { CBVH_TRIS_U16 = 0, CBVH_TRIS_U32 = 1, CBVH_TRIS_DELTA16 = 2, CBVH_TRIS_LOCAL8 = 4 }; /* 3: reserved (fileformat/unsupported-encoding) */
+/* LOCAL8 (spec section 4): blocks of CBVH_LOCAL8_BLOCK triangles, each a u32 base vertex index and then
+ * 3 u8 offsets a triangle (index = base + offset), so a block's vertices lie within 256 indices. */
+#define CBVH_LOCAL8_BLOCK 8u
+#define CBVH_LOCAL8_BLOCK_SIZE (4u + 3u * CBVH_LOCAL8_BLOCK)
+#define CBVH_LOCAL8_WINDOW 256u
 enum { CBVH_VERTS_F32 = 0, CBVH_VERTS_Q16 = 1 };
 enum { CBVH_REMAP_U16 = 0, CBVH_REMAP_U32 = 1, CBVH_REMAP_U24 = 2 };
 enum { CBVH_MATS_U8 = 0, CBVH_MATS_U16 = 1, CBVH_MATS_U32 = 2, CBVH_MATS_UNIFORM = 3 };

@@ -4,6 +4,7 @@
 #include <string.h>
 
 #include "common/alloc.h"
+#include "common/encodings.h"
 #include "common/error.h"
 #include "common/format.h"
 #include "common/struct_size.h"
@@ -215,6 +216,7 @@ static cbvh_result write_file(cook_state *s, const cbvh_mesh *mesh, const cbvh_c
     memset(&h, 0, sizeof h);
     h.triangle_count = s->layout.triangle_count;
     h.vertex_count = s->layout.vertex_count;
+    h.incompat_flags = s->layout.layout == CBVH_LAYOUT_WIDE4 ? CBVH_INCOMPAT_W4_DEPTH_FIRST : 0;
     h.node_count = s->layout.node_count;
     h.depth = s->layout.depth;
     h.max_leaf_size = s->layout.max_leaf_count;
@@ -288,7 +290,10 @@ CBVH_API cbvh_result cbvh_cook(const cbvh_mesh *mesh, const cbvh_cook_options *o
         cook_report(&progress, 0.0);
         /* The reported SAH cost uses unit costs whatever the build's costs, so trees cooked
          * with different options compare (and `cbvh info` computes the same figure). */
-        r = cook_layout_build(&s.tree, &s.mesh, &s.grid, o->layout, 1.0f, 1.0f, &s.a, &s.layout, err);
+        const uint32_t vertex_size = cbvh_element_size(
+            CBVH_SECTION_VERTICES, o->vertex_format == CBVH_VERTEX_QUANTIZED16 ? CBVH_VERTS_Q16 : CBVH_VERTS_F32);
+        r = cook_layout_build(&s.tree, &s.mesh, &s.grid, o->layout, vertex_size, 1.0f, 1.0f, &s.a, &s.layout,
+                              err);
         cook_tree_free(&s.a, &s.tree);
         if (r == CBVH_OK)
             cook_report(&progress, 1.0);

@@ -109,18 +109,16 @@ typedef struct cook_layout {
     uint32_t max_leaf_count;    /* largest leaf */
     uint32_t triangle_count;
     uint32_t *triangles;        /* 3 per cooked triangle, new vertex ids (first-use order) */
+    uint32_t triangle_encoding; /* CBVH_TRIS_* the TRIANGLES section stores them in (the fewest bytes) */
     uint32_t *triangle_source;  /* cooked triangle -> prepared triangle id */
-    uint32_t *visit_order;      /* cooked triangles in the order vertices are numbered by first use: the
-                                 * leaves' depth-first order (wide4), or NULL for cooked order (binary,
-                                 * which stores leaves depth first) */
     uint32_t vertex_count;
     uint32_t *vertex_source;    /* new vertex id -> prepared vertex id */
     double sah_cost;            /* of the quantized tree, relative to the root's area */
 } cook_layout;
 
 cbvh_result cook_layout_build(const cook_tree *t, const cook_mesh *m, const cook_grid *g, cbvh_layout layout,
-                              float traversal_cost, float intersection_cost, const cbvh_allocator *a,
-                              cook_layout *out, cbvh_error *err);
+                              uint32_t vertex_size, float traversal_cost, float intersection_cost,
+                              const cbvh_allocator *a, cook_layout *out, cbvh_error *err);
 
 /* Half the surface area of a quantized box as readers decode it (the SAH's and the collapse's measure). */
 double cook_quantized_half_area(const cook_grid *g, const uint16_t qmin[3], const uint16_t qmax[3]);
@@ -164,6 +162,7 @@ void cbvh_cook_sections_free(const cbvh_allocator *a, cook_sections *s);
 /* ---- write: header, table, aligned (optionally zlib) sections, CRCs ---- */
 
 typedef struct cook_header {
+    uint32_t incompat_flags; /* CBVH_INCOMPAT_* */
     uint32_t triangle_count, vertex_count, node_count, depth, max_leaf_size, original_triangle_count;
     float grid_origin[3], grid_scale[3];
     float bounds_min[3], bounds_max[3];

@@ -2,6 +2,7 @@
 #include <string.h>
 
 #include "common/alloc.h"
+#include "common/encodings.h"
 #include "common/error.h"
 #include "common/format.h"
 #include "cook/cook_internal.h"
@@ -109,14 +110,25 @@ static int delta16_fits(uint32_t base, uint32_t v)
     return d >= INT16_MIN && d <= INT16_MAX;
 }
 
-/* Vertices numbered by first use in the leaves' depth-first order: neighbouring triangles get
- * neighbouring indices, which keeps DELTA16 deltas small and compresses well. With `copies`,
- * a triangle whose deltas would not fit in i16 (it reuses a vertex first used long before, as
- * across the root's split plane) gets fresh copies of its stale vertices, bit-identical
- * positions, so every triangle fits DELTA16 (8 bytes instead of 12 for u32). */
-static cbvh_result order_vertices(const cook_mesh *m, cook_layout *l, int copies, const cbvh_allocator *a)
+/* Which rule makes copies of vertices in order_vertices. */
+enum vertex_copies {
+    COPIES_NONE,    /* u16 or u32 indices: every vertex once */
+    COPIES_DELTA16, /* a triangle whose deltas would not fit in i16 copies its stale vertices */
+    COPIES_LOCAL8   /* a block of CBVH_LOCAL8_BLOCK triangles copies the vertices first used before its window */
+};
+
+/* Vertices numbered by first use in cooked order, the leaves' depth-first order in both layouts:
+ * neighbouring triangles get neighbouring indices, which keeps DELTA16 deltas and LOCAL8 windows small
+ * and compresses well. A copy is a fresh id for a vertex already numbered, with a bit-identical position:
+ * - DELTA16: a triangle that reuses a vertex first used long before (as across the root's split plane)
+ *   gets copies of its stale vertices, so every triangle fits DELTA16 (8 bytes instead of 12 for u32);
+ * - LOCAL8: a block's new ids are the next at most 3 x CBVH_LOCAL8_BLOCK, so a vertex whose id lies more
+ *   than CBVH_LOCAL8_WINDOW - 3 x CBVH_LOCAL8_BLOCK below the block's first new id gets a copy, and every
+ *   id of the block lies within CBVH_LOCAL8_WINDOW of its smallest. */
+static cbvh_result order_vertices(const cook_mesh *m, cook_layout *l, enum vertex_copies copies,
+                                  const cbvh_allocator *a)
 {
-    const size_t capacity = copies ? 3 * (size_t)l->triangle_count : m->vertex_count;
+    const size_t capacity = copies != COPIES_NONE ? 3 * (size_t)l->triangle_count : m->vertex_count;
     uint32_t *latest = cbvh_alloc_array(a, m->vertex_count, sizeof(uint32_t), 64);
     uint32_t *vsrc = cbvh_alloc_array(a, capacity, sizeof(uint32_t), 64);
     if (!latest || !vsrc) {
@@ -128,20 +140,21 @@ static cbvh_result order_vertices(const cook_mesh *m, cook_layout *l, int copies
     const uint32_t *restrict idx = m->indices;
     const uint32_t *restrict src = l->triangle_source;
     uint32_t *restrict tris = l->triangles;
-    const uint32_t *restrict visit = l->visit_order;
-    uint32_t count = 0;
-    for (uint32_t i = 0; i < l->triangle_count; i++) {
-        const uint32_t t = visit ? visit[i] : i;
+    const uint32_t reach = CBVH_LOCAL8_WINDOW - 3u * CBVH_LOCAL8_BLOCK;
+    uint32_t count = 0, window = 0; /* LOCAL8: the smallest id the current block may use */
+    for (uint32_t t = 0; t < l->triangle_count; t++) {
+        if (copies == COPIES_LOCAL8 && t % CBVH_LOCAL8_BLOCK == 0)
+            window = count > reach ? count - reach : 0;
         uint32_t v[3], id[3];
         for (int c = 0; c < 3; c++) {
             v[c] = idx[3 * (size_t)src[t] + (size_t)c];
-            if (latest[v[c]] == UNSET) {
+            if (latest[v[c]] == UNSET || (copies == COPIES_LOCAL8 && latest[v[c]] < window)) {
                 latest[v[c]] = count;
                 vsrc[count++] = v[c];
             }
             id[c] = latest[v[c]];
         }
-        if (copies && (!delta16_fits(id[0], id[1]) || !delta16_fits(id[0], id[2]))) {
+        if (copies == COPIES_DELTA16 && (!delta16_fits(id[0], id[1]) || !delta16_fits(id[0], id[2]))) {
             /* Afterwards every id lies in [count - 32000, count + 3): deltas fit. */
             for (int c = 0; c < 3; c++)
                 if (id[c] + 32000 < count) {
@@ -157,6 +170,64 @@ static cbvh_result order_vertices(const cook_mesh *m, cook_layout *l, int copies
     l->vertex_source = vsrc;
     l->vertex_count = count;
     return CBVH_OK;
+}
+
+/* The index encoding of the numbered triangles without LOCAL8: u16 when every index fits, else DELTA16
+ * when every triangle's deltas fit in i16, else u32. */
+static uint32_t wide_index_encoding(const cook_layout *l)
+{
+    if (l->vertex_count <= (uint64_t)cbvh_encoding_of(CBVH_SECTION_TRIANGLES, CBVH_TRIS_U16)->max_value + 1)
+        return CBVH_TRIS_U16;
+    const uint32_t *t = l->triangles;
+    for (size_t i = 0; i < (size_t)l->triangle_count; i++, t += 3)
+        if (!delta16_fits(t[0], t[1]) || !delta16_fits(t[0], t[2]))
+            return CBVH_TRIS_U32;
+    return CBVH_TRIS_DELTA16;
+}
+
+/* Bytes of the TRIANGLES and VERTICES sections for l's numbering in index encoding `enc`. */
+static uint64_t mesh_bytes(const cook_layout *l, uint32_t enc, uint32_t vertex_size)
+{
+    const cbvh_encoding *e = cbvh_encoding_of(CBVH_SECTION_TRIANGLES, enc);
+    return cbvh_elements_for(e, l->triangle_count) * e->element_size + (uint64_t)l->vertex_count * vertex_size;
+}
+
+/* Numbers the vertices and picks the index encoding whose triangles and vertices take the fewest bytes
+ * (spec section 4): LOCAL8 with its copies, or the narrowest other encoding (u16, DELTA16 with its
+ * copies, u32); ties go to LOCAL8. */
+static cbvh_result number_vertices(const cook_mesh *m, cook_layout *l, uint32_t vertex_size, const cbvh_allocator *a)
+{
+    cbvh_result r = order_vertices(m, l, COPIES_LOCAL8, a);
+    if (r != CBVH_OK)
+        return r;
+    const uint64_t local8 = mesh_bytes(l, CBVH_TRIS_LOCAL8, vertex_size);
+    l->triangle_encoding = CBVH_TRIS_LOCAL8;
+    /* The other encodings take at least this (each vertex once, the narrowest index that fits): most
+     * meshes need no second numbering. */
+    const uint32_t narrowest = m->vertex_count > 65536 ? CBVH_TRIS_DELTA16 : CBVH_TRIS_U16;
+    const cbvh_encoding *n = cbvh_encoding_of(CBVH_SECTION_TRIANGLES, narrowest);
+    if ((uint64_t)l->triangle_count * n->element_size + (uint64_t)m->vertex_count * vertex_size >= local8)
+        return CBVH_OK;
+    /* Copies are made only where a delta would not fit, so with few vertices (u16 indices) or a mesh whose
+     * deltas all fit there are none. */
+    cook_layout other = *l;
+    other.triangles = cbvh_alloc_array(a, l->triangle_count, 3 * sizeof(uint32_t), 64);
+    other.vertex_source = NULL;
+    if (!other.triangles)
+        return CBVH_ERROR_OUT_OF_MEMORY;
+    r = order_vertices(m, &other, m->vertex_count > 65536 ? COPIES_DELTA16 : COPIES_NONE, a);
+    if (r == CBVH_OK) {
+        other.triangle_encoding = wide_index_encoding(&other);
+        if (mesh_bytes(&other, other.triangle_encoding, vertex_size) < local8) {
+            uint32_t *tris = l->triangles, *vsrc = l->vertex_source;
+            *l = other;
+            other.triangles = tris;
+            other.vertex_source = vsrc;
+        }
+    }
+    cbvh_free(a, other.triangles);
+    cbvh_free(a, other.vertex_source);
+    return r;
 }
 
 /* Ct x internal areas + Ci x leaf areas x triangles, over the root's area, on the decoded boxes. */
@@ -177,7 +248,6 @@ void cook_layout_free(const cbvh_allocator *a, cook_layout *l)
     cbvh_free(a, l->triangles);
     cbvh_free(a, l->triangle_source);
     cbvh_free(a, l->vertex_source);
-    cbvh_free(a, l->visit_order);
     memset(l, 0, sizeof *l);
 }
 
@@ -212,8 +282,8 @@ static cbvh_result place_binary(const cook_tree *t, const cook_grid *g, float tr
 }
 
 cbvh_result cook_layout_build(const cook_tree *t, const cook_mesh *m, const cook_grid *g, cbvh_layout layout,
-                              float traversal_cost, float intersection_cost, const cbvh_allocator *a,
-                              cook_layout *out, cbvh_error *err)
+                              uint32_t vertex_size, float traversal_cost, float intersection_cost,
+                              const cbvh_allocator *a, cook_layout *out, cbvh_error *err)
 {
     memset(out, 0, sizeof *out);
     out->layout = layout;
@@ -235,9 +305,7 @@ cbvh_result cook_layout_build(const cook_tree *t, const cook_mesh *m, const cook
         return cbvh_fail(err, CBVH_ERROR_LIMIT, "the tree is %u nodes deep; a file allows at most %u", depth,
                          CBVH_MAX_DEPTH);
     }
-    /* Copies are made only where a delta would not fit, so with few vertices (u16 indices)
-     * or a mesh whose deltas all fit there are none. */
-    r = order_vertices(m, out, m->vertex_count > 65536, a);
+    r = number_vertices(m, out, vertex_size, a);
     if (r != CBVH_OK) {
         cook_layout_free(a, out);
         return cbvh_fail(err, CBVH_ERROR_OUT_OF_MEMORY, "out of memory while ordering %u vertices", m->vertex_count);

@@ -1,4 +1,4 @@
-/* place_wide4.c: the cooker's side of the 4-wide layout: the binary build tree collapsed into 64-byte nodes, breadth first. */
+/* place_wide4.c: the cooker's side of the 4-wide layout: the binary build tree collapsed into 64-byte nodes, breadth first, leaves depth first. */
 #include <string.h>
 
 #include "common/alloc.h"
@@ -90,40 +90,40 @@ static uint32_t octant_order(const cook_grid *g, const uint16_t q[6][4], uint32_
     return 0; /* unreachable: the table holds every order of four slots */
 }
 
-/* The cooked triangles in the depth-first order of the leaves (slots in
- * order): the placement stores leaves breadth first, where leaves of
- * different levels that share vertices lie far apart; numbering vertices in
- * this order keeps a triangle's vertex ids close (DELTA16 fits without
- * copies) and a leaf's vertices together, as in the binary layout. */
-static cbvh_result depth_first_triangles(const uint8_t *nodes, uint32_t depth, const cbvh_allocator *a,
-                                         uint32_t *visit)
+/* The leaves' triangles in depth-first order (spec section 5.2, CBVH_INCOMPAT_W4_DEPTH_FIRST): node i's
+ * leaf slots from its first_triangle on, in slot order, then its internal children's subtrees in slot
+ * order. Breadth first, leaves of different levels that share vertices would lie far apart; depth first, a
+ * subtree's triangles are consecutive, so their vertices get close ids (first-use numbering, layout.c)
+ * and LOCAL8's 256-vertex windows need few copies. Writes each node's first_triangle and triangle_source. */
+static cbvh_result tile_depth_first(const cook_tree *t, const double *area, const uint32_t *build_of, uint8_t *nodes,
+                                    uint32_t depth, const cbvh_allocator *a, uint32_t *triangle_source)
 {
     uint32_t *stack = cbvh_alloc_array(a, (size_t)(CBVH_W4_WIDTH - 1u) * depth + 1u, sizeof(uint32_t), 64);
     if (!stack)
         return CBVH_ERROR_OUT_OF_MEMORY;
-    uint32_t sp = 0, n = 0;
+    uint32_t sp = 0, next = 0;
     stack[sp++] = 0;
     while (sp > 0) {
         const uint32_t i = stack[--sp];
-        const uint8_t *node = cbvh_w4_node(nodes, i);
-        const uint64_t meta = cbvh_w4_meta(node);
-        const uint32_t used = cbvh_w4_used(meta), internal = cbvh_w4_internal(meta);
-        /* slots in order: internal children pushed last-first, so the first is walked next; a leaf's
-         * triangles are emitted when its slot comes, before the internal slots after it */
-        uint32_t pending = 0, pend[CBVH_W4_WIDTH];
-        for (uint32_t s = 0; s < CBVH_W4_WIDTH; s++) {
-            if (!(used >> s & 1u))
-                continue;
-            const uint32_t ref = cbvh_w4_child_ref(node, meta, s);
-            if (internal >> s & 1u) {
-                pend[pending++] = ref;
+        uint8_t *node = nodes + (size_t)i * CBVH_W4_NODE_SIZE;
+        uint32_t kids[CBVH_W4_WIDTH];
+        const uint32_t k = collapse(t, area, build_of[i], kids); /* the slots, as the placement made them */
+        cbvh_write_u32(node + CBVH_W4_FIRST_TRIANGLE, next);
+        uint32_t internal = 0;
+        for (uint32_t s = 0; s < k; s++) {
+            const cook_bnode *c = &t->nodes[kids[s]];
+            if (!c->count) {
+                internal++;
                 continue;
             }
-            for (uint32_t k = 0; k < cbvh_w4_ref_count(ref); k++)
-                visit[n++] = cbvh_w4_ref_first(ref) + k;
+            for (uint32_t j = 0; j < c->count; j++)
+                triangle_source[next + j] = t->prims[c->child + j];
+            next += c->count;
         }
-        while (pending > 0)
-            stack[sp++] = pend[--pending];
+        /* the internal children, pushed last first so the first is walked next */
+        const uint32_t first_child = cbvh_read_u32(node + CBVH_W4_FIRST_CHILD);
+        while (internal > 0)
+            stack[sp++] = first_child + --internal;
     }
     cbvh_free(a, stack);
     return CBVH_OK;
@@ -150,9 +150,9 @@ cbvh_result cook_place_wide4(const cook_tree *t, const cook_grid *g, float trave
         cook_quantize_box(g, t->nodes[i].lo, t->nodes[i].hi, box[i], box[i] + 3);
         area[i] = cook_quantized_half_area(g, box[i], box[i] + 3);
     }
-    /* Breadth first: node i's internal children take the next free node indices and its leaves the next
-     * cooked triangles, both in slot order, as the spec's validation rule expects. */
-    uint32_t node_count = 1, next_triangle = 0, depth = 1, level_end = 1, max_leaf = 0;
+    /* Breadth first: node i's internal children take the next free node indices, in slot order, as the
+     * spec's validation rule expects; the leaves' triangles are placed depth first afterwards. */
+    uint32_t node_count = 1, depth = 1, level_end = 1, max_leaf = 0;
     double sah = traversal_cost * area[0];
     build_of[0] = 0;
     for (uint32_t i = 0; i < node_count; i++) {
@@ -166,7 +166,6 @@ cbvh_result cook_place_wide4(const cook_tree *t, const cook_grid *g, float trave
         const uint32_t k = collapse(t, area, build_of[i], kids);
         uint8_t *node = nodes + (size_t)i * CBVH_W4_NODE_SIZE;
         cbvh_write_u32(node + CBVH_W4_FIRST_CHILD, node_count);
-        cbvh_write_u32(node + CBVH_W4_FIRST_TRIANGLE, next_triangle);
         for (uint32_t s = 0; s < k; s++) {
             const cook_bnode *c = &t->nodes[kids[s]];
             used |= 1u << s;
@@ -174,9 +173,6 @@ cbvh_result cook_place_wide4(const cook_tree *t, const cook_grid *g, float trave
                 q[p][s] = box[kids[s]][p];
             if (c->count) {
                 count[s] = c->count;
-                for (uint32_t j = 0; j < c->count; j++)
-                    out->triangle_source[next_triangle + j] = t->prims[c->child + j];
-                next_triangle += c->count;
                 max_leaf = c->count > max_leaf ? c->count : max_leaf;
                 sah += intersection_cost * c->count * area[kids[s]];
             } else {
@@ -193,6 +189,7 @@ cbvh_result cook_place_wide4(const cook_tree *t, const cook_grid *g, float trave
         cbvh_write_u64(node + CBVH_W4_META, cbvh_w4_make_meta(count, used, internal, order));
     }
     const double root_area = area[0];
+    const cbvh_result r = tile_depth_first(t, area, build_of, nodes, depth, a, out->triangle_source);
     cbvh_free(a, box);
     cbvh_free(a, area);
     cbvh_free(a, build_of);
@@ -202,8 +199,7 @@ cbvh_result cook_place_wide4(const cook_tree *t, const cook_grid *g, float trave
     out->depth = depth;
     out->max_leaf_count = max_leaf;
     out->sah_cost = root_area > 0.0 ? sah / root_area : 0.0;
-    out->visit_order = cbvh_alloc_array(a, out->triangle_count, sizeof(uint32_t), 64);
-    if (!out->visit_order || depth_first_triangles(nodes, depth, a, out->visit_order) != CBVH_OK)
+    if (r != CBVH_OK)
         return cbvh_fail(err, CBVH_ERROR_OUT_OF_MEMORY, "out of memory while ordering %u triangles",
                          out->triangle_count);
     return CBVH_OK;

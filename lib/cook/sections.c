@@ -55,31 +55,31 @@ static int encode_nodes(const cook_layout *l, const cbvh_allocator *a, cook_sect
     return 1;
 }
 
-static int delta_fits(int64_t d)
-{
-    return d >= INT16_MIN && d <= INT16_MAX;
-}
-
-/* u16 when every index fits, else DELTA16 when every triangle's deltas fit in i16, else u32. */
-static uint32_t triangle_encoding(const cook_layout *l)
-{
-    if (l->vertex_count <= (uint64_t)cbvh_encoding_of(CBVH_SECTION_TRIANGLES, CBVH_TRIS_U16)->max_value + 1)
-        return CBVH_TRIS_U16;
-    const uint32_t *t = l->triangles;
-    for (size_t i = 0; i < (size_t)l->triangle_count; i++, t += 3)
-        if (!delta_fits((int64_t)t[1] - t[0]) || !delta_fits((int64_t)t[2] - t[0]))
-            return CBVH_TRIS_U32;
-    return CBVH_TRIS_DELTA16;
-}
-
+/* The triangles in the encoding the layout chose (layout.c: the fewest bytes). */
 static int encode_triangles(const cook_layout *l, const cbvh_allocator *a, cook_sections *out)
 {
-    const uint32_t enc = triangle_encoding(l);
-    const size_t elem = cbvh_element_size(CBVH_SECTION_TRIANGLES, enc);
-    uint8_t *p = section_alloc(a, out, CBVH_SECTION_TRIANGLES, enc, l->triangle_count);
+    const uint32_t enc = l->triangle_encoding;
+    const cbvh_encoding *e = cbvh_encoding_of(CBVH_SECTION_TRIANGLES, enc);
+    const size_t elem = e->element_size;
+    uint8_t *p = section_alloc(a, out, CBVH_SECTION_TRIANGLES, enc, cbvh_elements_for(e, l->triangle_count));
     if (!p)
         return 0;
     const uint32_t *t = l->triangles;
+    if (enc == CBVH_TRIS_LOCAL8) {
+        /* each block: the smallest id of its triangles, then each index less it (the numbering keeps a
+         * block's ids within CBVH_LOCAL8_WINDOW); slots past the last triangle stay 0 */
+        memset(p, 0, cbvh_elements_for(e, l->triangle_count) * elem);
+        for (uint32_t b = 0; b < l->triangle_count; b += CBVH_LOCAL8_BLOCK, p += elem) {
+            const uint32_t n = l->triangle_count - b < CBVH_LOCAL8_BLOCK ? l->triangle_count - b : CBVH_LOCAL8_BLOCK;
+            uint32_t base = UINT32_MAX;
+            for (uint32_t j = 0; j < 3 * n; j++)
+                base = t[3 * (size_t)b + j] < base ? t[3 * (size_t)b + j] : base;
+            cbvh_write_u32(p, base);
+            for (uint32_t j = 0; j < 3 * n; j++)
+                p[4 + j] = (uint8_t)(t[3 * (size_t)b + j] - base);
+        }
+        return 1;
+    }
     for (uint32_t i = 0; i < l->triangle_count; i++, t += 3, p += elem) {
         if (enc == CBVH_TRIS_U16) {
             put_u16(p, t[0]);

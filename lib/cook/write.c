@@ -79,7 +79,7 @@ static void write_header(uint8_t *file, const cook_header *h, uint32_t section_c
     cbvh_write_u32(file + CBVH_HDR_VERSION, CBVH_FORMAT_VERSION);
     cbvh_write_u32(file + CBVH_HDR_HEADER_SIZE, CBVH_HEADER_SIZE);
     cbvh_write_u32(file + CBVH_HDR_COMPAT_FLAGS, 0);
-    cbvh_write_u32(file + CBVH_HDR_INCOMPAT_FLAGS, 0);
+    cbvh_write_u32(file + CBVH_HDR_INCOMPAT_FLAGS, h->incompat_flags);
     cbvh_write_u32(file + CBVH_HDR_SECTION_COUNT, section_count);
     cbvh_write_u32(file + CBVH_HDR_TABLE_CRC,
                    cbvh_crc32(0, file + CBVH_HEADER_SIZE, (uint64_t)section_count * CBVH_SECTION_ENTRY_SIZE));

@@ -110,9 +110,9 @@ cbvh_result cbvh_validate_header(struct cbvh_file *f, cbvh_error *err)
     in->format_version = cbvh_read_u32(b + CBVH_HDR_VERSION);
     in->compat_flags = cbvh_read_u32(b + CBVH_HDR_COMPAT_FLAGS);
     in->incompat_flags = cbvh_read_u32(b + CBVH_HDR_INCOMPAT_FLAGS);
-    if (in->incompat_flags != 0)
+    if (in->incompat_flags & ~CBVH_INCOMPAT_KNOWN)
         return cbvh_fail(err, CBVH_ERROR_UNSUPPORTED, "incompatible feature flags 0x%08x are unknown to this reader",
-                         in->incompat_flags);
+                         in->incompat_flags & ~CBVH_INCOMPAT_KNOWN);
     for (int i = CBVH_HDR_RESERVED1; i < CBVH_HDR_HEADER_CRC; i++)
         if (b[i] != 0)
             return CORRUPT("header byte %d: reserved byte is 0x%02x, must be 0", i, b[i]);

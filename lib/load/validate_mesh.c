@@ -53,6 +53,31 @@ static cbvh_result check_delta16(const struct cbvh_file *f, uint32_t begin, uint
     return CBVH_OK;
 }
 
+/* LOCAL8: blocks [begin, end); each block's base plus its largest offset is below vertex_count (in 64 bits),
+ * and the offsets of the last block's slots past triangle_count are 0, so its bytes are canonical. */
+static cbvh_result check_local8(const struct cbvh_file *f, uint32_t begin, uint32_t end, cbvh_error *err)
+{
+    const uint8_t *restrict b = (const uint8_t *)f->triangles + (size_t)CBVH_LOCAL8_BLOCK_SIZE * begin;
+    const uint64_t vc = f->info.vertex_count, tc = f->info.triangle_count;
+    for (uint32_t i = begin; i < end; i++, b += CBVH_LOCAL8_BLOCK_SIZE) {
+        const uint64_t base = *(const uint32_t *)(const void *)b, first = (uint64_t)i * CBVH_LOCAL8_BLOCK;
+        uint32_t largest = 0;
+        for (uint32_t j = 0; j < 3u * CBVH_LOCAL8_BLOCK; j++) {
+            const uint32_t o = b[4 + j];
+            if (first + j / 3u < tc)
+                largest = o > largest ? o : largest;
+            else if (o != 0)
+                return CORRUPT("triangle block %u: offset %u of slot %u, past triangle_count %llu, must be 0", i,
+                               o, j / 3u, (unsigned long long)tc);
+        }
+        if (base + largest >= vc)
+            return CORRUPT("triangle block %u (triangles from %llu): LOCAL8 base %llu plus offset %u is not below "
+                           "vertex_count %llu", i, (unsigned long long)first, (unsigned long long)base, largest,
+                           (unsigned long long)vc);
+    }
+    return CBVH_OK;
+}
+
 cbvh_result cbvh_indices_check(const struct cbvh_file *f, void *unused, uint32_t begin, uint32_t end,
                                cbvh_error *err)
 {
@@ -62,6 +87,7 @@ cbvh_result cbvh_indices_check(const struct cbvh_file *f, void *unused, uint32_t
     switch (f->triangle_encoding) {
     case CBVH_TRIS_U16: max = max_u16((const uint16_t *)f->triangles + first, n); break;
     case CBVH_TRIS_U32: max = max_u32((const uint32_t *)f->triangles + first, n); break;
+    case CBVH_TRIS_LOCAL8: return check_local8(f, begin, end, err);
     default: return check_delta16(f, begin, end, err);
     }
     return max < f->info.vertex_count ? CBVH_OK : find_bad_index(f, begin, end, err);

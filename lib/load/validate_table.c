@@ -11,14 +11,13 @@
 /* Elements a section of `type` in `encoding` holds (sized_by_content kinds: whatever their size says). */
 static uint64_t element_count(const cbvh_file_info *in, const cbvh_section_info *s)
 {
-    if (cbvh_encoding_of(s->type, s->encoding)->uniform)
-        return 1;
+    const cbvh_encoding *e = cbvh_encoding_of(s->type, s->encoding);
     if (cbvh_section_kind_of(s->type)->sized_by_content)
-        return s->size / cbvh_element_size(s->type, s->encoding);
+        return s->size / e->element_size;
     switch (s->type) {
-    case CBVH_SECTION_NODES: return in->node_count;
-    case CBVH_SECTION_VERTICES: return in->vertex_count;
-    default: return in->triangle_count; /* TRIANGLES, REMAP, MATERIALS: one per cooked triangle */
+    case CBVH_SECTION_NODES: return cbvh_elements_for(e, in->node_count);
+    case CBVH_SECTION_VERTICES: return cbvh_elements_for(e, in->vertex_count);
+    default: return cbvh_elements_for(e, in->triangle_count); /* TRIANGLES, REMAP, MATERIALS: per cooked triangle */
     }
 }
 

@@ -51,6 +51,9 @@ cbvh_result cbvh_tree_check(const struct cbvh_file *f, void *walk_state, uint32_
     const uint32_t triangle_count = f->info.triangle_count;
     const uint32_t max_leaf = f->info.max_leaf_size;
     const uint32_t header_depth = f->info.depth;
+    if (begin == 0 && (f->info.incompat_flags & CBVH_INCOMPAT_W4_DEPTH_FIRST))
+        return CORRUPT("incompat_flags 0x%x: the wide4 depth-first flag is set on a binary-layout file",
+                       CBVH_INCOMPAT_W4_DEPTH_FIRST);
     if (begin == 0 && node_count > CBVH_BINARY_MAX_NODES)
         return CORRUPT("node_count %u is more than a binary-layout file holds (%u)", node_count,
                        CBVH_BINARY_MAX_NODES);

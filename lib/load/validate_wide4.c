@@ -38,10 +38,37 @@ static cbvh_result check_slots(const uint8_t *node, uint32_t i, uint64_t meta, u
     return CBVH_OK;
 }
 
+/* With CBVH_INCOMPAT_W4_DEPTH_FIRST the leaves hold the triangles in depth-first order (spec section 5.2):
+ * node i's leaf slots from first_triangle on, then its internal children's subtrees in slot order. Run
+ * once the linear pass has proved the nodes a tree of the header's depth whose leaves hold triangle_count
+ * triangles in all, so the walk ends and its stack (CBVH_W4_WIDTH - 1 per level) cannot overflow. */
+static cbvh_result check_depth_first_triangles(const struct cbvh_file *f, cbvh_error *err)
+{
+    uint32_t stack[(CBVH_W4_WIDTH - 1u) * CBVH_MAX_DEPTH + 1u], sp = 0, next = 0;
+    stack[sp++] = 0;
+    while (sp > 0) {
+        const uint32_t i = stack[--sp];
+        const uint8_t *node = cbvh_w4_node(f->nodes, i);
+        const uint64_t meta = cbvh_w4_meta(node);
+        const uint32_t used = cbvh_w4_used(meta), internal = cbvh_w4_internal(meta);
+        if (cbvh_w4_first_triangle(node) != next)
+            return CORRUPT("node %u: first_triangle %u, but the leaves before it in depth-first order end at "
+                           "triangle %u", i, cbvh_w4_first_triangle(node), next);
+        for (uint32_t s = 0; s < CBVH_W4_WIDTH; s++)
+            if ((used & ~internal) >> s & 1u)
+                next += cbvh_w4_count(meta, s);
+        /* the internal children, pushed last first so the first is walked next */
+        for (uint32_t k = cbvh_w4_popcount(internal); k-- > 0;)
+            stack[sp++] = cbvh_w4_first_child(node) + k;
+    }
+    return CBVH_OK;
+}
+
 /* Breadth-first allocation makes the tree checkable in one pass: node i's
  * internal children MUST be the next unallocated node indices (first_child =
  * 1 + the internal children of nodes 0..i-1) and lie after i, and its leaves
- * the next cooked triangles. So every node but the root is the child of
+ * the next cooked triangles (or, with CBVH_INCOMPAT_W4_DEPTH_FIRST, the ones
+ * check_depth_first_triangles expects, checked at the end). So every node but the root is the child of
  * exactly one node with a smaller index (no cycle, no sharing, every walk
  * ends), and the leaves tile the triangles. The nodes of one level are
  * consecutive, and the next level is what they allocated: `level_end` tracks
@@ -80,7 +107,7 @@ cbvh_result cbvh_w4_tree_check(const struct cbvh_file *f, void *walk_state, uint
         if (first_child != w->next_child)
             return CORRUPT("node %u: first_child %u, but the nodes before it leave the next child at %u", i,
                            first_child, w->next_child);
-        if (first_triangle != w->next_triangle)
+        if (first_triangle != w->next_triangle && !(f->info.incompat_flags & CBVH_INCOMPAT_W4_DEPTH_FIRST))
             return CORRUPT("node %u: first_triangle %u, but the leaves before it end at triangle %u", i,
                            first_triangle, w->next_triangle);
         const uint32_t used = cbvh_w4_used(meta), internal = cbvh_w4_internal(meta);
@@ -112,5 +139,7 @@ cbvh_result cbvh_w4_tree_finish(const struct cbvh_file *f, const cbvh_w4_walk *w
     if (w->next_triangle != f->info.triangle_count)
         return CORRUPT("leaves cover triangles [0, %u), triangle_count is %u", w->next_triangle,
                        f->info.triangle_count);
+    if (f->info.incompat_flags & CBVH_INCOMPAT_W4_DEPTH_FIRST)
+        return check_depth_first_triangles(f, err);
     return CBVH_OK;
 }

@@ -207,7 +207,7 @@ CBVH_KERNEL int leaf_loop(const struct cbvh_file *restrict f, uint32_t first, ui
 /* The leaf step of every single-ray walk: the leaf's cooked triangles
  * [first, first + count). Any-hit: returns 1 when the leaf occludes the ray.
  * Closest-hit: updates best and *tmax, returns 0 (1: a filter stopped the walk). The encodings the cooker
- * writes for lossless files (DELTA16 or U16 indices, float vertices) get
+ * writes for lossless files (LOCAL8 or U16 indices, float vertices) get
  * loops of their own (one switch per leaf, not per triangle); the others go
  * through the generic one, which keeps every walk instance small. */
 CBVH_KERNEL int cbvh_leaf_visit(const struct cbvh_file *restrict f, uint32_t first, uint32_t count,
@@ -217,8 +217,8 @@ CBVH_KERNEL int cbvh_leaf_visit(const struct cbvh_file *restrict f, uint32_t fir
     const struct cbvh_ray_shear *s = &ray->shear;
     const float tmin = ray->tmin;
     switch (f->triangle_encoding << 1 | f->vertex_encoding) {
-    case CBVH_TRIS_DELTA16 << 1 | CBVH_VERTS_F32:
-        return leaf_loop(f, first, count, s, ray->gate, tmin, tmax, best, any, scalar, CBVH_TRIS_DELTA16, CBVH_VERTS_F32);
+    case CBVH_TRIS_LOCAL8 << 1 | CBVH_VERTS_F32:
+        return leaf_loop(f, first, count, s, ray->gate, tmin, tmax, best, any, scalar, CBVH_TRIS_LOCAL8, CBVH_VERTS_F32);
     case CBVH_TRIS_U16 << 1 | CBVH_VERTS_F32:
         return leaf_loop(f, first, count, s, ray->gate, tmin, tmax, best, any, scalar, CBVH_TRIS_U16, CBVH_VERTS_F32);
     default:
