@@ -60,7 +60,8 @@ enum { CBVH_CODEC_RAW = 0, CBVH_CODEC_ZLIB = 1 };
 
 /* Element encodings per section (element sizes, names and limits: common/encodings.h). */
 enum { CBVH_NODES_Q16 = 0, CBVH_NODES_W4 = 1 };                  /* binary, wide4 layout */
-enum { CBVH_TRIS_U16 = 0, CBVH_TRIS_U32 = 1, CBVH_TRIS_DELTA16 = 2, CBVH_TRIS_LOCAL8 = 4 }; /* 3: reserved (fileformat/unsupported-encoding) */
+/* TRIANGLES encoding 3 is reserved: the vector fileformat/unsupported-encoding stands for an unknown one. */
+enum { CBVH_TRIS_U16 = 0, CBVH_TRIS_U32 = 1, CBVH_TRIS_DELTA16 = 2, CBVH_TRIS_LOCAL8 = 4 };
 /* LOCAL8 (spec section 4): blocks of CBVH_LOCAL8_BLOCK triangles, each a u32 base vertex index and then
  * 3 u8 offsets a triangle (index = base + offset), so a block's vertices lie within 256 indices. */
 #define CBVH_LOCAL8_BLOCK 8u

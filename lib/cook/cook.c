@@ -163,8 +163,8 @@ typedef struct cook_state {
 static void state_free(cook_state *s)
 {
     cbvh_cook_sections_free(&s->a, &s->sections);
-    cook_layout_free(&s->a, &s->layout);
-    cook_tree_free(&s->a, &s->tree);
+    cbvh_cook_layout_free(&s->a, &s->layout);
+    cbvh_cook_tree_free(&s->a, &s->tree);
     cbvh_free(&s->a, s->quantized);
     cbvh_cook_mesh_free(&s->a, &s->mesh);
 }
@@ -226,7 +226,7 @@ static cbvh_result write_file(cook_state *s, const cbvh_mesh *mesh, const cbvh_c
     memcpy(h.bounds_min, s->mesh.bounds_min, sizeof h.bounds_min);
     memcpy(h.bounds_max, s->mesh.bounds_max, sizeof h.bounds_max);
     fill_stats(s, st);
-    cook_layout_free(&s->a, &s->layout);
+    cbvh_cook_layout_free(&s->a, &s->layout);
     cbvh_free(&s->a, s->quantized);
     s->quantized = NULL;
     cbvh_cook_mesh_free(&s->a, &s->mesh);
@@ -281,7 +281,7 @@ CBVH_API cbvh_result cbvh_cook(const cbvh_mesh *mesh, const cbvh_cook_options *o
     if (r == CBVH_OK) {
         progress.phase = CBVH_PHASE_BUILD;
         cook_report(&progress, 0.0);
-        r = cook_build(&s.mesh, &params, &s.a, &progress, &s.tree, err);
+        r = cbvh_cook_build(&s.mesh, &params, &s.a, &progress, &s.tree, err);
     }
     double t2 = cbvh_os_seconds();
     st.seconds[CBVH_PHASE_BUILD] = t2 - t1;
@@ -292,9 +292,9 @@ CBVH_API cbvh_result cbvh_cook(const cbvh_mesh *mesh, const cbvh_cook_options *o
          * with different options compare (and `cbvh info` computes the same figure). */
         const uint32_t vertex_size = cbvh_element_size(
             CBVH_SECTION_VERTICES, o->vertex_format == CBVH_VERTEX_QUANTIZED16 ? CBVH_VERTS_Q16 : CBVH_VERTS_F32);
-        r = cook_layout_build(&s.tree, &s.mesh, &s.grid, o->layout, vertex_size, 1.0f, 1.0f, &s.a, &s.layout,
+        r = cbvh_cook_layout_build(&s.tree, &s.mesh, &s.grid, o->layout, vertex_size, 1.0f, 1.0f, &s.a, &s.layout,
                               err);
-        cook_tree_free(&s.a, &s.tree);
+        cbvh_cook_tree_free(&s.a, &s.tree);
         if (r == CBVH_OK)
             cook_report(&progress, 1.0);
     }

@@ -63,7 +63,8 @@ cbvh_result cbvh_cook_grid_init(cook_grid *g, const float bmin[3], const float b
 
 /* Conservative box: qmin the largest q with deq(q) <= lo, qmax the smallest q >= qmin with deq(q) >= hi.
  * Precondition: bmin <= lo <= hi <= bmax of the grid's bounds. */
-void cook_quantize_box(const cook_grid *g, const float lo[3], const float hi[3], uint16_t qmin[3], uint16_t qmax[3]);
+void cbvh_cook_quantize_box(const cook_grid *g, const float lo[3], const float hi[3], uint16_t qmin[3],
+                            uint16_t qmax[3]);
 
 /* Moves every position to its nearest grid point: writes the grid coordinates to q (3 per vertex)
  * and the decoded values back into positions. Returns the largest |decoded - input|. */
@@ -93,9 +94,9 @@ typedef struct cook_tree {
     uint32_t *prims;            /* prepared triangle ids, leaves' ranges index this */
 } cook_tree;
 
-cbvh_result cook_build(const cook_mesh *m, const cook_build_params *params, const cbvh_allocator *a,
+cbvh_result cbvh_cook_build(const cook_mesh *m, const cook_build_params *params, const cbvh_allocator *a,
                        const cook_progress *progress, cook_tree *out, cbvh_error *err);
-void cook_tree_free(const cbvh_allocator *a, cook_tree *t);
+void cbvh_cook_tree_free(const cbvh_allocator *a, cook_tree *t);
 
 /* ---- layout: depth-first file order ---- */
 
@@ -116,18 +117,18 @@ typedef struct cook_layout {
     double sah_cost;            /* of the quantized tree, relative to the root's area */
 } cook_layout;
 
-cbvh_result cook_layout_build(const cook_tree *t, const cook_mesh *m, const cook_grid *g, cbvh_layout layout,
+cbvh_result cbvh_cook_layout_build(const cook_tree *t, const cook_mesh *m, const cook_grid *g, cbvh_layout layout,
                               uint32_t vertex_size, float traversal_cost, float intersection_cost,
                               const cbvh_allocator *a, cook_layout *out, cbvh_error *err);
 
 /* Half the surface area of a quantized box as readers decode it (the SAH's and the collapse's measure). */
-double cook_quantized_half_area(const cook_grid *g, const uint16_t qmin[3], const uint16_t qmax[3]);
+double cbvh_cook_quantized_half_area(const cook_grid *g, const uint16_t qmin[3], const uint16_t qmax[3]);
 
 /* The wide layout's placement (place_wide4.c): fills out's nodes, node and leaf counts, depth, largest
  * leaf, SAH cost and triangle_source (out->triangle_count set, triangle_source NULL on entry). */
-cbvh_result cook_place_wide4(const cook_tree *t, const cook_grid *g, float traversal_cost, float intersection_cost,
+cbvh_result cbvh_cook_place_wide4(const cook_tree *t, const cook_grid *g, float traversal_cost, float intersection_cost,
                              const cbvh_allocator *a, cook_layout *out, cbvh_error *err);
-void cook_layout_free(const cbvh_allocator *a, cook_layout *l);
+void cbvh_cook_layout_free(const cbvh_allocator *a, cook_layout *l);
 
 /* ---- sections: little-endian payloads in the narrowest encoding the spec allows ---- */
 

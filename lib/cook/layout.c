@@ -20,7 +20,7 @@ typedef struct node_info {
     uint32_t depth;  /* nodes from the root, root = 1 */
 } node_info;
 
-double cook_quantized_half_area(const cook_grid *g, const uint16_t qmin[3], const uint16_t qmax[3])
+double cbvh_cook_quantized_half_area(const cook_grid *g, const uint16_t qmin[3], const uint16_t qmax[3])
 {
     double d[3];
     for (int a = 0; a < 3; a++)
@@ -53,7 +53,7 @@ static uint32_t sort_byte(const cook_grid *g, const node_info *first, const node
 static void measure_subtrees(const cook_tree *t, const cook_grid *g, node_info *restrict info)
 {
     for (uint32_t i = 0; i < t->node_count; i++)
-        cook_quantize_box(g, t->nodes[i].lo, t->nodes[i].hi, info[i].qmin, info[i].qmax);
+        cbvh_cook_quantize_box(g, t->nodes[i].lo, t->nodes[i].hi, info[i].qmin, info[i].qmax);
     for (uint32_t i = t->node_count; i-- > 0;) {
         const cook_bnode *n = &t->nodes[i];
         if (n->count) {
@@ -65,7 +65,8 @@ static void measure_subtrees(const cook_tree *t, const cook_grid *g, node_info *
         info[i].size = 1 + l->size + r->size;
         info[i].tris = l->tris + r->tris;
         /* Larger surface area first: more rays enter it, and ties keep the build order. */
-        info[i].first = cook_quantized_half_area(g, r->qmin, r->qmax) > cook_quantized_half_area(g, l->qmin, l->qmax)
+        info[i].first = cbvh_cook_quantized_half_area(g, r->qmin, r->qmax) >
+                                cbvh_cook_quantized_half_area(g, l->qmin, l->qmax)
                             ? n->child + 1 : n->child;
     }
 }
@@ -235,14 +236,14 @@ static double sah_cost(const cbvh_node *nodes, uint32_t count, const cook_grid *
 {
     double sum = 0.0;
     for (uint32_t i = 0; i < count; i++) {
-        double area = cook_quantized_half_area(g, nodes[i].qmin, nodes[i].qmax);
+        double area = cbvh_cook_quantized_half_area(g, nodes[i].qmin, nodes[i].qmax);
         sum += cbvh_node_is_leaf(nodes[i].word) ? ci * cbvh_leaf_count(nodes[i].word) * area : ct * area;
     }
-    double root = cook_quantized_half_area(g, nodes[0].qmin, nodes[0].qmax);
+    double root = cbvh_cook_quantized_half_area(g, nodes[0].qmin, nodes[0].qmax);
     return root > 0.0 ? sum / root : 0.0;
 }
 
-void cook_layout_free(const cbvh_allocator *a, cook_layout *l)
+void cbvh_cook_layout_free(const cbvh_allocator *a, cook_layout *l)
 {
     cbvh_free(a, l->nodes);
     cbvh_free(a, l->triangles);
@@ -281,7 +282,7 @@ static cbvh_result place_binary(const cook_tree *t, const cook_grid *g, float tr
     return CBVH_OK;
 }
 
-cbvh_result cook_layout_build(const cook_tree *t, const cook_mesh *m, const cook_grid *g, cbvh_layout layout,
+cbvh_result cbvh_cook_layout_build(const cook_tree *t, const cook_mesh *m, const cook_grid *g, cbvh_layout layout,
                               uint32_t vertex_size, float traversal_cost, float intersection_cost,
                               const cbvh_allocator *a, cook_layout *out, cbvh_error *err)
 {
@@ -293,21 +294,21 @@ cbvh_result cook_layout_build(const cook_tree *t, const cook_mesh *m, const cook
         return cbvh_fail(err, CBVH_ERROR_OUT_OF_MEMORY, "out of memory while laying out %u triangles",
                          m->triangle_count);
     cbvh_result r = layout == CBVH_LAYOUT_WIDE4
-                        ? cook_place_wide4(t, g, traversal_cost, intersection_cost, a, out, err)
+                        ? cbvh_cook_place_wide4(t, g, traversal_cost, intersection_cost, a, out, err)
                         : place_binary(t, g, traversal_cost, intersection_cost, a, out, err);
     if (r != CBVH_OK) {
-        cook_layout_free(a, out);
+        cbvh_cook_layout_free(a, out);
         return r;
     }
     if (out->depth > CBVH_MAX_DEPTH) {
         uint32_t depth = out->depth;
-        cook_layout_free(a, out);
+        cbvh_cook_layout_free(a, out);
         return cbvh_fail(err, CBVH_ERROR_LIMIT, "the tree is %u nodes deep; a file allows at most %u", depth,
                          CBVH_MAX_DEPTH);
     }
     r = number_vertices(m, out, vertex_size, a);
     if (r != CBVH_OK) {
-        cook_layout_free(a, out);
+        cbvh_cook_layout_free(a, out);
         return cbvh_fail(err, CBVH_ERROR_OUT_OF_MEMORY, "out of memory while ordering %u vertices", m->vertex_count);
     }
     return CBVH_OK;

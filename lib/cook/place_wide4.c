@@ -1,4 +1,4 @@
-/* place_wide4.c: the cooker's side of the 4-wide layout: the binary build tree collapsed into 64-byte nodes, breadth first, leaves depth first. */
+/* place_wide4.c: the cooker's side of the 4-wide layout: the build tree collapsed into 64-byte nodes, breadth first. */
 #include <string.h>
 
 #include "common/alloc.h"
@@ -129,7 +129,7 @@ static cbvh_result tile_depth_first(const cook_tree *t, const double *area, cons
     return CBVH_OK;
 }
 
-cbvh_result cook_place_wide4(const cook_tree *t, const cook_grid *g, float traversal_cost, float intersection_cost,
+cbvh_result cbvh_cook_place_wide4(const cook_tree *t, const cook_grid *g, float traversal_cost, float intersection_cost,
                              const cbvh_allocator *a, cook_layout *out, cbvh_error *err)
 {
     /* At most one wide node per internal build node. */
@@ -147,8 +147,8 @@ cbvh_result cook_place_wide4(const cook_tree *t, const cook_grid *g, float trave
         return cbvh_fail(err, CBVH_ERROR_OUT_OF_MEMORY, "out of memory while laying out %u wide nodes", capacity);
     }
     for (uint32_t i = 0; i < t->node_count; i++) {
-        cook_quantize_box(g, t->nodes[i].lo, t->nodes[i].hi, box[i], box[i] + 3);
-        area[i] = cook_quantized_half_area(g, box[i], box[i] + 3);
+        cbvh_cook_quantize_box(g, t->nodes[i].lo, t->nodes[i].hi, box[i], box[i] + 3);
+        area[i] = cbvh_cook_quantized_half_area(g, box[i], box[i] + 3);
     }
     /* Breadth first: node i's internal children take the next free node indices, in slot order, as the
      * spec's validation rule expects; the leaves' triangles are placed depth first afterwards. */

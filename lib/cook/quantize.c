@@ -105,7 +105,8 @@ static uint32_t largest_at_most(const cook_grid *g, int axis, float v)
     return q > 0 ? q - 1 : 0;
 }
 
-void cook_quantize_box(const cook_grid *g, const float lo[3], const float hi[3], uint16_t qmin[3], uint16_t qmax[3])
+void cbvh_cook_quantize_box(const cook_grid *g, const float lo[3], const float hi[3], uint16_t qmin[3],
+                            uint16_t qmax[3])
 {
     for (int a = 0; a < 3; a++) {
         /* qmax starts at qmin: where deq is flat (zero scale, or a grid far from the origin

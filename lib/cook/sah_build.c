@@ -430,7 +430,7 @@ static void init_refs(const cook_mesh *m, prim_ref *restrict refs, box *root, bo
     }
 }
 
-void cook_tree_free(const cbvh_allocator *a, cook_tree *t)
+void cbvh_cook_tree_free(const cbvh_allocator *a, cook_tree *t)
 {
     cbvh_free(a, t->nodes);
     cbvh_free(a, t->prims);
@@ -593,7 +593,7 @@ static void merge_worker(builder *main, const builder *worker, uint32_t at)
 /* Subtrees at least this large are worth a second thread. */
 #define PARALLEL_MIN 32768
 
-cbvh_result cook_build(const cook_mesh *m, const cook_build_params *params, const cbvh_allocator *a,
+cbvh_result cbvh_cook_build(const cook_mesh *m, const cook_build_params *params, const cbvh_allocator *a,
                        const cook_progress *progress, cook_tree *out, cbvh_error *err)
 {
     memset(out, 0, sizeof *out);
@@ -614,7 +614,7 @@ cbvh_result cook_build(const cook_mesh *m, const cook_build_params *params, cons
     if (!b.refs || !b.w || !out->nodes || !out->prims) {
         cbvh_free(a, b.refs);
         cbvh_free(a, b.w);
-        cook_tree_free(a, out);
+        cbvh_cook_tree_free(a, out);
         return cbvh_fail(err, CBVH_ERROR_OUT_OF_MEMORY, "out of memory while building the tree (%u triangles)", tris);
     }
     b.nodes = out->nodes;

@@ -218,7 +218,8 @@ CBVH_KERNEL int cbvh_leaf_visit(const struct cbvh_file *restrict f, uint32_t fir
     const float tmin = ray->tmin;
     switch (f->triangle_encoding << 1 | f->vertex_encoding) {
     case CBVH_TRIS_LOCAL8 << 1 | CBVH_VERTS_F32:
-        return leaf_loop(f, first, count, s, ray->gate, tmin, tmax, best, any, scalar, CBVH_TRIS_LOCAL8, CBVH_VERTS_F32);
+        return leaf_loop(f, first, count, s, ray->gate, tmin, tmax, best, any, scalar, CBVH_TRIS_LOCAL8,
+                         CBVH_VERTS_F32);
     case CBVH_TRIS_U16 << 1 | CBVH_VERTS_F32:
         return leaf_loop(f, first, count, s, ray->gate, tmin, tmax, best, any, scalar, CBVH_TRIS_U16, CBVH_VERTS_F32);
     default:
