@@ -60,13 +60,13 @@ CBVH_KERNEL uint32_t walk_order_pair(const enum cbvh_walk_order order, int secon
 
 /* The ray as the wide layout's SIMD box test reads it, set up once per walk
  * (rebroadcasting a dozen scalars at every node cost about a tenth of a
- * walk's instructions): for each of the six planes the test uses (near x, y,
- * z, far x, y, z; layout/wide4.h's plane index k), its byte offset in a node
- * and its axis' grid origin and scale, ray origin and reciprocal in all four
- * lanes. Without SIMD it is empty and unused. */
+ * walk's instructions): per axis its grid origin and scale, the ray origin and
+ * reciprocal in all four lanes; for each of the six planes the test uses (near
+ * x, y, z, far x, y, z; plane j is on axis j % 3) its byte offset in a node
+ * (layout/wide4.h's plane index k). Without SIMD it is empty and unused. */
 struct cbvh_w4_simd_ray {
 #ifdef CBVH_HAVE_SIMD
-    __m128 origin[6], scale[6], org[6], rcp[6];
+    __m128 origin[3], scale[3], org[3], rcp[3];
     __m128 tmin;
     uint32_t offset[6];
 #else
@@ -79,22 +79,24 @@ CBVH_KERNEL void walk_w4_simd_ray_init(struct cbvh_w4_simd_ray *w, const struct 
 {
 #ifdef CBVH_HAVE_SIMD
     const struct cbvh_slab_select s = box->sel;
-    const __m128 origin[3] = {_mm_set1_ps(box->origin[0]), _mm_set1_ps(box->origin[1]), _mm_set1_ps(box->origin[2])};
-    const __m128 scale[3] = {_mm_set1_ps(box->scale[0]), _mm_set1_ps(box->scale[1]), _mm_set1_ps(box->scale[2])};
-    const __m128 org[3] = {_mm_set1_ps(box->org[0]), _mm_set1_ps(box->org[1]), _mm_set1_ps(box->org[2])};
-    const __m128 rcp[3] = {_mm_set1_ps(box->rcp[0]), _mm_set1_ps(box->rcp[1]), _mm_set1_ps(box->rcp[2])};
+    w->origin[0] = _mm_set1_ps(box->origin[0]);
+    w->origin[1] = _mm_set1_ps(box->origin[1]);
+    w->origin[2] = _mm_set1_ps(box->origin[2]);
+    w->scale[0] = _mm_set1_ps(box->scale[0]);
+    w->scale[1] = _mm_set1_ps(box->scale[1]);
+    w->scale[2] = _mm_set1_ps(box->scale[2]);
+    w->org[0] = _mm_set1_ps(box->org[0]);
+    w->org[1] = _mm_set1_ps(box->org[1]);
+    w->org[2] = _mm_set1_ps(box->org[2]);
+    w->rcp[0] = _mm_set1_ps(box->rcp[0]);
+    w->rcp[1] = _mm_set1_ps(box->rcp[1]);
+    w->rcp[2] = _mm_set1_ps(box->rcp[2]);
     w->offset[0] = CBVH_W4_Q + 8u * s.near_x;
     w->offset[1] = CBVH_W4_Q + 8u * s.near_y;
     w->offset[2] = CBVH_W4_Q + 8u * s.near_z;
     w->offset[3] = CBVH_W4_Q + 8u * s.far_x;
     w->offset[4] = CBVH_W4_Q + 8u * s.far_y;
     w->offset[5] = CBVH_W4_Q + 8u * s.far_z;
-    for (uint32_t j = 0; j < 6; j++) { /* plane j is on axis j % 3 */
-        w->origin[j] = origin[j % 3u];
-        w->scale[j] = scale[j % 3u];
-        w->org[j] = org[j % 3u];
-        w->rcp[j] = rcp[j % 3u];
-    }
     w->tmin = _mm_set1_ps(tmin);
 #else
     (void)box;
@@ -106,13 +108,14 @@ CBVH_KERNEL void walk_w4_simd_ray_init(struct cbvh_w4_simd_ray *w, const struct 
 #ifdef CBVH_HAVE_SIMD
 /* Plane j of the four slots (struct cbvh_w4_simd_ray) as a distance along the
  * ray, lane s for slot s, with the normative arithmetic of ray_box.h:
- * ((origin + (float)q * scale) - org) * rcp. */
+ * ((origin + (float)q * scale) - org) * rcp. j is a constant at every call. */
 CBVH_KERNEL __m128 walk_w4_plane_distance(const uint8_t *restrict node, const struct cbvh_w4_simd_ray *restrict w,
                                           uint32_t j)
 {
+    const uint32_t a = j % 3u;
     const __m128i q = _mm_loadl_epi64((const __m128i *)(const void *)(node + w->offset[j]));
     const __m128 qf = _mm_cvtepi32_ps(_mm_unpacklo_epi16(q, _mm_setzero_si128()));
-    return _mm_mul_ps(_mm_sub_ps(_mm_add_ps(w->origin[j], _mm_mul_ps(qf, w->scale[j])), w->org[j]), w->rcp[j]);
+    return _mm_mul_ps(_mm_sub_ps(_mm_add_ps(w->origin[a], _mm_mul_ps(qf, w->scale[a])), w->org[a]), w->rcp[a]);
 }
 
 /* The slab test of ray_box.h on the four slots at once, lane for lane the
