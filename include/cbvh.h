@@ -571,6 +571,20 @@ CBVH_API size_t cbvh_overlap_box(const cbvh_file *file, const float box_min[3], 
 CBVH_API size_t cbvh_overlap_sphere(const cbvh_file *file, const float center[3], float radius,
                                     cbvh_overlap_fn callback, void *user, uint32_t *out, size_t capacity);
 
+/* Overlaps that say when the output filled, and continue from there. The triangles that intersect the
+ * region (the same set as cbvh_overlap_box / cbvh_overlap_sphere) come in an order fixed by the file and the
+ * region; these skip the first `first` of them and write the next ones to `out`, at most `capacity`.
+ * Returns how many were written. *more (when not NULL) is set to 1 when at least one more overlapping
+ * triangle follows the last one written (out filled), else 0: a caller continues with first + the return
+ * value until *more is 0. With out NULL nothing is written and *more says whether any overlapping triangle
+ * lies past `first`. Each call walks the tree again, so reading n triangles in pages of p costs about n / p
+ * walks; cbvh_overlap_box's callback reads any number in one. Invalid input (as for cbvh_overlap_box)
+ * writes none and sets *more to 0. Safe on any opened file, from any number of threads. */
+CBVH_API size_t cbvh_overlap_box_from(const cbvh_file *file, const float box_min[3], const float box_max[3],
+                                      size_t first, uint32_t *out, size_t capacity, int *more);
+CBVH_API size_t cbvh_overlap_sphere_from(const cbvh_file *file, const float center[3], float radius, size_t first,
+                                         uint32_t *out, size_t capacity, int *more);
+
 #ifdef __cplusplus
 }
 #endif

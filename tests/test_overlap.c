@@ -120,6 +120,34 @@ static void run_overlaps(const ref_fixture *fx, int count, uint64_t seed)
         const size_t n5 = sphere ? cbvh_overlap_sphere(fx->file, center, radius, count_calls, &calls, small, 0)
                                  : cbvh_overlap_box(fx->file, fmin3, fmax3, count_calls, &calls, small, 0);
         assert_int_equal(n5, 0);
+        /* Pages of 1, 4 and 7: the same triangles in the same order as the whole query, *more exactly while
+         * some are left, every page but the last full. */
+        for (size_t page = 1; page <= 7; page += 3) {
+            uint32_t buf[8];
+            size_t got = 0;
+            for (int more = 1; more;) {
+                more = -1;
+                const size_t k = sphere ? cbvh_overlap_sphere_from(fx->file, center, radius, got, buf, page, &more)
+                                        : cbvh_overlap_box_from(fx->file, fmin3, fmax3, got, buf, page, &more);
+                assert_true(got + k <= n);
+                for (size_t j = 0; j < k; j++)
+                    assert_int_equal(buf[j], ids[got + j]);
+                got += k;
+                assert_int_equal(more, got < n);
+                if (more)
+                    assert_int_equal(k, page);
+            }
+            assert_int_equal(got, n);
+        }
+        /* Without an output array: whether any overlapping triangle lies past `first`. */
+        int more = -1;
+        assert_int_equal(sphere ? cbvh_overlap_sphere_from(fx->file, center, radius, 0, NULL, 5, &more)
+                                : cbvh_overlap_box_from(fx->file, fmin3, fmax3, 0, NULL, 5, &more), 0);
+        assert_int_equal(more, n > 0);
+        more = -1;
+        assert_int_equal(sphere ? cbvh_overlap_sphere_from(fx->file, center, radius, n, ids, 1, &more)
+                                : cbvh_overlap_box_from(fx->file, fmin3, fmax3, n, ids, 1, &more), 0);
+        assert_int_equal(more, 0);
     }
     assert_true(nonempty > (size_t)count / 4);
     free(ids);
@@ -197,6 +225,18 @@ static void test_invalid_input(void **state)
     assert_int_equal(cbvh_overlap_sphere(fx.file, c, -1.0f, NULL, NULL, NULL, 0), 0);
     assert_int_equal(cbvh_overlap_sphere(fx.file, c, NAN, NULL, NULL, NULL, 0), 0);
     assert_int_equal(cbvh_overlap_sphere(fx.file, nan3, 1.0f, NULL, NULL, NULL, 0), 0);
+    /* the paged queries: nothing written and no more for what the plain ones reject */
+    uint32_t buf[4];
+    int more = -1;
+    assert_int_equal(cbvh_overlap_box_from(fx.file, hi, lo, 0, buf, 4, &more), 0);
+    assert_int_equal(more, 0);
+    more = -1;
+    assert_int_equal(cbvh_overlap_box_from(NULL, lo, hi, 0, buf, 4, &more), 0);
+    assert_int_equal(more, 0);
+    more = -1;
+    assert_int_equal(cbvh_overlap_sphere_from(fx.file, c, NAN, 0, buf, 4, &more), 0);
+    assert_int_equal(more, 0);
+    assert_int_equal(cbvh_overlap_box_from(fx.file, lo, hi, 0, buf, 4, NULL), 4); /* more may be NULL */
     /* The ball inside the closed sphere mesh touches nothing; a radius reaching the surface touches. */
     assert_int_equal(cbvh_overlap_sphere(fx.file, c, 0.5f, NULL, NULL, NULL, 0), 0);
     assert_true(cbvh_overlap_sphere(fx.file, c, 1.0f, NULL, NULL, NULL, 0) > 0);

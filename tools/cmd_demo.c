@@ -37,6 +37,7 @@ static const char usage[] =
 #define DEMO_SHAPE_SAMPLE 50
 #define DEMO_SWEEP_STEPS 24
 #define DEMO_OVERLAP_CAP 65536
+#define DEMO_OVERLAP_PAGE 256 /* the paged box overlaps' page */
 
 /* The opened scene plus its triangles in double precision for the brute-force checks. */
 typedef struct demo {
@@ -509,7 +510,9 @@ static int overlap_agrees(const demo *d, shape_kind kind, const shape *s, uint32
     return 1;
 }
 
-static size_t run_overlap(const demo *d, shape_kind kind, const shape *s, uint32_t *found)
+/* A box overlap in one query, or (paged) in pages of DEMO_OVERLAP_PAGE through cbvh_overlap_box_from,
+ * each continuing where the last one's output filled; a sphere overlap. */
+static size_t run_overlap(const demo *d, shape_kind kind, int paged, const shape *s, uint32_t *found)
 {
     if (kind == SHAPE_SPHERE)
         return cbvh_overlap_sphere(d->file, s->center, s->radius, NULL, NULL, found, DEMO_OVERLAP_CAP);
@@ -518,12 +521,17 @@ static size_t run_overlap(const demo *d, shape_kind kind, const shape *s, uint32
         lo[a] = s->center[a] - s->half[a];
         hi[a] = s->center[a] + s->half[a];
     }
-    return cbvh_overlap_box(d->file, lo, hi, NULL, NULL, found, DEMO_OVERLAP_CAP);
+    if (!paged)
+        return cbvh_overlap_box(d->file, lo, hi, NULL, NULL, found, DEMO_OVERLAP_CAP);
+    size_t n = 0;
+    for (int more = 1; more && n + DEMO_OVERLAP_PAGE <= DEMO_OVERLAP_CAP;)
+        n += cbvh_overlap_box_from(d->file, lo, hi, n, found + n, DEMO_OVERLAP_PAGE, &more);
+    return n;
 }
 
 static void demo_overlaps(demo *d)
 {
-    static const char *const names[] = { "overlap sphere", "overlap box" };
+    static const char *const names[] = { "overlap sphere", "overlap box", "overlap box, pages of 256" };
     uint32_t *found = malloc(DEMO_OVERLAP_CAP * sizeof *found);
     shape *shapes = malloc(DEMO_SHAPES * sizeof *shapes);
     if (!found || !shapes) {
@@ -531,8 +539,9 @@ static void demo_overlaps(demo *d)
         fprintf(stderr, "cbvh demo: out of memory\n");
         goto out;
     }
-    for (int k = 0; k < 2; k++) {
+    for (int k = 0; k < 3; k++) {
         shape_kind kind = k == 0 ? SHAPE_SPHERE : SHAPE_BOX;
+        const int paged = k == 2;
         for (size_t i = 0; i < DEMO_SHAPES; i++) {
             make_shape(d, kind, &shapes[i]);
             shapes[i].radius *= 4; /* a little larger than the swept shapes, to gather several triangles */
@@ -542,11 +551,11 @@ static void demo_overlaps(demo *d)
         double t0 = cli_now();
         size_t hits = 0;
         for (size_t i = 0; i < DEMO_SHAPES; i++)
-            hits += run_overlap(d, kind, &shapes[i], found) != 0;
+            hits += run_overlap(d, kind, paged, &shapes[i], found) != 0;
         double sec = cli_now() - t0;
         int bad = 0;
         for (size_t i = 0; i < DEMO_SHAPES; i += DEMO_SHAPES / DEMO_SHAPE_SAMPLE) {
-            size_t n = run_overlap(d, kind, &shapes[i], found);
+            size_t n = run_overlap(d, kind, paged, &shapes[i], found);
             if (n < DEMO_OVERLAP_CAP && !overlap_agrees(d, kind, &shapes[i], found, n) && bad++ == 0)
                 report_failure("%s: query %zu (%zu triangles) disagrees with brute force", names[k], i, n);
         }

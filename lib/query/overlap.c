@@ -13,18 +13,29 @@ struct overlap_sink {
     uint32_t *out;
     size_t capacity;
     size_t reported;
+    size_t skip;    /* overlapping triangles passed over before the first report (the _from queries) */
+    int find_more;  /* a full out stops the query at the next overlapping triangle, which sets more */
+    int more;
 };
 
 /* Reports a triangle; returns 1 when the query must stop (the callback asked,
- * or out is full). */
+ * or out is full: at once, or with find_more at the next triangle). */
 static int sink_report(struct overlap_sink *s, uint32_t tri)
 {
+    if (s->skip > 0) {
+        s->skip--;
+        return 0;
+    }
+    if (s->find_more && s->reported >= s->capacity) {
+        s->more = 1;
+        return 1;
+    }
     if (s->out)
         s->out[s->reported] = tri;
     s->reported++;
     if (s->callback && s->callback(s->user, tri))
         return 1;
-    return s->out && s->reported >= s->capacity;
+    return !s->find_more && s->out && s->reported >= s->capacity;
 }
 
 /* The region tested against node boxes (an AABB) and against triangles. */
@@ -80,34 +91,43 @@ static int overlap_leaf(void *query, uint32_t first, uint32_t count)
 static size_t overlap_walk(const struct cbvh_file *f, const struct overlap_region *region, struct overlap_sink *sink)
 {
     struct overlap_query q = {f, region, sink};
-    if (sink->out && sink->capacity == 0)
+    if (sink->out && sink->capacity == 0 && !sink->find_more)
         return 0; /* out is full before the first report */
     cbvh_shape_walk(f, f->layout, CBVH_NO_OCTANT, overlap_enter, overlap_leaf, &q);
     return sink->reported;
 }
 
-CBVH_API size_t cbvh_overlap_box(const cbvh_file *file, const float box_min[3], const float box_max[3],
-                                 cbvh_overlap_fn callback, void *user, uint32_t *out, size_t capacity)
+/* The region of a box query; 0 for an invalid box. */
+static int box_region(const float box_min[3], const float box_max[3], struct overlap_region *region)
 {
-    struct overlap_sink sink = {callback, user, out, capacity, 0};
-    struct overlap_region region = {{0, 0, 0}, {0, 0, 0}, 0, {0, 0, 0}, 0.0};
-    if (!file || !box_min || !box_max || !cbvh_all_finite(box_min, 3) || !cbvh_all_finite(box_max, 3))
+    const struct overlap_region none = {{0, 0, 0}, {0, 0, 0}, 0, {0, 0, 0}, 0.0};
+    *region = none;
+    if (!box_min || !box_max || !cbvh_all_finite(box_min, 3) || !cbvh_all_finite(box_max, 3))
         return 0;
     for (int a = 0; a < 3; a++) {
         if (!(box_min[a] <= box_max[a]))
             return 0;
-        region.lo[a] = box_min[a];
-        region.hi[a] = box_max[a];
+        region->lo[a] = box_min[a];
+        region->hi[a] = box_max[a];
     }
+    return 1;
+}
+
+CBVH_API size_t cbvh_overlap_box(const cbvh_file *file, const float box_min[3], const float box_max[3],
+                                 cbvh_overlap_fn callback, void *user, uint32_t *out, size_t capacity)
+{
+    struct overlap_sink sink = {callback, user, out, capacity, 0, 0, 0, 0};
+    struct overlap_region region;
+    if (!file || !box_region(box_min, box_max, &region))
+        return 0;
     return overlap_walk(file, &region, &sink);
 }
 
-CBVH_API size_t cbvh_overlap_sphere(const cbvh_file *file, const float center[3], float radius,
-                                    cbvh_overlap_fn callback, void *user, uint32_t *out, size_t capacity)
+/* The region of a sphere query: the ball, and a box around it for node culling; 0 for an invalid sphere. */
+static int sphere_region(const float center[3], float radius, struct overlap_region *region_out)
 {
-    struct overlap_sink sink = {callback, user, out, capacity, 0};
     struct overlap_region region;
-    if (!file || !center || !cbvh_all_finite(center, 3) || !isfinite(radius) || !(radius >= 0.0f))
+    if (!center || !cbvh_all_finite(center, 3) || !isfinite(radius) || !(radius >= 0.0f))
         return 0;
     region.sphere = 1;
     region.center = v3_from_f(center);
@@ -122,5 +142,43 @@ CBVH_API size_t cbvh_overlap_sphere(const cbvh_file *file, const float center[3]
         region.lo[a] -= fabsf(region.lo[a]) * 0x1p-22f + 0x1p-126f;
         region.hi[a] += fabsf(region.hi[a]) * 0x1p-22f + 0x1p-126f;
     }
+    *region_out = region;
+    return 1;
+}
+
+CBVH_API size_t cbvh_overlap_sphere(const cbvh_file *file, const float center[3], float radius,
+                                    cbvh_overlap_fn callback, void *user, uint32_t *out, size_t capacity)
+{
+    struct overlap_sink sink = {callback, user, out, capacity, 0, 0, 0, 0};
+    struct overlap_region region;
+    if (!file || !sphere_region(center, radius, &region))
+        return 0;
     return overlap_walk(file, &region, &sink);
+}
+
+/* The _from queries: the sink skips `first`, fills out, and looks for one more. */
+static size_t overlap_from(const struct cbvh_file *file, const struct overlap_region *region, int valid, size_t first,
+                           uint32_t *out, size_t capacity, int *more)
+{
+    struct overlap_sink sink = {NULL, NULL, out, out ? capacity : 0, 0, first, 1, 0};
+    const size_t n = file && valid ? overlap_walk(file, region, &sink) : 0;
+    if (more)
+        *more = sink.more;
+    return n;
+}
+
+CBVH_API size_t cbvh_overlap_box_from(const cbvh_file *file, const float box_min[3], const float box_max[3],
+                                      size_t first, uint32_t *out, size_t capacity, int *more)
+{
+    struct overlap_region region;
+    const int valid = box_region(box_min, box_max, &region);
+    return overlap_from(file, &region, valid, first, out, capacity, more);
+}
+
+CBVH_API size_t cbvh_overlap_sphere_from(const cbvh_file *file, const float center[3], float radius, size_t first,
+                                         uint32_t *out, size_t capacity, int *more)
+{
+    struct overlap_region region;
+    const int valid = sphere_region(center, radius, &region);
+    return overlap_from(file, &region, valid, first, out, capacity, more);
 }

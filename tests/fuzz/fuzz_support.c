@@ -492,7 +492,19 @@ static void check_overlaps(check_ctx *c)
     capped.stop_after = 1;
     m = cbvh_overlap_box(c->f, lo, hi, log_overlap, &capped, NULL, 0);
     FUZZ_CHECK(m == (total ? 1u : 0u), "box overlap stopped at the first: returned %zu of %zu", m, total);
-    c->queries += 3;
+    /* in pages of 8: the first page is the capped query's, and the pages add up to the whole set */
+    size_t paged = 0;
+    for (int more = 1, page = 0; more; page++) {
+        const size_t k = cbvh_overlap_box_from(c->f, lo, hi, paged, out, 8, &more);
+        FUZZ_CHECK(k <= 8 && paged + k <= total && (more ? k == 8 : 1), "box overlap page %d: %zu at %zu of %zu",
+                   page, k, paged, total);
+        FUZZ_CHECK(page > 0 || k == (total < 8 ? total : 8), "first box overlap page: %zu of %zu", k, total);
+        paged += k;
+        if (paged >= total)
+            FUZZ_CHECK(!more, "box overlap pages: more after all %zu", total);
+    }
+    FUZZ_CHECK(paged == total, "box overlap pages gave %zu of %zu", paged, total);
+    c->queries += 4;
 
     float center[3];
     random_point(c, 0.1, center);
