@@ -74,9 +74,9 @@ static inline void cbvh_shear_setup(struct cbvh_ray_shear *s, const float org[3]
     }
 }
 
-/* Returns 1 and fills ctx when the ray is valid (cbvh.h: finite org and dir,
- * dir not all zero, 0 <= tmin <= tmax, tmax finite or +inf), else 0. */
-static inline int cbvh_ray_setup(struct cbvh_ray_ctx *ctx, const cbvh_ray *ray)
+/* 1 when the ray is valid (cbvh.h: finite org and dir, dir not all zero,
+ * 0 <= tmin <= tmax, tmax finite or +inf), else 0. */
+static inline int cbvh_ray_valid(const cbvh_ray *ray)
 {
     const float *o = ray->org, *d = ray->dir;
     if (!(isfinite(o[0]) && isfinite(o[1]) && isfinite(o[2]) && isfinite(d[0]) && isfinite(d[1]) &&
@@ -85,7 +85,22 @@ static inline int cbvh_ray_setup(struct cbvh_ray_ctx *ctx, const cbvh_ray *ray)
     if (d[0] == 0.0f && d[1] == 0.0f && d[2] == 0.0f)
         return 0;
     /* Ordered compares: a NaN tmax fails them and is rejected. */
-    if (!(ray->tmin >= 0.0f && ray->tmin <= ray->tmax))
+    return ray->tmin >= 0.0f && ray->tmin <= ray->tmax;
+}
+
+/* The octant of a valid ray (cbvh_octant_of its reciprocal) without computing the reciprocal: 1/d has
+ * d's sign bit for every d that is not NaN, ±0 (±inf) included. */
+static inline uint32_t cbvh_ray_octant(const cbvh_ray *ray)
+{
+    return (uint32_t)(signbit(ray->dir[0]) != 0) | (uint32_t)(signbit(ray->dir[1]) != 0) << 1 |
+           (uint32_t)(signbit(ray->dir[2]) != 0) << 2;
+}
+
+/* Returns 1 and fills ctx when the ray is valid (cbvh_ray_valid), else 0. */
+static inline int cbvh_ray_setup(struct cbvh_ray_ctx *ctx, const cbvh_ray *ray)
+{
+    const float *o = ray->org, *d = ray->dir;
+    if (!cbvh_ray_valid(ray))
         return 0;
     for (int a = 0; a < 3; a++)
         ctx->rcp[a] = 1.0f / d[a];

@@ -1,4 +1,8 @@
 /* stream.c: batched ray streams: one traversal per batch of same-octant rays, live rays partitioned in place. */
+#ifdef HAVE_CONFIG_H
+#include "config.h"
+#endif
+
 #include <string.h>
 
 #include "query/ray_box.h"
@@ -38,6 +42,78 @@ static void solo_tail(const struct cbvh_file *f, struct cbvh_stream_batch *b, ui
         box_ray[CBVH_LANE_TMAX] = b->best[r].t;
 }
 
+/* Ray r of the batch against triangle k (vertices a, v1, v2): an occlusion, or a closer best hit. */
+CBVH_KERNEL void stream_triangle(struct cbvh_stream_batch *restrict b, uint32_t r, uint32_t k, const float a[3],
+                                 const float v1[3], const float v2[3], int any, uint8_t *restrict occluded)
+{
+    float *box_ray = b->box_ray[r];
+    const float tmin = box_ray[CBVH_LANE_TMIN], tmax = box_ray[CBVH_LANE_TMAX];
+    float t, u, v;
+    if (!cbvh_ray_triangle(&b->ctx[r].shear, a, v1, v2, tmin, tmax, &t, &u, &v))
+        return;
+    if (any) {
+        /* Occluded: a negative tmax fails every later box and triangle test. */
+        occluded[b->ray_index[r]] = 1;
+        box_ray[CBVH_LANE_TMAX] = -1.0f;
+    } else if (cbvh_hit_better(t, k, tmax, b->best[r].tri)) {
+        box_ray[CBVH_LANE_TMAX] = t;
+        b->best[r].tri = k;
+        b->best[r].t = t;
+        b->best[r].u = u;
+        b->best[r].v = v;
+    }
+}
+
+/* The live rays live[0, m) against the leaf's triangles [tri0, tri0 + count). With SIMD the leaf is
+ * gathered once per batch visit, four triangles a vector (leaf.h), and each ray runs the four-wide
+ * filter on it, the scalar test deciding only the lanes it keeps: the gather, most of a single ray's
+ * leaf cost, is shared by the batch. Without, triangles outside and rays inside, each triangle fetched
+ * once. Each ray meets its triangles in index order either way, and the tie rule makes its answer the
+ * single-ray walk's. */
+CBVH_KERNEL void stream_leaf(const struct cbvh_file *f, struct cbvh_stream_batch *restrict b,
+                             const uint16_t *restrict live, uint32_t m, uint32_t tri0, uint32_t count, const int any,
+                             int simd, uint8_t *restrict occluded)
+{
+    float a[3], v1[3], v2[3];
+#ifdef CBVH_HAVE_SIMD
+    if (simd && count > 1) {
+        const float origin[3] = {f->grid_origin[0], f->grid_origin[1], f->grid_origin[2]};
+        const float scale[3] = {f->grid_scale[0], f->grid_scale[1], f->grid_scale[2]};
+        __m128 c4[CBVH_MAX_LEAF_SIZE / 4][3][3];
+        uint32_t lanes[CBVH_MAX_LEAF_SIZE / 4];
+        const uint32_t groups = (count + 3) / 4;
+        for (uint32_t g = 0; g < groups; g++) {
+            const uint32_t n = count - 4 * g < 4 ? count - 4 * g : 4;
+            /* lanes past the leaf's end repeat its triangle; their answers are ignored */
+            const uint32_t lane[4] = {0, n > 1 ? 1u : 0u, n > 2 ? 2u : 0u, n > 3 ? 3u : 0u};
+            leaf_gather4(f->triangles, (int)f->triangle_encoding, f->vertices, (int)f->vertex_encoding, origin,
+                         scale, tri0 + 4 * g, lane, c4[g]);
+            lanes[g] = (1u << n) - 1u;
+        }
+        for (uint32_t j = 0; j < m; j++) {
+            const uint32_t r = live[j];
+            for (uint32_t g = 0; g < groups; g++) {
+                /* the lanes the filter keeps, lowest first: the slot of a one-bit mask 1, 2, 4, 8 is 0..3 */
+                for (uint32_t kept = ~leaf_reject4_sse2(&b->ctx[r].shear, c4[g]) & lanes[g]; kept;
+                     kept &= kept - 1u) {
+                    const uint32_t low = kept & (0u - kept), k = tri0 + 4 * g + (low >> 1) - (low >> 3);
+                    cbvh_triangle_vertices(f, k, a, v1, v2);
+                    stream_triangle(b, r, k, a, v1, v2, any, occluded);
+                }
+            }
+        }
+        return;
+    }
+#else
+    (void)simd;
+#endif
+    for (uint32_t k = tri0; k < tri0 + count; k++) {
+        cbvh_triangle_vertices(f, k, a, v1, v2);
+        for (uint32_t j = 0; j < m; j++)
+            stream_triangle(b, live[j], k, a, v1, v2, any, occluded);
+    }
+}
+
 /* Walks the tree once for the batch. At each box the planes are dequantized
  * once and all live rays [0, n) of `live` are tested and partitioned (the
  * survivors move to the front); the children are visited with the survivors
@@ -52,6 +128,8 @@ CBVH_KERNEL void stream_walk(const struct cbvh_file *restrict f, const uint32_t 
                              const int any, const int counting, uint8_t *restrict occluded, uint64_t *restrict visited,
                              uint64_t *restrict tested)
 {
+    /* the scalar box kernel (the fallback, and its test) comes with scalar leaves */
+    const int simd_leaves = box_test != cbvh_stream_box_scalar;
     cbvh_query_stats solo = {0, 0};
     const float origin[3] = {f->grid_origin[0], f->grid_origin[1], f->grid_origin[2]};
     const float scale[3] = {f->grid_scale[0], f->grid_scale[1], f->grid_scale[2]};
@@ -107,31 +185,8 @@ CBVH_KERNEL void stream_walk(const struct cbvh_file *restrict f, const uint32_t 
         if (m > 0) {
             uint32_t tri0, tri_count;
             cbvh_tree_leaf(f, layout, r, &tri0, &tri_count);
-            const uint32_t tri_end = tri0 + tri_count;
-            float a[3], v1[3], v2[3], t, u, v;
             nt += (uint64_t)m * tri_count;
-            /* Triangles outside, rays inside: each triangle is fetched once per batch visit. */
-            for (uint32_t k = tri0; k < tri_end; k++) {
-                cbvh_triangle_vertices(f, k, a, v1, v2);
-                for (uint32_t j = 0; j < m; j++) {
-                    const uint32_t ray = live[j];
-                    float *box_ray = b->box_ray[ray];
-                    const float tmin = box_ray[CBVH_LANE_TMIN], tmax = box_ray[CBVH_LANE_TMAX];
-                    if (!cbvh_ray_triangle(&b->ctx[ray].shear, a, v1, v2, tmin, tmax, &t, &u, &v))
-                        continue;
-                    if (any) {
-                        /* Occluded: a negative tmax fails every later box and triangle test. */
-                        occluded[b->ray_index[ray]] = 1;
-                        box_ray[CBVH_LANE_TMAX] = -1.0f;
-                    } else if (cbvh_hit_better(t, k, tmax, b->best[ray].tri)) {
-                        box_ray[CBVH_LANE_TMAX] = t;
-                        b->best[ray].tri = k;
-                        b->best[ray].t = t;
-                        b->best[ray].u = u;
-                        b->best[ray].v = v;
-                    }
-                }
-            }
+            stream_leaf(f, b, live, m, tri0, tri_count, any, simd_leaves, occluded);
         }
         if (sp == 0)
             break;
@@ -237,13 +292,8 @@ static void stream_run(const struct cbvh_file *f, const cbvh_ray *rays, size_t c
                 hits[r].tri = CBVH_NO_HIT;
             else
                 occluded[r] = 0;
-            octant[j] = cbvh_ray_prepare(&ctx, &rays[r], f) ? (uint8_t)ctx.octant : UINT8_MAX;
-            if (octant[j] != UINT8_MAX && ctx.box_halve) {
-                /* the batch shares one dequantized box between its rays; a ray whose box test needs half
-                 * scale (coordinates past FLT_MAX / 2, ray_box.h) takes the single-ray walk instead */
-                solo_ray(f, &ctx, hits ? &hits[r] : NULL, occluded ? &occluded[r] : NULL, &visited, &tested);
-                octant[j] = UINT8_MAX;
-            }
+            /* the octant alone here; each ray is prepared once, when its octant's turn comes */
+            octant[j] = cbvh_ray_valid(&rays[r]) ? (uint8_t)cbvh_ray_octant(&rays[r]) : UINT8_MAX;
             if (octant[j] != UINT8_MAX)
                 present |= 1u << octant[j];
         }
@@ -253,8 +303,15 @@ static void stream_run(const struct cbvh_file *f, const cbvh_ray *rays, size_t c
             for (uint32_t j = 0; j < window; j++) {
                 if (octant[j] != o)
                     continue;
-                cbvh_ray_prepare(&ctx, &rays[start + j], f);
-                batch_add(&batch, &ctx, start + j);
+                const size_t r = start + j;
+                cbvh_ray_prepare(&ctx, &rays[r], f);
+                if (ctx.box_halve) {
+                    /* the batch shares one dequantized box between its rays; a ray whose box test needs
+                     * half scale (coordinates past FLT_MAX / 2, ray_box.h) takes the single-ray walk */
+                    solo_ray(f, &ctx, hits ? &hits[r] : NULL, occluded ? &occluded[r] : NULL, &visited, &tested);
+                    continue;
+                }
+                batch_add(&batch, &ctx, r);
                 if (batch.count == CBVH_STREAM_BATCH)
                     batch_flush(f, &batch, o, box_test, stats != NULL, hits, occluded, &visited, &tested);
             }
