@@ -50,6 +50,51 @@ static cbvh_ray *make_rays(const ref_fixture *fx, size_t count, uint64_t seed, i
     return rays;
 }
 
+/* The _scratch streams answer as the stack's (hits, occ) whatever their batch: scratch for 1, 33 and 1000
+ * rays at an odd address, for more than the largest batch, too small for one ray, and none; nothing is
+ * written past the end of the scratch. */
+static void check_scratch(const ref_fixture *fx, const cbvh_ray *rays, size_t count, const cbvh_hit *hits,
+                          const uint8_t *occ)
+{
+    const size_t batches[] = {1, 33, 1000, 5000};
+    const size_t largest = cbvh_stream_scratch_size(5000);
+    uint8_t *mem = malloc(largest + 64);
+    cbvh_hit *h = malloc(sizeof(cbvh_hit) * (count + 1));
+    uint8_t *o = malloc(count + 1);
+    assert_non_null(mem);
+    assert_non_null(h);
+    assert_non_null(o);
+    assert_true(cbvh_stream_scratch_size(0) == cbvh_stream_scratch_size(1));
+    assert_true(cbvh_stream_scratch_size(1) < cbvh_stream_scratch_size(33));
+    assert_true(cbvh_stream_scratch_size(4096) == largest); /* batches stop at 4096 rays */
+    for (size_t k = 0; k < sizeof batches / sizeof batches[0] + 2; k++) {
+        const int none = k == sizeof batches / sizeof batches[0] + 1;
+        const size_t size = k < sizeof batches / sizeof batches[0] ? cbvh_stream_scratch_size(batches[k])
+                            : none                                 ? 0
+                                                                   : cbvh_stream_scratch_size(1) - 1;
+        uint8_t *scratch = mem + 1; /* any alignment */
+        memset(mem, 0x5A, largest + 64);
+        memset(h, 0xAB, sizeof(cbvh_hit) * (count + 1));
+        memset(o, 0xAB, count + 1);
+        cbvh_raycast_stream_scratch(fx->file, rays, count, h, NULL, none ? NULL : scratch, size);
+        cbvh_occluded_stream_scratch(fx->file, rays, count, o, NULL, none ? NULL : scratch, size);
+        for (size_t r = 0; r < count; r++) {
+            assert_int_equal(h[r].tri, hits[r].tri);
+            if (h[r].tri != CBVH_NO_HIT)
+                assert_true(h[r].t == hits[r].t && h[r].u == hits[r].u && h[r].v == hits[r].v);
+            assert_int_equal(o[r], occ[r]);
+        }
+        assert_int_equal(h[count].tri, 0xABABABABu);
+        assert_int_equal(o[count], 0xAB);
+        assert_int_equal(mem[0], 0x5A);
+        for (size_t b = 1 + size; b < largest + 64; b++)
+            assert_int_equal(mem[b], 0x5A);
+    }
+    free(mem);
+    free(h);
+    free(o);
+}
+
 /* The stream over rays[0, count) equals cbvh_raycast / cbvh_occluded (sorted) ray by ray, bit for bit. */
 static void check_stream(const ref_fixture *fx, const cbvh_ray *rays, size_t count)
 {
@@ -79,6 +124,7 @@ static void check_stream(const ref_fixture *fx, const cbvh_ray *rays, size_t cou
         }
         if (count > 0 && ref_ray_valid(&rays[0]))
             assert_true(st.nodes_visited > 0);
+        check_scratch(fx, rays, count, hits, occ);
     }
     cbvh_stream_set_kernel(0);
     free(hits);
@@ -90,7 +136,8 @@ static void open_scene(ref_fixture *fx, scene *s)
     assert_int_equal(ref_fixture_open(fx, s->positions, s->vertex_count, s->indices, s->triangle_count, test_options()), CBVH_OK);
 }
 
-/* Counts around the SIMD widths, the batch size (256) and the octant window (2048). */
+/* Counts around the SIMD widths, the stack batch (32) and its octant window (256), the batch sizes of the
+ * scratch checks and their windows. */
 static void test_counts(void **state)
 {
     (void)state;
@@ -98,7 +145,7 @@ static void test_counts(void **state)
     ref_fixture fx;
     assert_true(scene_soup(&s, 2000, 0.1f, 3));
     open_scene(&fx, &s);
-    const size_t counts[] = {0, 1, 3, 4, 5, 7, 8, 9, 255, 256, 257, 2047, 2048, 2049, 5000};
+    const size_t counts[] = {0, 1, 3, 4, 5, 7, 8, 9, 31, 32, 33, 255, 256, 257, 2047, 2048, 2049, 5000, 8001};
     for (size_t c = 0; c < sizeof(counts) / sizeof(counts[0]); c++) {
         cbvh_ray *rays = make_rays(&fx, counts[c], 100 + c, 0);
         check_stream(&fx, rays, counts[c]);
@@ -137,7 +184,12 @@ static void test_meshes(void **state)
 static void test_box_kernels_agree(void **state)
 {
     (void)state;
-    static struct cbvh_stream_batch batch;
+    enum { BATCH = 256 };
+    static _Alignas(32) float box_ray[BATCH][8]; /* the kernels' aligned loads */
+    struct cbvh_stream_batch batch;
+    memset(&batch, 0, sizeof batch);
+    batch.box_ray = box_ray;
+    batch.capacity = BATCH;
     const float dirs[] = {0.0f, -0.0f, 1e-40f, -1e-40f, 1e30f, -1e30f, 1.0f, -1.0f, 0.37f};
     const float coords[] = {-2.0f, -1.0f, 0.0f, 0.5f, 1.0f, 3.0f};
     const cbvh_stream_box_fn fns[] = {cbvh_stream_box_scalar,
@@ -154,8 +206,8 @@ static void test_box_kernels_agree(void **state)
     uint64_t st = 9;
     for (int round = 0; round < 200; round++) {
         const uint32_t octant = (uint32_t)(scene_rand_next(&st) % 8);
-        const uint32_t n = (uint32_t)(scene_rand_next(&st) % (CBVH_STREAM_BATCH + 1));
-        for (uint32_t r = 0; r < CBVH_STREAM_BATCH; r++) {
+        const uint32_t n = (uint32_t)(scene_rand_next(&st) % (BATCH + 1));
+        for (uint32_t r = 0; r < BATCH; r++) {
             float *b = batch.box_ray[r];
             for (int a = 0; a < 3; a++) {
                 b[CBVH_LANE_OX + a] = coords[scene_rand_next(&st) % 6];
@@ -172,15 +224,15 @@ static void test_box_kernels_agree(void **state)
             near[a] = (octant >> a & 1u) ? hi[a] : lo[a];
             far[a] = (octant >> a & 1u) ? lo[a] : hi[a];
         }
-        uint8_t expect[CBVH_STREAM_BATCH];
+        uint8_t expect[BATCH];
         for (int f = 0; f < nfns; f++) {
             if (f == 2 && !have_avx2)
                 continue;
-            uint16_t live[CBVH_STREAM_BATCH];
+            uint16_t live[BATCH];
             for (uint32_t j = 0; j < n; j++)
                 live[j] = (uint16_t)(n - 1 - j); /* any permutation */
             const uint32_t m = fns[f](&batch, live, n, near, far);
-            uint8_t got[CBVH_STREAM_BATCH] = {0}, seen[CBVH_STREAM_BATCH] = {0};
+            uint8_t got[BATCH] = {0}, seen[BATCH] = {0};
             for (uint32_t j = 0; j < n; j++) {
                 assert_false(seen[live[j]]); /* still a permutation */
                 seen[live[j]] = 1;
@@ -210,6 +262,17 @@ static void test_null_arguments(void **state)
     assert_int_equal(occ[1], 0);
     cbvh_raycast_stream(NULL, rays, 2, NULL, NULL); /* nowhere to write: nothing happens */
     cbvh_occluded_stream(NULL, rays, 2, NULL, NULL);
+    uint8_t scratch[4096];
+    h[0].tri = h[1].tri = 0;
+    occ[0] = occ[1] = 1;
+    cbvh_raycast_stream_scratch(NULL, rays, 2, h, NULL, scratch, sizeof scratch);
+    assert_int_equal(h[0].tri, CBVH_NO_HIT);
+    assert_int_equal(h[1].tri, CBVH_NO_HIT);
+    cbvh_occluded_stream_scratch(NULL, rays, 2, occ, NULL, scratch, sizeof scratch);
+    assert_int_equal(occ[0], 0);
+    assert_int_equal(occ[1], 0);
+    cbvh_raycast_stream_scratch(NULL, rays, 2, NULL, NULL, scratch, sizeof scratch);
+    cbvh_occluded_stream_scratch(NULL, rays, 2, NULL, NULL, NULL, 0);
 }
 
 int main(void)

@@ -166,10 +166,15 @@ void bench_cbvh_kernel(const void *engine, const cbvh_ray *rays, size_t count, c
 {
     const bench_cbvh *e = engine;
     if (e->stream) {
+        /* batches of BENCH_STREAM_BATCH rays in scratch of this call's own (threads run calls at once); the
+         * plain cbvh_raycast_stream batches 32 rays on its stack */
+        const size_t size = cbvh_stream_scratch_size(BENCH_STREAM_BATCH);
+        void *scratch = malloc(size);
         if (hits)
-            cbvh_raycast_stream(e->file, rays, count, hits, stats);
+            cbvh_raycast_stream_scratch(e->file, rays, count, hits, stats, scratch, scratch ? size : 0);
         else
-            cbvh_occluded_stream(e->file, rays, count, occluded, stats);
+            cbvh_occluded_stream_scratch(e->file, rays, count, occluded, stats, scratch, scratch ? size : 0);
+        free(scratch);
         return;
     }
     if (hits)

@@ -56,6 +56,8 @@ typedef struct bench_cbvh {
 } bench_cbvh;
 
 #define BENCH_CBVH_VARIANTS 5
+/* Rays per batch of the stream variant (cbvh_raycast_stream_scratch). */
+#define BENCH_STREAM_BATCH 1024
 
 /* Sets *e to variant k (0 <= k < BENCH_CBVH_VARIANTS; 0 is sorted, the default traversal) of file. */
 void bench_cbvh_variant(bench_cbvh *e, const cbvh_file *file, int k);

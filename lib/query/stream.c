@@ -9,9 +9,15 @@
 #include "query/raycast.h"
 #include "query/stream.h"
 
-/* Rays are grouped by octant within windows of this many input rays, so a
- * batch shares one sort-byte mask and one near/far plane selection. */
-#define CBVH_STREAM_WINDOW 2048
+/* Rays are grouped by octant within windows of this many input rays per batch ray (8: one batch an
+ * octant), so a batch shares one sort-byte mask and one near/far plane selection. */
+#define CBVH_STREAM_WINDOW_PER_RAY 8u
+
+/* Bytes a batch ray takes in the block (the window's octant bytes included), and the alignment slack. */
+#define STREAM_RAY_BYTES                                                                                         \
+    (8 * sizeof(float) + sizeof(struct cbvh_ray_ctx) + sizeof(struct cbvh_best_hit) + sizeof(size_t) +          \
+     sizeof(uint16_t) + CBVH_STREAM_WINDOW_PER_RAY)
+#define STREAM_SLACK 64u
 
 /* A batch node with at most this many live rays hands them to the single-ray
  * walk: below it the batch would mostly carry one ray per node, paying the
@@ -125,7 +131,7 @@ CBVH_KERNEL void stream_leaf(const struct cbvh_file *f, struct cbvh_stream_batch
  * precomputed order of the batch's octant. */
 CBVH_KERNEL void stream_walk(const struct cbvh_file *restrict f, const uint32_t layout,
                              struct cbvh_stream_batch *restrict b, uint32_t octant, cbvh_stream_box_fn box_test,
-                             const int any, const int counting, uint8_t *restrict occluded, uint64_t *restrict visited,
+                             const int any, int counting, uint8_t *restrict occluded, uint64_t *restrict visited,
                              uint64_t *restrict tested)
 {
     /* the scalar box kernel (the fallback, and its test) comes with scalar leaves */
@@ -134,7 +140,7 @@ CBVH_KERNEL void stream_walk(const struct cbvh_file *restrict f, const uint32_t 
     const float origin[3] = {f->grid_origin[0], f->grid_origin[1], f->grid_origin[2]};
     const float scale[3] = {f->grid_scale[0], f->grid_scale[1], f->grid_scale[2]};
     const struct cbvh_slab_select sel = cbvh_slab_select_of(octant);
-    uint16_t live[CBVH_STREAM_BATCH];
+    uint16_t *restrict live = b->live;
     struct {
         uint32_t box;
         cbvh_ref ref;
@@ -199,25 +205,31 @@ CBVH_KERNEL void stream_walk(const struct cbvh_file *restrict f, const uint32_t 
     *tested += nt + solo.triangles_tested;
 }
 
-/* The stream walk for the file's layout; one instance per layout and flag set. */
+/* The stream walk per layout and query kind, each a function of its own so that a frame holds one walk's
+ * stack, not the sum of all (-fstack-usage); `counting` (whether the solo tails count) is read at run time. */
+#define STREAM_INSTANCE(name, layout, any)                                                                     \
+    CBVH_NOINLINE void name(const struct cbvh_file *f, struct cbvh_stream_batch *b, uint32_t octant,            \
+                            cbvh_stream_box_fn box_test, int counting, uint8_t *occluded, uint64_t *visited,    \
+                            uint64_t *tested)                                                                   \
+    {                                                                                                          \
+        stream_walk(f, layout, b, octant, box_test, any, counting, occluded, visited, tested);                 \
+    }
+STREAM_INSTANCE(stream_wide4_closest, CBVH_LAYOUT_WIDE4, 0)
+STREAM_INSTANCE(stream_wide4_any, CBVH_LAYOUT_WIDE4, 1)
+STREAM_INSTANCE(stream_binary_closest, CBVH_LAYOUT_BINARY, 0)
+STREAM_INSTANCE(stream_binary_any, CBVH_LAYOUT_BINARY, 1)
+#undef STREAM_INSTANCE
+
+/* The stream walk for the file's layout. */
 static void stream_walk_file(const struct cbvh_file *f, struct cbvh_stream_batch *b, uint32_t octant,
                              cbvh_stream_box_fn box_test, int any, int counting, uint8_t *occluded, uint64_t *visited,
                              uint64_t *tested)
 {
-    const uint32_t layout = f->layout;
-#define STREAM_WALK(L, ANY, COUNTING) stream_walk(f, L, b, octant, box_test, ANY, COUNTING, occluded, visited, tested)
-    if (layout == CBVH_LAYOUT_WIDE4) {
-        if (any)
-            counting ? STREAM_WALK(CBVH_LAYOUT_WIDE4, 1, 1) : STREAM_WALK(CBVH_LAYOUT_WIDE4, 1, 0);
-        else
-            counting ? STREAM_WALK(CBVH_LAYOUT_WIDE4, 0, 1) : STREAM_WALK(CBVH_LAYOUT_WIDE4, 0, 0);
-    } else {
-        if (any)
-            counting ? STREAM_WALK(CBVH_LAYOUT_BINARY, 1, 1) : STREAM_WALK(CBVH_LAYOUT_BINARY, 1, 0);
-        else
-            counting ? STREAM_WALK(CBVH_LAYOUT_BINARY, 0, 1) : STREAM_WALK(CBVH_LAYOUT_BINARY, 0, 0);
-    }
-#undef STREAM_WALK
+    if (f->layout == CBVH_LAYOUT_WIDE4)
+        (any ? stream_wide4_any : stream_wide4_closest)(f, b, octant, box_test, counting, occluded, visited, tested);
+    else
+        (any ? stream_binary_any : stream_binary_closest)(f, b, octant, box_test, counting, occluded, visited,
+                                                            tested);
 }
 
 /* Adds a validated ray to the batch. */
@@ -271,20 +283,47 @@ static void solo_ray(const struct cbvh_file *f, const struct cbvh_ray_ctx *ctx, 
     *tested += stats.triangles_tested;
 }
 
-/* Splits the stream into windows, each window into same-octant batches.
+/* The batch's arrays cut from `size` bytes at `mem`: as many rays as fit, at most CBVH_STREAM_MAX_BATCH
+ * (the alignments need at most STREAM_SLACK bytes); *octant receives the window's octant bytes.
+ * Returns the batch's capacity, 0 when not even one ray fits. */
+static uint32_t batch_carve(struct cbvh_stream_batch *b, uint8_t **octant, void *mem, size_t size)
+{
+    if (!mem || size < STREAM_SLACK + STREAM_RAY_BYTES)
+        return 0;
+    size_t n = (size - STREAM_SLACK) / STREAM_RAY_BYTES;
+    n = n < CBVH_STREAM_MAX_BATCH ? n : CBVH_STREAM_MAX_BATCH;
+    uintptr_t p = ((uintptr_t)mem + 31u) & ~(uintptr_t)31u; /* box_ray: 32-byte aligned for AVX2 loads */
+    b->box_ray = (float(*)[8])p;
+    p += n * 8 * sizeof(float);
+    b->ctx = (struct cbvh_ray_ctx *)p; /* 8-byte alignment holds: every array before is a multiple of 32 */
+    p += n * sizeof(struct cbvh_ray_ctx);
+    p = (p + _Alignof(struct cbvh_best_hit) - 1) & ~(uintptr_t)(_Alignof(struct cbvh_best_hit) - 1);
+    b->best = (struct cbvh_best_hit *)p;
+    p += n * sizeof(struct cbvh_best_hit);
+    p = (p + _Alignof(size_t) - 1) & ~(uintptr_t)(_Alignof(size_t) - 1);
+    b->ray_index = (size_t *)p;
+    p += n * sizeof(size_t);
+    b->live = (uint16_t *)p;
+    p += n * sizeof(uint16_t);
+    *octant = (uint8_t *)p;
+    b->count = 0;
+    b->capacity = (uint32_t)n;
+    return b->capacity;
+}
+
+/* Splits the stream into windows, each window into same-octant batches of the batch's capacity.
  * Exactly one of hits / occluded is given. Invalid rays are misses. */
 static void stream_run(const struct cbvh_file *f, const cbvh_ray *rays, size_t count, cbvh_hit *hits,
-                       uint8_t *occluded, cbvh_query_stats *stats)
+                       uint8_t *occluded, cbvh_query_stats *stats, struct cbvh_stream_batch *restrict batch,
+                       uint8_t *restrict octant)
 {
     const cbvh_stream_box_fn box_test = cbvh_stream_box_kernel();
-    struct cbvh_stream_batch batch;
-    uint8_t octant[CBVH_STREAM_WINDOW];
+    const uint32_t window_size = CBVH_STREAM_WINDOW_PER_RAY * batch->capacity;
     struct cbvh_ray_ctx ctx;
     uint64_t visited = 0, tested = 0;
 
-    batch.count = 0;
-    for (size_t start = 0; start < count; start += CBVH_STREAM_WINDOW) {
-        const uint32_t window = (uint32_t)(count - start < CBVH_STREAM_WINDOW ? count - start : CBVH_STREAM_WINDOW);
+    for (size_t start = 0; start < count; start += window_size) {
+        const uint32_t window = (uint32_t)(count - start < window_size ? count - start : window_size);
         uint32_t present = 0; /* octants that occur in the window */
         for (uint32_t j = 0; j < window; j++) {
             const size_t r = start + j;
@@ -311,11 +350,11 @@ static void stream_run(const struct cbvh_file *f, const cbvh_ray *rays, size_t c
                     solo_ray(f, &ctx, hits ? &hits[r] : NULL, occluded ? &occluded[r] : NULL, &visited, &tested);
                     continue;
                 }
-                batch_add(&batch, &ctx, r);
-                if (batch.count == CBVH_STREAM_BATCH)
-                    batch_flush(f, &batch, o, box_test, stats != NULL, hits, occluded, &visited, &tested);
+                batch_add(batch, &ctx, r);
+                if (batch->count == batch->capacity)
+                    batch_flush(f, batch, o, box_test, stats != NULL, hits, occluded, &visited, &tested);
             }
-            batch_flush(f, &batch, o, box_test, stats != NULL, hits, occluded, &visited, &tested);
+            batch_flush(f, batch, o, box_test, stats != NULL, hits, occluded, &visited, &tested);
         }
     }
     if (stats) {
@@ -324,8 +363,26 @@ static void stream_run(const struct cbvh_file *f, const cbvh_ray *rays, size_t c
     }
 }
 
-CBVH_API void cbvh_raycast_stream(const cbvh_file *file, const cbvh_ray *rays, size_t count, cbvh_hit *hits,
-                                  cbvh_query_stats *stats)
+/* A batch of CBVH_STREAM_STACK_BATCH rays on this frame, or the caller's scratch when it holds more. */
+static void stream_query(const struct cbvh_file *f, const cbvh_ray *rays, size_t count, cbvh_hit *hits,
+                         uint8_t *occluded, cbvh_query_stats *stats, void *scratch, size_t scratch_size)
+{
+    _Alignas(32) uint8_t own[STREAM_SLACK + CBVH_STREAM_STACK_BATCH * STREAM_RAY_BYTES];
+    struct cbvh_stream_batch batch;
+    uint8_t *octant;
+    if (batch_carve(&batch, &octant, scratch, scratch_size) <= CBVH_STREAM_STACK_BATCH)
+        batch_carve(&batch, &octant, own, sizeof own);
+    stream_run(f, rays, count, hits, occluded, stats, &batch, octant);
+}
+
+CBVH_API size_t cbvh_stream_scratch_size(size_t batch_rays)
+{
+    const size_t n = batch_rays < 1 ? 1 : batch_rays > CBVH_STREAM_MAX_BATCH ? CBVH_STREAM_MAX_BATCH : batch_rays;
+    return STREAM_SLACK + n * STREAM_RAY_BYTES;
+}
+
+CBVH_API void cbvh_raycast_stream_scratch(const cbvh_file *file, const cbvh_ray *rays, size_t count, cbvh_hit *hits,
+                                          cbvh_query_stats *stats, void *scratch, size_t scratch_size)
 {
     if (!hits)
         return;
@@ -334,11 +391,12 @@ CBVH_API void cbvh_raycast_stream(const cbvh_file *file, const cbvh_ray *rays, s
             hits[r].tri = CBVH_NO_HIT;
         return;
     }
-    stream_run(file, rays, count, hits, NULL, stats);
+    stream_query(file, rays, count, hits, NULL, stats, scratch, scratch_size);
 }
 
-CBVH_API void cbvh_occluded_stream(const cbvh_file *file, const cbvh_ray *rays, size_t count, uint8_t *occluded,
-                                   cbvh_query_stats *stats)
+CBVH_API void cbvh_occluded_stream_scratch(const cbvh_file *file, const cbvh_ray *rays, size_t count,
+                                           uint8_t *occluded, cbvh_query_stats *stats, void *scratch,
+                                           size_t scratch_size)
 {
     if (!occluded)
         return;
@@ -346,5 +404,17 @@ CBVH_API void cbvh_occluded_stream(const cbvh_file *file, const cbvh_ray *rays, 
         memset(occluded, 0, count);
         return;
     }
-    stream_run(file, rays, count, NULL, occluded, stats);
+    stream_query(file, rays, count, NULL, occluded, stats, scratch, scratch_size);
+}
+
+CBVH_API void cbvh_raycast_stream(const cbvh_file *file, const cbvh_ray *rays, size_t count, cbvh_hit *hits,
+                                  cbvh_query_stats *stats)
+{
+    cbvh_raycast_stream_scratch(file, rays, count, hits, stats, NULL, 0);
+}
+
+CBVH_API void cbvh_occluded_stream(const cbvh_file *file, const cbvh_ray *rays, size_t count, uint8_t *occluded,
+                                   cbvh_query_stats *stats)
+{
+    cbvh_occluded_stream_scratch(file, rays, count, occluded, stats, NULL, 0);
 }

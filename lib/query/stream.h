@@ -8,21 +8,26 @@
 #include "query/leaf.h"
 #include "query/ray_setup.h"
 
-/* Rays per batch: the batch (144 bytes a ray, 36 KiB) is on the stream call's stack; it fits L2, not L1. */
-#define CBVH_STREAM_BATCH 256
-
 /* One ray as the box test reads it: 32 bytes, so SSE2 loads a ray in two
  * vectors and AVX2 in one, then transposes to one lane per ray. */
 enum { CBVH_LANE_OX, CBVH_LANE_OY, CBVH_LANE_OZ, CBVH_LANE_TMIN, CBVH_LANE_RX, CBVH_LANE_RY, CBVH_LANE_RZ,
        CBVH_LANE_TMAX };
 
-/* Up to CBVH_STREAM_BATCH rays of one octant, so the sort byte orders the whole batch. */
+/* Rays per batch when the stream runs on its own stack (cbvh_raycast_stream): its frame and the walk's
+ * stay within about 8 KiB. Caller scratch (cbvh_raycast_stream_scratch) takes up to CBVH_STREAM_MAX_BATCH,
+ * the most a 16-bit live list numbers. */
+#define CBVH_STREAM_STACK_BATCH 32u
+#define CBVH_STREAM_MAX_BATCH 4096u
+
+/* Up to `capacity` rays of one octant, so the sort byte orders the whole batch. Its arrays lie in one
+ * block (the stream's stack or the caller's scratch), cut by stream.c. */
 struct cbvh_stream_batch {
-    _Alignas(32) float box_ray[CBVH_STREAM_BATCH][8]; /* CBVH_LANE_*; TMAX shrinks with hits, -1 once occluded */
-    struct cbvh_ray_ctx ctx[CBVH_STREAM_BATCH];  /* the prepared rays (triangle test, per-ray tails) */
-    struct cbvh_best_hit best[CBVH_STREAM_BATCH];
-    size_t ray_index[CBVH_STREAM_BATCH];   /* position in the caller's arrays */
-    uint32_t count;
+    float (*box_ray)[8];          /* CBVH_LANE_*, 32-byte aligned; TMAX shrinks with hits, -1 once occluded */
+    struct cbvh_ray_ctx *ctx;     /* the prepared rays (triangle test, per-ray tails) */
+    struct cbvh_best_hit *best;
+    size_t *ray_index;            /* position in the caller's arrays */
+    uint16_t *live;               /* the walk's live rays, batch positions */
+    uint32_t count, capacity;
 };
 
 /* Tests the rays batch->box_ray[live[j]], j < n, against the box whose near

@@ -310,7 +310,16 @@ static void check_ray(check_ctx *c, const cbvh_ray *r)
     cbvh_occluded_stream(c->f, r, 1, &socc, NULL);
     check_hit(c, r, &sh, sh.tri != CBVH_NO_HIT, "stream");
     FUZZ_CHECK(socc == 0 || socc == 1, "occluded stream wrote %u", socc);
-    c->queries += 2;
+    /* the same ray through a batch in caller scratch (odd address): the same answer */
+    static _Alignas(64) uint8_t scratch[16384];
+    cbvh_hit ssh;
+    uint8_t ssocc = 0x77;
+    cbvh_raycast_stream_scratch(c->f, r, 1, &ssh, NULL, scratch + 1, sizeof scratch - 1);
+    cbvh_occluded_stream_scratch(c->f, r, 1, &ssocc, NULL, scratch + 1, sizeof scratch - 1);
+    FUZZ_CHECK(ssh.tri == sh.tri && (sh.tri == CBVH_NO_HIT || ssh.t == sh.t) && ssocc == socc,
+               "stream in scratch differs (tri %u t %.9g occ %u vs tri %u t %.9g occ %u)", ssh.tri, ssh.t, ssocc,
+               sh.tri, sh.t, socc);
+    c->queries += 4;
     if (!c->strict)
         return;
     for (int t = 1; t < 4; t++) {
