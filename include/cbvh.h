@@ -591,8 +591,13 @@ CBVH_API size_t cbvh_overlap_box(const cbvh_file *file, const float box_min[3], 
 CBVH_API size_t cbvh_overlap_sphere(const cbvh_file *file, const float center[3], float radius,
                                     cbvh_overlap_fn callback, void *user, uint32_t *out, size_t capacity);
 
+/* The same for the capsule of `radius` around the segment p0-p1 (exact segment/triangle distance; p0 == p1
+ * is a sphere, radius 0 the segment itself). */
+CBVH_API size_t cbvh_overlap_capsule(const cbvh_file *file, const float p0[3], const float p1[3], float radius,
+                                     cbvh_overlap_fn callback, void *user, uint32_t *out, size_t capacity);
+
 /* Overlaps that say when the output filled, and continue from there. The triangles that intersect the
- * region (the same set as cbvh_overlap_box / cbvh_overlap_sphere) come in an order fixed by the file and the
+ * region (the same set as cbvh_overlap_box / _sphere / _capsule) come in an order fixed by the file and the
  * region; these skip the first `first` of them and write the next ones to `out`, at most `capacity`.
  * Returns how many were written. *more (when not NULL) is set to 1 when at least one more overlapping
  * triangle follows the last one written (out filled), else 0: a caller continues with first + the return
@@ -604,6 +609,8 @@ CBVH_API size_t cbvh_overlap_box_from(const cbvh_file *file, const float box_min
                                       size_t first, uint32_t *out, size_t capacity, int *more);
 CBVH_API size_t cbvh_overlap_sphere_from(const cbvh_file *file, const float center[3], float radius, size_t first,
                                          uint32_t *out, size_t capacity, int *more);
+CBVH_API size_t cbvh_overlap_capsule_from(const cbvh_file *file, const float p0[3], const float p1[3], float radius,
+                                          size_t first, uint32_t *out, size_t capacity, int *more);
 
 #ifdef __cplusplus
 }

@@ -1,4 +1,4 @@
-/* test_overlap.c: box and sphere overlap queries against brute force; the triangle/box SAT against clipping. */
+/* test_overlap.c: box, sphere and capsule overlap queries against brute force; the triangle/box SAT against clipping. */
 #include <math.h>
 #include <setjmp.h>
 #include <stdarg.h>
@@ -33,8 +33,43 @@ static int ref_sphere_class(const double *tri, const double c[3], double r, doub
     return d > r + tol ? 0 : d <= r - tol ? 2 : 1;
 }
 
+static int ref_capsule_class(const double *tri, const double p0[3], const double p1[3], double r, double tol)
+{
+    const double d = ref_segment_triangle_dist(tri, p0, p1);
+    return d > r + tol ? 0 : d <= r - tol ? 2 : 1;
+}
+
+/* A query region: a box [lo, hi], a ball (p0, radius) or a capsule (p0-p1, radius). */
+enum { BOX, SPHERE, CAPSULE };
+typedef struct region {
+    int kind;
+    float lo[3], hi[3], p0[3], p1[3], radius;
+} region;
+
+static const char *const kind_name[] = {"box", "sphere", "capsule"};
+
+static size_t overlap(const ref_fixture *fx, const region *g, cbvh_overlap_fn callback, void *user, uint32_t *out,
+                      size_t capacity)
+{
+    if (g->kind == BOX)
+        return cbvh_overlap_box(fx->file, g->lo, g->hi, callback, user, out, capacity);
+    if (g->kind == SPHERE)
+        return cbvh_overlap_sphere(fx->file, g->p0, g->radius, callback, user, out, capacity);
+    return cbvh_overlap_capsule(fx->file, g->p0, g->p1, g->radius, callback, user, out, capacity);
+}
+
+static size_t overlap_from(const ref_fixture *fx, const region *g, size_t first, uint32_t *out, size_t capacity,
+                           int *more)
+{
+    if (g->kind == BOX)
+        return cbvh_overlap_box_from(fx->file, g->lo, g->hi, first, out, capacity, more);
+    if (g->kind == SPHERE)
+        return cbvh_overlap_sphere_from(fx->file, g->p0, g->radius, first, out, capacity, more);
+    return cbvh_overlap_capsule_from(fx->file, g->p0, g->p1, g->radius, first, out, capacity, more);
+}
+
 /* The reported set holds every sure overlap and no sure miss, each once. */
-static void check_set(const ref_fixture *fx, const uint32_t *ids, size_t n, const double *region, int sphere)
+static void check_set(const ref_fixture *fx, const uint32_t *ids, size_t n, const region *g)
 {
     const double tol = 1e-6 * fx->diag;
     uint8_t *seen = calloc(fx->id_count + 1, 1);
@@ -44,12 +79,16 @@ static void check_set(const ref_fixture *fx, const uint32_t *ids, size_t n, cons
         assert_false(seen[ids[k]]);
         seen[ids[k]] = 1;
     }
+    const double lo[3] = {g->lo[0], g->lo[1], g->lo[2]}, hi[3] = {g->hi[0], g->hi[1], g->hi[2]};
+    const double p0[3] = {g->p0[0], g->p0[1], g->p0[2]}, p1[3] = {g->p1[0], g->p1[1], g->p1[2]};
     for (size_t k = 0; k < fx->tris.count; k++) {
         const double *tri = fx->tris.v + 9 * k;
-        const int cls = sphere ? ref_sphere_class(tri, region, region[3], tol) : ref_box_class(tri, region, region + 3, tol);
+        const int cls = g->kind == BOX      ? ref_box_class(tri, lo, hi, tol)
+                        : g->kind == SPHERE ? ref_sphere_class(tri, p0, g->radius, tol)
+                                            : ref_capsule_class(tri, p0, p1, g->radius, tol);
         const int got = seen[fx->tris.id[k]];
         if ((cls == 2 && !got) || (cls == 0 && got)) {
-            fprintf(stderr, "%s overlap: tri %u reported %d, reference class %d\n", sphere ? "sphere" : "box",
+            fprintf(stderr, "%s overlap: tri %u reported %d, reference class %d\n", kind_name[g->kind],
                     fx->tris.id[k], got, cls);
             fail();
         }
@@ -77,34 +116,29 @@ static void run_overlaps(const ref_fixture *fx, int count, uint64_t seed)
     assert_non_null(ids);
     size_t nonempty = 0;
     for (int r = 0; r < count; r++) {
-        const int sphere = r % 2;
-        double region[6];
-        float fmin3[3], fmax3[3], center[3];
+        region g;
+        g.kind = r % 3;
         const double size = rnd(&st, 0.0, 0.15) * fx->diag;
         for (int a = 0; a < 3; a++) {
-            center[a] = (float)rnd(&st, fx->lo[a] - 0.05 * fx->diag, fx->hi[a] + 0.05 * fx->diag);
-            fmin3[a] = center[a] - (float)(size * scene_rand_unit(&st));
-            fmax3[a] = center[a] + (float)(size * scene_rand_unit(&st));
-            region[a] = sphere ? center[a] : fmin3[a];
-            region[3 + a] = fmax3[a];
+            g.p0[a] = (float)rnd(&st, fx->lo[a] - 0.05 * fx->diag, fx->hi[a] + 0.05 * fx->diag);
+            g.p1[a] = g.p0[a] + (float)(size * (2.0 * scene_rand_unit(&st) - 1.0));
+            g.lo[a] = g.p0[a] - (float)(size * scene_rand_unit(&st));
+            g.hi[a] = g.p0[a] + (float)(size * scene_rand_unit(&st));
         }
-        const float radius = (float)size;
-        if (sphere)
-            region[3] = radius;
+        g.radius = (float)(g.kind == CAPSULE ? 0.3 * size : size);
+        if (g.kind == CAPSULE && r % 5 == 2) /* a capsule of no length is a sphere; one of no radius a segment */
+            memcpy(g.p1, g.p0, sizeof g.p1);
+        if (g.kind == CAPSULE && r % 5 == 4)
+            g.radius = 0.0f;
         size_t calls = 0;
-        const size_t n = sphere ? cbvh_overlap_sphere(fx->file, center, radius, count_calls, &calls, ids, fx->id_count)
-                                : cbvh_overlap_box(fx->file, fmin3, fmax3, count_calls, &calls, ids, fx->id_count);
+        const size_t n = overlap(fx, &g, count_calls, &calls, ids, fx->id_count);
         assert_int_equal(calls, n);
-        check_set(fx, ids, n, region, sphere);
+        check_set(fx, ids, n, &g);
         nonempty += n > 0;
         /* Without an output array the count is the same; a callback that stops ends the query at 1. */
-        const size_t n2 = sphere ? cbvh_overlap_sphere(fx->file, center, radius, NULL, NULL, NULL, 0)
-                                 : cbvh_overlap_box(fx->file, fmin3, fmax3, NULL, NULL, NULL, 0);
-        assert_int_equal(n2, n);
+        assert_int_equal(overlap(fx, &g, NULL, NULL, NULL, 0), n);
         uint32_t first = CBVH_NO_HIT;
-        const size_t n3 = sphere ? cbvh_overlap_sphere(fx->file, center, radius, stop_at_first, &first, NULL, 0)
-                                 : cbvh_overlap_box(fx->file, fmin3, fmax3, stop_at_first, &first, NULL, 0);
-        assert_int_equal(n3, n > 0 ? 1 : 0);
+        assert_int_equal(overlap(fx, &g, stop_at_first, &first, NULL, 0), n > 0 ? 1 : 0);
         if (n > 0) {
             int found = 0;
             for (size_t k = 0; k < n; k++)
@@ -113,13 +147,9 @@ static void run_overlaps(const ref_fixture *fx, int count, uint64_t seed)
         }
         /* A small array fills and stops the query; capacity 0 reports nothing. */
         uint32_t small[3] = {CBVH_NO_HIT, CBVH_NO_HIT, CBVH_NO_HIT};
-        const size_t n4 = sphere ? cbvh_overlap_sphere(fx->file, center, radius, NULL, NULL, small, 2)
-                                 : cbvh_overlap_box(fx->file, fmin3, fmax3, NULL, NULL, small, 2);
-        assert_int_equal(n4, n < 2 ? n : 2);
+        assert_int_equal(overlap(fx, &g, NULL, NULL, small, 2), n < 2 ? n : 2);
         assert_int_equal(small[2], CBVH_NO_HIT);
-        const size_t n5 = sphere ? cbvh_overlap_sphere(fx->file, center, radius, count_calls, &calls, small, 0)
-                                 : cbvh_overlap_box(fx->file, fmin3, fmax3, count_calls, &calls, small, 0);
-        assert_int_equal(n5, 0);
+        assert_int_equal(overlap(fx, &g, count_calls, &calls, small, 0), 0);
         /* Pages of 1, 4 and 7: the same triangles in the same order as the whole query, *more exactly while
          * some are left, every page but the last full. */
         for (size_t page = 1; page <= 7; page += 3) {
@@ -127,8 +157,7 @@ static void run_overlaps(const ref_fixture *fx, int count, uint64_t seed)
             size_t got = 0;
             for (int more = 1; more;) {
                 more = -1;
-                const size_t k = sphere ? cbvh_overlap_sphere_from(fx->file, center, radius, got, buf, page, &more)
-                                        : cbvh_overlap_box_from(fx->file, fmin3, fmax3, got, buf, page, &more);
+                const size_t k = overlap_from(fx, &g, got, buf, page, &more);
                 assert_true(got + k <= n);
                 for (size_t j = 0; j < k; j++)
                     assert_int_equal(buf[j], ids[got + j]);
@@ -141,12 +170,10 @@ static void run_overlaps(const ref_fixture *fx, int count, uint64_t seed)
         }
         /* Without an output array: whether any overlapping triangle lies past `first`. */
         int more = -1;
-        assert_int_equal(sphere ? cbvh_overlap_sphere_from(fx->file, center, radius, 0, NULL, 5, &more)
-                                : cbvh_overlap_box_from(fx->file, fmin3, fmax3, 0, NULL, 5, &more), 0);
+        assert_int_equal(overlap_from(fx, &g, 0, NULL, 5, &more), 0);
         assert_int_equal(more, n > 0);
         more = -1;
-        assert_int_equal(sphere ? cbvh_overlap_sphere_from(fx->file, center, radius, n, ids, 1, &more)
-                                : cbvh_overlap_box_from(fx->file, fmin3, fmax3, n, ids, 1, &more), 0);
+        assert_int_equal(overlap_from(fx, &g, n, ids, 1, &more), 0);
         assert_int_equal(more, 0);
     }
     assert_true(nonempty > (size_t)count / 4);
@@ -225,6 +252,10 @@ static void test_invalid_input(void **state)
     assert_int_equal(cbvh_overlap_sphere(fx.file, c, -1.0f, NULL, NULL, NULL, 0), 0);
     assert_int_equal(cbvh_overlap_sphere(fx.file, c, NAN, NULL, NULL, NULL, 0), 0);
     assert_int_equal(cbvh_overlap_sphere(fx.file, nan3, 1.0f, NULL, NULL, NULL, 0), 0);
+    assert_int_equal(cbvh_overlap_capsule(fx.file, c, nan3, 1.0f, NULL, NULL, NULL, 0), 0);
+    assert_int_equal(cbvh_overlap_capsule(fx.file, c, NULL, 1.0f, NULL, NULL, NULL, 0), 0);
+    assert_int_equal(cbvh_overlap_capsule(fx.file, c, hi, -1.0f, NULL, NULL, NULL, 0), 0);
+    assert_int_equal(cbvh_overlap_capsule(NULL, c, hi, 1.0f, NULL, NULL, NULL, 0), 0);
     /* the paged queries: nothing written and no more for what the plain ones reject */
     uint32_t buf[4];
     int more = -1;
@@ -237,6 +268,13 @@ static void test_invalid_input(void **state)
     assert_int_equal(cbvh_overlap_sphere_from(fx.file, c, NAN, 0, buf, 4, &more), 0);
     assert_int_equal(more, 0);
     assert_int_equal(cbvh_overlap_box_from(fx.file, lo, hi, 0, buf, 4, NULL), 4); /* more may be NULL */
+    more = -1;
+    assert_int_equal(cbvh_overlap_capsule_from(fx.file, c, NULL, 1.0f, 0, buf, 4, &more), 0);
+    assert_int_equal(more, 0);
+    /* A capsule inside the closed sphere mesh touches nothing; one that pokes out touches. */
+    const float in0[3] = {-0.4f, 0, 0}, in1[3] = {0.4f, 0, 0}, out1[3] = {1.5f, 0, 0};
+    assert_int_equal(cbvh_overlap_capsule(fx.file, in0, in1, 0.5f, NULL, NULL, NULL, 0), 0);
+    assert_true(cbvh_overlap_capsule(fx.file, in0, out1, 0.1f, NULL, NULL, NULL, 0) > 0);
     /* The ball inside the closed sphere mesh touches nothing; a radius reaching the surface touches. */
     assert_int_equal(cbvh_overlap_sphere(fx.file, c, 0.5f, NULL, NULL, NULL, 0), 0);
     assert_true(cbvh_overlap_sphere(fx.file, c, 1.0f, NULL, NULL, NULL, 0) > 0);
@@ -298,8 +336,8 @@ static void test_sliver_overlaps(void **state)
             if (sqrt(d2) <= 0.999 * radius && n != 1)
                 fail_msg("aspect 1e%d sphere %d: the long edge is %g from the center, radius %g, not reported", e, i,
                          sqrt(d2), (double)radius);
-            const double region[4] = {center[0], center[1], center[2], radius};
-            check_set(&fx, ids, n, region, 1);
+            region g = {SPHERE, {0, 0, 0}, {0, 0, 0}, {center[0], center[1], center[2]}, {0, 0, 0}, radius};
+            check_set(&fx, ids, n, &g);
         }
         ref_fixture_close(&fx);
     }

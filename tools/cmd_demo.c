@@ -511,11 +511,19 @@ static int overlap_agrees(const demo *d, shape_kind kind, const shape *s, uint32
 }
 
 /* A box overlap in one query, or (paged) in pages of DEMO_OVERLAP_PAGE through cbvh_overlap_box_from,
- * each continuing where the last one's output filled; a sphere overlap. */
+ * each continuing where the last one's output filled; a sphere or capsule overlap. */
 static size_t run_overlap(const demo *d, shape_kind kind, int paged, const shape *s, uint32_t *found)
 {
     if (kind == SHAPE_SPHERE)
         return cbvh_overlap_sphere(d->file, s->center, s->radius, NULL, NULL, found, DEMO_OVERLAP_CAP);
+    if (kind == SHAPE_CAPSULE) {
+        float p0[3], p1[3];
+        for (int a = 0; a < 3; a++) {
+            p0[a] = s->center[a] - s->axis[a];
+            p1[a] = s->center[a] + s->axis[a];
+        }
+        return cbvh_overlap_capsule(d->file, p0, p1, s->radius, NULL, NULL, found, DEMO_OVERLAP_CAP);
+    }
     float lo[3], hi[3];
     for (int a = 0; a < 3; a++) {
         lo[a] = s->center[a] - s->half[a];
@@ -531,7 +539,8 @@ static size_t run_overlap(const demo *d, shape_kind kind, int paged, const shape
 
 static void demo_overlaps(demo *d)
 {
-    static const char *const names[] = { "overlap sphere", "overlap box", "overlap box, pages of 256" };
+    static const char *const names[] = { "overlap sphere", "overlap capsule", "overlap box",
+                                         "overlap box, pages of 256" };
     uint32_t *found = malloc(DEMO_OVERLAP_CAP * sizeof *found);
     shape *shapes = malloc(DEMO_SHAPES * sizeof *shapes);
     if (!found || !shapes) {
@@ -539,9 +548,9 @@ static void demo_overlaps(demo *d)
         fprintf(stderr, "cbvh demo: out of memory\n");
         goto out;
     }
-    for (int k = 0; k < 3; k++) {
-        shape_kind kind = k == 0 ? SHAPE_SPHERE : SHAPE_BOX;
-        const int paged = k == 2;
+    for (int k = 0; k < 4; k++) {
+        shape_kind kind = k == 0 ? SHAPE_SPHERE : k == 1 ? SHAPE_CAPSULE : SHAPE_BOX;
+        const int paged = k == 3;
         for (size_t i = 0; i < DEMO_SHAPES; i++) {
             make_shape(d, kind, &shapes[i]);
             shapes[i].radius *= 4; /* a little larger than the swept shapes, to gather several triangles */

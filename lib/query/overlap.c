@@ -1,4 +1,4 @@
-/* overlap.c: box and sphere overlap queries: the shape walk (shape_walk.h), exact per-triangle tests, callback and/or output array. */
+/* overlap.c: box, sphere and capsule overlap queries: the shape walk (shape_walk.h), exact per-triangle tests, callback and/or output array. */
 #include <math.h>
 
 #include "query/closest.h"
@@ -39,18 +39,23 @@ static int sink_report(struct overlap_sink *s, uint32_t tri)
 }
 
 /* The region tested against node boxes (an AABB) and against triangles. */
+enum overlap_kind { REGION_BOX, REGION_SPHERE, REGION_CAPSULE };
 struct overlap_region {
     float lo[3], hi[3];  /* conservative bounds of the region, for node culling */
-    int sphere;          /* 0: the box [lo, hi] itself; 1: the ball below */
-    cbvh_v3 center;
+    enum overlap_kind kind; /* the box [lo, hi] itself, the ball (center, radius), or the capsule */
+    cbvh_v3 center, end; /* sphere: center; capsule: the segment center-end */
     double radius;
 };
 
 static int region_triangle(const struct overlap_region *r, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c)
 {
-    if (r->sphere) {
+    if (r->kind == REGION_SPHERE) {
         const cbvh_v3 q = cbvh_closest_point_triangle(r->center, a, b, c);
         return v3_len2(v3_sub(q, r->center)) <= r->radius * r->radius;
+    }
+    if (r->kind == REGION_CAPSULE) {
+        cbvh_v3 on_seg, on_tri;
+        return cbvh_closest_segment_triangle(r->center, r->end, a, b, c, &on_seg, &on_tri) <= r->radius * r->radius;
     }
     const cbvh_v3 lo = v3_from_f(r->lo), hi = v3_from_f(r->hi);
     double t;
@@ -100,7 +105,7 @@ static size_t overlap_walk(const struct cbvh_file *f, const struct overlap_regio
 /* The region of a box query; 0 for an invalid box. */
 static int box_region(const float box_min[3], const float box_max[3], struct overlap_region *region)
 {
-    const struct overlap_region none = {{0, 0, 0}, {0, 0, 0}, 0, {0, 0, 0}, 0.0};
+    const struct overlap_region none = {{0, 0, 0}, {0, 0, 0}, REGION_BOX, {0, 0, 0}, {0, 0, 0}, 0.0};
     *region = none;
     if (!box_min || !box_max || !cbvh_all_finite(box_min, 3) || !cbvh_all_finite(box_max, 3))
         return 0;
@@ -123,18 +128,25 @@ CBVH_API size_t cbvh_overlap_box(const cbvh_file *file, const float box_min[3], 
     return overlap_walk(file, &region, &sink);
 }
 
-/* The region of a sphere query: the ball, and a box around it for node culling; 0 for an invalid sphere. */
-static int sphere_region(const float center[3], float radius, struct overlap_region *region_out)
+/* The region of a sphere (p1 NULL) or capsule query: the ball or the capsule, and a box around it for node
+ * culling; 0 for invalid input. */
+static int round_region(const float p0[3], const float p1[3], float radius, struct overlap_region *region_out)
 {
     struct overlap_region region;
-    if (!center || !cbvh_all_finite(center, 3) || !isfinite(radius) || !(radius >= 0.0f))
+    if (!p0 || !cbvh_all_finite(p0, 3) || (p1 && !cbvh_all_finite(p1, 3)) || !isfinite(radius) ||
+        !(radius >= 0.0f))
         return 0;
-    region.sphere = 1;
-    region.center = v3_from_f(center);
+    region.kind = p1 ? REGION_CAPSULE : REGION_SPHERE;
+    region.center = v3_from_f(p0);
+    region.end = p1 ? v3_from_f(p1) : region.center;
     region.radius = radius;
+    const cbvh_v3 lo = v3(fmin(region.center.x, region.end.x), fmin(region.center.y, region.end.y),
+                          fmin(region.center.z, region.end.z));
+    const cbvh_v3 hi = v3(fmax(region.center.x, region.end.x), fmax(region.center.y, region.end.y),
+                          fmax(region.center.z, region.end.z));
     float box_center[3], extent[3];
-    cbvh_sweep_bounds(v3_madd(region.center, v3(1, 1, 1), -region.radius),
-                      v3_madd(region.center, v3(1, 1, 1), region.radius), box_center, extent);
+    cbvh_sweep_bounds(v3_madd(lo, v3(1, 1, 1), -region.radius), v3_madd(hi, v3(1, 1, 1), region.radius), box_center,
+                      extent);
     for (int a = 0; a < 3; a++) {
         /* Widened by 2^-22 relative, more than the rounding of the two additions. */
         region.lo[a] = box_center[a] - extent[a];
@@ -151,7 +163,7 @@ CBVH_API size_t cbvh_overlap_sphere(const cbvh_file *file, const float center[3]
 {
     struct overlap_sink sink = {callback, user, out, capacity, 0, 0, 0, 0};
     struct overlap_region region;
-    if (!file || !sphere_region(center, radius, &region))
+    if (!file || !round_region(center, NULL, radius, &region))
         return 0;
     return overlap_walk(file, &region, &sink);
 }
@@ -179,6 +191,24 @@ CBVH_API size_t cbvh_overlap_sphere_from(const cbvh_file *file, const float cent
                                          uint32_t *out, size_t capacity, int *more)
 {
     struct overlap_region region;
-    const int valid = sphere_region(center, radius, &region);
+    const int valid = round_region(center, NULL, radius, &region);
+    return overlap_from(file, &region, valid, first, out, capacity, more);
+}
+
+CBVH_API size_t cbvh_overlap_capsule(const cbvh_file *file, const float p0[3], const float p1[3], float radius,
+                                     cbvh_overlap_fn callback, void *user, uint32_t *out, size_t capacity)
+{
+    struct overlap_sink sink = {callback, user, out, capacity, 0, 0, 0, 0};
+    struct overlap_region region;
+    if (!file || !p1 || !round_region(p0, p1, radius, &region))
+        return 0;
+    return overlap_walk(file, &region, &sink);
+}
+
+CBVH_API size_t cbvh_overlap_capsule_from(const cbvh_file *file, const float p0[3], const float p1[3], float radius,
+                                          size_t first, uint32_t *out, size_t capacity, int *more)
+{
+    struct overlap_region region;
+    const int valid = p1 && round_region(p0, p1, radius, &region);
     return overlap_from(file, &region, valid, first, out, capacity, more);
 }

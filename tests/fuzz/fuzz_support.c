@@ -523,6 +523,20 @@ static void check_overlaps(check_ctx *c)
     n = cbvh_overlap_sphere(c->f, center, radius, log_overlap, &slog, NULL, 0);
     check_overlap_answer(c, &slog, n, NULL, 0, "sphere overlap");
     c->queries++;
+    /* a capsule from the sphere's center: it holds the ball, so it reports at least the ball's triangles */
+    float tip[3];
+    random_point(c, 0.1, tip);
+    for (int k = 0; k < 3; k++)
+        tip[k] = center[k] + 0.3f * (tip[k] - center[k]);
+    static overlap_log clog;
+    memset(&clog, 0, sizeof clog);
+    n = cbvh_overlap_capsule(c->f, center, tip, radius, log_overlap, &clog, NULL, 0);
+    check_overlap_answer(c, &clog, n, NULL, 0, "capsule overlap");
+    if (slog.count < 4096 && clog.count < 4096)
+        for (size_t i = 0; i < slog.count; i++)
+            FUZZ_CHECK(sorted_has(&clog, slog.ids[i]), "capsule overlap misses triangle %u of its end ball",
+                       slog.ids[i]);
+    c->queries++;
 
     /* invalid queries report nothing */
     float nan3[3] = { NAN, NAN, NAN };
