@@ -478,6 +478,14 @@ typedef enum cbvh_filter_result {
  * triangle there that the watertight test accepts). */
 typedef cbvh_filter_result (*cbvh_hit_filter_fn)(void *user, const cbvh_hit_record *candidate);
 
+/* Where a mesh instance is placed in the world, without cooking it again:
+ * world = translation + scale * rotate(rotation, local). */
+typedef struct cbvh_transform {
+    float rotation[4];    /* quaternion (x, y, z, w); any finite non-zero one, normalized by the library */
+    float translation[3]; /* finite */
+    float scale;          /* uniform, finite, > 0 */
+} cbvh_transform;
+
 /* Per-query options (a struct that grows, see "Structs that grow"): set
  * with cbvh_query_options_init, then change the fields wanted. */
 typedef struct cbvh_query_options {
@@ -486,6 +494,13 @@ typedef struct cbvh_query_options {
     cbvh_cull cull;            /* default CBVH_CULL_NONE */
     cbvh_hit_filter_fn filter; /* default NULL: every hit counts */
     void *filter_user;         /* the filter's first argument */
+    /* Default NULL: the ray is in the mesh's own frame. Else the mesh is placed by *transform and the ray
+     * is in the world: it is taken into the mesh's frame in double precision (then rounded to float once),
+     * and the hit comes back in the world: t and u, v are the same along both rays (the map is affine),
+     * the normal is rotated into the world, and the filter sees the world record. A transform that is not
+     * finite, a zero quaternion, a scale <= 0, or a ray that does not fit in float in the mesh's frame:
+     * CBVH_ERROR_INVALID_ARGUMENT. */
+    const cbvh_transform *transform;
 } cbvh_query_options;
 
 /* Fills *options with the defaults for a caller whose sizeof *options is

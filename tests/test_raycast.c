@@ -1169,6 +1169,119 @@ static void test_query_options(void **state)
     scene_free(&s);
 }
 
+/* A placed instance (cbvh_query_options.transform): the mesh rotated, scaled and moved without cooking it
+ * again. World rays aimed at the placed mesh answer as the double-precision reference on the placed
+ * triangles (check_closest), the normal is the placed triangle's, and any-hit agrees; a caller's struct
+ * that ends before the field ignores it; bad transforms are errors. */
+static void test_transform(void **state)
+{
+    (void)state;
+    scene s;
+    ref_fixture fx;
+    assert_true(scene_sphere(&s, 3000, (float[3]){1, -2, 3}, 2.0f));
+    open_scene(&fx, &s, test_options());
+    uint64_t st = 77;
+    double *world_v = malloc(sizeof(double) * 9 * fx.tris.count);
+    assert_non_null(world_v);
+    const float scales[] = {1.0f, 0.25f, 7.5f, 1.0f, 3.0f, 0.5f};
+    for (int trial = 0; trial < 6; trial++) {
+        cbvh_transform tr;
+        double q[4], len = 0.0;
+        for (int i = 0; i < 4; i++) {
+            q[i] = 2.0 * scene_rand_unit(&st) - 1.0;
+            len += q[i] * q[i];
+        }
+        len = sqrt(len);
+        for (int i = 0; i < 4; i++) /* not unit: the library normalizes */
+            tr.rotation[i] = trial == 0 ? (i == 3 ? 1.0f : 0.0f) : (float)(3.0 * q[i] / len);
+        tr.scale = scales[trial];
+        for (int a = 0; a < 3; a++)
+            tr.translation[a] = trial == 0 ? 0.0f : (float)((2.0 * scene_rand_unit(&st) - 1.0) * 3.0 * fx.diag);
+        /* the reference placement, from the quaternion as given, normalized here */
+        double qn = 0.0, m[3][3];
+        for (int i = 0; i < 4; i++)
+            qn += (double)tr.rotation[i] * tr.rotation[i];
+        const double x = tr.rotation[0], y = tr.rotation[1], z = tr.rotation[2], w = tr.rotation[3], k = 2.0 / qn;
+        const double rows[3][3] = {{1 - k * (y * y + z * z), k * (x * y - z * w), k * (x * z + y * w)},
+                                   {k * (x * y + z * w), 1 - k * (x * x + z * z), k * (y * z - x * w)},
+                                   {k * (x * z - y * w), k * (y * z + x * w), 1 - k * (x * x + y * y)}};
+        memcpy(m, rows, sizeof m);
+        ref_fixture world = fx;
+        world.tris.v = world_v;
+        for (int a = 0; a < 3; a++) {
+            world.lo[a] = INFINITY;
+            world.hi[a] = -INFINITY;
+        }
+        for (size_t i = 0; i < 3 * fx.tris.count; i++) {
+            const double *p = fx.tris.v + 3 * i;
+            for (int a = 0; a < 3; a++) {
+                const double c = tr.translation[a] + tr.scale * (m[a][0] * p[0] + m[a][1] * p[1] + m[a][2] * p[2]);
+                world_v[3 * i + (size_t)a] = c;
+                world.lo[a] = fmin(world.lo[a], c);
+                world.hi[a] = fmax(world.hi[a], c);
+            }
+        }
+        world.diag = fx.diag * tr.scale;
+        cbvh_query_options opt;
+        assert_int_equal(cbvh_query_options_init(&opt, sizeof opt), CBVH_OK);
+        opt.transform = &tr;
+        int hits = 0;
+        for (int r = 0; r < 400; r++) {
+            const cbvh_ray ray = ref_make_ray(&world, &st, r % 3);
+            cbvh_hit_record rec;
+            assert_int_equal(cbvh_raycast_with(fx.file, &ray, &opt, &rec, NULL), CBVH_OK);
+            const cbvh_hit h = {rec.tri, rec.t, rec.u, rec.v};
+            check_closest(&world, &ray, rec.tri != CBVH_NO_HIT, &h);
+            int occluded = -1;
+            assert_int_equal(cbvh_occluded_with(fx.file, &ray, &opt, &occluded, NULL), CBVH_OK);
+            assert_int_equal(occluded, rec.tri != CBVH_NO_HIT);
+            if (rec.tri == CBVH_NO_HIT)
+                continue;
+            hits++;
+            /* the placed triangle's unit normal, in double */
+            const double *v = world_v + 9 * fx.index_of_id[rec.tri];
+            const double e1[3] = {v[3] - v[0], v[4] - v[1], v[5] - v[2]}, e2[3] = {v[6] - v[0], v[7] - v[1], v[8] - v[2]};
+            const double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+            const double nl = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+            const double dot = (n[0] * rec.normal[0] + n[1] * rec.normal[1] + n[2] * rec.normal[2]) / nl;
+            if (!(dot > 0.9999))
+                fail_msg("trial %d ray %d: normal (%g %g %g) against the placed triangle's, cosine %g", trial, r,
+                         (double)rec.normal[0], (double)rec.normal[1], (double)rec.normal[2], dot);
+        }
+        assert_true(hits > 100);
+    }
+    /* A caller whose struct ends before `transform` has none: the mesh's own frame. */
+    cbvh_transform far = {{0, 0, 0, 1}, {1000, 0, 0}, 1.0f};
+    cbvh_query_options old;
+    assert_int_equal(cbvh_query_options_init(&old, offsetof(cbvh_query_options, transform)), CBVH_OK);
+    const cbvh_ray at = {{1, -2, 10}, 0.0f, {0, 0, -1}, INFINITY};
+    cbvh_hit_record plain, with_old;
+    assert_int_equal(cbvh_raycast_with(fx.file, &at, NULL, &plain, NULL), CBVH_OK);
+    assert_int_equal(cbvh_raycast_with(fx.file, &at, &old, &with_old, NULL), CBVH_OK);
+    assert_true(plain.tri != CBVH_NO_HIT && with_old.tri == plain.tri && with_old.t == plain.t);
+    cbvh_query_options opt;
+    assert_int_equal(cbvh_query_options_init(&opt, sizeof opt), CBVH_OK);
+    opt.transform = &far; /* the mesh moved 1000 along x: the same ray misses */
+    assert_int_equal(cbvh_raycast_with(fx.file, &at, &opt, &with_old, NULL), CBVH_OK);
+    assert_int_equal(with_old.tri, CBVH_NO_HIT);
+    /* bad transforms */
+    const cbvh_transform bad[] = {{{0, 0, 0, 0}, {0, 0, 0}, 1.0f},      {{0, 0, 0, 1}, {0, 0, 0}, 0.0f},
+                                  {{0, 0, 0, 1}, {0, 0, 0}, -1.0f},     {{0, 0, 0, 1}, {0, 0, 0}, NAN},
+                                  {{0, 0, 0, 1}, {INFINITY, 0, 0}, 1.0f}, {{NAN, 0, 0, 1}, {0, 0, 0}, 1.0f},
+                                  {{0, 0, 0, 1}, {0, 0, 0}, 1e-45f}};
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+        opt.transform = &bad[i];
+        int occluded = -1;
+        assert_int_equal(cbvh_raycast_with(fx.file, &at, &opt, &with_old, NULL), CBVH_ERROR_INVALID_ARGUMENT);
+        assert_int_equal(with_old.tri, CBVH_NO_HIT);
+        assert_int_equal(cbvh_occluded_with(fx.file, &at, &opt, &occluded, NULL), CBVH_ERROR_INVALID_ARGUMENT);
+        assert_int_equal(occluded, 0);
+    }
+    free(world_v);
+    ref_fixture_close(&fx);
+    scene_free(&s);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -1184,6 +1297,7 @@ int main(void)
         cmocka_unit_test(test_far_side_boxes),
         cmocka_unit_test(test_overflowing_edge_sums),
         cmocka_unit_test(test_query_options),
+        cmocka_unit_test(test_transform),
     };
     int failed = TEST_RUN_LAYOUTS(tests, 1);
     fprintf(stderr, "test_raycast: %ld reference checks\n", checks_done);

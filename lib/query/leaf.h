@@ -37,7 +37,9 @@ struct cbvh_hit_gate {
     cbvh_hit_filter_fn filter;
     void *user;
     double t_base; /* the kernels' t plus this is t on the caller's ray */
-    float dir[3];  /* the caller's ray direction */
+    float dir[3];  /* the ray direction in the mesh's frame */
+    int placed;    /* a query transform: records are rotated into the world by `rotation` */
+    double rotation[3][3];
 };
 
 /* Triangle k, hit at t in the ray's current range: any hit: 1 (the walk stops) unless the gate rejects it;

@@ -110,12 +110,26 @@ static void record_fill(const struct cbvh_file *f, uint32_t k, double t_base, fl
     r->material = cbvh_cooked_material(f, k);
 }
 
+/* A record of the mesh's frame rotated into the world of a query transform (t, u, v, front stay). */
+static void record_place(const struct cbvh_hit_gate *gate, cbvh_hit_record *r)
+{
+    if (!gate->placed)
+        return;
+    double n[3];
+    for (int i = 0; i < 3; i++)
+        n[i] = gate->rotation[i][0] * r->normal[0] + gate->rotation[i][1] * r->normal[1] +
+               gate->rotation[i][2] * r->normal[2];
+    for (int i = 0; i < 3; i++)
+        r->normal[i] = (float)n[i];
+}
+
 /* The gate's check (leaf.h): culling first, then the caller's filter. */
 static int gate_check(const struct cbvh_hit_gate *gate, const struct cbvh_file *f, uint32_t k, float t, float u,
                       float v)
 {
     cbvh_hit_record r;
     record_fill(f, k, gate->t_base, t, u, v, gate->dir, &r);
+    record_place(gate, &r);
     if ((gate->cull == CBVH_CULL_BACK && !r.front) || (gate->cull == CBVH_CULL_FRONT && r.front))
         return CBVH_FILTER_REJECT;
     if (!gate->filter)
@@ -124,8 +138,42 @@ static int gate_check(const struct cbvh_hit_gate *gate, const struct cbvh_file *
     return verdict == CBVH_FILTER_REJECT || verdict == CBVH_FILTER_STOP ? (int)verdict : CBVH_FILTER_ACCEPT;
 }
 
-/* Checks the arguments of a query with options and prepares its ray and gate. */
-static cbvh_result query_prepare(const cbvh_file *file, const cbvh_ray *ray, const cbvh_query_options *options,
+/* The rotation matrix of transform t's quaternion (normalized in double) into m, and the ray `world` taken
+ * into the mesh's frame: local = R^T (world - translation) / scale, in double, rounded to float once.
+ * Returns 0 for an invalid transform or a local ray that overflows float. */
+static int place_ray(const cbvh_transform *t, const cbvh_ray *world, double m[3][3], cbvh_ray *local)
+{
+    const float *q = t->rotation;
+    double len2 = 0.0;
+    for (int i = 0; i < 4; i++) {
+        if (!isfinite(q[i]))
+            return 0;
+        len2 += (double)q[i] * q[i];
+    }
+    if (!(len2 > 0.0) || !isfinite(len2) || !isfinite(t->scale) || !(t->scale > 0.0f) ||
+        !isfinite(t->translation[0]) || !isfinite(t->translation[1]) || !isfinite(t->translation[2]))
+        return 0;
+    const double x = q[0], y = q[1], z = q[2], w = q[3], k = 2.0 / len2;
+    m[0][0] = 1.0 - k * (y * y + z * z), m[0][1] = k * (x * y - z * w), m[0][2] = k * (x * z + y * w);
+    m[1][0] = k * (x * y + z * w), m[1][1] = 1.0 - k * (x * x + z * z), m[1][2] = k * (y * z - x * w);
+    m[2][0] = k * (x * z - y * w), m[2][1] = k * (y * z + x * w), m[2][2] = 1.0 - k * (x * x + y * y);
+    *local = *world;
+    for (int a = 0; a < 3; a++) {
+        double o = 0.0, d = 0.0;
+        for (int i = 0; i < 3; i++) { /* column a of R: row a of R^T */
+            o += m[i][a] * ((double)world->org[i] - t->translation[i]);
+            d += m[i][a] * world->dir[i];
+        }
+        local->org[a] = (float)(o / t->scale);
+        local->dir[a] = (float)(d / t->scale);
+        if (!isfinite(local->org[a]) || !isfinite(local->dir[a]))
+            return 0;
+    }
+    return 1;
+}
+
+/* Checks the arguments of a query with options and prepares its ray (in the mesh's frame) and gate. */
+static cbvh_result query_prepare(const cbvh_file *file, const cbvh_ray *world, const cbvh_query_options *options,
                                  cbvh_query_options *o, struct cbvh_ray_ctx *ctx, struct cbvh_hit_gate *gate)
 {
     query_options_defaults(o);
@@ -133,6 +181,14 @@ static cbvh_result query_prepare(const cbvh_file *file, const cbvh_ray *ray, con
         if (!cbvh_struct_size_ok(options->struct_size, QUERY_OPTIONS_SIZE_MIN, sizeof *options))
             return CBVH_ERROR_INVALID_ARGUMENT;
         memcpy(o, options, options->struct_size);
+    }
+    cbvh_ray placed;
+    const cbvh_ray *ray = world;
+    gate->placed = o->transform != NULL; /* NULL by default, and for a caller whose struct ends before it */
+    if (gate->placed) {
+        if (!world || !place_ray(o->transform, world, gate->rotation, &placed))
+            return CBVH_ERROR_INVALID_ARGUMENT;
+        ray = &placed;
     }
     if (!file || !ray || !known_traversal(o->traversal) ||
         (o->cull != CBVH_CULL_NONE && o->cull != CBVH_CULL_BACK && o->cull != CBVH_CULL_FRONT) ||
@@ -145,7 +201,7 @@ static cbvh_result query_prepare(const cbvh_file *file, const cbvh_ray *ray, con
     gate->t_base = ctx->t_base;
     for (int a = 0; a < 3; a++)
         gate->dir[a] = ray->dir[a];
-    /* without culling or filter every hit counts: the plain walk */
+    /* without culling or filter every hit counts: the plain walk (a transform only rotates the answer) */
     ctx->gate = o->cull != CBVH_CULL_NONE || o->filter ? gate : NULL;
     return CBVH_OK;
 }
@@ -165,8 +221,10 @@ CBVH_API cbvh_result cbvh_raycast_with(const cbvh_file *file, const cbvh_ray *ra
         return r;
     struct cbvh_best_hit best = {UINT32_MAX, 0.0f, 0.0f, 0.0f};
     cbvh_closest(file, &ctx, o.traversal, &best, stats);
-    if (best.tri != UINT32_MAX)
-        record_fill(file, best.tri, ctx.t_base, best.t, best.u, best.v, ray->dir, hit);
+    if (best.tri != UINT32_MAX) {
+        record_fill(file, best.tri, ctx.t_base, best.t, best.u, best.v, gate.dir, hit);
+        record_place(&gate, hit);
+    }
     return CBVH_OK;
 }
 
