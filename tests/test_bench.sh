@@ -35,7 +35,7 @@ run 0 "bench --gen sphere:2000" "$CBVH" bench --gen sphere:2000 --rays 2000 --re
         grep -q '^| rays | query | engine | variant | MRays/s | MRays/s/thread | nodes/ray | tris/ray |' "$tmp/bench.md" &&
     check "... prints the agreement table" grep -q '^| rays | engine | variant | same triangle | both miss |' "$tmp/bench.md" &&
     check "... a row per ray set, query and traversal" \
-        test "$(grep -c '^| \(incoherent\|coherent\|shadow\) | \(closest\|any\) | cbvh | ' "$tmp/bench.md")" -eq 30 &&
+        test "$(grep -c '^| \(incoherent\|coherent\|shadow\|short\) | \(closest\|any\) | cbvh | ' "$tmp/bench.md")" -eq 40 &&
     check "... progress stays off stdout" test "$(grep -c '%' "$tmp/bench.md")" -eq 0
 
 if [ "$has_python" = 1 ] && [ -f "$tmp/bench.json" ]; then

@@ -1,4 +1,4 @@
-/* rays.c: deterministic benchmark ray sets (incoherent, coherent camera tiles, shadow rays) from a seed. */
+/* rays.c: deterministic benchmark ray sets (incoherent, coherent camera tiles, shadow rays, short probes) from a seed. */
 #include <math.h>
 
 #include "rays.h"
@@ -11,6 +11,7 @@ const char *rays_kind_name(ray_kind kind)
     switch (kind) {
     case RAYS_INCOHERENT: return "incoherent";
     case RAYS_COHERENT: return "coherent";
+    case RAYS_SHORT: return "short";
     default: return "shadow";
     }
 }
@@ -120,6 +121,41 @@ static void coherent(const float lo[3], const float hi[3], double diag, uint64_t
     }
 }
 
+/* A point of a triangle picked uniformly by index, uniformly on the triangle. */
+static void surface_point(const rays_mesh *mesh, uint64_t *state, double p[3])
+{
+    size_t tri = (size_t)(scene_rand_unit(state) * (double)mesh->triangle_count);
+    const uint32_t *ix = mesh->indices + 3 * tri;
+    const float *v0 = mesh->positions + 3 * (size_t)ix[0];
+    const float *v1 = mesh->positions + 3 * (size_t)ix[1];
+    const float *v2 = mesh->positions + 3 * (size_t)ix[2];
+    double b1 = scene_rand_unit(state), b2 = scene_rand_unit(state);
+    if (b1 + b2 > 1.0) {
+        b1 = 1.0 - b1;
+        b2 = 1.0 - b2;
+    }
+    for (int a = 0; a < 3; a++)
+        p[a] = (1.0 - b1 - b2) * v0[a] + b1 * v1[a] + b2 * v2[a];
+}
+
+/* What games cast most (ground probes, bullet traces, line of sight): from a point half a percent of the
+ * diagonal off a surface point, on either side, in a uniform direction, one percent of the diagonal long. */
+static void short_rays(const rays_mesh *mesh, double diag, uint64_t *state, cbvh_ray *out, size_t count)
+{
+    for (size_t i = 0; i < count; i++) {
+        double p[3];
+        float off[3];
+        surface_point(mesh, state, p);
+        unit_direction(state, off);
+        cbvh_ray *r = &out[i];
+        for (int a = 0; a < 3; a++)
+            r->org[a] = (float)(p[a] + 0.005 * diag * off[a]);
+        unit_direction(state, r->dir);
+        r->tmin = 0.0f;
+        r->tmax = (float)(0.01 * diag);
+    }
+}
+
 /* Points on triangles picked uniformly by index, towards a light outside the
  * bounds. tmin skips the triangle the ray starts on; tmax stops just before the light. */
 static void shadow(const rays_mesh *mesh, const float lo[3], const float hi[3], double diag, uint64_t *state,
@@ -131,20 +167,12 @@ static void shadow(const rays_mesh *mesh, const float lo[3], const float hi[3], 
     for (int a = 0; a < 3; a++)
         light[a] = 0.5 * ((double)lo[a] + hi[a]) + diag * toward[a] / tn;
     for (size_t i = 0; i < count; i++) {
-        size_t tri = (size_t)(scene_rand_unit(state) * (double)mesh->triangle_count);
-        const uint32_t *ix = mesh->indices + 3 * tri;
-        const float *v0 = mesh->positions + 3 * (size_t)ix[0];
-        const float *v1 = mesh->positions + 3 * (size_t)ix[1];
-        const float *v2 = mesh->positions + 3 * (size_t)ix[2];
-        double b1 = scene_rand_unit(state), b2 = scene_rand_unit(state);
-        if (b1 + b2 > 1.0) {
-            b1 = 1.0 - b1;
-            b2 = 1.0 - b2;
-        }
+        double p[3];
+        surface_point(mesh, state, p);
         cbvh_ray *r = &out[i];
         double len2 = 0.0;
         for (int a = 0; a < 3; a++) {
-            r->org[a] = (float)((1.0 - b1 - b2) * v0[a] + b1 * v1[a] + b2 * v2[a]);
+            r->org[a] = (float)p[a];
             r->dir[a] = (float)(light[a] - r->org[a]);
             len2 += (double)r->dir[a] * r->dir[a];
         }
@@ -162,6 +190,7 @@ void rays_generate(ray_kind kind, const rays_mesh *mesh, uint64_t seed, cbvh_ray
     switch (kind) {
     case RAYS_INCOHERENT: incoherent(lo, hi, diag, &state, out, count); break;
     case RAYS_COHERENT: coherent(lo, hi, diag, &state, out, count); break;
+    case RAYS_SHORT: short_rays(mesh, diag, &state, out, count); break;
     default: shadow(mesh, lo, hi, diag, &state, out, count); break;
     }
 }
