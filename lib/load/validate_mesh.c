@@ -61,15 +61,21 @@ static cbvh_result check_local8(const struct cbvh_file *f, uint32_t begin, uint3
     const uint64_t vc = f->info.vertex_count, tc = f->info.triangle_count;
     for (uint32_t i = begin; i < end; i++, b += CBVH_LOCAL8_BLOCK_SIZE) {
         const uint64_t base = *(const uint32_t *)(const void *)b, first = (uint64_t)i * CBVH_LOCAL8_BLOCK;
-        uint32_t largest = 0;
-        for (uint32_t j = 0; j < 3u * CBVH_LOCAL8_BLOCK; j++) {
-            const uint32_t o = b[4 + j];
-            if (first + j / 3u < tc)
-                largest = o > largest ? o : largest;
-            else if (o != 0)
-                return CORRUPT("triangle block %u: offset %u of slot %u, past triangle_count %llu, must be 0", i,
-                               o, j / 3u, (unsigned long long)tc);
+        /* a full block: the largest of its offsets, a fixed-length loop the compiler vectorizes; the last
+         * one slot by slot */
+        const uint32_t used = tc - first < CBVH_LOCAL8_BLOCK ? (uint32_t)(tc - first) : CBVH_LOCAL8_BLOCK;
+        uint8_t largest = 0;
+        if (used == CBVH_LOCAL8_BLOCK) {
+            for (uint32_t j = 0; j < 3u * CBVH_LOCAL8_BLOCK; j++)
+                largest = b[4 + j] > largest ? b[4 + j] : largest;
+        } else {
+            for (uint32_t j = 0; j < 3u * used; j++)
+                largest = b[4 + j] > largest ? b[4 + j] : largest;
         }
+        for (uint32_t j = 3u * used; j < 3u * CBVH_LOCAL8_BLOCK; j++)
+            if (b[4 + j] != 0)
+                return CORRUPT("triangle block %u: offset %u of slot %u, past triangle_count %llu, must be 0", i,
+                               b[4 + j], j / 3u, (unsigned long long)tc);
         if (base + largest >= vc)
             return CORRUPT("triangle block %u (triangles from %llu): LOCAL8 base %llu plus offset %u is not below "
                            "vertex_count %llu", i, (unsigned long long)first, (unsigned long long)base, largest,
