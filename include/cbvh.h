@@ -627,6 +627,28 @@ CBVH_API size_t cbvh_overlap_sphere_from(const cbvh_file *file, const float cent
 CBVH_API size_t cbvh_overlap_capsule_from(const cbvh_file *file, const float p0[3], const float p1[3], float radius,
                                           size_t first, uint32_t *out, size_t capacity, int *more);
 
+/* A triangle a ball or capsule overlaps, with what it takes to separate them: moving the shape by
+ * depth * normal leaves it touching the triangle at most (a fixed struct: it never grows). */
+typedef struct cbvh_contact {
+    uint32_t tri;     /* original triangle id */
+    float depth;      /* >= 0: how far the shape reaches into the triangle */
+    float normal[3];  /* unit, from the triangle towards the shape */
+    float point[3];   /* the triangle's point nearest the shape's core (center or segment) */
+} cbvh_contact;
+
+/* Contacts (penetration depth and separating direction) of the ball of `radius` around `center`, or of the
+ * capsule around segment p0-p1, with every triangle it overlaps (the triangles of cbvh_overlap_sphere /
+ * cbvh_overlap_capsule, in the same order and with the same paging: `first`, `capacity`, *more). With the
+ * core (center or segment) at distance d > 0 from the triangle: depth = radius - d along the line of the
+ * closest points, the least motion that separates them. With the core reaching the triangle (d = 0; a
+ * sweep then reports t = 0): the normal is the face normal (n = (v1 - v0) x (v2 - v0) as wound, or -n,
+ * whichever needs less) and depth lifts the whole core radius above the triangle's plane. Computed in
+ * double. Returns how many contacts were written. Invalid input writes none and sets *more to 0. */
+CBVH_API size_t cbvh_contacts_sphere(const cbvh_file *file, const float center[3], float radius, size_t first,
+                                     cbvh_contact *out, size_t capacity, int *more);
+CBVH_API size_t cbvh_contacts_capsule(const cbvh_file *file, const float p0[3], const float p1[3], float radius,
+                                      size_t first, cbvh_contact *out, size_t capacity, int *more);
+
 #ifdef __cplusplus
 }
 #endif

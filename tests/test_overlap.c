@@ -1,4 +1,4 @@
-/* test_overlap.c: box, sphere and capsule overlap queries against brute force; the triangle/box SAT against clipping. */
+/* test_overlap.c: box, sphere and capsule overlaps and contacts against brute force; the triangle/box SAT against clipping. */
 #include <math.h>
 #include <setjmp.h>
 #include <stdarg.h>
@@ -282,6 +282,141 @@ static void test_invalid_input(void **state)
     scene_free(&s);
 }
 
+/* The reference distance from the core (center, or segment p0-p1) of a round region to triangle k. */
+static double core_dist(const ref_fixture *fx, size_t k, const double p0[3], const double p1[3], int capsule)
+{
+    const double *tri = fx->tris.v + 9 * k;
+    return capsule ? ref_segment_triangle_dist(tri, p0, p1) : sqrt(ref_point_triangle_dist2(tri, p0));
+}
+
+/* Contacts of balls and capsules: the overlap's triangles in its order; each normal a unit vector, each
+ * point on its triangle; depth = radius - the reference core distance when the core is clear of the
+ * triangle; the shape moved by depth along the normal (and a little more) no longer overlaps the triangle
+ * in the reference, and moved a little less still does (the least motion). */
+static void check_contacts(const ref_fixture *fx, int count, uint64_t seed)
+{
+    uint64_t st = seed;
+    uint32_t *ids = malloc(sizeof(uint32_t) * (fx->id_count + 1));
+    cbvh_contact *contacts = malloc(sizeof(cbvh_contact) * (fx->id_count + 1));
+    assert_non_null(ids);
+    assert_non_null(contacts);
+    const double tol = 2e-5 * fx->diag;
+    size_t total = 0, touching = 0;
+    for (int r = 0; r < count; r++) {
+        const int capsule = r % 2;
+        float p0[3], p1[3];
+        const double size = rnd(&st, 0.0, 0.1) * fx->diag;
+        for (int a = 0; a < 3; a++) {
+            p0[a] = (float)rnd(&st, fx->lo[a], fx->hi[a]);
+            p1[a] = p0[a] + (float)(size * (2.0 * scene_rand_unit(&st) - 1.0));
+        }
+        const float radius = (float)(capsule ? 0.5 * size : size);
+        const size_t n = capsule ? cbvh_overlap_capsule(fx->file, p0, p1, radius, NULL, NULL, ids, fx->id_count)
+                                 : cbvh_overlap_sphere(fx->file, p0, radius, NULL, NULL, ids, fx->id_count);
+        int more = -1;
+        const size_t m = capsule ? cbvh_contacts_capsule(fx->file, p0, p1, radius, 0, contacts, fx->id_count, &more)
+                                 : cbvh_contacts_sphere(fx->file, p0, radius, 0, contacts, fx->id_count, &more);
+        assert_int_equal(m, n);
+        assert_int_equal(more, 0);
+        for (size_t i = 0; i < m; i++) {
+            const cbvh_contact *c = &contacts[i];
+            assert_int_equal(c->tri, ids[i]);
+            const size_t k = fx->index_of_id[c->tri];
+            assert_true(k != (size_t)-1);
+            const double nl = sqrt((double)c->normal[0] * c->normal[0] + (double)c->normal[1] * c->normal[1] +
+                                   (double)c->normal[2] * c->normal[2]);
+            assert_true(fabs(nl - 1.0) < 1e-5);
+            const double pt[3] = {c->point[0], c->point[1], c->point[2]};
+            assert_true(sqrt(ref_point_triangle_dist2(fx->tris.v + 9 * k, pt)) <= tol);
+            const double q0[3] = {p0[0], p0[1], p0[2]}, q1[3] = {p1[0], p1[1], p1[2]};
+            const double d = core_dist(fx, k, q0, capsule ? q1 : q0, capsule);
+            assert_true(c->depth >= 0.0f && d <= radius + tol);
+            if (d > tol) {
+                if (!(fabs(c->depth - (radius - d)) <= tol))
+                    fail_msg("%s contact with tri %u: depth %g, radius - distance %g", capsule ? "capsule" : "sphere",
+                             c->tri, (double)c->depth, radius - d);
+            } else {
+                touching++;
+            }
+            /* moved by depth (+ tol) along the normal: clear of the triangle; by depth - 2 tol: not yet */
+            for (int sign = 1; sign >= -1; sign -= 2) {
+                const double move = c->depth + sign * (sign > 0 ? tol : 2.0 * tol);
+                if (move < 0.0 || (sign < 0 && d <= tol))
+                    continue;
+                double m0[3], m1[3];
+                for (int a = 0; a < 3; a++) {
+                    m0[a] = q0[a] + move * c->normal[a];
+                    m1[a] = q1[a] + move * c->normal[a];
+                }
+                const double moved = core_dist(fx, k, m0, capsule ? m1 : m0, capsule);
+                if (sign > 0 ? !(moved >= radius - tol) : !(moved < radius))
+                    fail_msg("%s contact with tri %u (distance %g, depth %g): moved by %g along the normal, the "
+                             "core is %g from it, radius %g", capsule ? "capsule" : "sphere", c->tri, d,
+                             (double)c->depth, move, moved, (double)radius);
+            }
+        }
+        total += m;
+        /* pages of 3: the same contacts */
+        size_t got = 0;
+        for (int again = 1; again;) {
+            cbvh_contact page[3];
+            const size_t k = capsule ? cbvh_contacts_capsule(fx->file, p0, p1, radius, got, page, 3, &again)
+                                     : cbvh_contacts_sphere(fx->file, p0, radius, got, page, 3, &again);
+            for (size_t j = 0; j < k; j++)
+                assert_memory_equal(&page[j], &contacts[got + j], sizeof page[j]);
+            got += k;
+        }
+        assert_int_equal(got, m);
+    }
+    printf("contacts: %zu, %zu of them with the core reaching the triangle\n", total, touching);
+    assert_true(total > (size_t)count);
+    free(ids);
+    free(contacts);
+}
+
+static void test_contacts(void **state)
+{
+    (void)state;
+    for (int m = 0; m < 3; m++) {
+        scene s;
+        ref_fixture fx;
+        if (m == 0)
+            assert_true(scene_sphere(&s, 3000, (float[3]){0, 0, 0}, 1.0f));
+        else if (m == 1)
+            assert_true(scene_terrain(&s, 3000, 40.0f));
+        else
+            assert_true(scene_soup(&s, 2000, 0.1f, 9));
+        assert_int_equal(ref_fixture_open(&fx, s.positions, s.vertex_count, s.indices, s.triangle_count,
+                                          test_options()), CBVH_OK);
+        check_contacts(&fx, 200, 90 + (uint64_t)m);
+        ref_fixture_close(&fx);
+        scene_free(&s);
+    }
+    /* invalid input */
+    scene s;
+    ref_fixture fx;
+    assert_true(scene_sphere(&s, 200, (float[3]){0, 0, 0}, 1.0f));
+    assert_int_equal(ref_fixture_open(&fx, s.positions, s.vertex_count, s.indices, s.triangle_count, test_options()),
+                     CBVH_OK);
+    const float c[3] = {0, 0, 0}, nan3[3] = {NAN, 0, 0};
+    cbvh_contact out[2];
+    int more = -1;
+    assert_int_equal(cbvh_contacts_sphere(fx.file, c, -1.0f, 0, out, 2, &more), 0);
+    assert_int_equal(more, 0);
+    more = -1;
+    assert_int_equal(cbvh_contacts_capsule(fx.file, c, nan3, 1.0f, 0, out, 2, &more), 0);
+    assert_int_equal(more, 0);
+    assert_int_equal(cbvh_contacts_capsule(fx.file, c, NULL, 1.0f, 0, out, 2, NULL), 0);
+    assert_int_equal(cbvh_contacts_sphere(NULL, c, 1.0f, 0, out, 2, NULL), 0);
+    /* a ball around the center of the closed unit sphere mesh, radius 1.5: every triangle, each pushed along
+     * its normal toward the inside by about 1.5 - its distance */
+    more = -1;
+    assert_int_equal(cbvh_contacts_sphere(fx.file, c, 1.5f, 0, out, 2, &more), 2);
+    assert_int_equal(more, 1);
+    ref_fixture_close(&fx);
+    scene_free(&s);
+}
+
 /* Finding F4 addendum (notes/findings.md): a sphere overlap missed a sliver
  * of aspect 8e9 whose long edge passes 2.0 from the center of a sphere of
  * radius 3.26e8 (the float-era closest point lost every digit). The
@@ -350,6 +485,7 @@ int main(void)
         cmocka_unit_test(test_triangle_box_sat),
         cmocka_unit_test(test_invalid_input),
         cmocka_unit_test(test_sliver_overlaps),
+        cmocka_unit_test(test_contacts),
     };
     return TEST_RUN_LAYOUTS(tests, 0);
 }

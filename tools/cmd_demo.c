@@ -20,7 +20,8 @@ static const char usage[] =
     "opens it, and runs every query kind on generated queries: closest-hit and any-hit raycasts\n"
     "with the sorted, stackless and stream traversals, raycasts culling back faces and reporting\n"
     "all hits, a placed instance (query options), sphere, capsule and box sweeps, box, sphere and\n"
-    "capsule overlaps. The traversals and options are compared with each other ray by ray, and a sample of\n"
+    "capsule overlaps, sphere contacts. The traversals and options are compared with each other ray\n"
+    "by ray, and a sample of\n"
     "each kind against a double-precision brute-force loop over all triangles (sweeps by sampling\n"
     "the motion). Prints what it did, counts, hits and speed.\n"
     "\n"
@@ -633,6 +634,45 @@ out:
     free(shapes);
 }
 
+/* Contacts (penetration depth and separating direction) of balls with what they overlap: each depth is the
+ * radius less the brute-force distance from the center to its triangle. */
+static void demo_contacts(demo *d)
+{
+    shape *shapes = malloc(DEMO_SHAPES * sizeof *shapes);
+    cbvh_contact *contacts = malloc(DEMO_OVERLAP_CAP * sizeof *contacts);
+    if (!shapes || !contacts) {
+        d->failures++;
+        fprintf(stderr, "cbvh demo: out of memory\n");
+        goto out;
+    }
+    for (size_t i = 0; i < DEMO_SHAPES; i++) {
+        make_shape(d, SHAPE_SPHERE, &shapes[i]);
+        shapes[i].radius *= 4;
+    }
+    size_t touched = 0;
+    const double t0 = cli_now();
+    for (size_t i = 0; i < DEMO_SHAPES; i++)
+        touched += cbvh_contacts_sphere(d->file, shapes[i].center, shapes[i].radius, 0, contacts, DEMO_OVERLAP_CAP,
+                                        NULL) != 0;
+    const double sec = cli_now() - t0;
+    int bad = 0;
+    for (size_t i = 0; i < DEMO_SHAPES; i += DEMO_SHAPES / DEMO_SHAPE_SAMPLE) {
+        const shape *s = &shapes[i];
+        const size_t n = cbvh_contacts_sphere(d->file, s->center, s->radius, 0, contacts, DEMO_OVERLAP_CAP, NULL);
+        for (size_t k = 0; k < n; k++) {
+            const double c[3] = {s->center[0], s->center[1], s->center[2]};
+            const double dist = sqrt(ref_point_triangle_dist2(d->tris + 9 * (size_t)contacts[k].tri, c));
+            if (!(fabs(contacts[k].depth - (s->radius - dist)) <= d->tol) && bad++ == 0)
+                report_failure("contacts sphere: query %zu, triangle %u: depth %g, radius less distance %g", i,
+                               (unsigned)contacts[k].tri, (double)contacts[k].depth, s->radius - dist);
+        }
+    }
+    sample_row(d, "contacts sphere (depth)", DEMO_SHAPES, touched, sec, "queries/s", DEMO_SHAPE_SAMPLE, bad);
+out:
+    free(shapes);
+    free(contacts);
+}
+
 /* ---- the demo ---- */
 
 static int demo_load(demo *d, const cbvh_file *f)
@@ -743,6 +783,7 @@ int cmd_demo(int argc, char **argv)
     demo_raycasts(&d);
     demo_sweeps(&d);
     demo_overlaps(&d);
+    demo_contacts(&d);
     if (d.failures) {
         printf("cbvh demo: FAILED: %d check%s disagreed (details on stderr)\n", d.failures, d.failures == 1 ? "" : "s");
         rc = CLI_EXIT_BAD_INPUT;

@@ -1,6 +1,7 @@
-/* overlap.c: box, sphere and capsule overlap queries: the shape walk (shape_walk.h), exact per-triangle tests, callback and/or output array. */
+/* overlap.c: box, sphere and capsule overlap and contact queries: the shape walk (shape_walk.h), exact per-triangle tests, callback and/or output array. */
 #include <math.h>
 
+#include "query/triangle_frame.h"
 #include "query/closest.h"
 #include "query/sweep_walk.h"
 #include "query/shape_walk.h"
@@ -11,6 +12,7 @@ struct overlap_sink {
     cbvh_overlap_fn callback;
     void *user;
     uint32_t *out;
+    cbvh_contact *contacts; /* the contact queries' output, instead of out */
     size_t capacity;
     size_t reported;
     size_t skip;    /* overlapping triangles passed over before the first report (the _from queries) */
@@ -18,9 +20,9 @@ struct overlap_sink {
     int more;
 };
 
-/* Reports a triangle; returns 1 when the query must stop (the callback asked,
- * or out is full: at once, or with find_more at the next triangle). */
-static int sink_report(struct overlap_sink *s, uint32_t tri)
+/* Reports a triangle (and its contact, for the contact queries); returns 1 when the query must stop (the
+ * callback asked, or out is full: at once, or with find_more at the next triangle). */
+static int sink_report(struct overlap_sink *s, uint32_t tri, const cbvh_contact *contact)
 {
     if (s->skip > 0) {
         s->skip--;
@@ -32,10 +34,12 @@ static int sink_report(struct overlap_sink *s, uint32_t tri)
     }
     if (s->out)
         s->out[s->reported] = tri;
+    if (s->contacts)
+        s->contacts[s->reported] = *contact;
     s->reported++;
     if (s->callback && s->callback(s->user, tri))
         return 1;
-    return !s->find_more && s->out && s->reported >= s->capacity;
+    return !s->find_more && (s->out || s->contacts) && s->reported >= s->capacity;
 }
 
 /* The region tested against node boxes (an AABB) and against triangles. */
@@ -64,6 +68,54 @@ static int region_triangle(const struct overlap_region *r, cbvh_v3 a, cbvh_v3 b,
                                    v3(0, 0, 0), 0.0, &t, &n);
 }
 
+/* The contact of a ball or capsule region with a triangle it overlaps (double precision): on the closest
+ * points of core (center, segment) and triangle at distance d > 0, the normal from the triangle's point to
+ * the core's and depth radius - d: moving the shape by depth along it leaves exactly the radius between
+ * them, and, the normal being the separating axis of two convex sets, every other pair at least as far.
+ * A core that reaches the triangle (d = 0) is pushed off the triangle's plane: along the unit face normal
+ * (as wound) or against it, whichever needs less, by radius plus the depth of the core's lowest end below
+ * the plane; the whole core then lies at least radius above it. */
+static void region_contact(const struct overlap_region *r, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, uint32_t tri,
+                           cbvh_contact *out)
+{
+    cbvh_v3 on_core, on_tri;
+    double d2;
+    if (r->kind == REGION_SPHERE) {
+        on_core = r->center;
+        on_tri = cbvh_closest_point_triangle(r->center, a, b, c);
+        d2 = v3_len2(v3_sub(on_core, on_tri));
+    } else {
+        d2 = cbvh_closest_segment_triangle(r->center, r->end, a, b, c, &on_core, &on_tri);
+    }
+    const double d = sqrt(d2);
+    cbvh_v3 n;
+    double depth;
+    if (d > 0.0) {
+        n = v3_scale(v3_sub(on_core, on_tri), 1.0 / d);
+        depth = r->radius - d;
+    } else {
+        const cbvh_v3 v[3] = {a, b, c};
+        struct cbvh_triangle_frame f;
+        cbvh_triangle_frame_of(v, &f);
+        n = v3_scale(f.n, 1.0 / sqrt(f.nn)); /* a file's triangles have a non-zero area */
+        const double s0 = v3_dot(v3_sub(r->center, v[f.base]), n), s1 = v3_dot(v3_sub(r->end, v[f.base]), n);
+        if (s0 + s1 >= 0.0) {
+            depth = r->radius - fmin(s0, s1);
+        } else {
+            n = v3_scale(n, -1.0);
+            depth = r->radius + fmax(s0, s1);
+        }
+    }
+    out->tri = tri;
+    out->depth = (float)depth;
+    out->normal[0] = (float)n.x;
+    out->normal[1] = (float)n.y;
+    out->normal[2] = (float)n.z;
+    out->point[0] = (float)on_tri.x;
+    out->point[1] = (float)on_tri.y;
+    out->point[2] = (float)on_tri.z;
+}
+
 /* An overlap as the shape walk sees it. */
 struct overlap_query {
     const struct cbvh_file *f;
@@ -85,8 +137,14 @@ static int overlap_leaf(void *query, uint32_t first, uint32_t count)
     for (uint32_t k = first; k < first + count; k++) {
         float a[3], b[3], c[3];
         cbvh_triangle_vertices(q->f, k, a, b, c);
-        if (region_triangle(q->region, v3_from_f(a), v3_from_f(b), v3_from_f(c)) &&
-            sink_report(q->sink, cbvh_original_id(q->f, k)))
+        const cbvh_v3 va = v3_from_f(a), vb = v3_from_f(b), vc = v3_from_f(c);
+        if (!region_triangle(q->region, va, vb, vc))
+            continue;
+        const uint32_t tri = cbvh_original_id(q->f, k);
+        cbvh_contact contact;
+        if (q->sink->contacts && q->sink->skip == 0)
+            region_contact(q->region, va, vb, vc, tri, &contact);
+        if (sink_report(q->sink, tri, &contact))
             return 1;
     }
     return 0;
@@ -96,7 +154,7 @@ static int overlap_leaf(void *query, uint32_t first, uint32_t count)
 static size_t overlap_walk(const struct cbvh_file *f, const struct overlap_region *region, struct overlap_sink *sink)
 {
     struct overlap_query q = {f, region, sink};
-    if (sink->out && sink->capacity == 0 && !sink->find_more)
+    if ((sink->out || sink->contacts) && sink->capacity == 0 && !sink->find_more)
         return 0; /* out is full before the first report */
     cbvh_shape_walk(f, f->layout, CBVH_NO_OCTANT, overlap_enter, overlap_leaf, &q);
     return sink->reported;
@@ -121,7 +179,7 @@ static int box_region(const float box_min[3], const float box_max[3], struct ove
 CBVH_API size_t cbvh_overlap_box(const cbvh_file *file, const float box_min[3], const float box_max[3],
                                  cbvh_overlap_fn callback, void *user, uint32_t *out, size_t capacity)
 {
-    struct overlap_sink sink = {callback, user, out, capacity, 0, 0, 0, 0};
+    struct overlap_sink sink = {callback, user, out, NULL, capacity, 0, 0, 0, 0};
     struct overlap_region region;
     if (!file || !box_region(box_min, box_max, &region))
         return 0;
@@ -161,7 +219,7 @@ static int round_region(const float p0[3], const float p1[3], float radius, stru
 CBVH_API size_t cbvh_overlap_sphere(const cbvh_file *file, const float center[3], float radius,
                                     cbvh_overlap_fn callback, void *user, uint32_t *out, size_t capacity)
 {
-    struct overlap_sink sink = {callback, user, out, capacity, 0, 0, 0, 0};
+    struct overlap_sink sink = {callback, user, out, NULL, capacity, 0, 0, 0, 0};
     struct overlap_region region;
     if (!file || !round_region(center, NULL, radius, &region))
         return 0;
@@ -172,7 +230,7 @@ CBVH_API size_t cbvh_overlap_sphere(const cbvh_file *file, const float center[3]
 static size_t overlap_from(const struct cbvh_file *file, const struct overlap_region *region, int valid, size_t first,
                            uint32_t *out, size_t capacity, int *more)
 {
-    struct overlap_sink sink = {NULL, NULL, out, out ? capacity : 0, 0, first, 1, 0};
+    struct overlap_sink sink = {NULL, NULL, out, NULL, out ? capacity : 0, 0, first, 1, 0};
     const size_t n = file && valid ? overlap_walk(file, region, &sink) : 0;
     if (more)
         *more = sink.more;
@@ -198,7 +256,7 @@ CBVH_API size_t cbvh_overlap_sphere_from(const cbvh_file *file, const float cent
 CBVH_API size_t cbvh_overlap_capsule(const cbvh_file *file, const float p0[3], const float p1[3], float radius,
                                      cbvh_overlap_fn callback, void *user, uint32_t *out, size_t capacity)
 {
-    struct overlap_sink sink = {callback, user, out, capacity, 0, 0, 0, 0};
+    struct overlap_sink sink = {callback, user, out, NULL, capacity, 0, 0, 0, 0};
     struct overlap_region region;
     if (!file || !p1 || !round_region(p0, p1, radius, &region))
         return 0;
@@ -211,4 +269,31 @@ CBVH_API size_t cbvh_overlap_capsule_from(const cbvh_file *file, const float p0[
     struct overlap_region region;
     const int valid = p1 && round_region(p0, p1, radius, &region);
     return overlap_from(file, &region, valid, first, out, capacity, more);
+}
+
+/* The contact queries: the _from sink with contacts instead of ids. */
+static size_t contacts_from(const struct cbvh_file *file, const struct overlap_region *region, int valid,
+                            size_t first, cbvh_contact *out, size_t capacity, int *more)
+{
+    struct overlap_sink sink = {NULL, NULL, NULL, out, out ? capacity : 0, 0, first, 1, 0};
+    const size_t n = file && valid ? overlap_walk(file, region, &sink) : 0;
+    if (more)
+        *more = sink.more;
+    return n;
+}
+
+CBVH_API size_t cbvh_contacts_sphere(const cbvh_file *file, const float center[3], float radius, size_t first,
+                                     cbvh_contact *out, size_t capacity, int *more)
+{
+    struct overlap_region region;
+    const int valid = round_region(center, NULL, radius, &region);
+    return contacts_from(file, &region, valid, first, out, capacity, more);
+}
+
+CBVH_API size_t cbvh_contacts_capsule(const cbvh_file *file, const float p0[3], const float p1[3], float radius,
+                                      size_t first, cbvh_contact *out, size_t capacity, int *more)
+{
+    struct overlap_region region;
+    const int valid = p1 && round_region(p0, p1, radius, &region);
+    return contacts_from(file, &region, valid, first, out, capacity, more);
 }

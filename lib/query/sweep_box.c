@@ -48,7 +48,7 @@ static cbvh_v3 contact_point(cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, cbvh_v3 center, cb
     return da >= db && da >= dc ? a : db >= dc ? b : c;
 }
 
-static int box_triangle(const void *shape, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, double tmax, struct cbvh_contact *out)
+static int box_triangle(const void *shape, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, double tmax, struct cbvh_sweep_contact *out)
 {
     const struct box_shape *s = shape;
     double t;

@@ -84,7 +84,7 @@ int cbvh_enter_face(cbvh_v3 o, cbvh_v3 d, cbvh_v3 base, cbvh_v3 e1, cbvh_v3 e2, 
 }
 
 int cbvh_sweep_ball_triangle(cbvh_v3 o, cbvh_v3 d, double r, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, double tmax,
-                             struct cbvh_contact *out)
+                             struct cbvh_sweep_contact *out)
 {
     const cbvh_v3 v[3] = {a, b, c};
     cbvh_v3 n;

@@ -5,7 +5,7 @@
 #include "query/vec3d.h"
 
 /* A first contact: time, point on the triangle, unit normal from the triangle towards the shape. */
-struct cbvh_contact {
+struct cbvh_sweep_contact {
     double t;
     cbvh_v3 point;
     cbvh_v3 normal;
@@ -39,7 +39,7 @@ int cbvh_enter_face(cbvh_v3 o, cbvh_v3 d, cbvh_v3 base, cbvh_v3 e1, cbvh_v3 e2, 
  * and vertices (the face only when r = 0). Returns 1 and fills *out (point
  * on the triangle). */
 int cbvh_sweep_ball_triangle(cbvh_v3 o, cbvh_v3 d, double r, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, double tmax,
-                             struct cbvh_contact *out);
+                             struct cbvh_sweep_contact *out);
 
 /* The normal used when shape and triangle touch with no separating
  * direction (a zero-distance contact): the face normal turned against the

@@ -11,7 +11,7 @@ struct sphere_shape {
  * and the normal from it to the center (cbvh_fallback_normal when the center
  * lies on the triangle). Otherwise the first entry of the center into the
  * triangle grown by the radius (sweep_features.h). */
-static int sphere_triangle(const void *shape, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, double tmax, struct cbvh_contact *out)
+static int sphere_triangle(const void *shape, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, double tmax, struct cbvh_sweep_contact *out)
 {
     const struct sphere_shape *s = shape;
     const cbvh_v3 q = cbvh_closest_point_triangle(s->center, a, b, c);

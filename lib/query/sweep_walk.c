@@ -20,7 +20,7 @@ struct sweep_query {
     uint32_t octant;
     cbvh_sweep_triangle_fn sweep;
     const void *shape;
-    struct cbvh_contact best;
+    struct cbvh_sweep_contact best;
     uint32_t best_tri;
 };
 
@@ -44,7 +44,7 @@ static int sweep_enter(void *query, const float box_lo[3], const float box_hi[3]
 static int sweep_leaf(void *query, uint32_t first, uint32_t count)
 {
     struct sweep_query *q = query;
-    struct cbvh_contact c;
+    struct cbvh_sweep_contact c;
     for (uint32_t k = first; k < first + count; k++) {
         float a[3], b[3], cc[3];
         cbvh_triangle_vertices(q->f, k, a, b, cc);

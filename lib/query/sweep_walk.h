@@ -8,7 +8,7 @@
 /* Sweeps one triangle: first contact with t in [0, tmax] (t = 0 when the shape
  * already overlaps the triangle). Returns 1 and fills *out on contact. */
 typedef int (*cbvh_sweep_triangle_fn)(const void *shape, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, double tmax,
-                                      struct cbvh_contact *out);
+                                      struct cbvh_sweep_contact *out);
 
 /* Walks the nodes whose box, grown by `extent`, is crossed by the point
  * center + t * delta for t in [0, 1] (the shape lies in the box

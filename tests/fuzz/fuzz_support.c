@@ -526,8 +526,11 @@ static void check_overlaps(check_ctx *c)
     /* a capsule from the sphere's center: it holds the ball, so it reports at least the ball's triangles */
     float tip[3];
     random_point(c, 0.1, tip);
-    for (int k = 0; k < 3; k++)
-        tip[k] = center[k] + 0.3f * (tip[k] - center[k]);
+    for (int k = 0; k < 3; k++) { /* in double: the difference of two floats near FLT_MAX overflows in float */
+        tip[k] = (float)((double)center[k] + 0.3 * ((double)tip[k] - center[k]));
+        if (!isfinite(tip[k])) /* 0.7 center + 0.3 point: finite unless rounding met FLT_MAX */
+            tip[k] = center[k];
+    }
     static overlap_log clog;
     memset(&clog, 0, sizeof clog);
     n = cbvh_overlap_capsule(c->f, center, tip, radius, log_overlap, &clog, NULL, 0);
@@ -536,7 +539,25 @@ static void check_overlaps(check_ctx *c)
         for (size_t i = 0; i < slog.count; i++)
             FUZZ_CHECK(sorted_has(&clog, slog.ids[i]), "capsule overlap misses triangle %u of its end ball",
                        slog.ids[i]);
-    c->queries++;
+    /* the capsule's contacts: as many as its overlaps, each with a depth >= 0 and a unit normal */
+    size_t contacts = 0;
+    for (int more = 1; more;) {
+        cbvh_contact page[8];
+        const size_t k = cbvh_contacts_capsule(c->f, center, tip, radius, contacts, page, 8, &more);
+        for (size_t j = 0; j < k; j++) {
+            dvec v[3];
+            const double nl = sqrt((double)page[j].normal[0] * page[j].normal[0] +
+                                   (double)page[j].normal[1] * page[j].normal[1] +
+                                   (double)page[j].normal[2] * page[j].normal[2]);
+            FUZZ_CHECK(page[j].depth >= 0.0f && fabs(nl - 1.0) < 1e-4 && triangle_of(c, page[j].tri, v),
+                       "capsule contact: triangle %u depth %g normal length %g", page[j].tri, (double)page[j].depth,
+                       nl);
+        }
+        contacts += k;
+        FUZZ_CHECK(k > 0 || !more, "capsule contacts: an empty page with more to come");
+    }
+    FUZZ_CHECK(contacts == clog.count, "capsule contacts: %zu, overlaps %zu", contacts, clog.count);
+    c->queries += 2;
 
     /* invalid queries report nothing */
     float nan3[3] = { NAN, NAN, NAN };
