@@ -76,6 +76,26 @@ CBVH_KERNEL int cbvh_plane_t(const struct cbvh_ray_shear *restrict s, const floa
     hi /= dd;
     tp = tp < lo ? lo : tp;
     tp = tp > hi ? hi : tp;
+    /* Nor does it leave the triangle's bounding box where the line crosses it (slabs in double). A grazing
+     * ray's t could otherwise fall before the entry of the box, and so of every node box holding the
+     * triangle (they are conservative), and a walk that drops nodes entered past its best t so far would
+     * drop this hit while another visiting order finds it (fuzzing: sorted and stackless disagreed). */
+    double enter = -INFINITY, leave = INFINITY;
+    for (int axis = 0; axis < 3; axis++) {
+        if (s->dir[axis] == 0.0f)
+            continue;
+        const double p0 = v3_get(v[0], axis), p1 = v3_get(v[1], axis), p2 = v3_get(v[2], axis);
+        const double o = s->org[axis], inv = 1.0 / s->dir[axis];
+        const double small = p0 < p1 ? (p0 < p2 ? p0 : p2) : (p1 < p2 ? p1 : p2);
+        const double big = p0 > p1 ? (p0 > p2 ? p0 : p2) : (p1 > p2 ? p1 : p2);
+        const double t0 = (small - o) * inv, t1 = (big - o) * inv;
+        enter = inv > 0.0 ? (t0 > enter ? t0 : enter) : (t1 > enter ? t1 : enter);
+        leave = inv > 0.0 ? (t1 < leave ? t1 : leave) : (t0 < leave ? t0 : leave);
+    }
+    if (enter <= leave) {
+        tp = tp < enter ? enter : tp;
+        tp = tp > leave ? leave : tp;
+    }
     *t = tp;
     return 1;
 }
