@@ -11,6 +11,14 @@
 #include "query/ray_setup.h"
 #include "query/ray_triangle.h"
 
+/* The lowest set bit of a non-empty 4-bit mask, as a slot or lane number: 1, 2, 4, 8 -> 0, 1, 2, 3 (the
+ * walks' child slots and the leaves' filtered lanes). */
+static inline uint32_t cbvh_lowest_lane(uint32_t mask4)
+{
+    const uint32_t low = mask4 & (0u - mask4);
+    return (low >> 1) - (low >> 3);
+}
+
 /* The best hit so far, in cooked triangle order. */
 struct cbvh_best_hit {
     uint32_t tri; /* cooked index, UINT32_MAX while there is none */
@@ -124,6 +132,17 @@ CBVH_KERNEL void leaf_gather4(const void *restrict tris, const int tri_enc, cons
     }
 }
 
+/* Triangles k + lane[j] of a group of n (1..4) from triangle k: lanes past the group's end repeat its first
+ * triangle (leaf_gather4), and `kept` masks them out of the answers. */
+CBVH_KERNEL void leaf_group(uint32_t n, uint32_t lane[4], uint32_t *kept)
+{
+    lane[0] = 0;
+    lane[1] = n > 1 ? 1u : 0u;
+    lane[2] = n > 2 ? 2u : 0u;
+    lane[3] = n > 3 ? 3u : 0u;
+    *kept = (1u << n) - 1u;
+}
+
 /* The first test of cbvh_ray_triangle (ray_triangle.h) on four triangles at once, lane for lane the same
  * float operations in the same order (the build contracts no multiply-add): the vertices relative to the
  * origin, sheared, then the three edge functions. Returns the bits of the lanes that test rejects for sure
@@ -176,14 +195,13 @@ CBVH_KERNEL int leaf_loop(const struct cbvh_file *restrict f, uint32_t first, ui
     /* Four triangles at a time through the SIMD filter; the scalar test on the lanes it keeps, in order. */
     if (!scalar && count > 1) {
         for (uint32_t k = first; k < first + count; k += 4) {
-            const uint32_t n = first + count - k < 4 ? first + count - k : 4;
-            /* lanes past the leaf's end repeat its triangle k; their answers are ignored */
-            const uint32_t lane[4] = {0, n > 1 ? 1u : 0u, n > 2 ? 2u : 0u, n > 3 ? 3u : 0u};
+            uint32_t lane[4], group;
+            leaf_group(first + count - k < 4 ? first + count - k : 4, lane, &group);
             __m128 c4[3][3];
             leaf_gather4(tris, tri_enc, verts, vert_enc, origin, scale, k, lane, c4);
-            /* the lanes the filter keeps, lowest first: the slot of a one-bit mask 1, 2, 4, 8 is 0, 1, 2, 3 */
-            for (uint32_t kept = ~leaf_reject4_sse2(s, c4) & ((1u << n) - 1u); kept; kept &= kept - 1u) {
-                const uint32_t low = kept & (0u - kept), j = (low >> 1) - (low >> 3);
+            /* the lanes the filter keeps, lowest first */
+            for (uint32_t kept = ~leaf_reject4_sse2(s, c4) & group; kept; kept &= kept - 1u) {
+                const uint32_t j = cbvh_lowest_lane(kept);
                 leaf_triangle(tris, tri_enc, verts, vert_enc, origin, scale, k + j, a, b, c);
                 if (cbvh_ray_triangle(s, a, b, c, tmin, best_t, &t, &u, &v) &&
                     leaf_take(f, gate, k + j, t, u, v, any, &best_t, best))

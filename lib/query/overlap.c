@@ -226,11 +226,11 @@ CBVH_API size_t cbvh_overlap_sphere(const cbvh_file *file, const float center[3]
     return overlap_walk(file, &region, &sink);
 }
 
-/* The _from queries: the sink skips `first`, fills out, and looks for one more. */
-static size_t overlap_from(const struct cbvh_file *file, const struct overlap_region *region, int valid, size_t first,
-                           uint32_t *out, size_t capacity, int *more)
+/* The paged queries (_from, contacts): the sink skips `first`, fills ids or contacts, and looks for one more. */
+static size_t paged_walk(const struct cbvh_file *file, const struct overlap_region *region, int valid, size_t first,
+                         uint32_t *ids, cbvh_contact *contacts, size_t capacity, int *more)
 {
-    struct overlap_sink sink = {NULL, NULL, out, NULL, out ? capacity : 0, 0, first, 1, 0};
+    struct overlap_sink sink = {NULL, NULL, ids, contacts, ids || contacts ? capacity : 0, 0, first, 1, 0};
     const size_t n = file && valid ? overlap_walk(file, region, &sink) : 0;
     if (more)
         *more = sink.more;
@@ -242,7 +242,7 @@ CBVH_API size_t cbvh_overlap_box_from(const cbvh_file *file, const float box_min
 {
     struct overlap_region region;
     const int valid = box_region(box_min, box_max, &region);
-    return overlap_from(file, &region, valid, first, out, capacity, more);
+    return paged_walk(file, &region, valid, first, out, NULL, capacity, more);
 }
 
 CBVH_API size_t cbvh_overlap_sphere_from(const cbvh_file *file, const float center[3], float radius, size_t first,
@@ -250,7 +250,7 @@ CBVH_API size_t cbvh_overlap_sphere_from(const cbvh_file *file, const float cent
 {
     struct overlap_region region;
     const int valid = round_region(center, NULL, radius, &region);
-    return overlap_from(file, &region, valid, first, out, capacity, more);
+    return paged_walk(file, &region, valid, first, out, NULL, capacity, more);
 }
 
 CBVH_API size_t cbvh_overlap_capsule(const cbvh_file *file, const float p0[3], const float p1[3], float radius,
@@ -268,18 +268,7 @@ CBVH_API size_t cbvh_overlap_capsule_from(const cbvh_file *file, const float p0[
 {
     struct overlap_region region;
     const int valid = p1 && round_region(p0, p1, radius, &region);
-    return overlap_from(file, &region, valid, first, out, capacity, more);
-}
-
-/* The contact queries: the _from sink with contacts instead of ids. */
-static size_t contacts_from(const struct cbvh_file *file, const struct overlap_region *region, int valid,
-                            size_t first, cbvh_contact *out, size_t capacity, int *more)
-{
-    struct overlap_sink sink = {NULL, NULL, NULL, out, out ? capacity : 0, 0, first, 1, 0};
-    const size_t n = file && valid ? overlap_walk(file, region, &sink) : 0;
-    if (more)
-        *more = sink.more;
-    return n;
+    return paged_walk(file, &region, valid, first, out, NULL, capacity, more);
 }
 
 CBVH_API size_t cbvh_contacts_sphere(const cbvh_file *file, const float center[3], float radius, size_t first,
@@ -287,7 +276,7 @@ CBVH_API size_t cbvh_contacts_sphere(const cbvh_file *file, const float center[3
 {
     struct overlap_region region;
     const int valid = round_region(center, NULL, radius, &region);
-    return contacts_from(file, &region, valid, first, out, capacity, more);
+    return paged_walk(file, &region, valid, first, NULL, out, capacity, more);
 }
 
 CBVH_API size_t cbvh_contacts_capsule(const cbvh_file *file, const float p0[3], const float p1[3], float radius,
@@ -295,5 +284,5 @@ CBVH_API size_t cbvh_contacts_capsule(const cbvh_file *file, const float p0[3], 
 {
     struct overlap_region region;
     const int valid = p1 && round_region(p0, p1, radius, &region);
-    return contacts_from(file, &region, valid, first, out, capacity, more);
+    return paged_walk(file, &region, valid, first, NULL, out, capacity, more);
 }

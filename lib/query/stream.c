@@ -89,20 +89,18 @@ CBVH_KERNEL void stream_leaf(const struct cbvh_file *f, struct cbvh_stream_batch
         uint32_t lanes[CBVH_MAX_LEAF_SIZE / 4];
         const uint32_t groups = (count + 3) / 4;
         for (uint32_t g = 0; g < groups; g++) {
-            const uint32_t n = count - 4 * g < 4 ? count - 4 * g : 4;
-            /* lanes past the leaf's end repeat its triangle; their answers are ignored */
-            const uint32_t lane[4] = {0, n > 1 ? 1u : 0u, n > 2 ? 2u : 0u, n > 3 ? 3u : 0u};
+            uint32_t lane[4];
+            leaf_group(count - 4 * g < 4 ? count - 4 * g : 4, lane, &lanes[g]);
             leaf_gather4(f->triangles, (int)f->triangle_encoding, f->vertices, (int)f->vertex_encoding, origin,
                          scale, tri0 + 4 * g, lane, c4[g]);
-            lanes[g] = (1u << n) - 1u;
         }
         for (uint32_t j = 0; j < m; j++) {
             const uint32_t r = live[j];
             for (uint32_t g = 0; g < groups; g++) {
-                /* the lanes the filter keeps, lowest first: the slot of a one-bit mask 1, 2, 4, 8 is 0..3 */
+                /* the lanes the filter keeps, lowest first */
                 for (uint32_t kept = ~leaf_reject4_sse2(&b->ctx[r].shear, c4[g]) & lanes[g]; kept;
                      kept &= kept - 1u) {
-                    const uint32_t low = kept & (0u - kept), k = tri0 + 4 * g + (low >> 1) - (low >> 3);
+                    const uint32_t k = tri0 + 4 * g + cbvh_lowest_lane(kept);
                     cbvh_triangle_vertices(f, k, a, v1, v2);
                     stream_triangle(b, r, k, a, v1, v2, any, occluded);
                 }

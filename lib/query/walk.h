@@ -170,7 +170,7 @@ CBVH_KERNEL uint32_t walk_w4_children_hit(const struct cbvh_file *restrict f, cb
     if (!hits)
         return 0;
     if (!(hits & (hits - 1u))) { /* one child: no order to choose */
-        const uint32_t s = (hits >> 1) - (hits >> 3); /* the slot of a one-bit mask: 1, 2, 4, 8 -> 0, 1, 2, 3 */
+        const uint32_t s = cbvh_lowest_lane(hits);
         out[0] = cbvh_w4_child_ref(node, meta, s);
         entry[0] = e[s];
         return 1;
