@@ -590,6 +590,69 @@ CBVH_API int cbvh_sweep_capsule(const cbvh_file *file, const float p0[3], const 
 CBVH_API int cbvh_sweep_box(const cbvh_file *file, const float center[3], const float half_extent[3],
                             const float delta[3], cbvh_sweep_hit *hit);
 
+/* A shape for the queries with options (cbvh_sweep_with, cbvh_overlap_with, cbvh_contacts_with). */
+typedef enum cbvh_shape_kind {
+    CBVH_SHAPE_SPHERE = 0,  /* the ball of `radius` around `center` */
+    CBVH_SHAPE_CAPSULE = 1, /* the points within `radius` of the segment p0-p1 */
+    CBVH_SHAPE_BOX = 2      /* the box of `half_extent` around `center`, its axes turned by `rotation` */
+} cbvh_shape_kind;
+
+/* A shape in the query's frame (the world when the options carry a transform, else the mesh's frame). Fields
+ * a kind does not use are ignored. All values finite; radius and half extents >= 0. rotation is a
+ * quaternion (x, y, z, w) taking the box's axes into the query's frame: any non-zero one (normalized by the
+ * library), or all zero for an axis-aligned box, so that a zeroed struct with center and half_extent set is
+ * the box of cbvh_sweep_box / cbvh_overlap_box. */
+typedef struct cbvh_shape {
+    cbvh_shape_kind kind;
+    float center[3];      /* sphere, box */
+    float p0[3], p1[3];   /* capsule */
+    float radius;         /* sphere, capsule */
+    float half_extent[3]; /* box, along its own axes */
+    float rotation[4];    /* box */
+} cbvh_shape;
+
+/* A sweep's first contact, as cbvh_sweep_hit (tri = CBVH_NO_HIT for none; t in [0, 1] of delta; point on
+ * the triangle; unit normal from the triangle towards the shape) with the triangle's material, and, for a
+ * shape that overlaps the triangle at the start (t = 0), depth: how far the shape reaches into the triangle
+ * along the normal, so that moving it by depth * normal leaves it touching the triangle at most (0 when
+ * t > 0). At t = 0 a ball or capsule whose core (center, segment) is clear of the triangle has the normal
+ * along the closest points and depth = radius - distance, as cbvh_contacts_sphere; a core that reaches the
+ * triangle keeps the sweep's normal (the face normal turned against delta) and depth lifts the whole core
+ * radius above the triangle's plane along it. A box has the axis of least penetration of the separating-axis
+ * test (box faces, triangle normal, edge crosses), whose depth is the exact penetration depth. With a
+ * transform, point and normal are in the world and depth in world units (t is the same on both frames).
+ * A fixed struct: it never grows. */
+typedef struct cbvh_sweep_record {
+    uint32_t tri;
+    float t;
+    float point[3];
+    float normal[3];
+    float depth;
+    uint32_t material;
+} cbvh_sweep_record;
+
+/* Sweeps `shape` by `delta` under `options` (NULL: the defaults). The first contact is the one of
+ * cbvh_sweep_sphere / _capsule / _box for the same shape (an oriented box is tested exactly, on the 13
+ * axes in its own frame), including zero-size shapes answered as rays and ties to the triangle first in
+ * cooked order. Options:
+ *  - transform: the mesh is placed by it and shape and delta are in the world; they are taken into the
+ *    mesh's frame in double and rounded to float once (a box's rotation is composed with the transform's),
+ *    and the record comes back in the world;
+ *  - cull: CBVH_CULL_BACK ignores the triangles whose front face (see cbvh_cull) looks along the motion
+ *    (delta . n > 0; the shape would meet their back face), CBVH_CULL_FRONT those with delta . n < 0;
+ *    with delta parallel to a face or zero, nothing is culled;
+ *  - filter: called with each triangle whose contact would become the answer, as a cbvh_hit_record: t the
+ *    sweep's t, u and v the barycentrics of the contact point, the face normal and front = delta . n < 0,
+ *    in the world under a transform; REJECT passes over the triangle, STOP ends the sweep with it;
+ *  - traversal: sweeps always walk nearest child first; any of the enum's values is accepted.
+ * Returns CBVH_OK with *record filled (a miss: tri = CBVH_NO_HIT), or CBVH_ERROR_INVALID_ARGUMENT with
+ * *record a miss when file, shape, delta or record is NULL, a value is not finite, a radius or half extent
+ * is negative, the shape kind, cull or traversal is not one of its enum's values, the options' struct_size
+ * is out of range, the transform is invalid (see cbvh_query_options) or the shape does not fit in float in
+ * the mesh's frame. */
+CBVH_API cbvh_result cbvh_sweep_with(const cbvh_file *file, const cbvh_shape *shape, const float delta[3],
+                                     const cbvh_query_options *options, cbvh_sweep_record *record);
+
 /* Overlap callback: called once per overlapping triangle (original id);
  * return nonzero to stop the query early. */
 typedef int (*cbvh_overlap_fn)(void *user, uint32_t tri);
@@ -648,6 +711,26 @@ CBVH_API size_t cbvh_contacts_sphere(const cbvh_file *file, const float center[3
                                      cbvh_contact *out, size_t capacity, int *more);
 CBVH_API size_t cbvh_contacts_capsule(const cbvh_file *file, const float p0[3], const float p1[3], float radius,
                                       size_t first, cbvh_contact *out, size_t capacity, int *more);
+
+/* Overlaps and contacts of any shape (a sphere, capsule or oriented box; see cbvh_shape) under `options`
+ * (NULL: the defaults), paged as cbvh_overlap_box_from: the triangles the shape overlaps (exact tests; for a
+ * box the 13-axis separating-axis test in its own frame) from the `first`-th on, at most `capacity`, *more
+ * set to 1 when more follow. cbvh_overlap_with writes original ids to `out`; cbvh_contacts_with writes
+ * contacts: for spheres and capsules those of cbvh_contacts_sphere / _capsule, for boxes the axis of least
+ * penetration (the exact penetration depth: moving the box by depth * normal leaves it touching at most, by
+ * less it still overlaps) and a point of the triangle inside the box (the mean of the corners of the part
+ * inside). With a transform the shape is in the world (taken
+ * into the mesh's frame in double, rounded to float once) and contacts come back in the world (depth in
+ * world units). Culling and filters do not apply to overlaps: options->cull must be CBVH_CULL_NONE and
+ * options->filter NULL (filter the results by cbvh_file_get_material instead). Returns CBVH_OK and sets
+ * *count to how many were written, or CBVH_ERROR_INVALID_ARGUMENT with *count 0 and *more 0 for invalid
+ * input (as cbvh_sweep_with, and a cull or filter set). count must not be NULL; more may be. */
+CBVH_API cbvh_result cbvh_overlap_with(const cbvh_file *file, const cbvh_shape *shape,
+                                       const cbvh_query_options *options, size_t first, uint32_t *out,
+                                       size_t capacity, size_t *count, int *more);
+CBVH_API cbvh_result cbvh_contacts_with(const cbvh_file *file, const cbvh_shape *shape,
+                                        const cbvh_query_options *options, size_t first, cbvh_contact *out,
+                                        size_t capacity, size_t *count, int *more);
 
 #ifdef __cplusplus
 }

@@ -223,7 +223,7 @@ static void test_triangle_box_sat(void **state)
         const int got = cbvh_triangle_box_sweep(v3(tri[0], tri[1], tri[2]), v3(tri[3], tri[4], tri[5]),
                                                 v3(tri[6], tri[7], tri[8]), v3(0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1]), 0.5 * (lo[2] + hi[2])),
                                                 v3(0.5 * (hi[0] - lo[0]), 0.5 * (hi[1] - lo[1]), 0.5 * (hi[2] - lo[2])),
-                                                v3(0, 0, 0), 0.0, &t, &n);
+                                                v3(0, 0, 0), 0.0, &t, &n, NULL);
         const int cls = ref_box_class(tri, lo, hi, 1e-9);
         if ((cls == 2 && !got) || (cls == 0 && got)) {
             fprintf(stderr, "SAT %d, clipping class %d at case %d\n", got, cls, r);

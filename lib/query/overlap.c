@@ -1,10 +1,13 @@
-/* overlap.c: box, sphere and capsule overlap and contact queries: the shape walk (shape_walk.h), exact per-triangle tests, callback and/or output array. */
+/* overlap.c: box (axis-aligned or oriented), sphere and capsule overlap and contact queries: the shape walk (shape_walk.h), exact per-triangle tests, callback and/or output array. */
 #include <math.h>
+#include <string.h>
 
 #include "query/triangle_frame.h"
 #include "query/closest.h"
 #include "query/sweep_walk.h"
 #include "query/shape_walk.h"
+#include "query/raycast.h"
+#include "query/shape.h"
 #include "query/triangle_box.h"
 
 /* Where overlapping triangles go. */
@@ -42,30 +45,45 @@ static int sink_report(struct overlap_sink *s, uint32_t tri, const cbvh_contact 
     return !s->find_more && (s->out || s->contacts) && s->reported >= s->capacity;
 }
 
-/* The region tested against node boxes (an AABB) and against triangles. */
-enum overlap_kind { REGION_BOX, REGION_SPHERE, REGION_CAPSULE };
+/* The region tested against node boxes (an AABB) and against triangles: a ball, a capsule or a box (its
+ * center p0 and half extents, which for cbvh_overlap_box's [min, max] are the exact double midpoint and
+ * half size), in the mesh's frame; contacts go to the world of `placement` when it is not NULL. */
 struct overlap_region {
-    float lo[3], hi[3];  /* conservative bounds of the region, for node culling */
-    enum overlap_kind kind; /* the box [lo, hi] itself, the ball (center, radius), or the capsule */
-    cbvh_v3 center, end; /* sphere: center; capsule: the segment center-end */
-    double radius;
+    float lo[3], hi[3]; /* conservative bounds of the region, for node culling */
+    struct cbvh_local_shape shape;
+    struct cbvh_box box;
+    const struct cbvh_placement *placement;
 };
 
 static int region_triangle(const struct overlap_region *r, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c)
 {
-    if (r->kind == REGION_SPHERE) {
-        const cbvh_v3 q = cbvh_closest_point_triangle(r->center, a, b, c);
-        return v3_len2(v3_sub(q, r->center)) <= r->radius * r->radius;
+    const struct cbvh_local_shape *s = &r->shape;
+    if (s->kind == CBVH_SHAPE_SPHERE) {
+        const cbvh_v3 q = cbvh_closest_point_triangle(s->p0, a, b, c);
+        return v3_len2(v3_sub(q, s->p0)) <= s->radius * s->radius;
     }
-    if (r->kind == REGION_CAPSULE) {
+    if (s->kind == CBVH_SHAPE_CAPSULE) {
         cbvh_v3 on_seg, on_tri;
-        return cbvh_closest_segment_triangle(r->center, r->end, a, b, c, &on_seg, &on_tri) <= r->radius * r->radius;
+        return cbvh_closest_segment_triangle(s->p0, s->p1, a, b, c, &on_seg, &on_tri) <= s->radius * s->radius;
     }
-    const cbvh_v3 lo = v3_from_f(r->lo), hi = v3_from_f(r->hi);
     double t;
     cbvh_v3 n;
-    return cbvh_triangle_box_sweep(a, b, c, v3_scale(v3_add(lo, hi), 0.5), v3_scale(v3_sub(hi, lo), 0.5),
-                                   v3(0, 0, 0), 0.0, &t, &n);
+    return cbvh_triangle_oriented_box_sweep(a, b, c, &r->box, v3(0, 0, 0), 0.0, &t, &n, NULL);
+}
+
+/* The contact of a box region with a triangle it overlaps: the separating-axis test's axis of least
+ * penetration and its depth (exact: the axes hold every face normal of the obstacle), and a point of the
+ * triangle inside the box. */
+static void box_contact(const struct overlap_region *r, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, cbvh_v3 *n, double *depth,
+                        cbvh_v3 *point)
+{
+    double t;
+    *depth = 0.0;
+    cbvh_triangle_oriented_box_sweep(a, b, c, &r->box, v3(0, 0, 0), 0.0, &t, n, depth);
+    const cbvh_v3 o = r->box.center, h = r->box.half;
+    const double size = fmax(fmax(h.x, h.y), h.z) + fmax(v3_len(v3_sub(b, a)), v3_len(v3_sub(c, a))) + fabs(o.x) +
+                        fabs(o.y) + fabs(o.z);
+    *point = cbvh_box_contact_point(a, b, c, &r->box, o, *n, 1e-6 * size);
 }
 
 /* The contact of a ball or capsule region with a triangle it overlaps (double precision): on the closest
@@ -75,45 +93,56 @@ static int region_triangle(const struct overlap_region *r, cbvh_v3 a, cbvh_v3 b,
  * A core that reaches the triangle (d = 0) is pushed off the triangle's plane: along the unit face normal
  * (as wound) or against it, whichever needs less, by radius plus the depth of the core's lowest end below
  * the plane; the whole core then lies at least radius above it. */
+static void round_contact(const struct cbvh_local_shape *s, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, cbvh_v3 *n,
+                          double *depth, cbvh_v3 *on_tri)
+{
+    cbvh_v3 on_core;
+    double d2;
+    if (s->kind == CBVH_SHAPE_SPHERE) {
+        on_core = s->p0;
+        *on_tri = cbvh_closest_point_triangle(s->p0, a, b, c);
+        d2 = v3_len2(v3_sub(on_core, *on_tri));
+    } else {
+        d2 = cbvh_closest_segment_triangle(s->p0, s->p1, a, b, c, &on_core, on_tri);
+    }
+    const double d = sqrt(d2);
+    if (d > 0.0) {
+        *n = v3_scale(v3_sub(on_core, *on_tri), 1.0 / d);
+        *depth = s->radius - d;
+        return;
+    }
+    const cbvh_v3 v[3] = {a, b, c};
+    struct cbvh_triangle_frame f;
+    cbvh_triangle_frame_of(v, &f);
+    *n = v3_scale(f.n, 1.0 / sqrt(f.nn)); /* a file's triangles have a non-zero area */
+    const double s0 = v3_dot(v3_sub(s->p0, v[f.base]), *n), s1 = v3_dot(v3_sub(s->p1, v[f.base]), *n);
+    if (s0 + s1 >= 0.0) {
+        *depth = s->radius - fmin(s0, s1);
+    } else {
+        *n = v3_scale(*n, -1.0);
+        *depth = s->radius + fmax(s0, s1);
+    }
+}
+
+/* The contact of the region with a triangle it overlaps, in the world of the region's placement. */
 static void region_contact(const struct overlap_region *r, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, uint32_t tri,
                            cbvh_contact *out)
 {
-    cbvh_v3 on_core, on_tri;
-    double d2;
-    if (r->kind == REGION_SPHERE) {
-        on_core = r->center;
-        on_tri = cbvh_closest_point_triangle(r->center, a, b, c);
-        d2 = v3_len2(v3_sub(on_core, on_tri));
-    } else {
-        d2 = cbvh_closest_segment_triangle(r->center, r->end, a, b, c, &on_core, &on_tri);
-    }
-    const double d = sqrt(d2);
-    cbvh_v3 n;
+    cbvh_v3 n, point;
     double depth;
-    if (d > 0.0) {
-        n = v3_scale(v3_sub(on_core, on_tri), 1.0 / d);
-        depth = r->radius - d;
-    } else {
-        const cbvh_v3 v[3] = {a, b, c};
-        struct cbvh_triangle_frame f;
-        cbvh_triangle_frame_of(v, &f);
-        n = v3_scale(f.n, 1.0 / sqrt(f.nn)); /* a file's triangles have a non-zero area */
-        const double s0 = v3_dot(v3_sub(r->center, v[f.base]), n), s1 = v3_dot(v3_sub(r->end, v[f.base]), n);
-        if (s0 + s1 >= 0.0) {
-            depth = r->radius - fmin(s0, s1);
-        } else {
-            n = v3_scale(n, -1.0);
-            depth = r->radius + fmax(s0, s1);
-        }
+    if (r->shape.kind == CBVH_SHAPE_BOX)
+        box_contact(r, a, b, c, &n, &depth, &point);
+    else
+        round_contact(&r->shape, a, b, c, &n, &depth, &point);
+    if (r->placement) {
+        n = cbvh_rotate(r->placement->rotation, n);
+        point = cbvh_point_to_world(r->placement, point);
+        depth *= r->placement->scale;
     }
     out->tri = tri;
     out->depth = (float)depth;
-    out->normal[0] = (float)n.x;
-    out->normal[1] = (float)n.y;
-    out->normal[2] = (float)n.z;
-    out->point[0] = (float)on_tri.x;
-    out->point[1] = (float)on_tri.y;
-    out->point[2] = (float)on_tri.z;
+    v3_to_f(n, out->normal);
+    v3_to_f(point, out->point);
 }
 
 /* An overlap as the shape walk sees it. */
@@ -163,8 +192,7 @@ static size_t overlap_walk(const struct cbvh_file *f, const struct overlap_regio
 /* The region of a box query; 0 for an invalid box. */
 static int box_region(const float box_min[3], const float box_max[3], struct overlap_region *region)
 {
-    const struct overlap_region none = {{0, 0, 0}, {0, 0, 0}, REGION_BOX, {0, 0, 0}, {0, 0, 0}, 0.0};
-    *region = none;
+    memset(region, 0, sizeof *region);
     if (!box_min || !box_max || !cbvh_all_finite(box_min, 3) || !cbvh_all_finite(box_max, 3))
         return 0;
     for (int a = 0; a < 3; a++) {
@@ -173,6 +201,10 @@ static int box_region(const float box_min[3], const float box_max[3], struct ove
         region->lo[a] = box_min[a];
         region->hi[a] = box_max[a];
     }
+    const cbvh_v3 lo = v3_from_f(box_min), hi = v3_from_f(box_max);
+    region->shape.kind = CBVH_SHAPE_BOX;
+    region->box.center = region->shape.p0 = region->shape.p1 = v3_scale(v3_add(lo, hi), 0.5);
+    region->box.half = region->shape.half = v3_scale(v3_sub(hi, lo), 0.5);
     return 1;
 }
 
@@ -186,33 +218,46 @@ CBVH_API size_t cbvh_overlap_box(const cbvh_file *file, const float box_min[3], 
     return overlap_walk(file, &region, &sink);
 }
 
-/* The region of a sphere (p1 NULL) or capsule query: the ball or the capsule, and a box around it for node
- * culling; 0 for invalid input. */
-static int round_region(const float p0[3], const float p1[3], float radius, struct overlap_region *region_out)
+/* The region of a shape in the mesh's frame, with a box around it for node culling. */
+static void shape_region(const struct cbvh_local_shape *shape, const struct cbvh_placement *placement,
+                         struct overlap_region *region)
 {
-    struct overlap_region region;
-    if (!p0 || !cbvh_all_finite(p0, 3) || (p1 && !cbvh_all_finite(p1, 3)) || !isfinite(radius) ||
-        !(radius >= 0.0f))
-        return 0;
-    region.kind = p1 ? REGION_CAPSULE : REGION_SPHERE;
-    region.center = v3_from_f(p0);
-    region.end = p1 ? v3_from_f(p1) : region.center;
-    region.radius = radius;
-    const cbvh_v3 lo = v3(fmin(region.center.x, region.end.x), fmin(region.center.y, region.end.y),
-                          fmin(region.center.z, region.end.z));
-    const cbvh_v3 hi = v3(fmax(region.center.x, region.end.x), fmax(region.center.y, region.end.y),
-                          fmax(region.center.z, region.end.z));
+    memset(region, 0, sizeof *region);
+    region->shape = *shape;
+    region->placement = placement;
+    region->box.center = shape->p0;
+    region->box.half = shape->half;
+    region->box.rotated = shape->rotated;
+    memcpy(region->box.axes, shape->axes, sizeof shape->axes);
+    cbvh_v3 lo, hi;
     float box_center[3], extent[3];
-    cbvh_sweep_bounds(v3_madd(lo, v3(1, 1, 1), -region.radius), v3_madd(hi, v3(1, 1, 1), region.radius), box_center,
-                      extent);
+    cbvh_shape_bounds(shape, &lo, &hi);
+    cbvh_sweep_bounds(lo, hi, box_center, extent);
     for (int a = 0; a < 3; a++) {
         /* Widened by 2^-22 relative, more than the rounding of the two additions. */
-        region.lo[a] = box_center[a] - extent[a];
-        region.hi[a] = box_center[a] + extent[a];
-        region.lo[a] -= fabsf(region.lo[a]) * 0x1p-22f + 0x1p-126f;
-        region.hi[a] += fabsf(region.hi[a]) * 0x1p-22f + 0x1p-126f;
+        region->lo[a] = box_center[a] - extent[a];
+        region->hi[a] = box_center[a] + extent[a];
+        region->lo[a] -= fabsf(region->lo[a]) * 0x1p-22f + 0x1p-126f;
+        region->hi[a] += fabsf(region->hi[a]) * 0x1p-22f + 0x1p-126f;
     }
-    *region_out = region;
+}
+
+/* The region of a sphere (p1 NULL) or capsule query; 0 for invalid input. */
+static int round_region(const float p0[3], const float p1[3], float radius, struct overlap_region *region)
+{
+    cbvh_shape in;
+    memset(&in, 0, sizeof in);
+    struct cbvh_local_shape shape;
+    if (!p0 || (p1 && !cbvh_all_finite(p1, 3)) || !cbvh_all_finite(p0, 3))
+        return 0;
+    in.kind = p1 ? CBVH_SHAPE_CAPSULE : CBVH_SHAPE_SPHERE;
+    memcpy(in.center, p0, sizeof in.center);
+    memcpy(in.p0, p0, sizeof in.p0);
+    memcpy(in.p1, p1 ? p1 : p0, sizeof in.p1);
+    in.radius = radius;
+    if (!cbvh_shape_to_mesh(&in, NULL, &shape))
+        return 0;
+    shape_region(&shape, NULL, region);
     return 1;
 }
 
@@ -285,4 +330,55 @@ CBVH_API size_t cbvh_contacts_capsule(const cbvh_file *file, const float p0[3], 
     struct overlap_region region;
     const int valid = p1 && round_region(p0, p1, radius, &region);
     return paged_walk(file, &region, valid, first, NULL, out, capacity, more);
+}
+
+/* The region of a query with options: options checked (overlaps take no culling and no filter), the shape
+ * taken into the mesh's frame by the transform, whose placement *placement holds for the contacts. */
+static cbvh_result region_with(const cbvh_file *file, const cbvh_shape *shape, const cbvh_query_options *options,
+                               struct cbvh_placement *placement, struct overlap_region *region)
+{
+    cbvh_query_options o;
+    struct cbvh_local_shape local;
+    const struct cbvh_placement *p = NULL;
+    if (!file || !shape || cbvh_query_options_read(options, &o) != CBVH_OK || o.cull != CBVH_CULL_NONE || o.filter)
+        return CBVH_ERROR_INVALID_ARGUMENT;
+    if (o.transform) {
+        if (!cbvh_placement_of(o.transform, placement))
+            return CBVH_ERROR_INVALID_ARGUMENT;
+        p = placement;
+    }
+    if (!cbvh_shape_to_mesh(shape, p, &local))
+        return CBVH_ERROR_INVALID_ARGUMENT;
+    shape_region(&local, p, region);
+    return CBVH_OK;
+}
+
+/* The paged walk of a query with options, into ids or contacts. */
+static cbvh_result paged_with(const cbvh_file *file, const cbvh_shape *shape, const cbvh_query_options *options,
+                              size_t first, uint32_t *ids, cbvh_contact *contacts, size_t capacity, size_t *count,
+                              int *more)
+{
+    if (more)
+        *more = 0;
+    if (!count)
+        return CBVH_ERROR_INVALID_ARGUMENT;
+    struct cbvh_placement placement;
+    struct overlap_region region;
+    const cbvh_result r = region_with(file, shape, options, &placement, &region);
+    *count = paged_walk(file, &region, r == CBVH_OK, first, ids, contacts, capacity, more);
+    return r;
+}
+
+CBVH_API cbvh_result cbvh_overlap_with(const cbvh_file *file, const cbvh_shape *shape,
+                                       const cbvh_query_options *options, size_t first, uint32_t *out,
+                                       size_t capacity, size_t *count, int *more)
+{
+    return paged_with(file, shape, options, first, out, NULL, capacity, count, more);
+}
+
+CBVH_API cbvh_result cbvh_contacts_with(const cbvh_file *file, const cbvh_shape *shape,
+                                        const cbvh_query_options *options, size_t first, cbvh_contact *out,
+                                        size_t capacity, size_t *count, int *more)
+{
+    return paged_with(file, shape, options, first, NULL, out, capacity, count, more);
 }

@@ -3,7 +3,9 @@
 #include <string.h>
 
 #include "common/struct_size.h"
+#include "query/placement.h"
 #include "query/raycast.h"
+#include "query/sweep_walk.h"
 
 int cbvh_hit_output(const struct cbvh_file *f, const struct cbvh_best_hit *best, double t_base, cbvh_hit *hit)
 {
@@ -74,10 +76,22 @@ CBVH_API cbvh_result cbvh_query_options_init(cbvh_query_options *options, size_t
     return CBVH_OK;
 }
 
+cbvh_result cbvh_query_options_read(const cbvh_query_options *options, cbvh_query_options *o)
+{
+    query_options_defaults(o);
+    if (options) {
+        if (!cbvh_struct_size_ok(options->struct_size, QUERY_OPTIONS_SIZE_MIN, sizeof *options))
+            return CBVH_ERROR_INVALID_ARGUMENT;
+        memcpy(o, options, options->struct_size);
+    }
+    const int known_cull = o->cull == CBVH_CULL_NONE || o->cull == CBVH_CULL_BACK || o->cull == CBVH_CULL_FRONT;
+    return known_traversal(o->traversal) && known_cull ? CBVH_OK : CBVH_ERROR_INVALID_ARGUMENT;
+}
+
 /* The record of cooked triangle k hit at the kernels' t: the normal from the edges in double, scaled by
  * their largest component first so that neither tiny nor huge coordinates underflow or overflow it. */
-static void record_fill(const struct cbvh_file *f, uint32_t k, double t_base, float t, float u, float v,
-                        const float dir[3], cbvh_hit_record *r)
+void cbvh_hit_record_fill(const struct cbvh_file *f, uint32_t k, double t_base, float t, float u, float v,
+                          const float dir[3], cbvh_hit_record *r)
 {
     float p[3][3];
     cbvh_triangle_vertices(f, k, p[0], p[1], p[2]);
@@ -128,7 +142,7 @@ static int gate_check(const struct cbvh_hit_gate *gate, const struct cbvh_file *
                       float v)
 {
     cbvh_hit_record r;
-    record_fill(f, k, gate->t_base, t, u, v, gate->dir, &r);
+    cbvh_hit_record_fill(f, k, gate->t_base, t, u, v, gate->dir, &r);
     record_place(gate, &r);
     if ((gate->cull == CBVH_CULL_BACK && !r.front) || (gate->cull == CBVH_CULL_FRONT && r.front))
         return CBVH_FILTER_REJECT;
@@ -138,69 +152,52 @@ static int gate_check(const struct cbvh_hit_gate *gate, const struct cbvh_file *
     return verdict == CBVH_FILTER_REJECT || verdict == CBVH_FILTER_STOP ? (int)verdict : CBVH_FILTER_ACCEPT;
 }
 
-/* The rotation matrix of transform t's quaternion (normalized in double) into m, and the ray `world` taken
- * into the mesh's frame: local = R^T (world - translation) / scale, in double, rounded to float once.
- * Returns 0 for an invalid transform or a local ray that overflows float. */
-static int place_ray(const cbvh_transform *t, const cbvh_ray *world, double m[3][3], cbvh_ray *local)
+void cbvh_hit_gate_init(struct cbvh_hit_gate *gate, cbvh_cull cull, cbvh_hit_filter_fn filter, void *user,
+                        const double (*rotation)[3], const float dir[3], double t_base)
 {
-    const float *q = t->rotation;
-    double len2 = 0.0;
-    for (int i = 0; i < 4; i++) {
-        if (!isfinite(q[i]))
-            return 0;
-        len2 += (double)q[i] * q[i];
-    }
-    if (!(len2 > 0.0) || !isfinite(len2) || !isfinite(t->scale) || !(t->scale > 0.0f) ||
-        !isfinite(t->translation[0]) || !isfinite(t->translation[1]) || !isfinite(t->translation[2]))
-        return 0;
-    const double x = q[0], y = q[1], z = q[2], w = q[3], k = 2.0 / len2;
-    m[0][0] = 1.0 - k * (y * y + z * z), m[0][1] = k * (x * y - z * w), m[0][2] = k * (x * z + y * w);
-    m[1][0] = k * (x * y + z * w), m[1][1] = 1.0 - k * (x * x + z * z), m[1][2] = k * (y * z - x * w);
-    m[2][0] = k * (x * z - y * w), m[2][1] = k * (y * z + x * w), m[2][2] = 1.0 - k * (x * x + y * y);
+    gate->check = gate_check;
+    gate->cull = cull;
+    gate->filter = filter;
+    gate->user = user;
+    gate->t_base = t_base;
+    for (int a = 0; a < 3; a++)
+        gate->dir[a] = dir[a];
+    gate->placed = rotation != NULL;
+    if (rotation)
+        memcpy(gate->rotation, rotation, sizeof gate->rotation);
+}
+
+/* The ray `world` taken into the mesh's frame of placement p: local = R^T (world - translation) / scale, in
+ * double, rounded to float once. Returns 0 for a local ray that overflows float. */
+static int place_ray(const struct cbvh_placement *p, const cbvh_ray *world, cbvh_ray *local)
+{
+    const cbvh_v3 org = cbvh_point_to_mesh(p, v3_from_f(world->org));
+    const cbvh_v3 dir = cbvh_vector_to_mesh(p, v3_from_f(world->dir));
     *local = *world;
-    for (int a = 0; a < 3; a++) {
-        double o = 0.0, d = 0.0;
-        for (int i = 0; i < 3; i++) { /* column a of R: row a of R^T */
-            o += m[i][a] * ((double)world->org[i] - t->translation[i]);
-            d += m[i][a] * world->dir[i];
-        }
-        local->org[a] = (float)(o / t->scale);
-        local->dir[a] = (float)(d / t->scale);
-        if (!isfinite(local->org[a]) || !isfinite(local->dir[a]))
-            return 0;
-    }
-    return 1;
+    v3_to_f(org, local->org);
+    v3_to_f(dir, local->dir);
+    return cbvh_all_finite(local->org, 3) && cbvh_all_finite(local->dir, 3);
 }
 
 /* Checks the arguments of a query with options and prepares its ray (in the mesh's frame) and gate. */
 static cbvh_result query_prepare(const cbvh_file *file, const cbvh_ray *world, const cbvh_query_options *options,
                                  cbvh_query_options *o, struct cbvh_ray_ctx *ctx, struct cbvh_hit_gate *gate)
 {
-    query_options_defaults(o);
-    if (options) {
-        if (!cbvh_struct_size_ok(options->struct_size, QUERY_OPTIONS_SIZE_MIN, sizeof *options))
-            return CBVH_ERROR_INVALID_ARGUMENT;
-        memcpy(o, options, options->struct_size);
-    }
-    cbvh_ray placed;
-    const cbvh_ray *ray = world;
-    gate->placed = o->transform != NULL; /* NULL by default, and for a caller whose struct ends before it */
-    if (gate->placed) {
-        if (!world || !place_ray(o->transform, world, gate->rotation, &placed))
-            return CBVH_ERROR_INVALID_ARGUMENT;
-        ray = &placed;
-    }
-    if (!file || !ray || !known_traversal(o->traversal) ||
-        (o->cull != CBVH_CULL_NONE && o->cull != CBVH_CULL_BACK && o->cull != CBVH_CULL_FRONT) ||
-        !cbvh_ray_prepare(ctx, ray, file))
+    if (cbvh_query_options_read(options, o) != CBVH_OK)
         return CBVH_ERROR_INVALID_ARGUMENT;
-    gate->check = gate_check;
-    gate->cull = o->cull;
-    gate->filter = o->filter;
-    gate->user = o->filter_user;
-    gate->t_base = ctx->t_base;
-    for (int a = 0; a < 3; a++)
-        gate->dir[a] = ray->dir[a];
+    cbvh_ray local;
+    const cbvh_ray *ray = world;
+    struct cbvh_placement placement;
+    const int placed = o->transform != NULL; /* NULL by default, and for a caller whose struct ends before it */
+    if (placed) {
+        if (!world || !cbvh_placement_of(o->transform, &placement) || !place_ray(&placement, world, &local))
+            return CBVH_ERROR_INVALID_ARGUMENT;
+        ray = &local;
+    }
+    if (!file || !ray || !cbvh_ray_prepare(ctx, ray, file))
+        return CBVH_ERROR_INVALID_ARGUMENT;
+    cbvh_hit_gate_init(gate, o->cull, o->filter, o->filter_user, placed ? placement.rotation : NULL, ray->dir,
+                       ctx->t_base);
     /* without culling or filter every hit counts: the plain walk (a transform only rotates the answer) */
     ctx->gate = o->cull != CBVH_CULL_NONE || o->filter ? gate : NULL;
     return CBVH_OK;
@@ -222,7 +219,7 @@ CBVH_API cbvh_result cbvh_raycast_with(const cbvh_file *file, const cbvh_ray *ra
     struct cbvh_best_hit best = {UINT32_MAX, 0.0f, 0.0f, 0.0f};
     cbvh_closest(file, &ctx, o.traversal, &best, stats);
     if (best.tri != UINT32_MAX) {
-        record_fill(file, best.tri, ctx.t_base, best.t, best.u, best.v, gate.dir, hit);
+        cbvh_hit_record_fill(file, best.tri, ctx.t_base, best.t, best.u, best.v, gate.dir, hit);
         record_place(&gate, hit);
     }
     return CBVH_OK;

@@ -85,4 +85,18 @@ static inline int cbvh_ray_prepare(struct cbvh_ray_ctx *ctx, const cbvh_ray *ray
  * caller's ray: t_base + the kernel's t). Returns 1 on a hit. */
 int cbvh_hit_output(const struct cbvh_file *f, const struct cbvh_best_hit *best, double t_base, cbvh_hit *hit);
 
+/* Reads the caller's options (NULL: the defaults) into *o: CBVH_ERROR_INVALID_ARGUMENT when struct_size is
+ * out of range or traversal or cull is not one of its enum's values. */
+cbvh_result cbvh_query_options_read(const cbvh_query_options *options, cbvh_query_options *o);
+
+/* The hit record of cooked triangle k hit at the kernels' t (t_base + t on the caller's ray) with
+ * barycentrics u, v by a ray of direction dir (the mesh's frame): unit face normal, front, material. */
+void cbvh_hit_record_fill(const struct cbvh_file *f, uint32_t k, double t_base, float t, float u, float v,
+                          const float dir[3], cbvh_hit_record *r);
+
+/* Fills a gate (leaf.h) for culling `cull` and `filter` (NULL: none), records rotated into the world by
+ * `rotation` when it is not NULL, for a ray of direction dir whose kernels' t is offset by t_base. */
+void cbvh_hit_gate_init(struct cbvh_hit_gate *gate, cbvh_cull cull, cbvh_hit_filter_fn filter, void *user,
+                        const double (*rotation)[3], const float dir[3], double t_base);
+
 #endif

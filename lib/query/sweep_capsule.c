@@ -1,5 +1,6 @@
 /* sweep_capsule.c: capsule sweeps, exact: end balls, triangle vertices against the capsule side, edges against the segment. */
 #include "query/closest.h"
+#include "query/shape.h"
 #include "query/sweep_walk.h"
 
 struct capsule_shape {
@@ -24,7 +25,13 @@ static int capsule_triangle(const void *shape, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, 
         const cbvh_v3 away = v3_sub(on_seg, on_tri);
         out->t = 0.0;
         out->point = on_tri;
-        out->normal = v3_len2(away) > 0.0 ? v3_normalize(away) : cbvh_fallback_normal(a, b, c, s->delta);
+        if (v3_len2(away) > 0.0) {
+            out->normal = v3_normalize(away);
+            out->depth = r - v3_len(away);
+        } else { /* the axis reaches the triangle: lift its lower end radius above the plane along the normal */
+            out->normal = cbvh_fallback_normal(a, b, c, s->delta);
+            out->depth = r - fmin(v3_dot(v3_sub(s->p0, on_tri), out->normal), v3_dot(v3_sub(s->p1, on_tri), out->normal));
+        }
         return 1;
     }
     const cbvh_v3 v[3] = {a, b, c}, axis = v3_sub(s->p1, s->p0), back = v3_scale(s->delta, -1.0);
@@ -59,18 +66,9 @@ static int capsule_triangle(const void *shape, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, 
     return found;
 }
 
-CBVH_API int cbvh_sweep_capsule(const cbvh_file *file, const float p0[3], const float p1[3], float radius,
-                                const float delta[3], cbvh_sweep_hit *hit)
+int cbvh_sweep_capsule_shape(const struct cbvh_file *f, const struct cbvh_local_shape *shape, const float delta[3],
+                             const struct cbvh_sweep_rules *rules, struct cbvh_sweep_found *found)
 {
-    if (!file || !p0 || !p1 || !delta || !cbvh_all_finite(p0, 3) || !cbvh_all_finite(p1, 3) ||
-        !cbvh_all_finite(delta, 3) || !isfinite(radius) || !(radius >= 0.0f))
-        return cbvh_sweep_miss(hit);
-    if (radius == 0.0f && p0[0] == p1[0] && p0[1] == p1[1] && p0[2] == p1[2])
-        return cbvh_sweep_as_ray(file, p0, delta, hit);
-    const struct capsule_shape s = {v3_from_f(p0), v3_from_f(p1), v3_from_f(delta), radius};
-    const cbvh_v3 lo = v3(fmin(p0[0], p1[0]), fmin(p0[1], p1[1]), fmin(p0[2], p1[2]));
-    const cbvh_v3 hi = v3(fmax(p0[0], p1[0]), fmax(p0[1], p1[1]), fmax(p0[2], p1[2]));
-    float box_center[3], extent[3];
-    cbvh_sweep_bounds(v3_madd(lo, v3(1, 1, 1), -s.radius), v3_madd(hi, v3(1, 1, 1), s.radius), box_center, extent);
-    return cbvh_sweep_walk(file, box_center, extent, delta, capsule_triangle, &s, hit);
+    const struct capsule_shape s = {shape->p0, shape->p1, v3_from_f(delta), shape->radius};
+    return cbvh_sweep_walk(f, shape, delta, capsule_triangle, &s, rules, found);
 }

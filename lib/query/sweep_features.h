@@ -4,11 +4,13 @@
 
 #include "query/vec3d.h"
 
-/* A first contact: time, point on the triangle, unit normal from the triangle towards the shape. */
+/* A first contact: time, point on the triangle, unit normal from the triangle towards the shape, and at
+ * t = 0 how far the shape reaches into the triangle along the normal (0 otherwise). */
 struct cbvh_sweep_contact {
     double t;
     cbvh_v3 point;
     cbvh_v3 normal;
+    double depth;
 };
 
 /* The moving point is o + t*d for t in [0, tmax]. Each test below reports the

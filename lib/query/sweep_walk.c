@@ -5,7 +5,9 @@
 #include "query/ray_box.h"
 #include "query/raycast.h"
 #include "query/sweep_walk.h"
+#include "query/shape.h"
 #include "query/shape_walk.h"
+#include "query/triangle_frame.h"
 
 /* x moved away from zero by 2^-22 of itself: more than the half ulp a float
  * addition may have rounded it inwards by. */
@@ -15,11 +17,12 @@ static float outward_hi(float x) { return x + fabsf(x) * 0x1p-22f + FLT_MIN; }
 /* A sweep as the shape walk sees it. */
 struct sweep_query {
     const struct cbvh_file *f;
-    const float *center, *extent;
+    const float *center, *extent, *delta;
     float rcp[3];
     uint32_t octant;
     cbvh_sweep_triangle_fn sweep;
     const void *shape;
+    const struct cbvh_sweep_rules *rules;
     struct cbvh_sweep_contact best;
     uint32_t best_tri;
 };
@@ -41,38 +44,77 @@ static int sweep_enter(void *query, const float box_lo[3], const float box_hi[3]
                           0.0f, (float)q->best.t, &entry);
 }
 
+/* Culling by the motion: the sign of delta . n, n the face normal as wound; parallel or no motion keeps it. */
+static int culled(cbvh_cull cull, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, const float delta[3])
+{
+    const double s = v3_dot(v3_cross(v3_sub(b, a), v3_sub(c, a)), v3_from_f(delta));
+    return (cull == CBVH_CULL_BACK && s > 0.0) || (cull == CBVH_CULL_FRONT && s < 0.0);
+}
+
+/* The filter's verdict on cooked triangle k, whose contact would win: its record with the barycentrics of
+ * the contact point (in the triangle's best-conditioned frame, as the hit records' normals). */
+static int ask_filter(const struct sweep_query *q, uint32_t k, const cbvh_v3 v[3], const struct cbvh_sweep_contact *c)
+{
+    struct cbvh_triangle_frame fr;
+    cbvh_triangle_frame_of(v, &fr);
+    double w[3] = {1.0, 0.0, 0.0};
+    if (fr.nn > 0.0) {
+        double x, y;
+        cbvh_triangle_frame_barycentrics(&fr, v3_sub(c->point, v[fr.base]), &x, &y);
+        w[fr.base] = 1.0 - x - y;
+        w[(fr.base + 1) % 3] = x;
+        w[(fr.base + 2) % 3] = y;
+    }
+    cbvh_hit_record r;
+    cbvh_hit_record_fill(q->f, k, 0.0, (float)c->t, (float)w[1], (float)w[2], q->delta, &r);
+    if (q->rules->placement)
+        v3_to_f(cbvh_rotate(q->rules->placement->rotation, v3_from_f(r.normal)), r.normal);
+    return q->rules->filter(q->rules->user, &r);
+}
+
 static int sweep_leaf(void *query, uint32_t first, uint32_t count)
 {
     struct sweep_query *q = query;
-    struct cbvh_sweep_contact c;
+    const struct cbvh_sweep_rules *rules = q->rules;
     for (uint32_t k = first; k < first + count; k++) {
         float a[3], b[3], cc[3];
         cbvh_triangle_vertices(q->f, k, a, b, cc);
-        if (q->sweep(q->shape, v3_from_f(a), v3_from_f(b), v3_from_f(cc), q->best.t, &c) &&
-            (c.t < q->best.t || (c.t == q->best.t && k < q->best_tri))) {
-            q->best = c;
-            q->best_tri = k;
-        }
+        const cbvh_v3 v[3] = {v3_from_f(a), v3_from_f(b), v3_from_f(cc)};
+        if (rules && rules->cull != CBVH_CULL_NONE && culled(rules->cull, v[0], v[1], v[2], q->delta))
+            continue;
+        struct cbvh_sweep_contact c = {0.0, {0, 0, 0}, {0, 0, 0}, 0.0};
+        if (!q->sweep(q->shape, v[0], v[1], v[2], q->best.t, &c) ||
+            !(c.t < q->best.t || (c.t == q->best.t && k < q->best_tri)))
+            continue;
+        const int verdict = rules && rules->filter ? ask_filter(q, k, v, &c) : CBVH_FILTER_ACCEPT;
+        if (verdict == CBVH_FILTER_REJECT)
+            continue;
+        if (c.t > 0.0)
+            c.depth = 0.0;
+        q->best = c;
+        q->best_tri = k;
+        if (verdict == CBVH_FILTER_STOP)
+            return 1;
     }
     return 0;
 }
 
-int cbvh_sweep_walk(const struct cbvh_file *f, const float center[3], const float extent[3], const float delta[3],
-                    cbvh_sweep_triangle_fn sweep, const void *shape, cbvh_sweep_hit *hit)
+int cbvh_sweep_walk(const struct cbvh_file *f, const struct cbvh_local_shape *bounds, const float delta[3],
+                    cbvh_sweep_triangle_fn sweep, const void *shape, const struct cbvh_sweep_rules *rules,
+                    struct cbvh_sweep_found *found)
 {
-    struct sweep_query q = {f, center, extent, {1.0f / delta[0], 1.0f / delta[1], 1.0f / delta[2]}, 0, sweep, shape,
-                            {1.0, {0, 0, 0}, {0, 0, 0}}, UINT32_MAX};
+    cbvh_v3 lo, hi;
+    float center[3], extent[3];
+    cbvh_shape_bounds(bounds, &lo, &hi);
+    cbvh_sweep_bounds(lo, hi, center, extent);
+    struct sweep_query q = {f, center, extent, delta, {1.0f / delta[0], 1.0f / delta[1], 1.0f / delta[2]}, 0, sweep,
+                            shape, rules, {1.0, {0, 0, 0}, {0, 0, 0}, 0.0}, UINT32_MAX};
     q.octant = cbvh_octant_of(q.rcp);
     cbvh_shape_walk(f, f->layout, q.octant, sweep_enter, sweep_leaf, &q);
-    if (q.best_tri == UINT32_MAX)
-        return cbvh_sweep_miss(hit);
-    if (hit) {
-        hit->tri = cbvh_original_id(f, q.best_tri);
-        hit->t = (float)q.best.t;
-        v3_to_f(q.best.point, hit->point);
-        v3_to_f(v3_normalize(q.best.normal), hit->normal);
-    }
-    return 1;
+    found->tri = q.best_tri;
+    found->contact = q.best;
+    found->contact.normal = v3_normalize(q.best.normal);
+    return q.best_tri != UINT32_MAX;
 }
 
 void cbvh_sweep_bounds(cbvh_v3 lo, cbvh_v3 hi, float center[3], float extent[3])
@@ -88,13 +130,6 @@ void cbvh_sweep_bounds(cbvh_v3 lo, cbvh_v3 hi, float center[3], float extent[3])
     }
 }
 
-int cbvh_sweep_miss(cbvh_sweep_hit *hit)
-{
-    if (hit)
-        hit->tri = CBVH_NO_HIT;
-    return 0;
-}
-
 int cbvh_all_finite(const float *v, int n)
 {
     for (int k = 0; k < n; k++)
@@ -103,25 +138,32 @@ int cbvh_all_finite(const float *v, int n)
     return 1;
 }
 
-int cbvh_sweep_as_ray(const struct cbvh_file *f, const float center[3], const float delta[3], cbvh_sweep_hit *hit)
+int cbvh_sweep_as_ray(const struct cbvh_file *f, const float center[3], const float delta[3],
+                      const struct cbvh_sweep_rules *rules, struct cbvh_sweep_found *found)
 {
     const cbvh_ray ray = {{center[0], center[1], center[2]}, 0.0f, {delta[0], delta[1], delta[2]}, 1.0f};
     struct cbvh_ray_ctx ctx;
+    struct cbvh_hit_gate gate;
     struct cbvh_best_hit best = {UINT32_MAX, 0.0f, 0.0f, 0.0f};
+    found->tri = UINT32_MAX;
     if (!cbvh_ray_prepare(&ctx, &ray, f))
-        return cbvh_sweep_miss(hit);
+        return 0;
+    if (rules && (rules->cull != CBVH_CULL_NONE || rules->filter)) {
+        cbvh_hit_gate_init(&gate, rules->cull, rules->filter, rules->user,
+                           rules->placement ? rules->placement->rotation : NULL, delta, ctx.t_base);
+        ctx.gate = &gate;
+    }
     cbvh_closest(f, &ctx, CBVH_TRAVERSAL_SORTED, &best, NULL);
     if (best.tri == UINT32_MAX)
-        return cbvh_sweep_miss(hit);
-    if (hit) {
-        float a[3], b[3], c[3];
-        cbvh_triangle_vertices(f, best.tri, a, b, c);
-        const cbvh_v3 va = v3_from_f(a), vb = v3_from_f(b), vc = v3_from_f(c);
-        const cbvh_v3 p = v3_madd(v3_madd(v3_scale(va, 1.0 - (double)best.u - (double)best.v), vb, best.u), vc, best.v);
-        hit->tri = cbvh_original_id(f, best.tri);
-        hit->t = (float)(ctx.t_base + best.t);
-        v3_to_f(p, hit->point);
-        v3_to_f(cbvh_fallback_normal(va, vb, vc, v3_from_f(delta)), hit->normal);
-    }
+        return 0;
+    float a[3], b[3], c[3];
+    cbvh_triangle_vertices(f, best.tri, a, b, c);
+    const cbvh_v3 va = v3_from_f(a), vb = v3_from_f(b), vc = v3_from_f(c);
+    found->tri = best.tri;
+    found->contact.t = (float)(ctx.t_base + best.t);
+    found->contact.point =
+        v3_madd(v3_madd(v3_scale(va, 1.0 - (double)best.u - (double)best.v), vb, best.u), vc, best.v);
+    found->contact.normal = cbvh_fallback_normal(va, vb, vc, v3_from_f(delta));
+    found->contact.depth = 0.0;
     return 1;
 }

@@ -3,6 +3,7 @@
 #define CBVH_QUERY_SWEEP_WALK_H
 
 #include "common/file.h"
+#include "query/placement.h"
 #include "query/sweep_features.h"
 
 /* Sweeps one triangle: first contact with t in [0, tmax] (t = 0 when the shape
@@ -10,27 +11,53 @@
 typedef int (*cbvh_sweep_triangle_fn)(const void *shape, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, double tmax,
                                       struct cbvh_sweep_contact *out);
 
-/* Walks the nodes whose box, grown by `extent`, is crossed by the point
- * center + t * delta for t in [0, 1] (the shape lies in the box
- * center +- extent, so this culls exactly what the swept shape cannot touch),
+/* What a sweep with options leaves out (cbvh_sweep_with): culling by the motion, the caller's filter (its
+ * records in the world of `placement` when not NULL). */
+struct cbvh_sweep_rules {
+    cbvh_cull cull;
+    cbvh_hit_filter_fn filter;
+    void *user;
+    const struct cbvh_placement *placement;
+};
+
+/* A sweep's answer: cooked triangle (UINT32_MAX for none) and its contact, in the mesh's frame. */
+struct cbvh_sweep_found {
+    uint32_t tri;
+    struct cbvh_sweep_contact contact;
+};
+
+/* Walks the nodes whose box, grown by the extent of a float box
+ * center +- extent holding `bounds` (cbvh_shape_bounds), is crossed by the
+ * point center + t * delta for t in [0, 1] (this culls exactly what the swept
+ * shape cannot touch),
  * nearer child first by the sort byte of delta's octant. Each triangle reached
- * goes to `sweep`; the earliest contact wins, ties to the lower cooked index.
- * Returns 1 and fills *hit (original id) on contact. */
-int cbvh_sweep_walk(const struct cbvh_file *f, const float center[3], const float extent[3], const float delta[3],
-                    cbvh_sweep_triangle_fn sweep, const void *shape, cbvh_sweep_hit *hit);
+ * (past rules->cull) goes to `sweep`; the earliest contact wins, ties to the
+ * lower cooked index, a contact that would win asks rules->filter. rules may
+ * be NULL. Returns 1 on contact; fills *found either way. */
+struct cbvh_local_shape;
+int cbvh_sweep_walk(const struct cbvh_file *f, const struct cbvh_local_shape *bounds, const float delta[3],
+                    cbvh_sweep_triangle_fn sweep, const void *shape, const struct cbvh_sweep_rules *rules,
+                    struct cbvh_sweep_found *found);
 
 /* The float box center +- extent that surely holds the double box [lo, hi]. */
 void cbvh_sweep_bounds(cbvh_v3 lo, cbvh_v3 hi, float center[3], float extent[3]);
-
-/* Fills a miss. Returns 0. */
-int cbvh_sweep_miss(cbvh_sweep_hit *hit);
 
 /* 1 when all n floats are finite. */
 int cbvh_all_finite(const float *v, int n);
 
 /* A zero-size shape: the sweep is the ray center + t * delta, t in [0, 1],
  * answered by the ray kernel so that it agrees with cbvh_raycast exactly
- * (same triangle, same t); the normal is the face normal against delta. */
-int cbvh_sweep_as_ray(const struct cbvh_file *f, const float center[3], const float delta[3], cbvh_sweep_hit *hit);
+ * (same triangle, same t), under the rules' culling and filter; the normal is
+ * the face normal against delta. Returns 1 on contact; fills *found either way. */
+int cbvh_sweep_as_ray(const struct cbvh_file *f, const float center[3], const float delta[3],
+                      const struct cbvh_sweep_rules *rules, struct cbvh_sweep_found *found);
+
+/* The sweep of each shape kind, in the mesh's frame (shape.h), by a delta of floats. */
+int cbvh_sweep_sphere_shape(const struct cbvh_file *f, const struct cbvh_local_shape *s, const float delta[3],
+                            const struct cbvh_sweep_rules *rules, struct cbvh_sweep_found *found);
+int cbvh_sweep_capsule_shape(const struct cbvh_file *f, const struct cbvh_local_shape *s, const float delta[3],
+                             const struct cbvh_sweep_rules *rules, struct cbvh_sweep_found *found);
+int cbvh_sweep_box_shape(const struct cbvh_file *f, const struct cbvh_local_shape *s, const float delta[3],
+                         const struct cbvh_sweep_rules *rules, struct cbvh_sweep_found *found);
 
 #endif

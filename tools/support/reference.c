@@ -376,12 +376,20 @@ double ref_shape_triangle_dist(const ref_shape *shape, const double delta[3], do
     case REF_CAPSULE:
         return fmax(0.0, ref_segment_triangle_dist(tri, p0, p1) - shape->radius);
     default: {
-        double lo[3], hi[3];
+        double lo[3], hi[3], local[9];
         for (int k = 0; k < 3; k++) {
-            lo[k] = p0[k] - shape->half[k];
-            hi[k] = p0[k] + shape->half[k];
+            lo[k] = (shape->rotated ? 0.0 : p0[k]) - shape->half[k];
+            hi[k] = (shape->rotated ? 0.0 : p0[k]) + shape->half[k];
         }
-        return ref_box_triangle_dist(tri, lo, hi);
+        if (!shape->rotated)
+            return ref_box_triangle_dist(tri, lo, hi);
+        for (int v = 0; v < 3; v++) { /* the triangle in the box's frame: axes^T (vertex - center) */
+            double e[3];
+            sub3(tri + 3 * v, p0, e);
+            for (int j = 0; j < 3; j++)
+                local[3 * v + j] = shape->axes[0][j] * e[0] + shape->axes[1][j] * e[1] + shape->axes[2][j] * e[2];
+        }
+        return ref_box_triangle_dist(local, lo, hi);
     }
     }
 }
@@ -402,7 +410,7 @@ static void swept_bounds(const ref_shape *s, const double delta[3], double lo[3]
     for (int k = 0; k < 3; k++) {
         double a = fmin(s->p0[k], s->kind == REF_CAPSULE ? s->p1[k] : s->p0[k]);
         double b = fmax(s->p0[k], s->kind == REF_CAPSULE ? s->p1[k] : s->p0[k]);
-        const double grow = s->kind == REF_BOX ? s->half[k] : s->radius;
+        const double grow = s->kind != REF_BOX ? s->radius : s->rotated ? sqrt(dot3(s->half, s->half)) : s->half[k];
         lo[k] = fmin(a, a + delta[k]) - grow;
         hi[k] = fmax(b, b + delta[k]) + grow;
     }

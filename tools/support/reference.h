@@ -93,6 +93,8 @@ typedef struct ref_shape {
     double p0[3], p1[3]; /* sphere: center p0; capsule: segment p0-p1; box: center p0 */
     double radius;       /* sphere and capsule */
     double half[3];      /* box */
+    int rotated;         /* box: 0 for an axis-aligned one (axes ignored) */
+    double axes[3][3];   /* box: its columns are the box's unit axes */
 } ref_shape;
 
 /* Distance from the shape moved by t*delta to triangle tri (0 when they overlap). */

@@ -1,0 +1,48 @@
+/* placement.h: a query transform (cbvh_transform) as a rotation matrix, and points and vectors taken through it. */
+#ifndef CBVH_QUERY_PLACEMENT_H
+#define CBVH_QUERY_PLACEMENT_H
+
+#include "cbvh.h"
+#include "query/vec3d.h"
+
+/* world = translation + scale * rotation * local, in double. */
+struct cbvh_placement {
+    double rotation[3][3]; /* the normalized quaternion's matrix; its columns are the local axes in the world */
+    cbvh_v3 translation;
+    double scale;
+};
+
+/* The matrix of quaternion q (x, y, z, w), normalized in double. Returns 0 when q is not finite or zero. */
+int cbvh_rotation_of_quaternion(const float q[4], double m[3][3]);
+
+/* Checks transform t (finite, non-zero quaternion, scale > 0) and fills *p. Returns 0 when it is invalid. */
+int cbvh_placement_of(const cbvh_transform *t, struct cbvh_placement *p);
+
+/* m * v and m^T * v. */
+static inline cbvh_v3 cbvh_rotate(const double m[3][3], cbvh_v3 v)
+{
+    return v3(m[0][0] * v.x + m[0][1] * v.y + m[0][2] * v.z, m[1][0] * v.x + m[1][1] * v.y + m[1][2] * v.z,
+              m[2][0] * v.x + m[2][1] * v.y + m[2][2] * v.z);
+}
+static inline cbvh_v3 cbvh_rotate_back(const double m[3][3], cbvh_v3 v)
+{
+    return v3(m[0][0] * v.x + m[1][0] * v.y + m[2][0] * v.z, m[0][1] * v.x + m[1][1] * v.y + m[2][1] * v.z,
+              m[0][2] * v.x + m[1][2] * v.y + m[2][2] * v.z);
+}
+
+/* A world point or displacement in the mesh's frame, and a mesh point back in the world. */
+static inline cbvh_v3 cbvh_vector_to_mesh(const struct cbvh_placement *p, cbvh_v3 world)
+{
+    const cbvh_v3 r = cbvh_rotate_back(p->rotation, world);
+    return v3(r.x / p->scale, r.y / p->scale, r.z / p->scale);
+}
+static inline cbvh_v3 cbvh_point_to_mesh(const struct cbvh_placement *p, cbvh_v3 world)
+{
+    return cbvh_vector_to_mesh(p, v3_sub(world, p->translation));
+}
+static inline cbvh_v3 cbvh_point_to_world(const struct cbvh_placement *p, cbvh_v3 mesh)
+{
+    return v3_add(p->translation, v3_scale(cbvh_rotate(p->rotation, mesh), p->scale));
+}
+
+#endif
