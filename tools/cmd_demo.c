@@ -170,6 +170,17 @@ static cbvh_filter_result collect_hit(void *user, const cbvh_hit_record *hit)
     return CBVH_FILTER_REJECT;
 }
 
+/* The rotation matrix of quaternion q (x, y, z, w), normalized in double. */
+static void quaternion_matrix(const float q[4], double m[3][3])
+{
+    const double x = q[0], y = q[1], z = q[2], w = q[3];
+    const double k = 2.0 / (x * x + y * y + z * z + w * w);
+    const double r[3][3] = {{1 - k * (y * y + z * z), k * (x * y - z * w), k * (x * z + y * w)},
+                            {k * (x * y + z * w), 1 - k * (x * x + z * z), k * (y * z - x * w)},
+                            {k * (x * z - y * w), k * (y * z + x * w), 1 - k * (x * x + y * y)}};
+    memcpy(m, r, sizeof r);
+}
+
 /* A placed instance (cbvh_query_options.transform): the scene turned 30 degrees about (1, 2, 2) / 3, scaled
  * by 2 and moved; each ray is placed the same way (in double, rounded to float) and cast in the world. The
  * answers are the scene's own: the same triangle and t, but for rays within 1e-4 (barycentric) of an edge,
@@ -181,11 +192,8 @@ static void demo_placed(demo *d, const cbvh_ray *rays, const cbvh_hit *ref, size
     const cbvh_transform tr = {{(float)(sn * axis[0]), (float)(sn * axis[1]), (float)(sn * axis[2]), (float)cos(half)},
                                {5.0f, -3.0f, 2.0f},
                                2.0f};
-    const double x = tr.rotation[0], y = tr.rotation[1], z = tr.rotation[2], w = tr.rotation[3];
-    const double q2 = x * x + y * y + z * z + w * w, k = 2.0 / q2;
-    const double m[3][3] = {{1 - k * (y * y + z * z), k * (x * y - z * w), k * (x * z + y * w)},
-                            {k * (x * y + z * w), 1 - k * (x * x + z * z), k * (y * z - x * w)},
-                            {k * (x * z - y * w), k * (y * z + x * w), 1 - k * (x * x + y * y)}};
+    double m[3][3];
+    quaternion_matrix(tr.rotation, m);
     cbvh_query_options q;
     cbvh_query_options_init(&q, sizeof q);
     q.transform = &tr;
@@ -634,6 +642,87 @@ out:
     free(shapes);
 }
 
+/* Boxes turned by a random rotation (cbvh_sweep_with): the reported triangle is touched at the contact,
+ * nothing is penetrated before it (sampling the motion, the box shrunk by the tolerance), and a box that
+ * starts in contact, moved by its depth (+ tolerance) along the normal, is clear of the triangle. */
+static void demo_oriented_boxes(demo *d)
+{
+    shape *shapes = malloc(DEMO_SHAPES * sizeof *shapes);
+    cbvh_shape *boxes = malloc(DEMO_SHAPES * sizeof *boxes);
+    cbvh_sweep_record *recs = malloc(DEMO_SHAPES * sizeof *recs);
+    if (!shapes || !boxes || !recs) {
+        d->failures++;
+        fprintf(stderr, "cbvh demo: out of memory\n");
+        goto out;
+    }
+    for (size_t i = 0; i < DEMO_SHAPES; i++) {
+        make_shape(d, SHAPE_BOX, &shapes[i]);
+        memset(&boxes[i], 0, sizeof boxes[i]);
+        boxes[i].kind = CBVH_SHAPE_BOX;
+        float axis[3];
+        random_direction(d, axis);
+        const double half_angle = in_range(d, 0.0f, 3.14159265f) / 2.0;
+        for (int a = 0; a < 3; a++) {
+            boxes[i].center[a] = shapes[i].center[a];
+            boxes[i].half_extent[a] = shapes[i].half[a];
+            boxes[i].rotation[a] = (float)(sin(half_angle) * axis[a]);
+        }
+        boxes[i].rotation[3] = (float)cos(half_angle);
+    }
+    size_t count = 0;
+    const double t0 = cli_now();
+    for (size_t i = 0; i < DEMO_SHAPES; i++) {
+        cbvh_sweep_with(d->file, &boxes[i], shapes[i].delta, NULL, &recs[i]);
+        count += recs[i].tri != CBVH_NO_HIT;
+    }
+    const double sec = cli_now() - t0;
+    int bad = 0;
+    for (size_t i = 0; i < DEMO_SHAPES; i += DEMO_SHAPES / DEMO_SHAPE_SAMPLE) {
+        const shape *s = &shapes[i];
+        const cbvh_sweep_record *h = &recs[i];
+        const int hit = h->tri != CBVH_NO_HIT;
+        ref_shape box, shrunk;
+        memset(&box, 0, sizeof box);
+        box.kind = REF_BOX;
+        box.rotated = 1;
+        quaternion_matrix(boxes[i].rotation, box.axes);
+        double reach = 0.0, lo[3], hi[3];
+        const double delta[3] = {s->delta[0], s->delta[1], s->delta[2]}, zero[3] = {0, 0, 0};
+        for (int a = 0; a < 3; a++) {
+            box.p0[a] = box.p1[a] = s->center[a];
+            box.half[a] = s->half[a];
+            reach += (double)s->half[a] * s->half[a];
+        }
+        shrunk = box;
+        for (int a = 0; a < 3; a++)
+            shrunk.half[a] = fmax(0.0, box.half[a] - d->tol);
+        const double end = hit ? h->t : 1.0;
+        int ok = !hit || (h->tri < d->tri_count && d->valid[h->tri] &&
+                          ref_shape_triangle_dist(&box, delta, end, d->tris + 9 * (size_t)h->tri) <= d->tol);
+        if (ok && hit && h->t == 0.0f) {
+            ref_shape clear = box;
+            for (int a = 0; a < 3; a++)
+                clear.p0[a] += (h->depth + d->tol) * h->normal[a];
+            ok = ref_shape_triangle_dist(&clear, zero, 0.0, d->tris + 9 * (size_t)h->tri) > 0.0;
+        }
+        for (int a = 0; a < 3; a++) {
+            lo[a] = fmin(s->center[a], s->center[a] + end * delta[a]) - sqrt(reach) - d->tol;
+            hi[a] = fmax(s->center[a], s->center[a] + end * delta[a]) + sqrt(reach) + d->tol;
+        }
+        for (uint32_t k = 0; k < d->tri_count && ok && end > 0.0; k++)
+            for (int step = 0; step < DEMO_SWEEP_STEPS + !hit && ok && triangle_near(d, k, lo, hi); step++)
+                ok = ref_shape_triangle_dist(&shrunk, delta, end * step / DEMO_SWEEP_STEPS, d->tris + 9 * (size_t)k) > 0.0;
+        if (!ok && bad++ == 0)
+            report_failure("sweep oriented box: query %zu (hit %d, t %g) disagrees with sampling the motion", i, hit,
+                           end);
+    }
+    sample_row(d, "sweep box, oriented", DEMO_SHAPES, count, sec, "queries/s", DEMO_SHAPE_SAMPLE, bad);
+out:
+    free(shapes);
+    free(boxes);
+    free(recs);
+}
+
 /* Contacts (penetration depth and separating direction) of balls with what they overlap: each depth is the
  * radius less the brute-force distance from the center to its triangle. */
 static void demo_contacts(demo *d)
@@ -782,6 +871,7 @@ int cmd_demo(int argc, char **argv)
     }
     demo_raycasts(&d);
     demo_sweeps(&d);
+    demo_oriented_boxes(&d);
     demo_overlaps(&d);
     demo_contacts(&d);
     if (d.failures) {
