@@ -405,6 +405,32 @@ static void check_sweeps(check_ctx *c)
         check_sweep_hit(c, &h, "box sweep");
     c->queries += 3;
 
+    /* an oriented box (cbvh_sweep_with): the record as a sweep hit, a finite depth >= 0 only at t = 0 */
+    cbvh_shape box;
+    memset(&box, 0, sizeof box);
+    box.kind = CBVH_SHAPE_BOX;
+    for (int a = 0; a < 3; a++) {
+        box.center[a] = center[a];
+        box.half_extent[a] = half[a];
+        box.rotation[a] = (float)(unit(c) - 0.5);
+    }
+    box.rotation[3] = (float)unit(c);
+    cbvh_sweep_record rec;
+    if (cbvh_sweep_with(c->f, &box, delta, NULL, &rec) == CBVH_OK && rec.tri != CBVH_NO_HIT) {
+        cbvh_sweep_hit as_hit = {rec.tri, rec.t, {rec.point[0], rec.point[1], rec.point[2]},
+                                 {rec.normal[0], rec.normal[1], rec.normal[2]}};
+        check_sweep_hit(c, &as_hit, "oriented box sweep");
+        FUZZ_CHECK(isfinite(rec.depth) && rec.depth >= 0 && (rec.t == 0 || rec.depth == 0),
+                   "oriented box sweep: depth %.9g at t %.9g", rec.depth, rec.t);
+    }
+    size_t n_over = 0;
+    uint32_t over[8];
+    int more_over = 0;
+    if (cbvh_overlap_with(c->f, &box, NULL, 0, over, 8, &n_over, &more_over) == CBVH_OK)
+        FUZZ_CHECK(n_over <= 8 && (more_over == 0 || n_over == 8), "oriented box overlap: %zu written, more %d",
+                   n_over, more_over);
+    c->queries += 2;
+
     /* invalid shapes miss */
     float bad_radius = -1.0f, nan_center[3] = { NAN, 0, 0 };
     FUZZ_CHECK(!cbvh_sweep_sphere(c->f, center, bad_radius, delta, &h), "negative radius sweep hit");
