@@ -41,8 +41,8 @@ double rays_mesh_bounds(const rays_mesh *mesh, float lo[3], float hi[3])
     return sqrt(d2);
 }
 
-/* Uniform on the unit sphere (Archimedes: z uniform in [-1,1], angle uniform). */
-static void unit_direction(uint64_t *state, float dir[3])
+/* Archimedes: z uniform in [-1,1], angle uniform. */
+void rays_unit_direction(uint64_t *state, float dir[3])
 {
     double z = 2.0 * scene_rand_unit(state) - 1.0;
     double phi = 6.283185307179586 * scene_rand_unit(state);
@@ -61,7 +61,7 @@ static void incoherent(const float lo[3], const float hi[3], double diag, uint64
         cbvh_ray *r = &out[i];
         for (int a = 0; a < 3; a++)
             r->org[a] = (float)(lo[a] + ((double)hi[a] - lo[a]) * scene_rand_unit(state));
-        unit_direction(state, r->dir);
+        rays_unit_direction(state, r->dir);
         r->tmin = 0.0f;
         r->tmax = tmax;
     }
@@ -121,8 +121,7 @@ static void coherent(const float lo[3], const float hi[3], double diag, uint64_t
     }
 }
 
-/* A point of a triangle picked uniformly by index, uniformly on the triangle. */
-static void surface_point(const rays_mesh *mesh, uint64_t *state, double p[3])
+void rays_surface_point(const rays_mesh *mesh, uint64_t *state, double p[3], double normal[3])
 {
     size_t tri = (size_t)(scene_rand_unit(state) * (double)mesh->triangle_count);
     const uint32_t *ix = mesh->indices + 3 * tri;
@@ -136,6 +135,19 @@ static void surface_point(const rays_mesh *mesh, uint64_t *state, double p[3])
     }
     for (int a = 0; a < 3; a++)
         p[a] = (1.0 - b1 - b2) * v0[a] + b1 * v1[a] + b2 * v2[a];
+    if (!normal)
+        return;
+    double e1[3], e2[3];
+    for (int a = 0; a < 3; a++) {
+        e1[a] = (double)v1[a] - v0[a];
+        e2[a] = (double)v2[a] - v0[a];
+    }
+    normal[0] = e1[1] * e2[2] - e1[2] * e2[1];
+    normal[1] = e1[2] * e2[0] - e1[0] * e2[2];
+    normal[2] = e1[0] * e2[1] - e1[1] * e2[0];
+    double len = sqrt(normal[0] * normal[0] + normal[1] * normal[1] + normal[2] * normal[2]);
+    for (int a = 0; a < 3; a++)
+        normal[a] = len > 0.0 ? normal[a] / len : a == 2; /* a zero-area triangle: +z */
 }
 
 /* What games cast most (ground probes, bullet traces, line of sight): from a point half a percent of the
@@ -145,12 +157,12 @@ static void short_rays(const rays_mesh *mesh, double diag, uint64_t *state, cbvh
     for (size_t i = 0; i < count; i++) {
         double p[3];
         float off[3];
-        surface_point(mesh, state, p);
-        unit_direction(state, off);
+        rays_surface_point(mesh, state, p, NULL);
+        rays_unit_direction(state, off);
         cbvh_ray *r = &out[i];
         for (int a = 0; a < 3; a++)
             r->org[a] = (float)(p[a] + 0.005 * diag * off[a]);
-        unit_direction(state, r->dir);
+        rays_unit_direction(state, r->dir);
         r->tmin = 0.0f;
         r->tmax = (float)(0.01 * diag);
     }
@@ -168,7 +180,7 @@ static void shadow(const rays_mesh *mesh, const float lo[3], const float hi[3], 
         light[a] = 0.5 * ((double)lo[a] + hi[a]) + diag * toward[a] / tn;
     for (size_t i = 0; i < count; i++) {
         double p[3];
-        surface_point(mesh, state, p);
+        rays_surface_point(mesh, state, p, NULL);
         cbvh_ray *r = &out[i];
         double len2 = 0.0;
         for (int a = 0; a < 3; a++) {

@@ -37,4 +37,10 @@ double rays_mesh_bounds(const rays_mesh *mesh, float lo[3], float hi[3]);
  * Precondition: mesh->triangle_count > 0. */
 void rays_generate(ray_kind kind, const rays_mesh *mesh, uint64_t seed, cbvh_ray *out, size_t count);
 
+/* The samplers the ray sets (and tools/support/shapes.c) draw from a generator state: a unit direction
+ * uniform on the sphere; a point of a triangle picked uniformly by index, uniformly on that triangle, and
+ * (when normal is not NULL) that triangle's unit normal as wound. */
+void rays_unit_direction(uint64_t *state, float dir[3]);
+void rays_surface_point(const rays_mesh *mesh, uint64_t *state, double p[3], double normal[3]);
+
 #endif
