@@ -33,8 +33,11 @@ static void run_slice(slice *s)
 {
     const bench_job *j = s->job;
     double start = clock_seconds(CLOCK_THREAD_CPUTIME_ID);
-    j->kernel(j->engine, j->rays + s->begin, s->end - s->begin, j->hits ? j->hits + s->begin : NULL,
-              j->occluded ? j->occluded + s->begin : NULL, s->stats);
+    if (j->range)
+        j->range(j->range_job, s->begin, s->end, s->stats);
+    else
+        j->kernel(j->engine, j->rays + s->begin, s->end - s->begin, j->hits ? j->hits + s->begin : NULL,
+                  j->occluded ? j->occluded + s->begin : NULL, s->stats);
     s->cpu_seconds = clock_seconds(CLOCK_THREAD_CPUTIME_ID) - start;
 }
 
@@ -189,25 +192,23 @@ void bench_agree_closest(bench_agreement *a, const cbvh_ray *rays, const cbvh_hi
                          size_t count, double tolerance)
 {
     for (size_t i = 0; i < count; i++) {
-        int hit_ref = ref[i].tri != CBVH_NO_HIT, hit_other = other[i].tri != CBVH_NO_HIT;
-        if (!hit_ref && !hit_other) {
-            a->both_miss++;
-            continue;
-        }
-        if (hit_ref != hit_other) {
-            a->disagree++;
-            continue;
-        }
         const float *d = rays[i].dir;
         double len = sqrt((double)d[0] * d[0] + (double)d[1] * d[1] + (double)d[2] * d[2]);
-        int close = fabs((double)ref[i].t - (double)other[i].t) * len <= tolerance;
-        if (!close)
-            a->disagree++;
-        else if (ref[i].tri == other[i].tri)
-            a->same_triangle++;
-        else
-            a->t_close++;
+        bench_agree_one(a, ref[i].tri, other[i].tri, fabs((double)ref[i].t - (double)other[i].t) * len, tolerance);
     }
+}
+
+void bench_agree_one(bench_agreement *a, uint32_t tri_ref, uint32_t tri_other, double distance, double tolerance)
+{
+    int hit_ref = tri_ref != CBVH_NO_HIT, hit_other = tri_other != CBVH_NO_HIT;
+    if (!hit_ref && !hit_other)
+        a->both_miss++;
+    else if (hit_ref != hit_other || !(distance <= tolerance))
+        a->disagree++;
+    else if (tri_ref == tri_other)
+        a->same_triangle++;
+    else
+        a->t_close++;
 }
 
 uint64_t bench_disagree_any(const uint8_t *ref, const uint8_t *other, size_t count)

@@ -13,14 +13,19 @@
 typedef void (*bench_kernel)(const void *engine, const cbvh_ray *rays, size_t count, cbvh_hit *hits,
                              uint8_t *occluded, cbvh_query_stats *stats);
 
+/* Runs queries [begin, end) of a job of another kind (shape queries): `job` is bench_job.range_job. */
+typedef void (*bench_range_fn)(const void *job, size_t begin, size_t end, cbvh_query_stats *stats);
+
 typedef struct bench_job {
-    bench_kernel kernel;
+    bench_kernel kernel; /* rays, or NULL for a job `range` runs */
     const void *engine;
     const cbvh_ray *rays;
     size_t count;
     cbvh_hit *hits;     /* closest hit queries, else NULL */
     uint8_t *occluded;  /* any-hit queries, else NULL */
     int cpu_clock;      /* time with the threads' CPU clocks instead of the wall clock */
+    bench_range_fn range;
+    const void *range_job;
 } bench_job;
 
 /* Seconds on the wall clock, or with cpu nonzero the CPU time of the whole
@@ -77,6 +82,10 @@ typedef struct bench_agreement {
 /* Adds the comparison of count answers; tolerance is a distance (|t - t_ref| * |dir|). */
 void bench_agree_closest(bench_agreement *a, const cbvh_ray *rays, const cbvh_hit *ref, const cbvh_hit *other,
                          size_t count, double tolerance);
+
+/* Adds one comparison: whether each answer hit, the triangles, and how far apart the two hits' t lie as a
+ * distance (ignored unless both hit). */
+void bench_agree_one(bench_agreement *a, uint32_t tri_ref, uint32_t tri_other, double distance, double tolerance);
 
 /* Rays whose any-hit flags differ. */
 uint64_t bench_disagree_any(const uint8_t *ref, const uint8_t *other, size_t count);
