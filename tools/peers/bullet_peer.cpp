@@ -2,7 +2,13 @@
 #include "config.h"
 
 #include <btBulletCollisionCommon.h>
+#include <BulletCollision/CollisionDispatch/SphereTriangleDetector.h>
+#include <BulletCollision/CollisionShapes/btTriangleShape.h>
+#include <BulletCollision/NarrowPhaseCollision/btGjkEpaPenetrationDepthSolver.h>
+#include <BulletCollision/NarrowPhaseCollision/btGjkPairDetector.h>
+#include <BulletCollision/NarrowPhaseCollision/btPointCollector.h>
 #include <BulletCollision/NarrowPhaseCollision/btRaycastCallback.h>
+#include <BulletCollision/NarrowPhaseCollision/btVoronoiSimplexSolver.h>
 #include <cmath>
 #include <cstdio>
 #include <ctime>
@@ -54,6 +60,84 @@ void segment(const cbvh_ray &r, btVector3 &from, btVector3 &to)
     from.setValue(r.org[0] + r.tmin * r.dir[0], r.org[1] + r.tmin * r.dir[1], r.org[2] + r.tmin * r.dir[2]);
     to.setValue(r.org[0] + r.tmax * r.dir[0], r.org[1] + r.tmax * r.dir[1], r.org[2] + r.tmax * r.dir[2]);
 }
+
+btScalar segment_length(const shape_query &q)
+{
+    return btVector3(q.p1[0] - q.p0[0], q.p1[1] - q.p0[1], q.p1[2] - q.p0[2]).length();
+}
+
+/* The query's shape as Bullet holds it, built on the stack per query (no allocation), placed by `place`
+ * at the shape's start. Bullet's capsule stands along its local y axis. */
+struct query_shape {
+    btSphereShape sphere;
+    btCapsuleShape capsule;
+    btBoxShape box;
+    const btConvexShape *shape;
+    btTransform place;
+
+    query_shape(shape_kind kind, const shape_query &q)
+        : sphere(q.size[0]), capsule(q.size[0], segment_length(q)), box(btVector3(q.size[0], q.size[1], q.size[2]))
+    {
+        btVector3 p0(q.p0[0], q.p0[1], q.p0[2]), p1(q.p1[0], q.p1[1], q.p1[2]);
+        place.setIdentity();
+        place.setOrigin(0.5f * (p0 + p1));
+        if (kind == SHAPE_SPHERE) {
+            shape = &sphere;
+        } else if (kind == SHAPE_BOX) {
+            box.setMargin(0.0f);
+            shape = &box;
+        } else {
+            btVector3 axis = p1 - p0;
+            btScalar length = axis.length();
+            if (length > 0.0f)
+                place.setRotation(shortestArcQuat(btVector3(0, 1, 0), axis / length));
+            shape = &capsule;
+        }
+    }
+};
+
+/* Keeps the first contact: processTriangle calls reportHit only for a fraction below m_hitFraction. */
+struct sweep_callback : public btTriangleConvexcastCallback {
+    int triangle = -1;
+    sweep_callback(const btConvexShape *shape, const btTransform &from, const btTransform &to)
+        : btTriangleConvexcastCallback(shape, from, to, btTransform::getIdentity(), 0.0f)
+    {
+    }
+    btScalar reportHit(const btVector3 &, const btVector3 &, btScalar fraction, int, int index) override
+    {
+        triangle = index;
+        m_hitFraction = fraction;
+        return fraction;
+    }
+};
+
+/* Collects the triangles of the box walk that the exact test finds at distance <= 0. */
+struct overlap_callback : public btTriangleCallback {
+    shape_kind kind;
+    query_shape *q;
+    shape_answer *answer;
+    overlap_callback(shape_kind k, query_shape *s, shape_answer *a) : kind(k), q(s), answer(a) {}
+    void processTriangle(btVector3 *v, int, int index) override
+    {
+        btTriangleShape triangle(v[0], v[1], v[2]);
+        triangle.setMargin(0.0f);
+        btDiscreteCollisionDetectorInterface::ClosestPointInput input;
+        input.m_transformA = q->place;
+        input.m_transformB.setIdentity();
+        btPointCollector result;
+        if (kind == SHAPE_SPHERE) {
+            SphereTriangleDetector detector(&q->sphere, &triangle, 0.0f);
+            detector.getClosestPoints(input, result, nullptr);
+        } else {
+            btVoronoiSimplexSolver simplex;
+            btGjkEpaPenetrationDepthSolver epa;
+            btGjkPairDetector detector(q->shape, &triangle, &simplex, &epa);
+            detector.getClosestPoints(input, result, nullptr);
+        }
+        if (result.m_hasResult && result.m_distance <= 0.0f)
+            shape_answer_add(answer, (uint32_t)index);
+    }
+};
 
 } // namespace
 
@@ -119,5 +203,44 @@ extern "C" void bullet_peer_occluded(const bullet_peer *peer, const cbvh_ray *ra
         any_callback cb(from, to);
         peer->shape->performRaycast(&cb, from, to);
         occluded[i] = cb.hit;
+    }
+}
+
+extern "C" void bullet_peer_sweep(const bullet_peer *peer, shape_kind kind, const shape_query *queries, size_t count,
+                                  shape_answer *out)
+{
+    for (size_t i = 0; i < count; i++) {
+        const shape_query &q = queries[i];
+        query_shape s(kind, q);
+        btTransform to = s.place;
+        to.setOrigin(s.place.getOrigin() + btVector3(q.delta[0], q.delta[1], q.delta[2]));
+        sweep_callback cb(s.shape, s.place, to);
+        /* as convexSweepTest: the shape's box under its rotation only, moved from start to end */
+        btTransform rotation(s.place.getBasis());
+        btVector3 box_min, box_max;
+        s.shape->getAabb(rotation, box_min, box_max);
+        peer->shape->performConvexcast(&cb, s.place.getOrigin(), to.getOrigin(), box_min, box_max);
+        shape_answer &a = out[i];
+        a.count = 0;
+        a.set_hash = 0;
+        a.tri = cb.triangle < 0 ? CBVH_NO_HIT : (uint32_t)cb.triangle;
+        a.t = cb.triangle < 0 ? INFINITY : cb.m_hitFraction;
+    }
+}
+
+extern "C" void bullet_peer_overlap(const bullet_peer *peer, shape_kind kind, const shape_query *queries,
+                                    size_t count, shape_answer *out)
+{
+    for (size_t i = 0; i < count; i++) {
+        query_shape s(kind, queries[i]);
+        shape_answer &a = out[i];
+        a.tri = CBVH_NO_HIT;
+        a.t = INFINITY;
+        a.count = 0;
+        a.set_hash = 0;
+        overlap_callback cb(kind, &s, &a);
+        btVector3 box_min, box_max;
+        s.shape->getAabb(s.place, box_min, box_max);
+        peer->shape->processAllTriangles(&cb, box_min, box_max);
     }
 }

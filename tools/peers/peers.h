@@ -6,6 +6,7 @@
 #include <stdint.h>
 
 #include "cbvh.h"
+#include "support/shapes.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -69,6 +70,19 @@ void bullet_peer_raycast(const bullet_peer *peer, const cbvh_ray *rays, size_t c
 /* Any hit: the callback clamps the hit fraction to 0 at the first hit so every
  * later triangle is rejected at once (Bullet's walk itself cannot stop early). */
 void bullet_peer_occluded(const bullet_peer *peer, const cbvh_ray *rays, size_t count, uint8_t *occluded);
+
+/* Shape queries as btCollisionWorld runs them for one static triangle mesh, without the world around them:
+ * a sweep is convexSweepTest's inner call, performConvexcast with a btTriangleConvexcastCallback (GJK
+ * conservative advancement per triangle) keeping the smallest hit fraction; an overlap is contactTest's
+ * inner loop, processAllTriangles over the shape's box with the narrow phase the dispatcher picks per
+ * triangle (SphereTriangleDetector for a sphere, btGjkPairDetector with EPA for capsule and box), counting
+ * the triangles at distance <= 0. Margins: btSphereShape and btCapsuleShape are their core plus a margin of
+ * the radius (exact shapes); btBoxShape gets margin 0 (the default 0.04 rounds its corners in the mesh's
+ * units) and the triangles margin 0, so each engine answers for the same exact shapes. */
+void bullet_peer_sweep(const bullet_peer *peer, shape_kind kind, const shape_query *queries, size_t count,
+                       shape_answer *out);
+void bullet_peer_overlap(const bullet_peer *peer, shape_kind kind, const shape_query *queries, size_t count,
+                         shape_answer *out);
 #endif
 
 #ifdef __cplusplus
