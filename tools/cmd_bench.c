@@ -16,6 +16,7 @@
 #include "peers/peers.h"
 #include "progress.h"
 #include "support/rays.h"
+#include "support/shapes.h"
 
 static const char usage[] =
     "Usage: cbvh bench [OPTIONS] INPUT\n"
@@ -32,13 +33,23 @@ static const char usage[] =
     "rays and 16-ray packets, default and robust; Bullet 3 quantized BVH) run on the same\n"
     "triangles and rays: build time, memory per triangle, MRays/s, the ratio cbvh/peer, and\n"
     "ray-by-ray agreement with cbvh's answers.\n"
+    "Then shape queries as games ask them near a surface (shapes about 1% of the diagonal\n"
+    "across): sphere, capsule and box sweeps moving 1.5% of the diagonal, and sphere, capsule\n"
+    "and box overlaps, beside Bullet (convex casts and its per-triangle narrow phase, margins\n"
+    "0 on boxes and triangles): microseconds per query, queries per second, the ratio\n"
+    "cbvh/Bullet, and agreement query by query (the same first triangle or t within 1e-4 of\n"
+    "the diagonal for sweeps, the same triangle set for overlaps).\n"
     "Markdown tables go to stdout, progress to stderr (on a terminal).\n"
     "\n"
     "Options:\n"
     "  --gen SPEC      benchmark a generated scene instead of INPUT\n"
     "  --rays N        rays per ray set (default 1000000)\n"
-    "  --seed S        ray generator seed (default 1)\n"
-    "  --threads T     split the rays across T threads (default 1); Embree builds with T threads\n"
+    "  --shapes N      queries per shape set (default 100000; 0: no shape queries)\n"
+    "  --seed S        ray and shape generator seed (default 1)\n"
+    "  --threads LIST  thread counts, comma-separated (default 1,2): every figure at the first,\n"
+    "                  cbvh sorted, each peer's main variant and the shape queries at every\n"
+    "                  count, the queries split in contiguous slices; Embree builds with the\n"
+    "                  largest\n"
     "  --reps R        timed repetitions per figure, the median is reported (default 5)\n"
     "  --budget S      stop repeating a figure once its runs took S seconds in all (default 2;\n"
     "                  0: never), so the slowest peer does not dominate the run time\n"
@@ -52,7 +63,7 @@ static const char usage[] =
     "\n"
     "Exit status: 0 done, 1 the input is not a usable mesh or cbvh file, 2 usage or I/O error.\n";
 
-enum { OPT_GEN = 1, OPT_RAYS, OPT_SEED, OPT_THREADS, OPT_REPS, OPT_BUDGET, OPT_CPU, OPT_JSON, OPT_NO_PEERS, OPT_QUIET };
+enum { OPT_GEN = 1, OPT_RAYS, OPT_SHAPES, OPT_SEED, OPT_THREADS, OPT_REPS, OPT_BUDGET, OPT_CPU, OPT_JSON, OPT_NO_PEERS, OPT_QUIET };
 
 static const cli_option options[] = {
     { "gen", CLI_ARG_REQUIRED, OPT_GEN },       { "rays", CLI_ARG_REQUIRED, OPT_RAYS },
@@ -60,14 +71,22 @@ static const cli_option options[] = {
     { "reps", CLI_ARG_REQUIRED, OPT_REPS },     { "budget", CLI_ARG_REQUIRED, OPT_BUDGET },
     { "cpu-time", CLI_ARG_NONE, OPT_CPU },      { "json", CLI_ARG_REQUIRED, OPT_JSON },
     { "no-peers", CLI_ARG_NONE, OPT_NO_PEERS }, { "quiet", CLI_ARG_NONE, OPT_QUIET },
-    { NULL, 0, 0 },
+    { "shapes", CLI_ARG_REQUIRED, OPT_SHAPES }, { NULL, 0, 0 },
 };
 
-/* Rays a peer runs first, to see whether all rays fit in the time budget. */
-#define BENCH_PROBE_RAYS 65536
+/* Rays or shape queries a peer runs first, to see whether all fit in the time budget. */
+#define BENCH_PROBE_QUERIES 65536
 
-/* Answers compared with a tolerance of this fraction of the scene diagonal. */
+/* Ray answers compared with a tolerance of this fraction of the scene diagonal. */
 #define AGREE_TOLERANCE 1e-5
+/* Sweeps agree on the same first triangle, or on t within this fraction of the diagonal (t times the length
+ * of the motion) when the triangles differ (a shared edge or vertex). t alone would not do: Bullet's
+ * conservative advancement stops once the gap is below 0.001 in the mesh's units (a constant in
+ * btContinuousConvexCollision), so its t comes early by that much over the cosine of the approach angle, on
+ * every mesh, whatever its scale; the table shows how far the t of the same triangle lie apart. */
+#define SWEEP_AGREE_TOLERANCE 1e-4
+
+#define MAX_THREAD_COUNTS 8
 
 /* ------------------------------------------------------------------ */
 /* Engines: each runs a slice of rays for bench_run.                   */
@@ -111,7 +130,92 @@ typedef struct method {
     bench_kernel kernel;
     const void *state;
     int counted; /* cbvh: nodes and triangles per ray are measured */
+    int main;    /* measured at every thread count, not only the first */
 } method;
+
+/* A shape query engine: answers queries[0..count) of one kind, sweeps or overlaps. */
+typedef void (*shape_kernel)(const void *engine, shape_kind kind, int sweep, const shape_query *queries,
+                             size_t count, shape_answer *out);
+
+typedef struct shape_method {
+    const char *engine; /* "cbvh", "bullet" */
+    shape_kernel kernel;
+    const void *state;
+} shape_method;
+
+/* A slice of shape queries for bench_run's threads. */
+typedef struct shape_job {
+    const shape_method *m;
+    shape_kind kind;
+    int sweep;
+    const shape_query *queries;
+    shape_answer *answers;
+} shape_job;
+
+/* ------------------------------------------------------------------ */
+/* Shape engines                                                       */
+/* ------------------------------------------------------------------ */
+
+static int add_overlap(void *user, uint32_t tri)
+{
+    shape_answer_add(user, tri);
+    return 0;
+}
+
+/* cbvh's answer to one shape query; the engine is the opened file. */
+static void cbvh_shape_query(const cbvh_file *f, shape_kind kind, int sweep, const shape_query *q, shape_answer *a)
+{
+    memset(a, 0, sizeof *a);
+    a->tri = CBVH_NO_HIT;
+    a->t = INFINITY;
+    if (sweep) {
+        cbvh_sweep_hit h;
+        int hit = kind == SHAPE_SPHERE  ? cbvh_sweep_sphere(f, q->p0, q->size[0], q->delta, &h)
+                  : kind == SHAPE_BOX   ? cbvh_sweep_box(f, q->p0, q->size, q->delta, &h)
+                                        : cbvh_sweep_capsule(f, q->p0, q->p1, q->size[0], q->delta, &h);
+        if (hit) {
+            a->tri = h.tri;
+            a->t = h.t;
+        }
+    } else if (kind == SHAPE_BOX) {
+        float lo[3], hi[3];
+        for (int k = 0; k < 3; k++) {
+            lo[k] = q->p0[k] - q->size[k];
+            hi[k] = q->p0[k] + q->size[k];
+        }
+        cbvh_overlap_box(f, lo, hi, add_overlap, a, NULL, 0);
+    } else if (kind == SHAPE_SPHERE) {
+        cbvh_overlap_sphere(f, q->p0, q->size[0], add_overlap, a, NULL, 0);
+    } else {
+        cbvh_overlap_capsule(f, q->p0, q->p1, q->size[0], add_overlap, a, NULL, 0);
+    }
+}
+
+static void cbvh_shape_kernel(const void *engine, shape_kind kind, int sweep, const shape_query *queries,
+                              size_t count, shape_answer *out)
+{
+    for (size_t i = 0; i < count; i++)
+        cbvh_shape_query(engine, kind, sweep, &queries[i], &out[i]);
+}
+
+#ifdef HAVE_BULLET
+static void bullet_shape_kernel(const void *engine, shape_kind kind, int sweep, const shape_query *queries,
+                                size_t count, shape_answer *out)
+{
+    if (sweep)
+        bullet_peer_sweep(engine, kind, queries, count, out);
+    else
+        bullet_peer_overlap(engine, kind, queries, count, out);
+}
+#endif
+
+/* A bench_range_fn over a shape_job. */
+static void shape_range(const void *job, size_t begin, size_t end, cbvh_query_stats *stats)
+{
+    const shape_job *j = job;
+    (void)stats;
+    j->m->kernel(j->m->state, j->kind, j->sweep, j->queries + begin, end - begin, j->answers + begin);
+}
 
 /* A built engine's cost. */
 typedef struct build_row {
@@ -126,6 +230,7 @@ typedef struct result_row {
     ray_kind set;
     int any;
     const method *m;
+    unsigned threads;
     double seconds;
     size_t count; /* rays timed: all, or a prefix for an engine too slow for the budget */
     unsigned runs;
@@ -140,14 +245,43 @@ typedef struct agree_row {
     size_t closest_count, any_count; /* rays compared */
 } agree_row;
 
+/* A shape set's time with one engine and thread count. */
+typedef struct shape_row {
+    shape_kind kind;
+    int sweep;
+    const shape_method *m;
+    unsigned threads;
+    double seconds;
+    size_t count; /* queries timed */
+    unsigned runs;
+    uint64_t found; /* sweeps: queries that hit; overlaps: triangles reported (over the queries timed) */
+} shape_row;
+
+/* A peer's answers against cbvh's, query by query. */
+typedef struct shape_agree_row {
+    shape_kind kind;
+    int sweep;
+    const shape_method *m;
+    bench_agreement sweeps; /* sweeps: t compared as a distance along the motion */
+    uint64_t same_set, both_empty, other_set;          /* overlaps */
+    uint64_t ref_triangles, other_triangles;           /* overlaps: triangles reported by each */
+    uint64_t ref_start_touching, other_start_touching; /* sweeps: t = 0 answers */
+    double t_distance_max; /* sweeps, both hit: the largest |t - t_cbvh| * |delta| */
+    double t_distance_sum; /* sweeps, the same triangle: the sum of |t - t_cbvh| * |delta| */
+    size_t count;
+} shape_agree_row;
+
 #define MAX_METHODS 16
 #define MAX_BUILDS 4
+#define MAX_SHAPE_METHODS 2
 
 typedef struct bench_state {
     const char *command;
-    size_t rays;
+    size_t rays, shapes;
     uint64_t seed;
-    unsigned threads, reps;
+    unsigned thread_counts[MAX_THREAD_COUNTS];
+    int thread_count_n;
+    unsigned reps;
     float budget;
     int cpu_clock;
     const char *json_path;
@@ -170,6 +304,12 @@ typedef struct bench_state {
     int result_count;
     agree_row *agreements;
     int agree_count;
+    shape_method shape_methods[MAX_SHAPE_METHODS];
+    int shape_method_count;
+    shape_row *shape_results;
+    int shape_result_count;
+    shape_agree_row *shape_agreements;
+    int shape_agree_count;
 #ifdef HAVE_EMBREE
     embree_peer *embree[2];
 #endif
@@ -179,7 +319,7 @@ typedef struct bench_state {
 } bench_state;
 
 static void add_method(bench_state *s, const char *engine, const char *variant, bench_kernel kernel, const void *state,
-                       int counted)
+                       int counted, int main)
 {
     method *m = &s->methods[s->method_count++];
     m->engine = engine;
@@ -187,6 +327,24 @@ static void add_method(bench_state *s, const char *engine, const char *variant, 
     m->kernel = kernel;
     m->state = state;
     m->counted = counted;
+    m->main = main;
+}
+
+static void add_shape_method(bench_state *s, const char *engine, shape_kernel kernel, const void *state)
+{
+    shape_method *m = &s->shape_methods[s->shape_method_count++];
+    m->engine = engine;
+    m->kernel = kernel;
+    m->state = state;
+}
+
+/* The largest thread count asked for. */
+static unsigned max_threads(const bench_state *s)
+{
+    unsigned n = 1;
+    for (int i = 0; i < s->thread_count_n; i++)
+        n = s->thread_counts[i] > n ? s->thread_counts[i] : n;
+    return n;
 }
 
 /* ------------------------------------------------------------------ */
@@ -242,8 +400,9 @@ static void add_cbvh_methods(bench_state *s)
     for (int k = 0; k < BENCH_CBVH_VARIANTS; k++) {
         bench_cbvh *e = &s->cbvh_engines[k];
         bench_cbvh_variant(e, s->file, k);
-        add_method(s, "cbvh", e->name, bench_cbvh_kernel, e, 1);
+        add_method(s, "cbvh", e->name, bench_cbvh_kernel, e, 1, k == 0);
     }
+    add_shape_method(s, "cbvh", cbvh_shape_kernel, s->file);
 }
 
 /* Builds every peer configure found; a peer that fails to build is reported and skipped. */
@@ -259,7 +418,7 @@ static void build_peers(bench_state *s)
     static const char *const names[2] = { "embree", "embree-robust" };
     for (int robust = 0; robust < 2; robust++) {
         progress_update(&s->prog, robust ? "building embree (robust)" : "building embree", -1.0);
-        s->embree[robust] = embree_peer_create(&pm, robust, (int)s->threads, &info, err, sizeof err);
+        s->embree[robust] = embree_peer_create(&pm, robust, (int)max_threads(s), &info, err, sizeof err);
         progress_done(&s->prog);
         if (!s->embree[robust]) {
             cli_error(s->command, NULL, "%s", err);
@@ -271,8 +430,8 @@ static void build_peers(bench_state *s)
         b->open_seconds = -1.0;
         b->bytes = info.memory_bytes + info.mesh_bytes;
         b->structure_bytes = info.memory_bytes;
-        add_method(s, names[robust], "single", embree_kernel, s->embree[robust], 0);
-        add_method(s, names[robust], "packet16", embree16_kernel, s->embree[robust], 0);
+        add_method(s, names[robust], "single", embree_kernel, s->embree[robust], 0, !robust);
+        add_method(s, names[robust], "packet16", embree16_kernel, s->embree[robust], 0, 0);
     }
 #endif
 #ifdef HAVE_BULLET
@@ -288,7 +447,8 @@ static void build_peers(bench_state *s)
         b->open_seconds = -1.0;
         b->bytes = info.memory_bytes + info.mesh_bytes;
         b->structure_bytes = info.memory_bytes;
-        add_method(s, "bullet", "quantized", bullet_kernel, s->bullet, 0);
+        add_method(s, "bullet", "quantized", bullet_kernel, s->bullet, 0, 1);
+        add_shape_method(s, "bullet", bullet_shape_kernel, s->bullet);
     }
 #endif
 }
@@ -315,63 +475,155 @@ typedef struct buffers {
     uint8_t *ref_occluded, *occluded;
 } buffers;
 
+/* Times a job on `threads` threads, the median of the repetitions; returns negative when the threads
+ * cannot start. A reference engine (cbvh) first makes a whole pass, counted into *stats when not NULL, so
+ * counting does not perturb the timing. Every pass leaves the answers for the agreement check. A peer
+ * first runs a prefix of the queries; when all of them would take longer than the budget it is timed on
+ * the prefix the budget allows (job->count is cut to it): Bullet's ray walk cannot stop at the first hit,
+ * and takes minutes for a million rays on a large mesh. */
+static double time_job(bench_state *s, bench_job *job, unsigned threads, int reference,
+                       cbvh_query_stats *stats, unsigned *runs)
+{
+    size_t all = job->count;
+    double t = reference ? bench_run_once(job, threads, stats) : 0.0;
+    if (!reference && s->budget > 0.0f && all > BENCH_PROBE_QUERIES) {
+        job->count = BENCH_PROBE_QUERIES;
+        t = bench_run_once(job, threads, NULL);
+        double allowed = t > 0.0 ? (double)BENCH_PROBE_QUERIES * s->budget / t : (double)all;
+        job->count = allowed >= (double)all ? all : allowed > BENCH_PROBE_QUERIES ? (size_t)allowed
+                                                                                  : BENCH_PROBE_QUERIES;
+    }
+    if (t >= 0.0)
+        t = bench_run_median(job, threads, s->reps, s->budget, runs);
+    if (t < 0.0) {
+        progress_done(&s->prog);
+        cli_error(s->command, NULL, "cannot start %u threads", threads);
+    }
+    return t;
+}
+
 /* Measures every method on one ray set: method 0 (cbvh sorted) first, as the
- * reference every other method's answers are compared with. */
+ * reference every other method's answers are compared with, at the first thread
+ * count (where the answers are compared); the main methods again at every other. */
 static int measure_set(bench_state *s, ray_kind set, buffers *b, int *step, int steps)
 {
     char label[96];
     for (int any = 0; any < 2; any++)
-        for (int k = 0; k < s->method_count; k++) {
-            const method *m = &s->methods[k];
-            snprintf(label, sizeof label, "%s %s: %s %s", rays_kind_name(set), any ? "any" : "closest", m->engine,
-                     m->variant);
-            progress_update(&s->prog, label, (double)(*step)++ / steps);
-            bench_job job = { m->kernel, m->state, b->rays, s->rays, NULL, NULL, s->cpu_clock };
-            if (any)
-                job.occluded = k == 0 ? b->ref_occluded : b->occluded;
+        for (int ti = 0; ti < s->thread_count_n; ti++)
+            for (int k = 0; k < s->method_count; k++) {
+                const method *m = &s->methods[k];
+                unsigned threads = s->thread_counts[ti];
+                if (ti > 0 && !m->main)
+                    continue;
+                snprintf(label, sizeof label, "%s %s: %s %s, %u thread(s)", rays_kind_name(set),
+                         any ? "any" : "closest", m->engine, m->variant, threads);
+                progress_update(&s->prog, label, (double)(*step)++ / steps);
+                bench_job job = { m->kernel, m->state, b->rays, s->rays, NULL, NULL, s->cpu_clock, NULL, NULL };
+                if (any)
+                    job.occluded = k == 0 ? b->ref_occluded : b->occluded;
+                else
+                    job.hits = k == 0 ? b->ref_hits : b->hits;
+                result_row *r = &s->results[s->result_count++];
+                memset(r, 0, sizeof *r);
+                r->set = set;
+                r->any = any;
+                r->m = m;
+                r->threads = threads;
+                double t = time_job(s, &job, threads, m->counted, m->counted ? &r->stats : NULL, &r->runs);
+                if (t < 0.0)
+                    return CLI_EXIT_USAGE;
+                r->count = job.count;
+                r->seconds = t;
+                if (k == 0 || ti > 0)
+                    continue;
+                agree_row *a =
+                    &s->agreements[any ? s->agree_count - (s->method_count - 1) + (k - 1) : s->agree_count++];
+                if (!any) {
+                    memset(a, 0, sizeof *a);
+                    a->set = set;
+                    a->m = m;
+                    a->closest_count = job.count;
+                    bench_agree_closest(&a->closest, b->rays, b->ref_hits, b->hits, job.count,
+                                        AGREE_TOLERANCE * s->diagonal);
+                } else {
+                    a->any_count = job.count;
+                    a->any_disagree = bench_disagree_any(b->ref_occluded, b->occluded, job.count);
+                }
+            }
+    return 0;
+}
+
+static void agree_shapes(shape_agree_row *a, const shape_query *queries, const shape_answer *ref,
+                         const shape_answer *other, size_t count, double tolerance)
+{
+    a->count = count;
+    for (size_t i = 0; i < count; i++) {
+        const shape_answer *x = &ref[i], *y = &other[i];
+        if (!a->sweep) {
+            a->ref_triangles += x->count;
+            a->other_triangles += y->count;
+            if (x->count != y->count || x->set_hash != y->set_hash)
+                a->other_set++;
+            else if (x->count == 0)
+                a->both_empty++;
             else
-                job.hits = k == 0 ? b->ref_hits : b->hits;
-            result_row *r = &s->results[s->result_count++];
+                a->same_set++;
+            continue;
+        }
+        const float *d = queries[i].delta;
+        double len = sqrt((double)d[0] * d[0] + (double)d[1] * d[1] + (double)d[2] * d[2]);
+        double distance = fabs((double)x->t - (double)y->t) * len;
+        a->ref_start_touching += x->tri != CBVH_NO_HIT && x->t == 0.0f;
+        a->other_start_touching += y->tri != CBVH_NO_HIT && y->t == 0.0f;
+        if (x->tri != CBVH_NO_HIT && y->tri != CBVH_NO_HIT && distance > a->t_distance_max)
+            a->t_distance_max = distance;
+        /* the same first triangle agrees at any t: see SWEEP_AGREE_TOLERANCE */
+        if (x->tri == y->tri && x->tri != CBVH_NO_HIT) {
+            a->sweeps.same_triangle++;
+            a->t_distance_sum += distance;
+        } else {
+            bench_agree_one(&a->sweeps, x->tri, y->tri, distance, tolerance);
+        }
+    }
+}
+
+/* Measures every shape engine on one shape set at every thread count; cbvh (engine 0) first, as the
+ * reference, compared with each peer at the first thread count. */
+static int measure_shapes(bench_state *s, shape_kind kind, int sweep, const shape_query *queries, shape_answer *ref,
+                          shape_answer *other, int *step, int steps)
+{
+    char label[96];
+    for (int ti = 0; ti < s->thread_count_n; ti++)
+        for (int k = 0; k < s->shape_method_count; k++) {
+            const shape_method *m = &s->shape_methods[k];
+            unsigned threads = s->thread_counts[ti];
+            snprintf(label, sizeof label, "%s %s: %s, %u thread(s)", shape_kind_name(kind),
+                     sweep ? "sweep" : "overlap", m->engine, threads);
+            progress_update(&s->prog, label, (double)(*step)++ / steps);
+            shape_answer *answers = k == 0 ? ref : other;
+            shape_job sj = { m, kind, sweep, queries, answers };
+            bench_job job = { NULL, NULL, NULL, s->shapes, NULL, NULL, s->cpu_clock, shape_range, &sj };
+            shape_row *r = &s->shape_results[s->shape_result_count++];
             memset(r, 0, sizeof *r);
-            r->set = set;
-            r->any = any;
+            r->kind = kind;
+            r->sweep = sweep;
             r->m = m;
-            /* A separate counted pass for cbvh, so counting does not perturb the timing.
-             * Every pass leaves the answers for the agreement check. A peer first runs
-             * a prefix of the rays; when all of them would take longer than the budget
-             * it is timed on the prefix the budget allows (Bullet's walk cannot stop
-             * at the first hit, and takes minutes for a million rays on a large mesh). */
-            double t = m->counted ? bench_run_once(&job, s->threads, &r->stats) : 0.0;
-            if (!m->counted && s->budget > 0.0f && s->rays > BENCH_PROBE_RAYS) {
-                job.count = BENCH_PROBE_RAYS;
-                t = bench_run_once(&job, s->threads, NULL);
-                double allowed = t > 0.0 ? (double)BENCH_PROBE_RAYS * s->budget / t : (double)s->rays;
-                job.count = allowed >= (double)s->rays ? s->rays : allowed > BENCH_PROBE_RAYS ? (size_t)allowed
-                                                                                             : BENCH_PROBE_RAYS;
-            }
-            r->count = job.count;
-            if (t >= 0.0)
-                t = bench_run_median(&job, s->threads, s->reps, s->budget, &r->runs);
-            if (t < 0.0) {
-                progress_done(&s->prog);
-                cli_error(s->command, NULL, "cannot start %u threads", s->threads);
+            r->threads = threads;
+            double t = time_job(s, &job, threads, k == 0, NULL, &r->runs);
+            if (t < 0.0)
                 return CLI_EXIT_USAGE;
-            }
             r->seconds = t;
-            if (k == 0)
+            r->count = job.count;
+            for (size_t i = 0; i < job.count; i++)
+                r->found += sweep ? answers[i].tri != CBVH_NO_HIT : answers[i].count;
+            if (k == 0 || ti > 0)
                 continue;
-            agree_row *a = &s->agreements[any ? s->agree_count - (s->method_count - 1) + (k - 1) : s->agree_count++];
-            if (!any) {
-                memset(a, 0, sizeof *a);
-                a->set = set;
-                a->m = m;
-                a->closest_count = job.count;
-                bench_agree_closest(&a->closest, b->rays, b->ref_hits, b->hits, job.count,
-                                    AGREE_TOLERANCE * s->diagonal);
-            } else {
-                a->any_count = job.count;
-                a->any_disagree = bench_disagree_any(b->ref_occluded, b->occluded, job.count);
-            }
+            shape_agree_row *a = &s->shape_agreements[s->shape_agree_count++];
+            memset(a, 0, sizeof *a);
+            a->kind = kind;
+            a->sweep = sweep;
+            a->m = m;
+            agree_shapes(a, queries, ref, other, job.count, SWEEP_AGREE_TOLERANCE * s->diagonal);
         }
     return 0;
 }
@@ -385,22 +637,115 @@ static double mrays(const result_row *r)
     return r->seconds > 0.0 ? (double)r->count / r->seconds * 1e-6 : 0.0;
 }
 
-/* The cbvh sorted row of the same set and query: the reference of the ratio column. */
+/* The cbvh sorted row of the same set, query and thread count: the reference of the ratio column. */
 static const result_row *sorted_row(const bench_state *s, const result_row *r)
 {
-    for (int i = 0; i < s->result_count; i++)
-        if (s->results[i].set == r->set && s->results[i].any == r->any && s->results[i].m == &s->methods[0])
-            return &s->results[i];
+    for (int i = 0; i < s->result_count; i++) {
+        const result_row *x = &s->results[i];
+        if (x->set == r->set && x->any == r->any && x->m == &s->methods[0] && x->threads == r->threads)
+            return x;
+    }
     return r;
+}
+
+static double queries_per_second(const shape_row *r)
+{
+    return r->seconds > 0.0 ? (double)r->count / r->seconds : 0.0;
+}
+
+/* Microseconds one query takes on one thread: every thread runs its slice for the time measured. */
+static double micros_per_query(const shape_row *r)
+{
+    return r->count > 0 ? r->seconds * r->threads / (double)r->count * 1e6 : 0.0;
+}
+
+/* cbvh's row of the same shape set and thread count: the reference of the ratio column. */
+static const shape_row *cbvh_shape_row(const bench_state *s, const shape_row *r)
+{
+    for (int i = 0; i < s->shape_result_count; i++) {
+        const shape_row *x = &s->shape_results[i];
+        if (x->kind == r->kind && x->sweep == r->sweep && x->threads == r->threads && x->m == &s->shape_methods[0])
+            return x;
+    }
+    return r;
+}
+
+static double shape_ratio(const bench_state *s, const shape_row *r)
+{
+    double speed = queries_per_second(r);
+    return speed > 0.0 ? queries_per_second(cbvh_shape_row(s, r)) / speed : 0.0;
+}
+
+/* The thread counts as written on the command line, for the headings. */
+static void format_threads(const bench_state *s, char *text, size_t size)
+{
+    size_t n = 0;
+    text[0] = '\0';
+    for (int i = 0; i < s->thread_count_n && n < size; i++)
+        n += (size_t)snprintf(text + n, size - n, "%s%u", i ? "," : "", s->thread_counts[i]);
+}
+
+/* The mean distance between the t of sweeps that hit the same first triangle, over the diagonal. */
+static double t_apart_mean(const bench_state *s, const shape_agree_row *a)
+{
+    return a->sweeps.same_triangle ? a->t_distance_sum / (double)a->sweeps.same_triangle / s->diagonal : 0.0;
+}
+
+static void print_shape_tables(const bench_state *s)
+{
+    if (s->shape_result_count == 0)
+        return;
+    printf("\nShape queries near the surface, %zu per set (sizes and motions in `cbvh bench --help`); µs/query is "
+           "the time one query takes on one thread, cbvh / this the ratio of queries per second at the same "
+           "thread count:\n\n",
+           s->shapes);
+    printf("| shape | query | engine | threads | µs/query | queries/s | queries/s/thread | hits or tris/query | "
+           "cbvh / this | runs x queries |\n");
+    printf("|---|---|---|---:|---:|---:|---:|---:|---:|---:|\n");
+    for (int i = 0; i < s->shape_result_count; i++) {
+        const shape_row *r = &s->shape_results[i];
+        double speed = queries_per_second(r);
+        printf("| %s | %s | %s | %u | %.3f | %.0f | %.0f | %.3f | %.3f | %u x %zu |\n", shape_kind_name(r->kind),
+               r->sweep ? "sweep" : "overlap", r->m->engine, r->threads, micros_per_query(r), speed,
+               speed / r->threads, r->count ? (double)r->found / (double)r->count : 0.0, shape_ratio(s, r), r->runs,
+               r->count);
+    }
+    if (s->shape_agree_count == 0)
+        return;
+    printf("\nShape agreement with cbvh, query by query (sweeps: the same first triangle, or another one with t "
+           "times the motion's length within %.0e of the scene diagonal; overlaps: the same set of triangles). "
+           "Bullet's casts stop 0.001 mesh units short of contact (its constant), so its t come early; the t apart "
+           "columns say by how much, as a fraction of the diagonal:\n\n",
+           SWEEP_AGREE_TOLERANCE);
+    printf("| shape | query | engine | same triangle or set | both miss or none | t close, other triangle | "
+           "disagree | start touching cbvh / this | same triangle: t apart mean | t apart max | tris cbvh / this | "
+           "queries compared |\n");
+    printf("|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+    for (int i = 0; i < s->shape_agree_count; i++) {
+        const shape_agree_row *a = &s->shape_agreements[i];
+        printf("| %s | %s | %s | ", shape_kind_name(a->kind), a->sweep ? "sweep" : "overlap", a->m->engine);
+        if (a->sweep)
+            printf("%llu | %llu | %llu | %llu | %llu / %llu | %.2e | %.2e | - | %zu |\n",
+                   (unsigned long long)a->sweeps.same_triangle, (unsigned long long)a->sweeps.both_miss,
+                   (unsigned long long)a->sweeps.t_close, (unsigned long long)a->sweeps.disagree,
+                   (unsigned long long)a->ref_start_touching, (unsigned long long)a->other_start_touching,
+                   t_apart_mean(s, a), a->t_distance_max / s->diagonal, a->count);
+        else
+            printf("%llu | %llu | - | %llu | - | - | - | %llu / %llu | %zu |\n", (unsigned long long)a->same_set,
+                   (unsigned long long)a->both_empty, (unsigned long long)a->other_set,
+                   (unsigned long long)a->ref_triangles, (unsigned long long)a->other_triangles, a->count);
+    }
 }
 
 static void print_tables(const bench_state *s)
 {
     double tris = (double)s->mesh.triangle_count;
     printf("## cbvh bench: %s\n\n", s->mesh.name);
-    printf("%zu triangles, %zu rays per set, seed %llu, %u thread(s), median of up to %u runs per figure "
+    char threads[64];
+    format_threads(s, threads, sizeof threads);
+    printf("%zu triangles, %zu rays per set, seed %llu, threads %s, median of up to %u runs per figure "
            "(fewer once a figure's runs took %.3g s), %s.\n\n",
-           s->mesh.triangle_count, s->rays, (unsigned long long)s->seed, s->threads, s->reps, s->budget,
+           s->mesh.triangle_count, s->rays, (unsigned long long)s->seed, threads, s->reps, s->budget,
            s->cpu_clock ? "CPU time (process CPU for cook, build and open; slowest thread's CPU for queries)"
                         : "wall-clock time");
     const build_row *c = &s->builds[0];
@@ -435,13 +780,13 @@ static void print_tables(const bench_state *s)
     }
     printf("\n");
 
-    printf("| rays | query | engine | variant | MRays/s | MRays/s/thread | nodes/ray | tris/ray | cbvh sorted / this | runs x rays |\n");
-    printf("|---|---|---|---|---:|---:|---:|---:|---:|---:|\n");
+    printf("| rays | query | engine | variant | threads | MRays/s | MRays/s/thread | nodes/ray | tris/ray | cbvh sorted / this | runs x rays |\n");
+    printf("|---|---|---|---|---:|---:|---:|---:|---:|---:|---:|\n");
     for (int i = 0; i < s->result_count; i++) {
         const result_row *r = &s->results[i];
         double speed = mrays(r), ref = mrays(sorted_row(s, r));
-        printf("| %s | %s | %s | %s | %.3f | %.3f | ", rays_kind_name(r->set), r->any ? "any" : "closest",
-               r->m->engine, r->m->variant, speed, speed / s->threads);
+        printf("| %s | %s | %s | %s | %u | %.3f | %.3f | ", rays_kind_name(r->set), r->any ? "any" : "closest",
+               r->m->engine, r->m->variant, r->threads, speed, speed / r->threads);
         if (r->m->counted)
             printf("%.1f | %.2f | ", (double)r->stats.nodes_visited / (double)s->rays,
                    (double)r->stats.triangles_tested / (double)s->rays);
@@ -463,6 +808,7 @@ static void print_tables(const bench_state *s)
             printf(" (any hit: %zu)", a->any_count);
         printf(" |\n");
     }
+    print_shape_tables(s);
     fflush(stdout);
 }
 
@@ -483,12 +829,17 @@ static int write_json(const bench_state *s)
     json_uint(&w, "vertices", s->mesh.vertex_count);
     json_double(&w, "diagonal", s->diagonal);
     json_uint(&w, "rays", s->rays);
+    json_uint(&w, "shapes", s->shapes);
     json_uint(&w, "seed", s->seed);
-    json_uint(&w, "threads", s->threads);
+    json_begin_array(&w, "threads");
+    for (int i = 0; i < s->thread_count_n; i++)
+        json_uint(&w, NULL, s->thread_counts[i]);
+    json_end_array(&w);
     json_uint(&w, "reps", s->reps);
     json_double(&w, "budget_seconds", s->budget);
     json_string(&w, "clock", s->cpu_clock ? "cpu" : "wall");
     json_double(&w, "agreement_tolerance", AGREE_TOLERANCE);
+    json_double(&w, "sweep_agreement_tolerance", SWEEP_AGREE_TOLERANCE);
     json_begin_array(&w, "builds");
     for (int i = 0; i < s->build_count; i++) {
         const build_row *b = &s->builds[i];
@@ -529,11 +880,12 @@ static int write_json(const bench_state *s)
         json_string(&w, "query", r->any ? "any" : "closest");
         json_string(&w, "engine", r->m->engine);
         json_string(&w, "variant", r->m->variant);
+        json_uint(&w, "threads", r->threads);
         json_double(&w, "seconds", r->seconds);
         json_uint(&w, "runs", r->runs);
         json_uint(&w, "rays_timed", r->count);
         json_double(&w, "mrays_per_s", speed);
-        json_double(&w, "mrays_per_s_per_thread", speed / s->threads);
+        json_double(&w, "mrays_per_s_per_thread", speed / r->threads);
         if (r->m->counted) {
             json_double(&w, "nodes_per_ray", (double)r->stats.nodes_visited / (double)s->rays);
             json_double(&w, "triangles_per_ray", (double)r->stats.triangles_tested / (double)s->rays);
@@ -556,6 +908,53 @@ static int write_json(const bench_state *s)
         json_uint(&w, "any_disagree", a->any_disagree);
         json_uint(&w, "closest_rays_compared", a->closest_count);
         json_uint(&w, "any_rays_compared", a->any_count);
+        json_end_object(&w);
+    }
+    json_end_array(&w);
+    json_begin_array(&w, "shape_results");
+    for (int i = 0; i < s->shape_result_count; i++) {
+        const shape_row *r = &s->shape_results[i];
+        json_begin_object(&w, NULL);
+        json_string(&w, "shape", shape_kind_name(r->kind));
+        json_string(&w, "query", r->sweep ? "sweep" : "overlap");
+        json_string(&w, "engine", r->m->engine);
+        json_uint(&w, "threads", r->threads);
+        json_double(&w, "seconds", r->seconds);
+        json_uint(&w, "runs", r->runs);
+        json_uint(&w, "queries_timed", r->count);
+        json_double(&w, "us_per_query", micros_per_query(r));
+        json_double(&w, "queries_per_s", queries_per_second(r));
+        json_double(&w, "queries_per_s_per_thread", queries_per_second(r) / r->threads);
+        json_double(&w, r->sweep ? "hits_per_query" : "triangles_per_query",
+                    r->count ? (double)r->found / (double)r->count : 0.0);
+        json_double(&w, "cbvh_over_this", shape_ratio(s, r));
+        json_end_object(&w);
+    }
+    json_end_array(&w);
+    json_begin_array(&w, "shape_agreement");
+    for (int i = 0; i < s->shape_agree_count; i++) {
+        const shape_agree_row *a = &s->shape_agreements[i];
+        json_begin_object(&w, NULL);
+        json_string(&w, "shape", shape_kind_name(a->kind));
+        json_string(&w, "query", a->sweep ? "sweep" : "overlap");
+        json_string(&w, "engine", a->m->engine);
+        if (a->sweep) {
+            json_uint(&w, "same_triangle", a->sweeps.same_triangle);
+            json_uint(&w, "both_miss", a->sweeps.both_miss);
+            json_uint(&w, "t_close_other_triangle", a->sweeps.t_close);
+            json_uint(&w, "disagree", a->sweeps.disagree);
+            json_uint(&w, "cbvh_start_touching", a->ref_start_touching);
+            json_uint(&w, "this_start_touching", a->other_start_touching);
+            json_double(&w, "same_triangle_t_distance_mean_over_diagonal", t_apart_mean(s, a));
+            json_double(&w, "t_distance_max_over_diagonal", a->t_distance_max / s->diagonal);
+        } else {
+            json_uint(&w, "same_set", a->same_set);
+            json_uint(&w, "both_empty", a->both_empty);
+            json_uint(&w, "disagree", a->other_set);
+            json_uint(&w, "cbvh_triangles", a->ref_triangles);
+            json_uint(&w, "this_triangles", a->other_triangles);
+        }
+        json_uint(&w, "queries_compared", a->count);
         json_end_object(&w);
     }
     json_end_array(&w);
@@ -588,16 +987,33 @@ static int run(bench_state *s)
     b.hits = malloc(s->rays * sizeof *b.hits);
     b.ref_occluded = malloc(s->rays);
     b.occluded = malloc(s->rays);
-    s->results = calloc((size_t)RAYS_KIND_COUNT * 2 * s->method_count, sizeof *s->results);
+    int main_methods = 0;
+    for (int k = 0; k < s->method_count; k++)
+        main_methods += s->methods[k].main;
+    int ray_rows = s->method_count + (s->thread_count_n - 1) * main_methods;
+    int shape_rows = s->shapes ? s->thread_count_n * s->shape_method_count : 0;
+    s->results = calloc((size_t)RAYS_KIND_COUNT * 2 * ray_rows, sizeof *s->results);
     s->agreements = calloc((size_t)RAYS_KIND_COUNT * s->method_count, sizeof *s->agreements);
-    if (!b.rays || !b.ref_hits || !b.hits || !b.ref_occluded || !b.occluded || !s->results || !s->agreements) {
-        cli_error(s->command, NULL, "out of memory for %zu rays", s->rays);
+    s->shape_results = calloc((size_t)SHAPE_KIND_COUNT * 2 * shape_rows + 1, sizeof *s->shape_results);
+    s->shape_agreements = calloc((size_t)SHAPE_KIND_COUNT * 2 * s->shape_method_count, sizeof *s->shape_agreements);
+    shape_query *queries = malloc(s->shapes * sizeof *queries + 1);
+    shape_answer *ref = malloc(s->shapes * sizeof *ref + 1), *other = malloc(s->shapes * sizeof *other + 1);
+    if (!b.rays || !b.ref_hits || !b.hits || !b.ref_occluded || !b.occluded || !s->results || !s->agreements ||
+        !s->shape_results || !s->shape_agreements || !queries || !ref || !other) {
+        cli_error(s->command, NULL, "out of memory for %zu rays and %zu shapes", s->rays, s->shapes);
         status = CLI_EXIT_USAGE;
     }
-    int step = 0, steps = RAYS_KIND_COUNT * 2 * s->method_count;
+    int step = 0, steps = RAYS_KIND_COUNT * 2 * ray_rows + SHAPE_KIND_COUNT * 2 * shape_rows;
     for (int set = 0; set < RAYS_KIND_COUNT && !status; set++) {
         rays_generate((ray_kind)set, &rm, s->seed, b.rays, s->rays);
         status = measure_set(s, (ray_kind)set, &b, &step, steps);
+    }
+    /* sweeps first, the kinds in order: sphere, capsule, box */
+    for (int set = 0; set < 2 * SHAPE_KIND_COUNT && s->shapes && !status; set++) {
+        shape_kind kind = (shape_kind)(set % SHAPE_KIND_COUNT);
+        int sweep = set < SHAPE_KIND_COUNT;
+        shapes_generate(kind, sweep, &rm, s->seed, queries, s->shapes);
+        status = measure_shapes(s, kind, sweep, queries, ref, other, &step, steps);
     }
     progress_done(&s->prog);
     free(b.rays);
@@ -605,6 +1021,9 @@ static int run(bench_state *s)
     free(b.hits);
     free(b.ref_occluded);
     free(b.occluded);
+    free(queries);
+    free(ref);
+    free(other);
     if (!status) {
         print_tables(s);
         if (s->json_path)
@@ -613,14 +1032,39 @@ static int run(bench_state *s)
     return status;
 }
 
+/* --threads LIST: up to MAX_THREAD_COUNTS counts from 1 to 256, separated by commas. */
+static int parse_thread_counts(bench_state *s, const char *list)
+{
+    char token[32];
+    s->thread_count_n = 0;
+    for (const char *p = list;; p++) {
+        size_t n = strcspn(p, ",");
+        if (s->thread_count_n == MAX_THREAD_COUNTS || n >= sizeof token) {
+            cli_usage_error(s->command, "--threads takes up to %d counts separated by commas, not '%s'",
+                            MAX_THREAD_COUNTS, list);
+            return 0;
+        }
+        memcpy(token, p, n);
+        token[n] = '\0';
+        if (!cli_parse_u32(s->command, "--threads", token, 1, 256, &s->thread_counts[s->thread_count_n++]))
+            return 0;
+        p += n;
+        if (!*p)
+            return 1;
+    }
+}
+
 int cmd_bench(int argc, char **argv)
 {
     bench_state s;
     memset(&s, 0, sizeof s);
     s.command = "bench";
     s.rays = 1000000;
+    s.shapes = 100000;
     s.seed = 1;
-    s.threads = 1;
+    s.thread_counts[0] = 1;
+    s.thread_counts[1] = 2;
+    s.thread_count_n = 2;
     s.reps = 5;
     s.budget = 2.0f;
     const char *input = NULL, *gen = NULL;
@@ -652,8 +1096,13 @@ int cmd_bench(int argc, char **argv)
             s.seed = u;
             break;
         case OPT_THREADS:
-            if (!cli_parse_u32(s.command, "--threads", value, 1, 256, &s.threads))
+            if (!parse_thread_counts(&s, value))
                 return CLI_EXIT_USAGE;
+            break;
+        case OPT_SHAPES:
+            if (!cli_parse_u32(s.command, "--shapes", value, 0, 100000000u, &u))
+                return CLI_EXIT_USAGE;
+            s.shapes = u;
             break;
         case OPT_REPS:
             if (!cli_parse_u32(s.command, "--reps", value, 1, 1000, &s.reps))
@@ -681,6 +1130,8 @@ int cmd_bench(int argc, char **argv)
         unlink(s.temp_path);
     free(s.results);
     free(s.agreements);
+    free(s.shape_results);
+    free(s.shape_agreements);
     bench_mesh_free(&s.mesh);
     return status;
 }
