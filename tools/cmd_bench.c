@@ -74,8 +74,10 @@ static const cli_option options[] = {
     { "shapes", CLI_ARG_REQUIRED, OPT_SHAPES }, { NULL, 0, 0 },
 };
 
-/* Rays or shape queries a peer runs first, to see whether all fit in the time budget. */
+/* Rays or shape queries a peer runs first, to see whether all fit in the time budget; a shape query takes
+ * a peer tens of microseconds on a large mesh, so fewer of them tell as much. */
 #define BENCH_PROBE_QUERIES 65536
+#define BENCH_PROBE_SHAPES 4096
 
 /* Ray answers compared with a tolerance of this fraction of the scene diagonal. */
 #define AGREE_TOLERANCE 1e-5
@@ -481,17 +483,16 @@ typedef struct buffers {
  * first runs a prefix of the queries; when all of them would take longer than the budget it is timed on
  * the prefix the budget allows (job->count is cut to it): Bullet's ray walk cannot stop at the first hit,
  * and takes minutes for a million rays on a large mesh. */
-static double time_job(bench_state *s, bench_job *job, unsigned threads, int reference,
+static double time_job(bench_state *s, bench_job *job, size_t probe, unsigned threads, int reference,
                        cbvh_query_stats *stats, unsigned *runs)
 {
     size_t all = job->count;
     double t = reference ? bench_run_once(job, threads, stats) : 0.0;
-    if (!reference && s->budget > 0.0f && all > BENCH_PROBE_QUERIES) {
-        job->count = BENCH_PROBE_QUERIES;
+    if (!reference && s->budget > 0.0f && all > probe) {
+        job->count = probe;
         t = bench_run_once(job, threads, NULL);
-        double allowed = t > 0.0 ? (double)BENCH_PROBE_QUERIES * s->budget / t : (double)all;
-        job->count = allowed >= (double)all ? all : allowed > BENCH_PROBE_QUERIES ? (size_t)allowed
-                                                                                  : BENCH_PROBE_QUERIES;
+        double allowed = t > 0.0 ? (double)probe * s->budget / t : (double)all;
+        job->count = allowed >= (double)all ? all : allowed > probe ? (size_t)allowed : probe;
     }
     if (t >= 0.0)
         t = bench_run_median(job, threads, s->reps, s->budget, runs);
@@ -529,7 +530,7 @@ static int measure_set(bench_state *s, ray_kind set, buffers *b, int *step, int 
                 r->any = any;
                 r->m = m;
                 r->threads = threads;
-                double t = time_job(s, &job, threads, m->counted, m->counted ? &r->stats : NULL, &r->runs);
+                double t = time_job(s, &job, BENCH_PROBE_QUERIES, threads, m->counted, m->counted ? &r->stats : NULL, &r->runs);
                 if (t < 0.0)
                     return CLI_EXIT_USAGE;
                 r->count = job.count;
@@ -609,7 +610,7 @@ static int measure_shapes(bench_state *s, shape_kind kind, int sweep, const shap
             r->sweep = sweep;
             r->m = m;
             r->threads = threads;
-            double t = time_job(s, &job, threads, k == 0, NULL, &r->runs);
+            double t = time_job(s, &job, BENCH_PROBE_SHAPES, threads, k == 0, NULL, &r->runs);
             if (t < 0.0)
                 return CLI_EXIT_USAGE;
             r->seconds = t;
@@ -812,6 +813,15 @@ static void print_tables(const bench_state *s)
     fflush(stdout);
 }
 
+/* The members a closest-hit or sweep agreement shares. */
+static void json_agreement(json_writer *w, const bench_agreement *a)
+{
+    json_uint(w, "same_triangle", a->same_triangle);
+    json_uint(w, "both_miss", a->both_miss);
+    json_uint(w, "t_close_other_triangle", a->t_close);
+    json_uint(w, "disagree", a->disagree);
+}
+
 static int write_json(const bench_state *s)
 {
     FILE *out = fopen(s->json_path, "w");
@@ -901,10 +911,7 @@ static int write_json(const bench_state *s)
         json_string(&w, "rays", rays_kind_name(a->set));
         json_string(&w, "engine", a->m->engine);
         json_string(&w, "variant", a->m->variant);
-        json_uint(&w, "same_triangle", a->closest.same_triangle);
-        json_uint(&w, "both_miss", a->closest.both_miss);
-        json_uint(&w, "t_close_other_triangle", a->closest.t_close);
-        json_uint(&w, "disagree", a->closest.disagree);
+        json_agreement(&w, &a->closest);
         json_uint(&w, "any_disagree", a->any_disagree);
         json_uint(&w, "closest_rays_compared", a->closest_count);
         json_uint(&w, "any_rays_compared", a->any_count);
@@ -939,10 +946,7 @@ static int write_json(const bench_state *s)
         json_string(&w, "query", a->sweep ? "sweep" : "overlap");
         json_string(&w, "engine", a->m->engine);
         if (a->sweep) {
-            json_uint(&w, "same_triangle", a->sweeps.same_triangle);
-            json_uint(&w, "both_miss", a->sweeps.both_miss);
-            json_uint(&w, "t_close_other_triangle", a->sweeps.t_close);
-            json_uint(&w, "disagree", a->sweeps.disagree);
+            json_agreement(&w, &a->sweeps);
             json_uint(&w, "cbvh_start_touching", a->ref_start_touching);
             json_uint(&w, "this_start_touching", a->other_start_touching);
             json_double(&w, "same_triangle_t_distance_mean_over_diagonal", t_apart_mean(s, a));
