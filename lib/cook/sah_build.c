@@ -430,6 +430,72 @@ static void init_refs(const cook_mesh *m, prim_ref *restrict refs, box *root, bo
     }
 }
 
+/* Build nodes are allocated a page at a time as the tree grows: the worst case, 2n - 1 nodes for n prims,
+ * is about five times what an SAH tree with leaves of several triangles takes (the dragon: 0.37 nodes a
+ * triangle), and it was the largest buffer of a cook. */
+#define NODE_PAGE 4096u
+
+/* What both builders allocate pages from. While the worker runs, both may need a page at once, and the
+ * caller's hooks (and the meter counting them) need not be thread-safe: one call at a time. */
+typedef struct page_source {
+    const cbvh_allocator *a;
+    atomic_flag busy;
+    atomic_bool failed;         /* a page was refused: both builders stop */
+} page_source;
+
+/* A builder's nodes: page[i / page_nodes][i % page_nodes]. */
+typedef struct node_pages {
+    cook_bnode **page;          /* room for every page the worst case needs; page 0 shares its block */
+    uint32_t page_count;
+    uint32_t page_nodes;        /* NODE_PAGE, or the whole worst case when that is smaller */
+} node_pages;
+
+static inline cook_bnode *node_at(const node_pages *p, uint32_t i)
+{
+    return &p->page[i / p->page_nodes][i % p->page_nodes];
+}
+
+/* Room for the nodes of a subtree of `prims` prims: the table and the first page, in one block (one
+ * allocation fewer to fail); 0 without memory. Called on the caller's thread while no worker runs. */
+static int pages_init(node_pages *p, uint32_t prims, const cbvh_allocator *a)
+{
+    const uint32_t worst = 2 * prims - 1;
+    p->page_nodes = worst < NODE_PAGE ? worst : NODE_PAGE;
+    const size_t table = ((worst + p->page_nodes - 1) / p->page_nodes * sizeof *p->page + 63) & ~(size_t)63;
+    p->page = cbvh_alloc(a, table + (size_t)p->page_nodes * sizeof(cook_bnode), 64);
+    if (!p->page)
+        return 0;
+    p->page[0] = (cook_bnode *)(void *)((uint8_t *)p->page + table);
+    p->page_count = 1;
+    return 1;
+}
+
+static void pages_free(node_pages *p, const cbvh_allocator *a)
+{
+    for (uint32_t i = 1; i < p->page_count; i++)
+        cbvh_free(a, p->page[i]);
+    cbvh_free(a, p->page);
+    memset(p, 0, sizeof *p);
+}
+
+/* Makes room for node `last` (at most one page past the end); 0 when a page was refused, now or by the
+ * other builder. */
+static int pages_reach(node_pages *p, uint32_t last, page_source *src)
+{
+    if (last / p->page_nodes < p->page_count)
+        return 1;
+    while (atomic_flag_test_and_set_explicit(&src->busy, memory_order_acquire))
+        ;
+    cook_bnode *page = atomic_load_explicit(&src->failed, memory_order_relaxed)
+                           ? NULL : cbvh_alloc_array(src->a, p->page_nodes, sizeof(cook_bnode), 64);
+    if (!page)
+        atomic_store_explicit(&src->failed, 1, memory_order_relaxed);
+    atomic_flag_clear_explicit(&src->busy, memory_order_release);
+    if (page)
+        p->page[p->page_count++] = page;
+    return page != NULL;
+}
+
 void cbvh_cook_tree_free(const cbvh_allocator *a, cook_tree *t)
 {
     cbvh_free(a, t->nodes);
@@ -443,12 +509,13 @@ static void set_box(cook_bnode *n, const box *b)
     memcpy(n->hi, b->hi, sizeof n->hi);
 }
 
-/* One builder per thread: its own node array and bins; prim ranges of different builders
- * never overlap, so the two threads share nothing they write. */
+/* One builder per thread: its own nodes and bins; prim ranges of different builders never
+ * overlap, so the two threads share nothing they write but the page source, under its lock. */
 typedef struct builder {
     prim_ref *refs;
     workspace *w;
-    cook_bnode *nodes;
+    node_pages nodes;
+    page_source *pages;
     uint32_t node_count;
     uint32_t leaf_count;
     uint32_t leaf_size, bins;
@@ -456,11 +523,13 @@ typedef struct builder {
     _Atomic uint64_t done;      /* prims placed in leaves, read by the reporting thread */
 } builder;
 
-/* Makes t's node a leaf (returns 0) or splits it, appending two children and filling lt, rt. */
-static int split_node(builder *b, const task *t, task *lt, task *rt)
+enum split_outcome { MADE_LEAF, SPLIT, NO_PAGE };
+
+/* Makes t's node a leaf or splits it, appending two children and filling lt, rt. */
+static enum split_outcome split_node(builder *b, const task *t, task *lt, task *rt)
 {
     prim_ref *refs = b->refs;
-    cook_bnode *node = &b->nodes[t->node];
+    cook_bnode *node = node_at(&b->nodes, t->node);
     const uint32_t n = t->end - t->begin;
     split s;
     s.axis = -1;
@@ -476,7 +545,7 @@ static int split_node(builder *b, const task *t, task *lt, task *rt)
         node->count = n;
         b->leaf_count++;
         atomic_fetch_add_explicit(&b->done, n, memory_order_relaxed);
-        return 0;
+        return MADE_LEAF;
     }
     box left, right;
     uint32_t mid;
@@ -491,11 +560,13 @@ static int split_node(builder *b, const task *t, task *lt, task *rt)
         mid = split_median(refs, t, &left, &right, &lt->cent, &rt->cent);
     }
     const uint32_t child = b->node_count;
+    if (!pages_reach(&b->nodes, child + 1, b->pages))
+        return NO_PAGE;
     b->node_count += 2;
     node->child = child;
     node->count = 0;
-    set_box(&b->nodes[child], &left);
-    set_box(&b->nodes[child + 1], &right);
+    set_box(node_at(&b->nodes, child), &left);
+    set_box(node_at(&b->nodes, child + 1), &right);
     lt->node = child;
     lt->begin = t->begin;
     lt->end = mid;
@@ -504,7 +575,7 @@ static int split_node(builder *b, const task *t, task *lt, task *rt)
     rt->begin = mid;
     rt->end = t->end;
     rt->depth = t->depth + 1;
-    return 1;
+    return SPLIT;
 }
 
 typedef struct report_state {
@@ -513,7 +584,8 @@ typedef struct report_state {
     uint64_t total, next;
 } report_state;
 
-/* Builds the subtree of `root` (its node already holds its box), depth first. */
+/* Builds the subtree of `root` (its node already holds its box), depth first; stops early when
+ * either builder was refused a page. */
 static void build_from(builder *b, const task *root, report_state *report)
 {
     task stack[2 * CBVH_MAX_DEPTH + 2];
@@ -522,7 +594,10 @@ static void build_from(builder *b, const task *root, report_state *report)
     while (top > 0) {
         const task t = stack[--top];
         task lt, rt;
-        if (split_node(b, &t, &lt, &rt)) {
+        const enum split_outcome o = split_node(b, &t, &lt, &rt);
+        if (o == NO_PAGE || atomic_load_explicit(&b->pages->failed, memory_order_relaxed))
+            return;
+        if (o == SPLIT) {
             stack[top++] = rt;
             stack[top++] = lt;
             continue;
@@ -551,57 +626,81 @@ static void worker_main(void *arg)
     build_from(&job->b, &job->root, NULL);
 }
 
+static void worker_free(worker_job *job, const cbvh_allocator *a)
+{
+    cbvh_free(a, job->b.w);
+    job->b.w = NULL;
+    pages_free(&job->b.nodes, a);
+}
+
 /* Prepares a job for the subtree rt (all allocation here, on the calling thread: the
  * caller's allocator need not be thread-safe). Returns 0 without memory. */
 static int worker_init(worker_job *job, const builder *main, const task *rt, const cbvh_allocator *a)
 {
     memset(job, 0, sizeof *job);
     job->b.refs = main->refs;
+    job->b.pages = main->pages;
     job->b.leaf_size = main->leaf_size;
     job->b.bins = main->bins;
     job->b.ct = main->ct;
     job->b.ci = main->ci;
     atomic_init(&job->b.done, 0);
     job->b.w = cbvh_alloc(a, sizeof(workspace), 64);
-    job->b.nodes = cbvh_alloc_array(a, 2 * (size_t)(rt->end - rt->begin) - 1, sizeof(cook_bnode), 64);
-    if (!job->b.w || !job->b.nodes) {
-        cbvh_free(a, job->b.w);
-        cbvh_free(a, job->b.nodes);
+    if (!job->b.w || !pages_init(&job->b.nodes, rt->end - rt->begin, a)) {
+        worker_free(job, a);
         return 0;
     }
-    job->b.nodes[0] = main->nodes[rt->node];
+    *node_at(&job->b.nodes, 0) = *node_at(&main->nodes, rt->node);
     job->b.node_count = 1;
     job->root = *rt;
     job->root.node = 0;
     return 1;
 }
 
-/* Appends the worker's nodes to the main array; its root replaces the main node `at`. */
-static void merge_worker(builder *main, const builder *worker, uint32_t at)
+/* The tree's nodes in one array of the exact size: the main builder's, then the worker's (when there is
+ * one) after them, its root replacing the main node `at`. Frees the pages as they are copied. */
+static cook_bnode *flatten(builder *main, builder *worker, uint32_t at, const cbvh_allocator *a)
 {
+    const uint32_t count = main->node_count + (worker ? worker->node_count - 1 : 0);
+    cook_bnode *out = cbvh_alloc_array(a, count, sizeof(cook_bnode), 64);
+    if (!out)
+        return NULL;
+    for (uint32_t i = 0; i < main->node_count; i++)
+        out[i] = *node_at(&main->nodes, i);
+    pages_free(&main->nodes, a);
+    if (!worker)
+        return out;
     const uint32_t base = main->node_count - 1; /* worker node j >= 1 goes to base + j */
     for (uint32_t j = 0; j < worker->node_count; j++) {
-        cook_bnode n = worker->nodes[j];
+        cook_bnode n = *node_at(&worker->nodes, j);
         if (n.count == 0)
             n.child += base;
-        main->nodes[j ? base + j : at] = n;
+        out[j ? base + j : at] = n;
     }
-    main->node_count += worker->node_count - 1;
+    pages_free(&worker->nodes, a);
+    main->node_count = count;
     main->leaf_count += worker->leaf_count;
+    return out;
 }
 
 /* Subtrees at least this large are worth a second thread. */
 #define PARALLEL_MIN 32768
 
+static cbvh_result out_of_memory(uint32_t tris, cbvh_error *err)
+{
+    return cbvh_fail(err, CBVH_ERROR_OUT_OF_MEMORY, "out of memory while building the tree (%u triangles)", tris);
+}
+
 cbvh_result cbvh_cook_build(const cook_mesh *m, const cook_build_params *params, const cbvh_allocator *a,
-                       const cook_progress *progress, cook_tree *out, cbvh_error *err)
+                            const cook_progress *progress, cook_tree *out, cbvh_error *err)
 {
     memset(out, 0, sizeof *out);
     const uint32_t tris = m->triangle_count;
-    const size_t node_capacity = 2 * (size_t)tris - 1;
 
+    page_source pages = { a, ATOMIC_FLAG_INIT, 0 };
     builder b;
     memset(&b, 0, sizeof b);
+    b.pages = &pages;
     b.leaf_size = params->max_leaf_size;
     b.bins = params->bins;
     b.ct = params->traversal_cost;
@@ -609,20 +708,17 @@ cbvh_result cbvh_cook_build(const cook_mesh *m, const cook_build_params *params,
     atomic_init(&b.done, 0);
     b.refs = cbvh_alloc_array(a, tris, sizeof(prim_ref), 64);
     b.w = cbvh_alloc(a, sizeof(workspace), 64);
-    out->nodes = cbvh_alloc_array(a, node_capacity, sizeof(cook_bnode), 64);
-    out->prims = cbvh_alloc_array(a, tris, sizeof(uint32_t), 64);
-    if (!b.refs || !b.w || !out->nodes || !out->prims) {
+    if (!b.refs || !b.w || !pages_init(&b.nodes, tris, a)) {
         cbvh_free(a, b.refs);
         cbvh_free(a, b.w);
-        cbvh_cook_tree_free(a, out);
-        return cbvh_fail(err, CBVH_ERROR_OUT_OF_MEMORY, "out of memory while building the tree (%u triangles)", tris);
+        pages_free(&b.nodes, a);
+        return out_of_memory(tris, err);
     }
-    b.nodes = out->nodes;
 
     box root_box;
     task root;
     init_refs(m, b.refs, &root_box, &root.cent);
-    set_box(&b.nodes[0], &root_box);
+    set_box(node_at(&b.nodes, 0), &root_box);
     root.node = 0;
     root.begin = 0;
     root.end = tris;
@@ -634,39 +730,51 @@ cbvh_result cbvh_cook_build(const cook_mesh *m, const cook_build_params *params,
      * nodes, then appended. The tree is the same as a one-thread build's (a subtree depends
      * only on its own prims; only node numbering differs, and layout orders nodes by the
      * tree alone), so the file is too. */
+    worker_job job;
+    memset(&job, 0, sizeof job);
+    int threaded = 0;
     task lt, rt;
-    if (tris < 2 * PARALLEL_MIN || !split_node(&b, &root, &lt, &rt)) {
+    memset(&rt, 0, sizeof rt);
+    if (tris < 2 * PARALLEL_MIN) {
         build_from(&b, &root, &report);
-    } else {
-        worker_job job;
+    } else if (split_node(&b, &root, &lt, &rt) == SPLIT) {
         struct cbvh_os_thread thread;
-        int threaded = rt.end - rt.begin >= PARALLEL_MIN && worker_init(&job, &b, &rt, a);
+        threaded = rt.end - rt.begin >= PARALLEL_MIN && worker_init(&job, &b, &rt, a);
         if (threaded) {
             report.other = &job.b;
             if (cbvh_os_thread_start(&thread, worker_main, &job) != 0) {
                 report.other = NULL;
-                cbvh_free(a, job.b.w);
-                cbvh_free(a, job.b.nodes);
+                worker_free(&job, a);
                 threaded = 0;
             }
         }
         if (!threaded) /* no second thread (or no memory for one): the same work here */
             build_from(&b, &rt, &report);
         build_from(&b, &lt, &report);
-        if (threaded) {
+        if (threaded)
             cbvh_os_thread_join(&thread);
-            merge_worker(&b, &job.b, rt.node);
-            cbvh_free(a, job.b.w);
-            cbvh_free(a, job.b.nodes);
-        }
     }
+    cbvh_free(a, b.w);
 
-    for (uint32_t i = 0; i < tris; i++)
+    /* The prims in leaf order, then the nodes in one array: each allocated after the larger buffer
+     * before it is freed. */
+    int ok = !atomic_load_explicit(&pages.failed, memory_order_relaxed);
+    if (ok)
+        out->prims = cbvh_alloc_array(a, tris, sizeof(uint32_t), 64);
+    ok = ok && out->prims;
+    for (uint32_t i = 0; ok && i < tris; i++)
         out->prims[i] = prim_id(&b.refs[i]);
+    cbvh_free(a, b.refs);
+    if (ok)
+        out->nodes = flatten(&b, threaded ? &job.b : NULL, rt.node, a);
+    pages_free(&b.nodes, a);
+    worker_free(&job, a);
+    if (!ok || !out->nodes) {
+        cbvh_cook_tree_free(a, out);
+        return out_of_memory(tris, err);
+    }
     out->node_count = b.node_count;
     out->leaf_count = b.leaf_count;
-    cbvh_free(a, b.refs);
-    cbvh_free(a, b.w);
     cook_report(progress, 1.0);
     return CBVH_OK;
 }
