@@ -292,9 +292,14 @@ CBVH_API cbvh_result cbvh_cook(const cbvh_mesh *mesh, const cbvh_cook_options *o
          * with different options compare (and `cbvh info` computes the same figure). */
         const uint32_t vertex_size = cbvh_element_size(
             CBVH_SECTION_VERTICES, o->vertex_format == CBVH_VERTEX_QUANTIZED16 ? CBVH_VERTS_Q16 : CBVH_VERTS_F32);
-        r = cbvh_cook_layout_build(&s.tree, &s.mesh, &s.grid, o->layout, vertex_size, 1.0f, 1.0f, &s.a, &s.layout,
-                              err);
+        r = cbvh_cook_layout_place(&s.tree, s.mesh.triangle_count, &s.grid, o->layout, 1.0f, 1.0f, &s.a,
+                                   &s.layout, err);
         cbvh_cook_tree_free(&s.a, &s.tree);
+        if (r == CBVH_OK)
+            r = cbvh_cook_layout_number(&s.mesh, vertex_size, &s.a, &s.layout, err);
+        /* From here on the layout holds the triangles. */
+        cbvh_free(&s.a, s.mesh.indices);
+        s.mesh.indices = NULL;
         if (r == CBVH_OK)
             cook_report(&progress, 1.0);
     }

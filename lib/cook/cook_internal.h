@@ -117,9 +117,14 @@ typedef struct cook_layout {
     double sah_cost;            /* of the quantized tree, relative to the root's area */
 } cook_layout;
 
-cbvh_result cbvh_cook_layout_build(const cook_tree *t, const cook_mesh *m, const cook_grid *g, cbvh_layout layout,
-                              uint32_t vertex_size, float traversal_cost, float intersection_cost,
-                              const cbvh_allocator *a, cook_layout *out, cbvh_error *err);
+/* The layout in two steps, so that the tree is freed before the triangles are numbered. place: out's nodes
+ * and triangle_source from the tree (on failure out holds nothing); number: the vertices in first-use
+ * order, the triangles by their ids and the TRIANGLES encoding (on failure l keeps what it held). */
+cbvh_result cbvh_cook_layout_place(const cook_tree *t, uint32_t triangle_count, const cook_grid *g,
+                                   cbvh_layout layout, float traversal_cost, float intersection_cost,
+                                   const cbvh_allocator *a, cook_layout *out, cbvh_error *err);
+cbvh_result cbvh_cook_layout_number(const cook_mesh *m, uint32_t vertex_size, const cbvh_allocator *a,
+                                    cook_layout *l, cbvh_error *err);
 
 /* Half the surface area of a quantized box as readers decode it (the SAH's and the collapse's measure). */
 double cbvh_cook_quantized_half_area(const cook_grid *g, const uint16_t qmin[3], const uint16_t qmax[3]);
@@ -154,8 +159,9 @@ typedef struct cook_sections {
  * bound, checked against CBVH_MAX_MATERIAL_NAME_BYTES before the cook starts). */
 uint64_t cbvh_cook_material_names_size(const cbvh_cook_options *o);
 
-/* quantized: the 3 grid coordinates per prepared vertex, or NULL for float vertices. */
-cbvh_result cbvh_cook_sections_encode(const cook_layout *l, const cook_mesh *m, const uint16_t *quantized,
+/* quantized: the 3 grid coordinates per prepared vertex, or NULL for float vertices. The wide4 nodes
+ * become their section and the triangles are freed once encoded (l's other fields stay). */
+cbvh_result cbvh_cook_sections_encode(cook_layout *l, const cook_mesh *m, const uint16_t *quantized,
                                       const cbvh_mesh *input, const cbvh_cook_options *o,
                                       const cbvh_allocator *a, cook_sections *out, cbvh_error *err);
 void cbvh_cook_sections_free(const cbvh_allocator *a, cook_sections *s);

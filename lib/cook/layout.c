@@ -129,14 +129,9 @@ enum vertex_copies {
 static cbvh_result order_vertices(const cook_mesh *m, cook_layout *l, enum vertex_copies copies,
                                   const cbvh_allocator *a)
 {
-    const size_t capacity = copies != COPIES_NONE ? 3 * (size_t)l->triangle_count : m->vertex_count;
     uint32_t *latest = cbvh_alloc_array(a, m->vertex_count, sizeof(uint32_t), 64);
-    uint32_t *vsrc = cbvh_alloc_array(a, capacity, sizeof(uint32_t), 64);
-    if (!latest || !vsrc) {
-        cbvh_free(a, latest);
-        cbvh_free(a, vsrc);
+    if (!latest)
         return CBVH_ERROR_OUT_OF_MEMORY;
-    }
     memset(latest, 0xFF, (size_t)m->vertex_count * sizeof(uint32_t));
     const uint32_t *restrict idx = m->indices;
     const uint32_t *restrict src = l->triangle_source;
@@ -149,24 +144,27 @@ static cbvh_result order_vertices(const cook_mesh *m, cook_layout *l, enum verte
         uint32_t v[3], id[3];
         for (int c = 0; c < 3; c++) {
             v[c] = idx[3 * (size_t)src[t] + (size_t)c];
-            if (latest[v[c]] == UNSET || (copies == COPIES_LOCAL8 && latest[v[c]] < window)) {
-                latest[v[c]] = count;
-                vsrc[count++] = v[c];
-            }
+            if (latest[v[c]] == UNSET || (copies == COPIES_LOCAL8 && latest[v[c]] < window))
+                latest[v[c]] = count++;
             id[c] = latest[v[c]];
         }
         if (copies == COPIES_DELTA16 && (!delta16_fits(id[0], id[1]) || !delta16_fits(id[0], id[2]))) {
             /* Afterwards every id lies in [count - 32000, count + 3): deltas fit. */
             for (int c = 0; c < 3; c++)
-                if (id[c] + 32000 < count) {
-                    latest[v[c]] = id[c] = count;
-                    vsrc[count++] = v[c];
-                }
+                if (id[c] + 32000 < count)
+                    latest[v[c]] = id[c] = count++;
         }
         for (int c = 0; c < 3; c++)
             tris[3 * (size_t)t + (size_t)c] = id[c];
     }
     cbvh_free(a, latest);
+    /* Known only now, the count sizes vertex_source exactly (copies could make it up to 3 a triangle):
+     * every id was given at a corner of its vertex. */
+    uint32_t *vsrc = cbvh_alloc_array(a, count, sizeof(uint32_t), 64);
+    if (!vsrc)
+        return CBVH_ERROR_OUT_OF_MEMORY;
+    for (size_t c = 0; c < 3 * (size_t)l->triangle_count; c++)
+        vsrc[tris[c]] = idx[3 * (size_t)src[c / 3] + c % 3];
     cbvh_free(a, l->vertex_source);
     l->vertex_source = vsrc;
     l->vertex_count = count;
@@ -282,17 +280,13 @@ static cbvh_result place_binary(const cook_tree *t, const cook_grid *g, float tr
     return CBVH_OK;
 }
 
-cbvh_result cbvh_cook_layout_build(const cook_tree *t, const cook_mesh *m, const cook_grid *g, cbvh_layout layout,
-                              uint32_t vertex_size, float traversal_cost, float intersection_cost,
-                              const cbvh_allocator *a, cook_layout *out, cbvh_error *err)
+cbvh_result cbvh_cook_layout_place(const cook_tree *t, uint32_t triangle_count, const cook_grid *g,
+                                   cbvh_layout layout, float traversal_cost, float intersection_cost,
+                                   const cbvh_allocator *a, cook_layout *out, cbvh_error *err)
 {
     memset(out, 0, sizeof *out);
     out->layout = layout;
-    out->triangle_count = m->triangle_count;
-    out->triangles = cbvh_alloc_array(a, m->triangle_count, 3 * sizeof(uint32_t), 64);
-    if (!out->triangles)
-        return cbvh_fail(err, CBVH_ERROR_OUT_OF_MEMORY, "out of memory while laying out %u triangles",
-                         m->triangle_count);
+    out->triangle_count = triangle_count;
     cbvh_result r = layout == CBVH_LAYOUT_WIDE4
                         ? cbvh_cook_place_wide4(t, g, traversal_cost, intersection_cost, a, out, err)
                         : place_binary(t, g, traversal_cost, intersection_cost, a, out, err);
@@ -306,10 +300,14 @@ cbvh_result cbvh_cook_layout_build(const cook_tree *t, const cook_mesh *m, const
         return cbvh_fail(err, CBVH_ERROR_LIMIT, "the tree is %u nodes deep; a file allows at most %u", depth,
                          CBVH_MAX_DEPTH);
     }
-    r = number_vertices(m, out, vertex_size, a);
-    if (r != CBVH_OK) {
-        cbvh_cook_layout_free(a, out);
+    return CBVH_OK;
+}
+
+cbvh_result cbvh_cook_layout_number(const cook_mesh *m, uint32_t vertex_size, const cbvh_allocator *a,
+                                    cook_layout *l, cbvh_error *err)
+{
+    l->triangles = cbvh_alloc_array(a, l->triangle_count, 3 * sizeof(uint32_t), 64);
+    if (!l->triangles || number_vertices(m, l, vertex_size, a) != CBVH_OK)
         return cbvh_fail(err, CBVH_ERROR_OUT_OF_MEMORY, "out of memory while ordering %u vertices", m->vertex_count);
-    }
     return CBVH_OK;
 }

@@ -31,14 +31,18 @@ static uint8_t *section_alloc(const cbvh_allocator *a, cook_sections *out, uint3
     return s->data;
 }
 
-/* Wide4 nodes are laid out in their file bytes already; binary ones are serialized here. */
-static int encode_nodes(const cook_layout *l, const cbvh_allocator *a, cook_sections *out)
+/* Wide4 nodes are laid out in their file bytes already: the section takes them over. Binary ones are
+ * serialized here. */
+static int encode_nodes(cook_layout *l, const cbvh_allocator *a, cook_sections *out)
 {
     if (l->layout == CBVH_LAYOUT_WIDE4) {
-        uint8_t *w = section_alloc(a, out, CBVH_SECTION_NODES, CBVH_NODES_W4, l->node_count);
-        if (w)
-            memcpy(w, l->nodes, (size_t)l->node_count * cbvh_element_size(CBVH_SECTION_NODES, CBVH_NODES_W4));
-        return w != NULL;
+        cook_section *s = &out->s[out->count++];
+        s->type = CBVH_SECTION_NODES;
+        s->encoding = CBVH_NODES_W4;
+        s->data = l->nodes;
+        s->size = (uint64_t)l->node_count * cbvh_element_size(CBVH_SECTION_NODES, CBVH_NODES_W4);
+        l->nodes = NULL;
+        return 1;
     }
     const size_t elem = cbvh_element_size(CBVH_SECTION_NODES, CBVH_NODES_Q16);
     uint8_t *p = section_alloc(a, out, CBVH_SECTION_NODES, CBVH_NODES_Q16, l->node_count);
@@ -259,15 +263,17 @@ void cbvh_cook_sections_free(const cbvh_allocator *a, cook_sections *s)
     memset(s, 0, sizeof *s);
 }
 
-cbvh_result cbvh_cook_sections_encode(const cook_layout *l, const cook_mesh *m, const uint16_t *quantized,
+cbvh_result cbvh_cook_sections_encode(cook_layout *l, const cook_mesh *m, const uint16_t *quantized,
                                       const cbvh_mesh *input, const cbvh_cook_options *o,
                                       const cbvh_allocator *a, cook_sections *out, cbvh_error *err)
 {
     memset(out, 0, sizeof *out);
-    uint32_t *scratch = cbvh_alloc_array(a, l->triangle_count, sizeof(uint32_t), 64);
-    int ok = scratch && encode_nodes(l, a, out) && encode_triangles(l, a, out) &&
-             encode_vertices(l, m, quantized, a, out) && encode_remap(l, m, o, scratch, a, out) &&
-             encode_materials(l, m, input, o, scratch, a, out) && encode_material_names(o, a, out);
+    int ok = encode_nodes(l, a, out) && encode_triangles(l, a, out);
+    cbvh_free(a, l->triangles);
+    l->triangles = NULL;
+    uint32_t *scratch = ok ? cbvh_alloc_array(a, l->triangle_count, sizeof(uint32_t), 64) : NULL;
+    ok = scratch && encode_vertices(l, m, quantized, a, out) && encode_remap(l, m, o, scratch, a, out) &&
+         encode_materials(l, m, input, o, scratch, a, out) && encode_material_names(o, a, out);
     cbvh_free(a, scratch);
     if (!ok) {
         cbvh_cook_sections_free(a, out);
