@@ -296,6 +296,8 @@ CBVH_API cbvh_result cbvh_cook(const cbvh_mesh *mesh, const cbvh_cook_options *o
                                    &s.layout, err);
         cbvh_cook_tree_free(&s.a, &s.tree);
         if (r == CBVH_OK)
+            r = cbvh_cook_mesh_restore_triangles(&s.mesh, mesh, &s.a, err);
+        if (r == CBVH_OK)
             r = cbvh_cook_layout_number(&s.mesh, vertex_size, &s.a, &s.layout, err);
         /* From here on the layout holds the triangles. */
         cbvh_free(&s.a, s.mesh.indices);

@@ -28,18 +28,28 @@ static inline void cook_report(const cook_progress *p, double fraction)
 typedef struct cook_mesh {
     float *positions;           /* vertex_count xyz; replaced by decoded grid positions for quantized vertices */
     uint32_t vertex_count;
-    uint32_t *indices;          /* 3 per kept triangle, in the input's corner order */
+    uint32_t *indices;          /* 3 per kept triangle, in the input's corner order; NULL while shelved */
     uint32_t *original_ids;     /* per kept triangle, its index in the input mesh (increasing) */
     uint32_t triangle_count;
     uint32_t input_triangle_count;
     uint64_t dropped_degenerate;
     float bounds_min[3], bounds_max[3];
+    uint32_t *vertex_map;       /* input vertex -> prepared vertex, from which the indices are restored;
+                                 * kept only when smaller than them, else NULL */
 } cook_mesh;
 
 /* Validates and cleans `mesh` (see mesh_prepare.c). On failure `out` holds nothing. */
 cbvh_result cbvh_cook_prepare(const cbvh_mesh *mesh, const cbvh_allocator *a, const cook_progress *progress,
                               cook_mesh *out, cbvh_error *err);
 void cbvh_cook_mesh_free(const cbvh_allocator *a, cook_mesh *m);
+
+/* The build needs the triangles only for their boxes, so while it holds its largest buffers the vertex
+ * map stands in for the indices (4 bytes an input vertex instead of 12 a triangle; the dragon: 2 instead
+ * of 12 a triangle). shelve frees the indices when there is a map; restore computes them again from the
+ * input mesh (the same one prepared) and frees the map. */
+void cbvh_cook_mesh_shelve_triangles(cook_mesh *m, const cbvh_allocator *a);
+cbvh_result cbvh_cook_mesh_restore_triangles(cook_mesh *m, const cbvh_mesh *input, const cbvh_allocator *a,
+                                             cbvh_error *err);
 
 /* Drops the kept triangles whose current positions have zero area (quantized
  * vertices can collapse a small triangle onto a segment or a point), keeping
@@ -94,7 +104,8 @@ typedef struct cook_tree {
     uint32_t *prims;            /* prepared triangle ids, leaves' ranges index this */
 } cook_tree;
 
-cbvh_result cbvh_cook_build(const cook_mesh *m, const cook_build_params *params, const cbvh_allocator *a,
+/* Shelves m's triangles (cbvh_cook_mesh_shelve_triangles) once it has their boxes. */
+cbvh_result cbvh_cook_build(cook_mesh *m, const cook_build_params *params, const cbvh_allocator *a,
                        const cook_progress *progress, cook_tree *out, cbvh_error *err);
 void cbvh_cook_tree_free(const cbvh_allocator *a, cook_tree *t);
 

@@ -170,8 +170,10 @@ uint32_t cbvh_cook_drop_collapsed(cook_mesh *m)
     return dropped;
 }
 
-/* Renumbers the welded vertices that kept triangles use, in welded order, compacting positions. */
-static cbvh_result drop_unused(cook_mesh *m, uint32_t welded, const cbvh_allocator *a)
+/* Renumbers the welded vertices that kept triangles use, in welded order, compacting positions;
+ * map (input vertex -> welded vertex) then leads to the renumbered ones. */
+static cbvh_result drop_unused(cook_mesh *m, uint32_t welded, uint32_t *restrict map, size_t map_count,
+                               const cbvh_allocator *a)
 {
     uint32_t *renumber = cbvh_alloc_array(a, welded, sizeof(uint32_t), 64);
     if (!renumber)
@@ -189,6 +191,9 @@ static cbvh_result drop_unused(cook_mesh *m, uint32_t welded, const cbvh_allocat
     }
     for (size_t i = 0; i < corners; i++)
         m->indices[i] = renumber[m->indices[i]];
+    for (size_t v = 0; v < map_count; v++)
+        if (map[v] != NO_VERTEX)
+            map[v] = renumber[map[v]];
     m->vertex_count = count;
     cbvh_free(a, renumber);
     return CBVH_OK;
@@ -224,7 +229,34 @@ void cbvh_cook_mesh_free(const cbvh_allocator *a, cook_mesh *m)
     cbvh_free(a, m->positions);
     cbvh_free(a, m->indices);
     cbvh_free(a, m->original_ids);
+    cbvh_free(a, m->vertex_map);
     memset(m, 0, sizeof *m);
+}
+
+void cbvh_cook_mesh_shelve_triangles(cook_mesh *m, const cbvh_allocator *a)
+{
+    if (!m->vertex_map)
+        return;
+    cbvh_free(a, m->indices);
+    m->indices = NULL;
+}
+
+cbvh_result cbvh_cook_mesh_restore_triangles(cook_mesh *m, const cbvh_mesh *input, const cbvh_allocator *a,
+                                             cbvh_error *err)
+{
+    if (!m->indices) {
+        m->indices = cbvh_alloc_array(a, m->triangle_count, 3 * sizeof(uint32_t), 64);
+        if (!m->indices)
+            return out_of_memory(err, "triangles");
+        const uint32_t *restrict in = input->indices, *restrict ids = m->original_ids, *restrict map = m->vertex_map;
+        uint32_t *restrict out = m->indices;
+        for (size_t t = 0; t < m->triangle_count; t++)
+            for (size_t c = 0; c < 3; c++)
+                out[3 * t + c] = map[in[3 * (size_t)ids[t] + c]];
+    }
+    cbvh_free(a, m->vertex_map);
+    m->vertex_map = NULL;
+    return CBVH_OK;
 }
 
 cbvh_result cbvh_cook_prepare(const cbvh_mesh *mesh, const cbvh_allocator *a, const cook_progress *progress,
@@ -272,7 +304,6 @@ cbvh_result cbvh_cook_prepare(const cbvh_mesh *mesh, const cbvh_allocator *a, co
         return out_of_memory(err, "triangles");
     }
     drop_degenerate(mesh, map, out);
-    cbvh_free(a, map);
     cook_report(progress, 0.75);
 
     if (out->triangle_count == 0)
@@ -281,14 +312,19 @@ cbvh_result cbvh_cook_prepare(const cbvh_mesh *mesh, const cbvh_allocator *a, co
     else if (out->triangle_count > CBVH_MAX_TRIANGLES)
         r = cbvh_fail(err, CBVH_ERROR_LIMIT, "%u triangles remain after dropping degenerate ones; a file holds at most %u",
                       out->triangle_count, CBVH_MAX_TRIANGLES);
-    else if (drop_unused(out, welded, a) != CBVH_OK)
+    else if (drop_unused(out, welded, map, map_count, a) != CBVH_OK)
         r = out_of_memory(err, "vertex renumbering");
     else
         r = cbvh_cook_mesh_bounds(out, err);
     if (r != CBVH_OK) {
+        cbvh_free(a, map);
         cbvh_cook_mesh_free(a, out);
         return r;
     }
+    if (map_count <= 3 * (size_t)out->triangle_count)
+        out->vertex_map = map;
+    else
+        cbvh_free(a, map);
     cook_report(progress, 1.0);
     return CBVH_OK;
 }

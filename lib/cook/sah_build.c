@@ -691,7 +691,7 @@ static cbvh_result out_of_memory(uint32_t tris, cbvh_error *err)
     return cbvh_fail(err, CBVH_ERROR_OUT_OF_MEMORY, "out of memory while building the tree (%u triangles)", tris);
 }
 
-cbvh_result cbvh_cook_build(const cook_mesh *m, const cook_build_params *params, const cbvh_allocator *a,
+cbvh_result cbvh_cook_build(cook_mesh *m, const cook_build_params *params, const cbvh_allocator *a,
                             const cook_progress *progress, cook_tree *out, cbvh_error *err)
 {
     memset(out, 0, sizeof *out);
@@ -718,6 +718,7 @@ cbvh_result cbvh_cook_build(const cook_mesh *m, const cook_build_params *params,
     box root_box;
     task root;
     init_refs(m, b.refs, &root_box, &root.cent);
+    cbvh_cook_mesh_shelve_triangles(m, a);
     set_box(node_at(&b.nodes, 0), &root_box);
     root.node = 0;
     root.begin = 0;
