@@ -124,6 +124,19 @@ static cbvh_result weld(const cbvh_mesh *mesh, size_t stride, uint32_t *restrict
     return CBVH_OK;
 }
 
+/* Moves the welded positions to an array of their size: the array was sized for every used vertex before
+ * welding, three a triangle for meshes stored unwelded (STL always is), and is held to the end. */
+static cbvh_result shrink_positions(cook_mesh *m, uint32_t welded, const cbvh_allocator *a, cbvh_error *err)
+{
+    float *fit = cbvh_alloc_array(a, welded, 3 * sizeof(float), 64);
+    if (!fit)
+        return out_of_memory(err, "positions");
+    memcpy(fit, m->positions, (size_t)welded * 3 * sizeof(float));
+    cbvh_free(a, m->positions);
+    m->positions = fit;
+    return CBVH_OK;
+}
+
 /* Keeps the triangles with three distinct welded vertices and a nonzero area. */
 static void drop_degenerate(const cbvh_mesh *mesh, const uint32_t *restrict map, cook_mesh *m)
 {
@@ -289,6 +302,8 @@ cbvh_result cbvh_cook_prepare(const cbvh_mesh *mesh, const cbvh_allocator *a, co
         r = out->positions ? weld(mesh, stride, map, map_count, used, out->positions, &welded, a, err)
                            : out_of_memory(err, "positions");
     }
+    if (r == CBVH_OK && welded < used)
+        r = shrink_positions(out, welded, a, err);
     if (r != CBVH_OK) {
         cbvh_free(a, map);
         cbvh_cook_mesh_free(a, out);

@@ -433,7 +433,7 @@ static void init_refs(const cook_mesh *m, prim_ref *restrict refs, box *root, bo
 /* Build nodes are allocated a page at a time as the tree grows: the worst case, 2n - 1 nodes for n prims,
  * is about five times what an SAH tree with leaves of several triangles takes (the dragon: 0.37 nodes a
  * triangle), and it was the largest buffer of a cook. */
-#define NODE_PAGE 4096u
+#define NODE_PAGE 1024u
 
 /* What both builders allocate pages from. While the worker runs, both may need a page at once, and the
  * caller's hooks (and the meter counting them) need not be thread-safe: one call at a time. */
@@ -707,18 +707,19 @@ cbvh_result cbvh_cook_build(cook_mesh *m, const cook_build_params *params, const
     b.ci = params->intersection_cost;
     atomic_init(&b.done, 0);
     b.refs = cbvh_alloc_array(a, tris, sizeof(prim_ref), 64);
+    if (!b.refs)
+        return out_of_memory(tris, err);
+    box root_box;
+    task root;
+    init_refs(m, b.refs, &root_box, &root.cent);
+    cbvh_cook_mesh_shelve_triangles(m, a);
     b.w = cbvh_alloc(a, sizeof(workspace), 64);
-    if (!b.refs || !b.w || !pages_init(&b.nodes, tris, a)) {
+    if (!b.w || !pages_init(&b.nodes, tris, a)) {
         cbvh_free(a, b.refs);
         cbvh_free(a, b.w);
         pages_free(&b.nodes, a);
         return out_of_memory(tris, err);
     }
-
-    box root_box;
-    task root;
-    init_refs(m, b.refs, &root_box, &root.cent);
-    cbvh_cook_mesh_shelve_triangles(m, a);
     set_box(node_at(&b.nodes, 0), &root_box);
     root.node = 0;
     root.begin = 0;
