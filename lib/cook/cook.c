@@ -182,6 +182,7 @@ static cbvh_result make_grid(cook_state *s, const cbvh_cook_options *o, cbvh_coo
                          s->mesh.vertex_count);
     st->vertex_max_error =
         cbvh_cook_quantize_vertices(&s->grid, s->mesh.positions, s->quantized, s->mesh.vertex_count);
+    s->mesh.positions_for_build = 1;
     /* A triangle smaller than the grid step can lose its area on the grid: readers
      * would hold a segment that no ray and no overlap can report, so it goes. */
     if (cbvh_cook_drop_collapsed(&s->mesh) > 0 && s->mesh.triangle_count == 0)

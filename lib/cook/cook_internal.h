@@ -27,6 +27,7 @@ static inline void cook_report(const cook_progress *p, double fraction)
 
 typedef struct cook_mesh {
     float *positions;           /* vertex_count xyz; replaced by decoded grid positions for quantized vertices */
+    int positions_for_build;    /* 1: only the build reads them (the file stores grid coordinates) */
     uint32_t vertex_count;
     uint32_t *indices;          /* 3 per kept triangle, in the input's corner order; NULL while shelved */
     uint32_t *original_ids;     /* per kept triangle, its index in the input mesh (increasing) */
@@ -45,8 +46,9 @@ void cbvh_cook_mesh_free(const cbvh_allocator *a, cook_mesh *m);
 
 /* The build needs the triangles only for their boxes, so while it holds its largest buffers the vertex
  * map stands in for the indices (4 bytes an input vertex instead of 12 a triangle; the dragon: 2 instead
- * of 12 a triangle). shelve frees the indices when there is a map; restore computes them again from the
- * input mesh (the same one prepared) and frees the map. */
+ * of 12 a triangle). shelve frees the indices when there is a map, and the positions when only the build
+ * reads them; restore computes the indices again from the input mesh (the same one prepared) and frees
+ * the map. */
 void cbvh_cook_mesh_shelve_triangles(cook_mesh *m, const cbvh_allocator *a);
 cbvh_result cbvh_cook_mesh_restore_triangles(cook_mesh *m, const cbvh_mesh *input, const cbvh_allocator *a,
                                              cbvh_error *err);

@@ -248,6 +248,10 @@ void cbvh_cook_mesh_free(const cbvh_allocator *a, cook_mesh *m)
 
 void cbvh_cook_mesh_shelve_triangles(cook_mesh *m, const cbvh_allocator *a)
 {
+    if (m->positions_for_build) {
+        cbvh_free(a, m->positions);
+        m->positions = NULL;
+    }
     if (!m->vertex_map)
         return;
     cbvh_free(a, m->indices);
