@@ -185,7 +185,10 @@ static cbvh_result make_grid(cook_state *s, const cbvh_cook_options *o, cbvh_coo
     s->mesh.positions_for_build = 1;
     /* A triangle smaller than the grid step can lose its area on the grid: readers
      * would hold a segment that no ray and no overlap can report, so it goes. */
-    if (cbvh_cook_drop_collapsed(&s->mesh) > 0 && s->mesh.triangle_count == 0)
+    r = cbvh_cook_drop_collapsed(&s->mesh, &s->a, err);
+    if (r != CBVH_OK)
+        return r;
+    if (s->mesh.triangle_count == 0)
         return cbvh_fail(err, CBVH_ERROR_EMPTY_MESH,
                          "all triangles collapsed to zero area on the 16-bit vertex grid (quantized vertices)");
     return cbvh_cook_mesh_bounds(&s->mesh, err);

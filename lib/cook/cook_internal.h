@@ -30,10 +30,12 @@ typedef struct cook_mesh {
     int positions_for_build;    /* 1: only the build reads them (the file stores grid coordinates) */
     uint32_t vertex_count;
     uint32_t *indices;          /* 3 per kept triangle, in the input's corner order; NULL while shelved */
-    uint32_t *original_ids;     /* per kept triangle, its index in the input mesh (increasing) */
     uint32_t triangle_count;
     uint32_t input_triangle_count;
     uint64_t dropped_degenerate;
+    uint32_t *dropped;          /* the dropped_degenerate input ids of the dropped triangles, increasing: kept
+                                 * triangles are the others, in order (cbvh_cook_original_id), and few are
+                                 * dropped where a list of every kept one would take 4 bytes a triangle */
     float bounds_min[3], bounds_max[3];
     uint32_t *vertex_map;       /* input vertex -> prepared vertex, from which the indices are restored;
                                  * kept only when smaller than them, else NULL */
@@ -53,11 +55,26 @@ void cbvh_cook_mesh_shelve_triangles(cook_mesh *m, const cbvh_allocator *a);
 cbvh_result cbvh_cook_mesh_restore_triangles(cook_mesh *m, const cbvh_mesh *input, const cbvh_allocator *a,
                                              cbvh_error *err);
 
+/* The input id of kept triangle t: t plus the number of dropped ids below it. dropped[j] - j, the kept
+ * triangles before dropped[j], never decreases, and is <= t exactly for the dropped ids below t's. */
+static inline uint32_t cbvh_cook_original_id(const cook_mesh *m, uint32_t t)
+{
+    size_t lo = 0, hi = (size_t)m->dropped_degenerate;
+    while (lo < hi) {
+        const size_t mid = lo + (hi - lo) / 2;
+        if (m->dropped[mid] - mid <= t)
+            lo = mid + 1;
+        else
+            hi = mid;
+    }
+    return t + (uint32_t)lo;
+}
+
 /* Drops the kept triangles whose current positions have zero area (quantized
  * vertices can collapse a small triangle onto a segment or a point), keeping
- * the order, and counts them in dropped_degenerate. Returns how many. Vertices
- * only they used stay in positions; the layout writes used vertices only. */
-uint32_t cbvh_cook_drop_collapsed(cook_mesh *m);
+ * the order, and counts them in dropped_degenerate. Vertices only they used
+ * stay in positions; the layout writes used vertices only. */
+cbvh_result cbvh_cook_drop_collapsed(cook_mesh *m, const cbvh_allocator *a, cbvh_error *err);
 
 /* Sets m->bounds_min/max from the positions the triangles use; CBVH_ERROR_BAD_MESH when an extent overflows a float. */
 cbvh_result cbvh_cook_mesh_bounds(cook_mesh *m, cbvh_error *err);

@@ -137,13 +137,50 @@ static cbvh_result shrink_positions(cook_mesh *m, uint32_t welded, const cbvh_al
     return CBVH_OK;
 }
 
-/* Keeps the triangles with three distinct welded vertices and a nonzero area. */
-static void drop_degenerate(const cbvh_mesh *mesh, const uint32_t *restrict map, cook_mesh *m)
+/* Per kept triangle, its input id (the mesh's list of dropped ones, expanded); NULL without memory. */
+static uint32_t *original_ids(const cook_mesh *m, const cbvh_allocator *a)
+{
+    uint32_t *ids = cbvh_alloc_array(a, m->triangle_count, sizeof(uint32_t), 64);
+    if (!ids)
+        return NULL;
+    size_t next_dropped = 0;
+    uint32_t id = 0;
+    for (uint32_t t = 0; t < m->triangle_count; t++, id++) {
+        for (; next_dropped < m->dropped_degenerate && m->dropped[next_dropped] == id; next_dropped++)
+            id++;
+        ids[t] = id;
+    }
+    return ids;
+}
+
+/* Sets the mesh's list of dropped triangles to the input ids missing from `ids` (the kept ones, increasing). */
+static cbvh_result list_dropped(cook_mesh *m, const uint32_t *restrict ids, uint32_t kept, const cbvh_allocator *a,
+                                cbvh_error *err)
+{
+    const size_t count = (size_t)m->input_triangle_count - kept;
+    uint32_t *dropped = count ? cbvh_alloc_array(a, count, sizeof(uint32_t), 64) : NULL;
+    if (count && !dropped)
+        return out_of_memory(err, "dropped triangles");
+    size_t n = 0, k = 0;
+    for (size_t id = 0; id < m->input_triangle_count; id++) {
+        if (k < kept && ids[k] == id)
+            k++;
+        else
+            dropped[n++] = (uint32_t)id;
+    }
+    cbvh_free(a, m->dropped);
+    m->dropped = dropped;
+    m->dropped_degenerate = count;
+    return CBVH_OK;
+}
+
+/* Keeps the triangles with three distinct welded vertices and a nonzero area, writing their input ids. */
+static void drop_degenerate(const cbvh_mesh *mesh, const uint32_t *restrict map, cook_mesh *m,
+                            uint32_t *restrict ids)
 {
     const uint32_t *restrict idx = mesh->indices;
     const float *restrict pos = m->positions;
     uint32_t *restrict out = m->indices;
-    uint32_t *restrict ids = m->original_ids;
     const size_t tris = mesh->triangle_count;
     size_t kept = 0;
     for (size_t t = 0; t < tris; t++) {
@@ -157,30 +194,39 @@ static void drop_degenerate(const cbvh_mesh *mesh, const uint32_t *restrict map,
         ids[kept] = (uint32_t)t;
         kept++;
     }
-    m->dropped_degenerate = tris - kept;
     m->triangle_count = kept > UINT32_MAX ? UINT32_MAX : (uint32_t)kept;
 }
 
-uint32_t cbvh_cook_drop_collapsed(cook_mesh *m)
+static int collapsed(const cook_mesh *m, uint32_t t)
 {
-    const float *restrict pos = m->positions;
+    const float *pos = m->positions;
+    const uint32_t *corner = m->indices + 3 * (size_t)t;
+    return zero_area(pos + 3 * (size_t)corner[0], pos + 3 * (size_t)corner[1], pos + 3 * (size_t)corner[2]);
+}
+
+cbvh_result cbvh_cook_drop_collapsed(cook_mesh *m, const cbvh_allocator *a, cbvh_error *err)
+{
+    uint32_t first = 0;
+    while (first < m->triangle_count && !collapsed(m, first))
+        first++;
+    if (first == m->triangle_count)
+        return CBVH_OK;
+    uint32_t *restrict ids = original_ids(m, a);
+    if (!ids)
+        return out_of_memory(err, "collapsed triangles");
     uint32_t *restrict idx = m->indices;
-    uint32_t *restrict ids = m->original_ids;
-    uint32_t kept = 0;
-    for (uint32_t t = 0; t < m->triangle_count; t++) {
-        const uint32_t w0 = idx[3 * (size_t)t], w1 = idx[3 * (size_t)t + 1], w2 = idx[3 * (size_t)t + 2];
-        if (zero_area(pos + 3 * (size_t)w0, pos + 3 * (size_t)w1, pos + 3 * (size_t)w2))
+    uint32_t kept = first;
+    for (uint32_t t = first; t < m->triangle_count; t++) {
+        if (collapsed(m, t))
             continue;
-        idx[3 * (size_t)kept] = w0;
-        idx[3 * (size_t)kept + 1] = w1;
-        idx[3 * (size_t)kept + 2] = w2;
+        memmove(idx + 3 * (size_t)kept, idx + 3 * (size_t)t, 3 * sizeof *idx);
         ids[kept] = ids[t];
         kept++;
     }
-    const uint32_t dropped = m->triangle_count - kept;
-    m->dropped_degenerate += dropped;
     m->triangle_count = kept;
-    return dropped;
+    const cbvh_result r = list_dropped(m, ids, kept, a, err);
+    cbvh_free(a, ids);
+    return r;
 }
 
 /* Renumbers the welded vertices that kept triangles use, in welded order, compacting positions;
@@ -241,7 +287,7 @@ void cbvh_cook_mesh_free(const cbvh_allocator *a, cook_mesh *m)
 {
     cbvh_free(a, m->positions);
     cbvh_free(a, m->indices);
-    cbvh_free(a, m->original_ids);
+    cbvh_free(a, m->dropped);
     cbvh_free(a, m->vertex_map);
     memset(m, 0, sizeof *m);
 }
@@ -265,11 +311,13 @@ cbvh_result cbvh_cook_mesh_restore_triangles(cook_mesh *m, const cbvh_mesh *inpu
         m->indices = cbvh_alloc_array(a, m->triangle_count, 3 * sizeof(uint32_t), 64);
         if (!m->indices)
             return out_of_memory(err, "triangles");
-        const uint32_t *restrict in = input->indices, *restrict ids = m->original_ids, *restrict map = m->vertex_map;
+        const uint32_t *restrict in = input->indices, *restrict map = m->vertex_map;
         uint32_t *restrict out = m->indices;
-        for (size_t t = 0; t < m->triangle_count; t++)
+        for (uint32_t t = 0; t < m->triangle_count; t++) {
+            const uint32_t *corner = in + 3 * (size_t)cbvh_cook_original_id(m, t);
             for (size_t c = 0; c < 3; c++)
-                out[3 * t + c] = map[in[3 * (size_t)ids[t] + c]];
+                out[3 * (size_t)t + c] = map[corner[c]];
+        }
     }
     cbvh_free(a, m->vertex_map);
     m->vertex_map = NULL;
@@ -316,13 +364,16 @@ cbvh_result cbvh_cook_prepare(const cbvh_mesh *mesh, const cbvh_allocator *a, co
     cook_report(progress, 0.5);
 
     out->indices = cbvh_alloc_array(a, tris, 3 * sizeof(uint32_t), 64);
-    out->original_ids = cbvh_alloc_array(a, tris, sizeof(uint32_t), 64);
-    if (!out->indices || !out->original_ids) {
+    uint32_t *ids = cbvh_alloc_array(a, tris, sizeof(uint32_t), 64);
+    if (out->indices && ids)
+        drop_degenerate(mesh, map, out, ids);
+    r = out->indices && ids ? list_dropped(out, ids, out->triangle_count, a, err) : out_of_memory(err, "triangles");
+    cbvh_free(a, ids);
+    if (r != CBVH_OK) {
         cbvh_free(a, map);
         cbvh_cook_mesh_free(a, out);
-        return out_of_memory(err, "triangles");
+        return r;
     }
-    drop_degenerate(mesh, map, out);
     cook_report(progress, 0.75);
 
     if (out->triangle_count == 0)

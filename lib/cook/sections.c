@@ -169,7 +169,7 @@ static int encode_remap(const cook_layout *l, const cook_mesh *m, const cbvh_coo
         return 1;
     int identity = m->input_triangle_count == l->triangle_count;
     for (uint32_t t = 0; t < l->triangle_count; t++) {
-        scratch[t] = m->original_ids[l->triangle_source[t]];
+        scratch[t] = cbvh_cook_original_id(m, l->triangle_source[t]);
         identity &= scratch[t] == t;
     }
     if (identity)
@@ -189,7 +189,7 @@ static int encode_materials(const cook_layout *l, const cook_mesh *m, const cbvh
     uint32_t largest = 0;
     int all_equal = 1;
     for (uint32_t t = 0; t < l->triangle_count; t++) {
-        scratch[t] = input->material_ids[m->original_ids[l->triangle_source[t]]];
+        scratch[t] = input->material_ids[cbvh_cook_original_id(m, l->triangle_source[t])];
         largest = scratch[t] > largest ? scratch[t] : largest;
         all_equal &= scratch[t] == scratch[0];
     }
