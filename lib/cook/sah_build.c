@@ -433,7 +433,7 @@ static void init_refs(const cook_mesh *m, prim_ref *restrict refs, box *root, bo
 /* Build nodes are allocated a page at a time as the tree grows: the worst case, 2n - 1 nodes for n prims,
  * is about five times what an SAH tree with leaves of several triangles takes (the dragon: 0.37 nodes a
  * triangle), and it was the largest buffer of a cook. */
-#define NODE_PAGE 1024u
+#define NODE_PAGE_SHIFT 10 /* 1024 nodes, 32 KiB */
 
 /* What both builders allocate pages from. While the worker runs, both may need a page at once, and the
  * caller's hooks (and the meter counting them) need not be thread-safe: one call at a time. */
@@ -443,16 +443,17 @@ typedef struct page_source {
     atomic_bool failed;         /* a page was refused: both builders stop */
 } page_source;
 
-/* A builder's nodes: page[i / page_nodes][i % page_nodes]. */
+/* A builder's nodes: page[i >> page_shift][i & (page_nodes - 1)]. */
 typedef struct node_pages {
     cook_bnode **page;          /* room for every page the worst case needs; page 0 shares its block */
     uint32_t page_count;
-    uint32_t page_nodes;        /* NODE_PAGE, or the whole worst case when that is smaller */
+    uint32_t page_shift;
+    uint32_t page_nodes;        /* a power of two: 1 << NODE_PAGE_SHIFT, or the worst case's when smaller */
 } node_pages;
 
 static inline cook_bnode *node_at(const node_pages *p, uint32_t i)
 {
-    return &p->page[i / p->page_nodes][i % p->page_nodes];
+    return &p->page[i >> p->page_shift][i & (p->page_nodes - 1)];
 }
 
 /* Room for the nodes of a subtree of `prims` prims: the table and the first page, in one block (one
@@ -460,12 +461,15 @@ static inline cook_bnode *node_at(const node_pages *p, uint32_t i)
 static int pages_init(node_pages *p, uint32_t prims, const cbvh_allocator *a)
 {
     const uint32_t worst = 2 * prims - 1;
-    p->page_nodes = worst < NODE_PAGE ? worst : NODE_PAGE;
-    const size_t table = ((worst + p->page_nodes - 1) / p->page_nodes * sizeof *p->page + 63) & ~(size_t)63;
-    p->page = cbvh_alloc(a, table + (size_t)p->page_nodes * sizeof(cook_bnode), 64);
+    for (p->page_shift = 0; p->page_shift < NODE_PAGE_SHIFT && (1u << p->page_shift) < worst; p->page_shift++)
+        ;
+    p->page_nodes = 1u << p->page_shift;
+    const size_t table = ((((size_t)worst - 1) >> p->page_shift) + 1) * sizeof *p->page;
+    const size_t table_size = (table + 63) & ~(size_t)63;
+    p->page = cbvh_alloc(a, table_size + (size_t)p->page_nodes * sizeof(cook_bnode), 64);
     if (!p->page)
         return 0;
-    p->page[0] = (cook_bnode *)(void *)((uint8_t *)p->page + table);
+    p->page[0] = (cook_bnode *)(void *)((uint8_t *)p->page + table_size);
     p->page_count = 1;
     return 1;
 }
@@ -482,7 +486,7 @@ static void pages_free(node_pages *p, const cbvh_allocator *a)
  * other builder. */
 static int pages_reach(node_pages *p, uint32_t last, page_source *src)
 {
-    if (last / p->page_nodes < p->page_count)
+    if (last >> p->page_shift < p->page_count)
         return 1;
     while (atomic_flag_test_and_set_explicit(&src->busy, memory_order_acquire))
         ;
