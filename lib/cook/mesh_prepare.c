@@ -153,9 +153,9 @@ static uint32_t *original_ids(const cook_mesh *m, const cbvh_allocator *a)
     return ids;
 }
 
-/* Sets the mesh's list of dropped triangles to the input ids missing from `ids` (the kept ones, increasing). */
-static cbvh_result list_dropped(cook_mesh *m, const uint32_t *restrict ids, uint32_t kept, const cbvh_allocator *a,
-                                cbvh_error *err)
+/* Sets the mesh's list of dropped triangles: the input ids missing from `ids` (the kept ones, increasing). */
+static cbvh_result list_dropped(cook_mesh *m, const uint32_t *restrict ids, uint32_t kept,
+                                const cbvh_allocator *a, cbvh_error *err)
 {
     const size_t count = (size_t)m->input_triangle_count - kept;
     uint32_t *dropped = count ? cbvh_alloc_array(a, count, sizeof(uint32_t), 64) : NULL;
@@ -367,7 +367,8 @@ cbvh_result cbvh_cook_prepare(const cbvh_mesh *mesh, const cbvh_allocator *a, co
     uint32_t *ids = cbvh_alloc_array(a, tris, sizeof(uint32_t), 64);
     if (out->indices && ids)
         drop_degenerate(mesh, map, out, ids);
-    r = out->indices && ids ? list_dropped(out, ids, out->triangle_count, a, err) : out_of_memory(err, "triangles");
+    r = out->indices && ids ? list_dropped(out, ids, out->triangle_count, a, err)
+                            : out_of_memory(err, "triangles");
     cbvh_free(a, ids);
     if (r != CBVH_OK) {
         cbvh_free(a, map);

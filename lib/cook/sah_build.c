@@ -692,7 +692,8 @@ static cook_bnode *flatten(builder *main, builder *worker, uint32_t at, const cb
 
 static cbvh_result out_of_memory(uint32_t tris, cbvh_error *err)
 {
-    return cbvh_fail(err, CBVH_ERROR_OUT_OF_MEMORY, "out of memory while building the tree (%u triangles)", tris);
+    return cbvh_fail(err, CBVH_ERROR_OUT_OF_MEMORY, "out of memory while building the tree (%u triangles)",
+                     tris);
 }
 
 cbvh_result cbvh_cook_build(cook_mesh *m, const cook_build_params *params, const cbvh_allocator *a,
