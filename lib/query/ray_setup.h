@@ -23,6 +23,8 @@
 struct cbvh_ray_shear {
     float org[3];
     float dir[3];      /* for t from the triangle's plane (ray_triangle.h) */
+    double dir_inv[3]; /* 1 / dir and |dir|^2 in double, for the plane t's clamps: once per ray, not per hit */
+    double dir_len2;
     float sx, sy, sz;  /* dir[kx]/dir[kz], dir[ky]/dir[kz], 1/dir[kz] */
     uint32_t kx, ky, kz; /* kz: dominant axis of dir; kx, ky keep the winding */
 };
@@ -71,7 +73,9 @@ static inline void cbvh_shear_setup(struct cbvh_ray_shear *s, const float org[3]
     for (int a = 0; a < 3; a++) {
         s->org[a] = org[a];
         s->dir[a] = dir[a];
+        s->dir_inv[a] = 1.0 / (double)dir[a];
     }
+    s->dir_len2 = (double)dir[0] * dir[0] + (double)dir[1] * dir[1] + (double)dir[2] * dir[2];
 }
 
 /* 1 when the ray is valid (cbvh.h: finite org and dir, dir not all zero,

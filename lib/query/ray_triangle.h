@@ -43,20 +43,19 @@ CBVH_COLD static int cbvh_ray_triangle_edges_double(const struct cbvh_ray_shear 
     return !isnan(e[0]) && !isnan(e[1]) && !isnan(e[2]) && e[0] + e[1] + e[2] != 0.0;
 }
 
-/* t where the ray crosses the plane of (a, b, c): dot(n, base - org) /
- * dot(n, dir) in the triangle's frame (triangle_frame.h), all in double.
- * Well conditioned whatever the triangle's shape (the interpolated t of the
- * original test loses accuracy as 1/area on slivers), and without overflow
- * for any float coordinates. Only triangles that passed the edge tests get
- * here. Returns 0 when the ray lies in the plane (t undefined). */
-CBVH_KERNEL int cbvh_plane_t(const struct cbvh_ray_shear *restrict s, const float *restrict a,
-                               const float *restrict b, const float *restrict c, double *t)
+/* t where the ray crosses the plane of the triangle v: dot(n, base - org) /
+ * dot(n, dir) in the triangle's frame (triangle_frame.h, left in *f for the
+ * barycentrics), all in double. Well conditioned whatever the triangle's
+ * shape (the interpolated t of the original test loses accuracy as 1/area on
+ * slivers), and without overflow for any float coordinates. Only triangles
+ * that passed the edge tests get here. Returns 0 when the ray lies in the
+ * plane (t undefined). */
+CBVH_KERNEL int cbvh_plane_t(const struct cbvh_ray_shear *restrict s, const cbvh_v3 v[3],
+                             struct cbvh_triangle_frame *restrict f, double *t)
 {
-    const cbvh_v3 v[3] = {v3_from_f(a), v3_from_f(b), v3_from_f(c)};
     const cbvh_v3 org = v3_from_f(s->org), dir = v3_from_f(s->dir);
-    struct cbvh_triangle_frame f;
-    cbvh_triangle_frame_of(v, &f);
-    const double den = v3_dot(f.n, dir), num = v3_dot(f.n, v3_sub(v[f.base], org));
+    cbvh_triangle_frame_of(v, f);
+    const double den = v3_dot(f->n, dir), num = v3_dot(f->n, v3_sub(v[f->base], org));
     if (den == 0.0)
         return 0;
     /* Every point of the triangle projects onto the ray between its vertices'
@@ -70,10 +69,9 @@ CBVH_KERNEL int cbvh_plane_t(const struct cbvh_ray_shear *restrict s, const floa
         lo = proj < lo ? proj : lo;
         hi = proj > hi ? proj : hi;
     }
-    const double dd = v3_len2(dir);
     double tp = num / den;
-    lo /= dd;
-    hi /= dd;
+    lo /= s->dir_len2;
+    hi /= s->dir_len2;
     tp = tp < lo ? lo : tp;
     tp = tp > hi ? hi : tp;
     /* Nor does it leave the triangle's bounding box where the line crosses it (slabs in double). A grazing
@@ -85,7 +83,7 @@ CBVH_KERNEL int cbvh_plane_t(const struct cbvh_ray_shear *restrict s, const floa
         if (s->dir[axis] == 0.0f)
             continue;
         const double p0 = v3_get(v[0], axis), p1 = v3_get(v[1], axis), p2 = v3_get(v[2], axis);
-        const double o = s->org[axis], inv = 1.0 / s->dir[axis];
+        const double o = s->org[axis], inv = s->dir_inv[axis];
         const double small = p0 < p1 ? (p0 < p2 ? p0 : p2) : (p1 < p2 ? p1 : p2);
         const double big = p0 > p1 ? (p0 > p2 ? p0 : p2) : (p1 > p2 ? p1 : p2);
         const double t0 = (small - o) * inv, t1 = (big - o) * inv;
@@ -126,32 +124,30 @@ CBVH_COLD static void cbvh_barycentrics_to_boundary(const struct cbvh_triangle_f
 }
 
 /* Barycentrics (u: weight of b, v: weight of c) of the point at t on the
- * ray, which lies in the triangle's plane, from the triangle's frame in
- * double: errors relative to the edge lengths, not to the area (the sheared
- * edge functions, products of coordinates relative to the origin, cancel on
- * slivers and put the barycentric point far from the hit: finding F6). Only
- * for accepted hits, so out of line: one copy serves every walk instance.
- * edge: the sheared edge functions (u, v, w scaled). */
-CBVH_NOINLINE void cbvh_plane_barycentrics(const struct cbvh_ray_shear *restrict s, const float *restrict a,
-                                         const float *restrict b, const float *restrict c, double t,
-                                         const double edge[3], float *u, float *v)
+ * ray, which lies in the triangle's plane, from the triangle's frame f (as
+ * cbvh_plane_t left it; base: its base vertex) in double: errors relative to
+ * the edge lengths, not to the area (the sheared edge functions, products of
+ * coordinates relative to the origin, cancel on slivers and put the
+ * barycentric point far from the hit: finding F6). Only for accepted hits, so
+ * out of line: one copy serves every walk instance. edge: the sheared edge
+ * functions (u, v, w scaled). */
+CBVH_NOINLINE void cbvh_plane_barycentrics(const struct cbvh_ray_shear *restrict s,
+                                           const struct cbvh_triangle_frame *restrict f, cbvh_v3 base, double t,
+                                           const double edge[3], float *u, float *v)
 {
-    const cbvh_v3 vert[3] = {v3_from_f(a), v3_from_f(b), v3_from_f(c)};
-    struct cbvh_triangle_frame f;
-    cbvh_triangle_frame_of(vert, &f);
-    const cbvh_v3 w = v3_madd(v3_sub(v3_from_f(s->org), vert[f.base]), v3_from_f(s->dir), t);
+    const cbvh_v3 w = v3_madd(v3_sub(v3_from_f(s->org), base), v3_from_f(s->dir), t);
     double weight[3]; /* of a, b, c */
     double x, y;
-    cbvh_triangle_frame_barycentrics(&f, w, &x, &y);
+    cbvh_triangle_frame_barycentrics(f, w, &x, &y);
     if (isfinite(x) && isfinite(y)) {
         /* Into the closed triangle: the edge tests accept a ray up to float
          * precision outside it, where the exact point has a barycentric below
          * 0; then the nearest boundary point. */
         if (!(x >= 0.0 && y >= 0.0 && x + y <= 1.0))
-            cbvh_barycentrics_to_boundary(&f, w, &x, &y);
-        weight[(f.base + 1) % 3] = x;
-        weight[(f.base + 2) % 3] = y;
-        weight[f.base] = 1.0 - x - y;
+            cbvh_barycentrics_to_boundary(f, w, &x, &y);
+        weight[(f->base + 1) % 3] = x;
+        weight[(f->base + 2) % 3] = y;
+        weight[f->base] = 1.0 - x - y;
     } else {
         /* n.n underflowed (denormal coordinates): the edge functions' barycentrics. */
         const double sum = edge[0] + edge[1] + edge[2];
@@ -209,15 +205,17 @@ CBVH_KERNEL int cbvh_ray_triangle(const struct cbvh_ray_shear *restrict s, const
         if (!cbvh_ray_triangle_edges_double(s, vert, sheared, e))
             return 0;
     }
+    const cbvh_v3 vert[3] = {v3_from_f(a), v3_from_f(b), v3_from_f(c)};
+    struct cbvh_triangle_frame frame;
     double td;
-    if (!cbvh_plane_t(s, a, b, c, &td))
+    if (!cbvh_plane_t(s, vert, &frame, &td))
         return 0;
     const float t = (float)td;
     /* Ordered compares: an overflowed t (inf) fails t <= tmax <= CBVH_T_LIMIT. */
     if (!(t >= tmin && t <= tmax))
         return 0;
     *t_out = t;
-    cbvh_plane_barycentrics(s, a, b, c, td, e, u_out, v_out);
+    cbvh_plane_barycentrics(s, &frame, vert[frame.base], td, e, u_out, v_out);
     return 1;
 }
 
