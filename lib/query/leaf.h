@@ -190,7 +190,9 @@ CBVH_KERNEL int leaf_loop(const struct cbvh_file *restrict f, uint32_t first, ui
     const float origin[3] = {f->grid_origin[0], f->grid_origin[1], f->grid_origin[2]};
     const float scale[3] = {f->grid_scale[0], f->grid_scale[1], f->grid_scale[2]};
     float best_t = *tmax;
-    float t, u, v, a[3], b[3], c[3];
+    float t, u = 0.0f, v = 0.0f, a[3], b[3], c[3];
+    /* an occlusion query without a filter never looks at the barycentrics */
+    const int want_uv = !any || gate;
 #ifdef CBVH_HAVE_SIMD
     /* Four triangles at a time through the SIMD filter; the scalar test on the lanes it keeps, in order. */
     if (!scalar && count > 1) {
@@ -203,7 +205,7 @@ CBVH_KERNEL int leaf_loop(const struct cbvh_file *restrict f, uint32_t first, ui
             for (uint32_t kept = ~leaf_reject4_sse2(s, c4) & group; kept; kept &= kept - 1u) {
                 const uint32_t j = cbvh_lowest_lane(kept);
                 leaf_triangle(tris, tri_enc, verts, vert_enc, origin, scale, k + j, a, b, c);
-                if (cbvh_ray_triangle(s, a, b, c, tmin, best_t, &t, &u, &v) &&
+                if (cbvh_ray_triangle(s, a, b, c, tmin, best_t, want_uv, &t, &u, &v) &&
                     leaf_take(f, gate, k + j, t, u, v, any, &best_t, best))
                     return 1;
             }
@@ -216,7 +218,7 @@ CBVH_KERNEL int leaf_loop(const struct cbvh_file *restrict f, uint32_t first, ui
 #endif
     for (uint32_t k = first; k < first + count; k++) {
         leaf_triangle(tris, tri_enc, verts, vert_enc, origin, scale, k, a, b, c);
-        if (cbvh_ray_triangle(s, a, b, c, tmin, best_t, &t, &u, &v) &&
+        if (cbvh_ray_triangle(s, a, b, c, tmin, best_t, want_uv, &t, &u, &v) &&
             leaf_take(f, gate, k, t, u, v, any, &best_t, best))
             return 1;
     }

@@ -159,8 +159,9 @@ CBVH_NOINLINE void cbvh_plane_barycentrics(const struct cbvh_ray_shear *restrict
 }
 
 /* Tests the ray (sheared by s) against triangle (a, b, c). Returns 1 when it
- * hits at t in [tmin, tmax] and writes t and the barycentrics u (weight of b)
- * and v (weight of c). Watertight: a ray through a shared edge or vertex hits
+ * hits at t in [tmin, tmax] and writes t and, when want_uv (a caller's
+ * constant, or what it knows it needs: an any-hit walk without a hit filter
+ * does not), the barycentrics u (weight of b) and v (weight of c). Watertight: a ray through a shared edge or vertex hits
  * at least one of the triangles sharing it, because each edge function's sign
  * is the exact sign for the float sheared coordinates, which both triangles
  * compute identically (see cbvh_ray_triangle_edges_double), and the sign test
@@ -170,7 +171,7 @@ CBVH_NOINLINE void cbvh_plane_barycentrics(const struct cbvh_ray_shear *restrict
  * u, v from the hit point (cbvh_plane_barycentrics). */
 CBVH_KERNEL int cbvh_ray_triangle(const struct cbvh_ray_shear *restrict s, const float *restrict a,
                                     const float *restrict b, const float *restrict c, float tmin, float tmax,
-                                    float *t_out, float *u_out, float *v_out)
+                                    const int want_uv, float *t_out, float *u_out, float *v_out)
 {
     const uint32_t kx = s->kx, ky = s->ky, kz = s->kz;
     const float sx = s->sx, sy = s->sy;
@@ -215,7 +216,8 @@ CBVH_KERNEL int cbvh_ray_triangle(const struct cbvh_ray_shear *restrict s, const
     if (!(t >= tmin && t <= tmax))
         return 0;
     *t_out = t;
-    cbvh_plane_barycentrics(s, &frame, vert[frame.base], td, e, u_out, v_out);
+    if (want_uv)
+        cbvh_plane_barycentrics(s, &frame, vert[frame.base], td, e, u_out, v_out);
     return 1;
 }
 

@@ -55,7 +55,7 @@ CBVH_KERNEL void stream_triangle(struct cbvh_stream_batch *restrict b, uint32_t 
     float *box_ray = b->box_ray[r];
     const float tmin = box_ray[CBVH_LANE_TMIN], tmax = box_ray[CBVH_LANE_TMAX];
     float t, u, v;
-    if (!cbvh_ray_triangle(&b->ctx[r].shear, a, v1, v2, tmin, tmax, &t, &u, &v))
+    if (!cbvh_ray_triangle(&b->ctx[r].shear, a, v1, v2, tmin, tmax, !any, &t, &u, &v))
         return;
     if (any) {
         /* Occluded: a negative tmax fails every later box and triangle test. */
