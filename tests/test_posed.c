@@ -243,48 +243,64 @@ static void test_sweep_with_is_plain_sweep(void **state)
     }
 }
 
+/* A test mesh, placed by a random pose or left in its own frame, as the queries and the reference see it:
+ * the triangles in the query's frame, a box around them, their diagonal, the options that place it. */
+typedef struct placed_scene {
+    ref_fixture fx;
+    pose p;
+    ref_tris world;
+    double lo[3], hi[3], d;
+    cbvh_query_options o;
+} placed_scene;
+
+static void placed_scene_open(placed_scene *ps, uint64_t *st, int which, int placed)
+{
+    open_scene(&ps->fx, which);
+    random_pose(st, &ps->p);
+    placed_tris(&ps->fx, placed ? &ps->p : NULL, &ps->world);
+    ps->d = placed ? ps->fx.diag * ps->p.t.scale : ps->fx.diag;
+    double mid[3], placed_mid[3];
+    for (int a = 0; a < 3; a++)
+        mid[a] = 0.5 * (ps->fx.lo[a] + ps->fx.hi[a]);
+    pose_point(&ps->p, mid, placed_mid);
+    for (int a = 0; a < 3; a++) { /* placed: half a diagonal around the placed center */
+        ps->lo[a] = placed ? placed_mid[a] - 0.5 * ps->d : ps->fx.lo[a];
+        ps->hi[a] = placed ? placed_mid[a] + 0.5 * ps->d : ps->fx.hi[a];
+    }
+    options_with(&ps->o, placed ? &ps->p : NULL);
+}
+
+static void placed_scene_close(placed_scene *ps)
+{
+    free_tris(&ps->world);
+    ref_fixture_close(&ps->fx);
+}
+
 /* Oriented boxes, and every shape on a placed mesh, against the reference in the world. */
 static void test_oriented_and_placed_sweeps(void **state)
 {
     (void)state;
     uint64_t st = 11;
     long hits = 0, starts = 0;
-    for (int m = 0; m < 2; m++) {
-        ref_fixture fx;
-        open_scene(&fx, m);
-        for (int placed = 0; placed < 2; placed++) {
-            pose p;
-            random_pose(&st, &p);
-            ref_tris world;
-            placed_tris(&fx, placed ? &p : NULL, &world);
-            double lo[3], hi[3];
-            pose_point(&p, fx.lo, lo);
-            pose_point(&p, fx.hi, hi);
-            for (int a = 0; a < 3 && placed; a++) { /* a box around the placed bounds' corners, roughly */
-                const double c = 0.5 * (lo[a] + hi[a]), e = 0.5 * fx.diag * p.t.scale;
-                lo[a] = c - e;
-                hi[a] = c + e;
-            }
-            const double d = placed ? fx.diag * p.t.scale : fx.diag;
-            cbvh_query_options o;
-            options_with(&o, placed ? &p : NULL);
-            for (int q = 0; q < 120; q++) {
-                cbvh_shape s;
-                ref_shape r;
-                float delta[3];
-                random_shape(&st, &world, placed ? lo : fx.lo, placed ? hi : fx.hi, d,
-                             placed ? (cbvh_shape_kind)(q % 3) : CBVH_SHAPE_BOX, 1, &s, &r, delta);
-                if (q % 6 == 0)
-                    delta[0] = delta[1] = delta[2] = 0.0f;
-                cbvh_sweep_record rec;
-                assert_int_equal(cbvh_sweep_with(fx.file, &s, delta, &o, &rec), CBVH_OK);
-                check_record(&world, d, &r, delta, &rec);
-                hits += rec.tri != CBVH_NO_HIT;
-                starts += rec.tri != CBVH_NO_HIT && rec.t == 0.0f;
-            }
-            free_tris(&world);
+    for (int m = 0; m < 4; m++) {
+        const int placed = m % 2;
+        placed_scene ps;
+        placed_scene_open(&ps, &st, m / 2, placed);
+        for (int q = 0; q < 120; q++) {
+            cbvh_shape s;
+            ref_shape r;
+            float delta[3];
+            random_shape(&st, &ps.world, ps.lo, ps.hi, ps.d, placed ? (cbvh_shape_kind)(q % 3) : CBVH_SHAPE_BOX, 1,
+                         &s, &r, delta);
+            if (q % 6 == 0)
+                delta[0] = delta[1] = delta[2] = 0.0f;
+            cbvh_sweep_record rec;
+            assert_int_equal(cbvh_sweep_with(ps.fx.file, &s, delta, &ps.o, &rec), CBVH_OK);
+            check_record(&ps.world, ps.d, &r, delta, &rec);
+            hits += rec.tri != CBVH_NO_HIT;
+            starts += rec.tri != CBVH_NO_HIT && rec.t == 0.0f;
         }
-        ref_fixture_close(&fx);
+        placed_scene_close(&ps);
     }
     fprintf(stderr, "test_posed (%s): %ld sweep hits, %ld starting in contact\n", test_layout_name(), hits, starts);
     assert_true(hits > 200 && starts > 20);
@@ -314,66 +330,58 @@ static void test_overlaps_and_contacts(void **state)
     (void)state;
     uint64_t st = 23;
     long found = 0, box_contacts = 0;
-    for (int m = 0; m < 2; m++) {
-        ref_fixture fx;
-        open_scene(&fx, m);
-        for (int placed = 0; placed < 2; placed++) {
-            pose p;
-            random_pose(&st, &p);
-            ref_tris world;
-            placed_tris(&fx, placed ? &p : NULL, &world);
-            const double d = placed ? fx.diag * p.t.scale : fx.diag, tol = 2e-5 * d;
-            cbvh_query_options o;
-            options_with(&o, placed ? &p : NULL);
-            for (int q = 0; q < 120; q++) {
-                cbvh_shape s;
-                ref_shape r;
-                float delta[3];
-                const double *tri = world.v + 9 * (size_t)(scene_rand_unit(&st) * (double)world.count);
-                const double at[3] = {tri[0], tri[1], tri[2]};
-                random_shape(&st, &world, at, at, 0.5 * d, (cbvh_shape_kind)(q % 3), 1, &s, &r, delta);
-                uint32_t ids[4096];
-                cbvh_contact contacts[4096];
-                size_t n = 0, nc = 0;
-                int more = 1;
-                assert_int_equal(cbvh_overlap_with(fx.file, &s, &o, 0, ids, 4096, &n, &more), CBVH_OK);
-                assert_int_equal(more, 0);
-                assert_int_equal(cbvh_contacts_with(fx.file, &s, &o, 0, contacts, 4096, &nc, &more), CBVH_OK);
-                assert_int_equal(nc, n);
-                for (size_t k = 0; k < world.count; k++) {
-                    const int cls = overlap_class(&r, world.v + 9 * k, tol);
-                    int listed = 0;
-                    for (size_t j = 0; j < n; j++)
-                        listed |= ids[j] == world.id[k];
-                    if ((cls == 1 && !listed) || (cls == -1 && listed))
-                        fail_msg("shape %d: tri %u class %d, listed %d", (int)r.kind, world.id[k], cls, listed);
-                }
-                found += (long)n;
-                for (size_t j = 0; j < nc; j++) {
-                    const cbvh_contact *c = &contacts[j];
-                    assert_int_equal(c->tri, ids[j]);
-                    const double *t = tri_of(&world, c->tri), zero[3] = {0, 0, 0};
-                    const double nrm[3] = {c->normal[0], c->normal[1], c->normal[2]};
-                    const double pt[3] = {c->point[0], c->point[1], c->point[2]};
-                    assert_true(fabs(sqrt(nrm[0] * nrm[0] + nrm[1] * nrm[1] + nrm[2] * nrm[2]) - 1.0) < 1e-5);
-                    assert_true(c->depth >= 0.0f);
-                    assert_true(sqrt(ref_point_triangle_dist2(t, pt)) <= tol);
-                    const ref_shape clear = moved(&r, nrm, c->depth + tol);
-                    if (!(ref_shape_triangle_dist(&clear, zero, 0.0, t) > 0.0))
-                        fail_msg("shape %d: moved by depth %g + tol it overlaps tri %u", (int)r.kind, c->depth, c->tri);
-                    /* A box's depth is the least motion along the normal: by less it does not come clear. */
-                    if (r.kind == REF_BOX && c->depth > 3.0 * tol) {
-                        const ref_shape still = moved(&r, nrm, c->depth - 2.0 * tol);
-                        if (!(ref_shape_triangle_dist(&still, zero, 0.0, t) <= 1e-9 * d))
-                            fail_msg("shape %d: moved by depth %g - 2 tol it is clear of tri %u", (int)r.kind,
-                                     c->depth, c->tri);
-                    }
-                    box_contacts += r.kind == REF_BOX;
-                }
+    for (int m = 0; m < 4; m++) {
+        placed_scene ps;
+        placed_scene_open(&ps, &st, m / 2, m % 2);
+        const ref_tris *world = &ps.world;
+        const double d = ps.d, tol = 2e-5 * d;
+        for (int q = 0; q < 120; q++) {
+            cbvh_shape s;
+            ref_shape r;
+            float delta[3];
+            const double *tri = world->v + 9 * (size_t)(scene_rand_unit(&st) * (double)world->count);
+            const double at[3] = {tri[0], tri[1], tri[2]};
+            random_shape(&st, world, at, at, 0.5 * d, (cbvh_shape_kind)(q % 3), 1, &s, &r, delta);
+            uint32_t ids[4096];
+            cbvh_contact contacts[4096];
+            size_t n = 0, nc = 0;
+            int more = 1;
+            assert_int_equal(cbvh_overlap_with(ps.fx.file, &s, &ps.o, 0, ids, 4096, &n, &more), CBVH_OK);
+            assert_int_equal(more, 0);
+            assert_int_equal(cbvh_contacts_with(ps.fx.file, &s, &ps.o, 0, contacts, 4096, &nc, &more), CBVH_OK);
+            assert_int_equal(nc, n);
+            for (size_t k = 0; k < world->count; k++) {
+                const int cls = overlap_class(&r, world->v + 9 * k, tol);
+                int listed = 0;
+                for (size_t j = 0; j < n; j++)
+                    listed |= ids[j] == world->id[k];
+                if ((cls == 1 && !listed) || (cls == -1 && listed))
+                    fail_msg("shape %d: tri %u class %d, listed %d", (int)r.kind, world->id[k], cls, listed);
             }
-            free_tris(&world);
+            found += (long)n;
+            for (size_t j = 0; j < nc; j++) {
+                const cbvh_contact *c = &contacts[j];
+                assert_int_equal(c->tri, ids[j]);
+                const double *t = tri_of(world, c->tri), zero[3] = {0, 0, 0};
+                const double nrm[3] = {c->normal[0], c->normal[1], c->normal[2]};
+                const double pt[3] = {c->point[0], c->point[1], c->point[2]};
+                assert_true(fabs(sqrt(nrm[0] * nrm[0] + nrm[1] * nrm[1] + nrm[2] * nrm[2]) - 1.0) < 1e-5);
+                assert_true(c->depth >= 0.0f);
+                assert_true(sqrt(ref_point_triangle_dist2(t, pt)) <= tol);
+                const ref_shape clear = moved(&r, nrm, c->depth + tol);
+                if (!(ref_shape_triangle_dist(&clear, zero, 0.0, t) > 0.0))
+                    fail_msg("shape %d: moved by depth %g + tol it overlaps tri %u", (int)r.kind, c->depth, c->tri);
+                /* A box's depth is the least motion along the normal: by less it does not come clear. */
+                if (r.kind == REF_BOX && c->depth > 3.0 * tol) {
+                    const ref_shape still = moved(&r, nrm, c->depth - 2.0 * tol);
+                    if (!(ref_shape_triangle_dist(&still, zero, 0.0, t) <= 1e-9 * d))
+                        fail_msg("shape %d: moved by depth %g - 2 tol it is clear of tri %u", (int)r.kind,
+                                 c->depth, c->tri);
+                }
+                box_contacts += r.kind == REF_BOX;
+            }
         }
-        ref_fixture_close(&fx);
+        placed_scene_close(&ps);
     }
     fprintf(stderr, "test_posed (%s): %ld overlapping triangles, %ld box contacts\n", test_layout_name(), found,
             box_contacts);
@@ -449,24 +457,16 @@ static void test_cull_and_filter(void **state)
 {
     (void)state;
     uint64_t st = 41;
-    ref_fixture fx;
-    open_scene(&fx, 0);
-    pose p;
-    random_pose(&st, &p);
-    ref_tris world;
-    placed_tris(&fx, &p, &world);
-    double lo[3], hi[3];
-    for (int a = 0; a < 3; a++) {
-        lo[a] = p.t.translation[a] - fx.diag * p.t.scale;
-        hi[a] = p.t.translation[a] + fx.diag * p.t.scale;
-    }
-    const double d = fx.diag * p.t.scale;
+    placed_scene ps;
+    placed_scene_open(&ps, &st, 0, 1);
+    const ref_tris *world = &ps.world;
+    const double d = ps.d;
     long culled_hits = 0, filtered_hits = 0;
     for (int q = 0; q < 150; q++) {
         cbvh_shape s;
         ref_shape r;
         float delta[3];
-        random_shape(&st, &world, lo, hi, d, (cbvh_shape_kind)(q % 3), 1, &s, &r, delta);
+        random_shape(&st, world, ps.lo, ps.hi, d, (cbvh_shape_kind)(q % 3), 1, &s, &r, delta);
         if (q % 7 == 0) { /* a point: the ray kernel with the gate */
             s.radius = 0.0f;
             r.radius = 0.0;
@@ -476,22 +476,22 @@ static void test_cull_and_filter(void **state)
             memcpy(r.p1, r.p0, sizeof r.p1);
         }
         cbvh_query_options o;
-        options_with(&o, &p);
+        options_with(&o, &ps.p);
         o.cull = CBVH_CULL_BACK;
         cbvh_sweep_record rec;
         ref_tris kept;
-        assert_int_equal(cbvh_sweep_with(fx.file, &s, delta, &o, &rec), CBVH_OK);
-        subset_tris(&world, keep_facing, delta, &kept);
+        assert_int_equal(cbvh_sweep_with(ps.fx.file, &s, delta, &o, &rec), CBVH_OK);
+        subset_tris(world, keep_facing, delta, &kept);
         check_record(&kept, d, &r, delta, &rec);
         culled_hits += rec.tri != CBVH_NO_HIT;
         free_tris(&kept);
 
         struct filter_log log = {0, 0, {0}};
-        options_with(&o, &p);
+        options_with(&o, &ps.p);
         o.filter = reject_odd;
         o.filter_user = &log;
-        assert_int_equal(cbvh_sweep_with(fx.file, &s, delta, &o, &rec), CBVH_OK);
-        subset_tris(&world, keep_even, NULL, &kept);
+        assert_int_equal(cbvh_sweep_with(ps.fx.file, &s, delta, &o, &rec), CBVH_OK);
+        subset_tris(world, keep_even, NULL, &kept);
         check_record(&kept, d, &r, delta, &rec);
         filtered_hits += rec.tri != CBVH_NO_HIT;
         free_tris(&kept);
@@ -506,7 +506,7 @@ static void test_cull_and_filter(void **state)
 
         struct filter_log stop = {0, 1, {0}};
         o.filter_user = &stop;
-        assert_int_equal(cbvh_sweep_with(fx.file, &s, delta, &o, &rec), CBVH_OK);
+        assert_int_equal(cbvh_sweep_with(ps.fx.file, &s, delta, &o, &rec), CBVH_OK);
         assert_int_equal(stop.calls, rec.tri == CBVH_NO_HIT ? 0 : 1);
         if (stop.calls)
             assert_int_equal(stop.accepted.tri, rec.tri);
@@ -514,8 +514,7 @@ static void test_cull_and_filter(void **state)
     fprintf(stderr, "test_posed (%s): %ld culled and %ld filtered sweep hits\n", test_layout_name(), culled_hits,
             filtered_hits);
     assert_true(culled_hits > 30 && filtered_hits > 30);
-    free_tris(&world);
-    ref_fixture_close(&fx);
+    placed_scene_close(&ps);
 }
 
 /* Bad input of every kind is CBVH_ERROR_INVALID_ARGUMENT with a miss, never a silent answer. */

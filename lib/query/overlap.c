@@ -339,15 +339,9 @@ static cbvh_result region_with(const cbvh_file *file, const cbvh_shape *shape, c
 {
     cbvh_query_options o;
     struct cbvh_local_shape local;
-    const struct cbvh_placement *p = NULL;
-    if (!file || !shape || cbvh_query_options_read(options, &o) != CBVH_OK || o.cull != CBVH_CULL_NONE || o.filter)
-        return CBVH_ERROR_INVALID_ARGUMENT;
-    if (o.transform) {
-        if (!cbvh_placement_of(o.transform, placement))
-            return CBVH_ERROR_INVALID_ARGUMENT;
-        p = placement;
-    }
-    if (!cbvh_shape_to_mesh(shape, p, &local))
+    const struct cbvh_placement *p;
+    if (!file || !shape || cbvh_query_options_read(options, &o) != CBVH_OK || o.cull != CBVH_CULL_NONE || o.filter ||
+        !cbvh_placement_of_option(o.transform, placement, &p) || !cbvh_shape_to_mesh(shape, p, &local))
         return CBVH_ERROR_INVALID_ARGUMENT;
     shape_region(&local, p, region);
     return CBVH_OK;

@@ -18,6 +18,15 @@ int cbvh_rotation_of_quaternion(const float q[4], double m[3][3]);
 /* Checks transform t (finite, non-zero quaternion, scale > 0) and fills *p. Returns 0 when it is invalid. */
 int cbvh_placement_of(const cbvh_transform *t, struct cbvh_placement *p);
 
+/* The placement of a query's transform t: *out is NULL when t is NULL (the mesh's own frame), else
+ * `storage` filled by cbvh_placement_of. Returns 0 for an invalid transform. */
+static inline int cbvh_placement_of_option(const cbvh_transform *t, struct cbvh_placement *storage,
+                                           const struct cbvh_placement **out)
+{
+    *out = t ? storage : NULL;
+    return !t || cbvh_placement_of(t, storage);
+}
+
 /* m * v and m^T * v. */
 static inline cbvh_v3 cbvh_rotate(const double m[3][3], cbvh_v3 v)
 {

@@ -188,16 +188,14 @@ static cbvh_result query_prepare(const cbvh_file *file, const cbvh_ray *world, c
     cbvh_ray local;
     const cbvh_ray *ray = world;
     struct cbvh_placement placement;
-    const int placed = o->transform != NULL; /* NULL by default, and for a caller whose struct ends before it */
-    if (placed) {
-        if (!world || !cbvh_placement_of(o->transform, &placement) || !place_ray(&placement, world, &local))
-            return CBVH_ERROR_INVALID_ARGUMENT;
+    const struct cbvh_placement *p; /* NULL by default, and for a caller whose struct ends before transform */
+    if (!cbvh_placement_of_option(o->transform, &placement, &p) || (p && (!world || !place_ray(p, world, &local))))
+        return CBVH_ERROR_INVALID_ARGUMENT;
+    if (p)
         ray = &local;
-    }
     if (!file || !ray || !cbvh_ray_prepare(ctx, ray, file))
         return CBVH_ERROR_INVALID_ARGUMENT;
-    cbvh_hit_gate_init(gate, o->cull, o->filter, o->filter_user, placed ? placement.rotation : NULL, ray->dir,
-                       ctx->t_base);
+    cbvh_hit_gate_init(gate, o->cull, o->filter, o->filter_user, p ? p->rotation : NULL, ray->dir, ctx->t_base);
     /* without culling or filter every hit counts: the plain walk (a transform only rotates the answer) */
     ctx->gate = o->cull != CBVH_CULL_NONE || o->filter ? gate : NULL;
     return CBVH_OK;

@@ -38,46 +38,39 @@ static int sweep_plain(const cbvh_file *file, const cbvh_shape *shape, const flo
     return found.tri != UINT32_MAX;
 }
 
-static void copy3(float to[3], const float from[3]) { memcpy(to, from, 3 * sizeof *from); }
+/* The plain entry points' shape from its parts: a is the center (sphere, box) or p0 (capsule), b is p1
+ * (capsule) or the half extents (box). A NULL part the kind needs is invalid input: a miss. */
+static int sweep_parts(const cbvh_file *file, cbvh_shape_kind kind, const float *a, const float *b, float radius,
+                       const float delta[3], cbvh_sweep_hit *hit)
+{
+    if (!a || (kind != CBVH_SHAPE_SPHERE && !b))
+        return sweep_plain(file, NULL, delta, hit);
+    cbvh_shape s;
+    memset(&s, 0, sizeof s);
+    s.kind = kind;
+    s.radius = radius;
+    memcpy(kind == CBVH_SHAPE_CAPSULE ? s.p0 : s.center, a, sizeof s.center);
+    if (b)
+        memcpy(kind == CBVH_SHAPE_CAPSULE ? s.p1 : s.half_extent, b, sizeof s.p1);
+    return sweep_plain(file, &s, delta, hit);
+}
 
 CBVH_API int cbvh_sweep_sphere(const cbvh_file *file, const float center[3], float radius, const float delta[3],
                                cbvh_sweep_hit *hit)
 {
-    if (!(center))
-        return sweep_plain(file, NULL, delta, hit);
-    cbvh_shape s;
-    memset(&s, 0, sizeof s);
-    s.kind = CBVH_SHAPE_SPHERE;
-    copy3(s.center, center);
-    s.radius = radius;
-    return sweep_plain(file, &s, delta, hit);
+    return sweep_parts(file, CBVH_SHAPE_SPHERE, center, NULL, radius, delta, hit);
 }
 
 CBVH_API int cbvh_sweep_capsule(const cbvh_file *file, const float p0[3], const float p1[3], float radius,
                                 const float delta[3], cbvh_sweep_hit *hit)
 {
-    if (!(p0 && p1))
-        return sweep_plain(file, NULL, delta, hit);
-    cbvh_shape s;
-    memset(&s, 0, sizeof s);
-    s.kind = CBVH_SHAPE_CAPSULE;
-    copy3(s.p0, p0);
-    copy3(s.p1, p1);
-    s.radius = radius;
-    return sweep_plain(file, &s, delta, hit);
+    return sweep_parts(file, CBVH_SHAPE_CAPSULE, p0, p1, radius, delta, hit);
 }
 
 CBVH_API int cbvh_sweep_box(const cbvh_file *file, const float center[3], const float half_extent[3],
                             const float delta[3], cbvh_sweep_hit *hit)
 {
-    if (!(center && half_extent))
-        return sweep_plain(file, NULL, delta, hit);
-    cbvh_shape s;
-    memset(&s, 0, sizeof s);
-    s.kind = CBVH_SHAPE_BOX;
-    copy3(s.center, center);
-    copy3(s.half_extent, half_extent);
-    return sweep_plain(file, &s, delta, hit);
+    return sweep_parts(file, CBVH_SHAPE_BOX, center, half_extent, 0.0f, delta, hit);
 }
 
 CBVH_API cbvh_result cbvh_sweep_with(const cbvh_file *file, const cbvh_shape *shape, const float delta[3],
@@ -89,14 +82,10 @@ CBVH_API cbvh_result cbvh_sweep_with(const cbvh_file *file, const cbvh_shape *sh
     record->tri = CBVH_NO_HIT;
     cbvh_query_options o;
     struct cbvh_placement placement;
-    const struct cbvh_placement *p = NULL;
-    if (!file || !shape || !delta || !cbvh_all_finite(delta, 3) || cbvh_query_options_read(options, &o) != CBVH_OK)
+    const struct cbvh_placement *p;
+    if (!file || !shape || !delta || !cbvh_all_finite(delta, 3) || cbvh_query_options_read(options, &o) != CBVH_OK ||
+        !cbvh_placement_of_option(o.transform, &placement, &p))
         return CBVH_ERROR_INVALID_ARGUMENT;
-    if (o.transform) {
-        if (!cbvh_placement_of(o.transform, &placement))
-            return CBVH_ERROR_INVALID_ARGUMENT;
-        p = &placement;
-    }
     struct cbvh_local_shape local;
     float local_delta[3];
     v3_to_f(p ? cbvh_vector_to_mesh(p, v3_from_f(delta)) : v3_from_f(delta), local_delta);

@@ -89,9 +89,7 @@ static int sweep_leaf(void *query, uint32_t first, uint32_t count)
         const int verdict = rules && rules->filter ? ask_filter(q, k, v, &c) : CBVH_FILTER_ACCEPT;
         if (verdict == CBVH_FILTER_REJECT)
             continue;
-        if (c.t > 0.0)
-            c.depth = 0.0;
-        q->best = c;
+        q->best = c; /* c.depth stays 0 unless the kernel found an overlap at t = 0 */
         q->best_tri = k;
         if (verdict == CBVH_FILTER_STOP)
             return 1;
