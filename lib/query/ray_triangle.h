@@ -161,7 +161,8 @@ CBVH_NOINLINE void cbvh_plane_barycentrics(const struct cbvh_ray_shear *restrict
 /* Tests the ray (sheared by s) against triangle (a, b, c). Returns 1 when it
  * hits at t in [tmin, tmax] and writes t and, when want_uv (a caller's
  * constant, or what it knows it needs: an any-hit walk without a hit filter
- * does not), the barycentrics u (weight of b) and v (weight of c). Watertight: a ray through a shared edge or vertex hits
+ * does not), the barycentrics u (weight of b) and v (weight of c).
+ * Watertight: a ray through a shared edge or vertex hits
  * at least one of the triangles sharing it, because each edge function's sign
  * is the exact sign for the float sheared coordinates, which both triangles
  * compute identically (see cbvh_ray_triangle_edges_double), and the sign test

@@ -30,7 +30,8 @@ static int capsule_triangle(const void *shape, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, 
             out->depth = r - v3_len(away);
         } else { /* the axis reaches the triangle: lift its lower end radius above the plane along the normal */
             out->normal = cbvh_fallback_normal(a, b, c, s->delta);
-            out->depth = r - fmin(v3_dot(v3_sub(s->p0, on_tri), out->normal), v3_dot(v3_sub(s->p1, on_tri), out->normal));
+            const double h0 = v3_dot(v3_sub(s->p0, on_tri), out->normal);
+            out->depth = r - fmin(h0, v3_dot(v3_sub(s->p1, on_tri), out->normal));
         }
         return 1;
     }
