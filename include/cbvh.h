@@ -97,7 +97,11 @@ typedef struct cbvh_error {
 /* Allocator hooks. alloc returns memory aligned to at least `align` (a power
  * of two, at most 64) or NULL; free accepts what alloc returned. Pass NULL
  * wherever a cbvh_allocator* is taken to use the C library's allocator.
- * Every allocation cbvh makes goes through these hooks. */
+ * Every allocation cbvh makes goes through these hooks. The hooks need not be
+ * thread-safe, but may be called from a thread other than the caller's: a
+ * large cook builds half of its tree on a second thread, which takes its node
+ * pages through the hooks under the cook's own lock, so two calls never
+ * overlap (one call at a time within a cook, an open or a close). */
 typedef struct cbvh_allocator {
     void *(*alloc)(void *user, size_t size, size_t align);
     void (*free)(void *user, void *ptr);
