@@ -8,6 +8,7 @@
 #include "query/shape_walk.h"
 #include "query/raycast.h"
 #include "query/shape.h"
+#include "query/shape_cull.h"
 #include "query/triangle_box.h"
 
 /* Where overlapping triangles go. */
@@ -164,10 +165,14 @@ static int overlap_leaf(void *query, uint32_t first, uint32_t count)
 {
     const struct overlap_query *q = query;
     for (uint32_t k = first; k < first + count; k++) {
-        float a[3], b[3], c[3];
+        float a[3], b[3], c[3], lo[3], hi[3];
         cbvh_triangle_vertices(q->f, k, a, b, c);
+        cbvh_triangle_bounds(a, b, c, lo, hi);
+        if (!overlap_enter(query, lo, hi))
+            continue;
         const cbvh_v3 va = v3_from_f(a), vb = v3_from_f(b), vc = v3_from_f(c);
-        if (!region_triangle(q->region, va, vb, vc))
+        if (cbvh_shape_plane_clearance(&q->region->shape, v3(0, 0, 0), 0.0, va, vb, vc) == CBVH_PLANE_CLEAR ||
+            !region_triangle(q->region, va, vb, vc))
             continue;
         const uint32_t tri = cbvh_original_id(q->f, k);
         cbvh_contact contact;

@@ -10,8 +10,11 @@ struct box_shape {
     cbvh_v3 delta;
 };
 
-static int box_triangle(const void *shape, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, double tmax, struct cbvh_sweep_contact *out)
+/* The separating-axis sweep finds the overlap at t = 0 on the way: clear_at_start would save nothing. */
+static int box_triangle(const void *shape, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, double tmax, int clear_at_start,
+                        struct cbvh_sweep_contact *out)
 {
+    (void)clear_at_start;
     const struct box_shape *s = shape;
     double t, depth = 0.0;
     cbvh_v3 n;

@@ -12,9 +12,12 @@ struct sphere_shape {
  * and the normal from it to the center (cbvh_fallback_normal when the center
  * lies on the triangle), depth radius - distance along it. Otherwise the first
  * entry of the center into the triangle grown by the radius (sweep_features.h). */
-static int sphere_triangle(const void *shape, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, double tmax, struct cbvh_sweep_contact *out)
+static int sphere_triangle(const void *shape, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, double tmax, int clear_at_start,
+                           struct cbvh_sweep_contact *out)
 {
     const struct sphere_shape *s = shape;
+    if (clear_at_start)
+        return cbvh_sweep_ball_triangle(s->center, s->delta, s->radius, a, b, c, tmax, out);
     const cbvh_v3 q = cbvh_closest_point_triangle(s->center, a, b, c);
     const cbvh_v3 away = v3_sub(s->center, q);
     if (v3_len2(away) <= s->radius * s->radius) {

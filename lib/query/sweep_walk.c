@@ -6,6 +6,7 @@
 #include "query/raycast.h"
 #include "query/sweep_walk.h"
 #include "query/shape.h"
+#include "query/shape_cull.h"
 #include "query/shape_walk.h"
 #include "query/triangle_frame.h"
 
@@ -22,6 +23,7 @@ struct sweep_query {
     uint32_t octant;
     cbvh_sweep_triangle_fn sweep;
     const void *shape;
+    const struct cbvh_local_shape *bounds;
     const struct cbvh_sweep_rules *rules;
     struct cbvh_sweep_contact best;
     uint32_t best_tri;
@@ -77,13 +79,20 @@ static int sweep_leaf(void *query, uint32_t first, uint32_t count)
     struct sweep_query *q = query;
     const struct cbvh_sweep_rules *rules = q->rules;
     for (uint32_t k = first; k < first + count; k++) {
-        float a[3], b[3], cc[3];
+        float a[3], b[3], cc[3], lo[3], hi[3];
         cbvh_triangle_vertices(q->f, k, a, b, cc);
+        cbvh_triangle_bounds(a, b, cc, lo, hi);
+        if (!sweep_enter(query, lo, hi))
+            continue;
         const cbvh_v3 v[3] = {v3_from_f(a), v3_from_f(b), v3_from_f(cc)};
         if (rules && rules->cull != CBVH_CULL_NONE && culled(rules->cull, v[0], v[1], v[2], q->delta))
             continue;
+        const enum cbvh_plane_clearance plane =
+            cbvh_shape_plane_clearance(q->bounds, v3_from_f(q->delta), q->best.t, v[0], v[1], v[2]);
+        if (plane == CBVH_PLANE_CLEAR)
+            continue;
         struct cbvh_sweep_contact c = {0.0, {0, 0, 0}, {0, 0, 0}, 0.0};
-        if (!q->sweep(q->shape, v[0], v[1], v[2], q->best.t, &c) ||
+        if (!q->sweep(q->shape, v[0], v[1], v[2], q->best.t, plane == CBVH_PLANE_CLEAR_AT_START, &c) ||
             !(c.t < q->best.t || (c.t == q->best.t && k < q->best_tri)))
             continue;
         const int verdict = rules && rules->filter ? ask_filter(q, k, v, &c) : CBVH_FILTER_ACCEPT;
@@ -106,7 +115,7 @@ int cbvh_sweep_walk(const struct cbvh_file *f, const struct cbvh_local_shape *bo
     cbvh_shape_bounds(bounds, &lo, &hi);
     cbvh_sweep_bounds(lo, hi, center, extent);
     struct sweep_query q = {f, center, extent, delta, {1.0f / delta[0], 1.0f / delta[1], 1.0f / delta[2]}, 0, sweep,
-                            shape, rules, {1.0, {0, 0, 0}, {0, 0, 0}, 0.0}, UINT32_MAX};
+                            shape, bounds, rules, {1.0, {0, 0, 0}, {0, 0, 0}, 0.0}, UINT32_MAX};
     q.octant = cbvh_octant_of(q.rcp);
     cbvh_shape_walk(f, f->layout, q.octant, sweep_enter, sweep_leaf, &q);
     found->tri = q.best_tri;

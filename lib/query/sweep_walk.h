@@ -7,9 +7,11 @@
 #include "query/sweep_features.h"
 
 /* Sweeps one triangle: first contact with t in [0, tmax] (t = 0 when the shape
- * already overlaps the triangle). Returns 1 and fills *out on contact. */
+ * already overlaps the triangle). clear_at_start: 1 when the shape at t = 0 is
+ * known clear of the triangle (cbvh_shape_plane_clearance), so a kernel may skip
+ * its overlap test. Returns 1 and fills *out on contact. */
 typedef int (*cbvh_sweep_triangle_fn)(const void *shape, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, double tmax,
-                                      struct cbvh_sweep_contact *out);
+                                      int clear_at_start, struct cbvh_sweep_contact *out);
 
 /* What a sweep with options leaves out (cbvh_sweep_with): culling by the motion, the caller's filter (its
  * records in the world of `placement` when not NULL). */
