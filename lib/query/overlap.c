@@ -146,19 +146,68 @@ static void region_contact(const struct overlap_region *r, cbvh_v3 a, cbvh_v3 b,
     v3_to_f(point, out->point);
 }
 
-/* An overlap as the shape walk sees it. */
+/* An overlap as the shape walk sees it: the region's box as a range of grid coordinates per axis. */
 struct overlap_query {
     const struct cbvh_file *f;
     const struct overlap_region *region;
     struct overlap_sink *sink;
+    int32_t grid_lo[3], grid_hi[3];
 };
 
-/* Node boxes are closed, so a region touching a box is not culled. */
-static int overlap_enter(void *query, const float lo[3], const float hi[3])
+/* The region's box meets [lo, hi]: boxes are closed, so a region touching one is not culled. */
+static int region_meets(const struct overlap_region *r, const float lo[3], const float hi[3])
 {
-    const struct overlap_region *r = ((const struct overlap_query *)query)->region;
-    return !(lo[0] > r->hi[0] || hi[0] < r->lo[0] || lo[1] > r->hi[1] || hi[1] < r->lo[1] || lo[2] > r->hi[2] ||
-             hi[2] < r->lo[2]);
+    return !((lo[0] > r->hi[0]) | (hi[0] < r->lo[0]) | (lo[1] > r->hi[1]) | (hi[1] < r->lo[1]) |
+             (lo[2] > r->hi[2]) | (hi[2] < r->lo[2]));
+}
+
+/* The largest grid coordinate in [0, CBVH_Q_MAX] whose plane (cbvh_dequantize) is at most x, or -1. Planes
+ * grow with their coordinates (scale >= 0, every rounding monotonic), so from an estimate an outward
+ * search brackets it (far from the origin many coordinates round to one plane), and bisection ends it. */
+static int32_t grid_at_most(float x, float origin, float scale)
+{
+    const int32_t top = (int32_t)CBVH_Q_MAX;
+    double e = scale > 0.0f ? floor(((double)x - origin) / scale) : origin <= x ? top : -1;
+    int32_t lo = e < -1.0 ? -1 : e > top ? top : (int32_t)e, hi, step = 1; /* lo: at most x, or -1 */
+    if (lo >= 0 && cbvh_dequantize((uint32_t)lo, origin, scale) > x) {
+        do {
+            hi = lo;
+            lo = hi - step < 0 ? -1 : hi - step;
+            step *= 2;
+        } while (lo >= 0 && cbvh_dequantize((uint32_t)lo, origin, scale) > x);
+    } else {
+        for (hi = lo + 1; hi <= top && cbvh_dequantize((uint32_t)hi, origin, scale) <= x; step *= 2) {
+            lo = hi;
+            hi = lo + step > top + 1 ? top + 1 : lo + step;
+        }
+    }
+    while (hi - lo > 1) { /* the plane of lo is at most x (or lo = -1), the plane of hi above it (or hi = top + 1) */
+        const int32_t mid = lo + (hi - lo) / 2;
+        if (cbvh_dequantize((uint32_t)mid, origin, scale) <= x)
+            lo = mid;
+        else
+            hi = mid;
+    }
+    return lo;
+}
+
+/* The node boxes region_meets accepts, as coordinate ranges: a box's min plane is at most the region's max
+ * exactly when its coordinate is at most grid_hi, its max plane at least the region's min exactly when its
+ * coordinate exceeds the last one whose plane lies below that min. */
+static void grid_range(const struct cbvh_file *f, const struct overlap_region *r, int32_t lo[3], int32_t hi[3])
+{
+    for (int a = 0; a < 3; a++) {
+        hi[a] = grid_at_most(r->hi[a], f->grid_origin[a], f->grid_scale[a]);
+        lo[a] = grid_at_most(nextafterf(r->lo[a], -INFINITY), f->grid_origin[a], f->grid_scale[a]) + 1;
+    }
+}
+
+static int overlap_enter(void *query, const uint32_t q[6], float *entry)
+{
+    const struct overlap_query *o = query;
+    *entry = 0.0f;
+    return ((int32_t)q[0] <= o->grid_hi[0]) & ((int32_t)q[1] <= o->grid_hi[1]) & ((int32_t)q[2] <= o->grid_hi[2]) &
+           ((int32_t)q[3] >= o->grid_lo[0]) & ((int32_t)q[4] >= o->grid_lo[1]) & ((int32_t)q[5] >= o->grid_lo[2]);
 }
 
 static int overlap_leaf(void *query, uint32_t first, uint32_t count)
@@ -168,11 +217,11 @@ static int overlap_leaf(void *query, uint32_t first, uint32_t count)
         float a[3], b[3], c[3], lo[3], hi[3];
         cbvh_triangle_vertices(q->f, k, a, b, c);
         cbvh_triangle_bounds(a, b, c, lo, hi);
-        if (!overlap_enter(query, lo, hi))
+        if (!region_meets(q->region, lo, hi))
             continue;
         const cbvh_v3 va = v3_from_f(a), vb = v3_from_f(b), vc = v3_from_f(c);
-        if (cbvh_shape_plane_clearance(&q->region->shape, v3(0, 0, 0), 0.0, va, vb, vc) == CBVH_PLANE_CLEAR ||
-            !region_triangle(q->region, va, vb, vc))
+        const enum cbvh_cull_verdict v = cbvh_cull_triangle(&q->region->shape, v3(0, 0, 0), 0.0, va, vb, vc, 1);
+        if (v == CBVH_CULL_CLEAR || (v != CBVH_CULL_TOUCHES && !region_triangle(q->region, va, vb, vc)))
             continue;
         const uint32_t tri = cbvh_original_id(q->f, k);
         cbvh_contact contact;
@@ -187,10 +236,12 @@ static int overlap_leaf(void *query, uint32_t first, uint32_t count)
 /* Stored order: the order does not matter when every overlap is reported. */
 static size_t overlap_walk(const struct cbvh_file *f, const struct overlap_region *region, struct overlap_sink *sink)
 {
-    struct overlap_query q = {f, region, sink};
+    struct overlap_query q = {f, region, sink, {0, 0, 0}, {0, 0, 0}};
     if ((sink->out || sink->contacts) && sink->capacity == 0 && !sink->find_more)
         return 0; /* out is full before the first report */
-    cbvh_shape_walk(f, f->layout, CBVH_NO_OCTANT, overlap_enter, overlap_leaf, &q);
+    grid_range(f, region, q.grid_lo, q.grid_hi);
+    const float no_limit = INFINITY;
+    cbvh_shape_walk(f, f->layout, CBVH_NO_OCTANT, overlap_enter, overlap_leaf, &q, &no_limit);
     return sink->reported;
 }
 

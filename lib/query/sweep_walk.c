@@ -27,13 +27,14 @@ struct sweep_query {
     const struct cbvh_sweep_rules *rules;
     struct cbvh_sweep_contact best;
     uint32_t best_tri;
+    float limit; /* best.t as the box tests read it */
 };
 
-/* The box grown by the shape's extent, crossed by the center's path before the best contact. */
-static int sweep_enter(void *query, const float box_lo[3], const float box_hi[3])
+/* The box [box_lo, box_hi] grown by the shape's extent, crossed by the center's path before the best contact;
+ * *entry is where the path enters it. */
+static int sweep_box(const struct sweep_query *q, const float box_lo[3], const float box_hi[3], float *entry)
 {
-    const struct sweep_query *q = query;
-    float lo[3], hi[3], entry;
+    float lo[3], hi[3];
     for (int a = 0; a < 3; a++) {
         lo[a] = outward_lo(box_lo[a] - q->extent[a]);
         hi[a] = outward_hi(box_hi[a] + q->extent[a]);
@@ -43,7 +44,20 @@ static int sweep_enter(void *query, const float box_lo[3], const float box_hi[3]
     const uint32_t o = q->octant;
     return cbvh_slab_test(o & 1u ? hi[0] : lo[0], o & 2u ? hi[1] : lo[1], o & 4u ? hi[2] : lo[2],
                           o & 1u ? lo[0] : hi[0], o & 2u ? lo[1] : hi[1], o & 4u ? lo[2] : hi[2], q->center, q->rcp,
-                          0.0f, (float)q->best.t, &entry);
+                          0.0f, q->limit, entry);
+}
+
+/* A node box as sweep_box sees it: dequantized on the file's grid. */
+static int sweep_enter(void *query, const uint32_t grid[6], float *entry)
+{
+    const struct sweep_query *q = query;
+    const float *origin = q->f->grid_origin, *scale = q->f->grid_scale;
+    float lo[3], hi[3];
+    for (int a = 0; a < 3; a++) {
+        lo[a] = cbvh_dequantize(grid[a], origin[a], scale[a]);
+        hi[a] = cbvh_dequantize(grid[3 + a], origin[a], scale[a]);
+    }
+    return sweep_box(q, lo, hi, entry);
 }
 
 /* Culling by the motion: the sign of delta . n, n the face normal as wound; parallel or no motion keeps it. */
@@ -82,17 +96,18 @@ static int sweep_leaf(void *query, uint32_t first, uint32_t count)
         float a[3], b[3], cc[3], lo[3], hi[3];
         cbvh_triangle_vertices(q->f, k, a, b, cc);
         cbvh_triangle_bounds(a, b, cc, lo, hi);
-        if (!sweep_enter(query, lo, hi))
+        float entry;
+        if (!sweep_box(q, lo, hi, &entry))
             continue;
         const cbvh_v3 v[3] = {v3_from_f(a), v3_from_f(b), v3_from_f(cc)};
         if (rules && rules->cull != CBVH_CULL_NONE && culled(rules->cull, v[0], v[1], v[2], q->delta))
             continue;
-        const enum cbvh_plane_clearance plane =
-            cbvh_shape_plane_clearance(q->bounds, v3_from_f(q->delta), q->best.t, v[0], v[1], v[2]);
-        if (plane == CBVH_PLANE_CLEAR)
+        const enum cbvh_cull_verdict cull =
+            cbvh_cull_triangle(q->bounds, v3_from_f(q->delta), q->best.t, v[0], v[1], v[2], 0);
+        if (cull == CBVH_CULL_CLEAR)
             continue;
         struct cbvh_sweep_contact c = {0.0, {0, 0, 0}, {0, 0, 0}, 0.0};
-        if (!q->sweep(q->shape, v[0], v[1], v[2], q->best.t, plane == CBVH_PLANE_CLEAR_AT_START, &c) ||
+        if (!q->sweep(q->shape, v[0], v[1], v[2], q->best.t, cull == CBVH_CULL_CLEAR_AT_START, &c) ||
             !(c.t < q->best.t || (c.t == q->best.t && k < q->best_tri)))
             continue;
         const int verdict = rules && rules->filter ? ask_filter(q, k, v, &c) : CBVH_FILTER_ACCEPT;
@@ -100,6 +115,7 @@ static int sweep_leaf(void *query, uint32_t first, uint32_t count)
             continue;
         q->best = c; /* c.depth stays 0 unless the kernel found an overlap at t = 0 */
         q->best_tri = k;
+        q->limit = (float)c.t;
         if (verdict == CBVH_FILTER_STOP)
             return 1;
     }
@@ -115,9 +131,9 @@ int cbvh_sweep_walk(const struct cbvh_file *f, const struct cbvh_local_shape *bo
     cbvh_shape_bounds(bounds, &lo, &hi);
     cbvh_sweep_bounds(lo, hi, center, extent);
     struct sweep_query q = {f, center, extent, delta, {1.0f / delta[0], 1.0f / delta[1], 1.0f / delta[2]}, 0, sweep,
-                            shape, bounds, rules, {1.0, {0, 0, 0}, {0, 0, 0}, 0.0}, UINT32_MAX};
+                            shape, bounds, rules, {1.0, {0, 0, 0}, {0, 0, 0}, 0.0}, UINT32_MAX, 1.0f};
     q.octant = cbvh_octant_of(q.rcp);
-    cbvh_shape_walk(f, f->layout, q.octant, sweep_enter, sweep_leaf, &q);
+    cbvh_shape_walk(f, f->layout, q.octant, sweep_enter, sweep_leaf, &q, &q.limit);
     found->tri = q.best_tri;
     found->contact = q.best;
     found->contact.normal = v3_normalize(q.best.normal);

@@ -8,7 +8,7 @@
 
 /* Sweeps one triangle: first contact with t in [0, tmax] (t = 0 when the shape
  * already overlaps the triangle). clear_at_start: 1 when the shape at t = 0 is
- * known clear of the triangle (cbvh_shape_plane_clearance), so a kernel may skip
+ * known clear of the triangle (cbvh_cull_triangle), so a kernel may skip
  * its overlap test. Returns 1 and fills *out on contact. */
 typedef int (*cbvh_sweep_triangle_fn)(const void *shape, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, double tmax,
                                       int clear_at_start, struct cbvh_sweep_contact *out);
