@@ -18,27 +18,6 @@
 
 static double rnd(uint64_t *st, double lo, double hi) { return lo + (hi - lo) * scene_rand_unit(st); }
 
-/* Reference membership of one triangle: 2 surely overlapping (also with the
- * region shrunk by tol), 1 borderline, 0 surely apart (also grown by tol). */
-static int ref_box_class(const double *tri, const double lo[3], const double hi[3], double tol)
-{
-    if (!ref_triangle_box_overlap(tri, lo, hi, tol))
-        return 0;
-    return ref_triangle_box_overlap(tri, lo, hi, -tol) ? 2 : 1;
-}
-
-static int ref_sphere_class(const double *tri, const double c[3], double r, double tol)
-{
-    const double d = sqrt(ref_point_triangle_dist2(tri, c));
-    return d > r + tol ? 0 : d <= r - tol ? 2 : 1;
-}
-
-static int ref_capsule_class(const double *tri, const double p0[3], const double p1[3], double r, double tol)
-{
-    const double d = ref_segment_triangle_dist(tri, p0, p1);
-    return d > r + tol ? 0 : d <= r - tol ? 2 : 1;
-}
-
 /* A query region: a box [lo, hi], a ball (p0, radius) or a capsule (p0-p1, radius). */
 enum { BOX, SPHERE, CAPSULE };
 typedef struct region {

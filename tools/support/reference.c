@@ -363,6 +363,25 @@ int ref_triangle_box_overlap(const double tri[9], const double lo[3], const doub
     return 1;
 }
 
+int ref_box_class(const double *tri, const double lo[3], const double hi[3], double tol)
+{
+    if (!ref_triangle_box_overlap(tri, lo, hi, tol))
+        return 0;
+    return ref_triangle_box_overlap(tri, lo, hi, -tol) ? 2 : 1;
+}
+
+int ref_sphere_class(const double *tri, const double c[3], double r, double tol)
+{
+    const double d = sqrt(ref_point_triangle_dist2(tri, c));
+    return d > r + tol ? 0 : d <= r - tol ? 2 : 1;
+}
+
+int ref_capsule_class(const double *tri, const double p0[3], const double p1[3], double r, double tol)
+{
+    const double d = ref_segment_triangle_dist(tri, p0, p1);
+    return d > r + tol ? 0 : d <= r - tol ? 2 : 1;
+}
+
 double ref_shape_triangle_dist(const ref_shape *shape, const double delta[3], double t, const double tri[9])
 {
     double p0[3], p1[3];

@@ -86,6 +86,13 @@ double ref_box_triangle_dist(const double tri[9], const double lo[3], const doub
  * the box (Sutherland-Hodgman) keeps a point, with the box grown by `grow`. */
 int ref_triangle_box_overlap(const double tri[9], const double lo[3], const double hi[3], double grow);
 
+/* Reference membership of triangle tri in an overlap query's region, the box [lo, hi], the ball (c, r) or
+ * the capsule (p0-p1, r): 2 surely overlapping (also with the region shrunk by tol), 1 borderline, 0 surely
+ * apart (also with the region grown by tol). */
+int ref_box_class(const double *tri, const double lo[3], const double hi[3], double tol);
+int ref_sphere_class(const double *tri, const double c[3], double r, double tol);
+int ref_capsule_class(const double *tri, const double p0[3], const double p1[3], double r, double tol);
+
 /* A moving shape for the sweep references. */
 typedef enum ref_shape_kind { REF_SPHERE, REF_CAPSULE, REF_BOX } ref_shape_kind;
 typedef struct ref_shape {
