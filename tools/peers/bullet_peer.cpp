@@ -111,12 +111,16 @@ struct sweep_callback : public btTriangleConvexcastCallback {
     }
 };
 
-/* Collects the triangles of the box walk that the exact test finds at distance <= 0. */
+/* Passes on the triangles of the box walk that the exact test finds at distance <= 0. */
 struct overlap_callback : public btTriangleCallback {
     shape_kind kind;
     query_shape *q;
-    shape_answer *answer;
-    overlap_callback(shape_kind k, query_shape *s, shape_answer *a) : kind(k), q(s), answer(a) {}
+    void (*add)(void *user, uint32_t tri);
+    void *user;
+    overlap_callback(shape_kind k, query_shape *s, void (*a)(void *, uint32_t), void *u)
+        : kind(k), q(s), add(a), user(u)
+    {
+    }
     void processTriangle(btVector3 *v, int, int index) override
     {
         btTriangleShape triangle(v[0], v[1], v[2]);
@@ -135,9 +139,12 @@ struct overlap_callback : public btTriangleCallback {
             detector.getClosestPoints(input, result, nullptr);
         }
         if (result.m_hasResult && result.m_distance <= 0.0f)
-            shape_answer_add(answer, (uint32_t)index);
+            add(user, (uint32_t)index);
     }
 };
+
+/* shape_answer_add as an overlap_callback's add. */
+void add_to_answer(void *answer, uint32_t tri) { shape_answer_add((shape_answer *)answer, tri); }
 
 } // namespace
 
@@ -228,19 +235,25 @@ extern "C" void bullet_peer_sweep(const bullet_peer *peer, shape_kind kind, cons
     }
 }
 
+extern "C" void bullet_peer_overlap_each(const bullet_peer *peer, shape_kind kind, const shape_query *query,
+                                         void (*add)(void *user, uint32_t tri), void *user)
+{
+    query_shape s(kind, *query);
+    overlap_callback cb(kind, &s, add, user);
+    btVector3 box_min, box_max;
+    s.shape->getAabb(s.place, box_min, box_max);
+    peer->shape->processAllTriangles(&cb, box_min, box_max);
+}
+
 extern "C" void bullet_peer_overlap(const bullet_peer *peer, shape_kind kind, const shape_query *queries,
                                     size_t count, shape_answer *out)
 {
     for (size_t i = 0; i < count; i++) {
-        query_shape s(kind, queries[i]);
         shape_answer &a = out[i];
         a.tri = CBVH_NO_HIT;
         a.t = INFINITY;
         a.count = 0;
         a.set_hash = 0;
-        overlap_callback cb(kind, &s, &a);
-        btVector3 box_min, box_max;
-        s.shape->getAabb(s.place, box_min, box_max);
-        peer->shape->processAllTriangles(&cb, box_min, box_max);
+        bullet_peer_overlap_each(peer, kind, &queries[i], add_to_answer, &a);
     }
 }

@@ -83,6 +83,10 @@ void bullet_peer_sweep(const bullet_peer *peer, shape_kind kind, const shape_que
                        shape_answer *out);
 void bullet_peer_overlap(const bullet_peer *peer, shape_kind kind, const shape_query *queries, size_t count,
                          shape_answer *out);
+/* One overlap query's triangles, each passed to add(user, tri) (in Bullet's order): what bullet_peer_overlap
+ * counts, for checking its answers one triangle at a time. */
+void bullet_peer_overlap_each(const bullet_peer *peer, shape_kind kind, const shape_query *query,
+                              void (*add)(void *user, uint32_t tri), void *user);
 #endif
 
 #ifdef __cplusplus
