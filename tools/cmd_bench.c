@@ -9,6 +9,7 @@
 #include <unistd.h>
 
 #include "bench_input.h"
+#include "bench_judge.h"
 #include "bench_run.h"
 #include "cli.h"
 #include "commands.h"
@@ -34,11 +35,14 @@ static const char usage[] =
     "triangles and rays: build time, memory per triangle, MRays/s, the ratio cbvh/peer, and\n"
     "ray-by-ray agreement with cbvh's answers.\n"
     "Then shape queries as games ask them near a surface (shapes about 1% of the diagonal\n"
-    "across): sphere, capsule and box sweeps moving 1.5% of the diagonal, and sphere, capsule\n"
-    "and box overlaps, beside Bullet (convex casts and its per-triangle narrow phase, margins\n"
-    "0 on boxes and triangles): microseconds per query, queries per second, the ratio\n"
-    "cbvh/Bullet, and agreement query by query (the same first triangle or t within 1e-4 of\n"
-    "the diagonal for sweeps, the same triangle set for overlaps).\n"
+    "across, capsules along random directions): sphere, capsule and box sweeps moving 1.5% of\n"
+    "the diagonal, and sphere, capsule and box overlaps, beside Bullet (convex casts and its\n"
+    "per-triangle narrow phase, margins 0 on boxes and triangles): microseconds per query,\n"
+    "queries per second, the ratio cbvh/Bullet, and agreement query by query (the same first\n"
+    "triangle or t within 1e-4 of the diagonal for sweeps, the same triangle set for\n"
+    "overlaps). Up to 200 disagreements per set (fewer once checking them took the budget)\n"
+    "are decided against a double-precision brute force, which sides with cbvh, with Bullet,\n"
+    "with both or with neither (within 1e-5 of the diagonal).\n"
     "Markdown tables go to stdout, progress to stderr (on a terminal).\n"
     "\n"
     "Options:\n"
@@ -52,7 +56,8 @@ static const char usage[] =
     "                  largest\n"
     "  --reps R        timed repetitions per figure, the median is reported (default 5)\n"
     "  --budget S      stop repeating a figure once its runs took S seconds in all (default 2;\n"
-    "                  0: never), so the slowest peer does not dominate the run time\n"
+    "                  0: never), so the slowest peer does not dominate the run time; also\n"
+    "                  ends the checks of a shape set's disagreements\n"
     "  --cpu-time      time with CPU clocks instead of the wall clock (the slowest thread's CPU\n"
     "                  time for queries, the process's CPU time for cook, build and open): steadier\n"
     "                  on a machine busy with other work\n"
@@ -87,6 +92,12 @@ static const cli_option options[] = {
  * btContinuousConvexCollision), so its t comes early by that much over the cosine of the approach angle, on
  * every mesh, whatever its scale; the table shows how far the t of the same triangle lie apart. */
 #define SWEEP_AGREE_TOLERANCE 1e-4
+
+/* Shape disagreements a set has checked against the double-precision reference, at most (each check is a
+ * brute force over every triangle; the budget also ends the checks). Overlaps are judged with the ray
+ * tolerance (a triangle within it of the region's boundary may be reported or not), sweeps by the sweep
+ * agreement rule. */
+#define BENCH_JUDGE_QUERIES 200
 
 #define MAX_THREAD_COUNTS 8
 
@@ -139,9 +150,14 @@ typedef struct method {
 typedef void (*shape_kernel)(const void *engine, shape_kind kind, int sweep, const shape_query *queries,
                              size_t count, shape_answer *out);
 
+/* Marks in j the triangles an engine reports for overlap query q (bench_judge_mark: side 0 for cbvh, 1 for
+ * a peer). */
+typedef void (*shape_marker)(const void *engine, shape_kind kind, const shape_query *q, bench_judge *j);
+
 typedef struct shape_method {
     const char *engine; /* "cbvh", "bullet" */
     shape_kernel kernel;
+    shape_marker mark;
     const void *state;
 } shape_method;
 
@@ -164,6 +180,24 @@ static int add_overlap(void *user, uint32_t tri)
     return 0;
 }
 
+/* cbvh's overlap query q, its triangles passed to callback(user, tri). */
+static void cbvh_overlap_each(const cbvh_file *f, shape_kind kind, const shape_query *q, cbvh_overlap_fn callback,
+                              void *user)
+{
+    if (kind == SHAPE_BOX) {
+        float lo[3], hi[3];
+        for (int k = 0; k < 3; k++) {
+            lo[k] = q->p0[k] - q->size[k];
+            hi[k] = q->p0[k] + q->size[k];
+        }
+        cbvh_overlap_box(f, lo, hi, callback, user, NULL, 0);
+    } else if (kind == SHAPE_SPHERE) {
+        cbvh_overlap_sphere(f, q->p0, q->size[0], callback, user, NULL, 0);
+    } else {
+        cbvh_overlap_capsule(f, q->p0, q->p1, q->size[0], callback, user, NULL, 0);
+    }
+}
+
 /* cbvh's answer to one shape query; the engine is the opened file. */
 static void cbvh_shape_query(const cbvh_file *f, shape_kind kind, int sweep, const shape_query *q, shape_answer *a)
 {
@@ -179,18 +213,20 @@ static void cbvh_shape_query(const cbvh_file *f, shape_kind kind, int sweep, con
             a->tri = h.tri;
             a->t = h.t;
         }
-    } else if (kind == SHAPE_BOX) {
-        float lo[3], hi[3];
-        for (int k = 0; k < 3; k++) {
-            lo[k] = q->p0[k] - q->size[k];
-            hi[k] = q->p0[k] + q->size[k];
-        }
-        cbvh_overlap_box(f, lo, hi, add_overlap, a, NULL, 0);
-    } else if (kind == SHAPE_SPHERE) {
-        cbvh_overlap_sphere(f, q->p0, q->size[0], add_overlap, a, NULL, 0);
     } else {
-        cbvh_overlap_capsule(f, q->p0, q->p1, q->size[0], add_overlap, a, NULL, 0);
+        cbvh_overlap_each(f, kind, q, add_overlap, a);
     }
+}
+
+static int mark_cbvh(void *judge, uint32_t tri)
+{
+    bench_judge_mark(judge, 0, tri);
+    return 0;
+}
+
+static void cbvh_shape_mark(const void *engine, shape_kind kind, const shape_query *q, bench_judge *j)
+{
+    cbvh_overlap_each(engine, kind, q, mark_cbvh, j);
 }
 
 static void cbvh_shape_kernel(const void *engine, shape_kind kind, int sweep, const shape_query *queries,
@@ -208,6 +244,13 @@ static void bullet_shape_kernel(const void *engine, shape_kind kind, int sweep, 
         bullet_peer_sweep(engine, kind, queries, count, out);
     else
         bullet_peer_overlap(engine, kind, queries, count, out);
+}
+
+static void mark_peer(void *judge, uint32_t tri) { bench_judge_mark(judge, 1, tri); }
+
+static void bullet_shape_mark(const void *engine, shape_kind kind, const shape_query *q, bench_judge *j)
+{
+    bullet_peer_overlap_each(engine, kind, q, mark_peer, j);
 }
 #endif
 
@@ -271,6 +314,8 @@ typedef struct shape_agree_row {
     double t_distance_max; /* sweeps, both hit: the largest |t - t_cbvh| * |delta| */
     double t_distance_sum; /* sweeps, the same triangle: the sum of |t - t_cbvh| * |delta| */
     size_t count;
+    uint64_t checked;   /* disagreements decided against the reference (bench_judge.h) */
+    uint64_t sides[4];  /* how many it decided for each bench_side */
 } shape_agree_row;
 
 #define MAX_METHODS 16
@@ -312,6 +357,8 @@ typedef struct bench_state {
     int shape_result_count;
     shape_agree_row *shape_agreements;
     int shape_agree_count;
+    bench_judge judge;
+    int judge_state; /* 0 not read yet, 1 ready, -1 out of memory */
 #ifdef HAVE_EMBREE
     embree_peer *embree[2];
 #endif
@@ -332,11 +379,13 @@ static void add_method(bench_state *s, const char *engine, const char *variant, 
     m->main = main;
 }
 
-static void add_shape_method(bench_state *s, const char *engine, shape_kernel kernel, const void *state)
+static void add_shape_method(bench_state *s, const char *engine, shape_kernel kernel, shape_marker mark,
+                             const void *state)
 {
     shape_method *m = &s->shape_methods[s->shape_method_count++];
     m->engine = engine;
     m->kernel = kernel;
+    m->mark = mark;
     m->state = state;
 }
 
@@ -404,7 +453,7 @@ static void add_cbvh_methods(bench_state *s)
         bench_cbvh_variant(e, s->file, k);
         add_method(s, "cbvh", e->name, bench_cbvh_kernel, e, 1, k == 0);
     }
-    add_shape_method(s, "cbvh", cbvh_shape_kernel, s->file);
+    add_shape_method(s, "cbvh", cbvh_shape_kernel, cbvh_shape_mark, s->file);
 }
 
 /* Builds every peer configure found; a peer that fails to build is reported and skipped. */
@@ -450,7 +499,7 @@ static void build_peers(bench_state *s)
         b->bytes = info.memory_bytes + info.mesh_bytes;
         b->structure_bytes = info.memory_bytes;
         add_method(s, "bullet", "quantized", bullet_kernel, s->bullet, 0, 1);
-        add_shape_method(s, "bullet", bullet_shape_kernel, s->bullet);
+        add_shape_method(s, "bullet", bullet_shape_kernel, bullet_shape_mark, s->bullet);
     }
 #endif
 }
@@ -554,21 +603,58 @@ static int measure_set(bench_state *s, ray_kind set, buffers *b, int *step, int 
     return 0;
 }
 
-static void agree_shapes(shape_agree_row *a, const shape_query *queries, const shape_answer *ref,
+/* Decides disagreement i of row a against the reference, while the checks are within their number and
+ * the budget (started at *start, the first check's time, when negative). */
+static void judge_shape(bench_state *s, shape_agree_row *a, const shape_query *q, const shape_answer *x,
+                        const shape_answer *y, double *start)
+{
+    if (a->checked >= BENCH_JUDGE_QUERIES || s->judge_state < 0)
+        return;
+    double now = bench_clock(s->cpu_clock);
+    if (*start < 0.0)
+        *start = now;
+    else if (s->budget > 0.0f && now - *start > s->budget)
+        return;
+    if (s->judge_state == 0) {
+        s->judge_state = bench_judge_init(&s->judge, s->file, (uint32_t)s->mesh.triangle_count,
+                                          AGREE_TOLERANCE * s->diagonal, SWEEP_AGREE_TOLERANCE * s->diagonal)
+                             ? 1
+                             : -1;
+        if (s->judge_state < 0) {
+            cli_error(s->command, NULL, "out of memory for the reference: disagreements not checked");
+            return;
+        }
+    }
+    bench_side side;
+    if (a->sweep) {
+        side = bench_judge_sweep(&s->judge, a->kind, q, x, y);
+    } else {
+        s->shape_methods[0].mark(s->shape_methods[0].state, a->kind, q, &s->judge);
+        a->m->mark(a->m->state, a->kind, q, &s->judge);
+        side = bench_judge_overlap(&s->judge, a->kind, q);
+    }
+    a->checked++;
+    a->sides[side]++;
+}
+
+static void agree_shapes(bench_state *s, shape_agree_row *a, const shape_query *queries, const shape_answer *ref,
                          const shape_answer *other, size_t count, double tolerance)
 {
+    double start = -1.0;
     a->count = count;
     for (size_t i = 0; i < count; i++) {
         const shape_answer *x = &ref[i], *y = &other[i];
         if (!a->sweep) {
             a->ref_triangles += x->count;
             a->other_triangles += y->count;
-            if (x->count != y->count || x->set_hash != y->set_hash)
+            if (x->count != y->count || x->set_hash != y->set_hash) {
                 a->other_set++;
-            else if (x->count == 0)
+                judge_shape(s, a, &queries[i], x, y, &start);
+            } else if (x->count == 0) {
                 a->both_empty++;
-            else
+            } else {
                 a->same_set++;
+            }
             continue;
         }
         const float *d = queries[i].delta;
@@ -583,7 +669,10 @@ static void agree_shapes(shape_agree_row *a, const shape_query *queries, const s
             a->sweeps.same_triangle++;
             a->t_distance_sum += distance;
         } else {
+            const uint64_t before = a->sweeps.disagree;
             bench_agree_one(&a->sweeps, x->tri, y->tri, distance, tolerance);
+            if (a->sweeps.disagree != before)
+                judge_shape(s, a, &queries[i], x, y, &start);
         }
     }
 }
@@ -624,7 +713,7 @@ static int measure_shapes(bench_state *s, shape_kind kind, int sweep, const shap
             a->kind = kind;
             a->sweep = sweep;
             a->m = m;
-            agree_shapes(a, queries, ref, other, job.count, SWEEP_AGREE_TOLERANCE * s->diagonal);
+            agree_shapes(s, a, queries, ref, other, job.count, SWEEP_AGREE_TOLERANCE * s->diagonal);
         }
     return 0;
 }
@@ -716,25 +805,36 @@ static void print_shape_tables(const bench_state *s)
     printf("\nShape agreement with cbvh, query by query (sweeps: the same first triangle, or another one with t "
            "times the motion's length within %.0e of the scene diagonal; overlaps: the same set of triangles). "
            "Bullet's casts stop 0.001 mesh units short of contact (its constant), so its t come early; the t apart "
-           "columns say by how much, as a fraction of the diagonal:\n\n",
-           SWEEP_AGREE_TOLERANCE);
+           "columns say by how much, as a fraction of the diagonal. Up to %d disagreements per set (fewer once "
+           "checking them took the budget) are decided against a double-precision brute force (the tests' "
+           "reference): it sides with an engine whose answer it bears out (sweeps: by the rule above, a miss "
+           "when the shape shrunk by %.0e of the diagonal misses too; overlaps: every triangle that surely "
+           "overlaps and none surely apart, within %.0e of the diagonal), with both, or with neither:\n\n",
+           SWEEP_AGREE_TOLERANCE, BENCH_JUDGE_QUERIES, AGREE_TOLERANCE, AGREE_TOLERANCE);
     printf("| shape | query | engine | same triangle or set | both miss or none | t close, other triangle | "
-           "disagree | start touching cbvh / this | same triangle: t apart mean | t apart max | tris cbvh / this | "
-           "queries compared |\n");
-    printf("|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+           "disagree | checked | reference: cbvh / this / both / neither | start touching cbvh / this | "
+           "same triangle: t apart mean | t apart max | tris cbvh / this | queries compared |\n");
+    printf("|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
     for (int i = 0; i < s->shape_agree_count; i++) {
         const shape_agree_row *a = &s->shape_agreements[i];
         printf("| %s | %s | %s | ", shape_kind_name(a->kind), a->sweep ? "sweep" : "overlap", a->m->engine);
         if (a->sweep)
-            printf("%llu | %llu | %llu | %llu | %llu / %llu | %.2e | %.2e | - | %zu |\n",
-                   (unsigned long long)a->sweeps.same_triangle, (unsigned long long)a->sweeps.both_miss,
-                   (unsigned long long)a->sweeps.t_close, (unsigned long long)a->sweeps.disagree,
-                   (unsigned long long)a->ref_start_touching, (unsigned long long)a->other_start_touching,
-                   t_apart_mean(s, a), a->t_distance_max / s->diagonal, a->count);
+            printf("%llu | %llu | %llu | %llu | ", (unsigned long long)a->sweeps.same_triangle,
+                   (unsigned long long)a->sweeps.both_miss, (unsigned long long)a->sweeps.t_close,
+                   (unsigned long long)a->sweeps.disagree);
         else
-            printf("%llu | %llu | - | %llu | - | - | - | %llu / %llu | %zu |\n", (unsigned long long)a->same_set,
-                   (unsigned long long)a->both_empty, (unsigned long long)a->other_set,
-                   (unsigned long long)a->ref_triangles, (unsigned long long)a->other_triangles, a->count);
+            printf("%llu | %llu | - | %llu | ", (unsigned long long)a->same_set, (unsigned long long)a->both_empty,
+                   (unsigned long long)a->other_set);
+        printf("%llu | %llu / %llu / %llu / %llu | ", (unsigned long long)a->checked,
+               (unsigned long long)a->sides[BENCH_SIDE_CBVH], (unsigned long long)a->sides[BENCH_SIDE_PEER],
+               (unsigned long long)a->sides[BENCH_SIDE_BOTH], (unsigned long long)a->sides[BENCH_SIDE_NEITHER]);
+        if (a->sweep)
+            printf("%llu / %llu | %.2e | %.2e | - | %zu |\n", (unsigned long long)a->ref_start_touching,
+                   (unsigned long long)a->other_start_touching, t_apart_mean(s, a), a->t_distance_max / s->diagonal,
+                   a->count);
+        else
+            printf("- | - | - | %llu / %llu | %zu |\n", (unsigned long long)a->ref_triangles,
+                   (unsigned long long)a->other_triangles, a->count);
     }
 }
 
@@ -959,6 +1059,11 @@ static int write_json(const bench_state *s)
             json_uint(&w, "this_triangles", a->other_triangles);
         }
         json_uint(&w, "queries_compared", a->count);
+        json_uint(&w, "disagreements_checked", a->checked);
+        json_uint(&w, "reference_sides_cbvh", a->sides[BENCH_SIDE_CBVH]);
+        json_uint(&w, "reference_sides_this", a->sides[BENCH_SIDE_PEER]);
+        json_uint(&w, "reference_sides_both", a->sides[BENCH_SIDE_BOTH]);
+        json_uint(&w, "reference_sides_neither", a->sides[BENCH_SIDE_NEITHER]);
         json_end_object(&w);
     }
     json_end_array(&w);
@@ -1136,6 +1241,8 @@ int cmd_bench(int argc, char **argv)
     free(s.agreements);
     free(s.shape_results);
     free(s.shape_agreements);
+    if (s.judge_state > 0)
+        bench_judge_free(&s.judge);
     bench_mesh_free(&s.mesh);
     return status;
 }
