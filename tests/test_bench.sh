@@ -92,6 +92,10 @@ for r in agree:
         assert r["cbvh_triangles"] > 0 and r["this_triangles"] > 0, r
     assert same + r["disagree"] == r["queries_compared"] > 0, r
     assert same >= 0.8 * r["queries_compared"], r
+    # disagreements decided against the reference: some, at most 200, each for one side
+    sides = sum(r["reference_sides_" + k] for k in ("cbvh", "this", "both", "neither"))
+    assert sides == r["disagreements_checked"] <= min(r["disagree"], 200), r
+    assert r["disagreements_checked"] > 0 or r["disagree"] == 0, r
 print("peers:", sorted(engines - {"cbvh"}), "shape peers:", sorted(peers))
 EOF
 else
