@@ -1,9 +1,12 @@
 /* overlap.c: box (axis-aligned or oriented), sphere and capsule overlap and contact queries: the shape walk (shape_walk.h), exact per-triangle tests, callback and/or output array. */
+#include "config.h"
+
 #include <math.h>
 #include <string.h>
 
 #include "query/triangle_frame.h"
 #include "query/closest.h"
+#include "query/leaf.h"
 #include "query/sweep_walk.h"
 #include "query/shape_walk.h"
 #include "query/raycast.h"
@@ -151,15 +154,11 @@ struct overlap_query {
     const struct cbvh_file *f;
     const struct overlap_region *region;
     struct overlap_sink *sink;
-    int32_t grid_lo[3], grid_hi[3];
+    struct cbvh_grid_range grid;
+#ifdef CBVH_HAVE_SIMD
+    struct cbvh_cull4 cull4;
+#endif
 };
-
-/* The region's box meets [lo, hi]: boxes are closed, so a region touching one is not culled. */
-static int region_meets(const struct overlap_region *r, const float lo[3], const float hi[3])
-{
-    return !((lo[0] > r->hi[0]) | (hi[0] < r->lo[0]) | (lo[1] > r->hi[1]) | (hi[1] < r->lo[1]) |
-             (lo[2] > r->hi[2]) | (hi[2] < r->lo[2]));
-}
 
 /* The largest grid coordinate in [0, CBVH_Q_MAX] whose plane (cbvh_dequantize) is at most x, or -1. Planes
  * grow with their coordinates (scale >= 0, every rounding monotonic), so from an estimate an outward
@@ -191,57 +190,106 @@ static int32_t grid_at_most(float x, float origin, float scale)
     return lo;
 }
 
-/* The node boxes region_meets accepts, as coordinate ranges: a box's min plane is at most the region's max
- * exactly when its coordinate is at most grid_hi, its max plane at least the region's min exactly when its
- * coordinate exceeds the last one whose plane lies below that min. */
-static void grid_range(const struct cbvh_file *f, const struct overlap_region *r, int32_t lo[3], int32_t hi[3])
+/* The node boxes that meet the region's box (closed: a box touching it is not culled), as ranges of grid
+ * coordinates: a box's min plane is at most the region's max exactly when its coordinate is at most g->hi,
+ * its max plane at least the region's min exactly when its coordinate exceeds the last one whose plane lies
+ * below that min. */
+static void grid_range(const struct cbvh_file *f, const struct overlap_region *r, struct cbvh_grid_range *g)
 {
     for (int a = 0; a < 3; a++) {
-        hi[a] = grid_at_most(r->hi[a], f->grid_origin[a], f->grid_scale[a]);
-        lo[a] = grid_at_most(nextafterf(r->lo[a], -INFINITY), f->grid_origin[a], f->grid_scale[a]) + 1;
+        g->hi[a] = grid_at_most(r->hi[a], f->grid_origin[a], f->grid_scale[a]);
+        g->lo[a] = grid_at_most(nextafterf(r->lo[a], -INFINITY), f->grid_origin[a], f->grid_scale[a]) + 1;
     }
 }
 
 static int overlap_enter(void *query, const uint32_t q[6], float *entry)
 {
-    const struct overlap_query *o = query;
     *entry = 0.0f;
-    return ((int32_t)q[0] <= o->grid_hi[0]) & ((int32_t)q[1] <= o->grid_hi[1]) & ((int32_t)q[2] <= o->grid_hi[2]) &
-           ((int32_t)q[3] >= o->grid_lo[0]) & ((int32_t)q[4] >= o->grid_lo[1]) & ((int32_t)q[5] >= o->grid_lo[2]);
+    return cbvh_grid_range_meets(&((const struct overlap_query *)query)->grid, q);
 }
 
+/* Triangle k (original id tri) past the walk's box test: the cheap tests, then the exact one, and the report.
+ * Returns 1 when the query must stop. */
+static int overlap_triangle(const struct overlap_query *q, uint32_t k, const float a[3], const float b[3],
+                            const float c[3])
+{
+    const cbvh_v3 va = v3_from_f(a), vb = v3_from_f(b), vc = v3_from_f(c);
+    const enum cbvh_cull_verdict v = cbvh_cull_triangle(&q->region->shape, v3(0, 0, 0), 0.0, va, vb, vc, 1);
+    if (v == CBVH_CULL_CLEAR || (v != CBVH_CULL_TOUCHES && !region_triangle(q->region, va, vb, vc)))
+        return 0;
+    const uint32_t tri = cbvh_original_id(q->f, k);
+    cbvh_contact contact;
+    if (q->sink->contacts && q->sink->skip == 0)
+        region_contact(q->region, va, vb, vc, tri, &contact);
+    return sink_report(q->sink, tri, &contact);
+}
+
+#ifndef CBVH_HAVE_SIMD
+/* The region's box meets [lo, hi]: boxes are closed, so a region touching one is not culled. */
+static int region_meets(const struct overlap_region *r, const float lo[3], const float hi[3])
+{
+    return !((lo[0] > r->hi[0]) | (hi[0] < r->lo[0]) | (lo[1] > r->hi[1]) | (hi[1] < r->lo[1]) |
+             (lo[2] > r->hi[2]) | (hi[2] < r->lo[2]));
+}
+#endif
+
+/* With SIMD, four triangles at a time through the float box and plane tests (cbvh_cull4_keep), the kept ones
+ * in order through the rest; else one at a time through the box test. */
 static int overlap_leaf(void *query, uint32_t first, uint32_t count)
 {
     const struct overlap_query *q = query;
+    const struct cbvh_file *f = q->f;
+#ifdef CBVH_HAVE_SIMD
+    for (uint32_t k = first; k < first + count; k += 4) {
+        uint32_t lane[4], group;
+        leaf_group(first + count - k < 4 ? first + count - k : 4, lane, &group);
+        __m128 c4[3][3];
+        leaf_gather4(f->triangles, (int)f->triangle_encoding, f->vertices, (int)f->vertex_encoding,
+                     f->grid_origin, f->grid_scale, k, lane, c4);
+        uint32_t keep = cbvh_cull4_keep(&q->cull4, c4) & group;
+        if (!keep)
+            continue;
+        float v[3][3][4];
+        for (int i = 0; i < 3; i++)
+            for (int a = 0; a < 3; a++)
+                _mm_storeu_ps(v[i][a], c4[i][a]);
+        for (; keep; keep &= keep - 1u) {
+            const uint32_t j = cbvh_lowest_lane(keep);
+            const float a[3] = {v[0][0][j], v[0][1][j], v[0][2][j]};
+            const float b[3] = {v[1][0][j], v[1][1][j], v[1][2][j]};
+            const float c[3] = {v[2][0][j], v[2][1][j], v[2][2][j]};
+            if (overlap_triangle(q, k + j, a, b, c))
+                return 1;
+        }
+    }
+#else
     for (uint32_t k = first; k < first + count; k++) {
         float a[3], b[3], c[3], lo[3], hi[3];
-        cbvh_triangle_vertices(q->f, k, a, b, c);
+        cbvh_triangle_vertices(f, k, a, b, c);
         cbvh_triangle_bounds(a, b, c, lo, hi);
-        if (!region_meets(q->region, lo, hi))
-            continue;
-        const cbvh_v3 va = v3_from_f(a), vb = v3_from_f(b), vc = v3_from_f(c);
-        const enum cbvh_cull_verdict v = cbvh_cull_triangle(&q->region->shape, v3(0, 0, 0), 0.0, va, vb, vc, 1);
-        if (v == CBVH_CULL_CLEAR || (v != CBVH_CULL_TOUCHES && !region_triangle(q->region, va, vb, vc)))
-            continue;
-        const uint32_t tri = cbvh_original_id(q->f, k);
-        cbvh_contact contact;
-        if (q->sink->contacts && q->sink->skip == 0)
-            region_contact(q->region, va, vb, vc, tri, &contact);
-        if (sink_report(q->sink, tri, &contact))
+        if (region_meets(q->region, lo, hi) && overlap_triangle(q, k, a, b, c))
             return 1;
     }
+#endif
     return 0;
 }
 
 /* Stored order: the order does not matter when every overlap is reported. */
 static size_t overlap_walk(const struct cbvh_file *f, const struct overlap_region *region, struct overlap_sink *sink)
 {
-    struct overlap_query q = {f, region, sink, {0, 0, 0}, {0, 0, 0}};
+    struct overlap_query q;
+    memset(&q, 0, sizeof q);
+    q.f = f;
+    q.region = region;
+    q.sink = sink;
     if ((sink->out || sink->contacts) && sink->capacity == 0 && !sink->find_more)
         return 0; /* out is full before the first report */
-    grid_range(f, region, q.grid_lo, q.grid_hi);
+    grid_range(f, region, &q.grid);
+#ifdef CBVH_HAVE_SIMD
+    cbvh_cull4_init(&q.cull4, &region->shape, region->lo, region->hi);
+#endif
     const float no_limit = INFINITY;
-    cbvh_shape_walk(f, f->layout, CBVH_NO_OCTANT, overlap_enter, overlap_leaf, &q, &no_limit);
+    cbvh_shape_walk(f, f->layout, CBVH_NO_OCTANT, overlap_enter, overlap_leaf, &q, &no_limit, &q.grid);
     return sink->reported;
 }
 

@@ -2,6 +2,10 @@
 #ifndef CBVH_QUERY_SHAPE_CULL_H
 #define CBVH_QUERY_SHAPE_CULL_H
 
+#ifdef CBVH_HAVE_SIMD
+#include <emmintrin.h>
+#endif
+
 #include "query/shape.h"
 
 /* Plain compares (one instruction each), not fmin/fmax, which GCC leaves as calls into libm; the values are
@@ -44,45 +48,28 @@ enum cbvh_cull_verdict {
     CBVH_CULL_TOUCHES         /* the shape at t = 0 surely touches the triangle (asked for only) */
 };
 
-/* 1 when point p lies within `reach` of a vertex of triangle (a, b, c). */
-static inline int cull_point_near_vertex(cbvh_v3 p, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, double reach)
-{
-    const double r2 = reach * reach;
-    return (v3_len2(v3_sub(p, a)) <= r2) | (v3_len2(v3_sub(p, b)) <= r2) | (v3_len2(v3_sub(p, c)) <= r2);
-}
-
-/* 1 when point p, whose height over the plane of triangle (a, b, c) is s / |n| (n = (b - a) x (c - a),
- * nn = |n|^2), lies within `reach` of the plane and projects into the triangle: its three edge functions
- * (barycentrics times nn) at least tol. */
-static inline int cull_point_over(cbvh_v3 p, double s, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, cbvh_v3 n, double nn,
-                                  double reach, double tol)
-{
-    const double e0 = v3_dot(v3_cross(v3_sub(b, a), v3_sub(p, a)), n);
-    const double e1 = v3_dot(v3_cross(v3_sub(c, b), v3_sub(p, b)), n);
-    const double e2 = v3_dot(v3_cross(v3_sub(a, c), v3_sub(p, c)), n);
-    return (s * s <= reach * reach * nn) & (e0 >= tol) & (e1 >= tol) & (e2 >= tol);
-}
-
 /* The cheap tests of shape s against triangle (a, b, c), in double, with margins that put their verdicts
- * beyond the rounding of the exact tests:
+ * beyond the rounding of the exact tests (span: the longest edge from a on an axis; size: the sum of the
+ * largest coordinates of a vertex, the shape and the motion, of span and of the shape's own size):
  * - CBVH_CULL_CLEAR (or _AT_START): the shape, at t = 0 and moved by t * delta for every t in [0, tmax]
  *   (at t = 0 only), lies on one side of the triangle's plane. The swept shape is the hull of its core
  *   points (center, or capsule ends, at t = 0 and t = tmax) grown by its reach along the normal (radius,
- *   or half extents on the box's axes). The margin, 2^-30 of span^2 times size (span: the longest edge
- *   from a on an axis; size: the sum of the largest coordinates of a vertex, the shape and the motion, of
- *   span and of the shape's own size), is 2^23 times this test's own error bound in double (normal
- *   included, slivers too), and leaves a gap of about 2^-32 of size: far above the rounding of the exact
- *   tests, a few ulps of it, for any shape larger than a millionth of its distance to the vertices.
- * - CBVH_CULL_TOUCHES, asked for by want_touches (overlaps: the exact tests tell no more than yes or no
- *   there): a ball or capsule with an end point within the radius less 2^-20 size of a vertex, or of the
- *   plane where it projects into the triangle, each barycentric at least 2^-28 span^3 size / |n|^2; the
- *   triangle no sliver (|n|^2 >= 2^-20 span^4). The exact tests' closest points are then within 2^-28
- *   size of true ones no farther than that vertex or projection, so they find a distance below the
- *   radius.
+ *   or half extents on the box's axes). The margin, 2^-30 span^2 size, is 2^23 times this test's own
+ *   error bound in double (normal included, slivers too), and leaves a gap of about 2^-32 size: far above
+ *   the rounding of the exact tests, a few ulps of size, for any shape larger than a millionth of its
+ *   distance to the vertices.
+ * For a still ball or capsule (`still`, an overlap's: its exact tests tell no more than yes or no), on a
+ * triangle no sliver (|n|^2 >= 2^-20 span^4), with its end points' edge functions (barycentrics times |n|^2)
+ * exact to far better than m = 2^-28 span^3 size:
+ * - CBVH_CULL_CLEAR too when both ends lie outside one edge by more than the radius, the margin m.
+ * - CBVH_CULL_TOUCHES when an end lies within the radius less 2^-20 size of the plane where it projects
+ *   into the triangle (each barycentric at least m / |n|^2), or of an edge. The exact tests' closest
+ *   points are then within 2^-28 size of true ones no farther than that projection or edge point, so they
+ *   find a distance below the radius.
  * CBVH_CULL_MAY_TOUCH otherwise, always for a triangle of no area. Safe on any finite input. */
 static inline enum cbvh_cull_verdict cbvh_cull_triangle(const struct cbvh_local_shape *s, cbvh_v3 delta,
                                                         double tmax, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c,
-                                                        const int want_touches)
+                                                        const int still)
 {
     const cbvh_v3 e1 = v3_sub(b, a), e2 = v3_sub(c, a), n = v3_cross(e1, e2), motion = v3_scale(delta, tmax);
     const double s0 = v3_dot(n, v3_sub(s->p0, a)), s1 = v3_dot(n, v3_sub(s->p1, a)), m = v3_dot(n, motion);
@@ -95,19 +82,113 @@ static inline enum cbvh_cull_verdict cbvh_cull_triangle(const struct cbvh_local_
         return CBVH_CULL_CLEAR;
     if (lo > gap || hi < -gap)
         return CBVH_CULL_CLEAR_AT_START;
-    if (!want_touches || s->kind == CBVH_SHAPE_BOX)
+    if (!still || s->kind == CBVH_SHAPE_BOX)
         return CBVH_CULL_MAY_TOUCH;
-    const double nn = v3_len2(n), span2 = span * span, reach = s->radius - 0x1p-20 * size;
-    const double tol = 0x1p-28 * span2 * span * size;
-    if (!(nn >= 0x1p-20 * span2 * span2) || !(reach > 0.0))
+    const double nn = v3_len2(n), span2 = span * span, margin = 0x1p-28 * span2 * span * size;
+    if (!(nn >= 0x1p-20 * span2 * span2))
         return CBVH_CULL_MAY_TOUCH;
-    const int ends = s->kind == CBVH_SHAPE_CAPSULE ? 2 : 1;
-    for (int k = 0; k < ends; k++) {
-        const cbvh_v3 p = k ? s->p1 : s->p0;
-        if (cull_point_near_vertex(p, a, b, c, reach) || cull_point_over(p, k ? s1 : s0, a, b, c, n, nn, reach, tol))
+    const double r = s->radius, reach = r - 0x1p-20 * size, reach2 = reach > 0.0 ? reach * reach : -1.0;
+    const cbvh_v3 edge[3] = {v3_sub(b, a), v3_sub(c, b), v3_sub(a, c)};
+    const double edge2[3] = {v3_len2(edge[0]), v3_len2(edge[1]), v3_len2(edge[2])};
+    int outside = 7; /* bit k: every end so far lies outside edge k */
+    for (int end = 0; end < (s->kind == CBVH_SHAPE_CAPSULE ? 2 : 1); end++) {
+        const cbvh_v3 p = end ? s->p1 : s->p0;
+        const double h = end ? s1 : s0;
+        const cbvh_v3 w[3] = {v3_sub(p, a), v3_sub(p, b), v3_sub(p, c)};
+        const double w2[3] = {v3_len2(w[0]), v3_len2(w[1]), v3_len2(w[2])};
+        int inside = h * h <= reach2 * nn, near = 0;
+        for (int k = 0; k < 3; k++) {
+            /* edge k's function (the opposite barycentric times |n|^2, or minus the distance outside the
+             * edge times |n| |edge|), and the squared distance of p to the edge's line times |edge|^2 */
+            const cbvh_v3 x = v3_cross(edge[k], w[k]);
+            const double e = v3_dot(x, n), t = v3_dot(w[k], edge[k]), out = -e - margin;
+            inside &= e >= margin;
+            near |= t <= 0.0 ? w2[k] <= reach2 : t >= edge2[k] ? w2[k == 2 ? 0 : k + 1] <= reach2
+                                                                : v3_len2(x) <= reach2 * edge2[k];
+            outside &= ~((!(out > 0.0 && out * out > r * r * nn * edge2[k])) << k);
+        }
+        if (inside | near)
             return CBVH_CULL_TOUCHES;
     }
-    return CBVH_CULL_MAY_TOUCH;
+    return outside ? CBVH_CULL_CLEAR : CBVH_CULL_MAY_TOUCH;
 }
+
+#ifdef CBVH_HAVE_SIMD
+/* A still shape and the float box around it, in every lane, for cbvh_cull4_keep. */
+struct cbvh_cull4 {
+    __m128 lo[3], hi[3];
+    __m128 p0[3], p1[3];
+    __m128 radius, half[3], axes[3][3]; /* axes[i]: the box's axis i (the identity unless rotated) */
+    __m128 shape_size;                   /* the shape's part of cbvh_cull_triangle's size */
+    int box;
+};
+
+static inline void cbvh_cull4_init(struct cbvh_cull4 *w, const struct cbvh_local_shape *s, const float lo[3],
+                                   const float hi[3])
+{
+    const double p[2][3] = {{s->p0.x, s->p0.y, s->p0.z}, {s->p1.x, s->p1.y, s->p1.z}};
+    const double half[3] = {s->half.x, s->half.y, s->half.z};
+    for (int a = 0; a < 3; a++) {
+        w->lo[a] = _mm_set1_ps(lo[a]);
+        w->hi[a] = _mm_set1_ps(hi[a]);
+        w->p0[a] = _mm_set1_ps((float)p[0][a]);
+        w->p1[a] = _mm_set1_ps((float)p[1][a]);
+        w->half[a] = _mm_set1_ps((float)half[a]);
+        for (int i = 0; i < 3; i++)
+            w->axes[i][a] = _mm_set1_ps(s->rotated ? (float)s->axes[a][i] : (float)(a == i));
+    }
+    w->radius = _mm_set1_ps((float)s->radius);
+    w->shape_size = _mm_set1_ps((float)(cull_max(cull_max_abs(s->p0), cull_max_abs(s->p1)) + s->radius +
+                                        s->half.x + s->half.y + s->half.z));
+    w->box = s->kind == CBVH_SHAPE_BOX;
+}
+
+static inline __m128 cull4_abs(__m128 x) { return _mm_andnot_ps(_mm_set1_ps(-0.0f), x); }
+static inline __m128 cull4_dot(const __m128 a[3], const __m128 b[3])
+{
+    return _mm_add_ps(_mm_add_ps(_mm_mul_ps(a[0], b[0]), _mm_mul_ps(a[1], b[1])), _mm_mul_ps(a[2], b[2]));
+}
+
+/* Four triangles (c[v][axis], a lane each: leaf_gather4) against the still shape of w, in float: the lanes
+ * to test further, those whose box meets w's box (the walk's node test, exact) and whose plane does not
+ * keep the shape on one side (cbvh_cull_triangle's plane test with the margin 2^-14 span^2 size, 10 times
+ * this test's error bound in float, when span is at least 2^-30, far from underflow; a coordinate near
+ * overflow makes the margin infinite or a distance NaN, and keeps the lane). A lane dropped here is one
+ * cbvh_cull_triangle, and the exact tests, would drop. */
+static inline uint32_t cbvh_cull4_keep(const struct cbvh_cull4 *w, const __m128 c[3][3])
+{
+    __m128 in = _mm_castsi128_ps(_mm_set1_epi32(-1)), e1[3], e2[3], w0[3], w1[3], corner = _mm_setzero_ps();
+    __m128 span = _mm_setzero_ps();
+    for (int a = 0; a < 3; a++) {
+        const __m128 lo = _mm_min_ps(_mm_min_ps(c[0][a], c[1][a]), c[2][a]);
+        const __m128 hi = _mm_max_ps(_mm_max_ps(c[0][a], c[1][a]), c[2][a]);
+        in = _mm_and_ps(in, _mm_and_ps(_mm_cmple_ps(lo, w->hi[a]), _mm_cmpge_ps(hi, w->lo[a])));
+        e1[a] = _mm_sub_ps(c[1][a], c[0][a]);
+        e2[a] = _mm_sub_ps(c[2][a], c[0][a]);
+        w0[a] = _mm_sub_ps(w->p0[a], c[0][a]);
+        w1[a] = _mm_sub_ps(w->p1[a], c[0][a]);
+        span = _mm_max_ps(span, _mm_max_ps(cull4_abs(e1[a]), cull4_abs(e2[a])));
+        corner = _mm_max_ps(corner, cull4_abs(c[0][a]));
+    }
+    const __m128 n[3] = {_mm_sub_ps(_mm_mul_ps(e1[1], e2[2]), _mm_mul_ps(e1[2], e2[1])),
+                         _mm_sub_ps(_mm_mul_ps(e1[2], e2[0]), _mm_mul_ps(e1[0], e2[2])),
+                         _mm_sub_ps(_mm_mul_ps(e1[0], e2[1]), _mm_mul_ps(e1[1], e2[0]))};
+    const __m128 s0 = cull4_dot(n, w0), s1 = cull4_dot(n, w1);
+    __m128 reach;
+    if (w->box)
+        reach = _mm_add_ps(_mm_add_ps(_mm_mul_ps(w->half[0], cull4_abs(cull4_dot(n, w->axes[0]))),
+                                      _mm_mul_ps(w->half[1], cull4_abs(cull4_dot(n, w->axes[1])))),
+                           _mm_mul_ps(w->half[2], cull4_abs(cull4_dot(n, w->axes[2]))));
+    else
+        reach = _mm_mul_ps(w->radius, _mm_sqrt_ps(cull4_dot(n, n)));
+    const __m128 size = _mm_add_ps(_mm_add_ps(corner, span), w->shape_size);
+    const __m128 margin = _mm_mul_ps(_mm_mul_ps(_mm_set1_ps(0x1p-14f), _mm_mul_ps(span, span)), size);
+    const __m128 gap = _mm_add_ps(reach, margin);
+    const __m128 apart = _mm_or_ps(_mm_cmpgt_ps(_mm_min_ps(s0, s1), gap),
+                                   _mm_cmplt_ps(_mm_max_ps(s0, s1), _mm_sub_ps(_mm_setzero_ps(), gap)));
+    const __m128 clear = _mm_and_ps(_mm_cmpge_ps(span, _mm_set1_ps(0x1p-30f)), apart);
+    return (uint32_t)_mm_movemask_ps(_mm_andnot_ps(clear, in));
+}
+#endif
 
 #endif

@@ -2,6 +2,10 @@
 #ifndef CBVH_QUERY_SHAPE_WALK_H
 #define CBVH_QUERY_SHAPE_WALK_H
 
+#ifdef CBVH_HAVE_SIMD
+#include <emmintrin.h>
+#endif
+
 #include "layout/tree.h"
 #include "query/ray_box.h"
 #include "query/ray_setup.h"
@@ -11,6 +15,27 @@
 typedef int (*cbvh_shape_enter_fn)(void *query, const uint32_t q[6], float *entry);
 /* The leaf's cooked triangles [first, first + count). Returns 1 to end the walk. */
 typedef int (*cbvh_shape_leaf_fn)(void *query, uint32_t first, uint32_t count);
+
+/* A box as ranges of grid coordinates, lo <= q <= hi per axis (an overlap's region: overlap.c): a node box
+ * meets it when on every axis its min coordinate is at most hi and its max at least lo. The walk tests it
+ * itself, four wide slots at once with SIMD; `enter` must give the same answers (cbvh_grid_range_meets). */
+struct cbvh_grid_range {
+    int32_t lo[3], hi[3];
+};
+
+static inline int cbvh_grid_range_meets(const struct cbvh_grid_range *g, const uint32_t q[6])
+{
+    return ((int32_t)q[0] <= g->hi[0]) & ((int32_t)q[1] <= g->hi[1]) & ((int32_t)q[2] <= g->hi[2]) &
+           ((int32_t)q[3] >= g->lo[0]) & ((int32_t)q[4] >= g->lo[1]) & ((int32_t)q[5] >= g->lo[2]);
+}
+
+/* 1 when no node box can meet the range: a coordinate at most -1, or at least CBVH_Q_MAX + 1. */
+static inline int cbvh_grid_range_empty(const struct cbvh_grid_range *g)
+{
+    const int32_t top = (int32_t)CBVH_Q_MAX;
+    return (g->hi[0] < 0) | (g->hi[1] < 0) | (g->hi[2] < 0) | (g->lo[0] > top) | (g->lo[1] > top) |
+           (g->lo[2] > top);
+}
 
 /* The grid coordinates of box `box` in cbvh_tree_box_coord's order. */
 static inline void cbvh_shape_box_coords(const struct cbvh_file *f, const uint32_t layout, uint32_t box,
@@ -24,6 +49,77 @@ static inline void cbvh_shape_box_coords(const struct cbvh_file *f, const uint32
     q[5] = cbvh_tree_box_coord(f, layout, box, 5);
 }
 
+#ifdef CBVH_HAVE_SIMD
+/* A non-empty grid range as the four-slot test reads it: per axis, lo and hi (clamped into 16 bits, which
+ * changes no answer once the range is not empty) in every 16-bit lane. */
+struct cbvh_grid_range4 {
+    __m128i lo[3], hi[3];
+};
+
+static inline void cbvh_grid_range4_of(const struct cbvh_grid_range *g, struct cbvh_grid_range4 *w)
+{
+    for (int a = 0; a < 3; a++) {
+        const int32_t hi = g->hi[a] > (int32_t)CBVH_Q_MAX ? (int32_t)CBVH_Q_MAX : g->hi[a];
+        w->lo[a] = _mm_set1_epi16((short)(uint16_t)g->lo[a]);
+        w->hi[a] = _mm_set1_epi16((short)(uint16_t)hi);
+    }
+}
+
+/* cbvh_grid_range_meets on the four slots of wide node `node` at once: bit s for slot s (used or not).
+ * x <= y for unsigned 16-bit x, y exactly when the saturated x - y is 0; a node's plane k of all four slots
+ * is one 8-byte load (layout/wide4.h). */
+static inline uint32_t cbvh_grid_range4_hits(const uint8_t *node, const struct cbvh_grid_range4 *w)
+{
+    const __m128i zero = _mm_setzero_si128();
+    __m128i in = _mm_set1_epi16(-1);
+    for (uint32_t a = 0; a < 3; a++) {
+        const uint8_t *planes = node + CBVH_W4_Q + 8u * a; /* qmin on axis a; qmax three planes on */
+        const __m128i qmin = _mm_loadl_epi64((const __m128i *)(const void *)planes);
+        const __m128i qmax = _mm_loadl_epi64((const __m128i *)(const void *)(planes + 24));
+        in = _mm_and_si128(in, _mm_cmpeq_epi16(_mm_subs_epu16(qmin, w->hi[a]), zero));
+        in = _mm_and_si128(in, _mm_cmpeq_epi16(_mm_subs_epu16(w->lo[a], qmax), zero));
+    }
+    return (uint32_t)_mm_movemask_epi8(_mm_packs_epi16(in, in)) & 0xFu;
+}
+#endif
+
+/* The children of non-leaf r the walk enters, in the order of `octant`, with their entry keys: by the
+ * grid range, four at once, for a wide node when the query has one (and SIMD is built), else box by box
+ * through `enter`, without branching on the outcome (hard to predict). Returns how many. */
+CBVH_KERNEL uint32_t cbvh_shape_children(const struct cbvh_file *f, const uint32_t layout, cbvh_ref r,
+                                         uint32_t octant, cbvh_shape_enter_fn enter, void *query,
+                                         const void *grid4, cbvh_ref in[CBVH_TREE_WIDTH],
+                                         float in_entry[CBVH_TREE_WIDTH])
+{
+    uint32_t m = 0;
+#ifdef CBVH_HAVE_SIMD
+    if (grid4 && layout == CBVH_LAYOUT_WIDE4) {
+        const uint8_t *node = cbvh_w4_node(f->nodes, r);
+        const uint64_t meta = cbvh_w4_meta(node);
+        const uint8_t *order = cbvh_wide4_orders[octant < CBVH_NO_OCTANT ? cbvh_w4_order(meta, octant) : 0];
+        const uint32_t hits = cbvh_grid_range4_hits(node, grid4) & cbvh_w4_used(meta);
+        for (uint32_t k = 0; k < CBVH_W4_WIDTH; k++) {
+            const uint32_t s = order[k];
+            in[m] = cbvh_w4_child_ref(node, meta, s);
+            in_entry[m] = 0.0f;
+            m += hits >> s & 1u;
+        }
+        return m;
+    }
+#else
+    (void)grid4;
+#endif
+    struct cbvh_child children[CBVH_TREE_WIDTH];
+    const uint32_t n = cbvh_tree_children(f, layout, r, octant, children);
+    uint32_t q[6];
+    for (uint32_t k = 0; k < n; k++) {
+        cbvh_shape_box_coords(f, layout, children[k].box, q);
+        in[m] = children[k].ref;
+        m += enter(query, q, &in_entry[m]) != 0;
+    }
+    return m;
+}
+
 /* Walks the subtrees whose boxes `enter` accepts, children in the
  * precomputed order of `octant` (CBVH_NO_OCTANT: stored order, which for the
  * binary layout is the file's depth-first order). A node's children are
@@ -32,13 +128,15 @@ static inline void cbvh_shape_box_coords(const struct cbvh_file *f, const uint32
  * CBVH_BOX_PAD has fallen below its key is dropped without a second test:
  * for a sweep, whose best contact so far is *limit and whose keys are slab
  * entry distances, that is its box test again with the shorter motion.
+ * `grid`, when not NULL, is the same test as `enter` as a grid range, which
+ * wide nodes test four slots at once (cbvh_shape_children).
  * Force-inlined so each query's callbacks are direct calls; `layout` is read
  * at run time (a sweep's cost is in its triangle tests). The loader checked
  * depth <= CBVH_MAX_DEPTH, and a node pushes at most CBVH_TREE_WIDTH - 1
  * references, so the stack cannot overflow. */
 CBVH_KERNEL void cbvh_shape_walk(const struct cbvh_file *f, const uint32_t layout, uint32_t octant,
                                  cbvh_shape_enter_fn enter, cbvh_shape_leaf_fn leaf, void *query,
-                                 const float *limit)
+                                 const float *limit, const struct cbvh_grid_range *grid)
 {
     struct {
         cbvh_ref ref;
@@ -48,6 +146,18 @@ CBVH_KERNEL void cbvh_shape_walk(const struct cbvh_file *f, const uint32_t layou
     cbvh_ref r = cbvh_tree_root(f, layout);
     const uint32_t root_box = cbvh_tree_root_box(f, layout);
     float entry;
+    const void *grid4 = NULL;
+#ifdef CBVH_HAVE_SIMD
+    struct cbvh_grid_range4 w;
+    if (grid) {
+        if (cbvh_grid_range_empty(grid))
+            return;
+        cbvh_grid_range4_of(grid, &w);
+        grid4 = &w;
+    }
+#else
+    (void)grid;
+#endif
     if (root_box != CBVH_NO_BOX) {
         cbvh_shape_box_coords(f, layout, root_box, q);
         if (!enter(query, q, &entry))
@@ -55,16 +165,9 @@ CBVH_KERNEL void cbvh_shape_walk(const struct cbvh_file *f, const uint32_t layou
     }
     for (;;) {
         if (!cbvh_tree_is_leaf(f, layout, r)) {
-            struct cbvh_child children[CBVH_TREE_WIDTH];
-            const uint32_t n = cbvh_tree_children(f, layout, r, octant, children);
             cbvh_ref in[CBVH_TREE_WIDTH];
             float in_entry[CBVH_TREE_WIDTH];
-            uint32_t m = 0;
-            for (uint32_t k = 0; k < n; k++) { /* no branch on the test: its outcome is hard to predict */
-                cbvh_shape_box_coords(f, layout, children[k].box, q);
-                in[m] = children[k].ref;
-                m += enter(query, q, &in_entry[m]) != 0;
-            }
+            const uint32_t m = cbvh_shape_children(f, layout, r, octant, enter, query, grid4, in, in_entry);
             if (m > 0) {
                 for (uint32_t k = m; k-- > 1;) {
                     stack[sp].ref = in[k];

@@ -133,7 +133,7 @@ int cbvh_sweep_walk(const struct cbvh_file *f, const struct cbvh_local_shape *bo
     struct sweep_query q = {f, center, extent, delta, {1.0f / delta[0], 1.0f / delta[1], 1.0f / delta[2]}, 0, sweep,
                             shape, bounds, rules, {1.0, {0, 0, 0}, {0, 0, 0}, 0.0}, UINT32_MAX, 1.0f};
     q.octant = cbvh_octant_of(q.rcp);
-    cbvh_shape_walk(f, f->layout, q.octant, sweep_enter, sweep_leaf, &q, &q.limit);
+    cbvh_shape_walk(f, f->layout, q.octant, sweep_enter, sweep_leaf, &q, &q.limit, NULL);
     found->tri = q.best_tri;
     found->contact = q.best;
     found->contact.normal = v3_normalize(q.best.normal);
