@@ -160,29 +160,38 @@ struct overlap_query {
 #endif
 };
 
-/* The largest grid coordinate in [0, CBVH_Q_MAX] whose plane (cbvh_dequantize) is at most x, or -1. Planes
- * grow with their coordinates (scale >= 0, every rounding monotonic), so from an estimate an outward
- * search brackets it (far from the origin many coordinates round to one plane), and bisection ends it. */
-static int32_t grid_at_most(float x, float origin, float scale)
+/* 1 when the plane of grid coordinate q lies below x, or at x unless `strict`. */
+static int plane_below(uint32_t q, float x, float origin, float scale, int strict)
+{
+    const float plane = cbvh_dequantize(q, origin, scale);
+    return strict ? plane < x : plane <= x;
+}
+
+/* The largest grid coordinate in [0, CBVH_Q_MAX] whose plane (cbvh_dequantize) is at most x (below x when
+ * `strict`), or -1. Planes grow with their coordinates (scale >= 0, every rounding monotonic), so from an
+ * estimate an outward search brackets it (far from the origin many coordinates round to one plane), and
+ * bisection ends it. */
+static int32_t grid_last_below(float x, float origin, float scale, int strict)
 {
     const int32_t top = (int32_t)CBVH_Q_MAX;
-    double e = scale > 0.0f ? floor(((double)x - origin) / scale) : origin <= x ? top : -1;
-    int32_t lo = e < -1.0 ? -1 : e > top ? top : (int32_t)e, hi, step = 1; /* lo: at most x, or -1 */
-    if (lo >= 0 && cbvh_dequantize((uint32_t)lo, origin, scale) > x) {
+    const double e = scale > 0.0f ? ((double)x - origin) / scale : origin <= x ? top : -1;
+    int32_t lo = e < -1.0 ? -1 : e > top ? top : (int32_t)e, hi, step = 1; /* lo: below x, or -1 */
+    if (lo >= 0 && !plane_below((uint32_t)lo, x, origin, scale, strict)) {
         do {
             hi = lo;
             lo = hi - step < 0 ? -1 : hi - step;
             step *= 2;
-        } while (lo >= 0 && cbvh_dequantize((uint32_t)lo, origin, scale) > x);
+        } while (lo >= 0 && !plane_below((uint32_t)lo, x, origin, scale, strict));
     } else {
-        for (hi = lo + 1; hi <= top && cbvh_dequantize((uint32_t)hi, origin, scale) <= x; step *= 2) {
+        for (hi = lo + 1; hi <= top && plane_below((uint32_t)hi, x, origin, scale, strict); step *= 2) {
             lo = hi;
             hi = lo + step > top + 1 ? top + 1 : lo + step;
         }
     }
-    while (hi - lo > 1) { /* the plane of lo is at most x (or lo = -1), the plane of hi above it (or hi = top + 1) */
+    /* the plane of lo is below x (or lo = -1), the plane of hi not (or hi = top + 1) */
+    while (hi - lo > 1) {
         const int32_t mid = lo + (hi - lo) / 2;
-        if (cbvh_dequantize((uint32_t)mid, origin, scale) <= x)
+        if (plane_below((uint32_t)mid, x, origin, scale, strict))
             lo = mid;
         else
             hi = mid;
@@ -197,8 +206,8 @@ static int32_t grid_at_most(float x, float origin, float scale)
 static void grid_range(const struct cbvh_file *f, const struct overlap_region *r, struct cbvh_grid_range *g)
 {
     for (int a = 0; a < 3; a++) {
-        g->hi[a] = grid_at_most(r->hi[a], f->grid_origin[a], f->grid_scale[a]);
-        g->lo[a] = grid_at_most(nextafterf(r->lo[a], -INFINITY), f->grid_origin[a], f->grid_scale[a]) + 1;
+        g->hi[a] = grid_last_below(r->hi[a], f->grid_origin[a], f->grid_scale[a], 0);
+        g->lo[a] = grid_last_below(r->lo[a], f->grid_origin[a], f->grid_scale[a], 1) + 1;
     }
 }
 
@@ -208,13 +217,14 @@ static int overlap_enter(void *query, const uint32_t q[6], float *entry)
     return cbvh_grid_range_meets(&((const struct overlap_query *)query)->grid, q);
 }
 
-/* Triangle k (original id tri) past the walk's box test: the cheap tests, then the exact one, and the report.
- * Returns 1 when the query must stop. */
+/* Cooked triangle k past the walk's box test: the cheap tests, then the exact one (none when `sure`: the
+ * region surely touches it), and the report. Returns 1 when the query must stop. */
 static int overlap_triangle(const struct overlap_query *q, uint32_t k, const float a[3], const float b[3],
-                            const float c[3])
+                            const float c[3], int sure)
 {
     const cbvh_v3 va = v3_from_f(a), vb = v3_from_f(b), vc = v3_from_f(c);
-    const enum cbvh_cull_verdict v = cbvh_cull_triangle(&q->region->shape, v3(0, 0, 0), 0.0, va, vb, vc, 1);
+    const enum cbvh_cull_verdict v =
+        sure ? CBVH_CULL_TOUCHES : cbvh_cull_triangle(&q->region->shape, v3(0, 0, 0), 0.0, va, vb, vc, 1);
     if (v == CBVH_CULL_CLEAR || (v != CBVH_CULL_TOUCHES && !region_triangle(q->region, va, vb, vc)))
         return 0;
     const uint32_t tri = cbvh_original_id(q->f, k);
@@ -233,8 +243,8 @@ static int region_meets(const struct overlap_region *r, const float lo[3], const
 }
 #endif
 
-/* With SIMD, four triangles at a time through the float box and plane tests (cbvh_cull4_keep), the kept ones
- * in order through the rest; else one at a time through the box test. */
+/* With SIMD, four triangles at a time through the float tests (cbvh_cull4_keep), the kept ones in order
+ * through the rest; else one at a time through the box test. */
 static int overlap_leaf(void *query, uint32_t first, uint32_t count)
 {
     const struct overlap_query *q = query;
@@ -246,7 +256,7 @@ static int overlap_leaf(void *query, uint32_t first, uint32_t count)
         __m128 c4[3][3];
         leaf_gather4(f->triangles, (int)f->triangle_encoding, f->vertices, (int)f->vertex_encoding,
                      f->grid_origin, f->grid_scale, k, lane, c4);
-        uint32_t keep = cbvh_cull4_keep(&q->cull4, c4) & group;
+        uint32_t touch, keep = cbvh_cull4_keep(&q->cull4, c4, &touch) & group;
         if (!keep)
             continue;
         float v[3][3][4];
@@ -258,7 +268,7 @@ static int overlap_leaf(void *query, uint32_t first, uint32_t count)
             const float a[3] = {v[0][0][j], v[0][1][j], v[0][2][j]};
             const float b[3] = {v[1][0][j], v[1][1][j], v[1][2][j]};
             const float c[3] = {v[2][0][j], v[2][1][j], v[2][2][j]};
-            if (overlap_triangle(q, k + j, a, b, c))
+            if (overlap_triangle(q, k + j, a, b, c, touch >> j & 1u))
                 return 1;
         }
     }
@@ -267,7 +277,7 @@ static int overlap_leaf(void *query, uint32_t first, uint32_t count)
         float a[3], b[3], c[3], lo[3], hi[3];
         cbvh_triangle_vertices(f, k, a, b, c);
         cbvh_triangle_bounds(a, b, c, lo, hi);
-        if (region_meets(q->region, lo, hi) && overlap_triangle(q, k, a, b, c))
+        if (region_meets(q->region, lo, hi) && overlap_triangle(q, k, a, b, c, 0))
             return 1;
     }
 #endif

@@ -120,7 +120,7 @@ struct cbvh_cull4 {
     __m128 p0[3], p1[3];
     __m128 radius, half[3], axes[3][3]; /* axes[i]: the box's axis i (the identity unless rotated) */
     __m128 shape_size;                   /* the shape's part of cbvh_cull_triangle's size */
-    int box;
+    int box, capsule;
 };
 
 static inline void cbvh_cull4_init(struct cbvh_cull4 *w, const struct cbvh_local_shape *s, const float lo[3],
@@ -141,6 +141,7 @@ static inline void cbvh_cull4_init(struct cbvh_cull4 *w, const struct cbvh_local
     w->shape_size = _mm_set1_ps((float)(cull_max(cull_max_abs(s->p0), cull_max_abs(s->p1)) + s->radius +
                                         s->half.x + s->half.y + s->half.z));
     w->box = s->kind == CBVH_SHAPE_BOX;
+    w->capsule = s->kind == CBVH_SHAPE_CAPSULE;
 }
 
 static inline __m128 cull4_abs(__m128 x) { return _mm_andnot_ps(_mm_set1_ps(-0.0f), x); }
@@ -149,45 +150,114 @@ static inline __m128 cull4_dot(const __m128 a[3], const __m128 b[3])
     return _mm_add_ps(_mm_add_ps(_mm_mul_ps(a[0], b[0]), _mm_mul_ps(a[1], b[1])), _mm_mul_ps(a[2], b[2]));
 }
 
-/* Four triangles (c[v][axis], a lane each: leaf_gather4) against the still shape of w, in float: the lanes
- * to test further, those whose box meets w's box (the walk's node test, exact) and whose plane does not
- * keep the shape on one side (cbvh_cull_triangle's plane test with the margin 2^-14 span^2 size, 10 times
- * this test's error bound in float, when span is at least 2^-30, far from underflow; a coordinate near
- * overflow makes the margin infinite or a distance NaN, and keeps the lane). A lane dropped here is one
- * cbvh_cull_triangle, and the exact tests, would drop. */
-static inline uint32_t cbvh_cull4_keep(const struct cbvh_cull4 *w, const __m128 c[3][3])
+/* w ? a : b, lane by lane (SSE2 has no blend). */
+static inline __m128 cull4_select(__m128 w, __m128 a, __m128 b)
 {
-    __m128 in = _mm_castsi128_ps(_mm_set1_epi32(-1)), e1[3], e2[3], w0[3], w1[3], corner = _mm_setzero_ps();
+    return _mm_or_ps(_mm_and_ps(w, a), _mm_andnot_ps(w, b));
+}
+
+/* The lanes where end point p (height h over the plane, times |n|) lies within sqrt(reach2) of the triangle:
+ * of the plane where it projects into the triangle with every edge function (d[k] x (p - c[k])) . n at
+ * least margin, or of an edge (cbvh_cull_triangle's still tests, in float). outside[k] keeps the lanes
+ * where p also lies outside edge k by more than the radius r, the margin. */
+static inline __m128 cull4_end_touches(const __m128 c[3][3], const __m128 d[3][3], const __m128 dd[3],
+                                       const __m128 n[3], const __m128 nn, const __m128 p[3], __m128 h,
+                                       __m128 r, __m128 reach2, __m128 margin, __m128 outside[3])
+{
+    __m128 w[3][3], w2[3];
+    for (int k = 0; k < 3; k++) {
+        for (int a = 0; a < 3; a++)
+            w[k][a] = _mm_sub_ps(p[a], c[k][a]);
+        w2[k] = cull4_dot(w[k], w[k]);
+    }
+    __m128 inside = _mm_cmple_ps(_mm_mul_ps(h, h), _mm_mul_ps(reach2, nn)), near = _mm_setzero_ps();
+    for (int k = 0; k < 3; k++) {
+        const __m128 *dk = d[k], *wk = w[k];
+        const __m128 x[3] = {_mm_sub_ps(_mm_mul_ps(dk[1], wk[2]), _mm_mul_ps(dk[2], wk[1])),
+                             _mm_sub_ps(_mm_mul_ps(dk[2], wk[0]), _mm_mul_ps(dk[0], wk[2])),
+                             _mm_sub_ps(_mm_mul_ps(dk[0], wk[1]), _mm_mul_ps(dk[1], wk[0]))};
+        const __m128 t = cull4_dot(wk, dk);
+        const __m128 before = _mm_cmple_ps(t, _mm_setzero_ps()), past = _mm_cmpge_ps(t, dd[k]);
+        const __m128 line = _mm_cmple_ps(cull4_dot(x, x), _mm_mul_ps(reach2, dd[k]));
+        const __m128 end0 = _mm_cmple_ps(w2[k], reach2), end1 = _mm_cmple_ps(w2[k == 2 ? 0 : k + 1], reach2);
+        const __m128 e = cull4_dot(x, n), out = _mm_sub_ps(_mm_sub_ps(_mm_setzero_ps(), e), margin);
+        inside = _mm_and_ps(inside, _mm_cmpge_ps(e, margin));
+        near = _mm_or_ps(near, cull4_select(before, end0, cull4_select(past, end1, line)));
+        const __m128 far2 = _mm_mul_ps(_mm_mul_ps(r, r), _mm_mul_ps(nn, dd[k]));
+        const __m128 beyond = _mm_cmpgt_ps(_mm_mul_ps(out, out), far2);
+        outside[k] = _mm_and_ps(outside[k], _mm_and_ps(_mm_cmpgt_ps(out, _mm_setzero_ps()), beyond));
+    }
+    return _mm_or_ps(inside, near);
+}
+
+/* Four triangles (c[v][axis], a lane each: leaf_gather4) against the still shape of w, in float. Returns
+ * the lanes to test further: those whose box meets w's box (the walk's node test, exact) and whose plane
+ * does not keep the shape on one side (cbvh_cull_triangle's plane test with the margin 2^-14 span^2 size,
+ * 10 times this test's error bound in float, when span is at least 2^-30, far from underflow; a coordinate
+ * near overflow makes the margin infinite or a distance NaN, and keeps the lane). A lane dropped here is
+ * one cbvh_cull_triangle, and the exact tests, would drop. *touch gets the kept lanes where a ball or
+ * capsule surely touches the triangle, by cbvh_cull_triangle's still tests in float, on a triangle far
+ * from a sliver (|n|^2 >= span^4 / 16) of moderate size (2^-20 <= span, size <= 2^20, so nothing
+ * overflows or leaves the normal range): an end within the radius less 2^-13 size of the plane where it
+ * projects into the triangle, each edge function at least 2^-12 span^3 size, or of an edge. There too a
+ * lane is dropped when both ends lie outside one edge by more than the radius, that margin. These margins
+ * are 4 to 8 times the float error of distances and edge functions there, so the exact tests find the
+ * distance below the radius, or above it. */
+static inline uint32_t cbvh_cull4_keep(const struct cbvh_cull4 *w, const __m128 c[3][3], uint32_t *touch)
+{
+    __m128 in = _mm_castsi128_ps(_mm_set1_epi32(-1)), d[3][3], w0[3], w1[3], corner = _mm_setzero_ps();
     __m128 span = _mm_setzero_ps();
     for (int a = 0; a < 3; a++) {
         const __m128 lo = _mm_min_ps(_mm_min_ps(c[0][a], c[1][a]), c[2][a]);
         const __m128 hi = _mm_max_ps(_mm_max_ps(c[0][a], c[1][a]), c[2][a]);
         in = _mm_and_ps(in, _mm_and_ps(_mm_cmple_ps(lo, w->hi[a]), _mm_cmpge_ps(hi, w->lo[a])));
-        e1[a] = _mm_sub_ps(c[1][a], c[0][a]);
-        e2[a] = _mm_sub_ps(c[2][a], c[0][a]);
+        d[0][a] = _mm_sub_ps(c[1][a], c[0][a]);
+        d[1][a] = _mm_sub_ps(c[2][a], c[1][a]);
+        d[2][a] = _mm_sub_ps(c[0][a], c[2][a]);
         w0[a] = _mm_sub_ps(w->p0[a], c[0][a]);
         w1[a] = _mm_sub_ps(w->p1[a], c[0][a]);
-        span = _mm_max_ps(span, _mm_max_ps(cull4_abs(e1[a]), cull4_abs(e2[a])));
+        span = _mm_max_ps(span, _mm_max_ps(cull4_abs(d[0][a]), cull4_abs(d[2][a]))); /* c1 - c0, c2 - c0 */
         corner = _mm_max_ps(corner, cull4_abs(c[0][a]));
     }
+    const __m128 *e1 = d[0], e2[3] = {_mm_sub_ps(c[2][0], c[0][0]), _mm_sub_ps(c[2][1], c[0][1]),
+                                      _mm_sub_ps(c[2][2], c[0][2])};
     const __m128 n[3] = {_mm_sub_ps(_mm_mul_ps(e1[1], e2[2]), _mm_mul_ps(e1[2], e2[1])),
                          _mm_sub_ps(_mm_mul_ps(e1[2], e2[0]), _mm_mul_ps(e1[0], e2[2])),
                          _mm_sub_ps(_mm_mul_ps(e1[0], e2[1]), _mm_mul_ps(e1[1], e2[0]))};
-    const __m128 s0 = cull4_dot(n, w0), s1 = cull4_dot(n, w1);
+    const __m128 s0 = cull4_dot(n, w0), s1 = cull4_dot(n, w1), nn = cull4_dot(n, n);
+    const __m128 span2 = _mm_mul_ps(span, span);
     __m128 reach;
     if (w->box)
         reach = _mm_add_ps(_mm_add_ps(_mm_mul_ps(w->half[0], cull4_abs(cull4_dot(n, w->axes[0]))),
                                       _mm_mul_ps(w->half[1], cull4_abs(cull4_dot(n, w->axes[1])))),
                            _mm_mul_ps(w->half[2], cull4_abs(cull4_dot(n, w->axes[2]))));
     else
-        reach = _mm_mul_ps(w->radius, _mm_sqrt_ps(cull4_dot(n, n)));
+        reach = _mm_mul_ps(w->radius, _mm_sqrt_ps(nn));
     const __m128 size = _mm_add_ps(_mm_add_ps(corner, span), w->shape_size);
-    const __m128 margin = _mm_mul_ps(_mm_mul_ps(_mm_set1_ps(0x1p-14f), _mm_mul_ps(span, span)), size);
-    const __m128 gap = _mm_add_ps(reach, margin);
+    const __m128 gap = _mm_add_ps(reach, _mm_mul_ps(_mm_mul_ps(_mm_set1_ps(0x1p-14f), span2), size));
     const __m128 apart = _mm_or_ps(_mm_cmpgt_ps(_mm_min_ps(s0, s1), gap),
                                    _mm_cmplt_ps(_mm_max_ps(s0, s1), _mm_sub_ps(_mm_setzero_ps(), gap)));
-    const __m128 clear = _mm_and_ps(_mm_cmpge_ps(span, _mm_set1_ps(0x1p-30f)), apart);
-    return (uint32_t)_mm_movemask_ps(_mm_andnot_ps(clear, in));
+    __m128 keep = _mm_andnot_ps(_mm_and_ps(_mm_cmpge_ps(span, _mm_set1_ps(0x1p-30f)), apart), in);
+    *touch = 0;
+    if (w->box || !_mm_movemask_ps(keep))
+        return (uint32_t)_mm_movemask_ps(keep);
+    const __m128 sized =
+        _mm_and_ps(_mm_cmpge_ps(span, _mm_set1_ps(0x1p-20f)), _mm_cmple_ps(size, _mm_set1_ps(0x1p20f)));
+    const __m128 fat = _mm_cmpge_ps(nn, _mm_mul_ps(_mm_set1_ps(0x1p-4f), _mm_mul_ps(span2, span2)));
+    const __m128 moderate = _mm_and_ps(sized, fat);
+    const __m128 reach_in = _mm_sub_ps(w->radius, _mm_mul_ps(_mm_set1_ps(0x1p-13f), size));
+    const __m128 reaches = _mm_cmpgt_ps(reach_in, _mm_setzero_ps()); /* else no point is near enough */
+    const __m128 reach2 = cull4_select(reaches, _mm_mul_ps(reach_in, reach_in), _mm_set1_ps(-1.0f));
+    const __m128 margin = _mm_mul_ps(_mm_mul_ps(_mm_set1_ps(0x1p-12f), _mm_mul_ps(span2, span)), size);
+    const __m128 dd[3] = {cull4_dot(d[0], d[0]), cull4_dot(d[1], d[1]), cull4_dot(d[2], d[2])};
+    __m128 outside[3] = {moderate, moderate, moderate};
+    const __m128 r = w->radius;
+    __m128 sure = cull4_end_touches(c, d, dd, n, nn, w->p0, s0, r, reach2, margin, outside);
+    if (w->capsule)
+        sure = _mm_or_ps(sure, cull4_end_touches(c, d, dd, n, nn, w->p1, s1, r, reach2, margin, outside));
+    keep = _mm_andnot_ps(_mm_or_ps(_mm_or_ps(outside[0], outside[1]), outside[2]), keep);
+    *touch = (uint32_t)_mm_movemask_ps(_mm_and_ps(_mm_and_ps(sure, moderate), keep));
+    return (uint32_t)_mm_movemask_ps(keep);
 }
 #endif
 
