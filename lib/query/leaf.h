@@ -111,11 +111,18 @@ CBVH_KERNEL __m128 leaf_vertex4(const void *restrict verts, const int vert_enc, 
                        cbvh_dequantize(q[2], grid_origin[2], grid_scale[2]), 0.0f);
 }
 
-/* Triangles k + lane[j] (j = 0..3) as coordinate vectors: c[v][a] holds axis a of vertex v, lane j for
- * triangle k + lane[j]. */
+/* Four triangles gathered for the SIMD filter, a lane per triangle: c[v][a][j] is axis a of vertex v of
+ * lane j's triangle. Floats rather than vectors, so that the exact test of a lane the filter keeps reads
+ * its vertices back as they are (leaf_lane_test) instead of decoding the triangle again. */
+struct leaf_quad {
+    _Alignas(16) float c[3][3][4];
+};
+
+/* Triangles k + lane[j] (j = 0..3) into q, lane j for triangle k + lane[j]. */
 CBVH_KERNEL void leaf_gather4(const void *restrict tris, const int tri_enc, const void *restrict verts,
                               const int vert_enc, const float *restrict grid_origin,
-                              const float *restrict grid_scale, uint32_t k, const uint32_t lane[4], __m128 c[3][3])
+                              const float *restrict grid_scale, uint32_t k, const uint32_t lane[4],
+                              struct leaf_quad *restrict q)
 {
     uint32_t idx[4][3];
     for (uint32_t j = 0; j < 4; j++)
@@ -126,9 +133,9 @@ CBVH_KERNEL void leaf_gather4(const void *restrict tris, const int tri_enc, cons
         __m128 r2 = leaf_vertex4(verts, vert_enc, grid_origin, grid_scale, idx[2][v]);
         __m128 r3 = leaf_vertex4(verts, vert_enc, grid_origin, grid_scale, idx[3][v]);
         _MM_TRANSPOSE4_PS(r0, r1, r2, r3);
-        c[v][0] = r0;
-        c[v][1] = r1;
-        c[v][2] = r2;
+        _mm_store_ps(q->c[v][0], r0);
+        _mm_store_ps(q->c[v][1], r1);
+        _mm_store_ps(q->c[v][2], r2);
     }
 }
 
@@ -143,27 +150,31 @@ CBVH_KERNEL void leaf_group(uint32_t n, uint32_t lane[4], uint32_t *kept)
     *kept = (1u << n) - 1u;
 }
 
-/* The first test of cbvh_ray_triangle (ray_triangle.h) on four triangles at once, lane for lane the same
- * float operations in the same order (the build contracts no multiply-add): the vertices relative to the
- * origin, sheared, then the three edge functions. Returns the bits of the lanes that test rejects for sure
- * (finite edge functions of both signs); the scalar test then decides every other lane exactly as it would
- * alone, so answers are the same with or without this filter. c[v][a]: axis a of vertex v, a lane per
- * triangle (leaf_gather4). */
-CBVH_KERNEL uint32_t leaf_reject4_sse2(const struct cbvh_ray_shear *restrict s, const __m128 c[3][3])
+/* The first test of cbvh_ray_triangle (ray_triangle.h) on the four triangles of q at once, lane for lane
+ * the same float operations in the same order (the build contracts no multiply-add): the vertices relative
+ * to the origin, sheared, then the three edge functions, left in edge[e][j] (function e of lane j).
+ * Returns the bits of the lanes that test rejects for sure (finite edge functions of both signs); the
+ * exact test of every other lane (leaf_lane_test) then decides it exactly as the scalar test would alone,
+ * so answers are the same with or without this filter. */
+CBVH_KERNEL uint32_t leaf_reject4_sse2(const struct cbvh_ray_shear *restrict s,
+                                       const struct leaf_quad *restrict q, float edge[3][4])
 {
     const uint32_t kx = s->kx, ky = s->ky, kz = s->kz;
     const __m128 sx = _mm_set1_ps(s->sx), sy = _mm_set1_ps(s->sy);
     const __m128 ox = _mm_set1_ps(s->org[kx]), oy = _mm_set1_ps(s->org[ky]), oz = _mm_set1_ps(s->org[kz]);
     __m128 px[3], py[3];
     for (int v = 0; v < 3; v++) {
-        const __m128 z = _mm_sub_ps(c[v][kz], oz);
-        px[v] = _mm_sub_ps(_mm_sub_ps(c[v][kx], ox), _mm_mul_ps(sx, z));
-        py[v] = _mm_sub_ps(_mm_sub_ps(c[v][ky], oy), _mm_mul_ps(sy, z));
+        const __m128 z = _mm_sub_ps(_mm_load_ps(q->c[v][kz]), oz);
+        px[v] = _mm_sub_ps(_mm_sub_ps(_mm_load_ps(q->c[v][kx]), ox), _mm_mul_ps(sx, z));
+        py[v] = _mm_sub_ps(_mm_sub_ps(_mm_load_ps(q->c[v][ky]), oy), _mm_mul_ps(sy, z));
     }
     /* u = cx*by - cy*bx, v = ax*cy - ay*cx, w = bx*ay - by*ax (a, b, c = vertices 0, 1, 2) */
     const __m128 u = _mm_sub_ps(_mm_mul_ps(px[2], py[1]), _mm_mul_ps(py[2], px[1]));
     const __m128 v = _mm_sub_ps(_mm_mul_ps(px[0], py[2]), _mm_mul_ps(py[0], px[2]));
     const __m128 w = _mm_sub_ps(_mm_mul_ps(px[1], py[0]), _mm_mul_ps(py[1], px[0]));
+    _mm_storeu_ps(edge[0], u);
+    _mm_storeu_ps(edge[1], v);
+    _mm_storeu_ps(edge[2], w);
     const __m128 zero = _mm_setzero_ps();
     const __m128 sum = _mm_add_ps(_mm_add_ps(u, v), w);
     const __m128 abs_sum = _mm_andnot_ps(_mm_set1_ps(-0.0f), sum);
@@ -171,6 +182,20 @@ CBVH_KERNEL uint32_t leaf_reject4_sse2(const struct cbvh_ray_shear *restrict s, 
     const __m128 negative = _mm_or_ps(_mm_or_ps(_mm_cmplt_ps(u, zero), _mm_cmplt_ps(v, zero)), _mm_cmplt_ps(w, zero));
     const __m128 positive = _mm_or_ps(_mm_or_ps(_mm_cmpgt_ps(u, zero), _mm_cmpgt_ps(v, zero)), _mm_cmpgt_ps(w, zero));
     return (uint32_t)_mm_movemask_ps(_mm_and_ps(finite, _mm_and_ps(negative, positive)));
+}
+
+/* The exact test of lane j of q, which leaf_reject4_sse2 kept: cbvh_ray_triangle_decide (ray_triangle.h)
+ * on the lane's vertices and edge functions as the filter left them, the floats the scalar test computes.
+ * Arguments and result as for cbvh_ray_triangle. */
+CBVH_KERNEL int leaf_lane_test(const struct cbvh_ray_shear *restrict s, const struct leaf_quad *restrict q,
+                               const float edge[3][4], uint32_t j, float tmin, float tmax, const int want_uv,
+                               float *t, float *u, float *v)
+{
+    const cbvh_v3 vert[3] = {v3(q->c[0][0][j], q->c[0][1][j], q->c[0][2][j]),
+                             v3(q->c[1][0][j], q->c[1][1][j], q->c[1][2][j]),
+                             v3(q->c[2][0][j], q->c[2][1][j], q->c[2][2][j])};
+    return cbvh_ray_triangle_decide(s, vert, edge[0][j], edge[1][j], edge[2][j], tmin, tmax, want_uv, t, u,
+                                    v);
 }
 #endif
 
@@ -199,13 +224,13 @@ CBVH_KERNEL int leaf_loop(const struct cbvh_file *restrict f, uint32_t first, ui
         for (uint32_t k = first; k < first + count; k += 4) {
             uint32_t lane[4], group;
             leaf_group(first + count - k < 4 ? first + count - k : 4, lane, &group);
-            __m128 c4[3][3];
-            leaf_gather4(tris, tri_enc, verts, vert_enc, origin, scale, k, lane, c4);
+            struct leaf_quad q;
+            float edge[3][4];
+            leaf_gather4(tris, tri_enc, verts, vert_enc, origin, scale, k, lane, &q);
             /* the lanes the filter keeps, lowest first */
-            for (uint32_t kept = ~leaf_reject4_sse2(s, c4) & group; kept; kept &= kept - 1u) {
+            for (uint32_t kept = ~leaf_reject4_sse2(s, &q, edge) & group; kept; kept &= kept - 1u) {
                 const uint32_t j = cbvh_lowest_lane(kept);
-                leaf_triangle(tris, tri_enc, verts, vert_enc, origin, scale, k + j, a, b, c);
-                if (cbvh_ray_triangle(s, a, b, c, tmin, best_t, want_uv, &t, &u, &v) &&
+                if (leaf_lane_test(s, &q, edge, j, tmin, best_t, want_uv, &t, &u, &v) &&
                     leaf_take(f, gate, k + j, t, u, v, any, &best_t, best))
                     return 1;
             }

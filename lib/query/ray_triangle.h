@@ -19,18 +19,24 @@
  * sheared in double instead; that choice depends on the vertex and the ray
  * only, and the two triangles' edge functions are then the same double
  * expression up to an exact negation, so they still agree. */
-CBVH_COLD static int cbvh_ray_triangle_edges_double(const struct cbvh_ray_shear *s, const float *const v[3],
-                                                    const float sheared[3][2], double e[3])
+CBVH_COLD static int cbvh_ray_triangle_edges_double(const struct cbvh_ray_shear *s, const cbvh_v3 vert[3],
+                                                    double e[3])
 {
+    const uint32_t kx = s->kx, ky = s->ky, kz = s->kz;
     double p[3][2];
     for (int k = 0; k < 3; k++) {
-        if (isfinite(sheared[k][0]) && isfinite(sheared[k][1])) {
-            p[k][0] = sheared[k][0];
-            p[k][1] = sheared[k][1];
+        float v[3];
+        v3_to_f(vert[k], v); /* exact: the vertices are floats */
+        /* the float sheared coordinates, as cbvh_ray_triangle computes them */
+        const float zf = v[kz] - s->org[kz];
+        const float sheared[2] = {(v[kx] - s->org[kx]) - s->sx * zf, (v[ky] - s->org[ky]) - s->sy * zf};
+        if (isfinite(sheared[0]) && isfinite(sheared[1])) {
+            p[k][0] = sheared[0];
+            p[k][1] = sheared[1];
         } else {
-            const double z = (double)v[k][s->kz] - s->org[s->kz];
-            p[k][0] = ((double)v[k][s->kx] - s->org[s->kx]) - (double)s->sx * z;
-            p[k][1] = ((double)v[k][s->ky] - s->org[s->ky]) - (double)s->sy * z;
+            const double z = (double)v[kz] - s->org[kz];
+            p[k][0] = ((double)v[kx] - s->org[kx]) - (double)s->sx * z;
+            p[k][1] = ((double)v[ky] - s->org[ky]) - (double)s->sy * z;
         }
     }
     e[0] = p[2][0] * p[1][1] - p[2][1] * p[1][0]; /* u: edge b-c */
@@ -158,6 +164,32 @@ CBVH_NOINLINE void cbvh_plane_barycentrics(const struct cbvh_ray_shear *restrict
     *v = (float)weight[2];
 }
 
+/* The rest of cbvh_ray_triangle once its float edge functions u, v, w have not rejected the triangle
+ * vert (its float vertices in double): other arguments and result as for cbvh_ray_triangle. */
+CBVH_KERNEL int cbvh_ray_triangle_decide(const struct cbvh_ray_shear *restrict s, const cbvh_v3 vert[3],
+                                         float u, float v, float w, float tmin, float tmax, const int want_uv,
+                                         float *t_out, float *u_out, float *v_out)
+{
+    /* All non-zero and finite (so of one sign, with a finite sum): decided.
+     * Otherwise (an edge through the origin, an overflow) decide in double. */
+    double e[3] = {u, v, w};
+    if (!CBVH_LIKELY(fabsf(u + v + w) <= FLT_MAX && u != 0.0f && v != 0.0f && w != 0.0f) &&
+        !cbvh_ray_triangle_edges_double(s, vert, e))
+        return 0;
+    struct cbvh_triangle_frame frame;
+    double td;
+    if (!cbvh_plane_t(s, vert, &frame, &td))
+        return 0;
+    const float t = (float)td;
+    /* Ordered compares: an overflowed t (inf) fails t <= tmax <= CBVH_T_LIMIT. */
+    if (!(t >= tmin && t <= tmax))
+        return 0;
+    *t_out = t;
+    if (want_uv)
+        cbvh_plane_barycentrics(s, &frame, vert[frame.base], td, e, u_out, v_out);
+    return 1;
+}
+
 /* Tests the ray (sheared by s) against triangle (a, b, c). Returns 1 when it
  * hits at t in [tmin, tmax] and writes t and, when want_uv (a caller's
  * constant, or what it knows it needs: an any-hit walk without a hit filter
@@ -198,28 +230,8 @@ CBVH_KERNEL int cbvh_ray_triangle(const struct cbvh_ray_shear *restrict s, const
     const int finite = fabsf(u + v + w) <= FLT_MAX;
     if (finite && (u < 0.0f || v < 0.0f || w < 0.0f) && (u > 0.0f || v > 0.0f || w > 0.0f))
         return 0;
-    /* All non-zero and finite (so of one sign, with a finite sum): decided.
-     * Otherwise (an edge through the origin, an overflow) decide in double. */
-    double e[3] = {u, v, w};
-    if (!CBVH_LIKELY(finite && u != 0.0f && v != 0.0f && w != 0.0f)) {
-        const float *const vert[3] = {a, b, c};
-        const float sheared[3][2] = {{ax, ay}, {bx, by}, {cx, cy}};
-        if (!cbvh_ray_triangle_edges_double(s, vert, sheared, e))
-            return 0;
-    }
     const cbvh_v3 vert[3] = {v3_from_f(a), v3_from_f(b), v3_from_f(c)};
-    struct cbvh_triangle_frame frame;
-    double td;
-    if (!cbvh_plane_t(s, vert, &frame, &td))
-        return 0;
-    const float t = (float)td;
-    /* Ordered compares: an overflowed t (inf) fails t <= tmax <= CBVH_T_LIMIT. */
-    if (!(t >= tmin && t <= tmax))
-        return 0;
-    *t_out = t;
-    if (want_uv)
-        cbvh_plane_barycentrics(s, &frame, vert[frame.base], td, e, u_out, v_out);
-    return 1;
+    return cbvh_ray_triangle_decide(s, vert, u, v, w, tmin, tmax, want_uv, t_out, u_out, v_out);
 }
 
 #endif

@@ -48,20 +48,19 @@ static void solo_tail(const struct cbvh_file *f, struct cbvh_stream_batch *b, ui
         box_ray[CBVH_LANE_TMAX] = b->best[r].t;
 }
 
-/* Ray r of the batch against triangle k (vertices a, v1, v2): an occlusion, or a closer best hit. */
-CBVH_KERNEL void stream_triangle(struct cbvh_stream_batch *restrict b, uint32_t r, uint32_t k, const float a[3],
-                                 const float v1[3], const float v2[3], int any, uint8_t *restrict occluded)
+/* Ray r of the batch, whose test of triangle k found `hit` at t (u, v): an occlusion, or a closer best
+ * hit. */
+CBVH_KERNEL void stream_take(struct cbvh_stream_batch *restrict b, uint32_t r, uint32_t k, int hit, float t,
+                             float u, float v, int any, uint8_t *restrict occluded)
 {
-    float *box_ray = b->box_ray[r];
-    const float tmin = box_ray[CBVH_LANE_TMIN], tmax = box_ray[CBVH_LANE_TMAX];
-    float t, u, v;
-    if (!cbvh_ray_triangle(&b->ctx[r].shear, a, v1, v2, tmin, tmax, !any, &t, &u, &v))
+    if (!hit)
         return;
+    float *box_ray = b->box_ray[r];
     if (any) {
         /* Occluded: a negative tmax fails every later box and triangle test. */
         occluded[b->ray_index[r]] = 1;
         box_ray[CBVH_LANE_TMAX] = -1.0f;
-    } else if (cbvh_hit_better(t, k, tmax, b->best[r].tri)) {
+    } else if (cbvh_hit_better(t, k, box_ray[CBVH_LANE_TMAX], b->best[r].tri)) {
         box_ray[CBVH_LANE_TMAX] = t;
         b->best[r].tri = k;
         b->best[r].t = t;
@@ -85,24 +84,28 @@ CBVH_KERNEL void stream_leaf(const struct cbvh_file *f, struct cbvh_stream_batch
     if (simd && count > 1) {
         const float origin[3] = {f->grid_origin[0], f->grid_origin[1], f->grid_origin[2]};
         const float scale[3] = {f->grid_scale[0], f->grid_scale[1], f->grid_scale[2]};
-        __m128 c4[CBVH_MAX_LEAF_SIZE / 4][3][3];
+        struct leaf_quad q[CBVH_MAX_LEAF_SIZE / 4];
         uint32_t lanes[CBVH_MAX_LEAF_SIZE / 4];
         const uint32_t groups = (count + 3) / 4;
         for (uint32_t g = 0; g < groups; g++) {
             uint32_t lane[4];
             leaf_group(count - 4 * g < 4 ? count - 4 * g : 4, lane, &lanes[g]);
-            leaf_gather4(f->triangles, (int)f->triangle_encoding, f->vertices, (int)f->vertex_encoding, origin,
-                         scale, tri0 + 4 * g, lane, c4[g]);
+            leaf_gather4(f->triangles, (int)f->triangle_encoding, f->vertices, (int)f->vertex_encoding,
+                         origin, scale, tri0 + 4 * g, lane, &q[g]);
         }
         for (uint32_t j = 0; j < m; j++) {
             const uint32_t r = live[j];
+            const struct cbvh_ray_shear *s = &b->ctx[r].shear;
             for (uint32_t g = 0; g < groups; g++) {
+                float edge[3][4];
                 /* the lanes the filter keeps, lowest first */
-                for (uint32_t kept = ~leaf_reject4_sse2(&b->ctx[r].shear, c4[g]) & lanes[g]; kept;
-                     kept &= kept - 1u) {
-                    const uint32_t k = tri0 + 4 * g + cbvh_lowest_lane(kept);
-                    cbvh_triangle_vertices(f, k, a, v1, v2);
-                    stream_triangle(b, r, k, a, v1, v2, any, occluded);
+                for (uint32_t kept = ~leaf_reject4_sse2(s, &q[g], edge) & lanes[g]; kept; kept &= kept - 1u) {
+                    const uint32_t lane = cbvh_lowest_lane(kept);
+                    const float *box_ray = b->box_ray[r];
+                    float t, u, v;
+                    const int hit = leaf_lane_test(s, &q[g], edge, lane, box_ray[CBVH_LANE_TMIN],
+                                                   box_ray[CBVH_LANE_TMAX], !any, &t, &u, &v);
+                    stream_take(b, r, tri0 + 4 * g + lane, hit, t, u, v, any, occluded);
                 }
             }
         }
@@ -113,8 +116,14 @@ CBVH_KERNEL void stream_leaf(const struct cbvh_file *f, struct cbvh_stream_batch
 #endif
     for (uint32_t k = tri0; k < tri0 + count; k++) {
         cbvh_triangle_vertices(f, k, a, v1, v2);
-        for (uint32_t j = 0; j < m; j++)
-            stream_triangle(b, live[j], k, a, v1, v2, any, occluded);
+        for (uint32_t j = 0; j < m; j++) {
+            const uint32_t r = live[j];
+            const float *box_ray = b->box_ray[r];
+            float t, u, v;
+            const int hit = cbvh_ray_triangle(&b->ctx[r].shear, a, v1, v2, box_ray[CBVH_LANE_TMIN],
+                                              box_ray[CBVH_LANE_TMAX], !any, &t, &u, &v);
+            stream_take(b, r, k, hit, t, u, v, any, occluded);
+        }
     }
 }
 
