@@ -117,8 +117,8 @@ static int sweep_right(const bench_judge *j, const ref_shape *s, const double de
     return 0;
 }
 
-bench_side bench_judge_sweep(const bench_judge *j, shape_kind kind, const shape_query *q, const shape_answer *cbvh,
-                             const shape_answer *peer)
+bench_side bench_judge_sweep(const bench_judge *j, shape_kind kind, const shape_query *q,
+                             const shape_answer *cbvh, const shape_answer *peer)
 {
     const double delta[3] = {q->delta[0], q->delta[1], q->delta[2]};
     const double length = sqrt(delta[0] * delta[0] + delta[1] * delta[1] + delta[2] * delta[2]);

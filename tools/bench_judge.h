@@ -45,7 +45,7 @@ bench_side bench_judge_overlap(bench_judge *j, shape_kind kind, const shape_quer
  * tolerance misses too; a hit when it is on the reference's first triangle or within the sweep tolerance
  * of its contact along the motion, or, the reference missing, when the shape at the hit's t lies within
  * the overlap tolerance of the hit's triangle. */
-bench_side bench_judge_sweep(const bench_judge *j, shape_kind kind, const shape_query *q, const shape_answer *cbvh,
-                             const shape_answer *peer);
+bench_side bench_judge_sweep(const bench_judge *j, shape_kind kind, const shape_query *q,
+                             const shape_answer *cbvh, const shape_answer *peer);
 
 #endif

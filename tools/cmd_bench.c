@@ -181,8 +181,8 @@ static int add_overlap(void *user, uint32_t tri)
 }
 
 /* cbvh's overlap query q, its triangles passed to callback(user, tri). */
-static void cbvh_overlap_each(const cbvh_file *f, shape_kind kind, const shape_query *q, cbvh_overlap_fn callback,
-                              void *user)
+static void cbvh_overlap_each(const cbvh_file *f, shape_kind kind, const shape_query *q,
+                              cbvh_overlap_fn callback, void *user)
 {
     if (kind == SHAPE_BOX) {
         float lo[3], hi[3];
@@ -637,8 +637,8 @@ static void judge_shape(bench_state *s, shape_agree_row *a, const shape_query *q
     a->sides[side]++;
 }
 
-static void agree_shapes(bench_state *s, shape_agree_row *a, const shape_query *queries, const shape_answer *ref,
-                         const shape_answer *other, size_t count, double tolerance)
+static void agree_shapes(bench_state *s, shape_agree_row *a, const shape_query *queries,
+                         const shape_answer *ref, const shape_answer *other, size_t count, double tolerance)
 {
     double start = -1.0;
     a->count = count;
@@ -805,11 +805,12 @@ static void print_shape_tables(const bench_state *s)
     printf("\nShape agreement with cbvh, query by query (sweeps: the same first triangle, or another one with t "
            "times the motion's length within %.0e of the scene diagonal; overlaps: the same set of triangles). "
            "Bullet's casts stop 0.001 mesh units short of contact (its constant), so its t come early; the t apart "
-           "columns say by how much, as a fraction of the diagonal. Up to %d disagreements per set (fewer once "
-           "checking them took the budget) are decided against a double-precision brute force (the tests' "
-           "reference): it sides with an engine whose answer it bears out (sweeps: by the rule above, a miss "
-           "when the shape shrunk by %.0e of the diagonal misses too; overlaps: every triangle that surely "
-           "overlaps and none surely apart, within %.0e of the diagonal), with both, or with neither:\n\n",
+           "columns say by how much, as a fraction of the diagonal. Up to %d disagreements per set (fewer "
+           "once checking them took the budget) are decided against a double-precision brute force (the "
+           "tests' reference): it sides with an engine whose answer it bears out (sweeps: by the rule "
+           "above, a miss when the shape shrunk by %.0e of the diagonal misses too; overlaps: every triangle "
+           "that surely overlaps and none surely apart, within %.0e of the diagonal), with both, or with "
+           "neither:\n\n",
            SWEEP_AGREE_TOLERANCE, BENCH_JUDGE_QUERIES, AGREE_TOLERANCE, AGREE_TOLERANCE);
     printf("| shape | query | engine | same triangle or set | both miss or none | t close, other triangle | "
            "disagree | checked | reference: cbvh / this / both / neither | start touching cbvh / this | "
@@ -823,15 +824,16 @@ static void print_shape_tables(const bench_state *s)
                    (unsigned long long)a->sweeps.both_miss, (unsigned long long)a->sweeps.t_close,
                    (unsigned long long)a->sweeps.disagree);
         else
-            printf("%llu | %llu | - | %llu | ", (unsigned long long)a->same_set, (unsigned long long)a->both_empty,
-                   (unsigned long long)a->other_set);
+            printf("%llu | %llu | - | %llu | ", (unsigned long long)a->same_set,
+                   (unsigned long long)a->both_empty, (unsigned long long)a->other_set);
         printf("%llu | %llu / %llu / %llu / %llu | ", (unsigned long long)a->checked,
                (unsigned long long)a->sides[BENCH_SIDE_CBVH], (unsigned long long)a->sides[BENCH_SIDE_PEER],
-               (unsigned long long)a->sides[BENCH_SIDE_BOTH], (unsigned long long)a->sides[BENCH_SIDE_NEITHER]);
+               (unsigned long long)a->sides[BENCH_SIDE_BOTH],
+               (unsigned long long)a->sides[BENCH_SIDE_NEITHER]);
         if (a->sweep)
             printf("%llu / %llu | %.2e | %.2e | - | %zu |\n", (unsigned long long)a->ref_start_touching,
-                   (unsigned long long)a->other_start_touching, t_apart_mean(s, a), a->t_distance_max / s->diagonal,
-                   a->count);
+                   (unsigned long long)a->other_start_touching, t_apart_mean(s, a),
+                   a->t_distance_max / s->diagonal, a->count);
         else
             printf("- | - | - | %llu / %llu | %zu |\n", (unsigned long long)a->ref_triangles,
                    (unsigned long long)a->other_triangles, a->count);
