@@ -253,16 +253,15 @@ static int overlap_leaf(void *query, uint32_t first, uint32_t count)
     for (uint32_t k = first; k < first + count; k += 4) {
         uint32_t lane[4], group;
         leaf_group(first + count - k < 4 ? first + count - k : 4, lane, &group);
-        __m128 c4[3][3];
+        struct leaf_quad quad;
         leaf_gather4(f->triangles, (int)f->triangle_encoding, f->vertices, (int)f->vertex_encoding,
-                     f->grid_origin, f->grid_scale, k, lane, c4);
-        uint32_t touch, keep = cbvh_cull4_keep(&q->cull4, c4, &touch) & group;
-        if (!keep)
-            continue;
-        float v[3][3][4];
+                     f->grid_origin, f->grid_scale, k, lane, &quad);
+        __m128 c4[3][3];
         for (int i = 0; i < 3; i++)
             for (int a = 0; a < 3; a++)
-                _mm_storeu_ps(v[i][a], c4[i][a]);
+                c4[i][a] = _mm_load_ps(quad.c[i][a]);
+        uint32_t touch, keep = cbvh_cull4_keep(&q->cull4, (const __m128(*)[3])c4, &touch) & group;
+        const float(*v)[3][4] = quad.c;
         for (; keep; keep &= keep - 1u) {
             const uint32_t j = cbvh_lowest_lane(keep);
             const float a[3] = {v[0][0][j], v[0][1][j], v[0][2][j]};
