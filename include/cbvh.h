@@ -532,12 +532,12 @@ CBVH_API cbvh_result cbvh_occluded_with(const cbvh_file *file, const cbvh_ray *r
 /* Batched streams: `count` rays (any coherence) traversed together, each node
  * dequantized once per batch visit, live rays partitioned in place. Results
  * equal cbvh_raycast / cbvh_occluded ray by ray. hits[i] (occluded[i]: 0 or 1)
- * receives ray i's result. Uses no heap memory: rays go in batches of 32 of one
+ * receives ray i's result. Uses no heap memory: rays go in batches of 24 of one
  * ray octant, held on the call's stack. Stack use, measured with -fstack-usage
  * (gcc 12 -O2, x86-64), deepest path: about 13 KiB (the batch 5.7, the batch
- * walk 3.7, a ray finishing alone on the single-ray walk 2.9, the hit's
+ * walk 3.9, a ray finishing alone on the single-ray walk 2.9, the hit's
  * barycentrics 0.5); with the _scratch form and its batch in the caller's
- * memory, about 7.5 KiB. cbvh_raycast and cbvh_occluded: about 3.5 KiB. */
+ * memory, about 7.7 KiB. cbvh_raycast and cbvh_occluded: about 3.5 KiB. */
 CBVH_API void cbvh_raycast_stream(const cbvh_file *file, const cbvh_ray *rays, size_t count,
                                   cbvh_hit *hits, cbvh_query_stats *stats);
 CBVH_API void cbvh_occluded_stream(const cbvh_file *file, const cbvh_ray *rays, size_t count,
@@ -549,7 +549,7 @@ CBVH_API size_t cbvh_stream_scratch_size(size_t batch_rays);
 
 /* cbvh_raycast_stream / cbvh_occluded_stream with their batches in the caller's `scratch` (any alignment,
  * `scratch_size` bytes, not shared with another call running at the same time): as many rays a batch as
- * fit (cbvh_stream_scratch_size), at most 4096. Scratch NULL or too small for more than the stack's 32
+ * fit (cbvh_stream_scratch_size), at most 4096. Scratch NULL or too small for more than the stack's 24
  * rays: the stack batch. The answers are the same whatever the batch size. No heap memory. */
 CBVH_API void cbvh_raycast_stream_scratch(const cbvh_file *file, const cbvh_ray *rays, size_t count,
                                           cbvh_hit *hits, cbvh_query_stats *stats, void *scratch,

@@ -15,6 +15,7 @@
 #include <cmocka.h>
 
 #include "cbvh.h"
+#include "query/ray_box.h"
 #include "query/stream.h"
 #include "support/reference.h"
 #include "support/scene_gen.h"
@@ -179,12 +180,14 @@ static void test_meshes(void **state)
     }
 }
 
-/* The batch box kernels agree lane by lane on awkward rays: 0, -0 and
- * denormal directions, origins on the box planes, dead rays (tmax < 0). */
-static void test_box_kernels_agree(void **state)
+/* The batch node kernels agree box by box on awkward rays: 0, -0 and
+ * denormal directions, origins on the box planes, dead rays (tmax < 0): the
+ * same rays on each box's list, in the tested order, with the same entry
+ * distances, as the scalar kernel, whose lists are the slab test's (ray_box.h). */
+static void test_node_kernels_agree(void **state)
 {
     (void)state;
-    enum { BATCH = 256 };
+    enum { BATCH = 256, LANES = CBVH_STREAM_LANES };
     static _Alignas(32) float box_ray[BATCH][8]; /* the kernels' aligned loads */
     struct cbvh_stream_batch batch;
     memset(&batch, 0, sizeof batch);
@@ -192,9 +195,9 @@ static void test_box_kernels_agree(void **state)
     batch.capacity = BATCH;
     const float dirs[] = {0.0f, -0.0f, 1e-40f, -1e-40f, 1e30f, -1e30f, 1.0f, -1.0f, 0.37f};
     const float coords[] = {-2.0f, -1.0f, 0.0f, 0.5f, 1.0f, 3.0f};
-    const cbvh_stream_box_fn fns[] = {cbvh_stream_box_scalar,
+    const cbvh_stream_node_fn fns[] = {cbvh_stream_node_scalar,
 #ifdef CBVH_HAVE_SIMD
-                                      cbvh_stream_box_sse2, cbvh_stream_box_avx2
+                                       cbvh_stream_node_sse2, cbvh_stream_node_avx2
 #endif
     };
     const int nfns = (int)(sizeof(fns) / sizeof(fns[0]));
@@ -218,31 +221,59 @@ static void test_box_kernels_agree(void **state)
             b[CBVH_LANE_TMIN] = scene_rand_next(&st) % 2 ? 0.0f : 0.5f;
             b[CBVH_LANE_TMAX] = scene_rand_next(&st) % 5 == 0 ? -1.0f : 2.0f;
         }
-        const float lo[3] = {-1, -1, -1}, hi[3] = {1, 1, 1};
-        float near[3], far[3];
-        for (int a = 0; a < 3; a++) {
-            near[a] = (octant >> a & 1u) ? hi[a] : lo[a];
-            far[a] = (octant >> a & 1u) ? lo[a] : hi[a];
+        /* 1 to 4 boxes, each a few grid cells of [-1, 1]^3 or the whole cube */
+        struct cbvh_stream_boxes boxes;
+        memset(&boxes, 0, sizeof boxes);
+        boxes.count = 1 + (uint32_t)(scene_rand_next(&st) % LANES);
+        for (uint32_t k = 0; k < boxes.count; k++) {
+            for (int a = 0; a < 3; a++) {
+                const float lo = k == 0 ? -1.0f : coords[scene_rand_next(&st) % 4];
+                const float hi = k == 0 ? 1.0f : lo + 1.0f;
+                boxes.plane[a][k] = (octant >> a & 1u) ? hi : lo;
+                boxes.plane[3 + a][k] = (octant >> a & 1u) ? lo : hi;
+            }
         }
-        uint8_t expect[BATCH];
+        uint16_t rays[BATCH];
+        for (uint32_t j = 0; j < n; j++)
+            rays[j] = (uint16_t)(n - 1 - j); /* any order */
+        static uint16_t list_ray[3][LANES][BATCH];
+        static float list_entry[3][LANES][BATCH];
+        uint32_t count[3][LANES];
         for (int f = 0; f < nfns; f++) {
             if (f == 2 && !have_avx2)
                 continue;
-            uint16_t live[BATCH];
-            for (uint32_t j = 0; j < n; j++)
-                live[j] = (uint16_t)(n - 1 - j); /* any permutation */
-            const uint32_t m = fns[f](&batch, live, n, near, far);
-            uint8_t got[BATCH] = {0}, seen[BATCH] = {0};
-            for (uint32_t j = 0; j < n; j++) {
-                assert_false(seen[live[j]]); /* still a permutation */
-                seen[live[j]] = 1;
-                got[live[j]] = j < m;
+            uint16_t sink_ray;
+            float sink_entry;
+            struct cbvh_stream_lists lists;
+            for (uint32_t k = 0; k < LANES; k++) {
+                lists.ray[k] = k < boxes.count ? list_ray[f][k] : &sink_ray;
+                lists.entry[k] = k < boxes.count ? list_entry[f][k] : &sink_entry;
             }
-            for (uint32_t r = 0; r < n; r++) {
-                if (f == 0)
-                    expect[r] = got[r];
-                else
-                    assert_int_equal(got[r], expect[r]);
+            fns[f](&batch, rays, n, &boxes, &lists, count[f]);
+            for (uint32_t k = 0; k < boxes.count; k++) {
+                if (f == 0) {
+                    /* the scalar lists are the slab test's */
+                    uint32_t m = 0;
+                    for (uint32_t j = 0; j < n; j++) {
+                        const float *b = batch.box_ray[rays[j]];
+                        const float org[3] = {b[CBVH_LANE_OX], b[CBVH_LANE_OY], b[CBVH_LANE_OZ]};
+                        const float rcp[3] = {b[CBVH_LANE_RX], b[CBVH_LANE_RY], b[CBVH_LANE_RZ]};
+                        float e;
+                        if (cbvh_slab_test(boxes.plane[0][k], boxes.plane[1][k], boxes.plane[2][k],
+                                           boxes.plane[3][k], boxes.plane[4][k], boxes.plane[5][k], org, rcp,
+                                           b[CBVH_LANE_TMIN], b[CBVH_LANE_TMAX], &e)) {
+                            assert_true(m < count[0][k]);
+                            assert_int_equal(list_ray[0][k][m], rays[j]);
+                            assert_memory_equal(&list_entry[0][k][m], &e, sizeof e);
+                            m++;
+                        }
+                    }
+                    assert_int_equal(m, count[0][k]);
+                    continue;
+                }
+                assert_int_equal(count[f][k], count[0][k]);
+                assert_memory_equal(list_ray[f][k], list_ray[0][k], count[0][k] * sizeof(uint16_t));
+                assert_memory_equal(list_entry[f][k], list_entry[0][k], count[0][k] * sizeof(float));
             }
         }
     }
@@ -280,7 +311,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_counts),
         cmocka_unit_test(test_meshes),
-        cmocka_unit_test(test_box_kernels_agree),
+        cmocka_unit_test(test_node_kernels_agree),
         cmocka_unit_test(test_null_arguments),
     };
     return TEST_RUN_LAYOUTS(tests, 1);

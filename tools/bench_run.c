@@ -170,7 +170,7 @@ void bench_cbvh_kernel(const void *engine, const cbvh_ray *rays, size_t count, c
     const bench_cbvh *e = engine;
     if (e->stream) {
         /* batches of BENCH_STREAM_BATCH rays in scratch of this call's own (threads run calls at once); the
-         * plain cbvh_raycast_stream batches 32 rays on its stack */
+         * plain cbvh_raycast_stream batches 24 rays on its stack */
         const size_t size = cbvh_stream_scratch_size(BENCH_STREAM_BATCH);
         void *scratch = malloc(size);
         if (hits)

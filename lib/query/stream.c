@@ -1,4 +1,4 @@
-/* stream.c: batched ray streams: one traversal per batch of same-octant rays, live rays partitioned in place. */
+/* stream.c: batched ray streams: one traversal per batch of same-octant rays, a ray list per child entered. */
 #ifdef HAVE_CONFIG_H
 #include "config.h"
 #endif
@@ -13,17 +13,23 @@
  * octant), so a batch shares one sort-byte mask and one near/far plane selection. */
 #define CBVH_STREAM_WINDOW_PER_RAY 8u
 
+/* Entries of the walk's stack of ray lists per batch ray: the root's list and its children's take 5 a ray
+ * (the wide layout's four lists, each with room for every ray, above the root's), and the lists of the
+ * pending children below shrink fast on incoherent rays; a node whose lists would not fit sends its rays
+ * down the single-ray walk. */
+#define STREAM_LIST_PER_RAY 8u
+
 /* Bytes a batch ray takes in the block (the window's octant bytes included), and the alignment slack. */
 #define STREAM_RAY_BYTES                                                                                         \
     (8 * sizeof(float) + sizeof(struct cbvh_ray_ctx) + sizeof(struct cbvh_best_hit) + sizeof(size_t) +          \
-     sizeof(uint16_t) + CBVH_STREAM_WINDOW_PER_RAY)
+     STREAM_LIST_PER_RAY * (sizeof(float) + sizeof(uint16_t)) + CBVH_STREAM_WINDOW_PER_RAY)
 #define STREAM_SLACK 64u
 
 /* A batch node with at most this many live rays hands them to the single-ray
  * walk: below it the batch would mostly carry one ray per node, paying the
  * partition and stack bookkeeping without sharing any node fetch. */
 #ifndef CBVH_STREAM_SOLO
-#define CBVH_STREAM_SOLO 2
+#define CBVH_STREAM_SOLO 4
 #endif
 
 /* Ray r of the batch finishes the subtree of node `root` alone, starting
@@ -40,12 +46,16 @@ static void solo_tail(const struct cbvh_file *f, struct cbvh_stream_batch *b, ui
         if (cbvh_any_subtree(f, &ctx, root, stats)) {
             occluded[b->ray_index[r]] = 1;
             box_ray[CBVH_LANE_TMAX] = -1.0f;
+            b->shrinks++;
         }
         return;
     }
     cbvh_closest_subtree(f, &ctx, root, &b->best[r], stats);
-    if (b->best[r].tri != UINT32_MAX) /* its t is the ray's tmax: never above the one the walk started with */
+    if (b->best[r].tri != UINT32_MAX && b->best[r].t != box_ray[CBVH_LANE_TMAX]) {
+        /* its t is the ray's tmax: never above the one the walk started with */
         box_ray[CBVH_LANE_TMAX] = b->best[r].t;
+        b->shrinks++;
+    }
 }
 
 /* Ray r of the batch, whose test of triangle k found `hit` at t (u, v): an occlusion, or a closer best
@@ -60,8 +70,10 @@ CBVH_KERNEL void stream_take(struct cbvh_stream_batch *restrict b, uint32_t r, u
         /* Occluded: a negative tmax fails every later box and triangle test. */
         occluded[b->ray_index[r]] = 1;
         box_ray[CBVH_LANE_TMAX] = -1.0f;
+        b->shrinks++;
     } else if (cbvh_hit_better(t, k, box_ray[CBVH_LANE_TMAX], b->best[r].tri)) {
         box_ray[CBVH_LANE_TMAX] = t;
+        b->shrinks++;
         b->best[r].tri = k;
         b->best[r].t = t;
         b->best[r].u = u;
@@ -127,86 +139,143 @@ CBVH_KERNEL void stream_leaf(const struct cbvh_file *f, struct cbvh_stream_batch
     }
 }
 
-/* Walks the tree once for the batch. At each box the planes are dequantized
- * once and all live rays [0, n) of `live` are tested and partitioned (the
- * survivors move to the front); the children are visited with the survivors
- * only. A child's walk only permutes the prefix it gets, so the parent's
- * prefix still holds the same rays when the next child is popped, and the
- * box test there sees each ray's current tmax. The triangle test and the tie
+/* The boxes of children c[0, k) for the batch's octant (`sel`), dequantized with the arithmetic of
+ * ray_box.h. */
+CBVH_KERNEL void stream_boxes_of(const struct cbvh_file *restrict f, const uint32_t layout,
+                                 const struct cbvh_slab_select sel, const struct cbvh_child *c, uint32_t k,
+                                 struct cbvh_stream_boxes *restrict boxes)
+{
+    const uint32_t coord[6] = {sel.near_x, sel.near_y, sel.near_z, sel.far_x, sel.far_y, sel.far_z};
+    memset(boxes->plane, 0, sizeof boxes->plane);
+    for (uint32_t j = 0; j < k; j++)
+        for (uint32_t p = 0; p < 6; p++)
+            boxes->plane[p][j] = cbvh_dequantize(cbvh_tree_box_coord(f, layout, c[j].box, coord[p]),
+                                                 f->grid_origin[p % 3], f->grid_scale[p % 3]);
+    boxes->count = k;
+}
+
+/* The rays of list[0, n) that still reach their entry distance (the padded test of ray_box.h with the
+ * ray's current tmax), kept in order at the front; returns how many. */
+CBVH_KERNEL uint32_t stream_still_in_reach(const struct cbvh_stream_batch *restrict b, uint16_t *restrict ray,
+                                           float *restrict entry, uint32_t n)
+{
+    uint32_t w = 0;
+    for (uint32_t j = 0; j < n; j++) {
+        const uint16_t r = ray[j];
+        const float e = entry[j];
+        ray[w] = r;
+        entry[w] = e;
+        w += e <= b->box_ray[r][CBVH_LANE_TMAX] * CBVH_BOX_PAD;
+    }
+    return w;
+}
+
+/* Walks the tree once for the batch. A node's children are tested at the
+ * node, each live ray against all of their boxes at once (the planes
+ * dequantized once per visit), and each child entered gets the list of its
+ * rays with their entry distances. The lists form a stack in
+ * b->list_ray/list_entry beside the walk's stack of children: the lists of a
+ * node's children replace its own, a child's above its later siblings', so
+ * popping a child frees everything above its list. A child popped after some
+ * ray's tmax shrank drops the rays no longer in reach, as the single-ray walk
+ * drops a popped child; a list too large for what is left of the stack sends
+ * its node's rays down the single-ray walk. The triangle test and the tie
  * rule are those of the single-ray walks, so every ray gets the same hit.
  * Children come through the layout interface (layout/tree.h) in the
  * precomputed order of the batch's octant. */
 CBVH_KERNEL void stream_walk(const struct cbvh_file *restrict f, const uint32_t layout,
-                             struct cbvh_stream_batch *restrict b, uint32_t octant, cbvh_stream_box_fn box_test,
+                             struct cbvh_stream_batch *restrict b, uint32_t octant, cbvh_stream_node_fn node_test,
                              const int any, int counting, uint8_t *restrict occluded, uint64_t *restrict visited,
                              uint64_t *restrict tested)
 {
-    /* the scalar box kernel (the fallback, and its test) comes with scalar leaves */
-    const int simd_leaves = box_test != cbvh_stream_box_scalar;
+    /* the scalar node kernel (the fallback, and its test) comes with scalar leaves */
+    const int simd_leaves = node_test != cbvh_stream_node_scalar;
     cbvh_query_stats solo = {0, 0};
-    const float origin[3] = {f->grid_origin[0], f->grid_origin[1], f->grid_origin[2]};
-    const float scale[3] = {f->grid_scale[0], f->grid_scale[1], f->grid_scale[2]};
     const struct cbvh_slab_select sel = cbvh_slab_select_of(octant);
-    uint16_t *restrict live = b->live;
+    uint16_t *restrict list_ray = b->list_ray;
+    float *restrict list_entry = b->list_entry;
     struct {
-        uint32_t box;
         cbvh_ref ref;
-        uint32_t count;
+        uint32_t start;   /* its list: list_ray[start, start + count) */
+        uint16_t count;
+        uint16_t shrinks; /* b->shrinks when the list was made (mod 2^16: a wrap costs a recheck skipped) */
     } stack[(CBVH_TREE_WIDTH - 1u) * CBVH_MAX_DEPTH + 1u];
-    uint32_t sp = 0, n = b->count, box = cbvh_tree_root_box(f, layout);
-    cbvh_ref r = cbvh_tree_root(f, layout);
+    uint16_t sink_ray;
+    float sink_entry;
+    struct cbvh_stream_boxes boxes;
+    struct cbvh_stream_lists lists;
+    struct cbvh_child c[CBVH_TREE_WIDTH];
+    uint32_t sp = 0, count[CBVH_STREAM_LANES];
     uint64_t nv = 0, nt = 0;
 
-    for (uint32_t j = 0; j < n; j++)
-        live[j] = (uint16_t)j;
-    for (;;) {
-        uint32_t m = n;
-        if (box != CBVH_NO_BOX) {
-            const float near[3] = {
-                cbvh_dequantize(cbvh_tree_box_coord(f, layout, box, sel.near_x), origin[0], scale[0]),
-                cbvh_dequantize(cbvh_tree_box_coord(f, layout, box, sel.near_y), origin[1], scale[1]),
-                cbvh_dequantize(cbvh_tree_box_coord(f, layout, box, sel.near_z), origin[2], scale[2])};
-            const float far[3] = {
-                cbvh_dequantize(cbvh_tree_box_coord(f, layout, box, sel.far_x), origin[0], scale[0]),
-                cbvh_dequantize(cbvh_tree_box_coord(f, layout, box, sel.far_y), origin[1], scale[1]),
-                cbvh_dequantize(cbvh_tree_box_coord(f, layout, box, sel.far_z), origin[2], scale[2])};
-            nv += n;
-            m = box_test(b, live, n, near, far);
+    /* The root's list: every ray, through the root box when the layout has one. */
+    for (uint32_t j = 0; j < b->count; j++)
+        list_ray[j] = (uint16_t)j;
+    uint32_t start = 0, n = b->count;
+    cbvh_ref r = cbvh_tree_root(f, layout);
+    const uint32_t root_box = cbvh_tree_root_box(f, layout);
+    if (root_box != CBVH_NO_BOX) {
+        c[0].box = root_box;
+        stream_boxes_of(f, layout, sel, c, 1, &boxes);
+        for (uint32_t k = 0; k < CBVH_STREAM_LANES; k++) {
+            lists.ray[k] = k == 0 ? list_ray + n : &sink_ray;
+            lists.entry[k] = k == 0 ? list_entry + n : &sink_entry;
         }
-        const int leaf = m > 0 && cbvh_tree_is_leaf(f, layout, r);
-        if (m > 0 && m <= CBVH_STREAM_SOLO && !leaf) {
-            /* Too few rays left to share the nodes below: each finishes the
-             * subtree on its own, with the single-ray walk and its current tmax. */
-            for (uint32_t j = 0; j < m; j++)
-                solo_tail(f, b, live[j], r, any, occluded, counting ? &solo : NULL);
-            m = 0;
-        }
-        if (m > 0 && !leaf) {
-            struct cbvh_child c[CBVH_TREE_WIDTH];
-            const uint32_t k = cbvh_tree_children(f, layout, r, octant, c);
-            for (uint32_t j = k; j-- > 1;) {
-                stack[sp].box = c[j].box;
-                stack[sp].ref = c[j].ref;
-                stack[sp].count = m;
-                sp++;
-            }
-            box = c[0].box;
-            r = c[0].ref;
-            n = m;
-            continue;
-        }
-        if (m > 0) {
+        node_test(b, list_ray, n, &boxes, &lists, count);
+        nv += n;
+        start = n;
+        n = count[0];
+    }
+    while (n > 0) {
+        const uint32_t top = start + n;
+        if (cbvh_tree_is_leaf(f, layout, r)) {
             uint32_t tri0, tri_count;
             cbvh_tree_leaf(f, layout, r, &tri0, &tri_count);
-            nt += (uint64_t)m * tri_count;
-            stream_leaf(f, b, live, m, tri0, tri_count, any, simd_leaves, occluded);
+            nt += (uint64_t)n * tri_count;
+            stream_leaf(f, b, list_ray + start, n, tri0, tri_count, any, simd_leaves, occluded);
+        } else if (n <= CBVH_STREAM_SOLO || top + CBVH_TREE_WIDTH * n > b->list_capacity) {
+            /* Too few rays left to share the nodes below, or no room for their lists: each finishes the
+             * subtree on its own, with the single-ray walk and its current tmax. */
+            for (uint32_t j = 0; j < n; j++)
+                solo_tail(f, b, list_ray[start + j], r, any, occluded, counting ? &solo : NULL);
+        } else {
+            const uint32_t k = cbvh_tree_children(f, layout, r, octant, c);
+            stream_boxes_of(f, layout, sel, c, k, &boxes);
+            /* child j's list at top + (k - 1 - j) n, the nearest child's highest */
+            for (uint32_t j = 0; j < CBVH_STREAM_LANES; j++) {
+                lists.ray[j] = j < k ? list_ray + top + (k - 1 - j) * n : &sink_ray;
+                lists.entry[j] = j < k ? list_entry + top + (k - 1 - j) * n : &sink_entry;
+            }
+            node_test(b, list_ray + start, n, &boxes, &lists, count);
+            nv += (uint64_t)n * k;
+            /* close up the lists over the node's own, now done with, farthest first, and push the children
+             * entered */
+            uint32_t end = start;
+            for (uint32_t j = k; j-- > 0;) {
+                if (count[j] == 0)
+                    continue;
+                memmove(list_ray + end, lists.ray[j], count[j] * sizeof *list_ray);
+                memmove(list_entry + end, lists.entry[j], count[j] * sizeof *list_entry);
+                stack[sp].ref = c[j].ref;
+                stack[sp].start = end;
+                stack[sp].count = (uint16_t)count[j];
+                stack[sp].shrinks = (uint16_t)b->shrinks;
+                sp++;
+                end += count[j];
+                /* a wide node is one cache line: start fetching it while the nearer children run */
+                if (layout == CBVH_LAYOUT_WIDE4 && !cbvh_w4_ref_is_leaf(c[j].ref))
+                    CBVH_PREFETCH(cbvh_w4_node(f->nodes, c[j].ref));
+            }
         }
-        if (sp == 0)
-            break;
-        sp--;
-        box = stack[sp].box;
-        r = stack[sp].ref;
-        n = stack[sp].count;
+        /* the next child with rays still in reach */
+        for (n = 0; n == 0 && sp > 0;) {
+            sp--;
+            r = stack[sp].ref;
+            start = stack[sp].start;
+            n = stack[sp].count;
+            if (stack[sp].shrinks != (uint16_t)b->shrinks)
+                n = stream_still_in_reach(b, list_ray + start, list_entry + start, n);
+        }
     }
     *visited += nv + solo.nodes_visited;
     *tested += nt + solo.triangles_tested;
@@ -216,10 +285,10 @@ CBVH_KERNEL void stream_walk(const struct cbvh_file *restrict f, const uint32_t 
  * stack, not the sum of all (-fstack-usage); `counting` (whether the solo tails count) is read at run time. */
 #define STREAM_INSTANCE(name, layout, any)                                                                     \
     CBVH_NOINLINE void name(const struct cbvh_file *f, struct cbvh_stream_batch *b, uint32_t octant,            \
-                            cbvh_stream_box_fn box_test, int counting, uint8_t *occluded, uint64_t *visited,    \
+                            cbvh_stream_node_fn node_test, int counting, uint8_t *occluded, uint64_t *visited,    \
                             uint64_t *tested)                                                                   \
     {                                                                                                          \
-        stream_walk(f, layout, b, octant, box_test, any, counting, occluded, visited, tested);                 \
+        stream_walk(f, layout, b, octant, node_test, any, counting, occluded, visited, tested);                 \
     }
 STREAM_INSTANCE(stream_wide4_closest, CBVH_LAYOUT_WIDE4, 0)
 STREAM_INSTANCE(stream_wide4_any, CBVH_LAYOUT_WIDE4, 1)
@@ -229,13 +298,13 @@ STREAM_INSTANCE(stream_binary_any, CBVH_LAYOUT_BINARY, 1)
 
 /* The stream walk for the file's layout. */
 static void stream_walk_file(const struct cbvh_file *f, struct cbvh_stream_batch *b, uint32_t octant,
-                             cbvh_stream_box_fn box_test, int any, int counting, uint8_t *occluded, uint64_t *visited,
+                             cbvh_stream_node_fn node_test, int any, int counting, uint8_t *occluded, uint64_t *visited,
                              uint64_t *tested)
 {
     if (f->layout == CBVH_LAYOUT_WIDE4)
-        (any ? stream_wide4_any : stream_wide4_closest)(f, b, octant, box_test, counting, occluded, visited, tested);
+        (any ? stream_wide4_any : stream_wide4_closest)(f, b, octant, node_test, counting, occluded, visited, tested);
     else
-        (any ? stream_binary_any : stream_binary_closest)(f, b, octant, box_test, counting, occluded, visited,
+        (any ? stream_binary_any : stream_binary_closest)(f, b, octant, node_test, counting, occluded, visited,
                                                             tested);
 }
 
@@ -259,17 +328,17 @@ static void batch_add(struct cbvh_stream_batch *b, const struct cbvh_ray_ctx *ct
 
 /* Traverses the batch and writes its results, then empties it. */
 static void batch_flush(const struct cbvh_file *f, struct cbvh_stream_batch *b, uint32_t octant,
-                        cbvh_stream_box_fn box_test, int counting, cbvh_hit *hits, uint8_t *occluded,
+                        cbvh_stream_node_fn node_test, int counting, cbvh_hit *hits, uint8_t *occluded,
                         uint64_t *visited, uint64_t *tested)
 {
     if (b->count == 0)
         return;
     if (hits) {
-        stream_walk_file(f, b, octant, box_test, 0, counting, NULL, visited, tested);
+        stream_walk_file(f, b, octant, node_test, 0, counting, NULL, visited, tested);
         for (uint32_t r = 0; r < b->count; r++)
             cbvh_hit_output(f, &b->best[r], b->ctx[r].t_base, &hits[b->ray_index[r]]);
     } else {
-        stream_walk_file(f, b, octant, box_test, 1, counting, occluded, visited, tested);
+        stream_walk_file(f, b, octant, node_test, 1, counting, occluded, visited, tested);
     }
     b->count = 0;
 }
@@ -310,8 +379,12 @@ static uint32_t batch_carve(struct cbvh_stream_batch *b, uint8_t **octant, void 
     p = (p + _Alignof(size_t) - 1) & ~(uintptr_t)(_Alignof(size_t) - 1);
     b->ray_index = (size_t *)p;
     p += n * sizeof(size_t);
-    b->live = (uint16_t *)p;
-    p += n * sizeof(uint16_t);
+    b->list_entry = (float *)p; /* 4-byte alignment holds: size_t's does */
+    p += STREAM_LIST_PER_RAY * n * sizeof(float);
+    b->list_ray = (uint16_t *)p;
+    p += STREAM_LIST_PER_RAY * n * sizeof(uint16_t);
+    b->list_capacity = (uint32_t)(STREAM_LIST_PER_RAY * n);
+    b->shrinks = 0;
     *octant = (uint8_t *)p;
     b->count = 0;
     b->capacity = (uint32_t)n;
@@ -324,7 +397,7 @@ static void stream_run(const struct cbvh_file *f, const cbvh_ray *rays, size_t c
                        uint8_t *occluded, cbvh_query_stats *stats, struct cbvh_stream_batch *restrict batch,
                        uint8_t *restrict octant)
 {
-    const cbvh_stream_box_fn box_test = cbvh_stream_box_kernel();
+    const cbvh_stream_node_fn node_test = cbvh_stream_node_kernel();
     const uint32_t window_size = CBVH_STREAM_WINDOW_PER_RAY * batch->capacity;
     struct cbvh_ray_ctx ctx;
     uint64_t visited = 0, tested = 0;
@@ -359,9 +432,9 @@ static void stream_run(const struct cbvh_file *f, const cbvh_ray *rays, size_t c
                 }
                 batch_add(batch, &ctx, r);
                 if (batch->count == batch->capacity)
-                    batch_flush(f, batch, o, box_test, stats != NULL, hits, occluded, &visited, &tested);
+                    batch_flush(f, batch, o, node_test, stats != NULL, hits, occluded, &visited, &tested);
             }
-            batch_flush(f, batch, o, box_test, stats != NULL, hits, occluded, &visited, &tested);
+            batch_flush(f, batch, o, node_test, stats != NULL, hits, occluded, &visited, &tested);
         }
     }
     if (stats) {

@@ -9,15 +9,19 @@
 #include "query/ray_setup.h"
 
 /* One ray as the box test reads it: 32 bytes, so SSE2 loads a ray in two
- * vectors and AVX2 in one, then transposes to one lane per ray. */
+ * vectors and AVX2 one ray a 128-bit half, then broadcasts each field to the
+ * lanes of the node's children. */
 enum { CBVH_LANE_OX, CBVH_LANE_OY, CBVH_LANE_OZ, CBVH_LANE_TMIN, CBVH_LANE_RX, CBVH_LANE_RY, CBVH_LANE_RZ,
        CBVH_LANE_TMAX };
 
 /* Rays per batch when the stream runs on its own stack (cbvh_raycast_stream): its frame and the walk's
  * stay within about 8 KiB. Caller scratch (cbvh_raycast_stream_scratch) takes up to CBVH_STREAM_MAX_BATCH,
- * the most a 16-bit live list numbers. */
-#define CBVH_STREAM_STACK_BATCH 32u
+ * the most a 16-bit ray list numbers. */
+#define CBVH_STREAM_STACK_BATCH 24u
 #define CBVH_STREAM_MAX_BATCH 4096u
+
+/* The most children a node test takes (CBVH_TREE_WIDTH): one SSE2 vector of boxes per ray. */
+#define CBVH_STREAM_LANES 4u
 
 /* Up to `capacity` rays of one octant, so the sort byte orders the whole batch. Its arrays lie in one
  * block (the stream's stack or the caller's scratch), cut by stream.c. */
@@ -26,24 +30,46 @@ struct cbvh_stream_batch {
     struct cbvh_ray_ctx *ctx;     /* the prepared rays (triangle test, per-ray tails) */
     struct cbvh_best_hit *best;
     size_t *ray_index;            /* position in the caller's arrays */
-    uint16_t *live;               /* the walk's live rays, batch positions */
+    uint16_t *list_ray;           /* the walk's ray lists, a stack of them (stream.c): batch positions, */
+    float *list_entry;            /* and where each ray enters the list's box */
+    uint32_t list_capacity;       /* entries in list_ray and list_entry */
+    uint32_t shrinks;             /* times a ray's TMAX shrank: a list made since is still exact */
     uint32_t count, capacity;
 };
 
-/* Tests the rays batch->box_ray[live[j]], j < n, against the box whose near
- * planes (for the batch's octant) are near[3] and far planes far[3], with the
- * arithmetic of ray_box.h. Moves the survivors to the front of live[0..n) (a
- * permutation of the same set) and returns how many survived. */
-typedef uint32_t (*cbvh_stream_box_fn)(const struct cbvh_stream_batch *restrict batch, uint16_t *restrict live,
-                                       uint32_t n, const float near[3], const float far[3]);
+/* The boxes of a node's children as the batch's octant tests them, dequantized once per batch visit:
+ * plane[p][k] is plane p (near x, y, z, far x, y, z) of child k, the children in visit order. */
+struct cbvh_stream_boxes {
+    _Alignas(16) float plane[6][CBVH_STREAM_LANES];
+    uint32_t count; /* children, at most CBVH_STREAM_LANES; the planes of the other lanes are 0 */
+};
 
-uint32_t cbvh_stream_box_scalar(const struct cbvh_stream_batch *restrict batch, uint16_t *restrict live, uint32_t n,
-                                const float near[3], const float far[3]);
+/* Where a node test puts child k's rays: the j-th ray entering box k goes to ray[k][j], its entry distance
+ * to entry[k][j]. Each list has room for every tested ray; lanes past the boxes' count point to one
+ * writable element each (a kernel may store there unconditionally, never advancing). */
+struct cbvh_stream_lists {
+    uint16_t *ray[CBVH_STREAM_LANES];
+    float *entry[CBVH_STREAM_LANES];
+};
+
+/* Tests the rays batch->box_ray[rays[j]], j < n, against every box of `boxes`
+ * with the arithmetic of ray_box.h, each ray's current [TMIN, TMAX], and puts
+ * the ray, in the order of `rays`, on the list of each box it enters; count[k]
+ * receives the length of list k. */
+typedef void (*cbvh_stream_node_fn)(const struct cbvh_stream_batch *restrict batch, const uint16_t *restrict rays,
+                                    uint32_t n, const struct cbvh_stream_boxes *restrict boxes,
+                                    const struct cbvh_stream_lists *restrict out, uint32_t count[CBVH_STREAM_LANES]);
+
+void cbvh_stream_node_scalar(const struct cbvh_stream_batch *restrict batch, const uint16_t *restrict rays,
+                             uint32_t n, const struct cbvh_stream_boxes *restrict boxes,
+                             const struct cbvh_stream_lists *restrict out, uint32_t count[CBVH_STREAM_LANES]);
 #ifdef CBVH_HAVE_SIMD
-uint32_t cbvh_stream_box_sse2(const struct cbvh_stream_batch *restrict batch, uint16_t *restrict live, uint32_t n,
-                              const float near[3], const float far[3]);
-uint32_t cbvh_stream_box_avx2(const struct cbvh_stream_batch *restrict batch, uint16_t *restrict live, uint32_t n,
-                              const float near[3], const float far[3]);
+void cbvh_stream_node_sse2(const struct cbvh_stream_batch *restrict batch, const uint16_t *restrict rays,
+                           uint32_t n, const struct cbvh_stream_boxes *restrict boxes,
+                           const struct cbvh_stream_lists *restrict out, uint32_t count[CBVH_STREAM_LANES]);
+void cbvh_stream_node_avx2(const struct cbvh_stream_batch *restrict batch, const uint16_t *restrict rays,
+                           uint32_t n, const struct cbvh_stream_boxes *restrict boxes,
+                           const struct cbvh_stream_lists *restrict out, uint32_t count[CBVH_STREAM_LANES]);
 #endif
 
 /* Test hook, not exported: 0 = best kernel for this CPU (default), 1 = scalar,
@@ -51,22 +77,6 @@ uint32_t cbvh_stream_box_avx2(const struct cbvh_stream_batch *restrict batch, ui
  * Meant to be set before queries run; reads are atomic so concurrent queries stay defined. */
 void cbvh_stream_set_kernel(int which);
 /* The kernel chosen by the current setting. */
-cbvh_stream_box_fn cbvh_stream_box_kernel(void);
-
-/* Moves the lanes whose bit is set in mask (lane k = position base + k) to the
- * write position *w, keeping the set: positions after the current one are not
- * touched, so later lanes still hold their own rays. */
-static inline void cbvh_stream_compact(uint16_t *restrict live, uint32_t base, uint32_t lanes, uint32_t mask,
-                                       uint32_t *restrict w)
-{
-    for (uint32_t k = 0; k < lanes; k++) {
-        if (mask >> k & 1u) {
-            uint16_t tmp = live[*w];
-            live[*w] = live[base + k];
-            live[base + k] = tmp;
-            (*w)++;
-        }
-    }
-}
+cbvh_stream_node_fn cbvh_stream_node_kernel(void);
 
 #endif

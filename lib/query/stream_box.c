@@ -1,4 +1,4 @@
-/* stream_box.c: the scalar batch box test and the run-time choice of the batch box kernel. */
+/* stream_box.c: the scalar batch node test and the run-time choice of the batch node kernel. */
 #ifdef HAVE_CONFIG_H
 #include "config.h"
 #endif
@@ -9,24 +9,27 @@
 #include "query/ray_box.h"
 #include "query/stream.h"
 
-uint32_t cbvh_stream_box_scalar(const struct cbvh_stream_batch *restrict batch, uint16_t *restrict live, uint32_t n,
-                                const float near[3], const float far[3])
+void cbvh_stream_node_scalar(const struct cbvh_stream_batch *restrict batch, const uint16_t *restrict rays,
+                             uint32_t n, const struct cbvh_stream_boxes *restrict boxes,
+                             const struct cbvh_stream_lists *restrict out, uint32_t count[CBVH_STREAM_LANES])
 {
-    const float nx = near[0], ny = near[1], nz = near[2], fx = far[0], fy = far[1], fz = far[2];
-    uint32_t w = 0;
+    const float(*p)[CBVH_STREAM_LANES] = boxes->plane;
+    for (uint32_t k = 0; k < CBVH_STREAM_LANES; k++)
+        count[k] = 0;
     for (uint32_t j = 0; j < n; j++) {
-        const float *r = batch->box_ray[live[j]];
+        const float *r = batch->box_ray[rays[j]];
         const float org[3] = {r[CBVH_LANE_OX], r[CBVH_LANE_OY], r[CBVH_LANE_OZ]};
         const float rcp[3] = {r[CBVH_LANE_RX], r[CBVH_LANE_RY], r[CBVH_LANE_RZ]};
-        float entry;
-        if (cbvh_slab_test(nx, ny, nz, fx, fy, fz, org, rcp, r[CBVH_LANE_TMIN], r[CBVH_LANE_TMAX], &entry)) {
-            uint16_t tmp = live[w];
-            live[w] = live[j];
-            live[j] = tmp;
-            w++;
+        for (uint32_t k = 0; k < boxes->count; k++) {
+            float entry;
+            if (cbvh_slab_test(p[0][k], p[1][k], p[2][k], p[3][k], p[4][k], p[5][k], org, rcp, r[CBVH_LANE_TMIN],
+                               r[CBVH_LANE_TMAX], &entry)) {
+                out->ray[k][count[k]] = rays[j];
+                out->entry[k][count[k]] = entry;
+                count[k]++;
+            }
         }
     }
-    return w;
 }
 
 static atomic_int stream_kernel_setting;
@@ -36,19 +39,19 @@ void cbvh_stream_set_kernel(int which)
     atomic_store_explicit(&stream_kernel_setting, which, memory_order_relaxed);
 }
 
-cbvh_stream_box_fn cbvh_stream_box_kernel(void)
+cbvh_stream_node_fn cbvh_stream_node_kernel(void)
 {
     int which = atomic_load_explicit(&stream_kernel_setting, memory_order_relaxed);
 #ifdef CBVH_HAVE_SIMD
     int avx2 = (cbvh_cpu_features() & CBVH_CPU_AVX2) != 0;
     if (which == 0)
-        return avx2 ? cbvh_stream_box_avx2 : cbvh_stream_box_sse2;
+        return avx2 ? cbvh_stream_node_avx2 : cbvh_stream_node_sse2;
     if (which == 2)
-        return cbvh_stream_box_sse2;
+        return cbvh_stream_node_sse2;
     if (which == 3 && avx2)
-        return cbvh_stream_box_avx2;
+        return cbvh_stream_node_avx2;
 #else
     (void)which;
 #endif
-    return cbvh_stream_box_scalar;
+    return cbvh_stream_node_scalar;
 }
