@@ -1,4 +1,4 @@
-/* test_stream.c: ray streams give exactly the single-ray answers, with the scalar, SSE2 and AVX2 box kernels. */
+/* test_stream.c: ray streams give exactly the single-ray answers, with the scalar and SSE2 node kernels. */
 #ifdef HAVE_CONFIG_H
 #include "config.h"
 #endif
@@ -21,8 +21,8 @@
 #include "support/scene_gen.h"
 #include "support/layouts.h"
 
-/* Kernel settings of cbvh_stream_set_kernel: best, scalar, SSE2, AVX2. */
-static const int kernels[4] = {0, 1, 2, 3};
+/* Kernel settings of cbvh_stream_set_kernel: best, scalar, SSE2. */
+static const int kernels[3] = {0, 1, 2};
 
 /* Rays of every kind, with invalid ones mixed in every seventh slot. */
 static cbvh_ray *make_rays(const ref_fixture *fx, size_t count, uint64_t seed, int coherent)
@@ -103,7 +103,7 @@ static void check_stream(const ref_fixture *fx, const cbvh_ray *rays, size_t cou
     uint8_t *occ = malloc(count + 1);
     assert_non_null(hits);
     assert_non_null(occ);
-    for (int k = 0; k < 4; k++) {
+    for (int k = 0; k < 3; k++) {
         cbvh_stream_set_kernel(kernels[k]);
         memset(hits, 0xAB, sizeof(cbvh_hit) * (count + 1));
         memset(occ, 0xAB, count + 1);
@@ -197,15 +197,10 @@ static void test_node_kernels_agree(void **state)
     const float coords[] = {-2.0f, -1.0f, 0.0f, 0.5f, 1.0f, 3.0f};
     const cbvh_stream_node_fn fns[] = {cbvh_stream_node_scalar,
 #ifdef CBVH_HAVE_SIMD
-                                       cbvh_stream_node_sse2, cbvh_stream_node_avx2
+                                       cbvh_stream_node_sse2
 #endif
     };
     const int nfns = (int)(sizeof(fns) / sizeof(fns[0]));
-#ifdef CBVH_HAVE_SIMD
-    const int have_avx2 = __builtin_cpu_supports("avx2");
-#else
-    const int have_avx2 = 0;
-#endif
     uint64_t st = 9;
     for (int round = 0; round < 200; round++) {
         const uint32_t octant = (uint32_t)(scene_rand_next(&st) % 8);
@@ -236,12 +231,10 @@ static void test_node_kernels_agree(void **state)
         uint16_t rays[BATCH];
         for (uint32_t j = 0; j < n; j++)
             rays[j] = (uint16_t)(n - 1 - j); /* any order */
-        static uint16_t list_ray[3][LANES][BATCH];
-        static float list_entry[3][LANES][BATCH];
-        uint32_t count[3][LANES];
+        static uint16_t list_ray[2][LANES][BATCH];
+        static float list_entry[2][LANES][BATCH];
+        uint32_t count[2][LANES];
         for (int f = 0; f < nfns; f++) {
-            if (f == 2 && !have_avx2)
-                continue;
             uint16_t sink_ray;
             float sink_entry;
             struct cbvh_stream_lists lists;

@@ -368,7 +368,7 @@ static uint32_t batch_carve(struct cbvh_stream_batch *b, uint8_t **octant, void 
         return 0;
     size_t n = (size - STREAM_SLACK) / STREAM_RAY_BYTES;
     n = n < CBVH_STREAM_MAX_BATCH ? n : CBVH_STREAM_MAX_BATCH;
-    uintptr_t p = ((uintptr_t)mem + 31u) & ~(uintptr_t)31u; /* box_ray: 32-byte aligned for AVX2 loads */
+    uintptr_t p = ((uintptr_t)mem + 31u) & ~(uintptr_t)31u; /* box_ray: 16-byte aligned for SSE2 loads (32 kept) */
     b->box_ray = (float(*)[8])p;
     p += n * 8 * sizeof(float);
     b->ctx = (struct cbvh_ray_ctx *)p; /* 8-byte alignment holds: every array before is a multiple of 32 */

@@ -5,7 +5,6 @@
 
 #include <stdatomic.h>
 
-#include "common/cpu.h"
 #include "query/ray_box.h"
 #include "query/stream.h"
 
@@ -43,13 +42,8 @@ cbvh_stream_node_fn cbvh_stream_node_kernel(void)
 {
     int which = atomic_load_explicit(&stream_kernel_setting, memory_order_relaxed);
 #ifdef CBVH_HAVE_SIMD
-    int avx2 = (cbvh_cpu_features() & CBVH_CPU_AVX2) != 0;
-    if (which == 0)
-        return avx2 ? cbvh_stream_node_avx2 : cbvh_stream_node_sse2;
-    if (which == 2)
+    if (which == 0 || which == 2)
         return cbvh_stream_node_sse2;
-    if (which == 3 && avx2)
-        return cbvh_stream_node_avx2;
 #else
     (void)which;
 #endif

@@ -1,4 +1,4 @@
-/* stream_simd.c: the batch node test, a ray against four child boxes, with SSE2 and AVX2 (two rays a vector). */
+/* stream_simd.c: the batch node test, a ray against four child boxes, with SSE2. */
 #ifdef HAVE_CONFIG_H
 #include "config.h"
 #endif
@@ -71,51 +71,6 @@ void cbvh_stream_node_sse2(const struct cbvh_stream_batch *restrict batch, const
     const uint32_t lanes = (1u << boxes->count) - 1u;
     uint32_t c[CBVH_STREAM_LANES] = {0, 0, 0, 0};
     for (uint32_t j = 0; j < n; j++)
-        node_ray_sse2(batch, rays[j], plane, lanes, out, c);
-    memcpy(count, c, sizeof c);
-}
-
-/* Two rays a vector, one a 128-bit half, each half the SSE2 test of its ray. */
-CBVH_TARGET("avx2") void cbvh_stream_node_avx2(const struct cbvh_stream_batch *restrict batch,
-                                                const uint16_t *restrict rays, uint32_t n,
-                                                const struct cbvh_stream_boxes *restrict boxes,
-                                                const struct cbvh_stream_lists *restrict out,
-                                                uint32_t count[CBVH_STREAM_LANES])
-{
-    __m128 plane[6];
-    __m256 plane2[6];
-    for (uint32_t p = 0; p < 6; p++) {
-        plane[p] = _mm_load_ps(boxes->plane[p]);
-        plane2[p] = _mm256_broadcast_ps(&plane[p]);
-    }
-    const __m256 pad = _mm256_set1_ps(CBVH_BOX_PAD);
-    const uint32_t lanes = (1u << boxes->count) - 1u;
-    uint32_t c[CBVH_STREAM_LANES] = {0, 0, 0, 0};
-    uint32_t j = 0;
-    for (; j + 2 <= n; j += 2) {
-        const uint16_t r0 = rays[j], r1 = rays[j + 1];
-        const __m256 o = _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_load_ps(&batch->box_ray[r0][0])),
-                                              _mm_load_ps(&batch->box_ray[r1][0]), 1);
-        const __m256 d = _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_load_ps(&batch->box_ray[r0][4])),
-                                              _mm_load_ps(&batch->box_ray[r1][4]), 1);
-        const __m256 ox = _mm256_permute_ps(o, 0x00), oy = _mm256_permute_ps(o, 0x55),
-                     oz = _mm256_permute_ps(o, 0xAA), rx = _mm256_permute_ps(d, 0x00),
-                     ry = _mm256_permute_ps(d, 0x55), rz = _mm256_permute_ps(d, 0xAA);
-        __m256 tnear = _mm256_permute_ps(o, 0xFF), tfar = _mm256_permute_ps(d, 0xFF);
-        tnear = _mm256_max_ps(_mm256_mul_ps(_mm256_sub_ps(plane2[0], ox), rx), tnear);
-        tnear = _mm256_max_ps(_mm256_mul_ps(_mm256_sub_ps(plane2[1], oy), ry), tnear);
-        tnear = _mm256_max_ps(_mm256_mul_ps(_mm256_sub_ps(plane2[2], oz), rz), tnear);
-        tfar = _mm256_min_ps(_mm256_mul_ps(_mm256_sub_ps(plane2[3], ox), rx), tfar);
-        tfar = _mm256_min_ps(_mm256_mul_ps(_mm256_sub_ps(plane2[4], oy), ry), tfar);
-        tfar = _mm256_min_ps(_mm256_mul_ps(_mm256_sub_ps(plane2[5], oz), rz), tfar);
-        _Alignas(32) float entry[2 * CBVH_STREAM_LANES];
-        _mm256_store_ps(entry, tnear);
-        const uint32_t mask =
-            (uint32_t)_mm256_movemask_ps(_mm256_cmp_ps(tnear, _mm256_mul_ps(tfar, pad), _CMP_LE_OQ));
-        node_append(out, r0, mask & lanes, entry, c);
-        node_append(out, r1, mask >> 4 & lanes, entry + 4, c);
-    }
-    if (j < n)
         node_ray_sse2(batch, rays[j], plane, lanes, out, c);
     memcpy(count, c, sizeof c);
 }
