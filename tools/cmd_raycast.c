@@ -34,13 +34,15 @@ static const char usage[] =
     "  --any                   any-hit (occlusion) queries instead of closest hit\n"
     "  --traversal KIND        sorted (default: nearer child by the precomputed sort byte),\n"
     "                          stackless (escape links), unsorted, distance (nearer child by\n"
-    "                          box distance at run time), stream (batches of 4096 rays)\n"
+    "                          box distance at run time), stream (each 4096 rays read\n"
+    "                          go to cbvh_raycast_stream_scratch, batches of up to 1024)\n"
     "  --binary                binary records in and out, see above\n"
     "  -h, --help              show this help\n"
     "\n"
     "Exit status: 0 success, 1 corrupt file or bad ray input, 2 usage or I/O error.\n";
 
 #define RAYCAST_BATCH 4096
+#define RAYCAST_STREAM_BATCH 1024
 #define TRAVERSAL_STREAM (-1)
 
 typedef struct raycast_job {
@@ -51,6 +53,8 @@ typedef struct raycast_job {
     cbvh_ray rays[RAYCAST_BATCH];
     cbvh_hit hits[RAYCAST_BATCH];
     uint8_t occluded[RAYCAST_BATCH];
+    void *scratch; /* the stream's batch memory (NULL: the library's own, smaller batch on its stack) */
+    size_t scratch_size;
 } raycast_job;
 
 static void put_u32le(uint8_t *b, uint32_t v)
@@ -88,9 +92,11 @@ static void raycast_batch(raycast_job *job, size_t count)
         return;
     if (job->traversal == TRAVERSAL_STREAM) {
         if (job->any)
-            cbvh_occluded_stream(job->file, job->rays, count, job->occluded, NULL);
+            cbvh_occluded_stream_scratch(job->file, job->rays, count, job->occluded, NULL, job->scratch,
+                                         job->scratch_size);
         else
-            cbvh_raycast_stream(job->file, job->rays, count, job->hits, NULL);
+            cbvh_raycast_stream_scratch(job->file, job->rays, count, job->hits, NULL, job->scratch,
+                                        job->scratch_size);
     } else {
         cbvh_traversal tr = (cbvh_traversal)job->traversal;
         for (size_t i = 0; i < count; i++) {
@@ -297,7 +303,12 @@ int cmd_raycast(int argc, char **argv)
     if (rc)
         return rc;
     job.file = file;
+    if (job.traversal == TRAVERSAL_STREAM) {
+        job.scratch_size = cbvh_stream_scratch_size(RAYCAST_STREAM_BATCH);
+        job.scratch = malloc(job.scratch_size);
+    }
     rc = job.binary ? raycast_binary(&job) : raycast_text(&job);
+    free(job.scratch);
     cbvh_close(file);
     return rc;
 }
