@@ -530,7 +530,8 @@ CBVH_API cbvh_result cbvh_occluded_with(const cbvh_file *file, const cbvh_ray *r
                                         int *occluded, cbvh_query_stats *stats);
 
 /* Batched streams: `count` rays (any coherence) traversed together, each node
- * dequantized once per batch visit, live rays partitioned in place. Results
+ * dequantized once per batch visit and each live ray tested against all its
+ * children there, the rays entering a child listed for it. Results
  * equal cbvh_raycast / cbvh_occluded ray by ray. hits[i] (occluded[i]: 0 or 1)
  * receives ray i's result. Uses no heap memory: rays go in batches of 24 of one
  * ray octant, held on the call's stack. Stack use, measured with -fstack-usage
