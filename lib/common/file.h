@@ -115,18 +115,26 @@ static inline uint32_t cbvh_cooked_material(const struct cbvh_file *f, uint32_t 
     }
 }
 
+/* Where the REMAP section holds cooked triangle tri's original id (f->remap not NULL). */
+static inline const uint8_t *cbvh_remap_entry(const struct cbvh_file *f, uint32_t tri)
+{
+    const size_t size = f->remap_encoding == CBVH_REMAP_U16   ? 2u
+                        : f->remap_encoding == CBVH_REMAP_U24 ? 3u
+                                                              : 4u;
+    return (const uint8_t *)f->remap + size * tri;
+}
+
 /* Cooked triangle index -> original id as queries report it. */
 static inline uint32_t cbvh_original_id(const struct cbvh_file *f, uint32_t tri)
 {
     if (!f->remap)
         return tri;
+    const uint8_t *p = cbvh_remap_entry(f, tri);
     if (f->remap_encoding == CBVH_REMAP_U16)
-        return ((const uint16_t *)f->remap)[tri];
-    if (f->remap_encoding == CBVH_REMAP_U24) {
-        const uint8_t *p = (const uint8_t *)f->remap + 3u * (size_t)tri;
+        return *(const uint16_t *)(const void *)p;
+    if (f->remap_encoding == CBVH_REMAP_U24)
         return (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16;
-    }
-    return ((const uint32_t *)f->remap)[tri];
+    return *(const uint32_t *)(const void *)p;
 }
 
 #endif

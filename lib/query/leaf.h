@@ -64,6 +64,10 @@ CBVH_KERNEL int leaf_take(const struct cbvh_file *restrict f, const struct cbvh_
         return 0;
     if (any)
         return 1;
+    /* the answer reports k's original id: on a large mesh its REMAP entry is likely a cache miss, which
+     * the rest of the walk can hide */
+    if (f->remap)
+        CBVH_PREFETCH(cbvh_remap_entry(f, k));
     *best_t = t;
     best->tri = k;
     best->t = t;
