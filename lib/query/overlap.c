@@ -199,15 +199,57 @@ static int32_t grid_last_below(float x, float origin, float scale, int strict)
     return lo;
 }
 
+#ifdef CBVH_HAVE_SIMD
+/* grid_last_below of x[a] on the grid's axes a = 0, 1, 2 at once where an estimate checks out: out[a] when
+ * the plane of out[a] is at most x[a] (below x[a] when `strict`), or out[a] = -1, and the next plane is
+ * not, or out[a] = CBVH_Q_MAX (the planes grow with the coordinate, so that is the answer). Returns the
+ * axes left to grid_last_below: few, far from the origin, where many coordinates round to one plane. */
+static uint32_t grid_last_below3(const float x[3], const struct cbvh_file *f, int strict, int32_t out[3])
+{
+    const __m128 origin = _mm_setr_ps(f->grid_origin[0], f->grid_origin[1], f->grid_origin[2], 0.0f);
+    const __m128 scale = _mm_setr_ps(f->grid_scale[0], f->grid_scale[1], f->grid_scale[2], 1.0f);
+    const __m128 xs = _mm_setr_ps(x[0], x[1], x[2], 0.0f), top = _mm_set1_ps((float)CBVH_Q_MAX);
+    /* any estimate in [-1, CBVH_Q_MAX] will do (a NaN becomes CBVH_Q_MAX): the test below decides */
+    const __m128 estimate = _mm_div_ps(_mm_sub_ps(xs, origin), scale);
+    const __m128 e = _mm_max_ps(_mm_min_ps(estimate, top), _mm_set1_ps(-1.0f));
+    const __m128i q = _mm_cvttps_epi32(e), next = _mm_add_epi32(q, _mm_set1_epi32(1));
+    /* cbvh_dequantize on four lanes: the same two float operations */
+    const __m128 plane = _mm_add_ps(origin, _mm_mul_ps(_mm_cvtepi32_ps(q), scale));
+    const __m128 plane_next = _mm_add_ps(origin, _mm_mul_ps(_mm_cvtepi32_ps(next), scale));
+    const __m128 below = strict ? _mm_cmplt_ps(plane, xs) : _mm_cmple_ps(plane, xs);
+    const __m128 next_below = strict ? _mm_cmplt_ps(plane_next, xs) : _mm_cmple_ps(plane_next, xs);
+    const __m128i none = _mm_cmpeq_epi32(q, _mm_set1_epi32(-1));
+    const __m128i last = _mm_cmpeq_epi32(q, _mm_set1_epi32((int32_t)CBVH_Q_MAX));
+    const __m128i next_above = _mm_andnot_si128(_mm_castps_si128(next_below), _mm_set1_epi32(-1));
+    const __m128i ok =
+        _mm_and_si128(_mm_or_si128(_mm_castps_si128(below), none), _mm_or_si128(next_above, last));
+    int32_t lanes[4];
+    _mm_storeu_si128((__m128i *)(void *)lanes, q);
+    out[0] = lanes[0];
+    out[1] = lanes[1];
+    out[2] = lanes[2];
+    return ~(uint32_t)_mm_movemask_ps(_mm_castsi128_ps(ok)) & 7u;
+}
+#endif
+
 /* The node boxes that meet the region's box (closed: a box touching it is not culled), as ranges of grid
  * coordinates: a box's min plane is at most the region's max exactly when its coordinate is at most g->hi,
  * its max plane at least the region's min exactly when its coordinate exceeds the last one whose plane lies
  * below that min. */
 static void grid_range(const struct cbvh_file *f, const struct overlap_region *r, struct cbvh_grid_range *g)
 {
+    int32_t below_lo[3];
+    uint32_t left_hi = 7u, left_lo = 7u;
+#ifdef CBVH_HAVE_SIMD
+    left_hi = grid_last_below3(r->hi, f, 0, g->hi);
+    left_lo = grid_last_below3(r->lo, f, 1, below_lo);
+#endif
     for (int a = 0; a < 3; a++) {
-        g->hi[a] = grid_last_below(r->hi[a], f->grid_origin[a], f->grid_scale[a], 0);
-        g->lo[a] = grid_last_below(r->lo[a], f->grid_origin[a], f->grid_scale[a], 1) + 1;
+        if (left_hi >> a & 1u)
+            g->hi[a] = grid_last_below(r->hi[a], f->grid_origin[a], f->grid_scale[a], 0);
+        if (left_lo >> a & 1u)
+            below_lo[a] = grid_last_below(r->lo[a], f->grid_origin[a], f->grid_scale[a], 1);
+        g->lo[a] = below_lo[a] + 1;
     }
 }
 
@@ -217,20 +259,29 @@ static int overlap_enter(void *query, const uint32_t q[6], float *entry)
     return cbvh_grid_range_meets(&((const struct overlap_query *)query)->grid, q);
 }
 
-/* Cooked triangle k past the walk's box test: the cheap tests, then the exact one (none when `sure`: the
- * region surely touches it), and the report. Returns 1 when the query must stop. */
+/* What a triangle past the walk's box test has left to pass: the cheap tests in double, then the exact test
+ * (OVERLAP_CULL); the exact test alone (OVERLAP_EXACT: the float tests left nothing the cheap tests would
+ * decide); or nothing (OVERLAP_SURE: the region surely touches it). */
+enum overlap_left { OVERLAP_CULL, OVERLAP_EXACT, OVERLAP_SURE };
+
+/* Cooked triangle k past the walk's box test: its tests (`left`) and the report. Returns 1 when the query
+ * must stop. */
 static int overlap_triangle(const struct overlap_query *q, uint32_t k, const float a[3], const float b[3],
-                            const float c[3], int sure)
+                            const float c[3], enum overlap_left left)
 {
-    const cbvh_v3 va = v3_from_f(a), vb = v3_from_f(b), vc = v3_from_f(c);
-    const enum cbvh_cull_verdict v =
-        sure ? CBVH_CULL_TOUCHES : cbvh_cull_triangle(&q->region->shape, v3(0, 0, 0), 0.0, va, vb, vc, 1);
-    if (v == CBVH_CULL_CLEAR || (v != CBVH_CULL_TOUCHES && !region_triangle(q->region, va, vb, vc)))
-        return 0;
+    if (left != OVERLAP_SURE) {
+        const cbvh_v3 va = v3_from_f(a), vb = v3_from_f(b), vc = v3_from_f(c);
+        const struct cbvh_local_shape *s = &q->region->shape;
+        const enum cbvh_cull_verdict v = left == OVERLAP_EXACT
+                                             ? CBVH_CULL_MAY_TOUCH
+                                             : cbvh_cull_triangle(s, v3(0, 0, 0), 0.0, va, vb, vc, 1);
+        if (v == CBVH_CULL_CLEAR || (v != CBVH_CULL_TOUCHES && !region_triangle(q->region, va, vb, vc)))
+            return 0;
+    }
     const uint32_t tri = cbvh_original_id(q->f, k);
     cbvh_contact contact;
     if (q->sink->contacts && q->sink->skip == 0)
-        region_contact(q->region, va, vb, vc, tri, &contact);
+        region_contact(q->region, v3_from_f(a), v3_from_f(b), v3_from_f(c), tri, &contact);
     return sink_report(q->sink, tri, &contact);
 }
 
@@ -243,51 +294,48 @@ static int region_meets(const struct overlap_region *r, const float lo[3], const
 }
 #endif
 
-/* With SIMD, four triangles at a time through the float tests (cbvh_cull4_keep), the kept ones in order
- * through the rest; else one at a time through the box test. */
-static int overlap_leaf(void *query, uint32_t first, uint32_t count)
+#ifdef CBVH_HAVE_SIMD
+/* Four triangles through the float tests (cbvh_cull4_keep), the kept ones in order through the rest. */
+CBVH_FORCE_INLINE int overlap_quad(void *query, uint32_t k, const struct leaf_quad *t, uint32_t group)
 {
     const struct overlap_query *q = query;
-    const struct cbvh_file *f = q->f;
-#ifdef CBVH_HAVE_SIMD
-    for (uint32_t k = first; k < first + count; k += 4) {
-        uint32_t lane[4], group;
-        leaf_group(first + count - k < 4 ? first + count - k : 4, lane, &group);
-        struct leaf_quad quad;
-        leaf_gather4(f->triangles, (int)f->triangle_encoding, f->vertices, (int)f->vertex_encoding,
-                     f->grid_origin, f->grid_scale, k, lane, &quad);
-        __m128 c4[3][3];
-        for (int i = 0; i < 3; i++)
-            for (int a = 0; a < 3; a++)
-                c4[i][a] = _mm_load_ps(quad.c[i][a]);
-        uint32_t touch, keep = cbvh_cull4_keep(&q->cull4, (const __m128(*)[3])c4, &touch) & group;
-        const float(*v)[3][4] = quad.c;
-        for (; keep; keep &= keep - 1u) {
-            const uint32_t j = cbvh_lowest_lane(keep);
-            const float a[3] = {v[0][0][j], v[0][1][j], v[0][2][j]};
-            const float b[3] = {v[1][0][j], v[1][1][j], v[1][2][j]};
-            const float c[3] = {v[2][0][j], v[2][1][j], v[2][2][j]};
-            if (overlap_triangle(q, k + j, a, b, c, touch >> j & 1u))
-                return 1;
-        }
-    }
-#else
-    for (uint32_t k = first; k < first + count; k++) {
-        float a[3], b[3], c[3], lo[3], hi[3];
-        cbvh_triangle_vertices(f, k, a, b, c);
-        cbvh_triangle_bounds(a, b, c, lo, hi);
-        if (region_meets(q->region, lo, hi) && overlap_triangle(q, k, a, b, c, 0))
+    uint32_t touch, keep = cbvh_cull4_keep(&q->cull4, t->c, &touch) & group;
+    /* a ball's float tests leave only lanes near the radius, or far from moderate, to the exact test */
+    const enum overlap_left rest = q->region->shape.kind == CBVH_SHAPE_SPHERE ? OVERLAP_EXACT : OVERLAP_CULL;
+    for (; keep; keep &= keep - 1u) {
+        const uint32_t j = cbvh_lowest_lane(keep);
+        const float a[3] = {t->c[0][0][j], t->c[0][1][j], t->c[0][2][j]};
+        const float b[3] = {t->c[1][0][j], t->c[1][1][j], t->c[1][2][j]};
+        const float c[3] = {t->c[2][0][j], t->c[2][1][j], t->c[2][2][j]};
+        if (overlap_triangle(q, k + j, a, b, c, touch >> j & 1u ? OVERLAP_SURE : rest))
             return 1;
     }
-#endif
     return 0;
+}
+#endif
+
+/* With SIMD, four triangles at a time (overlap_quad); else one at a time through the box test. */
+static int overlap_leaf(void *query, uint32_t first, uint32_t count)
+{
+#ifdef CBVH_HAVE_SIMD
+    return cbvh_shape_leaf_quads(((const struct overlap_query *)query)->f, first, count, overlap_quad, query);
+#else
+    const struct overlap_query *q = query;
+    for (uint32_t k = first; k < first + count; k++) {
+        float a[3], b[3], c[3], lo[3], hi[3];
+        cbvh_triangle_vertices(q->f, k, a, b, c);
+        cbvh_triangle_bounds(a, b, c, lo, hi);
+        if (region_meets(q->region, lo, hi) && overlap_triangle(q, k, a, b, c, OVERLAP_CULL))
+            return 1;
+    }
+    return 0;
+#endif
 }
 
 /* Stored order: the order does not matter when every overlap is reported. */
 static size_t overlap_walk(const struct cbvh_file *f, const struct overlap_region *region, struct overlap_sink *sink)
 {
-    struct overlap_query q;
-    memset(&q, 0, sizeof q);
+    struct overlap_query q; /* not cleared: every field is set below */
     q.f = f;
     q.region = region;
     q.sink = sink;
@@ -295,7 +343,7 @@ static size_t overlap_walk(const struct cbvh_file *f, const struct overlap_regio
         return 0; /* out is full before the first report */
     grid_range(f, region, &q.grid);
 #ifdef CBVH_HAVE_SIMD
-    cbvh_cull4_init(&q.cull4, &region->shape, region->lo, region->hi);
+    cbvh_cull4_init(&q.cull4, &region->shape, region->lo, region->hi, NULL);
 #endif
     const float no_limit = INFINITY;
     cbvh_shape_walk(f, f->layout, CBVH_NO_OCTANT, overlap_enter, overlap_leaf, &q, &no_limit, &q.grid);
@@ -335,21 +383,20 @@ CBVH_API size_t cbvh_overlap_box(const cbvh_file *file, const float box_min[3], 
 static void shape_region(const struct cbvh_local_shape *shape, const struct cbvh_placement *placement,
                          struct overlap_region *region)
 {
-    memset(region, 0, sizeof *region);
     region->shape = *shape;
     region->placement = placement;
-    region->box.center = shape->p0;
-    region->box.half = shape->half;
-    region->box.rotated = shape->rotated;
-    memcpy(region->box.axes, shape->axes, sizeof shape->axes);
+    if (shape->kind == CBVH_SHAPE_BOX) { /* a ball or capsule has no use for it */
+        region->box.center = shape->p0;
+        region->box.half = shape->half;
+        region->box.rotated = shape->rotated;
+        memcpy(region->box.axes, shape->axes, sizeof shape->axes);
+    }
     cbvh_v3 lo, hi;
-    float box_center[3], extent[3];
     cbvh_shape_bounds(shape, &lo, &hi);
-    cbvh_sweep_bounds(lo, hi, box_center, extent);
     for (int a = 0; a < 3; a++) {
-        /* Widened by 2^-22 relative, more than the rounding of the two additions. */
-        region->lo[a] = box_center[a] - extent[a];
-        region->hi[a] = box_center[a] + extent[a];
+        /* Rounded to float, then widened by 2^-22 relative: more than that rounding's half ulp. */
+        region->lo[a] = (float)v3_get(lo, a);
+        region->hi[a] = (float)v3_get(hi, a);
         region->lo[a] -= fabsf(region->lo[a]) * 0x1p-22f + 0x1p-126f;
         region->hi[a] += fabsf(region->hi[a]) * 0x1p-22f + 0x1p-126f;
     }

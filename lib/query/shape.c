@@ -95,8 +95,10 @@ void cbvh_shape_bounds(const struct cbvh_local_shape *s, cbvh_v3 *lo, cbvh_v3 *h
         if (s->rotated) /* the rounding of the sums above, and of the axes themselves */
             reach = v3_scale(reach, 1.0 + 0x1p-40);
     }
-    *lo = v3_sub(v3(fmin(s->p0.x, s->p1.x), fmin(s->p0.y, s->p1.y), fmin(s->p0.z, s->p1.z)), reach);
-    *hi = v3_add(v3(fmax(s->p0.x, s->p1.x), fmax(s->p0.y, s->p1.y), fmax(s->p0.z, s->p1.z)), reach);
+    /* plain compares, not fmin/fmax (calls into libm): the shape's values are finite */
+    const cbvh_v3 p = s->p0, q = s->p1;
+    *lo = v3_sub(v3(p.x < q.x ? p.x : q.x, p.y < q.y ? p.y : q.y, p.z < q.z ? p.z : q.z), reach);
+    *hi = v3_add(v3(p.x > q.x ? p.x : q.x, p.y > q.y ? p.y : q.y, p.z > q.z ? p.z : q.z), reach);
 }
 
 int cbvh_shape_is_point(const struct cbvh_local_shape *s)

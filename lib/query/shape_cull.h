@@ -116,23 +116,34 @@ static inline enum cbvh_cull_verdict cbvh_cull_triangle(const struct cbvh_local_
 #ifdef CBVH_HAVE_SIMD
 /* A still shape and the float box around it, in every lane, for cbvh_cull4_keep. */
 struct cbvh_cull4 {
-    __m128 lo[3], hi[3];
+    __m128 lo[3], hi[3]; /* the box around a still shape (cbvh_cull4_keep) */
     __m128 p0[3], p1[3];
     __m128 radius, half[3], axes[3][3]; /* axes[i]: the box's axis i (the identity unless rotated) */
     __m128 shape_size;                   /* the shape's part of cbvh_cull_triangle's size */
+    __m128 delta[3], delta_size;         /* a swept shape's motion, its largest coordinate (sweeps) */
     int box, capsule;
 };
 
+/* Shape s, still within the box [lo, hi], or moved by delta (lo, hi NULL; delta NULL for a still one). */
 static inline void cbvh_cull4_init(struct cbvh_cull4 *w, const struct cbvh_local_shape *s, const float lo[3],
-                                   const float hi[3])
+                                   const float hi[3], const float delta[3])
 {
     const double p[2][3] = {{s->p0.x, s->p0.y, s->p0.z}, {s->p1.x, s->p1.y, s->p1.z}};
     const double half[3] = {s->half.x, s->half.y, s->half.z};
+    if (delta) {
+        w->delta_size = _mm_set1_ps(cull_maxf(cull_maxf(fabsf(delta[0]), fabsf(delta[1])), fabsf(delta[2])));
+        for (int a = 0; a < 3; a++)
+            w->delta[a] = _mm_set1_ps(delta[a]);
+    }
     for (int a = 0; a < 3; a++) {
-        w->lo[a] = _mm_set1_ps(lo[a]);
-        w->hi[a] = _mm_set1_ps(hi[a]);
+        if (lo) {
+            w->lo[a] = _mm_set1_ps(lo[a]);
+            w->hi[a] = _mm_set1_ps(hi[a]);
+        }
         w->p0[a] = _mm_set1_ps((float)p[0][a]);
         w->p1[a] = _mm_set1_ps((float)p[1][a]);
+        if (s->kind != CBVH_SHAPE_BOX) /* read for boxes only */
+            continue;
         w->half[a] = _mm_set1_ps((float)half[a]);
         for (int i = 0; i < 3; i++)
             w->axes[i][a] = _mm_set1_ps(s->rotated ? (float)s->axes[a][i] : (float)(a == i));
@@ -156,13 +167,82 @@ static inline __m128 cull4_select(__m128 w, __m128 a, __m128 b)
     return _mm_or_ps(_mm_and_ps(w, a), _mm_andnot_ps(w, b));
 }
 
+/* Four triangles' corners c[v][axis] from leaf_gather4's floats (16-byte aligned). */
+static inline void cull4_load(const float quad[3][3][4], __m128 c[3][3])
+{
+    for (int v = 0; v < 3; v++)
+        for (int a = 0; a < 3; a++)
+            c[v][a] = _mm_load_ps(quad[v][a]);
+}
+
+/* What both float culls read of four triangles: the edges d[k] = c[k + 1] - c[k], the face normal
+ * n = (c1 - c0) x (c2 - c0) and |n|^2, span (cbvh_cull_triangle's: the largest coordinate of c1 - c0 and
+ * c2 - c0) and corner (the largest coordinate of c0). */
+struct cull4_frame {
+    __m128 d[3][3], n[3], nn, span, corner;
+};
+
+static inline void cull4_frame_of(const __m128 c[3][3], struct cull4_frame *f)
+{
+    f->span = f->corner = _mm_setzero_ps();
+    for (int a = 0; a < 3; a++) {
+        f->d[0][a] = _mm_sub_ps(c[1][a], c[0][a]);
+        f->d[1][a] = _mm_sub_ps(c[2][a], c[1][a]);
+        f->d[2][a] = _mm_sub_ps(c[0][a], c[2][a]);
+        f->span = _mm_max_ps(f->span, _mm_max_ps(cull4_abs(f->d[0][a]), cull4_abs(f->d[2][a])));
+        f->corner = _mm_max_ps(f->corner, cull4_abs(c[0][a]));
+    }
+    const __m128 *e1 = f->d[0], e2[3] = {_mm_sub_ps(c[2][0], c[0][0]), _mm_sub_ps(c[2][1], c[0][1]),
+                                         _mm_sub_ps(c[2][2], c[0][2])};
+    f->n[0] = _mm_sub_ps(_mm_mul_ps(e1[1], e2[2]), _mm_mul_ps(e1[2], e2[1]));
+    f->n[1] = _mm_sub_ps(_mm_mul_ps(e1[2], e2[0]), _mm_mul_ps(e1[0], e2[2]));
+    f->n[2] = _mm_sub_ps(_mm_mul_ps(e1[0], e2[1]), _mm_mul_ps(e1[1], e2[0]));
+    f->nn = cull4_dot(f->n, f->n);
+}
+
+/* How far w's shape reaches along n from its core, times |n| (cull_reach_along in float). */
+static inline __m128 cull4_reach(const struct cbvh_cull4 *w, const __m128 n[3], __m128 nn)
+{
+    if (!w->box)
+        return _mm_mul_ps(w->radius, _mm_sqrt_ps(nn));
+    return _mm_add_ps(_mm_add_ps(_mm_mul_ps(w->half[0], cull4_abs(cull4_dot(n, w->axes[0]))),
+                                 _mm_mul_ps(w->half[1], cull4_abs(cull4_dot(n, w->axes[1])))),
+                      _mm_mul_ps(w->half[2], cull4_abs(cull4_dot(n, w->axes[2]))));
+}
+
+/* The lanes of a triangle of moderate size far from a sliver (cbvh_cull4_keep's bounds: 2^-20 <= span,
+ * size <= 2^20, |n|^2 >= span^4 / 16), where the float tests of edges and distances hold their margins. */
+static inline __m128 cull4_moderate(const struct cull4_frame *f, __m128 size)
+{
+    const __m128 span2 = _mm_mul_ps(f->span, f->span);
+    const __m128 sized =
+        _mm_and_ps(_mm_cmpge_ps(f->span, _mm_set1_ps(0x1p-20f)), _mm_cmple_ps(size, _mm_set1_ps(0x1p20f)));
+    return _mm_and_ps(sized, _mm_cmpge_ps(f->nn, _mm_mul_ps(_mm_set1_ps(0x1p-4f), _mm_mul_ps(span2, span2))));
+}
+
+/* The lanes where the shape, its core's points at heights h0 and h1 (times |n|) over the plane, moved by
+ * up to motion m (its height change, times |n|), stays on one side of the plane by more than its reach
+ * plus the margin 2^-14 span^2 size, on triangles with span at least 2^-30 (cbvh_cull4_keep). */
+static inline __m128 cull4_apart(__m128 h0, __m128 h1, __m128 m, __m128 reach, __m128 span, __m128 size)
+{
+    const __m128 zero = _mm_setzero_ps();
+    const __m128 margin = _mm_mul_ps(_mm_mul_ps(_mm_set1_ps(0x1p-14f), _mm_mul_ps(span, span)), size);
+    const __m128 gap = _mm_add_ps(reach, margin), low = _mm_add_ps(_mm_min_ps(h0, h1), _mm_min_ps(m, zero));
+    const __m128 high = _mm_add_ps(_mm_max_ps(h0, h1), _mm_max_ps(m, zero));
+    const __m128 above = _mm_cmpgt_ps(low, gap), below = _mm_cmplt_ps(high, _mm_sub_ps(zero, gap));
+    return _mm_and_ps(_mm_cmpge_ps(span, _mm_set1_ps(0x1p-30f)), _mm_or_ps(above, below));
+}
+
 /* The lanes where end point p (height h over the plane, times |n|) lies within sqrt(reach2) of the triangle:
  * of the plane where it projects into the triangle with every edge function (d[k] x (p - c[k])) . n at
  * least margin, or of an edge (cbvh_cull_triangle's still tests, in float). outside[k] keeps the lanes
- * where p also lies outside edge k by more than the radius r, the margin. */
+ * where p also lies outside edge k by more than the radius r, the margin; *far the lanes where p lies
+ * outside an edge by the margin and farther than sqrt(far2) from all three: its projection then lies out of
+ * the triangle, whose nearest point to p is on an edge, farther than sqrt(far2). */
 static inline __m128 cull4_end_touches(const __m128 c[3][3], const __m128 d[3][3], const __m128 dd[3],
                                        const __m128 n[3], const __m128 nn, const __m128 p[3], __m128 h,
-                                       __m128 r, __m128 reach2, __m128 margin, __m128 outside[3])
+                                       __m128 r, __m128 reach2, __m128 far2, __m128 margin, __m128 outside[3],
+                                       __m128 *far)
 {
     __m128 w[3][3], w2[3];
     for (int k = 0; k < 3; k++) {
@@ -171,6 +251,7 @@ static inline __m128 cull4_end_touches(const __m128 c[3][3], const __m128 d[3][3
         w2[k] = cull4_dot(w[k], w[k]);
     }
     __m128 inside = _mm_cmple_ps(_mm_mul_ps(h, h), _mm_mul_ps(reach2, nn)), near = _mm_setzero_ps();
+    __m128 off = _mm_setzero_ps(), clear = _mm_castsi128_ps(_mm_set1_epi32(-1));
     for (int k = 0; k < 3; k++) {
         const __m128 *dk = d[k], *wk = w[k];
         const __m128 x[3] = {_mm_sub_ps(_mm_mul_ps(dk[1], wk[2]), _mm_mul_ps(dk[2], wk[1])),
@@ -178,85 +259,147 @@ static inline __m128 cull4_end_touches(const __m128 c[3][3], const __m128 d[3][3
                              _mm_sub_ps(_mm_mul_ps(dk[0], wk[1]), _mm_mul_ps(dk[1], wk[0]))};
         const __m128 t = cull4_dot(wk, dk);
         const __m128 before = _mm_cmple_ps(t, _mm_setzero_ps()), past = _mm_cmpge_ps(t, dd[k]);
-        const __m128 line = _mm_cmple_ps(cull4_dot(x, x), _mm_mul_ps(reach2, dd[k]));
-        const __m128 end0 = _mm_cmple_ps(w2[k], reach2), end1 = _mm_cmple_ps(w2[k == 2 ? 0 : k + 1], reach2);
+        const __m128 xx = cull4_dot(x, x), w2_next = w2[k == 2 ? 0 : k + 1];
+        const __m128 line = _mm_cmple_ps(xx, _mm_mul_ps(reach2, dd[k]));
+        const __m128 end0 = _mm_cmple_ps(w2[k], reach2), end1 = _mm_cmple_ps(w2_next, reach2);
+        const __m128 far_line = _mm_cmpgt_ps(xx, _mm_mul_ps(far2, dd[k]));
+        const __m128 far0 = _mm_cmpgt_ps(w2[k], far2), far1 = _mm_cmpgt_ps(w2_next, far2);
         const __m128 e = cull4_dot(x, n), out = _mm_sub_ps(_mm_sub_ps(_mm_setzero_ps(), e), margin);
         inside = _mm_and_ps(inside, _mm_cmpge_ps(e, margin));
         near = _mm_or_ps(near, cull4_select(before, end0, cull4_select(past, end1, line)));
-        const __m128 far2 = _mm_mul_ps(_mm_mul_ps(r, r), _mm_mul_ps(nn, dd[k]));
-        const __m128 beyond = _mm_cmpgt_ps(_mm_mul_ps(out, out), far2);
-        outside[k] = _mm_and_ps(outside[k], _mm_and_ps(_mm_cmpgt_ps(out, _mm_setzero_ps()), beyond));
+        clear = _mm_and_ps(clear, cull4_select(before, far0, cull4_select(past, far1, far_line)));
+        const __m128 out_r2 = _mm_mul_ps(_mm_mul_ps(r, r), _mm_mul_ps(nn, dd[k]));
+        const __m128 out_of = _mm_cmpgt_ps(out, _mm_setzero_ps());
+        const __m128 beyond = _mm_cmpgt_ps(_mm_mul_ps(out, out), out_r2);
+        off = _mm_or_ps(off, out_of);
+        outside[k] = _mm_and_ps(outside[k], _mm_and_ps(out_of, beyond));
     }
+    *far = _mm_and_ps(off, clear);
     return _mm_or_ps(inside, near);
 }
 
-/* Four triangles (c[v][axis], a lane each: leaf_gather4) against the still shape of w, in float. Returns
- * the lanes to test further: those whose box meets w's box (the walk's node test, exact) and whose plane
- * does not keep the shape on one side (cbvh_cull_triangle's plane test with the margin 2^-14 span^2 size,
- * 10 times this test's error bound in float, when span is at least 2^-30, far from underflow; a coordinate
- * near overflow makes the margin infinite or a distance NaN, and keeps the lane). A lane dropped here is
- * one cbvh_cull_triangle, and the exact tests, would drop. *touch gets the kept lanes where a ball or
- * capsule surely touches the triangle, by cbvh_cull_triangle's still tests in float, on a triangle far
- * from a sliver (|n|^2 >= span^4 / 16) of moderate size (2^-20 <= span, size <= 2^20, so nothing
- * overflows or leaves the normal range): an end within the radius less 2^-13 size of the plane where it
- * projects into the triangle, each edge function at least 2^-12 span^3 size, or of an edge. There too a
- * lane is dropped when both ends lie outside one edge by more than the radius, that margin. These margins
- * are 4 to 8 times the float error of distances and edge functions there, so the exact tests find the
- * distance below the radius, or above it. */
-static inline uint32_t cbvh_cull4_keep(const struct cbvh_cull4 *w, const __m128 c[3][3], uint32_t *touch)
+/* Four triangles (quad[v][axis], 16-byte aligned, a lane each: leaf_gather4) against the still shape of w, in
+ * float. Returns the lanes to test further: those whose box meets w's box (the walk's node test, exact) and
+ * whose plane does not keep the shape on one side (cbvh_cull_triangle's plane test with the margin 2^-14
+ * span^2 size, 10 times this test's error bound in float, when span is at least 2^-30, far from underflow; a
+ * coordinate near overflow makes the margin infinite or a distance NaN, and keeps the lane). A lane dropped
+ * here is one cbvh_cull_triangle, and the exact tests, would drop. *touch gets the kept lanes where a ball or
+ * capsule surely touches the triangle, by cbvh_cull_triangle's still tests in float, on a triangle far from a
+ * sliver (|n|^2 >= span^4 / 16) of moderate size (2^-20 <= span, size <= 2^20, so nothing overflows or leaves
+ * the normal range): an end within the radius less 2^-13 size of the plane where it projects into the
+ * triangle, each edge function at least 2^-12 span^3 size, or of an edge. There too a lane is dropped when
+ * both ends lie outside one edge by more than the radius, that margin, and for a ball when its center lies
+ * outside an edge by the edge functions' margin and farther than the radius plus 2^-13 size from every edge
+ * (cull4_end_touches' *far). These margins are 4 to 8 times the float error of distances and edge functions
+ * there (the distance of a point to an edge's line from a cross product whose rounding is a few ulps of size,
+ * not of the distance), so the exact tests find the distance below the radius, or above it. */
+CBVH_FORCE_INLINE uint32_t cbvh_cull4_keep(const struct cbvh_cull4 *w, const float quad[3][3][4],
+                                           uint32_t *touch)
 {
-    __m128 in = _mm_castsi128_ps(_mm_set1_epi32(-1)), d[3][3], w0[3], w1[3], corner = _mm_setzero_ps();
-    __m128 span = _mm_setzero_ps();
+    __m128 c[3][3];
+    cull4_load(quad, c);
+    __m128 in = _mm_castsi128_ps(_mm_set1_epi32(-1));
     for (int a = 0; a < 3; a++) {
         const __m128 lo = _mm_min_ps(_mm_min_ps(c[0][a], c[1][a]), c[2][a]);
         const __m128 hi = _mm_max_ps(_mm_max_ps(c[0][a], c[1][a]), c[2][a]);
         in = _mm_and_ps(in, _mm_and_ps(_mm_cmple_ps(lo, w->hi[a]), _mm_cmpge_ps(hi, w->lo[a])));
-        d[0][a] = _mm_sub_ps(c[1][a], c[0][a]);
-        d[1][a] = _mm_sub_ps(c[2][a], c[1][a]);
-        d[2][a] = _mm_sub_ps(c[0][a], c[2][a]);
+    }
+    *touch = 0;
+    if (!_mm_movemask_ps(in)) /* a quarter of the groups on the bench's Wuson overlaps */
+        return 0;
+    struct cull4_frame f;
+    cull4_frame_of(c, &f);
+    __m128 w0[3], w1[3];
+    for (int a = 0; a < 3; a++) {
         w0[a] = _mm_sub_ps(w->p0[a], c[0][a]);
         w1[a] = _mm_sub_ps(w->p1[a], c[0][a]);
-        span = _mm_max_ps(span, _mm_max_ps(cull4_abs(d[0][a]), cull4_abs(d[2][a]))); /* c1 - c0, c2 - c0 */
-        corner = _mm_max_ps(corner, cull4_abs(c[0][a]));
     }
-    const __m128 *e1 = d[0], e2[3] = {_mm_sub_ps(c[2][0], c[0][0]), _mm_sub_ps(c[2][1], c[0][1]),
-                                      _mm_sub_ps(c[2][2], c[0][2])};
-    const __m128 n[3] = {_mm_sub_ps(_mm_mul_ps(e1[1], e2[2]), _mm_mul_ps(e1[2], e2[1])),
-                         _mm_sub_ps(_mm_mul_ps(e1[2], e2[0]), _mm_mul_ps(e1[0], e2[2])),
-                         _mm_sub_ps(_mm_mul_ps(e1[0], e2[1]), _mm_mul_ps(e1[1], e2[0]))};
-    const __m128 s0 = cull4_dot(n, w0), s1 = cull4_dot(n, w1), nn = cull4_dot(n, n);
-    const __m128 span2 = _mm_mul_ps(span, span);
-    __m128 reach;
-    if (w->box)
-        reach = _mm_add_ps(_mm_add_ps(_mm_mul_ps(w->half[0], cull4_abs(cull4_dot(n, w->axes[0]))),
-                                      _mm_mul_ps(w->half[1], cull4_abs(cull4_dot(n, w->axes[1])))),
-                           _mm_mul_ps(w->half[2], cull4_abs(cull4_dot(n, w->axes[2]))));
-    else
-        reach = _mm_mul_ps(w->radius, _mm_sqrt_ps(nn));
-    const __m128 size = _mm_add_ps(_mm_add_ps(corner, span), w->shape_size);
-    const __m128 gap = _mm_add_ps(reach, _mm_mul_ps(_mm_mul_ps(_mm_set1_ps(0x1p-14f), span2), size));
-    const __m128 apart = _mm_or_ps(_mm_cmpgt_ps(_mm_min_ps(s0, s1), gap),
-                                   _mm_cmplt_ps(_mm_max_ps(s0, s1), _mm_sub_ps(_mm_setzero_ps(), gap)));
-    __m128 keep = _mm_andnot_ps(_mm_and_ps(_mm_cmpge_ps(span, _mm_set1_ps(0x1p-30f)), apart), in);
-    *touch = 0;
+    const __m128(*d)[3] = f.d, *n = f.n, nn = f.nn, span = f.span;
+    const __m128 s0 = cull4_dot(n, w0), s1 = cull4_dot(n, w1), span2 = _mm_mul_ps(span, span);
+    const __m128 size = _mm_add_ps(_mm_add_ps(f.corner, span), w->shape_size);
+    const __m128 apart = cull4_apart(s0, s1, _mm_setzero_ps(), cull4_reach(w, n, nn), span, size);
+    __m128 keep = _mm_andnot_ps(apart, in);
     if (w->box || !_mm_movemask_ps(keep))
         return (uint32_t)_mm_movemask_ps(keep);
-    const __m128 sized =
-        _mm_and_ps(_mm_cmpge_ps(span, _mm_set1_ps(0x1p-20f)), _mm_cmple_ps(size, _mm_set1_ps(0x1p20f)));
-    const __m128 fat = _mm_cmpge_ps(nn, _mm_mul_ps(_mm_set1_ps(0x1p-4f), _mm_mul_ps(span2, span2)));
-    const __m128 moderate = _mm_and_ps(sized, fat);
+    const __m128 moderate = cull4_moderate(&f, size);
     const __m128 reach_in = _mm_sub_ps(w->radius, _mm_mul_ps(_mm_set1_ps(0x1p-13f), size));
     const __m128 reaches = _mm_cmpgt_ps(reach_in, _mm_setzero_ps()); /* else no point is near enough */
     const __m128 reach2 = cull4_select(reaches, _mm_mul_ps(reach_in, reach_in), _mm_set1_ps(-1.0f));
+    const __m128 reach_out = _mm_add_ps(w->radius, _mm_mul_ps(_mm_set1_ps(0x1p-13f), size));
+    const __m128 far2 = _mm_mul_ps(reach_out, reach_out);
     const __m128 margin = _mm_mul_ps(_mm_mul_ps(_mm_set1_ps(0x1p-12f), _mm_mul_ps(span2, span)), size);
     const __m128 dd[3] = {cull4_dot(d[0], d[0]), cull4_dot(d[1], d[1]), cull4_dot(d[2], d[2])};
     __m128 outside[3] = {moderate, moderate, moderate};
     const __m128 r = w->radius;
-    __m128 sure = cull4_end_touches(c, d, dd, n, nn, w->p0, s0, r, reach2, margin, outside);
-    if (w->capsule)
-        sure = _mm_or_ps(sure, cull4_end_touches(c, d, dd, n, nn, w->p1, s1, r, reach2, margin, outside));
-    keep = _mm_andnot_ps(_mm_or_ps(_mm_or_ps(outside[0], outside[1]), outside[2]), keep);
+    __m128 far, far1;
+    __m128 sure = cull4_end_touches(c, d, dd, n, nn, w->p0, s0, r, reach2, far2, margin, outside, &far);
+    if (w->capsule) {
+        sure = _mm_or_ps(sure, cull4_end_touches(c, d, dd, n, nn, w->p1, s1, r, reach2, far2, margin, outside,
+                                                 &far1));
+        far = _mm_setzero_ps(); /* the ends far from the triangle tell nothing of the segment between them */
+    }
+    far = _mm_and_ps(far, moderate);
+    keep = _mm_andnot_ps(_mm_or_ps(_mm_or_ps(outside[0], outside[1]), _mm_or_ps(outside[2], far)), keep);
     *touch = (uint32_t)_mm_movemask_ps(_mm_and_ps(_mm_and_ps(sure, moderate), keep));
+    return (uint32_t)_mm_movemask_ps(keep);
+}
+
+/* Four triangles (as for cbvh_cull4_keep) against w's shape moved by t * delta for t in [0, tmax] (w from
+ * cbvh_cull4_init with delta), in float. Returns the lanes to test further: those whose plane does not keep
+ * the swept shape on one side (cbvh_cull_triangle's plane test, CBVH_CULL_CLEAR, with its motion: the hull
+ * of the core's points at t = 0 and t = tmax grown by the reach) with the margin 2^-14 span^2 size, size
+ * now counting the motion's largest coordinate too; and, for a ball or capsule on a triangle of moderate
+ * size far from a sliver (cull4_moderate), those where the core's points at t = 0 and at t = tmax all lie
+ * outside one edge by more than the radius plus the margin 2^-12 span^3 size in the edge function (the
+ * function is linear, so the whole swept core does: the swept shape stays beyond the plane through that
+ * edge square to the triangle). The float error of a height or of an edge function, from the rounding of
+ * the normal, of the edge, of the points' differences and of the dot product, is below 2^-17 span^2 size
+ * or 2^-15 span^3 size: the margins are 8 and 8 times that, and 2^-14 span^2 size is 2^16 times
+ * cbvh_cull_triangle's own margin. So a lane dropped here is one cbvh_cull_triangle finds clear for every
+ * tmax' <= tmax (a shorter motion only moves the hull's far end inwards), and on which the exact tests find
+ * no contact. */
+CBVH_FORCE_INLINE uint32_t cbvh_cull4_sweep(const struct cbvh_cull4 *w, const float quad[3][3][4], float tmax)
+{
+    __m128 c[3][3], w0[3], w1[3], motion[3];
+    cull4_load(quad, c);
+    struct cull4_frame f;
+    cull4_frame_of(c, &f);
+    const __m128 t = _mm_set1_ps(tmax);
+    for (int a = 0; a < 3; a++) {
+        w0[a] = _mm_sub_ps(w->p0[a], c[0][a]);
+        w1[a] = _mm_sub_ps(w->p1[a], c[0][a]);
+        motion[a] = _mm_mul_ps(w->delta[a], t);
+    }
+    const __m128 *n = f.n, nn = f.nn, span = f.span, zero = _mm_setzero_ps();
+    const __m128 size = _mm_add_ps(_mm_add_ps(_mm_add_ps(f.corner, span), w->shape_size),
+                                   _mm_mul_ps(w->delta_size, t));
+    const __m128 h0 = cull4_dot(n, w0), h1 = cull4_dot(n, w1), m = cull4_dot(n, motion);
+    __m128 keep = _mm_andnot_ps(cull4_apart(h0, h1, m, cull4_reach(w, n, nn), span, size),
+                                _mm_castsi128_ps(_mm_set1_epi32(-1)));
+    if (w->box || !_mm_movemask_ps(keep))
+        return (uint32_t)_mm_movemask_ps(keep);
+    const __m128 margin =
+        _mm_mul_ps(_mm_mul_ps(_mm_set1_ps(0x1p-12f), _mm_mul_ps(_mm_mul_ps(span, span), span)), size);
+    const __m128 r2nn = _mm_mul_ps(_mm_mul_ps(w->radius, w->radius), nn);
+    __m128 outside = zero;
+    for (int k = 0; k < 3; k++) {
+        /* edge k's function at p, (d[k] x (p - c[k])) . n, is g . (p - c[k]) with g = n x d[k] */
+        const __m128 *dk = f.d[k];
+        const __m128 g[3] = {_mm_sub_ps(_mm_mul_ps(n[1], dk[2]), _mm_mul_ps(n[2], dk[1])),
+                             _mm_sub_ps(_mm_mul_ps(n[2], dk[0]), _mm_mul_ps(n[0], dk[2])),
+                             _mm_sub_ps(_mm_mul_ps(n[0], dk[1]), _mm_mul_ps(n[1], dk[0]))};
+        __m128 v0[3], v1[3];
+        for (int a = 0; a < 3; a++) {
+            v0[a] = _mm_sub_ps(w->p0[a], c[k][a]);
+            v1[a] = _mm_sub_ps(w->p1[a], c[k][a]);
+        }
+        const __m128 moved = _mm_max_ps(cull4_dot(g, motion), zero);
+        const __m128 e = _mm_add_ps(_mm_max_ps(cull4_dot(g, v0), cull4_dot(g, v1)), moved);
+        const __m128 out = _mm_sub_ps(_mm_sub_ps(zero, e), margin);
+        const __m128 beyond = _mm_cmpgt_ps(_mm_mul_ps(out, out), _mm_mul_ps(r2nn, cull4_dot(dk, dk)));
+        outside = _mm_or_ps(outside, _mm_and_ps(_mm_cmpgt_ps(out, zero), beyond));
+    }
+    keep = _mm_andnot_ps(_mm_and_ps(outside, cull4_moderate(&f, size)), keep);
     return (uint32_t)_mm_movemask_ps(keep);
 }
 #endif

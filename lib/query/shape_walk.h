@@ -7,6 +7,7 @@
 #endif
 
 #include "layout/tree.h"
+#include "query/leaf.h"
 #include "query/ray_box.h"
 #include "query/ray_setup.h"
 
@@ -83,6 +84,46 @@ static inline uint32_t cbvh_grid_range4_hits(const uint8_t *node, const struct c
 }
 #endif
 
+#ifdef CBVH_HAVE_SIMD
+/* A query's test of four triangles at once: cooked triangles k + j for the lanes j of `group`, gathered
+ * in q (leaf_gather4; the other lanes repeat triangle k). Returns 1 to end the walk. */
+typedef int (*cbvh_shape_quad_fn)(void *query, uint32_t k, const struct leaf_quad *q, uint32_t group);
+
+/* The leaf's cooked triangles [first, first + count) to `test`, four at a time, with the file's encodings
+ * as constants or run-time values (cbvh_shape_leaf_quads). Returns 1 when `test` ended the walk. */
+CBVH_KERNEL int shape_leaf_quads_as(const struct cbvh_file *f, uint32_t first, uint32_t count,
+                                    cbvh_shape_quad_fn test, void *query, const int tri_enc,
+                                    const int vert_enc)
+{
+    const void *tris = f->triangles, *verts = f->vertices;
+    for (uint32_t k = first; k < first + count; k += 4) {
+        uint32_t lane[4], group;
+        leaf_group(first + count - k < 4 ? first + count - k : 4, lane, &group);
+        struct leaf_quad q;
+        leaf_gather4(tris, tri_enc, verts, vert_enc, f->grid_origin, f->grid_scale, k, lane, &q);
+        if (test(query, k, &q, group))
+            return 1;
+    }
+    return 0;
+}
+
+/* The leaf's triangles four at a time to `test`: the encodings the cooker writes for lossless files (LOCAL8
+ * or U16 indices, float vertices) get loops of their own, as the ray leaves do (cbvh_leaf_visit). */
+CBVH_KERNEL int cbvh_shape_leaf_quads(const struct cbvh_file *f, uint32_t first, uint32_t count,
+                                      cbvh_shape_quad_fn test, void *query)
+{
+    switch (f->triangle_encoding << 1 | f->vertex_encoding) {
+    case CBVH_TRIS_LOCAL8 << 1 | CBVH_VERTS_F32:
+        return shape_leaf_quads_as(f, first, count, test, query, CBVH_TRIS_LOCAL8, CBVH_VERTS_F32);
+    case CBVH_TRIS_U16 << 1 | CBVH_VERTS_F32:
+        return shape_leaf_quads_as(f, first, count, test, query, CBVH_TRIS_U16, CBVH_VERTS_F32);
+    default:
+        return shape_leaf_quads_as(f, first, count, test, query, (int)f->triangle_encoding,
+                                   (int)f->vertex_encoding);
+    }
+}
+#endif
+
 /* The children of non-leaf r the walk enters, in the order of `octant`, with their entry keys: by the
  * grid range, four at once, for a wide node when the query has one (and SIMD is built), else box by box
  * through `enter`, without branching on the outcome (hard to predict). Returns how many. */
@@ -96,8 +137,18 @@ CBVH_KERNEL uint32_t cbvh_shape_children(const struct cbvh_file *f, const uint32
     if (grid4 && layout == CBVH_LAYOUT_WIDE4) {
         const uint8_t *node = cbvh_w4_node(f->nodes, r);
         const uint64_t meta = cbvh_w4_meta(node);
-        const uint8_t *order = cbvh_wide4_orders[octant < CBVH_NO_OCTANT ? cbvh_w4_order(meta, octant) : 0];
         const uint32_t hits = cbvh_grid_range4_hits(node, grid4) & cbvh_w4_used(meta);
+        if (octant == CBVH_NO_OCTANT) { /* slot order: the references of the slots entered alone */
+            /* counted by the table: GCC would count the turns of a loop to h = 0 with a libgcc call */
+            m = cbvh_w4_popcount(hits);
+            uint32_t h = hits;
+            for (uint32_t k = 0; k < m; k++, h &= h - 1u) {
+                in[k] = cbvh_w4_child_ref(node, meta, cbvh_lowest_lane(h));
+                in_entry[k] = 0.0f;
+            }
+            return m;
+        }
+        const uint8_t *order = cbvh_wide4_orders[cbvh_w4_order(meta, octant)];
         for (uint32_t k = 0; k < CBVH_W4_WIDTH; k++) {
             const uint32_t s = order[k];
             in[m] = cbvh_w4_child_ref(node, meta, s);

@@ -1,4 +1,6 @@
 /* sweep_walk.c: the tree walk shared by the sphere, capsule and box sweeps, and their common helpers. */
+#include "config.h"
+
 #include <float.h>
 #include <math.h>
 
@@ -28,6 +30,10 @@ struct sweep_query {
     struct cbvh_sweep_contact best;
     uint32_t best_tri;
     float limit; /* best.t as the box tests read it */
+#ifdef CBVH_HAVE_SIMD
+    struct cbvh_cull4 cull4;
+    __m128 center4[3], extent4[3], rcp4[3]; /* sweep_box's, in every lane */
+#endif
 };
 
 /* The box [box_lo, box_hi] grown by the shape's extent, crossed by the center's path before the best contact;
@@ -88,38 +94,102 @@ static int ask_filter(const struct sweep_query *q, uint32_t k, const cbvh_v3 v[3
     return q->rules->filter(q->rules->user, &r);
 }
 
-static int sweep_leaf(void *query, uint32_t first, uint32_t count)
+/* Cooked triangle k: its box, the motion's culling, the cheap tests, the sweep, and the filter when its
+ * contact would win. Returns 1 when the filter stops the walk. */
+static int sweep_triangle(struct sweep_query *q, uint32_t k, const float a[3], const float b[3],
+                          const float cc[3])
+{
+    const struct cbvh_sweep_rules *rules = q->rules;
+    float lo[3], hi[3], entry;
+    cbvh_triangle_bounds(a, b, cc, lo, hi);
+    if (!sweep_box(q, lo, hi, &entry))
+        return 0;
+    const cbvh_v3 v[3] = {v3_from_f(a), v3_from_f(b), v3_from_f(cc)};
+    if (rules && rules->cull != CBVH_CULL_NONE && culled(rules->cull, v[0], v[1], v[2], q->delta))
+        return 0;
+    const enum cbvh_cull_verdict cull =
+        cbvh_cull_triangle(q->bounds, v3_from_f(q->delta), q->best.t, v[0], v[1], v[2], 0);
+    if (cull == CBVH_CULL_CLEAR)
+        return 0;
+    struct cbvh_sweep_contact c = {0.0, {0, 0, 0}, {0, 0, 0}, 0.0};
+    if (!q->sweep(q->shape, v[0], v[1], v[2], q->best.t, cull == CBVH_CULL_CLEAR_AT_START, &c) ||
+        !(c.t < q->best.t || (c.t == q->best.t && k < q->best_tri)))
+        return 0;
+    const int verdict = rules && rules->filter ? ask_filter(q, k, v, &c) : CBVH_FILTER_ACCEPT;
+    if (verdict == CBVH_FILTER_REJECT)
+        return 0;
+    q->best = c; /* c.depth stays 0 unless the kernel found an overlap at t = 0 */
+    q->best_tri = k;
+    q->limit = (float)c.t;
+    return verdict == CBVH_FILTER_STOP;
+}
+
+#ifdef CBVH_HAVE_SIMD
+/* x moved away from zero as outward_lo (sign -1) or outward_hi (sign 1) move it, lane by lane. */
+static inline __m128 outward4(__m128 x, float sign)
+{
+    const __m128 away = _mm_mul_ps(_mm_andnot_ps(_mm_set1_ps(-0.0f), x), _mm_set1_ps(0x1p-22f));
+    return sign < 0.0f ? _mm_sub_ps(_mm_sub_ps(x, away), _mm_set1_ps(FLT_MIN))
+                       : _mm_add_ps(_mm_add_ps(x, away), _mm_set1_ps(FLT_MIN));
+}
+
+/* sweep_box on the boxes of four triangles (cbvh_triangle_bounds), lane for lane the same float operations
+ * in the same order (_mm_max_ps(a, b) is a > b ? a : b, as the slab test's selections): the lanes whose box
+ * it keeps with the motion up to `limit`. */
+static uint32_t sweep_box4(const struct sweep_query *q, const struct leaf_quad *t, float limit)
+{
+    __m128 tnear = _mm_setzero_ps(), tfar = _mm_set1_ps(limit);
+    for (int a = 0; a < 3; a++) {
+        const __m128 c0 = _mm_load_ps(t->c[0][a]), c1 = _mm_load_ps(t->c[1][a]), c2 = _mm_load_ps(t->c[2][a]);
+        const __m128 lo = outward4(_mm_sub_ps(_mm_min_ps(_mm_min_ps(c0, c1), c2), q->extent4[a]), -1.0f);
+        const __m128 hi = outward4(_mm_add_ps(_mm_max_ps(_mm_max_ps(c0, c1), c2), q->extent4[a]), 1.0f);
+        const int back = q->octant >> a & 1u;
+        const __m128 tn = _mm_mul_ps(_mm_sub_ps(back ? hi : lo, q->center4[a]), q->rcp4[a]);
+        const __m128 tf = _mm_mul_ps(_mm_sub_ps(back ? lo : hi, q->center4[a]), q->rcp4[a]);
+        tnear = _mm_max_ps(tn, tnear);
+        tfar = _mm_min_ps(tf, tfar);
+    }
+    return (uint32_t)_mm_movemask_ps(_mm_cmple_ps(tnear, _mm_mul_ps(tfar, _mm_set1_ps(CBVH_BOX_PAD))));
+}
+
+/* Four triangles through their box test (sweep_box4: it keeps a triangle sweep_box keeps with the limit at
+ * the time, which only shrinks) and the float cull (cbvh_cull4_sweep, over the motion up to the best contact
+ * so far: limit, rounded from best.t, times 1 + 2^-22 is at least best.t), the kept ones in order through
+ * the rest. */
+static int sweep_quad(void *query, uint32_t k, const struct leaf_quad *t, uint32_t group)
 {
     struct sweep_query *q = query;
-    const struct cbvh_sweep_rules *rules = q->rules;
-    for (uint32_t k = first; k < first + count; k++) {
-        float a[3], b[3], cc[3], lo[3], hi[3];
-        cbvh_triangle_vertices(q->f, k, a, b, cc);
-        cbvh_triangle_bounds(a, b, cc, lo, hi);
-        float entry;
-        if (!sweep_box(q, lo, hi, &entry))
-            continue;
-        const cbvh_v3 v[3] = {v3_from_f(a), v3_from_f(b), v3_from_f(cc)};
-        if (rules && rules->cull != CBVH_CULL_NONE && culled(rules->cull, v[0], v[1], v[2], q->delta))
-            continue;
-        const enum cbvh_cull_verdict cull =
-            cbvh_cull_triangle(q->bounds, v3_from_f(q->delta), q->best.t, v[0], v[1], v[2], 0);
-        if (cull == CBVH_CULL_CLEAR)
-            continue;
-        struct cbvh_sweep_contact c = {0.0, {0, 0, 0}, {0, 0, 0}, 0.0};
-        if (!q->sweep(q->shape, v[0], v[1], v[2], q->best.t, cull == CBVH_CULL_CLEAR_AT_START, &c) ||
-            !(c.t < q->best.t || (c.t == q->best.t && k < q->best_tri)))
-            continue;
-        const int verdict = rules && rules->filter ? ask_filter(q, k, v, &c) : CBVH_FILTER_ACCEPT;
-        if (verdict == CBVH_FILTER_REJECT)
-            continue;
-        q->best = c; /* c.depth stays 0 unless the kernel found an overlap at t = 0 */
-        q->best_tri = k;
-        q->limit = (float)c.t;
-        if (verdict == CBVH_FILTER_STOP)
+    uint32_t keep = sweep_box4(q, t, q->limit) & group;
+    if (!keep)
+        return 0;
+    keep &= cbvh_cull4_sweep(&q->cull4, t->c, q->limit * 0x1.000004p0f);
+    for (; keep; keep &= keep - 1u) {
+        const uint32_t j = cbvh_lowest_lane(keep);
+        const float a[3] = {t->c[0][0][j], t->c[0][1][j], t->c[0][2][j]};
+        const float b[3] = {t->c[1][0][j], t->c[1][1][j], t->c[1][2][j]};
+        const float c[3] = {t->c[2][0][j], t->c[2][1][j], t->c[2][2][j]};
+        if (sweep_triangle(q, k + j, a, b, c))
             return 1;
     }
     return 0;
+}
+#endif
+
+/* With SIMD, four triangles at a time (sweep_quad); else one at a time. */
+static int sweep_leaf(void *query, uint32_t first, uint32_t count)
+{
+    struct sweep_query *q = query;
+#ifdef CBVH_HAVE_SIMD
+    return cbvh_shape_leaf_quads(q->f, first, count, sweep_quad, q);
+#else
+    for (uint32_t k = first; k < first + count; k++) {
+        float a[3], b[3], c[3];
+        cbvh_triangle_vertices(q->f, k, a, b, c);
+        if (sweep_triangle(q, k, a, b, c))
+            return 1;
+    }
+    return 0;
+#endif
 }
 
 int cbvh_sweep_walk(const struct cbvh_file *f, const struct cbvh_local_shape *bounds, const float delta[3],
@@ -130,9 +200,27 @@ int cbvh_sweep_walk(const struct cbvh_file *f, const struct cbvh_local_shape *bo
     float center[3], extent[3];
     cbvh_shape_bounds(bounds, &lo, &hi);
     cbvh_sweep_bounds(lo, hi, center, extent);
-    struct sweep_query q = {f, center, extent, delta, {1.0f / delta[0], 1.0f / delta[1], 1.0f / delta[2]}, 0, sweep,
-                            shape, bounds, rules, {1.0, {0, 0, 0}, {0, 0, 0}, 0.0}, UINT32_MAX, 1.0f};
+    struct sweep_query q = {.f = f,
+                            .center = center,
+                            .extent = extent,
+                            .delta = delta,
+                            .rcp = {1.0f / delta[0], 1.0f / delta[1], 1.0f / delta[2]},
+                            .sweep = sweep,
+                            .shape = shape,
+                            .bounds = bounds,
+                            .rules = rules,
+                            .best = {1.0, {0, 0, 0}, {0, 0, 0}, 0.0},
+                            .best_tri = UINT32_MAX,
+                            .limit = 1.0f};
     q.octant = cbvh_octant_of(q.rcp);
+#ifdef CBVH_HAVE_SIMD
+    cbvh_cull4_init(&q.cull4, bounds, NULL, NULL, delta);
+    for (int a = 0; a < 3; a++) {
+        q.center4[a] = _mm_set1_ps(center[a]);
+        q.extent4[a] = _mm_set1_ps(extent[a]);
+        q.rcp4[a] = _mm_set1_ps(q.rcp[a]);
+    }
+#endif
     cbvh_shape_walk(f, f->layout, q.octant, sweep_enter, sweep_leaf, &q, &q.limit, NULL);
     found->tri = q.best_tri;
     found->contact = q.best;
