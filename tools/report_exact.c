@@ -1,4 +1,6 @@
 /* report_exact.c: the report's reference layout: a cooked tree with float node boxes recomputed exactly from its triangles. */
+#include "config.h" /* CBVH_HAVE_SIMD: the walk's leaves as the library runs them, so its time compares */
+
 #include <stdlib.h>
 
 #include "common/file.h"

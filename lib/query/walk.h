@@ -247,8 +247,8 @@ CBVH_KERNEL int cbvh_walk(const struct cbvh_file *restrict f, const uint32_t lay
         cbvh_box_ray_halve(&box, ray->box_halve);
     const float tmin = ray->tmin;
     float tmax = ray->tmax;
-    struct cbvh_w4_simd_ray w;
-    if (layout == CBVH_LAYOUT_WIDE4 && !float_boxes)
+    struct cbvh_w4_simd_ray w; /* unused with float boxes, but set: the compiler cannot tell */
+    if (layout == CBVH_LAYOUT_WIDE4)
         walk_w4_simd_ray_init(&w, &box, tmin);
     struct {
         cbvh_ref ref;
