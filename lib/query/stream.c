@@ -184,8 +184,9 @@ CBVH_KERNEL uint32_t stream_still_in_reach(const struct cbvh_stream_batch *restr
  * Children come through the layout interface (layout/tree.h) in the
  * precomputed order of the batch's octant. */
 CBVH_KERNEL void stream_walk(const struct cbvh_file *restrict f, const uint32_t layout,
-                             struct cbvh_stream_batch *restrict b, uint32_t octant, cbvh_stream_node_fn node_test,
-                             const int any, int counting, uint8_t *restrict occluded, uint64_t *restrict visited,
+                             struct cbvh_stream_batch *restrict b, uint32_t octant,
+                             cbvh_stream_node_fn node_test, const int any, int counting,
+                             uint8_t *restrict occluded, uint64_t *restrict visited,
                              uint64_t *restrict tested)
 {
     /* the scalar node kernel (the fallback, and its test) comes with scalar leaves */
@@ -282,13 +283,14 @@ CBVH_KERNEL void stream_walk(const struct cbvh_file *restrict f, const uint32_t 
 }
 
 /* The stream walk per layout and query kind, each a function of its own so that a frame holds one walk's
- * stack, not the sum of all (-fstack-usage); `counting` (whether the solo tails count) is read at run time. */
-#define STREAM_INSTANCE(name, layout, any)                                                                     \
-    CBVH_NOINLINE void name(const struct cbvh_file *f, struct cbvh_stream_batch *b, uint32_t octant,            \
-                            cbvh_stream_node_fn node_test, int counting, uint8_t *occluded, uint64_t *visited,    \
-                            uint64_t *tested)                                                                   \
-    {                                                                                                          \
-        stream_walk(f, layout, b, octant, node_test, any, counting, occluded, visited, tested);                 \
+ * stack, not the sum of all (-fstack-usage); `counting` (whether the solo tails count) is read at run
+ * time. */
+#define STREAM_INSTANCE(name, layout, any)                                                                   \
+    CBVH_NOINLINE void name(const struct cbvh_file *f, struct cbvh_stream_batch *b, uint32_t octant,         \
+                            cbvh_stream_node_fn node_test, int counting, uint8_t *occluded,                  \
+                            uint64_t *visited, uint64_t *tested)                                             \
+    {                                                                                                        \
+        stream_walk(f, layout, b, octant, node_test, any, counting, occluded, visited, tested);              \
     }
 STREAM_INSTANCE(stream_wide4_closest, CBVH_LAYOUT_WIDE4, 0)
 STREAM_INSTANCE(stream_wide4_any, CBVH_LAYOUT_WIDE4, 1)
@@ -298,14 +300,15 @@ STREAM_INSTANCE(stream_binary_any, CBVH_LAYOUT_BINARY, 1)
 
 /* The stream walk for the file's layout. */
 static void stream_walk_file(const struct cbvh_file *f, struct cbvh_stream_batch *b, uint32_t octant,
-                             cbvh_stream_node_fn node_test, int any, int counting, uint8_t *occluded, uint64_t *visited,
-                             uint64_t *tested)
+                             cbvh_stream_node_fn node_test, int any, int counting, uint8_t *occluded,
+                             uint64_t *visited, uint64_t *tested)
 {
     if (f->layout == CBVH_LAYOUT_WIDE4)
-        (any ? stream_wide4_any : stream_wide4_closest)(f, b, octant, node_test, counting, occluded, visited, tested);
+        (any ? stream_wide4_any : stream_wide4_closest)(f, b, octant, node_test, counting, occluded, visited,
+                                                        tested);
     else
-        (any ? stream_binary_any : stream_binary_closest)(f, b, octant, node_test, counting, occluded, visited,
-                                                            tested);
+        (any ? stream_binary_any : stream_binary_closest)(f, b, octant, node_test, counting, occluded,
+                                                          visited, tested);
 }
 
 /* Adds a validated ray to the batch. */
@@ -368,7 +371,8 @@ static uint32_t batch_carve(struct cbvh_stream_batch *b, uint8_t **octant, void 
         return 0;
     size_t n = (size - STREAM_SLACK) / STREAM_RAY_BYTES;
     n = n < CBVH_STREAM_MAX_BATCH ? n : CBVH_STREAM_MAX_BATCH;
-    uintptr_t p = ((uintptr_t)mem + 31u) & ~(uintptr_t)31u; /* box_ray: 16-byte aligned for SSE2 loads (32 kept) */
+    /* box_ray: 16-byte aligned for SSE2 loads (32 kept) */
+    uintptr_t p = ((uintptr_t)mem + 31u) & ~(uintptr_t)31u;
     b->box_ray = (float(*)[8])p;
     p += n * 8 * sizeof(float);
     b->ctx = (struct cbvh_ray_ctx *)p; /* 8-byte alignment holds: every array before is a multiple of 32 */

@@ -55,9 +55,11 @@ struct cbvh_stream_lists {
  * with the arithmetic of ray_box.h, each ray's current [TMIN, TMAX], and puts
  * the ray, in the order of `rays`, on the list of each box it enters; count[k]
  * receives the length of list k. */
-typedef void (*cbvh_stream_node_fn)(const struct cbvh_stream_batch *restrict batch, const uint16_t *restrict rays,
-                                    uint32_t n, const struct cbvh_stream_boxes *restrict boxes,
-                                    const struct cbvh_stream_lists *restrict out, uint32_t count[CBVH_STREAM_LANES]);
+typedef void (*cbvh_stream_node_fn)(const struct cbvh_stream_batch *restrict batch,
+                                    const uint16_t *restrict rays, uint32_t n,
+                                    const struct cbvh_stream_boxes *restrict boxes,
+                                    const struct cbvh_stream_lists *restrict out,
+                                    uint32_t count[CBVH_STREAM_LANES]);
 
 void cbvh_stream_node_scalar(const struct cbvh_stream_batch *restrict batch, const uint16_t *restrict rays,
                              uint32_t n, const struct cbvh_stream_boxes *restrict boxes,

@@ -21,8 +21,8 @@ void cbvh_stream_node_scalar(const struct cbvh_stream_batch *restrict batch, con
         const float rcp[3] = {r[CBVH_LANE_RX], r[CBVH_LANE_RY], r[CBVH_LANE_RZ]};
         for (uint32_t k = 0; k < boxes->count; k++) {
             float entry;
-            if (cbvh_slab_test(p[0][k], p[1][k], p[2][k], p[3][k], p[4][k], p[5][k], org, rcp, r[CBVH_LANE_TMIN],
-                               r[CBVH_LANE_TMAX], &entry)) {
+            if (cbvh_slab_test(p[0][k], p[1][k], p[2][k], p[3][k], p[4][k], p[5][k], org, rcp,
+                               r[CBVH_LANE_TMIN], r[CBVH_LANE_TMAX], &entry)) {
                 out->ray[k][count[k]] = rays[j];
                 out->entry[k][count[k]] = entry;
                 count[k]++;

@@ -40,8 +40,9 @@ static inline void node_append(const struct cbvh_stream_lists *restrict out, uin
 
 /* One ray against the four boxes (near x, y, z, far x, y, z planes of the
  * boxes in lanes), onto the lists of those of `lanes` it enters. */
-static inline void node_ray_sse2(const struct cbvh_stream_batch *restrict batch, uint16_t r, const __m128 plane[6],
-                                 uint32_t lanes, const struct cbvh_stream_lists *restrict out,
+static inline void node_ray_sse2(const struct cbvh_stream_batch *restrict batch, uint16_t r,
+                                 const __m128 plane[6], uint32_t lanes,
+                                 const struct cbvh_stream_lists *restrict out,
                                  uint32_t count[CBVH_STREAM_LANES])
 {
     const __m128 o = _mm_load_ps(&batch->box_ray[r][0]), d = _mm_load_ps(&batch->box_ray[r][4]);

@@ -16,8 +16,8 @@ struct capsule_shape {
  * each edge E of T against S: the point p0 + t*delta entering the
  * parallelogram E - (S - p0) grown by r. With r = 0 the balls and cylinders
  * have no volume and the faces alone bound the swept prism. */
-static int capsule_triangle(const void *shape, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, double tmax, int clear_at_start,
-                            struct cbvh_sweep_contact *out)
+static int capsule_triangle(const void *shape, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, double tmax,
+                            int clear_at_start, struct cbvh_sweep_contact *out)
 {
     const struct capsule_shape *s = shape;
     const double r = s->radius;

@@ -12,8 +12,8 @@ struct sphere_shape {
  * and the normal from it to the center (cbvh_fallback_normal when the center
  * lies on the triangle), depth radius - distance along it. Otherwise the first
  * entry of the center into the triangle grown by the radius (sweep_features.h). */
-static int sphere_triangle(const void *shape, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, double tmax, int clear_at_start,
-                           struct cbvh_sweep_contact *out)
+static int sphere_triangle(const void *shape, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, double tmax,
+                           int clear_at_start, struct cbvh_sweep_contact *out)
 {
     const struct sphere_shape *s = shape;
     if (clear_at_start)
