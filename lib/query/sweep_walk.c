@@ -94,16 +94,19 @@ static int ask_filter(const struct sweep_query *q, uint32_t k, const cbvh_v3 v[3
     return q->rules->filter(q->rules->user, &r);
 }
 
-/* Cooked triangle k: its box, the motion's culling, the cheap tests, the sweep, and the filter when its
- * contact would win. Returns 1 when the filter stops the walk. */
+/* Cooked triangle k: its box (unless it passed sweep_box at the current limit: box_passed_at, NAN when
+ * untested; the limit only shrinks), the motion's culling, the cheap tests, the sweep, and the filter when
+ * its contact would win. Returns 1 when the filter stops the walk. */
 static int sweep_triangle(struct sweep_query *q, uint32_t k, const float a[3], const float b[3],
-                          const float cc[3])
+                          const float cc[3], float box_passed_at)
 {
     const struct cbvh_sweep_rules *rules = q->rules;
-    float lo[3], hi[3], entry;
-    cbvh_triangle_bounds(a, b, cc, lo, hi);
-    if (!sweep_box(q, lo, hi, &entry))
-        return 0;
+    if (!(q->limit == box_passed_at)) {
+        float lo[3], hi[3], entry;
+        cbvh_triangle_bounds(a, b, cc, lo, hi);
+        if (!sweep_box(q, lo, hi, &entry))
+            return 0;
+    }
     const cbvh_v3 v[3] = {v3_from_f(a), v3_from_f(b), v3_from_f(cc)};
     if (rules && rules->cull != CBVH_CULL_NONE && culled(rules->cull, v[0], v[1], v[2], q->delta))
         return 0;
@@ -152,23 +155,24 @@ static uint32_t sweep_box4(const struct sweep_query *q, const struct leaf_quad *
     return (uint32_t)_mm_movemask_ps(_mm_cmple_ps(tnear, _mm_mul_ps(tfar, _mm_set1_ps(CBVH_BOX_PAD))));
 }
 
-/* Four triangles through their box test (sweep_box4: it keeps a triangle sweep_box keeps with the limit at
- * the time, which only shrinks) and the float cull (cbvh_cull4_sweep, over the motion up to the best contact
- * so far: limit, rounded from best.t, times 1 + 2^-22 is at least best.t), the kept ones in order through
- * the rest. */
+/* Four triangles through their box test (sweep_box4: exactly the triangles sweep_box keeps with the limit
+ * at the time, so sweep_triangle tests a kept one's box again only once the limit shrank) and the float
+ * cull (cbvh_cull4_sweep, over the motion up to the best contact so far: limit, rounded from best.t, times
+ * 1 + 2^-22 is at least best.t), the kept ones in order through the rest. */
 static int sweep_quad(void *query, uint32_t k, const struct leaf_quad *t, uint32_t group)
 {
     struct sweep_query *q = query;
-    uint32_t keep = sweep_box4(q, t, q->limit) & group;
+    const float box_limit = q->limit;
+    uint32_t keep = sweep_box4(q, t, box_limit) & group;
     if (!keep)
         return 0;
-    keep &= cbvh_cull4_sweep(&q->cull4, t->c, q->limit * 0x1.000004p0f);
+    keep &= cbvh_cull4_sweep(&q->cull4, t->c, box_limit * 0x1.000004p0f);
     for (; keep; keep &= keep - 1u) {
         const uint32_t j = cbvh_lowest_lane(keep);
         const float a[3] = {t->c[0][0][j], t->c[0][1][j], t->c[0][2][j]};
         const float b[3] = {t->c[1][0][j], t->c[1][1][j], t->c[1][2][j]};
         const float c[3] = {t->c[2][0][j], t->c[2][1][j], t->c[2][2][j]};
-        if (sweep_triangle(q, k + j, a, b, c))
+        if (sweep_triangle(q, k + j, a, b, c, box_limit))
             return 1;
     }
     return 0;
@@ -185,7 +189,7 @@ static int sweep_leaf(void *query, uint32_t first, uint32_t count)
     for (uint32_t k = first; k < first + count; k++) {
         float a[3], b[3], c[3];
         cbvh_triangle_vertices(q->f, k, a, b, c);
-        if (sweep_triangle(q, k, a, b, c))
+        if (sweep_triangle(q, k, a, b, c, NAN))
             return 1;
     }
     return 0;
