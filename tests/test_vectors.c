@@ -112,27 +112,27 @@ typedef struct expectation {
 #define W4 CBVH_LAYOUT_WIDE4
 
 static const expectation expectations[] = {
-    { "good-single-triangle", CBVH_OK, "", { MESH_SINGLE, 1, 3, 1, 1, 4, 0, 0, 0, 0, 3, 0, BIN, 0, 0 } },
-    { "good-box-raw", CBVH_OK, "", { MESH_BOX, 12, 8, 15, 4, 2, 1, 0, 0, 0, 4, 0, BIN, 0, 0 } },
-    { "good-box-zlib", CBVH_OK, "", { MESH_BOX, 12, 8, 15, 4, 2, 1, 0, 0, 0, 4, 0, BIN, 0, 0 } },
-    { "good-box-u32", CBVH_OK, "", { MESH_BOX, 12, 8, 15, 4, 2, 1, 0, 1, 0, 4, 0, BIN, 0, 0 } },
-    { "good-box-delta16", CBVH_OK, "", { MESH_BOX, 12, 8, 15, 4, 2, 1, 0, 2, 0, 4, 0, BIN, 0, 0 } },
-    { "good-box-q16", CBVH_OK, "", { MESH_BOX, 12, 8, 15, 4, 2, 1, 1, 0, 0, 4, 0, BIN, 0, 0 } },
-    { "good-box-far-q16", CBVH_OK, "", { MESH_BOX_FAR, 12, 8, 15, 4, 2, 1, 1, 0, 0, 4, 0, BIN, 0, 0 } },
-    { "good-quad-flat", CBVH_OK, "", { MESH_QUAD, 2, 4, 3, 2, 1, 1, 0, 0, 0, 4, 0, BIN, 0, 0 } },
-    { "good-remap-materials", CBVH_OK, "", { MESH_BOX_DEGENERATE, 12, 8, 15, 4, 2, 1, 0, 0, 0, 5, 1, BIN, 0, 0 } },
+    { "good-single-triangle", CBVH_OK, "", { MESH_SINGLE, 1, 3, 1, 1, 4, 0, 0, 0, 0, 3, 0, BIN, 0, 0, 0 } },
+    { "good-box-raw", CBVH_OK, "", { MESH_BOX, 12, 8, 15, 4, 2, 1, 0, 0, 0, 4, 0, BIN, 0, 0, 0 } },
+    { "good-box-zlib", CBVH_OK, "", { MESH_BOX, 12, 8, 15, 4, 2, 1, 0, 0, 0, 4, 0, BIN, 0, 0, 0 } },
+    { "good-box-u32", CBVH_OK, "", { MESH_BOX, 12, 8, 15, 4, 2, 1, 0, 1, 0, 4, 0, BIN, 0, 0, 0 } },
+    { "good-box-delta16", CBVH_OK, "", { MESH_BOX, 12, 8, 15, 4, 2, 1, 0, 2, 0, 4, 0, BIN, 0, 0, 0 } },
+    { "good-box-q16", CBVH_OK, "", { MESH_BOX, 12, 8, 15, 4, 2, 1, 1, 0, 0, 4, 0, BIN, 0, 0, 0 } },
+    { "good-box-far-q16", CBVH_OK, "", { MESH_BOX_FAR, 12, 8, 15, 4, 2, 1, 1, 0, 0, 4, 0, BIN, 0, 0, 0 } },
+    { "good-quad-flat", CBVH_OK, "", { MESH_QUAD, 2, 4, 3, 2, 1, 1, 0, 0, 0, 4, 0, BIN, 0, 0, 0 } },
+    { "good-remap-materials", CBVH_OK, "", { MESH_BOX_DEGENERATE, 12, 8, 15, 4, 2, 1, 0, 0, 0, 5, 1, BIN, 0, 0, 0 } },
     { "good-remap-u32-materials-u32-zlib", CBVH_OK, "",
-      { MESH_BOX_DEGENERATE, 12, 8, 15, 4, 2, 1, 0, 2, 0, 5, 70000, BIN, 0, 0 } },
-    { "good-remap-sparse", CBVH_OK, "", { MESH_QUAD_SPARSE, 2, 4, 3, 2, 1, 1, 0, 0, 0, 5, 3, BIN, 0, 0 } },
-    { "good-remap-u24", CBVH_OK, "", { MESH_BOX_DEGENERATE, 12, 8, 15, 4, 2, 1, 0, 0, 0, 5, 1, BIN, 0, 0 } },
+      { MESH_BOX_DEGENERATE, 12, 8, 15, 4, 2, 1, 0, 2, 0, 5, 70000, BIN, 0, 0, 0 } },
+    { "good-remap-sparse", CBVH_OK, "", { MESH_QUAD_SPARSE, 2, 4, 3, 2, 1, 1, 0, 0, 0, 5, 3, BIN, 0, 0, 0 } },
+    { "good-remap-u24", CBVH_OK, "", { MESH_BOX_DEGENERATE, 12, 8, 15, 4, 2, 1, 0, 0, 0, 5, 1, BIN, 0, 0, 0 } },
     BAD("bad-remap-u24-range", "original id 16777215"),
-    { "good-materials-u16-cooked-ids", CBVH_OK, "", { MESH_BOX, 12, 8, 15, 4, 2, 0, 0, 0, 0, 4, 1000, BIN, 0, 0 } },
-    { "good-ancillary", CBVH_OK, "", { MESH_BOX, 12, 8, 15, 4, 2, 1, 0, 0, 0, 6, 0, BIN, 0, 0 } },
-    { "good-compat-flags", CBVH_OK, "", { MESH_BOX, 12, 8, 15, 4, 2, 1, 0, 0, 0x80000005u, 4, 0, BIN, 0, 0 } },
-    { "good-materials-uniform", CBVH_OK, "", { MESH_BOX, 12, 8, 15, 4, 2, 1, 0, 0, 0, 5, 0, BIN, 7, 0 } },
-    { "good-material-names", CBVH_OK, "", { MESH_BOX, 12, 8, 15, 4, 2, 1, 0, 0, 0, 6, 0, BIN, 7, 3 } },
-    { "good-material-names-zlib", CBVH_OK, "", { MESH_BOX, 12, 8, 15, 4, 2, 1, 0, 0, 0, 6, 0, BIN, 7, 3 } },
-    { "good-material-names-future", CBVH_OK, "", { MESH_BOX, 12, 8, 15, 4, 2, 1, 0, 0, 0, 6, 0, BIN, 7, 0 } },
+    { "good-materials-u16-cooked-ids", CBVH_OK, "", { MESH_BOX, 12, 8, 15, 4, 2, 0, 0, 0, 0, 4, 1000, BIN, 0, 0, 0 } },
+    { "good-ancillary", CBVH_OK, "", { MESH_BOX, 12, 8, 15, 4, 2, 1, 0, 0, 0, 6, 0, BIN, 0, 0, 0 } },
+    { "good-compat-flags", CBVH_OK, "", { MESH_BOX, 12, 8, 15, 4, 2, 1, 0, 0, 0x80000005u, 4, 0, BIN, 0, 0, 0 } },
+    { "good-materials-uniform", CBVH_OK, "", { MESH_BOX, 12, 8, 15, 4, 2, 1, 0, 0, 0, 5, 0, BIN, 7, 0, 0 } },
+    { "good-material-names", CBVH_OK, "", { MESH_BOX, 12, 8, 15, 4, 2, 1, 0, 0, 0, 6, 0, BIN, 7, 3, 0 } },
+    { "good-material-names-zlib", CBVH_OK, "", { MESH_BOX, 12, 8, 15, 4, 2, 1, 0, 0, 0, 6, 0, BIN, 7, 3, 0 } },
+    { "good-material-names-future", CBVH_OK, "", { MESH_BOX, 12, 8, 15, 4, 2, 1, 0, 0, 0, 6, 0, BIN, 7, 0, 0 } },
     BAD("bad-materials-uniform-size", "size 8, expected 4"),
     BAD("bad-names-order", "not after name 1"),
     BAD("bad-names-duplicate", "name 2 (id 7) is not after"),
@@ -210,18 +210,18 @@ static const expectation expectations[] = {
     NEWER("unsupported-codec", "codec 2"),
     NEWER("unsupported-encoding", "encoding 3"),
     NEWER("unsupported-critical-section", "critical section type 6"),
-    { "good-w4-single-triangle", CBVH_OK, "", { MESH_SINGLE, 1, 3, 1, 1, 4, 0, 0, 0, 0, 3, 0, W4, 0, 0 } },
-    { "good-w4-box-raw", CBVH_OK, "", { MESH_BOX, 12, 8, 3, 2, 2, 1, 0, 0, 0, 4, 0, W4, 0, 0 } },
-    { "good-w4-box-zlib", CBVH_OK, "", { MESH_BOX, 12, 8, 3, 2, 2, 1, 0, 0, 0, 4, 0, W4, 0, 0 } },
-    { "good-w4-box-leaf1", CBVH_OK, "", { MESH_BOX, 12, 8, 5, 3, 1, 1, 0, 0, 0, 4, 0, W4, 0, 0 } },
-    { "good-w4-box-leaf8", CBVH_OK, "", { MESH_BOX, 12, 8, 1, 1, 8, 1, 0, 0, 0, 4, 0, W4, 0, 0 } },
-    { "good-w4-box-q16", CBVH_OK, "", { MESH_BOX, 12, 8, 3, 2, 2, 1, 1, 0, 0, 4, 0, W4, 0, 0 } },
-    { "good-w4-box-far-q16", CBVH_OK, "", { MESH_BOX_FAR, 12, 8, 3, 2, 2, 1, 1, 0, 0, 4, 0, W4, 0, 0 } },
-    { "good-w4-quad-flat", CBVH_OK, "", { MESH_QUAD, 2, 4, 1, 1, 1, 1, 0, 0, 0, 4, 0, W4, 0, 0 } },
-    { "good-w4-remap-materials", CBVH_OK, "", { MESH_BOX_DEGENERATE, 12, 8, 3, 2, 2, 1, 0, 0, 0, 5, 1, W4, 0, 0 } },
+    { "good-w4-single-triangle", CBVH_OK, "", { MESH_SINGLE, 1, 3, 1, 1, 4, 0, 0, 0, 0, 3, 0, W4, 0, 0, 0 } },
+    { "good-w4-box-raw", CBVH_OK, "", { MESH_BOX, 12, 8, 3, 2, 2, 1, 0, 0, 0, 4, 0, W4, 0, 0, 0 } },
+    { "good-w4-box-zlib", CBVH_OK, "", { MESH_BOX, 12, 8, 3, 2, 2, 1, 0, 0, 0, 4, 0, W4, 0, 0, 0 } },
+    { "good-w4-box-leaf1", CBVH_OK, "", { MESH_BOX, 12, 8, 5, 3, 1, 1, 0, 0, 0, 4, 0, W4, 0, 0, 0 } },
+    { "good-w4-box-leaf8", CBVH_OK, "", { MESH_BOX, 12, 8, 1, 1, 8, 1, 0, 0, 0, 4, 0, W4, 0, 0, 0 } },
+    { "good-w4-box-q16", CBVH_OK, "", { MESH_BOX, 12, 8, 3, 2, 2, 1, 1, 0, 0, 4, 0, W4, 0, 0, 0 } },
+    { "good-w4-box-far-q16", CBVH_OK, "", { MESH_BOX_FAR, 12, 8, 3, 2, 2, 1, 1, 0, 0, 4, 0, W4, 0, 0, 0 } },
+    { "good-w4-quad-flat", CBVH_OK, "", { MESH_QUAD, 2, 4, 1, 1, 1, 1, 0, 0, 0, 4, 0, W4, 0, 0, 0 } },
+    { "good-w4-remap-materials", CBVH_OK, "", { MESH_BOX_DEGENERATE, 12, 8, 3, 2, 2, 1, 0, 0, 0, 5, 1, W4, 0, 0, 0 } },
     { "good-w4-remap-u32-materials-u32-zlib", CBVH_OK, "",
-      { MESH_BOX_DEGENERATE, 12, 8, 3, 2, 2, 1, 0, 2, 0, 5, 70000, W4, 0, 0 } },
-    { "good-w4-materials-u16-cooked-ids", CBVH_OK, "", { MESH_BOX, 12, 8, 3, 2, 2, 0, 0, 0, 0, 4, 1000, W4, 0, 0 } },
+      { MESH_BOX_DEGENERATE, 12, 8, 3, 2, 2, 1, 0, 2, 0, 5, 70000, W4, 0, 0, 0 } },
+    { "good-w4-materials-u16-cooked-ids", CBVH_OK, "", { MESH_BOX, 12, 8, 3, 2, 2, 0, 0, 0, 0, 4, 1000, W4, 0, 0, 0 } },
     BAD("bad-w4-no-slot", "node 1: no slot in use"),
     BAD("bad-w4-internal-unused", "node 0: slots 0x8 are internal but not in use"),
     BAD("bad-w4-unused-box", "node 1: unused slot 3 has a nonzero box"),
@@ -242,12 +242,12 @@ static const expectation expectations[] = {
     BAD("bad-w4-depth-mismatch", "the tree's depth is 3, the header says 4"),
     BAD("bad-w4-depth-exceeded", "node 4: at depth 3, deeper than the header's depth 2"),
     NEWER("unsupported-w4-nodes-encoding-2", "section 0 (NODES): encoding 2 is unknown"),
-    { "good-box-local8", CBVH_OK, "", { MESH_BOX, 12, 8, 15, 4, 2, 1, 0, 4, 0, 4, 0, BIN, 0, 0 } },
+    { "good-box-local8", CBVH_OK, "", { MESH_BOX, 12, 8, 15, 4, 2, 1, 0, 4, 0, 4, 0, BIN, 0, 0, 0 } },
     BAD("bad-local8-index", "LOCAL8 base 7 plus offset"),
     BAD("bad-local8-padding", "offset 1 of slot 4, past triangle_count 12, must be 0"),
     BAD("bad-local8-size", "expected 56 (2 elements of 28 bytes)"),
-    { "good-two-boxes", CBVH_OK, "", { MESH_TWO_BOXES, 24, 16, 47, 6, 1, 1, 0, 0, 0, 4, 0, BIN, 0, 0 } },
-    { "good-w4-two-boxes", CBVH_OK, "", { MESH_TWO_BOXES, 24, 16, 10, 4, 1, 1, 0, 0, 0, 4, 0, W4, 0, 0 } },
+    { "good-two-boxes", CBVH_OK, "", { MESH_TWO_BOXES, 24, 16, 47, 6, 1, 1, 0, 0, 0, 4, 0, BIN, 0, 0, 0 } },
+    { "good-w4-two-boxes", CBVH_OK, "", { MESH_TWO_BOXES, 24, 16, 10, 4, 1, 1, 0, 0, 0, 4, 0, W4, 0, 0, 0 } },
     { "good-w4-two-boxes-local8", CBVH_OK, "", { MESH_TWO_BOXES, 24, 16, 10, 4, 1, 1, 0, 4, 0, 4, 0, W4, 0, 0, 2 } },
     { "good-w4-local8-q16-zlib", CBVH_OK, "", { MESH_BOX_DEGENERATE, 12, 8, 3, 2, 2, 1, 1, 4, 0, 5, 1, W4, 0, 0, 2 } },
     BAD("bad-w4-depth-first-unflagged", "but the leaves before it end at triangle"),
@@ -568,7 +568,7 @@ static void test_wide4_answers(void **state)
         const twin *w = &twins[i];
         const mesh *m = &meshes[w->mesh];
         char path[4096];
-        cbvh_file *wide = NULL, *binary = NULL, *cooked = NULL;
+        cbvh_file *wide = NULL, *binary = NULL;
         snprintf(path, sizeof path, "%s/%s.cbvh", vectors_dir(), w->wide4);
         assert_int_equal(cbvh_open_path(path, NULL, &wide, NULL), CBVH_OK);
         snprintf(path, sizeof path, "%s/%s.cbvh", vectors_dir(), w->binary);
@@ -586,6 +586,7 @@ static void test_wide4_answers(void **state)
         o.vertex_format = w->vertex_format;
         void *bytes = NULL;
         size_t size = 0;
+        cbvh_file *cooked = NULL;
         assert_int_equal(cbvh_cook(&input, &o, NULL, &bytes, &size, NULL, NULL), CBVH_OK);
         assert_int_equal(cbvh_open_memory(bytes, size, NULL, &cooked, NULL), CBVH_OK);
         cbvh_file_info info;

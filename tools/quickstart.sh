@@ -109,12 +109,14 @@ fi
 if [ -x "$top/tests/sanitize.sh" ] && [ "${CBVH_SKIP_SANITIZE:-0}" != 1 ]; then
     if sh "$top/tests/sanitize.sh"; then pass=$((${pass:-0} + 1)); else fail=$((${fail:-0} + 1)); status=1; fi
 fi
-# The runtime-only build (--disable-cooker): the library without the cooker, and the tests that need none.
+# The runtime-only build (--disable-cooker): the library without the cooker, and the tests that need none;
+# warnings are errors here and in distcheck's full build (the main build keeps them warnings for users).
 if [ "${CBVH_SKIP_RUNTIME_ONLY:-0}" != 1 ]; then
     runtime=$(mktemp -d "${TMPDIR:-/tmp}/cbvh-runtime.XXXXXX")
     t0=$(date +%s)
     # (the CMake consumer test already ran in the main build's make check)
-    if (cd "$runtime" && "$top/configure" -q --disable-cooker --disable-shared && make -s -j"$jobs" &&
+    if (cd "$runtime" && "$top/configure" -q --disable-cooker --disable-shared --enable-werror &&
+        make -s -j"$jobs" &&
         CBVH_SKIP_CMAKE_TEST=1 make -s -j"$jobs" check) \
         >"$runtime/runtime-only.log" 2>&1; then
         echo "runtime-only build: $(sed -n 's/^# PASS: *//p' "$runtime/test-suite.log") test programs passed in $(($(date +%s) - t0)) s"
@@ -142,7 +144,7 @@ if [ "${CBVH_SKIP_DISTCHECK:-0}" != 1 ]; then
     # The tarball's own check needs its programs and scripts, not the same long runs again: the corpus, the
     # browser and the npm meshes ran in the main check above.
     if env -u CBVH_DRAGON -u CBVH_DRAGON_MESH -u CBVH_BUNNY CBVH_SKIP_CORPUS=1 CBVH_SKIP_BROWSER=1 \
-        make -s -j"$jobs" distcheck >distcheck.log 2>&1; then
+        make -s -j"$jobs" distcheck DISTCHECK_CONFIGURE_FLAGS=--enable-werror >distcheck.log 2>&1; then
         echo "distcheck: the release tarball builds and passes its tests"
         pass=$((${pass:-0} + 1))
     else
