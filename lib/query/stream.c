@@ -338,6 +338,11 @@ static void batch_flush(const struct cbvh_file *f, struct cbvh_stream_batch *b, 
         return;
     if (hits) {
         stream_walk_file(f, b, octant, node_test, 0, counting, NULL, visited, tested);
+        /* the hits' REMAP entries (original ids), scattered over a large mesh's table: all requested
+         * before the first is read */
+        for (uint32_t r = 0; f->remap && r < b->count; r++)
+            if (b->best[r].tri != UINT32_MAX)
+                CBVH_PREFETCH(cbvh_remap_entry(f, b->best[r].tri));
         for (uint32_t r = 0; r < b->count; r++)
             cbvh_hit_output(f, &b->best[r], b->ctx[r].t_base, &hits[b->ray_index[r]]);
     } else {
