@@ -43,6 +43,16 @@ struct cbvh_file {
     uint32_t owned_count;
 };
 
+/* Where triangle k's entry starts in a TRIANGLES section of encoding `enc`: a LOCAL8 triangle's block
+ * (its base and offsets are in the block's first 28 bytes). For prefetching a leaf before its visit. */
+static inline const void *cbvh_indices_entry(const void *tris, int enc, uint32_t k)
+{
+    const uint8_t *t = (const uint8_t *)tris;
+    if (enc == CBVH_TRIS_LOCAL8)
+        return t + (size_t)CBVH_LOCAL8_BLOCK_SIZE * (k / CBVH_LOCAL8_BLOCK);
+    return t + (enc == CBVH_TRIS_DELTA16 ? 8u : enc == CBVH_TRIS_U16 ? 6u : 12u) * (size_t)k;
+}
+
 /* Triangle k's three vertex indices from a TRIANGLES section of encoding `enc` (CBVH_TRIS_*). Inlined
  * with a constant encoding, the switch folds away (the query kernels' leaf loops). */
 static inline void cbvh_indices_decode(const void *tris, int enc, uint32_t k, uint32_t idx[3])

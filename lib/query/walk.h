@@ -276,9 +276,13 @@ CBVH_KERNEL int cbvh_walk(const struct cbvh_file *restrict f, const uint32_t lay
                     stack[sp].ref = c[k];
                     stack[sp].entry = e[k];
                     sp++;
-                    /* a wide node is one cache line: start fetching the farther children now */
+                    /* a wide node is one cache line: start fetching the farther children now, and a
+                     * leaf's triangle entries (its vertices need those first) */
                     if (layout == CBVH_LAYOUT_WIDE4 && !cbvh_w4_ref_is_leaf(c[k]))
                         CBVH_PREFETCH(cbvh_w4_node(f->nodes, c[k]));
+                    else if (layout == CBVH_LAYOUT_WIDE4)
+                        CBVH_PREFETCH(cbvh_indices_entry(f->triangles, (int)f->triangle_encoding,
+                                                         cbvh_w4_ref_first(c[k])));
                 }
                 r = c[0];
                 continue;
