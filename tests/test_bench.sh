@@ -39,7 +39,7 @@ run 0 "bench --gen sphere:2000" "$CBVH" bench --gen sphere:2000 --rays 2000 --sh
         grep -q '^| rays | query | engine | variant | threads | MRays/s | MRays/s/thread | nodes/ray | tris/ray |' "$tmp/bench.md" &&
     check "... prints the agreement table" grep -q '^| rays | engine | variant | same triangle | both miss |' "$tmp/bench.md" &&
     check "... a row per ray set, query and traversal, and cbvh sorted again at 2 threads" \
-        test "$(grep -c '^| \(incoherent\|coherent\|shadow\|short\) | \(closest\|any\) | cbvh | ' "$tmp/bench.md")" -eq 48 &&
+        test "$(grep -c '^| \(incoherent\|coherent\|shadow\|short\) | \(closest\|any\) | cbvh | ' "$tmp/bench.md")" -eq 56 &&
     check "... prints the shape table" \
         grep -q '^| shape | query | engine | threads | µs/query | queries/s | queries/s/thread |' "$tmp/bench.md" &&
     check "... a cbvh row per shape set and thread count" \
@@ -62,7 +62,9 @@ for r in rows:
     assert total == r["closest_rays_compared"] == 2000 and r["any_rays_compared"] == 2000, r
     assert r["disagree"] == 0 and r["any_disagree"] == 0, r
     assert r["same_triangle"] > 0 and r["both_miss"] > 0, r
-for e in engines - {"cbvh"}:
+assert "cbvh expanded" in engines, engines
+assert any(r["engine"] == "cbvh" and r["variant"] == "expanded" for r in rows), rows
+for e in engines - {"cbvh", "cbvh expanded"}:
     assert any(r["engine"] == e for r in rows), e
 for r in d["results"]:
     assert r["mrays_per_s"] > 0 and r["threads"] in (1, 2), r
@@ -121,7 +123,7 @@ run 0 "report --gen sphere:2000" "$CBVH" report --gen sphere:2000 --rays 2000 --
     cp "$tmp/out" "$tmp/report.md" &&
     check "... prints the table with error and run-time columns" \
         grep -q '^| mesh | configuration | bytes/tri | open ms | closest MRays/s | any MRays/s | nodes/ray | tris/ray | extra nodes/ray | extra tris/ray | box inflation mean | box inflation worst | flips | wrong tri | t err max | t err RMS | vertex err | leaked rays |' "$tmp/report.md" &&
-    check "... one row per configuration" test "$(grep -c '^| sphere:2000 | \(binary\|wide4\) layout, ' "$tmp/report.md")" -eq 16 &&
+    check "... one row per configuration" test "$(grep -c '^| sphere:2000 | \(binary\|wide4\) layout, ' "$tmp/report.md")" -eq 18 &&
     check "... no ray leaks through the closed sphere" \
         test "$(grep '^| sphere:2000 |' "$tmp/report.md" | grep -vc '| 0 / [0-9]* |$')" -eq 0 &&
     check "... recommends an exact configuration" grep -q '^\*\*sphere:2000\.\*\* Recommended: ' "$tmp/report.md"
@@ -133,16 +135,21 @@ if [ "$has_python" = 1 ] && [ -f "$tmp/report.json" ]; then
     check "report: exact answers with float vertices, bounded error with quantized ones" python3 - "$tmp/report.json" <<'EOF'
 import json, sys
 rows = json.load(open(sys.argv[1]))["rows"]
-assert len(rows) == 16, len(rows)
-# wide4 (the default): leaf 1, 2, 4; at leaf 8 the float-box reference and four traversals, quantized
-# vertices, zlib; binary: leaf 8, and at leaf 16 its five traversals (the stackless walk is binary's only)
-assert sum(r["layout"] == "wide4 layout" for r in rows) == 10, rows
-assert sum(r["layout"] == "binary layout" for r in rows) == 6, rows
+assert len(rows) == 18, len(rows)
+# wide4 (the default): leaf 1, 2, 4; at leaf 8 the float-box reference and five variants (four traversals,
+# expanded triangles), quantized vertices, zlib; binary: leaf 8, and at leaf 16 its six variants (the
+# stackless walk is binary's only)
+assert sum(r["layout"] == "wide4 layout" for r in rows) == 11, rows
+assert sum(r["layout"] == "binary layout" for r in rows) == 7, rows
 assert sorted(r["traversal"] for r in rows if r["layout"] == "binary layout" and r["leaf_size"] == 16) == \
-    ["distance", "sorted", "stackless", "stream", "unsorted"], rows
+    ["distance", "expanded", "sorted", "stackless", "stream", "unsorted"], rows
 raw = [r for r in rows if r["layout"] == "wide4 layout" and r["leaf_size"] == 8 and r["vertices"] == "float" and r["boxes"] == "q16" and r["zlib_level"] == 0]
 packed = [r for r in rows if r["zlib_level"] > 0]
-assert len(raw) == 4 and len(packed) == 1, (raw, packed)
+assert len(raw) == 5 and len(packed) == 1, (raw, packed)
+# the expanded triangles' copy counts in their bytes: 36 a triangle more than the file
+expanded = [r for r in raw if r["traversal"] == "expanded"][0]
+sorted_raw = [r for r in raw if r["traversal"] == "sorted"][0]
+assert abs(expanded["bytes_per_triangle"] - sorted_raw["bytes_per_triangle"] - 36) < 0.5, (expanded, sorted_raw)
 assert sum(r["default"] for r in rows) == 1 and [r for r in rows if r["default"]][0]["layout"] == "wide4 layout", rows
 assert packed[0]["bytes_per_triangle"] < raw[0]["bytes_per_triangle"], (packed, raw)
 for r in rows:
@@ -171,7 +178,7 @@ panels = [g for g in root.iter(ns + "g") if g.get("class") == "panel"]
 assert len(panels) == 6, len(panels)
 for k, p in enumerate(panels): # the last is size against open time: the float-box reference is no file
     points = [t for t in p.iter(ns + "title")]
-    assert len(points) == (16 if k < 5 else 15), (k, len(points))
+    assert len(points) == (18 if k < 5 else 17), (k, len(points))
     assert sum(1 for x in p.iter(ns + "path") if x.get("class") == "front") == 1
 texts = [t.text or "" for t in root.iter(ns + "text")]
 assert any("ns per ray" in t for t in texts), texts[:5]
@@ -208,8 +215,8 @@ p.feed(page)
 plots = [x for x in p.plots if not x["label"].startswith("legend")]
 assert len(plots) == 6, plots
 for k, x in enumerate(plots):
-    assert x["points"] == (16 if k < 5 else 15) and x["front"] == 1, (k, x)
-assert p.advice == 1 and p.rows == 1 + 16, (p.advice, p.rows)
+    assert x["points"] == (18 if k < 5 else 17) and x["front"] == 1, (k, x)
+assert p.advice == 1 and p.rows == 1 + 18, (p.advice, p.rows)
 assert "Recommended: " in page
 EOF
 else

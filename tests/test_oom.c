@@ -1,4 +1,7 @@
-/* test_oom.c: every allocation of cook, open and cook_to_path failed in turn (clean error, nothing leaked, no partial file), and cooks killed mid-write never damage the destination. */
+/* test_oom.c: every allocation of cook, open, cook_to_path and expand failed in turn (clean error, nothing leaked, no partial file), and cooks killed mid-write never damage the destination. */
+#ifdef HAVE_CONFIG_H
+#include "config.h"
+#endif
 #include <dirent.h>
 #include <math.h>
 #include <setjmp.h>
@@ -162,6 +165,63 @@ static void test_open_oom(void **state)
     rmdir(dir);
     printf("open failure points: raw %zu, zlib %zu, quantized %zu, misaligned raw %zu, zlib by path %zu\n", raw, zlib, q16,
            misaligned, by_path);
+}
+
+/* The closest hits of a fan of rays through the sphere's center, into out[count]. */
+static void cast_fan(const cbvh_file *f, cbvh_hit *out, size_t count)
+{
+    for (size_t i = 0; i < count; i++) {
+        const float a = 0.37f * (float)i, z = 1.0f - 2.0f * (float)(i + 1) / (float)(count + 1);
+        const cbvh_ray r = { { 0.01f, 0.02f, 0.03f }, 0.0f, { cosf(a), sinf(a), z }, INFINITY };
+        cbvh_raycast(f, &r, CBVH_TRAVERSAL_SORTED, &out[i], NULL);
+    }
+}
+
+/* cbvh_file_expand_triangles: its allocation failing leaves the file as it was (same answers, nothing
+ * expanded, nothing leaked); then it expands (SIMD builds) with the same answers, and a second call
+ * allocates nothing. */
+static void test_expand_oom(void **state)
+{
+    (void)state;
+    enum { RAYS = 200 };
+    counting_alloc c;
+    cbvh_allocator a = counting_allocator(&c, -1, 0);
+    cbvh_file *f = NULL;
+    cbvh_error err;
+    assert_int_equal(cbvh_open_memory(file_raw, size_raw, &a, &f, &err), CBVH_OK);
+    cbvh_hit before[RAYS], after[RAYS];
+    cast_fan(f, before, RAYS);
+    assert_int_equal(cbvh_file_expand_triangles(NULL, &err), CBVH_ERROR_INVALID_ARGUMENT);
+    cbvh_file_info info;
+    const long live = c.live;
+#ifdef CBVH_HAVE_SIMD
+    c.fail_at = c.calls;
+    assert_int_equal(cbvh_file_expand_triangles(f, &err), CBVH_ERROR_OUT_OF_MEMORY);
+    assert_non_null(strstr(err.message, "expanded triangles"));
+    assert_int_equal(c.live, live);
+    cbvh_file_get_info(f, &info, sizeof info);
+    assert_int_equal(info.expanded_bytes, 0);
+    cast_fan(f, after, RAYS);
+    assert_memory_equal(before, after, sizeof before);
+    c.fail_at = -1;
+#endif
+    assert_int_equal(cbvh_file_expand_triangles(f, &err), CBVH_OK);
+    cbvh_file_get_info(f, &info, sizeof info);
+#ifdef CBVH_HAVE_SIMD
+    /* 36 bytes a triangle, in groups of four */
+    assert_int_equal(info.expanded_bytes, 144u * ((info.triangle_count + 3u) / 4u));
+    assert_int_equal(c.live, live + 1);
+#else
+    assert_int_equal(info.expanded_bytes, 0); /* the scalar test has no use for the copy */
+    assert_int_equal(c.live, live);
+#endif
+    const long calls = c.calls;
+    assert_int_equal(cbvh_file_expand_triangles(f, &err), CBVH_OK);
+    assert_int_equal(c.calls, calls);
+    cast_fan(f, after, RAYS);
+    assert_memory_equal(before, after, sizeof before);
+    cbvh_close(f);
+    assert_int_equal(c.live, 0);
 }
 
 /* Names in `dir`, other than `keep`. */
@@ -342,6 +402,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_cook_oom),
         cmocka_unit_test(test_open_oom),
+        cmocka_unit_test(test_expand_oom),
         cmocka_unit_test(test_cook_to_path_oom),
         cmocka_unit_test(test_killed_cook),
     };

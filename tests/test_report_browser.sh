@@ -33,6 +33,6 @@ mkdir -p tests
 run 0 "report --html on two scenes" "$CBVH" report --gen sphere:3000 --gen terrain:2000 --rays 3000 --sample 300 \
     --reps 1 --quiet --html "$tmp/report.html" &&
     check "Chromium: no console errors, six plots per mesh with every point, label and detail box, labels apart and inside" \
-        python3 "$(dirname "$0")/browser_check.py" "$chromium" "$tmp/report.html" "$shot" 2 16 &&
+        python3 "$(dirname "$0")/browser_check.py" "$chromium" "$tmp/report.html" "$shot" 2 18 &&
     echo "     screenshot: $(pwd)/$shot"
 finish

@@ -147,18 +147,34 @@ double bench_open_median(const char *command, const char *path, unsigned reps, i
     return median_of(times, n);
 }
 
-void bench_cbvh_variant(bench_cbvh *e, const cbvh_file *file, int k)
+double bench_open_expanded(const char *command, const char *path, int cpu_clock, cbvh_file **out, int *status)
+{
+    *status = cli_open(command, path, out);
+    if (*status)
+        return 0.0;
+    cbvh_error err;
+    const double start = bench_clock(cpu_clock);
+    if (cbvh_file_expand_triangles(*out, &err) != CBVH_OK) {
+        *status = cli_report(command, path, &err);
+        cbvh_close(*out);
+        *out = NULL;
+        return 0.0;
+    }
+    return bench_clock(cpu_clock) - start;
+}
+
+void bench_cbvh_variant(bench_cbvh *e, const cbvh_file *file, const cbvh_file *expanded, int k)
 {
     static const struct {
         const char *name;
         cbvh_traversal traversal;
-        int stream;
+        int stream, expanded;
     } variants[BENCH_CBVH_VARIANTS] = {
-        { "sorted", CBVH_TRAVERSAL_SORTED, 0 },       { "unsorted", CBVH_TRAVERSAL_UNSORTED, 0 },
-        { "stackless", CBVH_TRAVERSAL_STACKLESS, 0 }, { "distance", CBVH_TRAVERSAL_DISTANCE, 0 },
-        { "stream", CBVH_TRAVERSAL_SORTED, 1 },
+        { "sorted", CBVH_TRAVERSAL_SORTED, 0, 0 },       { "unsorted", CBVH_TRAVERSAL_UNSORTED, 0, 0 },
+        { "stackless", CBVH_TRAVERSAL_STACKLESS, 0, 0 }, { "distance", CBVH_TRAVERSAL_DISTANCE, 0, 0 },
+        { "stream", CBVH_TRAVERSAL_SORTED, 1, 0 },       { "expanded", CBVH_TRAVERSAL_SORTED, 0, 1 },
     };
-    e->file = file;
+    e->file = variants[k].expanded ? expanded : file;
     e->traversal = variants[k].traversal;
     e->stream = variants[k].stream;
     e->name = variants[k].name;

@@ -57,15 +57,22 @@ typedef struct bench_cbvh {
     const cbvh_file *file;
     cbvh_traversal traversal;
     int stream;
-    const char *name; /* "sorted", "unsorted", "stackless", "distance", "stream" */
+    const char *name; /* "sorted", "unsorted", "stackless", "distance", "stream", "expanded" */
 } bench_cbvh;
 
-#define BENCH_CBVH_VARIANTS 5
+#define BENCH_CBVH_VARIANTS 6
 /* Rays per batch of the stream variant (cbvh_raycast_stream_scratch). */
 #define BENCH_STREAM_BATCH 1024
 
-/* Sets *e to variant k (0 <= k < BENCH_CBVH_VARIANTS; 0 is sorted, the default traversal) of file. */
-void bench_cbvh_variant(bench_cbvh *e, const cbvh_file *file, int k);
+/* Sets *e to variant k (0 <= k < BENCH_CBVH_VARIANTS; 0 is sorted, the default traversal) of file; the
+ * "expanded" variant is the sorted traversal of `expanded`, the same file opened again and expanded
+ * (cbvh_file_expand_triangles, bench_open_expanded). */
+void bench_cbvh_variant(bench_cbvh *e, const cbvh_file *file, const cbvh_file *expanded, int k);
+
+/* Opens path again and expands its triangles: returns the seconds (bench_clock) of the expansion alone and
+ * leaves the file in *out; on failure reports it and sets *status (CLI_EXIT_*). */
+double bench_open_expanded(const char *command, const char *path, int cpu_clock, cbvh_file **out,
+                           int *status);
 
 /* A bench_kernel whose engine is a bench_cbvh. */
 void bench_cbvh_kernel(const void *engine, const cbvh_ray *rays, size_t count, cbvh_hit *hits, uint8_t *occluded,

@@ -35,7 +35,8 @@ static const char usage[] =
     "    holds as 8); quantized vertices and zlib sections at the default; the binary layout\n"
     "    at leaf sizes 8 and 16;\n"
     "  - traversals, on each layout at the default leaf size: sorted by the precomputed child\n"
-    "    order, unsorted, distance-sorted at run time, stackless (binary only), batched streams.\n"
+    "    order, unsorted, distance-sorted at run time, stackless (binary only), batched streams,\n"
+    "    and expanded (sorted, the triangles copied by cbvh_file_expand_triangles: its bytes count).\n"
     "Error columns: box inflation (surface area over the exact box, mean and worst), extra nodes\n"
     "and triangles visited per ray against the exact-float reference, hit/miss flips and wrong\n"
     "triangles against a double-precision brute force on a sample of the rays, distance error\n"
@@ -490,15 +491,23 @@ static int measure_cook(report_state *s, mesh_ctx *c, size_t k, int *step, int s
     uint64_t size = stats.file_size;
     cbvh_file *file = NULL;
     double open_seconds = bench_open_median(s->command, path, s->reps, s->cpu_clock, &file, &status);
+    /* the expanded variant's file: opened again, then cbvh_file_expand_triangles */
+    cbvh_file *expanded = NULL;
+    double expand_seconds = 0.0;
+    if (!status)
+        expand_seconds = bench_open_expanded(s->command, path, s->cpu_clock, &expanded, &status);
     if (!s->out_dir)
         unlink(path);
-    if (status)
+    if (status) {
+        cbvh_close(file);
         return status;
+    }
 
     exact_tree exact;
     tree_stats ts;
     if (!exact_tree_build(&exact, file) || !tree_stats_compute(file, 1.0, 1.0, &ts)) {
         cbvh_close(file);
+        cbvh_close(expanded);
         cli_error(s->command, NULL, "out of memory");
         return CLI_EXIT_USAGE;
     }
@@ -518,7 +527,7 @@ static int measure_cook(report_state *s, mesh_ctx *c, size_t k, int *step, int s
             continue;
         bench_cbvh engine;
         if (v >= 0) {
-            bench_cbvh_variant(&engine, file, v);
+            bench_cbvh_variant(&engine, file, expanded, v);
             if (engine.traversal == CBVH_TRAVERSAL_STACKLESS && cook_configs[k].layout != CBVH_LAYOUT_BINARY)
                 continue;
         }
@@ -546,8 +555,12 @@ static int measure_cook(report_state *s, mesh_ctx *c, size_t k, int *step, int s
         row->is_default = is_default && v == 0;
         row->traversal = v < 0 ? "sorted" : engine.name;
         describe_row(row, layout_names[cook_configs[k].layout]);
-        row->bytes_per_triangle = (double)size / (double)c->mesh.triangle_count;
-        row->open_seconds = v < 0 ? -1.0 : open_seconds;
+        const int is_expanded = v >= 0 && engine.file == expanded;
+        cbvh_file_info xinfo;
+        cbvh_file_get_info(expanded, &xinfo, sizeof xinfo);
+        row->bytes_per_triangle =
+            (double)(size + (is_expanded ? xinfo.expanded_bytes : 0u)) / (double)c->mesh.triangle_count;
+        row->open_seconds = v < 0 ? -1.0 : open_seconds + (is_expanded ? expand_seconds : 0.0);
         row->extra_nodes = row->nodes_per_ray - base.nodes_per_ray;
         row->extra_tris = row->tris_per_ray - base.tris_per_ray;
         row->inflation_mean = v < 0 ? 0.0 : ts.inflation_mean;
@@ -560,6 +573,7 @@ done:
         cli_error(s->command, NULL, "out of memory or cannot start a thread");
     exact_tree_free(&exact);
     cbvh_close(file);
+    cbvh_close(expanded);
     return status;
 }
 

@@ -33,6 +33,9 @@ struct cbvh_file {
     const void *materials;       /* per cooked triangle, or one for all (CBVH_MATS_UNIFORM); NULL = all 0 */
     uint32_t material_encoding;  /* CBVH_MATS_* */
     const uint8_t *material_names; /* the MATERIAL_NAMES section (info.material_name_count names), or NULL */
+    const void *quads; /* NULL, or the triangles expanded for the ray test (cbvh_file_expand_triangles,
+                        * SIMD builds): struct leaf_quad g (query/leaf.h) holds cooked triangles
+                        * 4g..4g+3, the last group padded with the last triangle */
 
     float grid_origin[3];
     float grid_scale[3];

@@ -9,7 +9,8 @@
 
 void cbvh_file_own(struct cbvh_file *f, void *p)
 {
-    /* At most the six known sections, the unmap table and a read() buffer: the table cannot fill up. */
+    /* At most the six known sections, the unmap table, a read() buffer and the expanded triangles: the
+     * table cannot fill up. */
     assert(f->owned_count < sizeof f->owned / sizeof f->owned[0]);
     f->owned[f->owned_count++] = p;
 }

@@ -154,6 +154,38 @@ CBVH_KERNEL void leaf_group(uint32_t n, uint32_t lane[4], uint32_t *kept)
     *kept = (1u << n) - 1u;
 }
 
+/* The groups of four in which a leaf's cooked triangles [first, end) are tested: group k (from
+ * leaf_groups_begin, stepping by 4 while k < end) holds triangles k + j in its lanes j of *mask. A file with
+ * expanded triangles (cbvh_file_expand_triangles) has them stored four by four from triangle 0, read in
+ * place: k is a multiple of 4 and the lanes outside the leaf are masked. Otherwise the groups start at
+ * `first` and are gathered into `scratch`. At most CBVH_LEAF_GROUPS groups a leaf. */
+#define CBVH_LEAF_GROUPS ((CBVH_MAX_LEAF_SIZE + 6u) / 4u)
+
+static inline uint32_t leaf_groups_begin(const struct leaf_quad *quads, uint32_t first)
+{
+    return quads ? first & ~3u : first;
+}
+
+/* Group k of a leaf [first, end) (see above): quads is the file's expanded triangles or NULL; the other
+ * arguments are leaf_gather4's, read once per leaf by the caller. */
+CBVH_KERNEL const struct leaf_quad *
+leaf_group_load(const struct leaf_quad *restrict quads, const void *restrict tris, const int tri_enc,
+                const void *restrict verts, const int vert_enc, const float *restrict grid_origin,
+                const float *restrict grid_scale, uint32_t first, uint32_t end, uint32_t k,
+                struct leaf_quad *restrict scratch, uint32_t *mask)
+{
+    const uint32_t past = end - k < 4u ? end - k : 4u; /* the lanes before the leaf's end */
+    if (quads) {
+        const uint32_t before = first > k ? first - k : 0u; /* the lanes before its start */
+        *mask = ((1u << past) - 1u) & ~((1u << before) - 1u);
+        return quads + k / 4u;
+    }
+    uint32_t lane[4];
+    leaf_group(past, lane, mask);
+    leaf_gather4(tris, tri_enc, verts, vert_enc, grid_origin, grid_scale, k, lane, scratch);
+    return scratch;
+}
+
 /* The first test of cbvh_ray_triangle (ray_triangle.h) on the four triangles of q at once, lane for lane
  * the same float operations in the same order (the build contracts no multiply-add): the vertices relative
  * to the origin, sheared, then the three edge functions, left in edge[e][j] (function e of lane j).
@@ -225,16 +257,18 @@ CBVH_KERNEL int leaf_loop(const struct cbvh_file *restrict f, uint32_t first, ui
 #ifdef CBVH_HAVE_SIMD
     /* Four triangles at a time through the SIMD filter; the scalar test on the lanes it keeps, in order. */
     if (!scalar && count > 1) {
-        for (uint32_t k = first; k < first + count; k += 4) {
-            uint32_t lane[4], group;
-            leaf_group(first + count - k < 4 ? first + count - k : 4, lane, &group);
-            struct leaf_quad q;
+        const struct leaf_quad *restrict quads = (const struct leaf_quad *)f->quads;
+        const uint32_t end = first + count;
+        for (uint32_t k = leaf_groups_begin(quads, first); k < end; k += 4) {
+            uint32_t group;
+            struct leaf_quad scratch;
+            const struct leaf_quad *q = leaf_group_load(quads, tris, tri_enc, verts, vert_enc, origin, scale,
+                                                        first, end, k, &scratch, &group);
             float edge[3][4];
-            leaf_gather4(tris, tri_enc, verts, vert_enc, origin, scale, k, lane, &q);
             /* the lanes the filter keeps, lowest first */
-            for (uint32_t kept = ~leaf_reject4_sse2(s, &q, edge) & group; kept; kept &= kept - 1u) {
+            for (uint32_t kept = ~leaf_reject4_sse2(s, q, edge) & group; kept; kept &= kept - 1u) {
                 const uint32_t j = cbvh_lowest_lane(kept);
-                if (leaf_lane_test(s, &q, edge, j, tmin, best_t, want_uv, &t, &u, &v) &&
+                if (leaf_lane_test(s, q, edge, j, tmin, best_t, want_uv, &t, &u, &v) &&
                     leaf_take(f, gate, k + j, t, u, v, any, &best_t, best))
                     return 1;
             }

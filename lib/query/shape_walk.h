@@ -85,8 +85,9 @@ static inline uint32_t cbvh_grid_range4_hits(const uint8_t *node, const struct c
 #endif
 
 #ifdef CBVH_HAVE_SIMD
-/* A query's test of four triangles at once: cooked triangles k + j for the lanes j of `group`, gathered
- * in q (leaf_gather4; the other lanes repeat triangle k). Returns 1 to end the walk. */
+/* A query's test of four triangles at once: cooked triangles k + j for the lanes j of `group` in q
+ * (leaf_group_load; the other lanes hold other triangles, which the test must ignore). Returns 1 to end
+ * the walk. */
 typedef int (*cbvh_shape_quad_fn)(void *query, uint32_t k, const struct leaf_quad *q, uint32_t group);
 
 /* The leaf's cooked triangles [first, first + count) to `test`, four at a time, with the file's encodings
@@ -95,13 +96,15 @@ CBVH_KERNEL int shape_leaf_quads_as(const struct cbvh_file *f, uint32_t first, u
                                     cbvh_shape_quad_fn test, void *query, const int tri_enc,
                                     const int vert_enc)
 {
-    const void *tris = f->triangles, *verts = f->vertices;
-    for (uint32_t k = first; k < first + count; k += 4) {
-        uint32_t lane[4], group;
-        leaf_group(first + count - k < 4 ? first + count - k : 4, lane, &group);
-        struct leaf_quad q;
-        leaf_gather4(tris, tri_enc, verts, vert_enc, f->grid_origin, f->grid_scale, k, lane, &q);
-        if (test(query, k, &q, group))
+    const struct leaf_quad *quads = (const struct leaf_quad *)f->quads;
+    const uint32_t end = first + count;
+    for (uint32_t k = leaf_groups_begin(quads, first); k < end; k += 4) {
+        uint32_t group;
+        struct leaf_quad scratch;
+        const struct leaf_quad *q =
+            leaf_group_load(quads, f->triangles, tri_enc, f->vertices, vert_enc, f->grid_origin,
+                            f->grid_scale, first, end, k, &scratch, &group);
+        if (test(query, k, q, group))
             return 1;
     }
     return 0;

@@ -86,7 +86,7 @@ CBVH_KERNEL void stream_take(struct cbvh_stream_batch *restrict b, uint32_t r, u
  * filter on it, the scalar test deciding only the lanes it keeps: the gather, most of a single ray's
  * leaf cost, is shared by the batch. Without, triangles outside and rays inside, each triangle fetched
  * once. Each ray meets its triangles in index order either way, and the tie rule makes its answer the
- * single-ray walk's. */
+ * single-ray walk's. Expanded triangles (cbvh_file_expand_triangles) are read in place instead. */
 CBVH_KERNEL void stream_leaf(const struct cbvh_file *f, struct cbvh_stream_batch *restrict b,
                              const uint16_t *restrict live, uint32_t m, uint32_t tri0, uint32_t count, const int any,
                              int simd, uint8_t *restrict occluded)
@@ -94,16 +94,16 @@ CBVH_KERNEL void stream_leaf(const struct cbvh_file *f, struct cbvh_stream_batch
     float a[3], v1[3], v2[3];
 #ifdef CBVH_HAVE_SIMD
     if (simd && count > 1) {
-        const float origin[3] = {f->grid_origin[0], f->grid_origin[1], f->grid_origin[2]};
-        const float scale[3] = {f->grid_scale[0], f->grid_scale[1], f->grid_scale[2]};
-        struct leaf_quad q[CBVH_MAX_LEAF_SIZE / 4];
-        uint32_t lanes[CBVH_MAX_LEAF_SIZE / 4];
-        const uint32_t groups = (count + 3) / 4;
-        for (uint32_t g = 0; g < groups; g++) {
-            uint32_t lane[4];
-            leaf_group(count - 4 * g < 4 ? count - 4 * g : 4, lane, &lanes[g]);
-            leaf_gather4(f->triangles, (int)f->triangle_encoding, f->vertices, (int)f->vertex_encoding,
-                         origin, scale, tri0 + 4 * g, lane, &q[g]);
+        struct leaf_quad scratch[CBVH_LEAF_GROUPS];
+        const struct leaf_quad *q[CBVH_LEAF_GROUPS];
+        uint32_t lanes[CBVH_LEAF_GROUPS], group_first[CBVH_LEAF_GROUPS], groups = 0;
+        const uint32_t end = tri0 + count;
+        const struct leaf_quad *quads = (const struct leaf_quad *)f->quads;
+        for (uint32_t k = leaf_groups_begin(quads, tri0); k < end; k += 4, groups++) {
+            group_first[groups] = k;
+            q[groups] = leaf_group_load(quads, f->triangles, (int)f->triangle_encoding, f->vertices,
+                                        (int)f->vertex_encoding, f->grid_origin, f->grid_scale, tri0, end, k,
+                                        &scratch[groups], &lanes[groups]);
         }
         for (uint32_t j = 0; j < m; j++) {
             const uint32_t r = live[j];
@@ -111,13 +111,13 @@ CBVH_KERNEL void stream_leaf(const struct cbvh_file *f, struct cbvh_stream_batch
             for (uint32_t g = 0; g < groups; g++) {
                 float edge[3][4];
                 /* the lanes the filter keeps, lowest first */
-                for (uint32_t kept = ~leaf_reject4_sse2(s, &q[g], edge) & lanes[g]; kept; kept &= kept - 1u) {
+                for (uint32_t kept = ~leaf_reject4_sse2(s, q[g], edge) & lanes[g]; kept; kept &= kept - 1u) {
                     const uint32_t lane = cbvh_lowest_lane(kept);
                     const float *box_ray = b->box_ray[r];
                     float t, u, v;
-                    const int hit = leaf_lane_test(s, &q[g], edge, lane, box_ray[CBVH_LANE_TMIN],
+                    const int hit = leaf_lane_test(s, q[g], edge, lane, box_ray[CBVH_LANE_TMIN],
                                                    box_ray[CBVH_LANE_TMAX], !any, &t, &u, &v);
-                    stream_take(b, r, tri0 + 4 * g + lane, hit, t, u, v, any, occluded);
+                    stream_take(b, r, group_first[g] + lane, hit, t, u, v, any, occluded);
                 }
             }
         }

@@ -5,6 +5,7 @@
 #include <stdio.h>
 
 #include "cbvh.h"
+#include "support/reference.h"
 
 /* Test hook of the library (lib/query/raycast.h), hidden in the shared
  * library: programs linked statically can choose the scalar child test;
@@ -44,9 +45,11 @@ static inline const char *test_layout_name(void)
 
 /* Runs `tests` on the binary layout, then on wide4 with SIMD child tests,
  * then (when `scalar` is set and the program can reach the hook) on wide4
- * with the scalar child test. Returns the number of failed tests over all
- * runs. A function, so the runs happen in this order. */
-static inline int test_run_layouts(const char *names[3], const struct CMUnitTest *tests, size_t count, int scalar)
+ * with the scalar child test, then on wide4 with the files ref_cook_open opens
+ * expanded (cbvh_file_expand_triangles). Returns the number of failed tests
+ * over all runs. A function, so the runs happen in this order. */
+static inline int test_run_layouts(const char *names[4], const struct CMUnitTest *tests, size_t count,
+                                   int scalar)
 {
     int failed = 0;
     test_layout = CBVH_LAYOUT_BINARY;
@@ -58,11 +61,15 @@ static inline int test_run_layouts(const char *names[3], const struct CMUnitTest
         failed += _cmocka_run_group_tests(names[2], tests, count, NULL, NULL);
         test_set_scalar(0);
     }
+    ref_expand_triangles = 1;
+    failed += _cmocka_run_group_tests(names[3], tests, count, NULL, NULL);
+    ref_expand_triangles = 0;
     return failed;
 }
 
-#define TEST_RUN_LAYOUTS(tests, scalar)                                                                   \
-    test_run_layouts((const char *[3]){"binary layout", "wide4 layout", "wide4 layout, scalar child test"}, \
+#define TEST_RUN_LAYOUTS(tests, scalar)                                                                      \
+    test_run_layouts((const char *[4]){"binary layout", "wide4 layout", "wide4 layout, scalar child test",   \
+                                       "wide4 layout, expanded triangles"},                                  \
                      tests, sizeof(tests) / sizeof((tests)[0]), scalar)
 
 #endif

@@ -60,6 +60,8 @@ void ref_tris_free(ref_tris *tris)
     tris->count = 0;
 }
 
+int ref_expand_triangles;
+
 cbvh_result ref_cook_open(const float *positions, size_t vertex_count, const uint32_t *indices, size_t triangle_count,
                           const cbvh_cook_options *options, void **buffer, cbvh_file **file)
 {
@@ -71,6 +73,13 @@ cbvh_result ref_cook_open(const float *positions, size_t vertex_count, const uin
     if (r != CBVH_OK)
         return r;
     r = cbvh_open_memory(*buffer, size, NULL, file, NULL);
+    if (r == CBVH_OK && ref_expand_triangles) {
+        r = cbvh_file_expand_triangles(*file, NULL);
+        if (r != CBVH_OK) {
+            cbvh_close(*file);
+            *file = NULL;
+        }
+    }
     if (r != CBVH_OK) {
         cbvh_buffer_free(NULL, *buffer);
         *buffer = NULL;

@@ -20,9 +20,12 @@ int ref_tris_from_file(const cbvh_file *file, uint32_t original_count, ref_tris 
 void ref_tris_free(ref_tris *tris);
 
 /* Cooks the mesh (positions xyz, 3 indices per triangle) with `options` (NULL
- * for the defaults) and opens the result from memory. *buffer holds the file
+ * for the defaults) and opens the result from memory, then expands its
+ * triangles (cbvh_file_expand_triangles) when ref_expand_triangles is set (the
+ * tests' runs of tests/support/layouts.h). *buffer holds the file
  * bytes until the caller closes the file and frees it with cbvh_buffer_free.
  * Returns CBVH_OK or the first error. */
+extern int ref_expand_triangles;
 cbvh_result ref_cook_open(const float *positions, size_t vertex_count, const uint32_t *indices, size_t triangle_count,
                           const cbvh_cook_options *options, void **buffer, cbvh_file **file);
 
