@@ -300,7 +300,7 @@ CBVH_FORCE_INLINE int overlap_quad(void *query, uint32_t k, const struct leaf_qu
 {
     const struct overlap_query *q = query;
     uint32_t touch, keep = cbvh_cull4_keep(&q->cull4, t->c, &touch) & group;
-    /* a ball's float tests leave only lanes near the radius, or far from moderate, to the exact test */
+    /* a ball's float tests leave only lanes near the radius, slivers, or odd sizes to the exact test */
     const enum overlap_left rest = q->region->shape.kind == CBVH_SHAPE_SPHERE ? OVERLAP_EXACT : OVERLAP_CULL;
     for (; keep; keep &= keep - 1u) {
         const uint32_t j = cbvh_lowest_lane(keep);

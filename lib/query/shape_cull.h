@@ -210,14 +210,15 @@ static inline __m128 cull4_reach(const struct cbvh_cull4 *w, const __m128 n[3], 
                       _mm_mul_ps(w->half[2], cull4_abs(cull4_dot(n, w->axes[2]))));
 }
 
-/* The lanes of a triangle of moderate size far from a sliver (cbvh_cull4_keep's bounds: 2^-20 <= span,
- * size <= 2^20, |n|^2 >= span^4 / 16), where the float tests of edges and distances hold their margins. */
-static inline __m128 cull4_moderate(const struct cull4_frame *f, __m128 size)
+/* The lanes of a triangle of moderate size (cbvh_cull4_keep's bounds: 2^-20 <= span, size <= 2^20) with
+ * |n|^2 >= sliver span^4: far from a sliver with sliver = 1/16, where the float tests of edges and distances
+ * hold their margins; not quite a sliver with sliver = 2^-20, where the tests that read no normal do. */
+static inline __m128 cull4_moderate(const struct cull4_frame *f, __m128 size, float sliver)
 {
     const __m128 span2 = _mm_mul_ps(f->span, f->span);
     const __m128 sized =
         _mm_and_ps(_mm_cmpge_ps(f->span, _mm_set1_ps(0x1p-20f)), _mm_cmple_ps(size, _mm_set1_ps(0x1p20f)));
-    return _mm_and_ps(sized, _mm_cmpge_ps(f->nn, _mm_mul_ps(_mm_set1_ps(0x1p-4f), _mm_mul_ps(span2, span2))));
+    return _mm_and_ps(sized, _mm_cmpge_ps(f->nn, _mm_mul_ps(_mm_set1_ps(sliver), _mm_mul_ps(span2, span2))));
 }
 
 /* The lanes where the shape, its core's points at heights h0 and h1 (times |n|) over the plane, moved by
@@ -233,16 +234,17 @@ static inline __m128 cull4_apart(__m128 h0, __m128 h1, __m128 m, __m128 reach, _
     return _mm_and_ps(_mm_cmpge_ps(span, _mm_set1_ps(0x1p-30f)), _mm_or_ps(above, below));
 }
 
-/* The lanes where end point p (height h over the plane, times |n|) lies within sqrt(reach2) of the triangle:
- * of the plane where it projects into the triangle with every edge function (d[k] x (p - c[k])) . n at
- * least margin, or of an edge (cbvh_cull_triangle's still tests, in float). outside[k] keeps the lanes
- * where p also lies outside edge k by more than the radius r, the margin; *far the lanes where p lies
- * outside an edge by the margin and farther than sqrt(far2) from all three: its projection then lies out of
- * the triangle, whose nearest point to p is on an edge, farther than sqrt(far2). */
+/* The lanes where end point p (height h over the plane, times |n|) lies within sqrt(reach2) of an edge;
+ * *inside_plane gets those where it lies within sqrt(reach2) of the plane where it projects into the triangle
+ * with every edge function (d[k] x (p - c[k])) . n at least margin (cbvh_cull_triangle's still tests, in
+ * float: those of an edge read no normal). outside[k] keeps the lanes where p also lies outside edge k by
+ * more than the radius r, the margin; *far the lanes where p lies outside an edge by the margin and farther
+ * than sqrt(far2) from all three: its projection then lies out of the triangle, whose nearest point to p is
+ * on an edge, farther than sqrt(far2). */
 static inline __m128 cull4_end_touches(const __m128 c[3][3], const __m128 d[3][3], const __m128 dd[3],
                                        const __m128 n[3], const __m128 nn, const __m128 p[3], __m128 h,
                                        __m128 r, __m128 reach2, __m128 far2, __m128 margin, __m128 outside[3],
-                                       __m128 *far)
+                                       __m128 *inside_plane, __m128 *far)
 {
     __m128 w[3][3], w2[3];
     for (int k = 0; k < 3; k++) {
@@ -275,7 +277,8 @@ static inline __m128 cull4_end_touches(const __m128 c[3][3], const __m128 d[3][3
         outside[k] = _mm_and_ps(outside[k], _mm_and_ps(out_of, beyond));
     }
     *far = _mm_and_ps(off, clear);
-    return _mm_or_ps(inside, near);
+    *inside_plane = inside;
+    return near;
 }
 
 /* Four triangles (quad[v][axis], 16-byte aligned, a lane each: leaf_gather4) against the still shape of w, in
@@ -284,15 +287,20 @@ static inline __m128 cull4_end_touches(const __m128 c[3][3], const __m128 d[3][3
  * span^2 size, 10 times this test's error bound in float, when span is at least 2^-30, far from underflow; a
  * coordinate near overflow makes the margin infinite or a distance NaN, and keeps the lane). A lane dropped
  * here is one cbvh_cull_triangle, and the exact tests, would drop. *touch gets the kept lanes where a ball or
- * capsule surely touches the triangle, by cbvh_cull_triangle's still tests in float, on a triangle far from a
- * sliver (|n|^2 >= span^4 / 16) of moderate size (2^-20 <= span, size <= 2^20, so nothing overflows or leaves
- * the normal range): an end within the radius less 2^-13 size of the plane where it projects into the
- * triangle, each edge function at least 2^-12 span^3 size, or of an edge. There too a lane is dropped when
- * both ends lie outside one edge by more than the radius, that margin, and for a ball when its center lies
- * outside an edge by the edge functions' margin and farther than the radius plus 2^-13 size from every edge
- * (cull4_end_touches' *far). These margins are 4 to 8 times the float error of distances and edge functions
- * there (the distance of a point to an edge's line from a cross product whose rounding is a few ulps of size,
- * not of the distance), so the exact tests find the distance below the radius, or above it. */
+ * capsule surely touches the triangle, by cbvh_cull_triangle's still tests in float, on a triangle of
+ * moderate size (2^-20 <= span, size <= 2^20, so nothing overflows or leaves the normal range): an end within
+ * the radius less 2^-13 size of the plane where it projects into the triangle, each edge function at least
+ * 2^-12 span^3 size, on a triangle far from a sliver (|n|^2 >= span^4 / 16), or of an edge, on one no sliver
+ * by cbvh_cull_triangle's bound (|n|^2 >= 2^-20 span^4). There too a lane is dropped when both ends lie
+ * outside one edge by more than the radius, that margin, far from a sliver, and, no sliver, for a ball when
+ * its center lies outside an edge by the edge functions' margin and farther than the radius plus 2^-13 size
+ * from every edge (cull4_end_touches' *far). These margins are 4 to 8 times the float error of distances and
+ * edge functions there (the distance of a point to an edge's line from a cross product whose rounding is a
+ * few ulps of size, not of the distance; an edge function's below 2^-14 span^3 size, whatever |n|), so the
+ * exact tests find the distance below the radius, or above it: on a triangle no sliver, the error of their
+ * barycentrics (2^-45 span^3 size / |n|^2) moves the point they take for the projection by less than 2^-21
+ * size, and the signs they read off the edge functions are those of the float tests. Only the plane's
+ * distance and the distance outside an edge divide by |n|, hence the stricter bound there. */
 CBVH_FORCE_INLINE uint32_t cbvh_cull4_keep(const struct cbvh_cull4 *w, const float quad[3][3][4],
                                            uint32_t *touch)
 {
@@ -321,7 +329,7 @@ CBVH_FORCE_INLINE uint32_t cbvh_cull4_keep(const struct cbvh_cull4 *w, const flo
     __m128 keep = _mm_andnot_ps(apart, in);
     if (w->box || !_mm_movemask_ps(keep))
         return (uint32_t)_mm_movemask_ps(keep);
-    const __m128 moderate = cull4_moderate(&f, size);
+    const __m128 moderate = cull4_moderate(&f, size, 0x1p-4f), fair = cull4_moderate(&f, size, 0x1p-20f);
     const __m128 reach_in = _mm_sub_ps(w->radius, _mm_mul_ps(_mm_set1_ps(0x1p-13f), size));
     const __m128 reaches = _mm_cmpgt_ps(reach_in, _mm_setzero_ps()); /* else no point is near enough */
     const __m128 reach2 = cull4_select(reaches, _mm_mul_ps(reach_in, reach_in), _mm_set1_ps(-1.0f));
@@ -331,16 +339,19 @@ CBVH_FORCE_INLINE uint32_t cbvh_cull4_keep(const struct cbvh_cull4 *w, const flo
     const __m128 dd[3] = {cull4_dot(d[0], d[0]), cull4_dot(d[1], d[1]), cull4_dot(d[2], d[2])};
     __m128 outside[3] = {moderate, moderate, moderate};
     const __m128 r = w->radius;
-    __m128 far, far1;
-    __m128 sure = cull4_end_touches(c, d, dd, n, nn, w->p0, s0, r, reach2, far2, margin, outside, &far);
+    __m128 far, far1, inside, inside1;
+    __m128 near =
+        cull4_end_touches(c, d, dd, n, nn, w->p0, s0, r, reach2, far2, margin, outside, &inside, &far);
     if (w->capsule) {
-        sure = _mm_or_ps(sure, cull4_end_touches(c, d, dd, n, nn, w->p1, s1, r, reach2, far2, margin, outside,
-                                                 &far1));
+        near = _mm_or_ps(near, cull4_end_touches(c, d, dd, n, nn, w->p1, s1, r, reach2, far2, margin, outside,
+                                                 &inside1, &far1));
+        inside = _mm_or_ps(inside, inside1);
         far = _mm_setzero_ps(); /* the ends far from the triangle tell nothing of the segment between them */
     }
-    far = _mm_and_ps(far, moderate);
+    far = _mm_and_ps(far, fair);
     keep = _mm_andnot_ps(_mm_or_ps(_mm_or_ps(outside[0], outside[1]), _mm_or_ps(outside[2], far)), keep);
-    *touch = (uint32_t)_mm_movemask_ps(_mm_and_ps(_mm_and_ps(sure, moderate), keep));
+    const __m128 sure = _mm_or_ps(_mm_and_ps(inside, moderate), _mm_and_ps(near, fair));
+    *touch = (uint32_t)_mm_movemask_ps(_mm_and_ps(sure, keep));
     return (uint32_t)_mm_movemask_ps(keep);
 }
 
@@ -399,7 +410,7 @@ CBVH_FORCE_INLINE uint32_t cbvh_cull4_sweep(const struct cbvh_cull4 *w, const fl
         const __m128 beyond = _mm_cmpgt_ps(_mm_mul_ps(out, out), _mm_mul_ps(r2nn, cull4_dot(dk, dk)));
         outside = _mm_or_ps(outside, _mm_and_ps(_mm_cmpgt_ps(out, zero), beyond));
     }
-    keep = _mm_andnot_ps(_mm_and_ps(outside, cull4_moderate(&f, size)), keep);
+    keep = _mm_andnot_ps(_mm_and_ps(outside, cull4_moderate(&f, size, 0x1p-4f)), keep);
     return (uint32_t)_mm_movemask_ps(keep);
 }
 #endif
