@@ -237,14 +237,14 @@ static inline __m128 cull4_apart(__m128 h0, __m128 h1, __m128 m, __m128 reach, _
 /* The lanes where end point p (height h over the plane, times |n|) lies within sqrt(reach2) of an edge;
  * *inside_plane gets those where it lies within sqrt(reach2) of the plane where it projects into the triangle
  * with every edge function (d[k] x (p - c[k])) . n at least margin (cbvh_cull_triangle's still tests, in
- * float: those of an edge read no normal). outside[k] keeps the lanes where p also lies outside edge k by
- * more than the radius r, the margin; *far the lanes where p lies outside an edge by the margin and farther
- * than sqrt(far2) from all three: its projection then lies out of the triangle, whose nearest point to p is
- * on an edge, farther than sqrt(far2). */
-static inline __m128 cull4_end_touches(const __m128 c[3][3], const __m128 d[3][3], const __m128 dd[3],
-                                       const __m128 n[3], const __m128 nn, const __m128 p[3], __m128 h,
-                                       __m128 r, __m128 reach2, __m128 far2, __m128 margin, __m128 outside[3],
-                                       __m128 *inside_plane, __m128 *far)
+ * float: those of an edge read no normal). outside[k], unless NULL, keeps the lanes where p also lies outside
+ * edge k by more than the radius r, the margin; *far the lanes where p lies outside an edge by the margin and
+ * farther than sqrt(far2) from all three: its projection then lies out of the triangle, whose nearest point
+ * to p is on an edge, farther than sqrt(far2). */
+CBVH_FORCE_INLINE __m128 cull4_end_touches(const __m128 c[3][3], const __m128 d[3][3], const __m128 dd[3],
+                                           const __m128 n[3], const __m128 nn, const __m128 p[3], __m128 h,
+                                           __m128 r, __m128 reach2, __m128 far2, __m128 margin,
+                                           __m128 outside[3], __m128 *inside_plane, __m128 *far)
 {
     __m128 w[3][3], w2[3];
     for (int k = 0; k < 3; k++) {
@@ -270,11 +270,13 @@ static inline __m128 cull4_end_touches(const __m128 c[3][3], const __m128 d[3][3
         inside = _mm_and_ps(inside, _mm_cmpge_ps(e, margin));
         near = _mm_or_ps(near, cull4_select(before, end0, cull4_select(past, end1, line)));
         clear = _mm_and_ps(clear, cull4_select(before, far0, cull4_select(past, far1, far_line)));
-        const __m128 out_r2 = _mm_mul_ps(_mm_mul_ps(r, r), _mm_mul_ps(nn, dd[k]));
         const __m128 out_of = _mm_cmpgt_ps(out, _mm_setzero_ps());
-        const __m128 beyond = _mm_cmpgt_ps(_mm_mul_ps(out, out), out_r2);
         off = _mm_or_ps(off, out_of);
-        outside[k] = _mm_and_ps(outside[k], _mm_and_ps(out_of, beyond));
+        if (outside) {
+            const __m128 out_r2 = _mm_mul_ps(_mm_mul_ps(r, r), _mm_mul_ps(nn, dd[k]));
+            const __m128 beyond = _mm_cmpgt_ps(_mm_mul_ps(out, out), out_r2);
+            outside[k] = _mm_and_ps(outside[k], _mm_and_ps(out_of, beyond));
+        }
     }
     *far = _mm_and_ps(off, clear);
     *inside_plane = inside;
@@ -291,10 +293,11 @@ static inline __m128 cull4_end_touches(const __m128 c[3][3], const __m128 d[3][3
  * moderate size (2^-20 <= span, size <= 2^20, so nothing overflows or leaves the normal range): an end within
  * the radius less 2^-13 size of the plane where it projects into the triangle, each edge function at least
  * 2^-12 span^3 size, on a triangle far from a sliver (|n|^2 >= span^4 / 16), or of an edge, on one no sliver
- * by cbvh_cull_triangle's bound (|n|^2 >= 2^-20 span^4). There too a lane is dropped when both ends lie
- * outside one edge by more than the radius, that margin, far from a sliver, and, no sliver, for a ball when
- * its center lies outside an edge by the edge functions' margin and farther than the radius plus 2^-13 size
- * from every edge (cull4_end_touches' *far). These margins are 4 to 8 times the float error of distances and
+ * by cbvh_cull_triangle's bound (|n|^2 >= 2^-20 span^4). There too a lane is dropped, for a capsule, when
+ * both ends lie outside one edge by more than the radius, that margin, far from a sliver, and, for a ball, no
+ * sliver, when its center lies outside an edge by the edge functions' margin and farther than the radius plus
+ * 2^-13 size from every edge (cull4_end_touches' *far: it drops what the capsule's test would for a ball, but
+ * for a band 2^-13 size wide, at less cost). These margins are 4 to 8 times the float error of distances and
  * edge functions there (the distance of a point to an edge's line from a cross product whose rounding is a
  * few ulps of size, not of the distance; an edge function's below 2^-14 span^3 size, whatever |n|), so the
  * exact tests find the distance below the radius, or above it: on a triangle no sliver, the error of their
@@ -323,7 +326,8 @@ CBVH_FORCE_INLINE uint32_t cbvh_cull4_keep(const struct cbvh_cull4 *w, const flo
         w1[a] = _mm_sub_ps(w->p1[a], c[0][a]);
     }
     const __m128(*d)[3] = f.d, *n = f.n, nn = f.nn, span = f.span;
-    const __m128 s0 = cull4_dot(n, w0), s1 = cull4_dot(n, w1), span2 = _mm_mul_ps(span, span);
+    const __m128 s0 = cull4_dot(n, w0), s1 = w->capsule ? cull4_dot(n, w1) : s0; /* a ball's p1 is p0 */
+    const __m128 span2 = _mm_mul_ps(span, span);
     const __m128 size = _mm_add_ps(_mm_add_ps(f.corner, span), w->shape_size);
     const __m128 apart = cull4_apart(s0, s1, _mm_setzero_ps(), cull4_reach(w, n, nn), span, size);
     __m128 keep = _mm_andnot_ps(apart, in);
@@ -339,17 +343,18 @@ CBVH_FORCE_INLINE uint32_t cbvh_cull4_keep(const struct cbvh_cull4 *w, const flo
     const __m128 dd[3] = {cull4_dot(d[0], d[0]), cull4_dot(d[1], d[1]), cull4_dot(d[2], d[2])};
     __m128 outside[3] = {moderate, moderate, moderate};
     const __m128 r = w->radius;
-    __m128 far, far1, inside, inside1;
-    __m128 near =
-        cull4_end_touches(c, d, dd, n, nn, w->p0, s0, r, reach2, far2, margin, outside, &inside, &far);
+    __m128 far, far1, inside, inside1, near, clear; /* clear: the lanes dropped */
     if (w->capsule) {
+        near = cull4_end_touches(c, d, dd, n, nn, w->p0, s0, r, reach2, far2, margin, outside, &inside, &far);
         near = _mm_or_ps(near, cull4_end_touches(c, d, dd, n, nn, w->p1, s1, r, reach2, far2, margin, outside,
                                                  &inside1, &far1));
         inside = _mm_or_ps(inside, inside1);
-        far = _mm_setzero_ps(); /* the ends far from the triangle tell nothing of the segment between them */
+        clear = _mm_or_ps(_mm_or_ps(outside[0], outside[1]), outside[2]);
+    } else {
+        near = cull4_end_touches(c, d, dd, n, nn, w->p0, s0, r, reach2, far2, margin, NULL, &inside, &far);
+        clear = _mm_and_ps(far, fair);
     }
-    far = _mm_and_ps(far, fair);
-    keep = _mm_andnot_ps(_mm_or_ps(_mm_or_ps(outside[0], outside[1]), _mm_or_ps(outside[2], far)), keep);
+    keep = _mm_andnot_ps(clear, keep);
     const __m128 sure = _mm_or_ps(_mm_and_ps(inside, moderate), _mm_and_ps(near, fair));
     *touch = (uint32_t)_mm_movemask_ps(_mm_and_ps(sure, keep));
     return (uint32_t)_mm_movemask_ps(keep);
