@@ -264,20 +264,24 @@ static int overlap_enter(void *query, const uint32_t q[6], float *entry)
  * decide); or nothing (OVERLAP_SURE: the region surely touches it). */
 enum overlap_left { OVERLAP_CULL, OVERLAP_EXACT, OVERLAP_SURE };
 
-/* Cooked triangle k past the walk's box test: its tests (`left`) and the report. Returns 1 when the query
- * must stop. */
-static int overlap_triangle(const struct overlap_query *q, uint32_t k, const float a[3], const float b[3],
-                            const float c[3], enum overlap_left left)
+/* 1 when the region overlaps a triangle that has the tests `left` (not OVERLAP_SURE) to pass. */
+static int overlap_tests(const struct overlap_query *q, const float a[3], const float b[3], const float c[3],
+                         enum overlap_left left)
 {
-    if (left != OVERLAP_SURE) {
-        const cbvh_v3 va = v3_from_f(a), vb = v3_from_f(b), vc = v3_from_f(c);
-        const struct cbvh_local_shape *s = &q->region->shape;
-        const enum cbvh_cull_verdict v = left == OVERLAP_EXACT
-                                             ? CBVH_CULL_MAY_TOUCH
-                                             : cbvh_cull_triangle(s, v3(0, 0, 0), 0.0, va, vb, vc, 1);
-        if (v == CBVH_CULL_CLEAR || (v != CBVH_CULL_TOUCHES && !region_triangle(q->region, va, vb, vc)))
-            return 0;
-    }
+    const cbvh_v3 va = v3_from_f(a), vb = v3_from_f(b), vc = v3_from_f(c);
+    const struct cbvh_local_shape *s = &q->region->shape;
+    const enum cbvh_cull_verdict v =
+        left == OVERLAP_EXACT ? CBVH_CULL_MAY_TOUCH : cbvh_cull_triangle(s, v3(0, 0, 0), 0.0, va, vb, vc, 1);
+    return v != CBVH_CULL_CLEAR && (v == CBVH_CULL_TOUCHES || region_triangle(q->region, va, vb, vc));
+}
+
+/* Cooked triangle k past the walk's box test: its tests (`left`) and the report. Returns 1 when the query
+ * must stop. Inlined, so that a triangle the float tests found touching costs the report only. */
+CBVH_FORCE_INLINE int overlap_triangle(const struct overlap_query *q, uint32_t k, const float a[3],
+                                       const float b[3], const float c[3], enum overlap_left left)
+{
+    if (left != OVERLAP_SURE && !overlap_tests(q, a, b, c, left))
+        return 0;
     const uint32_t tri = cbvh_original_id(q->f, k);
     cbvh_contact contact;
     if (q->sink->contacts && q->sink->skip == 0)
@@ -379,11 +383,10 @@ CBVH_API size_t cbvh_overlap_box(const cbvh_file *file, const float box_min[3], 
     return overlap_walk(file, &region, &sink);
 }
 
-/* The region of a shape in the mesh's frame, with a box around it for node culling. */
-static void shape_region(const struct cbvh_local_shape *shape, const struct cbvh_placement *placement,
-                         struct overlap_region *region)
+/* The region of region->shape, a shape in the mesh's frame, with a box around it for node culling. */
+static void shape_region(const struct cbvh_placement *placement, struct overlap_region *region)
 {
-    region->shape = *shape;
+    const struct cbvh_local_shape *shape = &region->shape;
     region->placement = placement;
     if (shape->kind == CBVH_SHAPE_BOX) { /* a ball or capsule has no use for it */
         region->box.center = shape->p0;
@@ -407,17 +410,16 @@ static int round_region(const float p0[3], const float p1[3], float radius, stru
 {
     cbvh_shape in;
     memset(&in, 0, sizeof in);
-    struct cbvh_local_shape shape;
-    if (!p0 || (p1 && !cbvh_all_finite(p1, 3)) || !cbvh_all_finite(p0, 3))
+    if (!p0) /* cbvh_shape_to_mesh checks the values */
         return 0;
     in.kind = p1 ? CBVH_SHAPE_CAPSULE : CBVH_SHAPE_SPHERE;
     memcpy(in.center, p0, sizeof in.center);
     memcpy(in.p0, p0, sizeof in.p0);
     memcpy(in.p1, p1 ? p1 : p0, sizeof in.p1);
     in.radius = radius;
-    if (!cbvh_shape_to_mesh(&in, NULL, &shape))
+    if (!cbvh_shape_to_mesh(&in, NULL, &region->shape))
         return 0;
-    shape_region(&shape, NULL, region);
+    shape_region(NULL, region);
     return 1;
 }
 
@@ -498,12 +500,11 @@ static cbvh_result region_with(const cbvh_file *file, const cbvh_shape *shape, c
                                struct cbvh_placement *placement, struct overlap_region *region)
 {
     cbvh_query_options o;
-    struct cbvh_local_shape local;
     const struct cbvh_placement *p;
     if (!file || !shape || cbvh_query_options_read(options, &o) != CBVH_OK || o.cull != CBVH_CULL_NONE || o.filter ||
-        !cbvh_placement_of_option(o.transform, placement, &p) || !cbvh_shape_to_mesh(shape, p, &local))
+        !cbvh_placement_of_option(o.transform, placement, &p) || !cbvh_shape_to_mesh(shape, p, &region->shape))
         return CBVH_ERROR_INVALID_ARGUMENT;
-    shape_region(&local, p, region);
+    shape_region(p, region);
     return CBVH_OK;
 }
 
