@@ -252,27 +252,30 @@ CBVH_FORCE_INLINE __m128 cull4_end_touches(const __m128 c[3][3], const __m128 d[
             w[k][a] = _mm_sub_ps(p[a], c[k][a]);
         w2[k] = cull4_dot(w[k], w[k]);
     }
-    __m128 inside = _mm_cmple_ps(_mm_mul_ps(h, h), _mm_mul_ps(reach2, nn)), near = _mm_setzero_ps();
-    __m128 off = _mm_setzero_ps(), clear = _mm_castsi128_ps(_mm_set1_epi32(-1));
+    /* a vertex is a point of every edge through it: the edges' tests need their lines only where p projects
+     * inside the segment (0 < t < |d|^2), and all three vertices far where every edge is */
+    __m128 inside = _mm_cmple_ps(_mm_mul_ps(h, h), _mm_mul_ps(reach2, nn)), off = _mm_setzero_ps();
+    __m128 near = _mm_or_ps(_mm_or_ps(_mm_cmple_ps(w2[0], reach2), _mm_cmple_ps(w2[1], reach2)),
+                            _mm_cmple_ps(w2[2], reach2));
+    __m128 clear = _mm_and_ps(_mm_and_ps(_mm_cmpgt_ps(w2[0], far2), _mm_cmpgt_ps(w2[1], far2)),
+                              _mm_cmpgt_ps(w2[2], far2));
+    const __m128 minus_margin = _mm_sub_ps(_mm_setzero_ps(), margin);
     for (int k = 0; k < 3; k++) {
         const __m128 *dk = d[k], *wk = w[k];
         const __m128 x[3] = {_mm_sub_ps(_mm_mul_ps(dk[1], wk[2]), _mm_mul_ps(dk[2], wk[1])),
                              _mm_sub_ps(_mm_mul_ps(dk[2], wk[0]), _mm_mul_ps(dk[0], wk[2])),
                              _mm_sub_ps(_mm_mul_ps(dk[0], wk[1]), _mm_mul_ps(dk[1], wk[0]))};
-        const __m128 t = cull4_dot(wk, dk);
-        const __m128 before = _mm_cmple_ps(t, _mm_setzero_ps()), past = _mm_cmpge_ps(t, dd[k]);
-        const __m128 xx = cull4_dot(x, x), w2_next = w2[k == 2 ? 0 : k + 1];
+        const __m128 t = cull4_dot(wk, dk), xx = cull4_dot(x, x);
+        const __m128 mid = _mm_and_ps(_mm_cmpgt_ps(t, _mm_setzero_ps()), _mm_cmplt_ps(t, dd[k]));
         const __m128 line = _mm_cmple_ps(xx, _mm_mul_ps(reach2, dd[k]));
-        const __m128 end0 = _mm_cmple_ps(w2[k], reach2), end1 = _mm_cmple_ps(w2_next, reach2);
         const __m128 far_line = _mm_cmpgt_ps(xx, _mm_mul_ps(far2, dd[k]));
-        const __m128 far0 = _mm_cmpgt_ps(w2[k], far2), far1 = _mm_cmpgt_ps(w2_next, far2);
-        const __m128 e = cull4_dot(x, n), out = _mm_sub_ps(_mm_sub_ps(_mm_setzero_ps(), e), margin);
+        const __m128 e = cull4_dot(x, n), out_of = _mm_cmplt_ps(e, minus_margin); /* -e - margin > 0 */
         inside = _mm_and_ps(inside, _mm_cmpge_ps(e, margin));
-        near = _mm_or_ps(near, cull4_select(before, end0, cull4_select(past, end1, line)));
-        clear = _mm_and_ps(clear, cull4_select(before, far0, cull4_select(past, far1, far_line)));
-        const __m128 out_of = _mm_cmpgt_ps(out, _mm_setzero_ps());
+        near = _mm_or_ps(near, _mm_and_ps(mid, line));
+        clear = _mm_andnot_ps(_mm_andnot_ps(far_line, mid), clear);
         off = _mm_or_ps(off, out_of);
         if (outside) {
+            const __m128 out = _mm_sub_ps(_mm_sub_ps(_mm_setzero_ps(), e), margin);
             const __m128 out_r2 = _mm_mul_ps(_mm_mul_ps(r, r), _mm_mul_ps(nn, dd[k]));
             const __m128 beyond = _mm_cmpgt_ps(_mm_mul_ps(out, out), out_r2);
             outside[k] = _mm_and_ps(outside[k], _mm_and_ps(out_of, beyond));
