@@ -29,7 +29,7 @@ struct overlap_sink {
 
 /* Reports a triangle (and its contact, for the contact queries); returns 1 when the query must stop (the
  * callback asked, or out is full: at once, or with find_more at the next triangle). */
-static int sink_report(struct overlap_sink *s, uint32_t tri, const cbvh_contact *contact)
+CBVH_FORCE_INLINE int sink_report(struct overlap_sink *s, uint32_t tri, const cbvh_contact *contact)
 {
     if (s->skip > 0) {
         s->skip--;
