@@ -304,9 +304,10 @@ CBVH_FORCE_INLINE __m128 cull4_end_touches(const __m128 c[3][3], const __m128 d[
  * edge functions there (the distance of a point to an edge's line from a cross product whose rounding is a
  * few ulps of size, not of the distance; an edge function's below 2^-14 span^3 size, whatever |n|), so the
  * exact tests find the distance below the radius, or above it: on a triangle no sliver, the error of their
- * barycentrics (2^-45 span^3 size / |n|^2) moves the point they take for the projection by less than 2^-21
- * size, and the signs they read off the edge functions are those of the float tests. Only the plane's
- * distance and the distance outside an edge divide by |n|, hence the stricter bound there. */
+ * barycentrics in double (below 2^-41 span^3 size / |n|^2: the normal's rounding is 2^-52 of its edges'
+ * product, not of |n|) moves the point they take for the projection by less than 2^-18 size, and the signs
+ * they read off the edge functions are those of the float tests. Only the plane's distance and the distance
+ * outside an edge divide by |n|, hence the stricter bound there. */
 CBVH_FORCE_INLINE uint32_t cbvh_cull4_keep(const struct cbvh_cull4 *w, const float quad[3][3][4],
                                            uint32_t *touch)
 {
