@@ -349,8 +349,7 @@ static size_t overlap_walk(const struct cbvh_file *f, const struct overlap_regio
 #ifdef CBVH_HAVE_SIMD
     cbvh_cull4_init(&q.cull4, &region->shape, region->lo, region->hi, NULL);
 #endif
-    const float no_limit = INFINITY;
-    cbvh_shape_walk(f, f->layout, CBVH_NO_OCTANT, overlap_enter, overlap_leaf, &q, &no_limit, &q.grid);
+    cbvh_shape_walk(f, f->layout, CBVH_NO_OCTANT, overlap_enter, overlap_leaf, &q, NULL, &q.grid);
     return sink->reported;
 }
 

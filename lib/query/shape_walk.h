@@ -181,7 +181,8 @@ CBVH_KERNEL uint32_t cbvh_shape_children(const struct cbvh_file *f, const uint32
  * the stack with their entry keys, and one popped once *limit times
  * CBVH_BOX_PAD has fallen below its key is dropped without a second test:
  * for a sweep, whose best contact so far is *limit and whose keys are slab
- * entry distances, that is its box test again with the shorter motion.
+ * entry distances, that is its box test again with the shorter motion; with
+ * limit NULL (an overlap's walk) nothing is dropped, and no key kept.
  * `grid`, when not NULL, is the same test as `enter` as a grid range, which
  * wide nodes test four slots at once (cbvh_shape_children).
  * Force-inlined so each query's callbacks are direct calls; `layout` is read
@@ -225,7 +226,8 @@ CBVH_KERNEL void cbvh_shape_walk(const struct cbvh_file *f, const uint32_t layou
             if (m > 0) {
                 for (uint32_t k = m; k-- > 1;) {
                     stack[sp].ref = in[k];
-                    stack[sp].entry = in_entry[k];
+                    if (limit)
+                        stack[sp].entry = in_entry[k];
                     sp++;
                 }
                 r = in[0];
@@ -241,7 +243,7 @@ CBVH_KERNEL void cbvh_shape_walk(const struct cbvh_file *f, const uint32_t layou
             if (sp == 0)
                 return;
             sp--;
-        } while (!(stack[sp].entry <= *limit * CBVH_BOX_PAD));
+        } while (limit && !(stack[sp].entry <= *limit * CBVH_BOX_PAD));
         r = stack[sp].ref;
     }
 }
