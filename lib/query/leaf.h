@@ -147,10 +147,8 @@ CBVH_KERNEL void leaf_gather4(const void *restrict tris, const int tri_enc, cons
  * triangle (leaf_gather4), and `kept` masks them out of the answers. */
 CBVH_KERNEL void leaf_group(uint32_t n, uint32_t lane[4], uint32_t *kept)
 {
-    lane[0] = 0;
-    lane[1] = n > 1 ? 1u : 0u;
-    lane[2] = n > 2 ? 2u : 0u;
-    lane[3] = n > 3 ? 3u : 0u;
+    for (uint32_t j = 0; j < 4; j++) /* j, or 0 past the end: masks, not branches on n */
+        lane[j] = j & (0u - (uint32_t)(j < n));
     *kept = (1u << n) - 1u;
 }
 

@@ -23,9 +23,9 @@ struct cbvh_slab_select {
 static inline struct cbvh_slab_select cbvh_slab_select_of(uint32_t octant)
 {
     struct cbvh_slab_select s;
-    s.near_x = octant & 1u ? 3u : 0u;
-    s.near_y = octant & 2u ? 4u : 1u;
-    s.near_z = octant & 4u ? 5u : 2u;
+    s.near_x = 3u * (octant & 1u); /* the maximum (3 + axis) for a negative direction, else the minimum */
+    s.near_y = 1u + 3u * (octant >> 1 & 1u);
+    s.near_z = 2u + 3u * (octant >> 2 & 1u);
     s.far_x = 3u - s.near_x;
     s.far_y = 5u - s.near_y;
     s.far_z = 7u - s.near_z;

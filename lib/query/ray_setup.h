@@ -56,14 +56,16 @@ static inline uint32_t cbvh_octant_of(const float rcp[3])
 static inline void cbvh_shear_setup(struct cbvh_ray_shear *s, const float org[3], const float dir[3])
 {
     float ax = fabsf(dir[0]), ay = fabsf(dir[1]), az = fabsf(dir[2]);
-    uint32_t kz = ax > ay ? (ax > az ? 0u : 2u) : (ay > az ? 1u : 2u);
-    uint32_t kx = kz == 2u ? 0u : kz + 1u;
-    uint32_t ky = kx == 2u ? 0u : kx + 1u;
-    if (dir[kz] < 0.0f) { /* swapping keeps the winding, so the sign test stays the same */
-        uint32_t tmp = kx;
-        kx = ky;
-        ky = tmp;
-    }
+    /* kz = ax > ay ? (ax > az ? 0 : 2) : (ay > az ? 1 : 2), kx and ky the next axes, swapped for a
+     * negative dir[kz] (which keeps the winding, so the sign test stays the same); in integer arithmetic:
+     * which way a ray points is as unpredictable as the ray, and branches on it mispredict */
+    const uint32_t x_wins = 0u - (uint32_t)(ax > ay);
+    const uint32_t kz = ((2u - 2u * (uint32_t)(ax > az)) & x_wins) | ((2u - (uint32_t)(ay > az)) & ~x_wins);
+    uint32_t kx = (0x021u >> (4u * kz)) & 0xFu; /* (kz + 1) mod 3 */
+    uint32_t ky = (0x021u >> (4u * kx)) & 0xFu;
+    const uint32_t swap = (kx ^ ky) & (0u - (uint32_t)(dir[kz] < 0.0f));
+    kx ^= swap;
+    ky ^= swap;
     s->kx = kx;
     s->ky = ky;
     s->kz = kz;

@@ -85,16 +85,20 @@ CBVH_KERNEL int cbvh_plane_t(const struct cbvh_ray_shear *restrict s, const cbvh
      * triangle (they are conservative), and a walk that drops nodes entered past its best t so far would
      * drop this hit while another visiting order finds it (fuzzing: sorted and stackless disagreed). */
     double enter = -INFINITY, leave = INFINITY;
+    /* the coordinates in an array, indexed by axis (v3_get's choice of member compiles to branches) */
+    const double coord[3][3] = {{v[0].x, v[1].x, v[2].x}, {v[0].y, v[1].y, v[2].y}, {v[0].z, v[1].z, v[2].z}};
     for (int axis = 0; axis < 3; axis++) {
         if (s->dir[axis] == 0.0f)
             continue;
-        const double p0 = v3_get(v[0], axis), p1 = v3_get(v[1], axis), p2 = v3_get(v[2], axis);
+        const double p0 = coord[axis][0], p1 = coord[axis][1], p2 = coord[axis][2];
         const double o = s->org[axis], inv = s->dir_inv[axis];
-        const double small = p0 < p1 ? (p0 < p2 ? p0 : p2) : (p1 < p2 ? p1 : p2);
-        const double big = p0 > p1 ? (p0 > p2 ? p0 : p2) : (p1 > p2 ? p1 : p2);
+        const double small = cbvh_dmin(cbvh_dmin(p0, p1), p2), big = cbvh_dmax(cbvh_dmax(p0, p1), p2);
         const double t0 = (small - o) * inv, t1 = (big - o) * inv;
-        enter = inv > 0.0 ? (t0 > enter ? t0 : enter) : (t1 > enter ? t1 : enter);
-        leave = inv > 0.0 ? (t1 < leave ? t1 : leave) : (t0 < leave ? t0 : leave);
+        /* the slab's entry and exit: t0 <= t1 for inv > 0, t1 <= t0 for inv < 0 (both finite, and bit for
+         * bit the same value when equal), so min and max pick them without a branch on the sign */
+        const double slab_enter = cbvh_dmin(t0, t1), slab_leave = cbvh_dmax(t0, t1);
+        enter = slab_enter > enter ? slab_enter : enter;
+        leave = slab_leave < leave ? slab_leave : leave;
     }
     if (enter <= leave) {
         tp = tp < enter ? enter : tp;
