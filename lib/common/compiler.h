@@ -63,4 +63,15 @@
 #define CBVH_PREFETCH(p) ((void)(p))
 #endif
 
+/* Unrolls the loop that follows completely (n: its trip count): for the kernels' short fixed loops over
+ * lanes and vertices, which compilers otherwise keep as loops with their values stored and reloaded. */
+#define CBVH_PRAGMA(x) _Pragma(#x)
+#if defined(__clang__)
+#define CBVH_UNROLL(n) CBVH_PRAGMA(unroll n)
+#elif defined(__GNUC__) && __GNUC__ >= 8
+#define CBVH_UNROLL(n) CBVH_PRAGMA(GCC unroll n)
+#else
+#define CBVH_UNROLL(n)
+#endif
+
 #endif

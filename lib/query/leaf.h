@@ -129,8 +129,10 @@ CBVH_KERNEL void leaf_gather4(const void *restrict tris, const int tri_enc, cons
                               struct leaf_quad *restrict q)
 {
     uint32_t idx[4][3];
+    CBVH_UNROLL(4)
     for (uint32_t j = 0; j < 4; j++)
         cbvh_indices_decode(tris, tri_enc, k + lane[j], idx[j]);
+    CBVH_UNROLL(3)
     for (uint32_t v = 0; v < 3; v++) {
         __m128 r0 = leaf_vertex4(verts, vert_enc, grid_origin, grid_scale, idx[0][v]);
         __m128 r1 = leaf_vertex4(verts, vert_enc, grid_origin, grid_scale, idx[1][v]);
@@ -197,6 +199,7 @@ CBVH_KERNEL uint32_t leaf_reject4_sse2(const struct cbvh_ray_shear *restrict s,
     const __m128 sx = _mm_set1_ps(s->sx), sy = _mm_set1_ps(s->sy);
     const __m128 ox = _mm_set1_ps(s->org[kx]), oy = _mm_set1_ps(s->org[ky]), oz = _mm_set1_ps(s->org[kz]);
     __m128 px[3], py[3];
+    CBVH_UNROLL(3)
     for (int v = 0; v < 3; v++) {
         const __m128 z = _mm_sub_ps(_mm_load_ps(q->c[v][kz]), oz);
         px[v] = _mm_sub_ps(_mm_sub_ps(_mm_load_ps(q->c[v][kx]), ox), _mm_mul_ps(sx, z));
