@@ -127,6 +127,50 @@ static double slab_reference(const double lo[3], const double hi[3], const doubl
     return t0 - t1;
 }
 
+/* The per-ray choices the kernels compute without branches (ray_setup.h, ray_box.h) against their
+ * definitions written out plainly: kz is the last axis of largest |dir| (so ties and zeros are covered),
+ * kx and ky the next two in cyclic order, swapped when dir[kz] < 0 (not for -0); the near plane on axis a
+ * is the maximum (3 + a) when the octant says the reciprocal is negative, else the minimum. */
+static void test_shear_axes_and_slab_select(void **state)
+{
+    (void)state;
+    static const float values[] = {0.0f, -0.0f, 1.0f, -1.0f, 2.0f, -2.0f, 1e-30f, -1e-30f, 0x1p-149f, -0x1p-149f};
+    const size_t nv = sizeof values / sizeof values[0];
+    size_t checked = 0;
+    for (size_t i = 0; i < nv; i++)
+        for (size_t j = 0; j < nv; j++)
+            for (size_t k = 0; k < nv; k++) {
+                const float dir[3] = {values[i], values[j], values[k]}, org[3] = {0.5f, -0.25f, 3.0f};
+                if (dir[0] == 0.0f && dir[1] == 0.0f && dir[2] == 0.0f)
+                    continue;
+                struct cbvh_ray_shear s;
+                cbvh_shear_setup(&s, org, dir);
+                uint32_t kz = 0;
+                for (uint32_t a = 0; a < 3; a++)
+                    if (fabsf(dir[a]) >= fabsf(dir[kz]))
+                        kz = a;
+                uint32_t kx = (kz + 1u) % 3u, ky = (kz + 2u) % 3u;
+                if (dir[kz] < 0.0f) {
+                    const uint32_t t = kx;
+                    kx = ky;
+                    ky = t;
+                }
+                if (s.kz != kz || s.kx != kx || s.ky != ky)
+                    fail_msg("dir (%g, %g, %g): axes (%u, %u, %u), expected (%u, %u, %u)", (double)dir[0],
+                             (double)dir[1], (double)dir[2], s.kx, s.ky, s.kz, kx, ky, kz);
+                checked++;
+            }
+    assert_int_equal(checked, nv * nv * nv - 8); /* every direction but the 8 all-zero ones */
+    for (uint32_t octant = 0; octant < 8; octant++) {
+        const struct cbvh_slab_select sel = cbvh_slab_select_of(octant);
+        const uint32_t near[3] = {sel.near_x, sel.near_y, sel.near_z}, far[3] = {sel.far_x, sel.far_y, sel.far_z};
+        for (uint32_t a = 0; a < 3; a++) {
+            assert_int_equal(near[a], octant >> a & 1u ? 3u + a : a);
+            assert_int_equal(far[a], octant >> a & 1u ? a : 3u + a);
+        }
+    }
+}
+
 static void test_slab_edge_cases(void **state)
 {
     (void)state;
@@ -1287,7 +1331,8 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_triangle_basic),   cmocka_unit_test(test_watertight_fan),
-        cmocka_unit_test(test_slab_edge_cases),  cmocka_unit_test(test_soup),
+        cmocka_unit_test(test_slab_edge_cases),
+        cmocka_unit_test(test_shear_axes_and_slab_select),  cmocka_unit_test(test_soup),
         cmocka_unit_test(test_sphere_and_terrain), cmocka_unit_test(test_cook_variants),
         cmocka_unit_test(test_closed_mesh_no_leaks), cmocka_unit_test(test_far_from_origin),
         cmocka_unit_test(test_invalid_rays),     cmocka_unit_test(test_stats),
