@@ -33,6 +33,7 @@ static int tri_hit(const float org[3], const float dir[3], const float *a, const
 {
     const cbvh_ray ray = {{org[0], org[1], org[2]}, 0.0f, {dir[0], dir[1], dir[2]}, INFINITY};
     struct cbvh_ray_ctx ctx;
+    memset(&ctx, 0, sizeof ctx); /* assert_true does not tell the compiler that a failed setup stops here */
     assert_true(cbvh_ray_setup(&ctx, &ray));
     return cbvh_ray_triangle(&ctx.shear, a, b, c, ctx.tmin, ctx.tmax, 1, t, u, v);
 }
