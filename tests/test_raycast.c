@@ -1,4 +1,7 @@
 /* test_raycast.c: ray kernels: watertight triangle test, robust slab test, every traversal against brute force. */
+#ifdef HAVE_CONFIG_H
+#include "config.h" /* CBVH_HAVE_SIMD: the ray set-up as the library runs it */
+#endif
 #include <float.h>
 #include <math.h>
 #include <setjmp.h>

@@ -105,10 +105,8 @@ CBVH_KERNEL void leaf_triangle(const void *restrict tris, const int tri_enc, con
 CBVH_KERNEL __m128 leaf_vertex4(const void *restrict verts, const int vert_enc, const float *restrict grid_origin,
                                 const float *restrict grid_scale, uint32_t i)
 {
-    if (vert_enc == CBVH_VERTS_F32) {
-        const float *q = (const float *)verts + 3u * (size_t)i;
-        return _mm_movelh_ps(_mm_loadl_pi(_mm_setzero_ps(), (const __m64 *)(const void *)q), _mm_load_ss(q + 2));
-    }
+    if (vert_enc == CBVH_VERTS_F32)
+        return cbvh_load3((const float *)verts + 3u * (size_t)i);
     const uint16_t *q = (const uint16_t *)verts + 3u * (size_t)i;
     return _mm_setr_ps(cbvh_dequantize(q[0], grid_origin[0], grid_scale[0]),
                        cbvh_dequantize(q[1], grid_origin[1], grid_scale[1]),

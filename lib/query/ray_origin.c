@@ -1,4 +1,8 @@
 /* ray_origin.c: far ray origins: moved next to the file's bounds (triangle test precision), axes whose box test needs half scale. */
+#ifdef HAVE_CONFIG_H
+#include "config.h"
+#endif
+
 #include "query/raycast.h"
 
 /* a + b as s + *err exactly (Knuth's two-sum). */

@@ -2,8 +2,12 @@
 #ifndef CBVH_QUERY_RAY_SETUP_H
 #define CBVH_QUERY_RAY_SETUP_H
 
+#ifdef CBVH_HAVE_SIMD
+#include <emmintrin.h>
+#endif
 #include <float.h>
 #include <math.h>
+#include <stddef.h>
 #include <stdint.h>
 
 #include "cbvh.h"
@@ -53,22 +57,52 @@ static inline uint32_t cbvh_octant_of(const float rcp[3])
            (uint32_t)(signbit(rcp[2]) != 0) << 2;
 }
 
+#ifdef CBVH_HAVE_SIMD
+/* p[0..2] into lanes 0-2 and 0 into lane 3: two loads, none past p[2]. */
+static inline __m128 cbvh_load3(const float *p)
+{
+    return _mm_movelh_ps(_mm_loadl_pi(_mm_setzero_ps(), (const __m64 *)(const void *)p), _mm_load_ss(p + 2));
+}
+
+/* Lanes 0-2 of v into p[0..2], nothing past them. */
+static inline void cbvh_store3(float *p, __m128 v)
+{
+    _mm_storel_pi((__m64 *)(void *)p, v);
+    _mm_store_ss(p + 2, _mm_movehl_ps(v, v));
+}
+#endif
+
 static inline void cbvh_shear_setup(struct cbvh_ray_shear *s, const float org[3], const float dir[3])
 {
-    float ax = fabsf(dir[0]), ay = fabsf(dir[1]), az = fabsf(dir[2]);
-    /* kz = ax > ay ? (ax > az ? 0 : 2) : (ay > az ? 1 : 2), kx and ky the next axes, swapped for a
-     * negative dir[kz] (which keeps the winding, so the sign test stays the same); in integer arithmetic:
-     * which way a ray points is as unpredictable as the ray, and branches on it mispredict */
-    const uint32_t x_wins = 0u - (uint32_t)(ax > ay);
-    const uint32_t kz = ((2u - 2u * (uint32_t)(ax > az)) & x_wins) | ((2u - (uint32_t)(ay > az)) & ~x_wins);
-    uint32_t kx = (0x021u >> (4u * kz)) & 0xFu; /* (kz + 1) mod 3 */
-    uint32_t ky = (0x021u >> (4u * kx)) & 0xFu;
-    const uint32_t swap = (kx ^ ky) & (0u - (uint32_t)(dir[kz] < 0.0f));
-    kx ^= swap;
-    ky ^= swap;
+    const float ax = fabsf(dir[0]), ay = fabsf(dir[1]), az = fabsf(dir[2]);
+    /* kz = ax > ay ? (ax > az ? 0 : 2) : (ay > az ? 1 : 2), and kx, ky the next axes in cyclic order,
+     * swapped for a negative dir[kz] (which keeps the winding, so the sign test stays the same), read
+     * from tables rather than branched on: which way a ray points is as unpredictable as the ray.
+     * KZ: 2 bits for each outcome of (ax > ay) | (ax > az) << 1 | (ay > az) << 2 (2 2 2 0 1 2 1 0; 5
+     * cannot happen); KXY: kx | ky << 2 in 4 bits at 2 * kz + (dir[kz] < 0) (kz 0: 1 2, 2 1; 1: 2 0,
+     * 0 2; 2: 0 1, 1 0). dir[kz] is the largest component of a direction that is not zero, so it is
+     * not zero either and its sign bit is dir[kz] < 0. */
+    enum { KZ = 0x192A, KXY = 0x148269 };
+    const uint32_t outcome = (uint32_t)(ax > ay) | (uint32_t)(ax > az) << 1 | (uint32_t)(ay > az) << 2;
+    const uint32_t kz = (uint32_t)KZ >> (2u * outcome) & 3u;
+    const uint32_t kxy = (uint32_t)KXY >> (4u * (2u * kz + (uint32_t)(dir[kz] < 0.0f)));
+    const uint32_t kx = kxy & 3u, ky = kxy >> 2 & 3u;
     s->kx = kx;
     s->ky = ky;
     s->kz = kz;
+#ifdef CBVH_HAVE_SIMD
+    /* the same quotients and products as below, three or two to an instruction (the dividers are the
+     * set-up's bottleneck) */
+    const __m128 d = cbvh_load3(dir);
+    cbvh_store3(&s->sx, _mm_div_ps(_mm_setr_ps(dir[kx], dir[ky], 1.0f, 1.0f), _mm_set1_ps(dir[kz])));
+    cbvh_store3(s->org, cbvh_load3(org));
+    cbvh_store3(s->dir, d);
+    const __m128d d01 = _mm_cvtps_pd(d), d2 = _mm_cvtps_pd(_mm_movehl_ps(d, d)), one = _mm_set1_pd(1.0);
+    _mm_storeu_pd(s->dir_inv, _mm_div_pd(one, d01));
+    _mm_store_sd(s->dir_inv + 2, _mm_div_sd(one, d2));
+    const __m128d sq01 = _mm_mul_pd(d01, d01), sq2 = _mm_mul_sd(d2, d2);
+    s->dir_len2 = _mm_cvtsd_f64(_mm_add_sd(_mm_add_sd(sq01, _mm_unpackhi_pd(sq01, sq01)), sq2));
+#else
     s->sx = dir[kx] / dir[kz];
     s->sy = dir[ky] / dir[kz];
     s->sz = 1.0f / dir[kz];
@@ -78,18 +112,33 @@ static inline void cbvh_shear_setup(struct cbvh_ray_shear *s, const float org[3]
         s->dir_inv[a] = 1.0 / (double)dir[a];
     }
     s->dir_len2 = (double)dir[0] * dir[0] + (double)dir[1] * dir[1] + (double)dir[2] * dir[2];
+#endif
 }
 
 /* 1 when the ray is valid (cbvh.h: finite org and dir, dir not all zero,
  * 0 <= tmin <= tmax, tmax finite or +inf), else 0. */
 static inline int cbvh_ray_valid(const cbvh_ray *ray)
 {
+#ifdef CBVH_HAVE_SIMD
+    /* org and tmin, dir and tmax are four consecutive floats each (cbvh.h): finite in the first seven
+     * lanes (|x| <= FLT_MAX fails for inf and NaN), dir not zero in all three */
+    _Static_assert(offsetof(cbvh_ray, tmin) == 3 * sizeof(float) && offsetof(cbvh_ray, tmax) == 7 * sizeof(float),
+                   "cbvh_ray is org, tmin, dir, tmax");
+    const __m128 org_tmin = _mm_loadu_ps(ray->org), dir_tmax = _mm_loadu_ps(ray->dir);
+    const __m128 sign = _mm_set1_ps(-0.0f), largest = _mm_set1_ps(FLT_MAX);
+    const int finite = _mm_movemask_ps(_mm_cmple_ps(_mm_andnot_ps(sign, org_tmin), largest)) |
+                       _mm_movemask_ps(_mm_cmple_ps(_mm_andnot_ps(sign, dir_tmax), largest)) << 4;
+    const int zero = _mm_movemask_ps(_mm_cmpeq_ps(dir_tmax, _mm_setzero_ps()));
+    if ((finite & 0x7F) != 0x7F || (zero & 7) == 7)
+        return 0;
+#else
     const float *o = ray->org, *d = ray->dir;
     if (!(isfinite(o[0]) && isfinite(o[1]) && isfinite(o[2]) && isfinite(d[0]) && isfinite(d[1]) &&
           isfinite(d[2]) && isfinite(ray->tmin)))
         return 0;
     if (d[0] == 0.0f && d[1] == 0.0f && d[2] == 0.0f)
         return 0;
+#endif
     /* Ordered compares: a NaN tmax fails them and is rejected. */
     return ray->tmin >= 0.0f && ray->tmin <= ray->tmax;
 }
@@ -108,14 +157,18 @@ static inline int cbvh_ray_setup(struct cbvh_ray_ctx *ctx, const cbvh_ray *ray)
     const float *o = ray->org, *d = ray->dir;
     if (!cbvh_ray_valid(ray))
         return 0;
+#ifdef CBVH_HAVE_SIMD
+    cbvh_store3(ctx->rcp, _mm_div_ps(_mm_set1_ps(1.0f), cbvh_load3(d)));
+#else
     for (int a = 0; a < 3; a++)
         ctx->rcp[a] = 1.0f / d[a];
+#endif
+    ctx->octant = cbvh_ray_octant(ray);
     ctx->t_base = 0.0;
     ctx->box_halve = 0;
     ctx->gate = NULL;
     ctx->tmin = ray->tmin;
     ctx->tmax = ray->tmax < CBVH_T_LIMIT ? ray->tmax : CBVH_T_LIMIT;
-    ctx->octant = cbvh_octant_of(ctx->rcp);
     cbvh_shear_setup(&ctx->shear, o, d);
     return 1;
 }

@@ -1,4 +1,8 @@
 /* raycast.c: the public single-ray entry points, cbvh_raycast and cbvh_occluded. */
+#ifdef HAVE_CONFIG_H
+#include "config.h"
+#endif
+
 #include <math.h>
 #include <string.h>
 

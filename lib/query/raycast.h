@@ -64,6 +64,16 @@ static inline int cbvh_ray_prepare(struct cbvh_ray_ctx *ctx, const cbvh_ray *ray
         return 0;
     const float *lo = f->info.bounds_min, *hi = f->info.bounds_max;
     float ext = 0.0f, dist = 0.0f;
+#ifdef CBVH_HAVE_SIMD
+    /* the loop below on the three axes at once (lane 3 is 0 throughout): MAXPS(a, b) is a > b ? a : b */
+    const __m128 lo4 = cbvh_load3(lo), hi4 = cbvh_load3(hi), o4 = cbvh_load3(ray->org);
+    const __m128 e4 = _mm_max_ps(_mm_sub_ps(hi4, lo4), _mm_setzero_ps());
+    const __m128 d4 = _mm_max_ps(_mm_sub_ps(o4, hi4), _mm_max_ps(_mm_sub_ps(lo4, o4), _mm_setzero_ps()));
+    const __m128 both = _mm_max_ps(_mm_unpacklo_ps(e4, d4), _mm_unpackhi_ps(e4, d4)); /* e0|2, d0|2, e1|3, d1|3 */
+    const __m128 top = _mm_max_ps(both, _mm_movehl_ps(both, both));                   /* ext, dist */
+    ext = _mm_cvtss_f32(top);
+    dist = _mm_cvtss_f32(_mm_shuffle_ps(top, top, 1));
+#else
     /* Plain compares (every value is finite): fmaxf is a libm call without -ffast-math. */
     for (int a = 0; a < 3; a++) {
         const float o = ray->org[a], e = hi[a] - lo[a], below = lo[a] - o, above = o - hi[a];
@@ -71,6 +81,7 @@ static inline int cbvh_ray_prepare(struct cbvh_ray_ctx *ctx, const cbvh_ray *ray
         dist = below > dist ? below : dist;
         dist = above > dist ? above : dist;
     }
+#endif
     /* Ordered compare: an extent near FLT_MAX gives an infinite product and no move. */
     if (dist > CBVH_FAR_FACTOR * ext)
         cbvh_ray_move_far_origin(ctx, ray, f, ext);
