@@ -10,9 +10,9 @@
 /* The leaf step, out of line: inlined, its register pressure made the node loop reload the box test's
  * ray from the stack at every node. */
 CBVH_NOINLINE int stackless_leaf(const struct cbvh_file *f, uint32_t word, const struct cbvh_ray_ctx *ray,
-                                 const int any, float *tmax, struct cbvh_best_hit *best)
+                                 const int any, const int near, float *tmax, struct cbvh_best_hit *best)
 {
-    return cbvh_leaf_visit(f, cbvh_leaf_first(word), cbvh_leaf_count(word), ray, any, 0, tmax, best);
+    return cbvh_leaf_visit(f, cbvh_leaf_first(word), cbvh_leaf_count(word), ray, any, 0, near, tmax, best);
 }
 
 /* i = hit ? i + 1 : escape(i), until the end of the array. A leaf's escape
@@ -45,7 +45,7 @@ CBVH_KERNEL int stackless_walk(const struct cbvh_file *restrict f, const struct 
         }
         if (cbvh_node_is_leaf(word)) {
             tested += cbvh_leaf_count(word);
-            if (stackless_leaf(f, word, ray, any, &tmax, best)) {
+            if (stackless_leaf(f, word, ray, any, entry <= tmin, &tmax, best)) {
                 hit = 1;
                 break;
             }

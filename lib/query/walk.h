@@ -256,6 +256,7 @@ CBVH_KERNEL int cbvh_walk(const struct cbvh_file *restrict f, const uint32_t lay
     } stack[(CBVH_TREE_WIDTH - 1u) * CBVH_MAX_DEPTH];
     uint32_t sp = 0;
     cbvh_ref r = root;
+    float r_entry = tmin; /* where the ray enters r's box (the root's: taken as its start) */
     uint64_t visited = 0, tested = 0;
     int hit = 0;
 
@@ -285,13 +286,14 @@ CBVH_KERNEL int cbvh_walk(const struct cbvh_file *restrict f, const uint32_t lay
                                                          cbvh_w4_ref_first(c[k])));
                 }
                 r = c[0];
+                r_entry = e[0];
                 continue;
             }
         } else {
             uint32_t first, count;
             cbvh_tree_leaf(f, layout, r, &first, &count);
             tested += count;
-            if (cbvh_leaf_visit(f, first, count, ray, mode.any, mode.scalar, &tmax, best)) {
+            if (cbvh_leaf_visit(f, first, count, ray, mode.any, mode.scalar, r_entry <= tmin, &tmax, best)) {
                 hit = 1;
                 break;
             }
@@ -303,6 +305,7 @@ CBVH_KERNEL int cbvh_walk(const struct cbvh_file *restrict f, const uint32_t lay
             sp--;
         } while (!(stack[sp].entry <= tmax * CBVH_BOX_PAD));
         r = stack[sp].ref;
+        r_entry = stack[sp].entry;
     }
 done:
     if (stats)

@@ -12,11 +12,15 @@
  * for the others the weak reference is NULL and the scalar run is skipped. */
 void cbvh_walk_set_scalar(int scalar) __attribute__((weak));
 
+/* What test_set_scalar last set: a test that switches the child test restores it. */
+static int test_scalar_now;
+
 static inline int test_set_scalar(int scalar)
 {
     if (!cbvh_walk_set_scalar)
         return 0;
     cbvh_walk_set_scalar(scalar);
+    test_scalar_now = scalar;
     return 1;
 }
 
