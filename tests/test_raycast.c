@@ -175,6 +175,31 @@ static void test_shear_axes_and_slab_select(void **state)
     }
 }
 
+/* The wide layout's orders are the 24 permutations of four slots in lexicographic order, and its visit
+ * table (what the walk visits of a node, by order and hit mask) lists the hit slots of each order in that
+ * order, two bits each. */
+static void test_wide4_visit_table(void **state)
+{
+    (void)state;
+    for (uint32_t o = 0; o < CBVH_W4_ORDERS; o++) {
+        const uint8_t *p = cbvh_wide4_orders[o];
+        assert_true(p[0] < 4 && p[1] < 4 && p[2] < 4 && p[3] < 4);
+        assert_int_equal((1u << p[0]) | (1u << p[1]) | (1u << p[2]) | (1u << p[3]), 0xFu);
+        if (o > 0)
+            assert_true(memcmp(cbvh_wide4_orders[o - 1], p, 4) < 0);
+        for (uint32_t hits = 0; hits < 16; hits++) {
+            uint32_t expected = 0, n = 0;
+            for (int k = 0; k < 4; k++) {
+                if (hits >> p[k] & 1u)
+                    expected |= (uint32_t)p[k] << (2u * n++);
+            }
+            if (cbvh_wide4_visits[o][hits] != expected || cbvh_w4_popcount(hits) != n)
+                fail_msg("order %u hits %x: visit %02x, expected %02x (%u slots)", o, hits,
+                         cbvh_wide4_visits[o][hits], expected, n);
+        }
+    }
+}
+
 static void test_slab_edge_cases(void **state)
 {
     (void)state;
@@ -1436,7 +1461,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_triangle_basic),   cmocka_unit_test(test_watertight_fan),
-        cmocka_unit_test(test_slab_edge_cases),
+        cmocka_unit_test(test_slab_edge_cases),  cmocka_unit_test(test_wide4_visit_table),
         cmocka_unit_test(test_shear_axes_and_slab_select),  cmocka_unit_test(test_soup),
         cmocka_unit_test(test_sphere_and_terrain), cmocka_unit_test(test_cook_variants),
         cmocka_unit_test(test_closed_mesh_no_leaks), cmocka_unit_test(test_far_from_origin),

@@ -175,16 +175,24 @@ CBVH_KERNEL uint32_t walk_w4_children_hit(const struct cbvh_file *restrict f, cb
         entry[0] = e[s];
         return 1;
     }
-    const uint8_t *slots = cbvh_wide4_orders[order == CBVH_WALK_SORTED ? cbvh_w4_order(meta, octant) : 0];
+    if (order != CBVH_WALK_DISTANCE) { /* the node's order for the ray's octant, or slot order */
+        const uint32_t o = order == CBVH_WALK_SORTED ? cbvh_w4_order(meta, octant) : 0u;
+        const uint32_t visit = cbvh_wide4_visits[o][hits], n = cbvh_w4_popcount(hits);
+        for (uint32_t j = 0; j < n; j++) {
+            const uint32_t s = visit >> (2u * j) & 3u;
+            out[j] = cbvh_w4_child_ref(node, meta, s);
+            entry[j] = e[s];
+        }
+        return n;
+    }
     uint32_t n = 0;
-    for (uint32_t k = 0; k < CBVH_W4_WIDTH; k++) {
-        const uint32_t s = slots[k];
+    for (uint32_t s = 0; s < CBVH_W4_WIDTH; s++) {
         if (hits >> s & 1u) {
             cbvh_ref rs = cbvh_w4_child_ref(node, meta, s);
             float es = e[s];
             uint32_t j = n++;
             /* by distance: insertion in entry order, ties keep the slot order */
-            for (; order == CBVH_WALK_DISTANCE && j > 0 && es < entry[j - 1]; j--) {
+            for (; j > 0 && es < entry[j - 1]; j--) {
                 out[j] = out[j - 1];
                 entry[j] = entry[j - 1];
             }
