@@ -138,7 +138,8 @@ static double slab_reference(const double lo[3], const double hi[3], const doubl
 static void test_shear_axes_and_slab_select(void **state)
 {
     (void)state;
-    static const float values[] = {0.0f, -0.0f, 1.0f, -1.0f, 2.0f, -2.0f, 1e-30f, -1e-30f, 0x1p-149f, -0x1p-149f};
+    static const float values[] = {0.0f,  -0.0f,  1.0f,    -1.0f,     2.0f,
+                                   -2.0f, 1e-30f, -1e-30f, 0x1p-149f, -0x1p-149f};
     const size_t nv = sizeof values / sizeof values[0];
     size_t checked = 0;
     for (size_t i = 0; i < nv; i++)
@@ -167,7 +168,8 @@ static void test_shear_axes_and_slab_select(void **state)
     assert_int_equal(checked, nv * nv * nv - 8); /* every direction but the 8 all-zero ones */
     for (uint32_t octant = 0; octant < 8; octant++) {
         const struct cbvh_slab_select sel = cbvh_slab_select_of(octant);
-        const uint32_t near[3] = {sel.near_x, sel.near_y, sel.near_z}, far[3] = {sel.far_x, sel.far_y, sel.far_z};
+        const uint32_t near[3] = {sel.near_x, sel.near_y, sel.near_z},
+                       far[3] = {sel.far_x, sel.far_y, sel.far_z};
         for (uint32_t a = 0; a < 3; a++) {
             assert_int_equal(near[a], octant >> a & 1u ? 3u + a : a);
             assert_int_equal(far[a], octant >> a & 1u ? a : 3u + a);
@@ -840,10 +842,11 @@ static void compare_scalar_leaves(const cbvh_file *f, const cbvh_ray *ray, int *
     }
     if (hit[0] != hit[1] || occ[0] != occ[1] ||
         (hit[0] && !(h[0].tri == h[1].tri && h[0].t == h[1].t && h[0].u == h[1].u && h[0].v == h[1].v)))
-        fail_msg("ray (%a %a %a) + t (%a %a %a), t in [%a, %a]: SIMD leaves hit %d (tri %u t %a) occluded %d, "
-                 "scalar leaves hit %d (tri %u t %a) occluded %d",
-                 ray->org[0], ray->org[1], ray->org[2], ray->dir[0], ray->dir[1], ray->dir[2], ray->tmin, ray->tmax,
-                 hit[0], h[0].tri, h[0].t, occ[0], hit[1], h[1].tri, h[1].t, occ[1]);
+        fail_msg(
+            "ray (%a %a %a) + t (%a %a %a), t in [%a, %a]: SIMD leaves hit %d (tri %u t %a) occluded %d, "
+            "scalar leaves hit %d (tri %u t %a) occluded %d",
+            ray->org[0], ray->org[1], ray->org[2], ray->dir[0], ray->dir[1], ray->dir[2], ray->tmin,
+            ray->tmax, hit[0], h[0].tri, h[0].t, occ[0], hit[1], h[1].tri, h[1].t, occ[1]);
     (*compared)++;
 }
 
@@ -1460,14 +1463,22 @@ static void test_transform(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_triangle_basic),   cmocka_unit_test(test_watertight_fan),
-        cmocka_unit_test(test_slab_edge_cases),  cmocka_unit_test(test_wide4_visit_table),
-        cmocka_unit_test(test_shear_axes_and_slab_select),  cmocka_unit_test(test_soup),
-        cmocka_unit_test(test_sphere_and_terrain), cmocka_unit_test(test_cook_variants),
-        cmocka_unit_test(test_closed_mesh_no_leaks), cmocka_unit_test(test_far_from_origin),
-        cmocka_unit_test(test_invalid_rays),     cmocka_unit_test(test_stats),
-        cmocka_unit_test(test_huge_coordinates), cmocka_unit_test(test_far_origin_hits),
-        cmocka_unit_test(test_sliver_t),        cmocka_unit_test(test_sliver_barycentrics),
+        cmocka_unit_test(test_triangle_basic),
+        cmocka_unit_test(test_watertight_fan),
+        cmocka_unit_test(test_slab_edge_cases),
+        cmocka_unit_test(test_wide4_visit_table),
+        cmocka_unit_test(test_shear_axes_and_slab_select),
+        cmocka_unit_test(test_soup),
+        cmocka_unit_test(test_sphere_and_terrain),
+        cmocka_unit_test(test_cook_variants),
+        cmocka_unit_test(test_closed_mesh_no_leaks),
+        cmocka_unit_test(test_far_from_origin),
+        cmocka_unit_test(test_invalid_rays),
+        cmocka_unit_test(test_stats),
+        cmocka_unit_test(test_huge_coordinates),
+        cmocka_unit_test(test_far_origin_hits),
+        cmocka_unit_test(test_sliver_t),
+        cmocka_unit_test(test_sliver_barycentrics),
         cmocka_unit_test(test_leaf_range_filter),
         cmocka_unit_test(test_needle_barycentrics),
         cmocka_unit_test(test_near_flt_max),

@@ -44,11 +44,13 @@ enum { CBVH_W4_Q = 0, CBVH_W4_FIRST_CHILD = 48, CBVH_W4_FIRST_TRIANGLE = 52, CBV
 
 /* The 24 orders of four slots, lexicographic: order o lists the slots in visit order. Listed once, as
  * X(a, b, c, d) for each order; the two tables below are made from it. */
+/* clang-format off */
 #define CBVH_W4_ORDER_LIST(X)                                                                              \
-    X(0, 1, 2, 3) X(0, 1, 3, 2) X(0, 2, 1, 3) X(0, 2, 3, 1) X(0, 3, 1, 2) X(0, 3, 2, 1) X(1, 0, 2, 3)       \
-    X(1, 0, 3, 2) X(1, 2, 0, 3) X(1, 2, 3, 0) X(1, 3, 0, 2) X(1, 3, 2, 0) X(2, 0, 1, 3) X(2, 0, 3, 1)       \
-    X(2, 1, 0, 3) X(2, 1, 3, 0) X(2, 3, 0, 1) X(2, 3, 1, 0) X(3, 0, 1, 2) X(3, 0, 2, 1) X(3, 1, 0, 2)       \
-    X(3, 1, 2, 0) X(3, 2, 0, 1) X(3, 2, 1, 0)
+    X(0, 1, 2, 3) X(0, 1, 3, 2) X(0, 2, 1, 3) X(0, 2, 3, 1) X(0, 3, 1, 2) X(0, 3, 2, 1)                     \
+    X(1, 0, 2, 3) X(1, 0, 3, 2) X(1, 2, 0, 3) X(1, 2, 3, 0) X(1, 3, 0, 2) X(1, 3, 2, 0)                     \
+    X(2, 0, 1, 3) X(2, 0, 3, 1) X(2, 1, 0, 3) X(2, 1, 3, 0) X(2, 3, 0, 1) X(2, 3, 1, 0)                     \
+    X(3, 0, 1, 2) X(3, 0, 2, 1) X(3, 1, 0, 2) X(3, 1, 2, 0) X(3, 2, 0, 1) X(3, 2, 1, 0)
+/* clang-format on */
 
 /* Entry o lists the slots of order o. */
 #define CBVH_W4_ORDER_ROW(a, b, c, d) {a, b, c, d},
@@ -58,21 +60,25 @@ static const uint8_t cbvh_wide4_orders[CBVH_W4_ORDERS][4] = {CBVH_W4_ORDER_LIST(
 /* Entry [o][hits] lists the slots of `hits` (a 4-bit mask) in order o, two bits each from the lowest:
  * what a walk visits of a node whose children `hits` the ray enters, with one load rather than a loop
  * that branches on each slot (which slots a ray enters is as unpredictable as the ray). */
+/* clang-format off */
 #define CBVH_W4_HIT(s, h) ((h) >> (s) & 1u)
+#define CBVH_W4_BEFORE_C(a, b, h) (CBVH_W4_HIT(a, h) + CBVH_W4_HIT(b, h))
 #define CBVH_W4_VISIT(a, b, c, d, h)                                                                       \
-    (uint8_t)((CBVH_W4_HIT(a, h) * (a)) | (CBVH_W4_HIT(b, h) * (b)) << (2u * CBVH_W4_HIT(a, h)) |              \
-              (CBVH_W4_HIT(c, h) * (c)) << (2u * (CBVH_W4_HIT(a, h) + CBVH_W4_HIT(b, h))) |                    \
-              (CBVH_W4_HIT(d, h) * (d)) << (2u * (CBVH_W4_HIT(a, h) + CBVH_W4_HIT(b, h) + CBVH_W4_HIT(c, h))))
+    (uint8_t)((CBVH_W4_HIT(a, h) * (a)) | (CBVH_W4_HIT(b, h) * (b)) << (2u * CBVH_W4_HIT(a, h)) |          \
+              (CBVH_W4_HIT(c, h) * (c)) << (2u * CBVH_W4_BEFORE_C(a, b, h)) |                              \
+              (CBVH_W4_HIT(d, h) * (d)) << (2u * (CBVH_W4_BEFORE_C(a, b, h) + CBVH_W4_HIT(c, h))))
 #define CBVH_W4_VISIT_ROW(a, b, c, d)                                                                      \
-    {CBVH_W4_VISIT(a, b, c, d, 0u),  CBVH_W4_VISIT(a, b, c, d, 1u),  CBVH_W4_VISIT(a, b, c, d, 2u),            \
-     CBVH_W4_VISIT(a, b, c, d, 3u),  CBVH_W4_VISIT(a, b, c, d, 4u),  CBVH_W4_VISIT(a, b, c, d, 5u),            \
-     CBVH_W4_VISIT(a, b, c, d, 6u),  CBVH_W4_VISIT(a, b, c, d, 7u),  CBVH_W4_VISIT(a, b, c, d, 8u),            \
-     CBVH_W4_VISIT(a, b, c, d, 9u),  CBVH_W4_VISIT(a, b, c, d, 10u), CBVH_W4_VISIT(a, b, c, d, 11u),           \
-     CBVH_W4_VISIT(a, b, c, d, 12u), CBVH_W4_VISIT(a, b, c, d, 13u), CBVH_W4_VISIT(a, b, c, d, 14u),           \
+    {CBVH_W4_VISIT(a, b, c, d, 0u),  CBVH_W4_VISIT(a, b, c, d, 1u),  CBVH_W4_VISIT(a, b, c, d, 2u),        \
+     CBVH_W4_VISIT(a, b, c, d, 3u),  CBVH_W4_VISIT(a, b, c, d, 4u),  CBVH_W4_VISIT(a, b, c, d, 5u),        \
+     CBVH_W4_VISIT(a, b, c, d, 6u),  CBVH_W4_VISIT(a, b, c, d, 7u),  CBVH_W4_VISIT(a, b, c, d, 8u),        \
+     CBVH_W4_VISIT(a, b, c, d, 9u),  CBVH_W4_VISIT(a, b, c, d, 10u), CBVH_W4_VISIT(a, b, c, d, 11u),       \
+     CBVH_W4_VISIT(a, b, c, d, 12u), CBVH_W4_VISIT(a, b, c, d, 13u), CBVH_W4_VISIT(a, b, c, d, 14u),       \
      CBVH_W4_VISIT(a, b, c, d, 15u)},
+/* clang-format on */
 static const uint8_t cbvh_wide4_visits[CBVH_W4_ORDERS][16] = {CBVH_W4_ORDER_LIST(CBVH_W4_VISIT_ROW)};
 #undef CBVH_W4_VISIT_ROW
 #undef CBVH_W4_VISIT
+#undef CBVH_W4_BEFORE_C
 #undef CBVH_W4_HIT
 
 static inline const uint8_t *cbvh_w4_node(const void *nodes, uint32_t n)

@@ -220,11 +220,12 @@ CBVH_KERNEL uint32_t leaf_outside4_sse2(const struct cbvh_ray_shear *restrict s,
     const __m128 smallest =
         _mm_min_ps(_mm_min_ps(_mm_andnot_ps(sign, u), _mm_andnot_ps(sign, v)), _mm_andnot_ps(sign, w));
     const __m128 inside = _mm_cmpgt_ps(smallest, _mm_mul_ps(_mm_set1_ps(0x1p-18f), edge_error));
-    const __m128 spread = _mm_div_ps(_mm_mul_ps(_mm_sub_ps(zmax, zmin), edge_error), _mm_andnot_ps(sign, det));
-    const __m128 margin = _mm_add_ps(
-        _mm_mul_ps(_mm_andnot_ps(sign, sz),
-                   _mm_add_ps(_mm_mul_ps(_mm_set1_ps(0x1p-16f), spread), _mm_mul_ps(_mm_set1_ps(0x1p-18f), zabs))),
-        _mm_set1_ps(FLT_MIN));
+    const __m128 spread =
+        _mm_div_ps(_mm_mul_ps(_mm_sub_ps(zmax, zmin), edge_error), _mm_andnot_ps(sign, det));
+    const __m128 margin =
+        _mm_add_ps(_mm_mul_ps(_mm_andnot_ps(sign, sz), _mm_add_ps(_mm_mul_ps(_mm_set1_ps(0x1p-16f), spread),
+                                                                  _mm_mul_ps(_mm_set1_ps(0x1p-18f), zabs))),
+                   _mm_set1_ps(FLT_MIN));
     const __m128 below = _mm_cmplt_ps(_mm_add_ps(t, margin), _mm_set1_ps(tmin));
     const __m128 above = _mm_cmpgt_ps(_mm_sub_ps(t, margin), _mm_set1_ps(tmax));
     return (uint32_t)_mm_movemask_ps(_mm_and_ps(inside, _mm_or_ps(below, above))) & candidates;
@@ -239,8 +240,9 @@ CBVH_KERNEL uint32_t leaf_outside4_sse2(const struct cbvh_ray_shear *restrict s,
  * answers are the same with or without this filter. near: the leaf's box holds the ray's start (its entry
  * is tmin), where the line crosses triangles behind the start or, from a surface, the start's own; it costs
  * more than it saves elsewhere (Wuson: incoherent rays -4%, shadow rays from the surface +5%). */
-CBVH_KERNEL uint32_t leaf_reject4_sse2(const struct cbvh_ray_shear *restrict s, const struct leaf_quad *restrict q,
-                                       const int near, float tmin, float tmax, float edge[3][4])
+CBVH_KERNEL uint32_t leaf_reject4_sse2(const struct cbvh_ray_shear *restrict s,
+                                       const struct leaf_quad *restrict q, const int near, float tmin,
+                                       float tmax, float edge[3][4])
 {
     const uint32_t kx = s->kx, ky = s->ky, kz = s->kz;
     const __m128 sx = _mm_set1_ps(s->sx), sy = _mm_set1_ps(s->sy);
@@ -266,10 +268,10 @@ CBVH_KERNEL uint32_t leaf_reject4_sse2(const struct cbvh_ray_shear *restrict s, 
     const __m128 negative = _mm_or_ps(_mm_or_ps(_mm_cmplt_ps(u, zero), _mm_cmplt_ps(v, zero)), _mm_cmplt_ps(w, zero));
     const __m128 positive = _mm_or_ps(_mm_or_ps(_mm_cmpgt_ps(u, zero), _mm_cmpgt_ps(v, zero)), _mm_cmpgt_ps(w, zero));
     const uint32_t mixed = (uint32_t)_mm_movemask_ps(_mm_and_ps(finite, _mm_and_ps(negative, positive)));
-    const uint32_t candidates = (uint32_t)_mm_movemask_ps(finite) & ~mixed;
-    if (!near || !candidates)
+    if (!near)
         return mixed;
-    return mixed | leaf_outside4_sse2(s, px, py, pz, u, v, w, sum, candidates, tmin, tmax);
+    const uint32_t candidates = (uint32_t)_mm_movemask_ps(finite) & ~mixed;
+    return candidates ? mixed | leaf_outside4_sse2(s, px, py, pz, u, v, w, sum, candidates, tmin, tmax) : mixed;
 }
 
 /* The exact test of lane j of q, which leaf_reject4_sse2 kept: cbvh_ray_triangle_decide (ray_triangle.h)
@@ -294,9 +296,10 @@ CBVH_KERNEL int leaf_lane_test(const struct cbvh_ray_shear *restrict s, const st
  * *tested receives the number of triangles tested. The file's arrays and
  * grid are read into locals once per leaf. */
 CBVH_KERNEL int leaf_loop(const struct cbvh_file *restrict f, uint32_t first, uint32_t count,
-                          const struct cbvh_ray_shear *restrict s, const struct cbvh_hit_gate *gate, float tmin,
-                          float *restrict tmax, struct cbvh_best_hit *restrict best, const int any, const int scalar,
-                          const int near, const int tri_enc, const int vert_enc)
+                          const struct cbvh_ray_shear *restrict s, const struct cbvh_hit_gate *gate,
+                          float tmin, float *restrict tmax, struct cbvh_best_hit *restrict best,
+                          const int any, const int scalar, const int near, const int tri_enc,
+                          const int vert_enc)
 {
     const void *restrict tris = f->triangles;
     const void *restrict verts = f->vertices;
@@ -318,7 +321,8 @@ CBVH_KERNEL int leaf_loop(const struct cbvh_file *restrict f, uint32_t first, ui
                                                         first, end, k, &scratch, &group);
             float edge[3][4];
             /* the lanes the filter keeps, lowest first */
-            for (uint32_t kept = ~leaf_reject4_sse2(s, q, near, tmin, best_t, edge) & group; kept; kept &= kept - 1u) {
+            for (uint32_t kept = ~leaf_reject4_sse2(s, q, near, tmin, best_t, edge) & group; kept;
+                 kept &= kept - 1u) {
                 const uint32_t j = cbvh_lowest_lane(kept);
                 if (leaf_lane_test(s, q, edge, j, tmin, best_t, want_uv, &t, &u, &v) &&
                     leaf_take(f, gate, k + j, t, u, v, any, &best_t, best))
@@ -348,8 +352,8 @@ CBVH_KERNEL int leaf_loop(const struct cbvh_file *restrict f, uint32_t first, ui
  * loops of their own (one switch per leaf, not per triangle); the others go
  * through the generic one, which keeps every walk instance small. */
 CBVH_KERNEL int cbvh_leaf_visit(const struct cbvh_file *restrict f, uint32_t first, uint32_t count,
-                                const struct cbvh_ray_ctx *ray, const int any, const int scalar, const int near,
-                                float *restrict tmax, struct cbvh_best_hit *restrict best)
+                                const struct cbvh_ray_ctx *ray, const int any, const int scalar,
+                                const int near, float *restrict tmax, struct cbvh_best_hit *restrict best)
 {
     const struct cbvh_ray_shear *s = &ray->shear;
     const float tmin = ray->tmin;

@@ -122,7 +122,8 @@ static inline int cbvh_ray_valid(const cbvh_ray *ray)
 #ifdef CBVH_HAVE_SIMD
     /* org and tmin, dir and tmax are four consecutive floats each (cbvh.h): finite in the first seven
      * lanes (|x| <= FLT_MAX fails for inf and NaN), dir not zero in all three */
-    _Static_assert(offsetof(cbvh_ray, tmin) == 3 * sizeof(float) && offsetof(cbvh_ray, tmax) == 7 * sizeof(float),
+    _Static_assert(offsetof(cbvh_ray, tmin) == 3 * sizeof(float) &&
+                       offsetof(cbvh_ray, tmax) == 7 * sizeof(float),
                    "cbvh_ray is org, tmin, dir, tmax");
     const __m128 org_tmin = _mm_loadu_ps(ray->org), dir_tmax = _mm_loadu_ps(ray->dir);
     const __m128 sign = _mm_set1_ps(-0.0f), largest = _mm_set1_ps(FLT_MAX);

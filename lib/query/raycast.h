@@ -69,8 +69,9 @@ static inline int cbvh_ray_prepare(struct cbvh_ray_ctx *ctx, const cbvh_ray *ray
     const __m128 lo4 = cbvh_load3(lo), hi4 = cbvh_load3(hi), o4 = cbvh_load3(ray->org);
     const __m128 e4 = _mm_max_ps(_mm_sub_ps(hi4, lo4), _mm_setzero_ps());
     const __m128 d4 = _mm_max_ps(_mm_sub_ps(o4, hi4), _mm_max_ps(_mm_sub_ps(lo4, o4), _mm_setzero_ps()));
-    const __m128 both = _mm_max_ps(_mm_unpacklo_ps(e4, d4), _mm_unpackhi_ps(e4, d4)); /* e0|2, d0|2, e1|3, d1|3 */
-    const __m128 top = _mm_max_ps(both, _mm_movehl_ps(both, both));                   /* ext, dist */
+    const __m128 both =
+        _mm_max_ps(_mm_unpacklo_ps(e4, d4), _mm_unpackhi_ps(e4, d4)); /* e0|2, d0|2, e1|3, d1|3 */
+    const __m128 top = _mm_max_ps(both, _mm_movehl_ps(both, both));   /* ext, dist */
     ext = _mm_cvtss_f32(top);
     dist = _mm_cvtss_f32(_mm_shuffle_ps(top, top, 1));
 #else

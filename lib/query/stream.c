@@ -110,9 +110,10 @@ CBVH_KERNEL void stream_leaf(const struct cbvh_file *f, struct cbvh_stream_batch
             const struct cbvh_ray_shear *s = &b->ctx[r].shear;
             for (uint32_t g = 0; g < groups; g++) {
                 float edge[3][4];
-                /* the lanes the filter keeps, lowest first */
-                /* (without the t filter: a leaf's entry is not kept per ray here) */
-                for (uint32_t kept = ~leaf_reject4_sse2(s, q[g], 0, 0.0f, 0.0f, edge) & lanes[g]; kept; kept &= kept - 1u) {
+                /* the lanes the filter keeps, lowest first (without its t test: a ray's entry into the
+                 * leaf is not kept here) */
+                for (uint32_t kept = ~leaf_reject4_sse2(s, q[g], 0, 0.0f, 0.0f, edge) & lanes[g]; kept;
+                     kept &= kept - 1u) {
                     const uint32_t lane = cbvh_lowest_lane(kept);
                     const float *box_ray = b->box_ray[r];
                     float t, u, v;

@@ -32,7 +32,7 @@ static inline cbvh_v3 v3_cross(cbvh_v3 a, cbvh_v3 b)
 }
 static inline double v3_len2(cbvh_v3 a) { return v3_dot(a, a); }
 static inline double v3_len(cbvh_v3 a) { return sqrt(v3_dot(a, a)); }
-/* a < b ? a : b and a > b ? a : b: one MINSD or MAXSD each, where a nested conditional compiles to branches */
+/* a < b ? a : b and a > b ? a : b: one MINSD or MAXSD each (a nested conditional compiles to branches) */
 static inline double cbvh_dmin(double a, double b) { return a < b ? a : b; }
 static inline double cbvh_dmax(double a, double b) { return a > b ? a : b; }
 static inline double v3_get(cbvh_v3 a, int axis) { return axis == 0 ? a.x : axis == 1 ? a.y : a.z; }
