@@ -18,6 +18,7 @@
 #include "query/ray_box.h"
 #include "query/ray_triangle.h"
 #include "query/raycast.h"
+#include "query/walk.h"
 #include "support/reference.h"
 #include "support/scene_gen.h"
 #include "support/layouts.h"
@@ -255,6 +256,128 @@ static void test_slab_edge_cases(void **state)
         }
     assert_true(checked > 1000);
 }
+
+#ifdef CBVH_HAVE_SIMD
+/* The wide layout's affine box test (walk.h, struct cbvh_w4_simd_ray) against the slab test in double on
+ * the dequantized planes: it must enter every box that test enters, with an entry distance no later, and
+ * miss the boxes the ray stays clear of. Grids and rays from ordinary to extreme (denormal scales, origins
+ * and coordinates near 1e30, directions from 1e-30 to 1e20); the rays the affine form cannot take (a zero
+ * or tiny direction component, overflow) take the exact form, which is checked the same way. */
+static void test_wide4_affine_box_test(void **state)
+{
+    (void)state;
+    const float grid_origins[] = {0.0f, -1.0f, 3.5f, 1e6f, -2e30f, 1e-30f};
+    const float grid_scales[] = {1e-5f, 3e-4f, 0.0f, 1e-40f, 2e25f, 1.0f};
+    const float coords[] = {0.0f, -0.5f, 0.7f, 2.0f, 1e6f, -1e6f, 1e30f, -1e30f, 1e-30f};
+    const float dirs[] = {1.0f, -1.0f, 0.37f, -3.0f, 1e-3f, 1e-20f, -1e-30f, 1e20f, 0.0f, -0.0f};
+    long affine = 0, exact = 0, entered = 0;
+    uint64_t st = 12345;
+    for (int i = 0; i < 200000; i++) {
+        /* three rays in four on ordinary grids (the first three origins and scales) */
+        const uint64_t extreme = scene_rand_next(&st) % 4 == 0 ? 3u : 0u;
+        float go[3], gs[3];
+        for (int a = 0; a < 3; a++) {
+            go[a] = grid_origins[scene_rand_next(&st) % (3u + extreme)];
+            gs[a] = grid_scales[scene_rand_next(&st) % (3u + extreme)];
+        }
+        uint8_t node[CBVH_W4_NODE_SIZE] = {0};
+        double lo[4][3], hi[4][3];
+        for (uint32_t s = 0; s < 4; s++)
+            for (uint32_t a = 0; a < 3; a++) {
+                uint32_t q0 = (uint32_t)(scene_rand_next(&st) % 65536),
+                         q1 = (uint32_t)(scene_rand_next(&st) % 65536);
+                if (scene_rand_next(&st) % 4 == 0)
+                    q1 = q0; /* flat boxes */
+                if (q0 > q1) {
+                    const uint32_t x = q0;
+                    q0 = q1;
+                    q1 = x;
+                }
+                const uint16_t v0 = (uint16_t)q0, v1 = (uint16_t)q1;
+                memcpy(node + CBVH_W4_Q + 8u * a + 2u * s, &v0, 2);
+                memcpy(node + CBVH_W4_Q + 8u * (3u + a) + 2u * s, &v1, 2);
+                lo[s][a] = cbvh_dequantize(q0, go[a], gs[a]);
+                hi[s][a] = cbvh_dequantize(q1, go[a], gs[a]);
+            }
+        cbvh_ray ray;
+        for (int a = 0; a < 3; a++) {
+            /* origins on a plane of a box, inside the grid, near its origin, or anywhere; directions
+             * mostly ordinary, some tiny, huge or zero */
+            const uint64_t pick = scene_rand_next(&st) % 4;
+            const float inside = go[a] + gs[a] * (float)(scene_rand_next(&st) % 65536);
+            ray.org[a] = pick == 0   ? (float)lo[scene_rand_next(&st) % 4][a]
+                         : pick == 1 ? inside
+                         : pick == 2 ? go[a] + coords[scene_rand_next(&st) % 9] * 1e-3f
+                                     : coords[scene_rand_next(&st) % 9];
+            ray.dir[a] = dirs[scene_rand_next(&st) % (scene_rand_next(&st) % 8 ? 4 : 10)];
+        }
+        ray.tmin = scene_rand_next(&st) % 2 ? 0.0f : 0.25f;
+        ray.tmax = scene_rand_next(&st) % 2 ? INFINITY : 1e3f;
+        struct cbvh_ray_ctx ctx;
+        if (!cbvh_ray_setup(&ctx, &ray))
+            continue;
+        struct cbvh_box_ray box;
+        cbvh_box_ray_init(&box, go, gs, ctx.shear.org, ctx.rcp, ctx.octant);
+        struct cbvh_w4_simd_ray w;
+        walk_w4_simd_ray_init(&w, &box, 0u, ctx.tmin);
+        if (!isfinite(cbvh_dequantize(CBVH_Q_MAX, go[0], gs[0])) ||
+            !isfinite(cbvh_dequantize(CBVH_Q_MAX, go[1], gs[1])) ||
+            !isfinite(cbvh_dequantize(CBVH_Q_MAX, go[2], gs[2])))
+            continue; /* a grid the loader rejects */
+        w.exact ? exact++ : affine++;
+        float entry[4];
+        const uint32_t hits = walk_w4_test_sse2(node, &w, ctx.tmax, entry);
+        const double o[3] = {ctx.shear.org[0], ctx.shear.org[1], ctx.shear.org[2]};
+        const double d[3] = {ray.dir[0], ray.dir[1], ray.dir[2]};
+        for (uint32_t s = 0; s < 4; s++) {
+            /* the exact slab test on the float planes, and the entry it finds */
+            double t0 = ctx.tmin, t1 = ctx.tmax;
+            for (int a = 0; a < 3; a++) {
+                if (d[a] == 0.0) {
+                    if (o[a] < lo[s][a] || o[a] > hi[s][a])
+                        t0 = INFINITY;
+                    continue;
+                }
+                const double ta = (lo[s][a] - o[a]) / d[a], tb = (hi[s][a] - o[a]) / d[a];
+                t0 = fmax(t0, fmin(ta, tb));
+                t1 = fmin(t1, fmax(ta, tb));
+            }
+            if (t0 <= t1) {
+                entered++;
+                /* the exact form's entry may round late, by less than the pad of ray_box.h */
+                const double late = w.exact ? fabs(t0) * 0x1p-21 : 0.0;
+                if (!(hits >> s & 1u) || !((double)entry[s] <= t0 + late))
+                    fail_msg(
+                        "%s test: box %u missed or entered late (entry %.9g, exact %.9g): org %g %g %g dir "
+                        "%g %g %g grid %g %g %g / %g %g %g",
+                        w.exact ? "exact" : "affine", s, (double)entry[s], t0, o[0], o[1], o[2], d[0], d[1],
+                        d[2], (double)go[0], (double)go[1], (double)go[2], (double)gs[0], (double)gs[1],
+                        (double)gs[2]);
+            }
+            /* clear misses stay misses: the box grown by 1e-5 of the size of its coordinates, the origin's
+             * and the grid's, and by the ray's travel over the affine form's least pad in t, 2^-120 */
+            double glo[3], ghi[3];
+            const double travel = 0x1p-118 * (fabs(d[0]) + fabs(d[1]) + fabs(d[2]));
+            for (int a = 0; a < 3; a++) {
+                const double grid = fabs(go[a]) + CBVH_Q_MAX * (double)gs[a];
+                const double grow = 1e-5 * (fabs(lo[s][a]) + fabs(hi[s][a]) + fabs(o[a]) + grid) + travel;
+                glo[a] = lo[s][a] - grow;
+                ghi[a] = hi[s][a] + grow;
+            }
+            if ((hits >> s & 1u) && slab_reference(glo, ghi, o, d, ctx.tmin, ctx.tmax * 1.00001) > 0.0)
+                fail_msg("%s test: box %u entered at %.9g, but the ray stays clear of it: org %g %g %g dir "
+                         "%g %g %g t "
+                         "[%g %g] box %g %g %g - %g %g %g grid %g %g %g / %g %g %g",
+                         w.exact ? "exact" : "affine", s, (double)entry[s], o[0], o[1], o[2], d[0], d[1],
+                         d[2], (double)ctx.tmin, (double)ctx.tmax, lo[s][0], lo[s][1], lo[s][2], hi[s][0],
+                         hi[s][1], hi[s][2], (double)go[0], (double)go[1], (double)go[2], (double)gs[0],
+                         (double)gs[1], (double)gs[2]);
+        }
+    }
+    printf("affine box test: %ld rays affine, %ld exact, %ld boxes entered\n", affine, exact, entered);
+    assert_true(affine > 100000 && exact > 20000 && entered > 10000);
+}
+#endif
 
 /* ------------------------------------------------------------------ */
 /* End to end                                                          */
@@ -1467,6 +1590,9 @@ int main(void)
         cmocka_unit_test(test_watertight_fan),
         cmocka_unit_test(test_slab_edge_cases),
         cmocka_unit_test(test_wide4_visit_table),
+#ifdef CBVH_HAVE_SIMD
+        cmocka_unit_test(test_wide4_affine_box_test),
+#endif
         cmocka_unit_test(test_shear_axes_and_slab_select),
         cmocka_unit_test(test_soup),
         cmocka_unit_test(test_sphere_and_terrain),

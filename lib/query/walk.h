@@ -58,39 +58,87 @@ CBVH_KERNEL uint32_t walk_order_pair(const enum cbvh_walk_order order, int secon
     return 2;
 }
 
-/* The ray as the wide layout's SIMD box test reads it, set up once per walk
- * (rebroadcasting a dozen scalars at every node cost about a tenth of a
- * walk's instructions): per axis its grid origin and scale, the ray origin and
- * reciprocal in all four lanes; for each of the six planes the test uses (near
- * x, y, z, far x, y, z; plane j is on axis j % 3) its byte offset in a node
- * (layout/wide4.h's plane index k). Without SIMD it is empty and unused. */
+/* The ray as the wide layout's SIMD box test reads it, set up once per walk (rebroadcasting a dozen
+ * scalars at every node cost about a tenth of a walk's instructions). Without SIMD it is empty and unused.
+ *
+ * Plane k of a node at grid coordinate q is, along the ray, T = (P - org) / dir with P =
+ * cbvh_dequantize(q): the box test of ray_box.h computes ((origin + q * scale) - org) * rcp, four
+ * roundings on a dependent chain. The affine test computes q * a + b instead, a = scale * rcp and b =
+ * (origin - org) * rcp set up per ray, with b lowered by `pad` for near planes and raised by it for far
+ * planes, so that the near distances never exceed and the far ones never fall short of T: the test
+ * stays conservative (it enters every box the exact test enters), two operations a plane shorter, and
+ * with nine constants rather than twelve. Per axis, with u = 2^-24, S = 65535 |scale| (the largest
+ * |q * scale|), M the largest |P| (max(|origin|, |origin + S|) up to a rounding) and D = |origin -
+ * org|: the products and sums of the affine form are each off by at most u of their operands, P by u (S
+ * + M) from origin + q scale, and 1 / dir by u from rcp, which sums (first order) to at most 4.1 u |rcp|
+ * (S + D + M); rounding b -/+ pad and the final sum adds 1.1 u |rcp| (S + 2 D) + 2.1 u pad. pad = 16 u
+ * |rcp| (S + D + M) + 2^-120 covers both with a factor of 3 to spare (and the underflow of products
+ * below FLT_MIN, at most 2^-150 each). The affine test needs every quantity finite and far from
+ * overflow: |rcp| (S + D + M) <= 2^100 on each axis, and no halved axis (ray_setup.h's box_halve). A
+ * ray that does not meet it (a zero or tiny direction component: rcp infinite or huge; coordinates near
+ * FLT_MAX) takes the exact test, on origin, scale, org and rcp: `exact`. For each of the six planes the
+ * test uses (near x, y, z, far x, y, z; plane j is on axis j % 3): its byte offset in a node (layout/
+ * wide4.h's plane index k). */
 struct cbvh_w4_simd_ray {
 #ifdef CBVH_HAVE_SIMD
-    __m128 origin[3], scale[3], org[3], rcp[3];
+    __m128 a[3], near_b[3], far_b[3];           /* the affine test's, per axis, in all four lanes */
+    __m128 origin[3], scale[3], org[3], rcp[3]; /* the exact test's */
     __m128 tmin;
     uint32_t offset[6];
+    int exact;
 #else
     int unused;
 #endif
 };
 
+#ifdef CBVH_HAVE_SIMD
+/* Lane k of v in all four lanes. */
+#define CBVH_LANE(v, k) _mm_shuffle_ps((v), (v), _MM_SHUFFLE(k, k, k, k))
+#endif
+
 CBVH_KERNEL void walk_w4_simd_ray_init(struct cbvh_w4_simd_ray *w, const struct cbvh_box_ray *restrict box,
-                                       float tmin)
+                                       uint32_t box_halve, float tmin)
 {
 #ifdef CBVH_HAVE_SIMD
     const struct cbvh_slab_select s = box->sel;
-    w->origin[0] = _mm_set1_ps(box->origin[0]);
-    w->origin[1] = _mm_set1_ps(box->origin[1]);
-    w->origin[2] = _mm_set1_ps(box->origin[2]);
-    w->scale[0] = _mm_set1_ps(box->scale[0]);
-    w->scale[1] = _mm_set1_ps(box->scale[1]);
-    w->scale[2] = _mm_set1_ps(box->scale[2]);
-    w->org[0] = _mm_set1_ps(box->org[0]);
-    w->org[1] = _mm_set1_ps(box->org[1]);
-    w->org[2] = _mm_set1_ps(box->org[2]);
-    w->rcp[0] = _mm_set1_ps(box->rcp[0]);
-    w->rcp[1] = _mm_set1_ps(box->rcp[1]);
-    w->rcp[2] = _mm_set1_ps(box->rcp[2]);
+    const __m128 origin = cbvh_load3(box->origin), scale = cbvh_load3(box->scale);
+    const __m128 org = cbvh_load3(box->org), rcp = cbvh_load3(box->rcp);
+    const __m128 sign = _mm_set1_ps(-0.0f);
+    /* lane 3 is 0 in every input: 0 there too, finite */
+    const __m128 span = _mm_mul_ps(_mm_andnot_ps(sign, scale), _mm_set1_ps((float)CBVH_Q_MAX));
+    const __m128 reach =
+        _mm_max_ps(_mm_andnot_ps(sign, origin), _mm_andnot_ps(sign, _mm_add_ps(origin, span)));
+    const __m128 gap = _mm_sub_ps(origin, org);
+    const __m128 size =
+        _mm_mul_ps(_mm_andnot_ps(sign, rcp), _mm_add_ps(_mm_add_ps(span, reach), _mm_andnot_ps(sign, gap)));
+    const __m128 pad = _mm_add_ps(_mm_mul_ps(size, _mm_set1_ps(0x1p-20f)), _mm_set1_ps(0x1p-120f));
+    const __m128 a = _mm_mul_ps(scale, rcp), b = _mm_mul_ps(gap, rcp);
+    const __m128 near_b = _mm_sub_ps(b, pad), far_b = _mm_add_ps(b, pad);
+    /* ordered: NaN (an infinite rcp times 0) fails it */
+    w->exact = box_halve || (_mm_movemask_ps(_mm_cmple_ps(size, _mm_set1_ps(0x1p100f))) & 7) != 7;
+    w->a[0] = CBVH_LANE(a, 0);
+    w->a[1] = CBVH_LANE(a, 1);
+    w->a[2] = CBVH_LANE(a, 2);
+    w->near_b[0] = CBVH_LANE(near_b, 0);
+    w->near_b[1] = CBVH_LANE(near_b, 1);
+    w->near_b[2] = CBVH_LANE(near_b, 2);
+    w->far_b[0] = CBVH_LANE(far_b, 0);
+    w->far_b[1] = CBVH_LANE(far_b, 1);
+    w->far_b[2] = CBVH_LANE(far_b, 2);
+    if (w->exact) { /* the exact form's constants only for the rays that take it */
+        w->origin[0] = CBVH_LANE(origin, 0);
+        w->origin[1] = CBVH_LANE(origin, 1);
+        w->origin[2] = CBVH_LANE(origin, 2);
+        w->scale[0] = CBVH_LANE(scale, 0);
+        w->scale[1] = CBVH_LANE(scale, 1);
+        w->scale[2] = CBVH_LANE(scale, 2);
+        w->org[0] = CBVH_LANE(org, 0);
+        w->org[1] = CBVH_LANE(org, 1);
+        w->org[2] = CBVH_LANE(org, 2);
+        w->rcp[0] = CBVH_LANE(rcp, 0);
+        w->rcp[1] = CBVH_LANE(rcp, 1);
+        w->rcp[2] = CBVH_LANE(rcp, 2);
+    }
     w->offset[0] = CBVH_W4_Q + 8u * s.near_x;
     w->offset[1] = CBVH_W4_Q + 8u * s.near_y;
     w->offset[2] = CBVH_W4_Q + 8u * s.near_z;
@@ -100,41 +148,63 @@ CBVH_KERNEL void walk_w4_simd_ray_init(struct cbvh_w4_simd_ray *w, const struct 
     w->tmin = _mm_set1_ps(tmin);
 #else
     (void)box;
+    (void)box_halve;
     (void)tmin;
     w->unused = 0;
 #endif
 }
 
 #ifdef CBVH_HAVE_SIMD
-/* Plane j of the four slots (struct cbvh_w4_simd_ray) as a distance along the
- * ray, lane s for slot s, with the normative arithmetic of ray_box.h:
+/* Plane j of the four slots (struct cbvh_w4_simd_ray) as grid coordinates, lane s for slot s. */
+CBVH_KERNEL __m128 walk_w4_plane_q(const uint8_t *restrict node, const struct cbvh_w4_simd_ray *restrict w,
+                                   uint32_t j)
+{
+    const __m128i q = _mm_loadl_epi64((const __m128i *)(const void *)(node + w->offset[j]));
+    return _mm_cvtepi32_ps(_mm_unpacklo_epi16(q, _mm_setzero_si128()));
+}
+
+/* Plane j of the four slots as a distance along the ray with the normative arithmetic of ray_box.h:
  * ((origin + (float)q * scale) - org) * rcp. j is a constant at every call. */
 CBVH_KERNEL __m128 walk_w4_plane_distance(const uint8_t *restrict node, const struct cbvh_w4_simd_ray *restrict w,
                                           uint32_t j)
 {
     const uint32_t a = j % 3u;
-    const __m128i q = _mm_loadl_epi64((const __m128i *)(const void *)(node + w->offset[j]));
-    const __m128 qf = _mm_cvtepi32_ps(_mm_unpacklo_epi16(q, _mm_setzero_si128()));
-    return _mm_mul_ps(_mm_sub_ps(_mm_add_ps(w->origin[a], _mm_mul_ps(qf, w->scale[a])), w->org[a]), w->rcp[a]);
+    return _mm_mul_ps(
+        _mm_sub_ps(_mm_add_ps(w->origin[a], _mm_mul_ps(walk_w4_plane_q(node, w, j), w->scale[a])), w->org[a]),
+        w->rcp[a]);
 }
 
-/* The slab test of ray_box.h on the four slots at once, lane for lane the
- * same operations in the same order: MAXPS(a, b) is `a > b ? a : b` and
- * MINPS(a, b) is `a < b ? a : b` (b when either is NaN), so a NaN distance
- * is ignored as in the scalar test. Returns the hit bits (bit s: slot s) and
- * each slot's entry distance. */
+/* The slab test of ray_box.h on the four slots at once. The exact form: lane for lane the same
+ * operations in the same order: MAXPS(a, b) is `a > b ? a : b` and MINPS(a, b) is `a < b ? a : b` (b
+ * when either is NaN), so a NaN distance is ignored as in the scalar test. The affine form (struct
+ * cbvh_w4_simd_ray), which every ray that can takes: every quantity finite, no padding of tfar. Returns
+ * the hit bits (bit s: slot s) and each slot's entry distance. */
 CBVH_KERNEL uint32_t walk_w4_test_sse2(const uint8_t *restrict node, const struct cbvh_w4_simd_ray *restrict w,
                                        float tmax, float entry[CBVH_W4_WIDTH])
 {
-    __m128 tnear = w->tmin, tfar = _mm_set1_ps(tmax);
-    tnear = _mm_max_ps(walk_w4_plane_distance(node, w, 0), tnear);
-    tnear = _mm_max_ps(walk_w4_plane_distance(node, w, 1), tnear);
-    tnear = _mm_max_ps(walk_w4_plane_distance(node, w, 2), tnear);
-    tfar = _mm_min_ps(walk_w4_plane_distance(node, w, 3), tfar);
-    tfar = _mm_min_ps(walk_w4_plane_distance(node, w, 4), tfar);
-    tfar = _mm_min_ps(walk_w4_plane_distance(node, w, 5), tfar);
+    __m128 tnear, tfar;
+    if (CBVH_LIKELY(!w->exact)) {
+        const __m128 n0 = _mm_add_ps(_mm_mul_ps(walk_w4_plane_q(node, w, 0), w->a[0]), w->near_b[0]);
+        const __m128 n1 = _mm_add_ps(_mm_mul_ps(walk_w4_plane_q(node, w, 1), w->a[1]), w->near_b[1]);
+        const __m128 n2 = _mm_add_ps(_mm_mul_ps(walk_w4_plane_q(node, w, 2), w->a[2]), w->near_b[2]);
+        const __m128 f0 = _mm_add_ps(_mm_mul_ps(walk_w4_plane_q(node, w, 3), w->a[0]), w->far_b[0]);
+        const __m128 f1 = _mm_add_ps(_mm_mul_ps(walk_w4_plane_q(node, w, 4), w->a[1]), w->far_b[1]);
+        const __m128 f2 = _mm_add_ps(_mm_mul_ps(walk_w4_plane_q(node, w, 5), w->a[2]), w->far_b[2]);
+        tnear = _mm_max_ps(_mm_max_ps(n0, n1), _mm_max_ps(n2, w->tmin));
+        tfar = _mm_min_ps(_mm_min_ps(f0, f1), _mm_min_ps(f2, _mm_set1_ps(tmax)));
+    } else {
+        tnear = w->tmin;
+        tfar = _mm_set1_ps(tmax);
+        tnear = _mm_max_ps(walk_w4_plane_distance(node, w, 0), tnear);
+        tnear = _mm_max_ps(walk_w4_plane_distance(node, w, 1), tnear);
+        tnear = _mm_max_ps(walk_w4_plane_distance(node, w, 2), tnear);
+        tfar = _mm_min_ps(walk_w4_plane_distance(node, w, 3), tfar);
+        tfar = _mm_min_ps(walk_w4_plane_distance(node, w, 4), tfar);
+        tfar = _mm_min_ps(walk_w4_plane_distance(node, w, 5), tfar);
+        tfar = _mm_mul_ps(tfar, _mm_set1_ps(CBVH_BOX_PAD));
+    }
     _mm_storeu_ps(entry, tnear);
-    return (uint32_t)_mm_movemask_ps(_mm_cmple_ps(tnear, _mm_mul_ps(tfar, _mm_set1_ps(CBVH_BOX_PAD))));
+    return (uint32_t)_mm_movemask_ps(_mm_cmple_ps(tnear, tfar));
 }
 #endif
 
@@ -255,9 +325,11 @@ CBVH_KERNEL int cbvh_walk(const struct cbvh_file *restrict f, const uint32_t lay
         cbvh_box_ray_halve(&box, ray->box_halve);
     const float tmin = ray->tmin;
     float tmax = ray->tmax;
-    struct cbvh_w4_simd_ray w; /* unused with float boxes, but set: the compiler cannot tell */
-    if (layout == CBVH_LAYOUT_WIDE4)
-        walk_w4_simd_ray_init(&w, &box, tmin);
+    /* set for every layout: the binary layout's instances never read it (the compiler drops the set-up),
+     * and a walk whose layout is a run-time value (cbvh report's) would otherwise look to the compiler as if
+     * it might read it unset */
+    struct cbvh_w4_simd_ray w;
+    walk_w4_simd_ray_init(&w, &box, float_boxes ? 0u : ray->box_halve, tmin);
     struct {
         cbvh_ref ref;
         float entry;
