@@ -1025,6 +1025,14 @@ static void test_leaf_range_filter(void **state)
             ray.tmin = (float)(1e-4 * fx.diag);
             compare_scalar_leaves(fx.file, &ray, &compared);
             ray.tmin = 0.0f;
+            if (i % 2) {
+                /* from off the surface, through the point: the first hit is the only triangle near the
+                 * ends of the ranges below, so an occlusion query that accepted a lane without its exact
+                 * test would disagree there */
+                const double back = 1e-2 * fx.diag * (0.1 + scene_rand_unit(&st));
+                for (int x = 0; x < 3; x++)
+                    ray.org[x] = (float)((double)ray.org[x] - back * (double)ray.dir[x]);
+            }
             cbvh_hit h;
             test_set_scalar(1);
             const int hit = cbvh_raycast(fx.file, &ray, CBVH_TRAVERSAL_SORTED, &h, NULL);

@@ -122,6 +122,9 @@ static void check_stream(const ref_fixture *fx, const cbvh_ray *rays, size_t cou
                 fail();
             }
             assert_int_equal(occ[r], cbvh_occluded(fx->file, &rays[r], CBVH_TRAVERSAL_SORTED, NULL));
+            /* occluded exactly when there is a closest hit: the occlusion queries' shortcut (a lane the
+             * leaf filter accepts without its exact test) against the closest hit's exact tests */
+            assert_int_equal(occ[r], hits[r].tri != CBVH_NO_HIT);
         }
         if (count > 0 && ref_ray_valid(&rays[0]))
             assert_true(st.nodes_visited > 0);
@@ -178,6 +181,57 @@ static void test_meshes(void **state)
         ref_fixture_close(&fx);
         scene_free(&s);
     }
+}
+
+/* Rays from off the surface through points of random triangles, with their range ending just before, at
+ * and just after their first hit (the only triangle near those ends): the streams and single rays must
+ * still agree, and occlude exactly when they hit (check_stream). */
+static void test_range_ends(void **state)
+{
+    (void)state;
+    scene s;
+    ref_fixture fx;
+    assert_true(scene_sphere(&s, 3000, (float[3]){0.5f, -0.25f, 2.0f}, 3.0f));
+    open_scene(&fx, &s);
+    enum { POINTS = 600, PER_POINT = 5 };
+    cbvh_ray *rays = malloc(sizeof(cbvh_ray) * POINTS * PER_POINT);
+    assert_non_null(rays);
+    uint64_t st = 77;
+    size_t n = 0;
+    for (int i = 0; i < POINTS; i++) {
+        const double *v = fx.tris.v + 9 * (size_t)(scene_rand_unit(&st) * (double)fx.tris.count);
+        double a = scene_rand_unit(&st), b = scene_rand_unit(&st);
+        if (a + b > 1.0) {
+            a = 1.0 - a;
+            b = 1.0 - b;
+        }
+        cbvh_ray ray = {{0}, 0.0f, {0}, INFINITY};
+        const double z = 2.0 * scene_rand_unit(&st) - 1.0, ph = 6.283185307179586 * scene_rand_unit(&st);
+        ray.dir[0] = (float)(sqrt(1.0 - z * z) * cos(ph));
+        ray.dir[1] = (float)(sqrt(1.0 - z * z) * sin(ph));
+        ray.dir[2] = (float)z;
+        const double back = 1e-2 * fx.diag * (0.1 + scene_rand_unit(&st));
+        for (int x = 0; x < 3; x++)
+            ray.org[x] =
+                (float)(v[x] + a * (v[3 + x] - v[x]) + b * (v[6 + x] - v[x]) - back * (double)ray.dir[x]);
+        cbvh_hit h;
+        if (!cbvh_raycast(fx.file, &ray, CBVH_TRAVERSAL_SORTED, &h, NULL) || !(h.t > 0.0f))
+            continue;
+        const float before = nextafterf(h.t, 0.0f), after = nextafterf(h.t, INFINITY);
+        const float ranges[PER_POINT][2] = {
+            {0.0f, before}, {0.0f, h.t}, {h.t, INFINITY}, {after, INFINITY}, {before, h.t}};
+        for (int k = 0; k < PER_POINT; k++) {
+            rays[n] = ray;
+            rays[n].tmin = ranges[k][0];
+            rays[n].tmax = ranges[k][1];
+            n++;
+        }
+    }
+    assert_true(n > 1000);
+    check_stream(&fx, rays, n);
+    free(rays);
+    ref_fixture_close(&fx);
+    scene_free(&s);
 }
 
 /* The batch node kernels agree box by box on awkward rays: 0, -0 and
@@ -302,9 +356,8 @@ static void test_null_arguments(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_counts),
-        cmocka_unit_test(test_meshes),
-        cmocka_unit_test(test_node_kernels_agree),
+        cmocka_unit_test(test_counts),         cmocka_unit_test(test_meshes),
+        cmocka_unit_test(test_range_ends),     cmocka_unit_test(test_node_kernels_agree),
         cmocka_unit_test(test_null_arguments),
     };
     return TEST_RUN_LAYOUTS(tests, 1);

@@ -201,10 +201,13 @@ leaf_group_load(const struct leaf_quad *restrict quads, const void *restrict tri
  * half that times Zspan; the rounding of the z values, of the interpolation and of the division by
  * dir[kz] add 9 2^-24 Zabs. The margin is four times that bound, in t (times 1/|dir[kz]|), plus FLT_MIN
  * (a t just below 0 that rounds to -0). A lane nearer an edge, or with a non-finite estimate, is left to
- * the exact test. Returns the ruled-out bits. */
+ * the exact test. Returns the ruled-out bits; *within receives those of `candidates` whose t the exact
+ * test would find inside [tmin, tmax] for sure (the same bound: t* is then more than 3/4 of the margin
+ * inside the range, and so is its rounding to float), the lanes it would accept. */
 CBVH_KERNEL uint32_t leaf_outside4_sse2(const struct cbvh_ray_shear *restrict s, const __m128 px[3],
                                         const __m128 py[3], const __m128 pz[3], __m128 u, __m128 v, __m128 w,
-                                        __m128 det, uint32_t candidates, float tmin, float tmax)
+                                        __m128 det, uint32_t candidates, float tmin, float tmax,
+                                        uint32_t *restrict within)
 {
     const __m128 sign = _mm_set1_ps(-0.0f), sz = _mm_set1_ps(s->sz);
     const __m128 z = _mm_add_ps(_mm_add_ps(_mm_mul_ps(u, pz[0]), _mm_mul_ps(v, pz[1])), _mm_mul_ps(w, pz[2]));
@@ -226,8 +229,11 @@ CBVH_KERNEL uint32_t leaf_outside4_sse2(const struct cbvh_ray_shear *restrict s,
         _mm_add_ps(_mm_mul_ps(_mm_andnot_ps(sign, sz), _mm_add_ps(_mm_mul_ps(_mm_set1_ps(0x1p-16f), spread),
                                                                   _mm_mul_ps(_mm_set1_ps(0x1p-18f), zabs))),
                    _mm_set1_ps(FLT_MIN));
-    const __m128 below = _mm_cmplt_ps(_mm_add_ps(t, margin), _mm_set1_ps(tmin));
-    const __m128 above = _mm_cmpgt_ps(_mm_sub_ps(t, margin), _mm_set1_ps(tmax));
+    const __m128 low = _mm_sub_ps(t, margin), high = _mm_add_ps(t, margin);
+    const __m128 lo = _mm_set1_ps(tmin), hi = _mm_set1_ps(tmax);
+    const __m128 below = _mm_cmplt_ps(high, lo), above = _mm_cmpgt_ps(low, hi);
+    const __m128 in_range = _mm_and_ps(_mm_cmpge_ps(low, lo), _mm_cmple_ps(high, hi));
+    *within = (uint32_t)_mm_movemask_ps(_mm_and_ps(inside, in_range)) & candidates;
     return (uint32_t)_mm_movemask_ps(_mm_and_ps(inside, _mm_or_ps(below, above))) & candidates;
 }
 
@@ -235,14 +241,17 @@ CBVH_KERNEL uint32_t leaf_outside4_sse2(const struct cbvh_ray_shear *restrict s,
  * the same float operations in the same order (the build contracts no multiply-add): the vertices relative
  * to the origin, sheared, then the three edge functions, left in edge[e][j] (function e of lane j).
  * Returns the bits of the lanes that test rejects for sure (finite edge functions of both signs) and, when
- * `near`, of those it keeps whose t would be outside [tmin, tmax] for sure (leaf_outside4_sse2); the exact
- * test of every other lane (leaf_lane_test) then decides it exactly as the scalar test would alone, so
- * answers are the same with or without this filter. near: the leaf's box holds the ray's start (its entry
- * is tmin), where the line crosses triangles behind the start or, from a surface, the start's own; it costs
- * more than it saves elsewhere (Wuson: incoherent rays -4%, shadow rays from the surface +5%). */
+ * `ranged`, of those it keeps whose t would be outside [tmin, tmax] for sure (leaf_outside4_sse2); the
+ * exact test of every other lane (leaf_lane_test) then decides it exactly as the scalar test would alone,
+ * so answers are the same with or without this filter. *within: when ranged, the lanes the exact test
+ * would accept for sure (leaf_outside4_sse2), else 0; an occlusion query without a hit filter needs no
+ * more of them. Callers range the leaves whose box holds the ray's start (its entry is tmin), where the
+ * line crosses triangles behind the start or, from a surface, the start's own (elsewhere it costs more
+ * than it saves: Wuson incoherent rays -4%, shadow rays from the surface +5%), and every leaf of an
+ * occlusion query, where a lane it accepts saves the exact test and ends the walk. */
 CBVH_KERNEL uint32_t leaf_reject4_sse2(const struct cbvh_ray_shear *restrict s,
-                                       const struct leaf_quad *restrict q, const int near, float tmin,
-                                       float tmax, float edge[3][4])
+                                       const struct leaf_quad *restrict q, const int ranged, float tmin,
+                                       float tmax, float edge[3][4], uint32_t *restrict within)
 {
     const uint32_t kx = s->kx, ky = s->ky, kz = s->kz;
     const __m128 sx = _mm_set1_ps(s->sx), sy = _mm_set1_ps(s->sy);
@@ -268,10 +277,13 @@ CBVH_KERNEL uint32_t leaf_reject4_sse2(const struct cbvh_ray_shear *restrict s,
     const __m128 negative = _mm_or_ps(_mm_or_ps(_mm_cmplt_ps(u, zero), _mm_cmplt_ps(v, zero)), _mm_cmplt_ps(w, zero));
     const __m128 positive = _mm_or_ps(_mm_or_ps(_mm_cmpgt_ps(u, zero), _mm_cmpgt_ps(v, zero)), _mm_cmpgt_ps(w, zero));
     const uint32_t mixed = (uint32_t)_mm_movemask_ps(_mm_and_ps(finite, _mm_and_ps(negative, positive)));
-    if (!near)
+    *within = 0;
+    if (!ranged)
         return mixed;
     const uint32_t candidates = (uint32_t)_mm_movemask_ps(finite) & ~mixed;
-    return candidates ? mixed | leaf_outside4_sse2(s, px, py, pz, u, v, w, sum, candidates, tmin, tmax) : mixed;
+    return candidates
+               ? mixed | leaf_outside4_sse2(s, px, py, pz, u, v, w, sum, candidates, tmin, tmax, within)
+               : mixed;
 }
 
 /* The exact test of lane j of q, which leaf_reject4_sse2 kept: cbvh_ray_triangle_decide (ray_triangle.h)
@@ -307,8 +319,8 @@ CBVH_KERNEL int leaf_loop(const struct cbvh_file *restrict f, uint32_t first, ui
     const float scale[3] = {f->grid_scale[0], f->grid_scale[1], f->grid_scale[2]};
     float best_t = *tmax;
     float t, u = 0.0f, v = 0.0f, a[3], b[3], c[3];
-    /* an occlusion query without a filter never looks at the barycentrics */
-    const int want_uv = !any || gate;
+    /* an occlusion query without a filter never looks at the barycentrics, nor at t once it is in range */
+    const int want_uv = !any || gate, occlusion = any && !gate;
 #ifdef CBVH_HAVE_SIMD
     /* Four triangles at a time through the SIMD filter; the scalar test on the lanes it keeps, in order. */
     if (!scalar && count > 1) {
@@ -320,9 +332,12 @@ CBVH_KERNEL int leaf_loop(const struct cbvh_file *restrict f, uint32_t first, ui
             const struct leaf_quad *q = leaf_group_load(quads, tris, tri_enc, verts, vert_enc, origin, scale,
                                                         first, end, k, &scratch, &group);
             float edge[3][4];
+            uint32_t within;
+            const uint32_t rejected = leaf_reject4_sse2(s, q, near || occlusion, tmin, best_t, edge, &within);
+            if (occlusion && (within & group))
+                return 1;
             /* the lanes the filter keeps, lowest first */
-            for (uint32_t kept = ~leaf_reject4_sse2(s, q, near, tmin, best_t, edge) & group; kept;
-                 kept &= kept - 1u) {
+            for (uint32_t kept = ~rejected & group; kept; kept &= kept - 1u) {
                 const uint32_t j = cbvh_lowest_lane(kept);
                 if (leaf_lane_test(s, q, edge, j, tmin, best_t, want_uv, &t, &u, &v) &&
                     leaf_take(f, gate, k + j, t, u, v, any, &best_t, best))
@@ -334,6 +349,7 @@ CBVH_KERNEL int leaf_loop(const struct cbvh_file *restrict f, uint32_t first, ui
     }
 #else
     (void)scalar;
+    (void)occlusion;
 #endif
     for (uint32_t k = first; k < first + count; k++) {
         leaf_triangle(tris, tri_enc, verts, vert_enc, origin, scale, k, a, b, c);

@@ -110,12 +110,21 @@ CBVH_KERNEL void stream_leaf(const struct cbvh_file *f, struct cbvh_stream_batch
             const struct cbvh_ray_shear *s = &b->ctx[r].shear;
             for (uint32_t g = 0; g < groups; g++) {
                 float edge[3][4];
-                /* the lanes the filter keeps, lowest first (without its t test: a ray's entry into the
-                 * leaf is not kept here) */
-                for (uint32_t kept = ~leaf_reject4_sse2(s, q[g], 0, 0.0f, 0.0f, edge) & lanes[g]; kept;
-                     kept &= kept - 1u) {
+                uint32_t within;
+                const float *box_ray = b->box_ray[r];
+                /* an occlusion: the filter's t test on the ray's range, a lane it accepts ends the ray
+                 * (leaf_reject4_sse2); a closest hit: the plain filter (a ray's entry into the leaf is not
+                 * kept here) */
+                const uint32_t rejected = leaf_reject4_sse2(s, q[g], any, box_ray[CBVH_LANE_TMIN],
+                                                            box_ray[CBVH_LANE_TMAX], edge, &within);
+                if (any && (within & lanes[g])) {
+                    stream_take(b, r, group_first[g] + cbvh_lowest_lane(within & lanes[g]), 1, 0.0f, 0.0f,
+                                0.0f, any, occluded);
+                    break;
+                }
+                /* the lanes the filter keeps, lowest first */
+                for (uint32_t kept = ~rejected & lanes[g]; kept; kept &= kept - 1u) {
                     const uint32_t lane = cbvh_lowest_lane(kept);
-                    const float *box_ray = b->box_ray[r];
                     float t, u, v;
                     const int hit = leaf_lane_test(s, q[g], edge, lane, box_ray[CBVH_LANE_TMIN],
                                                    box_ray[CBVH_LANE_TMAX], !any, &t, &u, &v);
