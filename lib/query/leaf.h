@@ -76,26 +76,26 @@ CBVH_KERNEL int leaf_take(const struct cbvh_file *restrict f, const struct cbvh_
     return verdict == CBVH_FILTER_STOP;
 }
 
-/* Triangle k's vertex indices and positions for encodings that are
- * compile-time constants in the specialised leaf loops below (the switch
- * then folds away), or run-time values in the generic one. */
+/* Triangle k's vertex indices and positions (p[v]: vertex v) for encodings that are compile-time
+ * constants in the specialised leaf loops below (the switch then folds away), or run-time values in the
+ * generic one. An array of rows, not three output pointers: the walks inline this, and an array of
+ * pointers to the caller's locals was built in every walk's prologue. */
 CBVH_KERNEL void leaf_triangle(const void *restrict tris, const int tri_enc, const void *restrict verts,
                                const int vert_enc, const float *restrict grid_origin,
-                               const float *restrict grid_scale, uint32_t k, float a[3], float b[3], float c[3])
+                               const float *restrict grid_scale, uint32_t k, float p[3][3])
 {
     uint32_t idx[3];
     cbvh_indices_decode(tris, tri_enc, k, idx);
-    float *const out[3] = {a, b, c};
     for (int v = 0; v < 3; v++) {
         if (vert_enc == CBVH_VERTS_F32) {
             const float *q = (const float *)verts + 3u * (size_t)idx[v];
-            out[v][0] = q[0];
-            out[v][1] = q[1];
-            out[v][2] = q[2];
+            p[v][0] = q[0];
+            p[v][1] = q[1];
+            p[v][2] = q[2];
         } else {
             const uint16_t *q = (const uint16_t *)verts + 3u * (size_t)idx[v];
             for (int x = 0; x < 3; x++)
-                out[v][x] = cbvh_dequantize(q[x], grid_origin[x], grid_scale[x]);
+                p[v][x] = cbvh_dequantize(q[x], grid_origin[x], grid_scale[x]);
         }
     }
 }
@@ -318,7 +318,7 @@ CBVH_KERNEL int leaf_loop(const struct cbvh_file *restrict f, uint32_t first, ui
     const float origin[3] = {f->grid_origin[0], f->grid_origin[1], f->grid_origin[2]};
     const float scale[3] = {f->grid_scale[0], f->grid_scale[1], f->grid_scale[2]};
     float best_t = *tmax;
-    float t, u = 0.0f, v = 0.0f, a[3], b[3], c[3];
+    float t, u = 0.0f, v = 0.0f, p[3][3];
     /* an occlusion query without a filter never looks at the barycentrics, nor at t once it is in range */
     const int want_uv = !any || gate, occlusion = any && !gate;
 #ifdef CBVH_HAVE_SIMD
@@ -352,8 +352,8 @@ CBVH_KERNEL int leaf_loop(const struct cbvh_file *restrict f, uint32_t first, ui
     (void)occlusion;
 #endif
     for (uint32_t k = first; k < first + count; k++) {
-        leaf_triangle(tris, tri_enc, verts, vert_enc, origin, scale, k, a, b, c);
-        if (cbvh_ray_triangle(s, a, b, c, tmin, best_t, want_uv, &t, &u, &v) &&
+        leaf_triangle(tris, tri_enc, verts, vert_enc, origin, scale, k, p);
+        if (cbvh_ray_triangle(s, p[0], p[1], p[2], tmin, best_t, want_uv, &t, &u, &v) &&
             leaf_take(f, gate, k, t, u, v, any, &best_t, best))
             return 1;
     }
