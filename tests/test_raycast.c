@@ -316,15 +316,18 @@ static void test_wide4_affine_box_test(void **state)
         struct cbvh_ray_ctx ctx;
         if (!cbvh_ray_setup(&ctx, &ray))
             continue;
-        struct cbvh_box_ray box;
-        cbvh_box_ray_init(&box, go, gs, ctx.shear.org, ctx.rcp, ctx.octant);
-        struct cbvh_w4_simd_ray w;
-        walk_w4_simd_ray_init(&w, &box, 0u, ctx.tmin);
         if (!isfinite(cbvh_dequantize(CBVH_Q_MAX, go[0], gs[0])) ||
             !isfinite(cbvh_dequantize(CBVH_Q_MAX, go[1], gs[1])) ||
             !isfinite(cbvh_dequantize(CBVH_Q_MAX, go[2], gs[2])))
             continue; /* a grid the loader rejects */
-        w.exact ? exact++ : affine++;
+        struct cbvh_box_ray box;
+        cbvh_box_ray_init(&box, go, gs, ctx.shear.org, ctx.rcp, ctx.octant);
+        struct cbvh_w4_simd_ray w;
+        walk_w4_simd_ray_init(&w, &box, 0u, ctx.tmin);
+        if (w.exact)
+            exact++;
+        else
+            affine++;
         float entry[4];
         const uint32_t hits = walk_w4_test_sse2(node, &w, ctx.tmax, entry);
         const double o[3] = {ctx.shear.org[0], ctx.shear.org[1], ctx.shear.org[2]};
