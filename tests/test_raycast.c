@@ -950,37 +950,45 @@ static void test_sliver_t(void **state)
     }
 }
 
-/* The leaf filter's t test (leaf_outside4_sse2, in leaves whose box holds the ray's start) only rules out
- * triangles the exact test would reject: on the wide layout, the SIMD leaves and the scalar ones (which
- * test every triangle exactly) give the same answers bit for bit for rays that start on the surface, as
- * shadow rays and game probes do: at random points of random triangles (a quarter of them within 1e-6 of
- * an edge), in random directions (a third of them grazing the start triangle's plane at 1e-2 to 1e-6),
- * with tmin 0 or a small gap, then with tmin and tmax on the float at, just above and just below the
- * first hit's t. */
+/* The leaf filter's t test (leaf_outside_lanes, in leaves whose box holds the ray's start) only rules out
+ * triangles the exact test would reject: on the wide layout, the SIMD leaves (four lanes with SSE2, eight
+ * with AVX2) and the scalar ones (which test every triangle exactly) give the same answers bit for bit for
+ * rays that start on the surface, as shadow rays and game probes do: at random points of random triangles (a
+ * quarter of them within 1e-6 of an edge), in random directions (a third of them grazing the start triangle's
+ * plane at 1e-2 to 1e-6), with tmin 0 or a small gap, then with tmin and tmax on the float at, just above and
+ * just below the first hit's t. */
 static void compare_scalar_leaves(const cbvh_file *f, const cbvh_ray *ray, int *compared)
 {
-    cbvh_hit h[2];
-    int hit[2], occ[2];
-    for (int scalar = 0; scalar < 2; scalar++) {
-        test_set_scalar(scalar);
-        hit[scalar] = cbvh_raycast(f, ray, CBVH_TRAVERSAL_SORTED, &h[scalar], NULL);
-        occ[scalar] = cbvh_occluded(f, ray, CBVH_TRAVERSAL_SORTED, NULL);
+    static const int kernels[3] = {TEST_KERNEL_SCALAR, TEST_KERNEL_SSE2, TEST_KERNEL_AVX2};
+    static const char *names[3] = {"scalar", "SSE2", "AVX2"};
+    cbvh_hit h[3];
+    int hit[3], occ[3];
+    for (int k = 0; k < 3; k++) {
+        if (!test_set_kernel(kernels[k])) { /* a CPU without AVX2 */
+            hit[k] = hit[0];
+            h[k] = h[0];
+            occ[k] = occ[0];
+            continue;
+        }
+        hit[k] = cbvh_raycast(f, ray, CBVH_TRAVERSAL_SORTED, &h[k], NULL);
+        occ[k] = cbvh_occluded(f, ray, CBVH_TRAVERSAL_SORTED, NULL);
     }
-    if (hit[0] != hit[1] || occ[0] != occ[1] ||
-        (hit[0] && !(h[0].tri == h[1].tri && h[0].t == h[1].t && h[0].u == h[1].u && h[0].v == h[1].v)))
-        fail_msg(
-            "ray (%a %a %a) + t (%a %a %a), t in [%a, %a]: SIMD leaves hit %d (tri %u t %a) occluded %d, "
-            "scalar leaves hit %d (tri %u t %a) occluded %d",
-            ray->org[0], ray->org[1], ray->org[2], ray->dir[0], ray->dir[1], ray->dir[2], ray->tmin,
-            ray->tmax, hit[0], h[0].tri, h[0].t, occ[0], hit[1], h[1].tri, h[1].t, occ[1]);
+    for (int k = 1; k < 3; k++)
+        if (hit[0] != hit[k] || occ[0] != occ[k] ||
+            (hit[0] && !(h[0].tri == h[k].tri && h[0].t == h[k].t && h[0].u == h[k].u && h[0].v == h[k].v)))
+            fail_msg(
+                "ray (%a %a %a) + t (%a %a %a), t in [%a, %a]: %s walks hit %d (tri %u t %a) occluded %d, "
+                "scalar walks hit %d (tri %u t %a) occluded %d",
+                ray->org[0], ray->org[1], ray->org[2], ray->dir[0], ray->dir[1], ray->dir[2], ray->tmin,
+                ray->tmax, names[k], hit[k], h[k].tri, h[k].t, occ[k], hit[0], h[0].tri, h[0].t, occ[0]);
     (*compared)++;
 }
 
 static void test_leaf_range_filter(void **state)
 {
     (void)state;
-    const int was = test_scalar_now;
-    if (test_layout != CBVH_LAYOUT_WIDE4 || !test_set_scalar(0))
+    const int was = test_kernel_now;
+    if (test_layout != CBVH_LAYOUT_WIDE4 || !test_set_kernel(TEST_KERNEL_SCALAR))
         skip(); /* the scalar leaves are the wide layout's, and only a static program reaches the switch */
     int compared = 0;
     for (int which = 0; which < 3; which++) {
@@ -1037,7 +1045,7 @@ static void test_leaf_range_filter(void **state)
                     ray.org[x] = (float)((double)ray.org[x] - back * (double)ray.dir[x]);
             }
             cbvh_hit h;
-            test_set_scalar(1);
+            test_set_kernel(TEST_KERNEL_SCALAR);
             const int hit = cbvh_raycast(fx.file, &ray, CBVH_TRAVERSAL_SORTED, &h, NULL);
             if (!hit)
                 continue;
@@ -1056,7 +1064,7 @@ static void test_leaf_range_filter(void **state)
         ref_fixture_close(&fx);
         scene_free(&sc);
     }
-    test_set_scalar(was);
+    test_set_kernel(was);
     assert_true(compared > 15000);
 }
 

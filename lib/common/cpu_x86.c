@@ -16,6 +16,8 @@ unsigned cbvh_cpu_features(void)
         f |= CBVH_CPU_PCLMUL;
     if (__builtin_cpu_supports("avx2"))
         f |= CBVH_CPU_AVX2;
+    if (__builtin_cpu_supports("bmi") && __builtin_cpu_supports("bmi2"))
+        f |= CBVH_CPU_BMI;
     return f;
 }
 #elif defined(CBVH_HAVE_SIMD) && defined(_MSC_VER) && (defined(_M_X64) || defined(_M_IX86))
@@ -39,6 +41,8 @@ static unsigned detect(void)
         __cpuidex(r, 7, 0);
         if (r[1] & (1 << 5))
             f |= CBVH_CPU_AVX2;
+        if ((r[1] & (1 << 3)) && (r[1] & (1 << 8)))
+            f |= CBVH_CPU_BMI;
     }
     return f;
 }

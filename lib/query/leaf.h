@@ -2,12 +2,10 @@
 #ifndef CBVH_QUERY_LEAF_H
 #define CBVH_QUERY_LEAF_H
 
-#ifdef CBVH_HAVE_SIMD
-#include <emmintrin.h>
-#endif
 #include <float.h>
 
 #include "common/file.h"
+#include "query/lanes.h"
 #include "query/ray_setup.h"
 #include "query/ray_triangle.h"
 
@@ -184,10 +182,41 @@ leaf_group_load(const struct leaf_quad *restrict quads, const void *restrict tri
     return scratch;
 }
 
-/* Of the four lanes of a group, those whose hit t, were the exact test (cbvh_ray_triangle_decide) to
+/* A group of CBVH_LANES triangles for the ray filter: lanes 4 h .. 4 h + 3 in quad[h], triangles k + j
+ * (leaf_group_lanes) for the lanes j of mask. */
+#define CBVH_LEAF_QUADS (CBVH_LANES / 4u)
+struct leaf_group {
+    const struct leaf_quad *quad[CBVH_LEAF_QUADS];
+    uint32_t mask;
+};
+
+/* Group k of a leaf [first, end) in CBVH_LANES lanes, k stepping by CBVH_LANES from leaf_groups_begin:
+ * leaf_group_load on each quad of it (scratch: one quad each), the quads past the leaf's end not read
+ * (the first stands in for them, its lanes masked). */
+CBVH_KERNEL void leaf_group_lanes(const struct leaf_quad *restrict quads, const void *restrict tris,
+                                  const int tri_enc, const void *restrict verts, const int vert_enc,
+                                  const float *restrict grid_origin, const float *restrict grid_scale,
+                                  uint32_t first, uint32_t end, uint32_t k,
+                                  struct leaf_quad scratch[CBVH_LEAF_QUADS], struct leaf_group *restrict g)
+{
+    uint32_t mask;
+    g->quad[0] = leaf_group_load(quads, tris, tri_enc, verts, vert_enc, grid_origin, grid_scale, first, end,
+                                 k, &scratch[0], &mask);
+    g->mask = mask;
+    for (uint32_t h = 1; h < CBVH_LEAF_QUADS; h++) {
+        g->quad[h] = g->quad[0];
+        if (end - k > 4u * h) {
+            g->quad[h] = leaf_group_load(quads, tris, tri_enc, verts, vert_enc, grid_origin, grid_scale,
+                                         first, end, k + 4u * h, &scratch[h], &mask);
+            g->mask |= mask << 4u * h;
+        }
+    }
+}
+
+/* Of the lanes of a group, those whose hit t, were the exact test (cbvh_ray_triangle_decide) to
  * accept them, would be outside [tmin, tmax] for sure: the bits of `candidates` (lanes whose float edge
  * functions u, v, w are finite, of one sign, with sum det) that it can rule out. px, py, pz: the sheared
- * vertices (the ray along +z, pz the kz coordinate relative to the origin) as leaf_reject4_sse2 has them.
+ * vertices (the ray along +z, pz the kz coordinate relative to the origin) as leaf_reject_lanes has them.
  *
  * The exact test's t is the double plane t clamped into the span of the vertices' projections on the
  * ray and into the line's interval in the triangle's bounding box, then rounded to float. Here t is
@@ -204,98 +233,103 @@ leaf_group_load(const struct leaf_quad *restrict quads, const void *restrict tri
  * the exact test. Returns the ruled-out bits; *within receives those of `candidates` whose t the exact
  * test would find inside [tmin, tmax] for sure (the same bound: t* is then more than 3/4 of the margin
  * inside the range, and so is its rounding to float), the lanes it would accept. */
-CBVH_KERNEL uint32_t leaf_outside4_sse2(const struct cbvh_ray_shear *restrict s, const __m128 px[3],
-                                        const __m128 py[3], const __m128 pz[3], __m128 u, __m128 v, __m128 w,
-                                        __m128 det, uint32_t candidates, float tmin, float tmax,
-                                        uint32_t *restrict within)
+CBVH_KERNEL uint32_t leaf_outside_lanes(const struct cbvh_ray_shear *restrict s, const cbvh_lanes px[3],
+                                        const cbvh_lanes py[3], const cbvh_lanes pz[3], cbvh_lanes u,
+                                        cbvh_lanes v, cbvh_lanes w, cbvh_lanes det, uint32_t candidates,
+                                        float tmin, float tmax, uint32_t *restrict within)
 {
-    const __m128 sign = _mm_set1_ps(-0.0f), sz = _mm_set1_ps(s->sz);
-    const __m128 z = _mm_add_ps(_mm_add_ps(_mm_mul_ps(u, pz[0]), _mm_mul_ps(v, pz[1])), _mm_mul_ps(w, pz[2]));
-    const __m128 t = _mm_mul_ps(_mm_div_ps(z, det), sz);
-    __m128 r = _mm_setzero_ps();
+    const cbvh_lanes sign = lanes_set1(-0.0f), sz = lanes_set1(s->sz);
+    const cbvh_lanes z = lanes_add(lanes_add(lanes_mul(u, pz[0]), lanes_mul(v, pz[1])), lanes_mul(w, pz[2]));
+    const cbvh_lanes t = lanes_mul(lanes_div(z, det), sz);
+    cbvh_lanes r = lanes_zero();
     CBVH_UNROLL(3)
     for (int k = 0; k < 3; k++)
-        r = _mm_max_ps(r, _mm_max_ps(_mm_andnot_ps(sign, px[k]), _mm_andnot_ps(sign, py[k])));
-    const __m128 zmin = _mm_min_ps(_mm_min_ps(pz[0], pz[1]), pz[2]);
-    const __m128 zmax = _mm_max_ps(_mm_max_ps(pz[0], pz[1]), pz[2]);
-    const __m128 zabs = _mm_max_ps(zmax, _mm_sub_ps(_mm_setzero_ps(), zmin));
-    const __m128 edge_error = _mm_mul_ps(r, _mm_add_ps(r, zabs)); /* E / 2^-20 */
-    const __m128 smallest =
-        _mm_min_ps(_mm_min_ps(_mm_andnot_ps(sign, u), _mm_andnot_ps(sign, v)), _mm_andnot_ps(sign, w));
-    const __m128 inside = _mm_cmpgt_ps(smallest, _mm_mul_ps(_mm_set1_ps(0x1p-18f), edge_error));
-    const __m128 spread =
-        _mm_div_ps(_mm_mul_ps(_mm_sub_ps(zmax, zmin), edge_error), _mm_andnot_ps(sign, det));
-    const __m128 margin =
-        _mm_add_ps(_mm_mul_ps(_mm_andnot_ps(sign, sz), _mm_add_ps(_mm_mul_ps(_mm_set1_ps(0x1p-16f), spread),
-                                                                  _mm_mul_ps(_mm_set1_ps(0x1p-18f), zabs))),
-                   _mm_set1_ps(FLT_MIN));
-    const __m128 low = _mm_sub_ps(t, margin), high = _mm_add_ps(t, margin);
-    const __m128 lo = _mm_set1_ps(tmin), hi = _mm_set1_ps(tmax);
-    const __m128 below = _mm_cmplt_ps(high, lo), above = _mm_cmpgt_ps(low, hi);
-    const __m128 in_range = _mm_and_ps(_mm_cmpge_ps(low, lo), _mm_cmple_ps(high, hi));
-    *within = (uint32_t)_mm_movemask_ps(_mm_and_ps(inside, in_range)) & candidates;
-    return (uint32_t)_mm_movemask_ps(_mm_and_ps(inside, _mm_or_ps(below, above))) & candidates;
+        r = lanes_max(r, lanes_max(lanes_andnot(sign, px[k]), lanes_andnot(sign, py[k])));
+    const cbvh_lanes zmin = lanes_min(lanes_min(pz[0], pz[1]), pz[2]);
+    const cbvh_lanes zmax = lanes_max(lanes_max(pz[0], pz[1]), pz[2]);
+    const cbvh_lanes zabs = lanes_max(zmax, lanes_sub(lanes_zero(), zmin));
+    const cbvh_lanes edge_error = lanes_mul(r, lanes_add(r, zabs)); /* E / 2^-20 */
+    const cbvh_lanes smallest =
+        lanes_min(lanes_min(lanes_andnot(sign, u), lanes_andnot(sign, v)), lanes_andnot(sign, w));
+    const cbvh_lanes inside = lanes_gt(smallest, lanes_mul(lanes_set1(0x1p-18f), edge_error));
+    const cbvh_lanes spread =
+        lanes_div(lanes_mul(lanes_sub(zmax, zmin), edge_error), lanes_andnot(sign, det));
+    const cbvh_lanes margin =
+        lanes_add(lanes_mul(lanes_andnot(sign, sz), lanes_add(lanes_mul(lanes_set1(0x1p-16f), spread),
+                                                              lanes_mul(lanes_set1(0x1p-18f), zabs))),
+                  lanes_set1(FLT_MIN));
+    const cbvh_lanes low = lanes_sub(t, margin), high = lanes_add(t, margin);
+    const cbvh_lanes lo = lanes_set1(tmin), hi = lanes_set1(tmax);
+    const cbvh_lanes below = lanes_lt(high, lo), above = lanes_gt(low, hi);
+    const cbvh_lanes in_range = lanes_and(lanes_ge(low, lo), lanes_le(high, hi));
+    *within = (uint32_t)lanes_bits(lanes_and(inside, in_range)) & candidates;
+    return (uint32_t)lanes_bits(lanes_and(inside, lanes_or(below, above))) & candidates;
 }
 
-/* The first test of cbvh_ray_triangle (ray_triangle.h) on the four triangles of q at once, lane for lane
- * the same float operations in the same order (the build contracts no multiply-add): the vertices relative
- * to the origin, sheared, then the three edge functions, left in edge[e][j] (function e of lane j).
+/* The first test of cbvh_ray_triangle (ray_triangle.h) on the CBVH_LANES triangles of g at once, lane for
+ * lane the same float operations in the same order (the build contracts no multiply-add): the vertices
+ * relative to the origin, sheared, then the three edge functions, left in edge[e][j] (function e of lane j).
  * Returns the bits of the lanes that test rejects for sure (finite edge functions of both signs) and, when
- * `ranged`, of those it keeps whose t would be outside [tmin, tmax] for sure (leaf_outside4_sse2); the
+ * `ranged`, of those it keeps whose t would be outside [tmin, tmax] for sure (leaf_outside_lanes); the
  * exact test of every other lane (leaf_lane_test) then decides it exactly as the scalar test would alone,
  * so answers are the same with or without this filter. *within: when ranged, the lanes the exact test
- * would accept for sure (leaf_outside4_sse2), else 0; an occlusion query without a hit filter needs no
+ * would accept for sure (leaf_outside_lanes), else 0; an occlusion query without a hit filter needs no
  * more of them. Callers range the leaves whose box holds the ray's start (its entry is tmin), where the
  * line crosses triangles behind the start or, from a surface, the start's own (elsewhere it costs more
  * than it saves: Wuson incoherent rays -4%, shadow rays from the surface +5%), and every leaf of an
  * occlusion query, where a lane it accepts saves the exact test and ends the walk. */
-CBVH_KERNEL uint32_t leaf_reject4_sse2(const struct cbvh_ray_shear *restrict s,
-                                       const struct leaf_quad *restrict q, const int ranged, float tmin,
-                                       float tmax, float edge[3][4], uint32_t *restrict within)
+CBVH_KERNEL uint32_t leaf_reject_lanes(const struct cbvh_ray_shear *restrict s,
+                                       const struct leaf_group *restrict g, const int ranged, float tmin,
+                                       float tmax, float edge[3][CBVH_LANES], uint32_t *restrict within)
 {
     const uint32_t kx = s->kx, ky = s->ky, kz = s->kz;
-    const __m128 sx = _mm_set1_ps(s->sx), sy = _mm_set1_ps(s->sy);
-    const __m128 ox = _mm_set1_ps(s->org[kx]), oy = _mm_set1_ps(s->org[ky]), oz = _mm_set1_ps(s->org[kz]);
-    __m128 px[3], py[3], pz[3];
+    const cbvh_lanes sx = lanes_set1(s->sx), sy = lanes_set1(s->sy);
+    const cbvh_lanes ox = lanes_set1(s->org[kx]), oy = lanes_set1(s->org[ky]), oz = lanes_set1(s->org[kz]);
+    const struct leaf_quad *restrict lo = g->quad[0], *restrict hi = g->quad[CBVH_LEAF_QUADS - 1u];
+    cbvh_lanes px[3], py[3], pz[3];
+    (void)hi;
     CBVH_UNROLL(3)
     for (int v = 0; v < 3; v++) {
-        pz[v] = _mm_sub_ps(_mm_load_ps(q->c[v][kz]), oz);
-        px[v] = _mm_sub_ps(_mm_sub_ps(_mm_load_ps(q->c[v][kx]), ox), _mm_mul_ps(sx, pz[v]));
-        py[v] = _mm_sub_ps(_mm_sub_ps(_mm_load_ps(q->c[v][ky]), oy), _mm_mul_ps(sy, pz[v]));
+        pz[v] = lanes_sub(lanes_load_halves(lo->c[v][kz], hi->c[v][kz]), oz);
+        px[v] = lanes_sub(lanes_sub(lanes_load_halves(lo->c[v][kx], hi->c[v][kx]), ox), lanes_mul(sx, pz[v]));
+        py[v] = lanes_sub(lanes_sub(lanes_load_halves(lo->c[v][ky], hi->c[v][ky]), oy), lanes_mul(sy, pz[v]));
     }
     /* u = cx*by - cy*bx, v = ax*cy - ay*cx, w = bx*ay - by*ax (a, b, c = vertices 0, 1, 2) */
-    const __m128 u = _mm_sub_ps(_mm_mul_ps(px[2], py[1]), _mm_mul_ps(py[2], px[1]));
-    const __m128 v = _mm_sub_ps(_mm_mul_ps(px[0], py[2]), _mm_mul_ps(py[0], px[2]));
-    const __m128 w = _mm_sub_ps(_mm_mul_ps(px[1], py[0]), _mm_mul_ps(py[1], px[0]));
-    _mm_storeu_ps(edge[0], u);
-    _mm_storeu_ps(edge[1], v);
-    _mm_storeu_ps(edge[2], w);
-    const __m128 zero = _mm_setzero_ps();
-    const __m128 sum = _mm_add_ps(_mm_add_ps(u, v), w);
-    const __m128 abs_sum = _mm_andnot_ps(_mm_set1_ps(-0.0f), sum);
-    const __m128 finite = _mm_cmple_ps(abs_sum, _mm_set1_ps(FLT_MAX)); /* false for NaN, as fabsf(..) <= FLT_MAX */
-    const __m128 negative = _mm_or_ps(_mm_or_ps(_mm_cmplt_ps(u, zero), _mm_cmplt_ps(v, zero)), _mm_cmplt_ps(w, zero));
-    const __m128 positive = _mm_or_ps(_mm_or_ps(_mm_cmpgt_ps(u, zero), _mm_cmpgt_ps(v, zero)), _mm_cmpgt_ps(w, zero));
-    const uint32_t mixed = (uint32_t)_mm_movemask_ps(_mm_and_ps(finite, _mm_and_ps(negative, positive)));
+    const cbvh_lanes u = lanes_sub(lanes_mul(px[2], py[1]), lanes_mul(py[2], px[1]));
+    const cbvh_lanes v = lanes_sub(lanes_mul(px[0], py[2]), lanes_mul(py[0], px[2]));
+    const cbvh_lanes w = lanes_sub(lanes_mul(px[1], py[0]), lanes_mul(py[1], px[0]));
+    lanes_store(edge[0], u);
+    lanes_store(edge[1], v);
+    lanes_store(edge[2], w);
+    const cbvh_lanes zero = lanes_zero();
+    const cbvh_lanes sum = lanes_add(lanes_add(u, v), w);
+    const cbvh_lanes abs_sum = lanes_andnot(lanes_set1(-0.0f), sum);
+    const cbvh_lanes finite =
+        lanes_le(abs_sum, lanes_set1(FLT_MAX)); /* false for NaN, as fabsf(..) <= FLT_MAX */
+    const cbvh_lanes negative = lanes_or(lanes_or(lanes_lt(u, zero), lanes_lt(v, zero)), lanes_lt(w, zero));
+    const cbvh_lanes positive = lanes_or(lanes_or(lanes_gt(u, zero), lanes_gt(v, zero)), lanes_gt(w, zero));
+    const uint32_t mixed = (uint32_t)lanes_bits(lanes_and(finite, lanes_and(negative, positive)));
     *within = 0;
     if (!ranged)
         return mixed;
-    const uint32_t candidates = (uint32_t)_mm_movemask_ps(finite) & ~mixed;
+    const uint32_t candidates = (uint32_t)lanes_bits(finite) & ~mixed;
     return candidates
-               ? mixed | leaf_outside4_sse2(s, px, py, pz, u, v, w, sum, candidates, tmin, tmax, within)
+               ? mixed | leaf_outside_lanes(s, px, py, pz, u, v, w, sum, candidates, tmin, tmax, within)
                : mixed;
 }
 
-/* The exact test of lane j of q, which leaf_reject4_sse2 kept: cbvh_ray_triangle_decide (ray_triangle.h)
+/* The exact test of lane j of g, which leaf_reject_lanes kept: cbvh_ray_triangle_decide (ray_triangle.h)
  * on the lane's vertices and edge functions as the filter left them, the floats the scalar test computes.
  * Arguments and result as for cbvh_ray_triangle. */
-CBVH_KERNEL int leaf_lane_test(const struct cbvh_ray_shear *restrict s, const struct leaf_quad *restrict q,
-                               const float edge[3][4], uint32_t j, float tmin, float tmax, const int want_uv,
-                               float *t, float *u, float *v)
+CBVH_KERNEL int leaf_lane_test(const struct cbvh_ray_shear *restrict s, const struct leaf_group *restrict g,
+                               const float edge[3][CBVH_LANES], uint32_t j, float tmin, float tmax,
+                               const int want_uv, float *t, float *u, float *v)
 {
-    const cbvh_v3 vert[3] = {v3(q->c[0][0][j], q->c[0][1][j], q->c[0][2][j]),
-                             v3(q->c[1][0][j], q->c[1][1][j], q->c[1][2][j]),
-                             v3(q->c[2][0][j], q->c[2][1][j], q->c[2][2][j])};
+    const struct leaf_quad *restrict q = g->quad[j / 4u];
+    const uint32_t i = j % 4u;
+    const cbvh_v3 vert[3] = {v3(q->c[0][0][i], q->c[0][1][i], q->c[0][2][i]),
+                             v3(q->c[1][0][i], q->c[1][1][i], q->c[1][2][i]),
+                             v3(q->c[2][0][i], q->c[2][1][i], q->c[2][2][i])};
     return cbvh_ray_triangle_decide(s, vert, edge[0][j], edge[1][j], edge[2][j], tmin, tmax, want_uv, t, u,
                                     v);
 }
@@ -326,20 +360,21 @@ CBVH_KERNEL int leaf_loop(const struct cbvh_file *restrict f, uint32_t first, ui
     if (!scalar && count > 1) {
         const struct leaf_quad *restrict quads = (const struct leaf_quad *)f->quads;
         const uint32_t end = first + count;
-        for (uint32_t k = leaf_groups_begin(quads, first); k < end; k += 4) {
-            uint32_t group;
-            struct leaf_quad scratch;
-            const struct leaf_quad *q = leaf_group_load(quads, tris, tri_enc, verts, vert_enc, origin, scale,
-                                                        first, end, k, &scratch, &group);
-            float edge[3][4];
+        for (uint32_t k = leaf_groups_begin(quads, first); k < end; k += CBVH_LANES) {
+            struct leaf_quad scratch[CBVH_LEAF_QUADS];
+            struct leaf_group g;
+            leaf_group_lanes(quads, tris, tri_enc, verts, vert_enc, origin, scale, first, end, k, scratch,
+                             &g);
+            float edge[3][CBVH_LANES];
             uint32_t within;
-            const uint32_t rejected = leaf_reject4_sse2(s, q, near || occlusion, tmin, best_t, edge, &within);
-            if (occlusion && (within & group))
+            const uint32_t rejected =
+                leaf_reject_lanes(s, &g, near || occlusion, tmin, best_t, edge, &within);
+            if (occlusion && (within & g.mask))
                 return 1;
             /* the lanes the filter keeps, lowest first */
-            for (uint32_t kept = ~rejected & group; kept; kept &= kept - 1u) {
-                const uint32_t j = cbvh_lowest_lane(kept);
-                if (leaf_lane_test(s, q, edge, j, tmin, best_t, want_uv, &t, &u, &v) &&
+            for (uint32_t kept = ~rejected & g.mask; kept; kept &= kept - 1u) {
+                const uint32_t j = lanes_lowest(kept);
+                if (leaf_lane_test(s, &g, edge, j, tmin, best_t, want_uv, &t, &u, &v) &&
                     leaf_take(f, gate, k + j, t, u, v, any, &best_t, best))
                     return 1;
             }

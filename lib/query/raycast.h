@@ -29,10 +29,21 @@ void cbvh_closest_subtree(const struct cbvh_file *f, const struct cbvh_ray_ctx *
                           struct cbvh_best_hit *best, cbvh_query_stats *stats);
 int cbvh_any_subtree(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray, cbvh_ref root, cbvh_query_stats *stats);
 
-/* Test hook, not exported: 1 makes the wide layout's walks test a node's
- * children one box at a time instead of with SIMD (the fallback of builds
- * without SIMD), so tests can compare both; 0 (the default) restores SIMD. */
-void cbvh_walk_set_scalar(int scalar);
+/* The wide layout's walk kernels (the binary layout has one, scalar). */
+enum cbvh_walk_kernel {
+    CBVH_WALK_KERNEL_BEST,   /* the fastest the build and the CPU have: AVX2, else SSE2, else scalar */
+    CBVH_WALK_KERNEL_SCALAR, /* a node's children one box at a time, leaf triangles one at a time (the
+                              * kernel of builds without SIMD) */
+    CBVH_WALK_KERNEL_SSE2,   /* four child boxes at once, leaf triangles through a four-lane filter */
+    CBVH_WALK_KERNEL_AVX2    /* SSE2's node test, leaf triangles eight lanes at a time (raycast_walks_avx2.c;
+                              * CPUs with AVX2, BMI1 and BMI2) */
+};
+
+/* Test hook, not exported: the kernel the wide layout's walks take from now on (an enum cbvh_walk_kernel;
+ * one the build or the CPU lacks falls back to the best below it). Every kernel gives the same answers
+ * bit for bit, so tests compare them. Returns the kernel the walks now take (never BEST). Meant to be set
+ * between queries; reads are atomic, so concurrent queries stay defined. */
+int cbvh_walk_set_kernel(int kernel);
 
 /* Stackless walk over escape links (binary layout). */
 void cbvh_closest_stackless(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray, struct cbvh_best_hit *best,

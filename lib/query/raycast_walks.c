@@ -1,61 +1,99 @@
-/* raycast_walks.c: the library's named instances of the traversal core (walk.h), one per mode and node layout. */
+/* raycast_walks.c: the library's named instances of the traversal core (walk.h), one per mode, layout and
+ * kernel. */
 #ifdef HAVE_CONFIG_H
 #include "config.h"
 #endif
 
 #include <stdatomic.h>
 
+#include "common/cpu.h"
 #include "query/raycast.h"
 #include "query/walk.h"
+#include "query/walk_instances.h"
 
-static const struct cbvh_walk_mode closest_sorted = {.order = CBVH_WALK_SORTED};
-static const struct cbvh_walk_mode closest_unsorted = {.order = CBVH_WALK_UNSORTED};
-static const struct cbvh_walk_mode closest_distance = {.order = CBVH_WALK_DISTANCE};
-static const struct cbvh_walk_mode any_sorted = {.order = CBVH_WALK_SORTED, .any = 1};
-static const struct cbvh_walk_mode any_unsorted = {.order = CBVH_WALK_UNSORTED, .any = 1};
-static const struct cbvh_walk_mode any_distance = {.order = CBVH_WALK_DISTANCE, .any = 1};
+/* The kernel the wide layout's walks take (enum cbvh_walk_kernel), chosen at the first walk, or by the
+ * test hook; 0 (BEST) until then. */
+static atomic_int walk_kernel_chosen;
 
-static atomic_int walk_scalar_setting;
-
-void cbvh_walk_set_scalar(int scalar)
+/* The best kernel this build and CPU have at or below `kernel`. */
+static int walk_kernel_available(int kernel)
 {
-    atomic_store_explicit(&walk_scalar_setting, scalar, memory_order_relaxed);
+#ifdef CBVH_HAVE_SIMD
+#ifdef CBVH_HAVE_AVX2
+    const unsigned avx2 = CBVH_CPU_AVX2 | CBVH_CPU_BMI;
+    if (kernel >= CBVH_WALK_KERNEL_AVX2 && (cbvh_cpu_features() & avx2) == avx2)
+        return CBVH_WALK_KERNEL_AVX2;
+#endif
+    return kernel >= CBVH_WALK_KERNEL_SSE2 ? CBVH_WALK_KERNEL_SSE2 : CBVH_WALK_KERNEL_SCALAR;
+#else
+    (void)kernel;
+    return CBVH_WALK_KERNEL_SCALAR;
+#endif
 }
 
-/* The walks of one mode: in the wide layout (every choice a constant but its scalar switch) and in the
- * binary layout, each a function of its own with the traversal core inlined, so a caller's frame holds
- * one walk's stack (about 1.5 KiB), not the sum of every instance's (with all of them inlined into it,
- * cbvh_closest's frame was 11.6 KiB; -fstack-usage); the call costs one jump per ray. `name` walks the
- * subtree `root` (whose box the caller tested) or, when `whole`, the whole tree, for the file's layout. */
-#define WALK_INSTANCE(name, mode)                                                                              \
-    CBVH_NOINLINE int name##_wide4(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray, cbvh_ref start,   \
-                                   struct cbvh_best_hit *best, cbvh_query_stats *stats)                         \
-    {                                                                                                          \
-        struct cbvh_walk_mode wide = mode;                                                                     \
-        wide.scalar = atomic_load_explicit(&walk_scalar_setting, memory_order_relaxed) != 0;                   \
-        return cbvh_walk(f, CBVH_LAYOUT_WIDE4, ray, start, CBVH_NO_BOX, wide, NULL, best, stats);              \
-    }                                                                                                          \
-    CBVH_NOINLINE int name##_binary(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray, cbvh_ref start,  \
-                                    uint32_t start_box, struct cbvh_best_hit *best, cbvh_query_stats *stats)    \
-    {                                                                                                          \
-        return cbvh_walk(f, CBVH_LAYOUT_BINARY, ray, start, start_box, mode, NULL, best, stats);               \
-    }                                                                                                          \
-    static int name(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray, const int whole, cbvh_ref root,  \
-                    struct cbvh_best_hit *best, cbvh_query_stats *stats)                                        \
-    {                                                                                                          \
-        const uint32_t layout = f->layout;                                                                     \
-        const cbvh_ref start = whole ? cbvh_tree_root(f, layout) : root;                                      \
-        if (layout == CBVH_LAYOUT_WIDE4)                                                                       \
-            return name##_wide4(f, ray, start, best, stats);                                                   \
-        return name##_binary(f, ray, start, whole ? cbvh_tree_root_box(f, layout) : CBVH_NO_BOX, best, stats); \
+int cbvh_walk_set_kernel(int kernel)
+{
+    const int chosen =
+        walk_kernel_available(kernel == CBVH_WALK_KERNEL_BEST ? CBVH_WALK_KERNEL_AVX2 : kernel);
+    atomic_store_explicit(&walk_kernel_chosen, chosen, memory_order_relaxed);
+    return chosen;
+}
+
+/* Read once per ray: a relaxed load and a predictable branch. Threads racing through the first walk
+ * choose the same kernel. */
+static inline int walk_kernel(void)
+{
+    const int chosen = atomic_load_explicit(&walk_kernel_chosen, memory_order_relaxed);
+    return CBVH_LIKELY(chosen != CBVH_WALK_KERNEL_BEST) ? chosen
+                                                        : cbvh_walk_set_kernel(CBVH_WALK_KERNEL_BEST);
+}
+
+#ifdef CBVH_HAVE_AVX2
+#define WALK_AVX2_CALL(name)                                                                                 \
+    if (kernel == CBVH_WALK_KERNEL_AVX2)                                                                     \
+        return cbvh_walk_##name##_wide4_avx2(f, ray, start, best, stats);
+#else
+#define WALK_AVX2_CALL(name)
+#endif
+
+/* The walks of one mode: in the wide layout (every choice a constant but the kernel: AVX2 in its own
+ * file, SSE2 or scalar here, a predictable branch rather than doubling the code) and in the binary
+ * layout, each a function of its own with the traversal core inlined, so a caller's frame holds one
+ * walk's stack (about 1.5 KiB), not the sum of every instance's (with all of them inlined into it,
+ * cbvh_closest's frame was 11.6 KiB; -fstack-usage); the call costs one jump per ray. walk_##name walks
+ * the subtree `root` (whose box the caller tested) or, when `whole`, the whole tree, for the file's
+ * layout. */
+#define WALK_INSTANCE(name, order_, any_)                                                                    \
+    CBVH_NOINLINE int walk_##name##_wide4(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray,         \
+                                          cbvh_ref start, struct cbvh_best_hit *best,                        \
+                                          cbvh_query_stats *stats)                                           \
+    {                                                                                                        \
+        const int kernel = walk_kernel();                                                                    \
+        WALK_AVX2_CALL(name)                                                                                 \
+        const struct cbvh_walk_mode mode = {                                                                 \
+            .order = order_, .any = any_, .scalar = kernel == CBVH_WALK_KERNEL_SCALAR};                      \
+        return cbvh_walk(f, CBVH_LAYOUT_WIDE4, ray, start, CBVH_NO_BOX, mode, NULL, best, stats);            \
+    }                                                                                                        \
+    CBVH_NOINLINE int walk_##name##_binary(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray,        \
+                                           cbvh_ref start, uint32_t start_box, struct cbvh_best_hit *best,   \
+                                           cbvh_query_stats *stats)                                          \
+    {                                                                                                        \
+        const struct cbvh_walk_mode mode = {.order = order_, .any = any_};                                   \
+        return cbvh_walk(f, CBVH_LAYOUT_BINARY, ray, start, start_box, mode, NULL, best, stats);             \
+    }                                                                                                        \
+    static int walk_##name(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray, const int whole,       \
+                           cbvh_ref root, struct cbvh_best_hit *best, cbvh_query_stats *stats)               \
+    {                                                                                                        \
+        const uint32_t layout = f->layout;                                                                   \
+        const cbvh_ref start = whole ? cbvh_tree_root(f, layout) : root;                                     \
+        if (layout == CBVH_LAYOUT_WIDE4)                                                                     \
+            return walk_##name##_wide4(f, ray, start, best, stats);                                          \
+        return walk_##name##_binary(f, ray, start, whole ? cbvh_tree_root_box(f, layout) : CBVH_NO_BOX,      \
+                                    best, stats);                                                            \
     }
-WALK_INSTANCE(walk_closest_sorted, closest_sorted)
-WALK_INSTANCE(walk_closest_unsorted, closest_unsorted)
-WALK_INSTANCE(walk_closest_distance, closest_distance)
-WALK_INSTANCE(walk_any_sorted, any_sorted)
-WALK_INSTANCE(walk_any_unsorted, any_unsorted)
-WALK_INSTANCE(walk_any_distance, any_distance)
+CBVH_WALK_INSTANCES(WALK_INSTANCE)
 #undef WALK_INSTANCE
+#undef WALK_AVX2_CALL
 
 /* The wide layout has no escape links: its stackless request walks sorted (the same answer). */
 void cbvh_closest(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray, cbvh_traversal traversal,

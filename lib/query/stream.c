@@ -94,39 +94,39 @@ CBVH_KERNEL void stream_leaf(const struct cbvh_file *f, struct cbvh_stream_batch
     float a[3], v1[3], v2[3];
 #ifdef CBVH_HAVE_SIMD
     if (simd && count > 1) {
-        struct leaf_quad scratch[CBVH_LEAF_GROUPS];
-        const struct leaf_quad *q[CBVH_LEAF_GROUPS];
-        uint32_t lanes[CBVH_LEAF_GROUPS], group_first[CBVH_LEAF_GROUPS], groups = 0;
+        struct leaf_quad scratch[CBVH_LEAF_GROUPS][CBVH_LEAF_QUADS];
+        struct leaf_group q[CBVH_LEAF_GROUPS];
+        uint32_t group_first[CBVH_LEAF_GROUPS], groups = 0;
         const uint32_t end = tri0 + count;
         const struct leaf_quad *quads = (const struct leaf_quad *)f->quads;
-        for (uint32_t k = leaf_groups_begin(quads, tri0); k < end; k += 4, groups++) {
+        for (uint32_t k = leaf_groups_begin(quads, tri0); k < end; k += CBVH_LANES, groups++) {
             group_first[groups] = k;
-            q[groups] = leaf_group_load(quads, f->triangles, (int)f->triangle_encoding, f->vertices,
-                                        (int)f->vertex_encoding, f->grid_origin, f->grid_scale, tri0, end, k,
-                                        &scratch[groups], &lanes[groups]);
+            leaf_group_lanes(quads, f->triangles, (int)f->triangle_encoding, f->vertices,
+                             (int)f->vertex_encoding, f->grid_origin, f->grid_scale, tri0, end, k,
+                             scratch[groups], &q[groups]);
         }
         for (uint32_t j = 0; j < m; j++) {
             const uint32_t r = live[j];
             const struct cbvh_ray_shear *s = &b->ctx[r].shear;
             for (uint32_t g = 0; g < groups; g++) {
-                float edge[3][4];
+                float edge[3][CBVH_LANES];
                 uint32_t within;
                 const float *box_ray = b->box_ray[r];
                 /* an occlusion: the filter's t test on the ray's range, a lane it accepts ends the ray
-                 * (leaf_reject4_sse2); a closest hit: the plain filter (a ray's entry into the leaf is not
+                 * (leaf_reject_lanes); a closest hit: the plain filter (a ray's entry into the leaf is not
                  * kept here) */
-                const uint32_t rejected = leaf_reject4_sse2(s, q[g], any, box_ray[CBVH_LANE_TMIN],
+                const uint32_t rejected = leaf_reject_lanes(s, &q[g], any, box_ray[CBVH_LANE_TMIN],
                                                             box_ray[CBVH_LANE_TMAX], edge, &within);
-                if (any && (within & lanes[g])) {
-                    stream_take(b, r, group_first[g] + cbvh_lowest_lane(within & lanes[g]), 1, 0.0f, 0.0f,
-                                0.0f, any, occluded);
+                if (any && (within & q[g].mask)) {
+                    stream_take(b, r, group_first[g] + lanes_lowest(within & q[g].mask), 1, 0.0f, 0.0f, 0.0f,
+                                any, occluded);
                     break;
                 }
                 /* the lanes the filter keeps, lowest first */
-                for (uint32_t kept = ~rejected & lanes[g]; kept; kept &= kept - 1u) {
-                    const uint32_t lane = cbvh_lowest_lane(kept);
+                for (uint32_t kept = ~rejected & q[g].mask; kept; kept &= kept - 1u) {
+                    const uint32_t lane = lanes_lowest(kept);
                     float t, u, v;
-                    const int hit = leaf_lane_test(s, q[g], edge, lane, box_ray[CBVH_LANE_TMIN],
+                    const int hit = leaf_lane_test(s, &q[g], edge, lane, box_ray[CBVH_LANE_TMIN],
                                                    box_ray[CBVH_LANE_TMAX], !any, &t, &u, &v);
                     stream_take(b, r, group_first[g] + lane, hit, t, u, v, any, occluded);
                 }

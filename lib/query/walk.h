@@ -26,9 +26,10 @@ enum cbvh_walk_order {
 struct cbvh_walk_mode {
     enum cbvh_walk_order order;
     int any;    /* any hit: stop at the first triangle hit */
-    int scalar; /* no SIMD: the children one box at a time, and each leaf triangle without the four-wide
-                 * filter (the fallback, and its test); the wide layout's instances read it at run time
-                 * (cbvh_walk_set_scalar), a predictable branch, rather than doubling their code */
+    int scalar; /* no SIMD: the children one box at a time, and each leaf triangle without the
+                 * filter (the fallback, and its test); the wide layout's SSE2 instances read it at run
+                 * time (raycast_walks.c's kernel choice), a predictable branch, rather than doubling their
+                 * code */
 };
 
 /* Box `box` against the ray: quantized from the file, or float_boxes[6 box ...]. */

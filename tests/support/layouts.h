@@ -1,4 +1,5 @@
-/* layouts.h: runs a test program's cmocka group once per node layout (and the wide layout's scalar child test). */
+/* layouts.h: runs a test program's cmocka group once per node layout (and the wide layout's other walk
+ * kernels). */
 #ifndef CBVH_TESTS_SUPPORT_LAYOUTS_H
 #define CBVH_TESTS_SUPPORT_LAYOUTS_H
 
@@ -8,20 +9,26 @@
 #include "support/reference.h"
 
 /* Test hook of the library (lib/query/raycast.h), hidden in the shared
- * library: programs linked statically can choose the scalar child test;
- * for the others the weak reference is NULL and the scalar run is skipped. */
-void cbvh_walk_set_scalar(int scalar) __attribute__((weak));
+ * library: programs linked statically can choose the wide layout's walk
+ * kernel; for the others the weak reference is NULL and those runs are
+ * skipped. */
+int cbvh_walk_set_kernel(int kernel) __attribute__((weak));
 
-/* What test_set_scalar last set: a test that switches the child test restores it. */
-static int test_scalar_now;
+/* The kernels of lib/query/raycast.h's enum cbvh_walk_kernel. */
+enum { TEST_KERNEL_BEST, TEST_KERNEL_SCALAR, TEST_KERNEL_SSE2, TEST_KERNEL_AVX2 };
 
-static inline int test_set_scalar(int scalar)
+/* What test_set_kernel last set: a test that switches the kernel restores it. */
+static int test_kernel_now;
+
+/* Makes the walks take `kernel`; returns 1 when they now do (0: the hook is out of reach, or the build
+ * or the CPU lacks the kernel, and the walks took the best below it). */
+static inline int test_set_kernel(int kernel)
 {
-    if (!cbvh_walk_set_scalar)
+    if (!cbvh_walk_set_kernel)
         return 0;
-    cbvh_walk_set_scalar(scalar);
-    test_scalar_now = scalar;
-    return 1;
+    const int chosen = cbvh_walk_set_kernel(kernel);
+    test_kernel_now = kernel;
+    return kernel == TEST_KERNEL_BEST || chosen == kernel;
 }
 
 /* The layout the group being run cooks with. */
@@ -47,33 +54,34 @@ static inline const char *test_layout_name(void)
     return test_layout == CBVH_LAYOUT_WIDE4 ? "wide4" : "binary";
 }
 
-/* Runs `tests` on the binary layout, then on wide4 with SIMD child tests,
- * then (when `scalar` is set and the program can reach the hook) on wide4
- * with the scalar child test, then on wide4 with the files ref_cook_open opens
- * expanded (cbvh_file_expand_triangles). Returns the number of failed tests
- * over all runs. A function, so the runs happen in this order. */
-static inline int test_run_layouts(const char *names[4], const struct CMUnitTest *tests, size_t count,
-                                   int scalar)
+/* Runs `tests` on the binary layout, then on wide4 with the best walk kernel, then (when `kernels` is set
+ * and the program can reach the hook) on wide4 with the SSE2 kernel when the best one is AVX2, and with
+ * the scalar kernel, then on wide4 with the files ref_cook_open opens expanded
+ * (cbvh_file_expand_triangles). Returns the number of failed tests over all runs. A function, so the
+ * runs happen in this order. */
+static inline int test_run_layouts(const char *names[5], const struct CMUnitTest *tests, size_t count,
+                                   int kernels)
 {
     int failed = 0;
     test_layout = CBVH_LAYOUT_BINARY;
-    test_set_scalar(0);
+    test_set_kernel(TEST_KERNEL_BEST);
     failed += _cmocka_run_group_tests(names[0], tests, count, NULL, NULL);
     test_layout = CBVH_LAYOUT_WIDE4;
     failed += _cmocka_run_group_tests(names[1], tests, count, NULL, NULL);
-    if (scalar && test_set_scalar(1)) {
+    if (kernels && test_set_kernel(TEST_KERNEL_AVX2) && test_set_kernel(TEST_KERNEL_SSE2))
         failed += _cmocka_run_group_tests(names[2], tests, count, NULL, NULL);
-        test_set_scalar(0);
-    }
+    if (kernels && test_set_kernel(TEST_KERNEL_SCALAR))
+        failed += _cmocka_run_group_tests(names[3], tests, count, NULL, NULL);
+    test_set_kernel(TEST_KERNEL_BEST);
     ref_expand_triangles = 1;
-    failed += _cmocka_run_group_tests(names[3], tests, count, NULL, NULL);
+    failed += _cmocka_run_group_tests(names[4], tests, count, NULL, NULL);
     ref_expand_triangles = 0;
     return failed;
 }
 
-#define TEST_RUN_LAYOUTS(tests, scalar)                                                                      \
-    test_run_layouts((const char *[4]){"binary layout", "wide4 layout", "wide4 layout, scalar child test",   \
-                                       "wide4 layout, expanded triangles"},                                  \
-                     tests, sizeof(tests) / sizeof((tests)[0]), scalar)
+#define TEST_RUN_LAYOUTS(tests, kernels)                                                                     \
+    test_run_layouts((const char *[5]){"binary layout", "wide4 layout", "wide4 layout, SSE2 walks",          \
+                                       "wide4 layout, scalar walks", "wide4 layout, expanded triangles"},    \
+                     tests, sizeof(tests) / sizeof((tests)[0]), kernels)
 
 #endif

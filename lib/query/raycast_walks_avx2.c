@@ -1,0 +1,27 @@
+/* raycast_walks_avx2.c: the wide layout's walk instances compiled for AVX2, eight leaf triangles a vector. */
+#ifdef HAVE_CONFIG_H
+#include "config.h"
+#endif
+
+#ifdef CBVH_HAVE_AVX2
+#if !defined(__AVX2__)
+#error "raycast_walks_avx2.c is compiled with AVX2, BMI1 and BMI2 enabled (configure and CMake add the flags)"
+#endif
+
+#include "query/walk.h"
+#include "query/walk_instances.h"
+
+/* The traversal core of walk.h as every other instance has it: only the instruction set differs, so
+ * the leaf filter (leaf.h, lanes.h) tests eight triangles at once, and the rest is the same code in VEX
+ * encoding. The answers are the other kernels' bit for bit: the filter only rules out lanes, and the
+ * exact test decides the others in the same order. */
+#define WALK_AVX2(name, order_, any_)                                                                        \
+    int cbvh_walk_##name##_wide4_avx2(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray,             \
+                                      cbvh_ref start, struct cbvh_best_hit *best, cbvh_query_stats *stats)   \
+    {                                                                                                        \
+        const struct cbvh_walk_mode mode = {.order = order_, .any = any_};                                   \
+        return cbvh_walk(f, CBVH_LAYOUT_WIDE4, ray, start, CBVH_NO_BOX, mode, NULL, best, stats);            \
+    }
+CBVH_WALK_INSTANCES(WALK_AVX2)
+#undef WALK_AVX2
+#endif
