@@ -45,6 +45,9 @@ enum cbvh_walk_kernel {
  * between queries; reads are atomic, so concurrent queries stay defined. */
 int cbvh_walk_set_kernel(int kernel);
 
+/* The kernel the wide layout's walks take now (never BEST): the streams follow it. */
+int cbvh_walk_kernel(void);
+
 /* Stackless walk over escape links (binary layout). */
 void cbvh_closest_stackless(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray, struct cbvh_best_hit *best,
                             cbvh_query_stats *stats);

@@ -48,6 +48,11 @@ static inline int walk_kernel(void)
                                                         : cbvh_walk_set_kernel(CBVH_WALK_KERNEL_BEST);
 }
 
+int cbvh_walk_kernel(void)
+{
+    return walk_kernel();
+}
+
 #ifdef CBVH_HAVE_AVX2
 #define WALK_AVX2_CALL(name)                                                                                 \
     if (kernel == CBVH_WALK_KERNEL_AVX2)                                                                     \

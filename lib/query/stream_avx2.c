@@ -1,0 +1,29 @@
+/* stream_avx2.c: the wide layout's stream walks compiled for AVX2, eight leaf triangles a vector for each
+ * ray. */
+#ifdef HAVE_CONFIG_H
+#include "config.h"
+#endif
+
+#ifdef CBVH_HAVE_AVX2
+#if !defined(__AVX2__)
+#error "stream_avx2.c is compiled with AVX2, BMI1 and BMI2 enabled (configure and CMake add the flags)"
+#endif
+
+#include "query/stream_walk.h"
+
+/* stream.c's instances, this file's instruction set: only the leaves' filter width differs (lanes.h), and
+ * the answers are the same bit for bit. */
+void cbvh_stream_wide4_closest_avx2(const struct cbvh_file *f, struct cbvh_stream_batch *b, uint32_t octant,
+                                    cbvh_stream_node_fn node_test, int counting, uint8_t *occluded,
+                                    uint64_t *visited, uint64_t *tested)
+{
+    stream_walk(f, CBVH_LAYOUT_WIDE4, b, octant, node_test, 0, counting, occluded, visited, tested);
+}
+
+void cbvh_stream_wide4_any_avx2(const struct cbvh_file *f, struct cbvh_stream_batch *b, uint32_t octant,
+                                cbvh_stream_node_fn node_test, int counting, uint8_t *occluded,
+                                uint64_t *visited, uint64_t *tested)
+{
+    stream_walk(f, CBVH_LAYOUT_WIDE4, b, octant, node_test, 1, counting, occluded, visited, tested);
+}
+#endif
