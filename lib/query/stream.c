@@ -48,11 +48,12 @@ static void stream_walk_file(const struct cbvh_file *f, struct cbvh_stream_batch
                              uint64_t *visited, uint64_t *tested)
 {
 #ifdef CBVH_HAVE_AVX2
-    /* the single-ray walks' kernel choice (raycast.h): AVX2 leaves with SIMD node tests */
+    /* the single-ray walks' kernel choice (raycast.h): with SIMD node tests, AVX2 leaves and the node test
+     * in AVX2's encoding */
     if (f->layout == CBVH_LAYOUT_WIDE4 && node_test != cbvh_stream_node_scalar &&
         cbvh_walk_kernel() == CBVH_WALK_KERNEL_AVX2) {
-        (any ? cbvh_stream_wide4_any_avx2 : cbvh_stream_wide4_closest_avx2)(f, b, octant, node_test, counting,
-                                                                            occluded, visited, tested);
+        (any ? cbvh_stream_wide4_any_avx2 : cbvh_stream_wide4_closest_avx2)(
+            f, b, octant, cbvh_stream_node_avx2, counting, occluded, visited, tested);
         return;
     }
 #endif

@@ -11,8 +11,13 @@
 
 #include "query/stream_walk.h"
 
+/* The streams' node test (stream_simd.c) in this file's encoding: cbvh_stream_node_avx2. */
+#define CBVH_STREAM_NODE_SIMD cbvh_stream_node_avx2
+#include "query/stream_simd.c"
+
 /* stream.c's instances, this file's instruction set: only the leaves' filter width differs (lanes.h), and
- * the answers are the same bit for bit. */
+ * the answers are the same bit for bit. node_test: the SSE2 or AVX2 node kernel (stream.c passes the
+ * latter). */
 void cbvh_stream_wide4_closest_avx2(const struct cbvh_file *f, struct cbvh_stream_batch *b, uint32_t octant,
                                     cbvh_stream_node_fn node_test, int counting, uint8_t *occluded,
                                     uint64_t *visited, uint64_t *tested)

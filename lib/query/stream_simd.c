@@ -62,7 +62,12 @@ static inline void node_ray_sse2(const struct cbvh_stream_batch *restrict batch,
     node_append(out, r, mask & lanes, entry, count);
 }
 
-void cbvh_stream_node_sse2(const struct cbvh_stream_batch *restrict batch, const uint16_t *restrict rays,
+/* cbvh_stream_node_sse2, or, compiled into stream_avx2.c, its AVX2 walks' own copy. */
+#ifndef CBVH_STREAM_NODE_SIMD
+#define CBVH_STREAM_NODE_SIMD cbvh_stream_node_sse2
+#endif
+
+void CBVH_STREAM_NODE_SIMD(const struct cbvh_stream_batch *restrict batch, const uint16_t *restrict rays,
                            uint32_t n, const struct cbvh_stream_boxes *restrict boxes,
                            const struct cbvh_stream_lists *restrict out, uint32_t count[CBVH_STREAM_LANES])
 {
