@@ -356,7 +356,8 @@ CBVH_KERNEL int leaf_loop(const struct cbvh_file *restrict f, uint32_t first, ui
     /* an occlusion query without a filter never looks at the barycentrics, nor at t once it is in range */
     const int want_uv = !any || gate, occlusion = any && !gate;
 #ifdef CBVH_HAVE_SIMD
-    /* Four triangles at a time through the SIMD filter; the scalar test on the lanes it keeps, in order. */
+    /* CBVH_LANES triangles at a time through the SIMD filter; the scalar test on the lanes it keeps, in
+     * order. */
     if (!scalar && count > 1) {
         const struct leaf_quad *restrict quads = (const struct leaf_quad *)f->quads;
         const uint32_t end = first + count;
