@@ -549,10 +549,10 @@ CBVH_API cbvh_result cbvh_occluded_with(const cbvh_file *file, const cbvh_ray *r
  * equal cbvh_raycast / cbvh_occluded ray by ray. hits[i] (occluded[i]: 0 or 1)
  * receives ray i's result. Uses no heap memory: rays go in batches of 24 of one
  * ray octant, held on the call's stack. Stack use, measured with -fstack-usage
- * (gcc 12 -O2, x86-64), deepest path: about 13 KiB (the batch 5.7, the batch
- * walk 3.9, a ray finishing alone on the single-ray walk 2.9, the hit's
- * barycentrics 0.5); with the _scratch form and its batch in the caller's
- * memory, about 7.7 KiB. cbvh_raycast and cbvh_occluded: about 3.5 KiB. */
+ * (gcc 12 -O2, x86-64), deepest path: about 15 KiB (the stack batch 6.2, which
+ * the _scratch forms reserve too; the batch walk 4.4; a ray finishing alone on
+ * the single-ray walk 3.3, 3.9 with the AVX2 walks; the hit's barycentrics
+ * 0.3). cbvh_raycast and cbvh_occluded: about 4 KiB (4.6 with the AVX2 walks). */
 CBVH_API void cbvh_raycast_stream(const cbvh_file *file, const cbvh_ray *rays, size_t count,
                                   cbvh_hit *hits, cbvh_query_stats *stats);
 CBVH_API void cbvh_occluded_stream(const cbvh_file *file, const cbvh_ray *rays, size_t count,

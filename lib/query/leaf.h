@@ -154,8 +154,7 @@ CBVH_KERNEL void leaf_group(uint32_t n, uint32_t lane[4], uint32_t *kept)
  * leaf_groups_begin, stepping by 4 while k < end) holds triangles k + j in its lanes j of *mask. A file with
  * expanded triangles (cbvh_file_expand_triangles) has them stored four by four from triangle 0, read in
  * place: k is a multiple of 4 and the lanes outside the leaf are masked. Otherwise the groups start at
- * `first` and are gathered into `scratch`. At most CBVH_LEAF_GROUPS groups a leaf. */
-#define CBVH_LEAF_GROUPS ((CBVH_MAX_LEAF_SIZE + 6u) / 4u)
+ * `first` and are gathered into `scratch`. */
 
 static inline uint32_t leaf_groups_begin(const struct leaf_quad *quads, uint32_t first)
 {
@@ -189,6 +188,9 @@ struct leaf_group {
     const struct leaf_quad *quad[CBVH_LEAF_QUADS];
     uint32_t mask;
 };
+
+/* At most this many groups a leaf: read in place, the first starts up to 3 triangles before the leaf. */
+#define CBVH_LEAF_GROUPS ((CBVH_MAX_LEAF_SIZE + 3u + CBVH_LANES - 1u) / CBVH_LANES)
 
 /* Group k of a leaf [first, end) in CBVH_LANES lanes, k stepping by CBVH_LANES from leaf_groups_begin:
  * leaf_group_load on each quad of it (scratch: one quad each), the quads past the leaf's end not read

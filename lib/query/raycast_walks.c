@@ -61,22 +61,20 @@ int cbvh_walk_kernel(void)
 #define WALK_AVX2_CALL(name)
 #endif
 
-/* The walks of one mode: in the wide layout (every choice a constant but the kernel: AVX2 in its own
- * file, SSE2 or scalar here, a predictable branch rather than doubling the code) and in the binary
- * layout, each a function of its own with the traversal core inlined, so a caller's frame holds one
- * walk's stack (about 1.5 KiB), not the sum of every instance's (with all of them inlined into it,
- * cbvh_closest's frame was 11.6 KiB; -fstack-usage); the call costs one jump per ray. walk_##name walks
- * the subtree `root` (whose box the caller tested) or, when `whole`, the whole tree, for the file's
- * layout. */
+/* The walks of one mode: in the wide layout (every choice a constant but the scalar switch of the SSE2
+ * instance, a predictable branch rather than doubling its code; the AVX2 instance in its own file) and
+ * in the binary layout, each a function of its own with the traversal core inlined, so a caller's frame
+ * holds one walk's stack (about 3 KiB), not the sum of every instance's (with all of them inlined into
+ * it, cbvh_closest's frame was 11.6 KiB; -fstack-usage); the call costs one jump per ray. The kernel is
+ * chosen before either wide instance is entered, so the AVX2 walk never runs under the SSE2 one's frame
+ * (3.2 KiB and six saved registers a ray when the choice was made inside it). walk_##name walks the
+ * subtree `root` (whose box the caller tested) or, when `whole`, the whole tree, for the file's layout. */
 #define WALK_INSTANCE(name, order_, any_)                                                                    \
     CBVH_NOINLINE int walk_##name##_wide4(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray,         \
-                                          cbvh_ref start, struct cbvh_best_hit *best,                        \
+                                          cbvh_ref start, const int scalar, struct cbvh_best_hit *best,      \
                                           cbvh_query_stats *stats)                                           \
     {                                                                                                        \
-        const int kernel = walk_kernel();                                                                    \
-        WALK_AVX2_CALL(name)                                                                                 \
-        const struct cbvh_walk_mode mode = {                                                                 \
-            .order = order_, .any = any_, .scalar = kernel == CBVH_WALK_KERNEL_SCALAR};                      \
+        const struct cbvh_walk_mode mode = {.order = order_, .any = any_, .scalar = scalar};                 \
         return cbvh_walk(f, CBVH_LAYOUT_WIDE4, ray, start, CBVH_NO_BOX, mode, NULL, best, stats);            \
     }                                                                                                        \
     CBVH_NOINLINE int walk_##name##_binary(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray,        \
@@ -91,8 +89,11 @@ int cbvh_walk_kernel(void)
     {                                                                                                        \
         const uint32_t layout = f->layout;                                                                   \
         const cbvh_ref start = whole ? cbvh_tree_root(f, layout) : root;                                     \
-        if (layout == CBVH_LAYOUT_WIDE4)                                                                     \
-            return walk_##name##_wide4(f, ray, start, best, stats);                                          \
+        if (layout == CBVH_LAYOUT_WIDE4) {                                                                   \
+            const int kernel = walk_kernel();                                                                \
+            WALK_AVX2_CALL(name)                                                                             \
+            return walk_##name##_wide4(f, ray, start, kernel == CBVH_WALK_KERNEL_SCALAR, best, stats);       \
+        }                                                                                                    \
         return walk_##name##_binary(f, ray, start, whole ? cbvh_tree_root_box(f, layout) : CBVH_NO_BOX,      \
                                     best, stats);                                                            \
     }

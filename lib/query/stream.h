@@ -79,7 +79,8 @@ void cbvh_stream_node_sse2(const struct cbvh_stream_batch *restrict batch, const
 #endif
 
 /* Test hook, not exported: 0 = best kernel for this build (default), 1 = scalar,
- * 2 = SSE2 (falls back to scalar when not built). An AVX2 kernel (two rays a vector) measured no faster
+ * 2 = SSE2 (falls back to scalar when not built; with the AVX2 walks chosen, raycast.h, the streams run
+ * its copy in AVX2's encoding). An AVX2 kernel (two rays a vector) measured no faster
  * on the dragon's incoherent rays (2.03 / 1.95 / 1.94 against SSE2's 2.11 / 1.89 / 2.06 MRays/s).
  * Meant to be set before queries run; reads are atomic so concurrent queries stay defined. */
 void cbvh_stream_set_kernel(int which);
