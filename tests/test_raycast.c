@@ -203,6 +203,67 @@ static void test_wide4_visit_table(void **state)
     }
 }
 
+/* The descent table (how the SIMD walks go down a node) follows the visit order: byte 3 is the first
+ * child visited, bytes 0 .. n - 2 the others from the last visited (pushed first, popped last) to the
+ * second. */
+static void test_wide4_descent_table(void **state)
+{
+    (void)state;
+    for (uint32_t o = 0; o < CBVH_W4_ORDERS; o++)
+        for (uint32_t hits = 1; hits < 16; hits++) {
+            uint32_t list[4], n = 0;
+            for (int k = 0; k < 4; k++)
+                if (hits >> cbvh_wide4_orders[o][k] & 1u)
+                    list[n++] = cbvh_wide4_orders[o][k];
+            const uint32_t d = cbvh_wide4_descents[o][hits];
+            if ((d >> 24) != list[0])
+                fail_msg("order %u hits %x: descent %08x goes on to slot %u, not %u", o, hits, d, d >> 24,
+                         list[0]);
+            for (uint32_t j = 0; j + 1 < n; j++)
+                if ((d >> (8u * j) & 0xFFu) != list[n - 1u - j])
+                    fail_msg("order %u hits %x: descent %08x pushes slot %u at %u, not %u", o, hits, d,
+                             d >> (8u * j) & 0xFFu, j, list[n - 1u - j]);
+        }
+}
+
+#ifdef CBVH_HAVE_SIMD
+/* walk_w4_refs, the SIMD walks' references of all four slots at once, gives cbvh_w4_child_ref's for
+ * every used slot of every node a file can hold: each set of used and internal slots, every leaf count. */
+static void test_wide4_refs(void **state)
+{
+    (void)state;
+    long checked = 0;
+    uint8_t node[CBVH_W4_NODE_SIZE];
+    memset(node, 0, sizeof node);
+    for (uint32_t used = 1; used < 16; used++)
+        for (uint32_t internal = 0; internal < 16; internal++) {
+            if (internal & ~used)
+                continue;
+            const uint32_t leaves = used & ~internal;
+            for (uint32_t c = 0; c < 4096u; c++) { /* three bits a slot: count - 1 of each leaf */
+                if (c & ~(0u + (leaves & 1u ? 07u : 0u) + (leaves & 2u ? 070u : 0u) +
+                          (leaves & 4u ? 0700u : 0u) + (leaves & 8u ? 07000u : 0u)))
+                    continue;
+                uint32_t count[4], order[8] = {0};
+                for (uint32_t s = 0; s < 4; s++)
+                    count[s] = (c >> (3u * s) & 7u) + 1u;
+                const uint64_t meta = cbvh_w4_make_meta(count, used, internal, order);
+                const uint32_t first_child = 0x7FFFFFF0u - 7u * c, first_triangle = 0x0FFFFFD0u - 5u * c;
+                memcpy(node + CBVH_W4_FIRST_CHILD, &first_child, 4);
+                memcpy(node + CBVH_W4_FIRST_TRIANGLE, &first_triangle, 4);
+                _Alignas(16) uint32_t refs[4];
+                _mm_store_si128((__m128i *)(void *)refs, walk_w4_refs(node, meta));
+                for (uint32_t s = 0; s < 4; s++)
+                    if ((used >> s & 1u) && refs[s] != cbvh_w4_child_ref(node, meta, s))
+                        fail_msg("used %x internal %x counts %o slot %u: %08x, expected %08x", used, internal,
+                                 c, s, refs[s], cbvh_w4_child_ref(node, meta, s));
+                checked++;
+            }
+        }
+    assert_int_equal(checked, 9999); /* each slot unused, internal or a leaf of 1..8: 10^4, less all unused */
+}
+#endif
+
 static void test_slab_edge_cases(void **state)
 {
     (void)state;
@@ -1609,6 +1670,10 @@ int main(void)
         cmocka_unit_test(test_watertight_fan),
         cmocka_unit_test(test_slab_edge_cases),
         cmocka_unit_test(test_wide4_visit_table),
+        cmocka_unit_test(test_wide4_descent_table),
+#ifdef CBVH_HAVE_SIMD
+        cmocka_unit_test(test_wide4_refs),
+#endif
 #ifdef CBVH_HAVE_SIMD
         cmocka_unit_test(test_wide4_affine_box_test),
 #endif

@@ -77,6 +77,33 @@ static const uint8_t cbvh_wide4_orders[CBVH_W4_ORDERS][4] = {CBVH_W4_ORDER_LIST(
 /* clang-format on */
 static const uint8_t cbvh_wide4_visits[CBVH_W4_ORDERS][16] = {CBVH_W4_ORDER_LIST(CBVH_W4_VISIT_ROW)};
 #undef CBVH_W4_VISIT_ROW
+
+/* Entry [o][hits] says how a depth-first walk descends into the children `hits` in order o, a slot a
+ * byte: byte 3 the first one in visit order (the walk goes on there), bytes 0, 1, 2 the ones it pushes
+ * onto its stack, from the last in visit order (deepest) to the second; with fewer than four children
+ * the bytes past them repeat slots (a walk stores those entries above its new top, dead). Made from the
+ * visit table: slot i of the visit list v is field i, v >> 2 i & 3. */
+/* clang-format off */
+#define CBVH_W4_HITS(h) (((h) & 1u) + ((h) >> 1 & 1u) + ((h) >> 2 & 1u) + ((h) >> 3 & 1u))
+#define CBVH_W4_FIELD(v, i) ((uint32_t)(v) >> (2u * ((i) & 3u)) & 3u)
+#define CBVH_W4_DESCENT(v, h)                                                                              \
+    (CBVH_W4_FIELD(v, CBVH_W4_HITS(h) - 1u) | CBVH_W4_FIELD(v, CBVH_W4_HITS(h) - 2u) << 8 |                  \
+     CBVH_W4_FIELD(v, CBVH_W4_HITS(h) - 3u) << 16 | CBVH_W4_FIELD(v, 0u) << 24)
+#define CBVH_W4_DESCENT_ROW(a, b, c, d)                                                                    \
+    {CBVH_W4_DESCENT(CBVH_W4_VISIT(a, b, c, d, 0u), 0u),   CBVH_W4_DESCENT(CBVH_W4_VISIT(a, b, c, d, 1u), 1u),     \
+     CBVH_W4_DESCENT(CBVH_W4_VISIT(a, b, c, d, 2u), 2u),   CBVH_W4_DESCENT(CBVH_W4_VISIT(a, b, c, d, 3u), 3u),     \
+     CBVH_W4_DESCENT(CBVH_W4_VISIT(a, b, c, d, 4u), 4u),   CBVH_W4_DESCENT(CBVH_W4_VISIT(a, b, c, d, 5u), 5u),     \
+     CBVH_W4_DESCENT(CBVH_W4_VISIT(a, b, c, d, 6u), 6u),   CBVH_W4_DESCENT(CBVH_W4_VISIT(a, b, c, d, 7u), 7u),     \
+     CBVH_W4_DESCENT(CBVH_W4_VISIT(a, b, c, d, 8u), 8u),   CBVH_W4_DESCENT(CBVH_W4_VISIT(a, b, c, d, 9u), 9u),     \
+     CBVH_W4_DESCENT(CBVH_W4_VISIT(a, b, c, d, 10u), 10u), CBVH_W4_DESCENT(CBVH_W4_VISIT(a, b, c, d, 11u), 11u),   \
+     CBVH_W4_DESCENT(CBVH_W4_VISIT(a, b, c, d, 12u), 12u), CBVH_W4_DESCENT(CBVH_W4_VISIT(a, b, c, d, 13u), 13u),   \
+     CBVH_W4_DESCENT(CBVH_W4_VISIT(a, b, c, d, 14u), 14u), CBVH_W4_DESCENT(CBVH_W4_VISIT(a, b, c, d, 15u), 15u)},
+/* clang-format on */
+static const uint32_t cbvh_wide4_descents[CBVH_W4_ORDERS][16] = {CBVH_W4_ORDER_LIST(CBVH_W4_DESCENT_ROW)};
+#undef CBVH_W4_DESCENT_ROW
+#undef CBVH_W4_DESCENT
+#undef CBVH_W4_FIELD
+#undef CBVH_W4_HITS
 #undef CBVH_W4_VISIT
 #undef CBVH_W4_BEFORE_C
 #undef CBVH_W4_HIT

@@ -83,7 +83,7 @@ CBVH_KERNEL uint32_t walk_order_pair(const enum cbvh_walk_order order, int secon
 struct cbvh_w4_simd_ray {
 #ifdef CBVH_HAVE_SIMD
     __m128 a[3], near_b[3], far_b[3];           /* the affine test's, per axis, in all four lanes */
-    __m128 origin[3], scale[3], org[3], rcp[3]; /* the exact test's */
+    const struct cbvh_box_ray *box;             /* the exact test's origin, scale, org and rcp */
     __m128 tmin;
     uint32_t offset[6];
     int exact;
@@ -126,20 +126,7 @@ CBVH_KERNEL void walk_w4_simd_ray_init(struct cbvh_w4_simd_ray *w, const struct 
     w->far_b[0] = CBVH_LANE(far_b, 0);
     w->far_b[1] = CBVH_LANE(far_b, 1);
     w->far_b[2] = CBVH_LANE(far_b, 2);
-    if (w->exact) { /* the exact form's constants only for the rays that take it */
-        w->origin[0] = CBVH_LANE(origin, 0);
-        w->origin[1] = CBVH_LANE(origin, 1);
-        w->origin[2] = CBVH_LANE(origin, 2);
-        w->scale[0] = CBVH_LANE(scale, 0);
-        w->scale[1] = CBVH_LANE(scale, 1);
-        w->scale[2] = CBVH_LANE(scale, 2);
-        w->org[0] = CBVH_LANE(org, 0);
-        w->org[1] = CBVH_LANE(org, 1);
-        w->org[2] = CBVH_LANE(org, 2);
-        w->rcp[0] = CBVH_LANE(rcp, 0);
-        w->rcp[1] = CBVH_LANE(rcp, 1);
-        w->rcp[2] = CBVH_LANE(rcp, 2);
-    }
+    w->box = box;
     w->offset[0] = CBVH_W4_Q + 8u * s.near_x;
     w->offset[1] = CBVH_W4_Q + 8u * s.near_y;
     w->offset[2] = CBVH_W4_Q + 8u * s.near_z;
@@ -170,9 +157,11 @@ CBVH_KERNEL __m128 walk_w4_plane_distance(const uint8_t *restrict node, const st
                                           uint32_t j)
 {
     const uint32_t a = j % 3u;
-    return _mm_mul_ps(
-        _mm_sub_ps(_mm_add_ps(w->origin[a], _mm_mul_ps(walk_w4_plane_q(node, w, j), w->scale[a])), w->org[a]),
-        w->rcp[a]);
+    const struct cbvh_box_ray *b = w->box;
+    return _mm_mul_ps(_mm_sub_ps(_mm_add_ps(_mm_set1_ps(b->origin[a]), _mm_mul_ps(walk_w4_plane_q(node, w, j),
+                                                                                  _mm_set1_ps(b->scale[a]))),
+                                 _mm_set1_ps(b->org[a])),
+                      _mm_set1_ps(b->rcp[a]));
 }
 
 /* The slab test of ray_box.h on the four slots at once. The exact form: lane for lane the same
@@ -209,10 +198,108 @@ CBVH_KERNEL uint32_t walk_w4_test_sse2(const uint8_t *restrict node, const struc
 }
 #endif
 
+/* An entry of a walk's stack: a child still to visit and where the ray enters its box. */
+struct cbvh_walk_entry {
+    cbvh_ref ref;
+    float entry;
+};
+
+#ifdef CBVH_HAVE_SIMD
+/* The references of a node's four slots at once, lane s for slot s: cbvh_w4_child_ref of each used slot
+ * (unused slots: a value to ignore), without a branch on which are leaves. Each lane counts what its
+ * slot adds before the next (low half: a leaf's triangles; high half: 1 for an internal slot); the sums
+ * over the lanes before each (at most 32 triangles and 3 nodes: no carry) are its offsets from the
+ * node's first triangle and first child. */
+CBVH_KERNEL __m128i walk_w4_refs(const uint8_t *restrict node, uint64_t meta)
+{
+    const uint32_t m = (uint32_t)meta;
+    uint32_t nibbles = m & 0xFFFFu; /* nibble s (a leaf's count - 1, else 0) into byte s */
+    nibbles = (nibbles | nibbles << 8) & 0x00FF00FFu;
+    nibbles = (nibbles | nibbles << 4) & 0x0F0F0F0Fu;
+    const __m128i zero = _mm_setzero_si128();
+    const __m128i counts = _mm_unpacklo_epi16(_mm_unpacklo_epi8(_mm_cvtsi32_si128((int)nibbles), zero), zero);
+    const __m128i bits = _mm_set1_epi32((int)m);
+    const __m128i used_bit = _mm_setr_epi32(1 << 16, 1 << 17, 1 << 18, 1 << 19);
+    const __m128i inner_bit = _mm_setr_epi32(1 << 20, 1 << 21, 1 << 22, 1 << 23);
+    const __m128i used = _mm_cmpeq_epi32(_mm_and_si128(bits, used_bit), used_bit); /* all ones or 0 */
+    const __m128i inner = _mm_cmpeq_epi32(_mm_and_si128(bits, inner_bit), inner_bit);
+    const __m128i step = _mm_add_epi32(_mm_sub_epi32(counts, _mm_andnot_si128(inner, used)),
+                                       _mm_and_si128(inner, _mm_set1_epi32(1 << 16)));
+    __m128i before = _mm_slli_si128(step, 4); /* lanes 0, s0, s1, s2: then the sums, two steps */
+    before = _mm_add_epi32(before, _mm_slli_si128(before, 4));
+    before = _mm_add_epi32(before, _mm_slli_si128(before, 8));
+    const __m128i inner_ref =
+        _mm_add_epi32(_mm_set1_epi32((int)cbvh_w4_first_child(node)), _mm_srli_epi32(before, 16));
+    const __m128i leaf_ref = _mm_or_si128(
+        _mm_add_epi32(_mm_set1_epi32((int)cbvh_w4_first_triangle(node)),
+                      _mm_and_si128(before, _mm_set1_epi32(0xFFFF))),
+        _mm_or_si128(_mm_slli_epi32(counts, CBVH_W4_COUNT_SHIFT), _mm_set1_epi32((int)CBVH_W4_LEAF_BIT)));
+    return _mm_or_si128(_mm_and_si128(inner, inner_ref), _mm_andnot_si128(inner, leaf_ref));
+}
+
+/* The SIMD walks' step down the wide layout, in the node's order for the ray's octant or in slot order
+ * (cbvh_wide4_descents): node r's children against the ray; the first one it enters into *next, the
+ * others onto the stack, the last deepest. Always three entries are stored (those above the new top are
+ * dead), and every slot's reference is made at once (walk_w4_refs): no branch on how many children the
+ * ray enters nor on which are leaves, which are as unpredictable as the ray. Returns 0, changing
+ * nothing, when the ray enters none. */
+CBVH_KERNEL int walk_w4_descend(const struct cbvh_file *restrict f, cbvh_ref r,
+                                const struct cbvh_w4_simd_ray *restrict w, const int sorted, uint32_t octant,
+                                float tmax, struct cbvh_walk_entry *restrict stack, uint32_t *restrict sp,
+                                cbvh_ref *restrict next, float *restrict next_entry,
+                                uint64_t *restrict boxes_tested)
+{
+    const uint8_t *restrict node = cbvh_w4_node(f->nodes, r);
+    const uint64_t meta = cbvh_w4_meta(node);
+    const uint32_t used = cbvh_w4_used(meta);
+    _Alignas(16) float e[CBVH_W4_WIDTH];
+    *boxes_tested += cbvh_w4_popcount(used);
+    const uint32_t hits = walk_w4_test_sse2(node, w, tmax, e) & used;
+    if (!hits)
+        return 0;
+    const uint32_t descent = cbvh_wide4_descents[sorted ? cbvh_w4_order(meta, octant) : 0u][hits];
+    const __m128i refs = walk_w4_refs(node, meta);
+    struct cbvh_walk_entry *restrict top = stack + *sp;
+#if defined(__AVX2__)
+    /* slots in descent order by one permutation each of the references and the entry distances */
+    const __m128i lanes = _mm_cvtepu8_epi32(_mm_cvtsi32_si128((int)descent));
+    const __m128 ref_lanes = _mm_permutevar_ps(_mm_castsi128_ps(refs), lanes);
+    const __m128 entry_lanes = _mm_permutevar_ps(_mm_load_ps(e), lanes);
+    _mm_storeu_ps((float *)(void *)top, _mm_unpacklo_ps(ref_lanes, entry_lanes));
+    _mm_storeu_ps((float *)(void *)(top + 2), _mm_unpackhi_ps(ref_lanes, entry_lanes));
+    *next = (cbvh_ref)_mm_extract_epi32(_mm_castps_si128(ref_lanes), 3);
+    *next_entry = e[descent >> 24];
+#else
+    _Alignas(16) uint32_t ref[CBVH_W4_WIDTH];
+    _mm_store_si128((__m128i *)(void *)ref, refs);
+    CBVH_UNROLL(3)
+    for (uint32_t j = 0; j < CBVH_W4_WIDTH - 1u; j++) {
+        const uint32_t s = descent >> (8u * j) & 3u;
+        top[j].ref = ref[s];
+        top[j].entry = e[s];
+    }
+    *next = ref[descent >> 24];
+    *next_entry = e[descent >> 24];
+#endif
+    /* a wide node is one cache line: start fetching the pushed children now (the nodes, or the leaves'
+     * triangle entries, which their vertices need first) */
+    CBVH_UNROLL(3)
+    for (uint32_t j = 0; j < CBVH_W4_WIDTH - 1u; j++) {
+        const cbvh_ref c = top[j].ref;
+        const void *inner = cbvh_w4_node(f->nodes, c & ~CBVH_W4_LEAF_BIT);
+        const void *leaf = cbvh_indices_entry(f->triangles, (int)f->triangle_encoding, cbvh_w4_ref_first(c));
+        CBVH_PREFETCH(cbvh_w4_ref_is_leaf(c) ? leaf : inner);
+    }
+    *sp += cbvh_w4_popcount(hits) - 1u;
+    return 1;
+}
+#endif
+
 /* walk_children_hit for the wide layout: the used slots' boxes against the
  * ray (four at once with SIMD, or one at a time for float boxes and the
  * scalar mode), the hit ones in the node's order for the ray's octant, slot
- * order, or by entry distance. */
+ * order, or by entry distance. The SIMD walks in the node's or slot order
+ * take walk_w4_descend instead. */
 CBVH_KERNEL uint32_t walk_w4_children_hit(const struct cbvh_file *restrict f, cbvh_ref r,
                                           const struct cbvh_box_ray *restrict box,
                                           const struct cbvh_w4_simd_ray *restrict w, const float *restrict float_boxes,
@@ -307,14 +394,13 @@ CBVH_KERNEL uint32_t walk_children_hit(const struct cbvh_file *restrict f, const
  * one popped after the ray became shorter than that is dropped without a
  * second box test. The loader checked depth <= CBVH_MAX_DEPTH, and a walk
  * pushes at most CBVH_TREE_WIDTH - 1 references per level, so the stack
- * cannot overflow. The walk covers the subtree of `root`, whose box the
- * caller tested (or root_box, tested here when not CBVH_NO_BOX). The result:
- * any hit: 1 when a triangle occludes the ray; closest: 0, with best filled.
- * Counters go to stats when not NULL (a few adds per node).
- * float_boxes: NULL for the file's quantized boxes (every library walk, where
- * the constant folds the choice away); else six floats per box id (min xyz,
- * max xyz), for tools that measure another box precision on the same tree and
- * the same walk (cbvh report's exact reference, whose rays have no box_halve). */
+ * cannot overflow (walk_w4_descend's dead stores above the top included). The walk covers the subtree of
+ * `root`, whose box the caller tested (or root_box, tested here when not CBVH_NO_BOX). The result: any hit: 1
+ * when a triangle occludes the ray; closest: 0, with best filled. Counters go to stats when not NULL (a few
+ * adds per node). float_boxes: NULL for the file's quantized boxes (every library walk, where the constant
+ * folds the choice away); else six floats per box id (min xyz, max xyz), for tools that measure another box
+ * precision on the same tree and the same walk (cbvh report's exact reference, whose rays have no box_halve).
+ */
 CBVH_KERNEL int cbvh_walk(const struct cbvh_file *restrict f, const uint32_t layout,
                           const struct cbvh_ray_ctx *restrict ray, cbvh_ref root, uint32_t root_box,
                           const struct cbvh_walk_mode mode, const float *restrict float_boxes,
@@ -331,10 +417,8 @@ CBVH_KERNEL int cbvh_walk(const struct cbvh_file *restrict f, const uint32_t lay
      * it might read it unset */
     struct cbvh_w4_simd_ray w;
     walk_w4_simd_ray_init(&w, &box, float_boxes ? 0u : ray->box_halve, tmin);
-    struct {
-        cbvh_ref ref;
-        float entry;
-    } stack[(CBVH_TREE_WIDTH - 1u) * CBVH_MAX_DEPTH];
+    /* walk_w4_descend stores up to CBVH_TREE_WIDTH - 2 dead entries above the top */
+    struct cbvh_walk_entry stack[(CBVH_TREE_WIDTH - 1u) * CBVH_MAX_DEPTH + CBVH_TREE_WIDTH];
     uint32_t sp = 0;
     cbvh_ref r = root;
     float r_entry = tmin; /* where the ray enters r's box (the root's: taken as its start) */
@@ -349,6 +433,15 @@ CBVH_KERNEL int cbvh_walk(const struct cbvh_file *restrict f, const uint32_t lay
     }
     for (;;) {
         if (!cbvh_tree_is_leaf(f, layout, r)) {
+#ifdef CBVH_HAVE_SIMD
+            if (layout == CBVH_LAYOUT_WIDE4 && !float_boxes && !mode.scalar &&
+                mode.order != CBVH_WALK_DISTANCE) {
+                if (walk_w4_descend(f, r, &w, mode.order == CBVH_WALK_SORTED, ray->octant, tmax, stack, &sp,
+                                    &r, &r_entry, &visited))
+                    continue;
+                goto pop;
+            }
+#endif
             cbvh_ref c[CBVH_TREE_WIDTH];
             float e[CBVH_TREE_WIDTH];
             const uint32_t n = walk_children_hit(f, layout, r, &box, &w, float_boxes, mode.order, ray->octant, tmin, tmax,
@@ -380,6 +473,7 @@ CBVH_KERNEL int cbvh_walk(const struct cbvh_file *restrict f, const uint32_t lay
             }
         }
         /* Pop the next reference still in reach: the padded test of ray_box.h with the current tmax. */
+    pop:
         do {
             if (sp == 0)
                 goto done;
