@@ -18,6 +18,8 @@ unsigned cbvh_cpu_features(void)
         f |= CBVH_CPU_AVX2;
     if (__builtin_cpu_supports("bmi") && __builtin_cpu_supports("bmi2"))
         f |= CBVH_CPU_BMI;
+    if (__builtin_cpu_supports("fma"))
+        f |= CBVH_CPU_FMA;
     return f;
 }
 #elif defined(CBVH_HAVE_SIMD) && defined(_MSC_VER) && (defined(_M_X64) || defined(_M_IX86))
@@ -36,7 +38,9 @@ static unsigned detect(void)
     if (r[2] & (1 << 1))
         f |= CBVH_CPU_PCLMUL;
     /* AVX2 needs OSXSAVE and the OS saving the XMM and YMM state (XCR0 bits 1 and 2). */
-    const int osxsave = (r[2] & (1 << 27)) != 0;
+    const int osxsave = (r[2] & (1 << 27)) != 0, fma = (r[2] & (1 << 12)) != 0;
+    if (osxsave && fma && (_xgetbv(0) & 6) == 6)
+        f |= CBVH_CPU_FMA;
     if (max_leaf >= 7 && osxsave && (_xgetbv(0) & 6) == 6) {
         __cpuidex(r, 7, 0);
         if (r[1] & (1 << 5))

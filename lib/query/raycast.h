@@ -36,7 +36,7 @@ enum cbvh_walk_kernel {
                               * kernel of builds without SIMD) */
     CBVH_WALK_KERNEL_SSE2,   /* four child boxes at once, leaf triangles through a four-lane filter */
     CBVH_WALK_KERNEL_AVX2    /* SSE2's node test, leaf triangles eight lanes at a time (raycast_walks_avx2.c;
-                              * CPUs with AVX2, BMI1 and BMI2) */
+                              * CPUs with AVX2, BMI1, BMI2 and FMA) */
 };
 
 /* Test hook, not exported: the kernel the wide layout's walks take from now on (an enum cbvh_walk_kernel;

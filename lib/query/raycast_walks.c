@@ -20,7 +20,7 @@ static int walk_kernel_available(int kernel)
 {
 #ifdef CBVH_HAVE_SIMD
 #ifdef CBVH_HAVE_AVX2
-    const unsigned avx2 = CBVH_CPU_AVX2 | CBVH_CPU_BMI;
+    const unsigned avx2 = CBVH_CPU_AVX2 | CBVH_CPU_BMI | CBVH_CPU_FMA;
     if (kernel >= CBVH_WALK_KERNEL_AVX2 && (cbvh_cpu_features() & avx2) == avx2)
         return CBVH_WALK_KERNEL_AVX2;
 #endif

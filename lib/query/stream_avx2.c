@@ -5,8 +5,8 @@
 #endif
 
 #ifdef CBVH_HAVE_AVX2
-#if !defined(__AVX2__)
-#error "stream_avx2.c is compiled with AVX2, BMI1 and BMI2 enabled (configure and CMake add the flags)"
+#if !defined(__AVX2__) || (defined(__GNUC__) && !defined(__FMA__))
+#error "stream_avx2.c is compiled with AVX2, BMI1, BMI2 and FMA enabled (configure and CMake add the flags)"
 #endif
 
 #include "query/stream_walk.h"

@@ -143,6 +143,15 @@ CBVH_KERNEL void walk_w4_simd_ray_init(struct cbvh_w4_simd_ray *w, const struct 
 }
 
 #ifdef CBVH_HAVE_SIMD
+/* q a + b in four lanes, the affine test's plane distance: one fused multiply-add in the files compiled for
+ * AVX2, which have FMA too (one rounding: within the product's and the sum's that the pad allows for), else
+ * the product and the sum. */
+#if defined(__FMA__) || (defined(_MSC_VER) && defined(__AVX2__))
+#define CBVH_AFFINE4(q, a, b) _mm_fmadd_ps((q), (a), (b))
+#else
+#define CBVH_AFFINE4(q, a, b) _mm_add_ps(_mm_mul_ps((q), (a)), (b))
+#endif
+
 /* Plane j of the four slots (struct cbvh_w4_simd_ray) as grid coordinates, lane s for slot s. */
 CBVH_KERNEL __m128 walk_w4_plane_q(const uint8_t *restrict node, const struct cbvh_w4_simd_ray *restrict w,
                                    uint32_t j)
@@ -174,12 +183,12 @@ CBVH_KERNEL uint32_t walk_w4_test_sse2(const uint8_t *restrict node, const struc
 {
     __m128 tnear, tfar;
     if (CBVH_LIKELY(!w->exact)) {
-        const __m128 n0 = _mm_add_ps(_mm_mul_ps(walk_w4_plane_q(node, w, 0), w->a[0]), w->near_b[0]);
-        const __m128 n1 = _mm_add_ps(_mm_mul_ps(walk_w4_plane_q(node, w, 1), w->a[1]), w->near_b[1]);
-        const __m128 n2 = _mm_add_ps(_mm_mul_ps(walk_w4_plane_q(node, w, 2), w->a[2]), w->near_b[2]);
-        const __m128 f0 = _mm_add_ps(_mm_mul_ps(walk_w4_plane_q(node, w, 3), w->a[0]), w->far_b[0]);
-        const __m128 f1 = _mm_add_ps(_mm_mul_ps(walk_w4_plane_q(node, w, 4), w->a[1]), w->far_b[1]);
-        const __m128 f2 = _mm_add_ps(_mm_mul_ps(walk_w4_plane_q(node, w, 5), w->a[2]), w->far_b[2]);
+        const __m128 n0 = CBVH_AFFINE4(walk_w4_plane_q(node, w, 0), w->a[0], w->near_b[0]);
+        const __m128 n1 = CBVH_AFFINE4(walk_w4_plane_q(node, w, 1), w->a[1], w->near_b[1]);
+        const __m128 n2 = CBVH_AFFINE4(walk_w4_plane_q(node, w, 2), w->a[2], w->near_b[2]);
+        const __m128 f0 = CBVH_AFFINE4(walk_w4_plane_q(node, w, 3), w->a[0], w->far_b[0]);
+        const __m128 f1 = CBVH_AFFINE4(walk_w4_plane_q(node, w, 4), w->a[1], w->far_b[1]);
+        const __m128 f2 = CBVH_AFFINE4(walk_w4_plane_q(node, w, 5), w->a[2], w->far_b[2]);
         tnear = _mm_max_ps(_mm_max_ps(n0, n1), _mm_max_ps(n2, w->tmin));
         tfar = _mm_min_ps(_mm_min_ps(f0, f1), _mm_min_ps(f2, _mm_set1_ps(tmax)));
     } else {
@@ -281,16 +290,12 @@ CBVH_KERNEL int walk_w4_descend(const struct cbvh_file *restrict f, cbvh_ref r,
     *next = ref[descent >> 24];
     *next_entry = e[descent >> 24];
 #endif
-    /* a wide node is one cache line: start fetching the pushed children now (the nodes, or the leaves'
-     * triangle entries, which their vertices need first) */
-    CBVH_UNROLL(3)
-    for (uint32_t j = 0; j < CBVH_W4_WIDTH - 1u; j++) {
-        const cbvh_ref c = top[j].ref;
-        const void *inner = cbvh_w4_node(f->nodes, c & ~CBVH_W4_LEAF_BIT);
-        const void *leaf = cbvh_indices_entry(f->triangles, (int)f->triangle_encoding, cbvh_w4_ref_first(c));
-        CBVH_PREFETCH(cbvh_w4_ref_is_leaf(c) ? leaf : inner);
-    }
-    *sp += cbvh_w4_popcount(hits) - 1u;
+    /* a wide node is one cache line: start fetching the child popped next, the second in visit order,
+     * when it is a node (else, harmlessly, this one again) */
+    const uint32_t n = cbvh_w4_popcount(hits);
+    const cbvh_ref second = top[n >= 2u ? n - 2u : 0u].ref;
+    CBVH_PREFETCH(cbvh_w4_node(f->nodes, cbvh_w4_ref_is_leaf(second) ? r : second));
+    *sp += n - 1u;
     return 1;
 }
 #endif
