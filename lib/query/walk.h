@@ -446,29 +446,30 @@ CBVH_KERNEL int cbvh_walk(const struct cbvh_file *restrict f, const uint32_t lay
                 if (walk_w4_descend(f, r, &w, mode.order == CBVH_WALK_SORTED, ray->octant, tmax, stack, &sp,
                                     &r, &r_entry, &visited))
                     continue;
-                goto pop;
-            }
+            } else
 #endif
-            cbvh_ref c[CBVH_TREE_WIDTH];
-            float e[CBVH_TREE_WIDTH];
-            const uint32_t n = walk_children_hit(f, layout, r, &box, &w, float_boxes, mode.order, ray->octant, tmin, tmax,
-                                                 c, e, &visited, mode.scalar);
-            if (n > 0) {
-                for (uint32_t k = n; k-- > 1;) {
-                    stack[sp].ref = c[k];
-                    stack[sp].entry = e[k];
-                    sp++;
-                    /* a wide node is one cache line: start fetching the farther children now, and a
-                     * leaf's triangle entries (its vertices need those first) */
-                    if (layout == CBVH_LAYOUT_WIDE4 && !cbvh_w4_ref_is_leaf(c[k]))
-                        CBVH_PREFETCH(cbvh_w4_node(f->nodes, c[k]));
-                    else if (layout == CBVH_LAYOUT_WIDE4)
-                        CBVH_PREFETCH(cbvh_indices_entry(f->triangles, (int)f->triangle_encoding,
-                                                         cbvh_w4_ref_first(c[k])));
+            {
+                cbvh_ref c[CBVH_TREE_WIDTH];
+                float e[CBVH_TREE_WIDTH];
+                const uint32_t n = walk_children_hit(f, layout, r, &box, &w, float_boxes, mode.order,
+                                                     ray->octant, tmin, tmax, c, e, &visited, mode.scalar);
+                if (n > 0) {
+                    for (uint32_t k = n; k-- > 1;) {
+                        stack[sp].ref = c[k];
+                        stack[sp].entry = e[k];
+                        sp++;
+                        /* a wide node is one cache line: start fetching the farther children now, and a
+                         * leaf's triangle entries (its vertices need those first) */
+                        if (layout == CBVH_LAYOUT_WIDE4 && !cbvh_w4_ref_is_leaf(c[k]))
+                            CBVH_PREFETCH(cbvh_w4_node(f->nodes, c[k]));
+                        else if (layout == CBVH_LAYOUT_WIDE4)
+                            CBVH_PREFETCH(cbvh_indices_entry(f->triangles, (int)f->triangle_encoding,
+                                                             cbvh_w4_ref_first(c[k])));
+                    }
+                    r = c[0];
+                    r_entry = e[0];
+                    continue;
                 }
-                r = c[0];
-                r_entry = e[0];
-                continue;
             }
         } else {
             uint32_t first, count;
@@ -480,7 +481,6 @@ CBVH_KERNEL int cbvh_walk(const struct cbvh_file *restrict f, const uint32_t lay
             }
         }
         /* Pop the next reference still in reach: the padded test of ray_box.h with the current tmax. */
-    pop:
         do {
             if (sp == 0)
                 goto done;
