@@ -251,7 +251,7 @@ CBVH_KERNEL __m128i walk_w4_refs(const uint8_t *restrict node, uint64_t meta)
  * others onto the stack, the last deepest. Always three entries are stored (those above the new top are
  * dead), and every slot's reference is made at once (walk_w4_refs): no branch on how many children the
  * ray enters nor on which are leaves, which are as unpredictable as the ray. Returns 0, changing
- * nothing, when the ray enters none. */
+ * nothing, when the ray enters none. *boxes_tested, unless NULL, grows by the boxes tested. */
 CBVH_KERNEL int walk_w4_descend(const struct cbvh_file *restrict f, cbvh_ref r,
                                 const struct cbvh_w4_simd_ray *restrict w, const int sorted, uint32_t octant,
                                 float tmax, struct cbvh_walk_entry *restrict stack, uint32_t *restrict sp,
@@ -262,7 +262,8 @@ CBVH_KERNEL int walk_w4_descend(const struct cbvh_file *restrict f, cbvh_ref r,
     const uint64_t meta = cbvh_w4_meta(node);
     const uint32_t used = cbvh_w4_used(meta);
     _Alignas(16) float e[CBVH_W4_WIDTH];
-    *boxes_tested += cbvh_w4_popcount(used);
+    if (boxes_tested) /* NULL when the caller wants no statistics: a predictable branch for a table lookup */
+        *boxes_tested += cbvh_w4_popcount(used);
     const uint32_t hits = walk_w4_test_sse2(node, w, tmax, e) & used;
     if (!hits)
         return 0;
@@ -444,7 +445,7 @@ CBVH_KERNEL int cbvh_walk(const struct cbvh_file *restrict f, const uint32_t lay
             if (layout == CBVH_LAYOUT_WIDE4 && !float_boxes && !mode.scalar &&
                 mode.order != CBVH_WALK_DISTANCE) {
                 if (walk_w4_descend(f, r, &w, mode.order == CBVH_WALK_SORTED, ray->octant, tmax, stack, &sp,
-                                    &r, &r_entry, &visited))
+                                    &r, &r_entry, stats ? &visited : NULL))
                     continue;
             } else
 #endif
