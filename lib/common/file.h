@@ -5,6 +5,12 @@
 #include "cbvh.h"
 #include "common/format.h"
 
+/* Readable bytes before every known section the loader places (nodes, triangles, vertices, ...): in place
+ * they are the file's (the 128-byte header comes first), and a copied or inflated section is allocated
+ * with them in front, zeroed. The ray test's vertex loads start 4 bytes before a float vertex
+ * (query/leaf.h's leaf_vertex4) so that they never read past the section's end. */
+#define CBVH_SECTION_LEAD 64u
+
 /* Everything here was validated by the loader: node links, leaf ranges,
  * indices and encodings are in range, so the query kernels do not check. */
 struct cbvh_file {

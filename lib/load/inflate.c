@@ -66,14 +66,15 @@ static cbvh_result run(z_stream *zs, uint8_t *in, uint64_t stored_size, uint8_t 
     return CBVH_OK;
 }
 
-cbvh_result cbvh_inflate_section(const cbvh_allocator *a, const uint8_t *src, uint64_t stored_size, uint64_t size,
-                                 uint32_t section_index, void **out, cbvh_error *err)
+cbvh_result cbvh_inflate_section(const cbvh_allocator *a, const uint8_t *src, uint64_t stored_size,
+                                 uint64_t size, size_t lead, uint32_t section_index, void **out,
+                                 cbvh_error *err)
 {
     *out = NULL;
-    if (size > SIZE_MAX)
+    if (size > SIZE_MAX - lead)
         return cbvh_fail(err, CBVH_ERROR_OUT_OF_MEMORY, "section %u: %llu bytes do not fit in memory", section_index,
                          (unsigned long long)size);
-    uint8_t *buffer = cbvh_alloc(a, (size_t)size, 64);
+    uint8_t *buffer = cbvh_alloc(a, lead + (size_t)size, 64);
     if (!buffer)
         return cbvh_fail(err, CBVH_ERROR_OUT_OF_MEMORY, "section %u: cannot allocate %llu bytes to inflate into",
                          section_index, (unsigned long long)size);
@@ -82,7 +83,7 @@ cbvh_result cbvh_inflate_section(const cbvh_allocator *a, const uint8_t *src, ui
     int ret = inflateInit(&zs);
     cbvh_result r;
     if (ret == Z_OK) {
-        r = run(&zs, (uint8_t *)src, stored_size, buffer, size, section_index, err);
+        r = run(&zs, (uint8_t *)src, stored_size, buffer + lead, size, section_index, err);
         inflateEnd(&zs);
     } else {
         r = cbvh_fail(err, ret == Z_MEM_ERROR ? CBVH_ERROR_OUT_OF_MEMORY : CBVH_ERROR_CORRUPT,

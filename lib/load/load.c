@@ -15,29 +15,34 @@ void cbvh_file_own(struct cbvh_file *f, void *p)
     f->owned[f->owned_count++] = p;
 }
 
-/* Where a known section's decoded bytes are: in place when raw and cbvh_in_place, else in an owned
- * 64-byte aligned copy or inflated buffer. */
+/* Where a known section's decoded bytes are: in place when raw and cbvh_in_place (the offset of a
+ * section is past the header: CBVH_SECTION_LEAD bytes before it are the file's), else in an owned
+ * 64-byte aligned copy or inflated buffer, CBVH_SECTION_LEAD zero bytes into its allocation. */
 static cbvh_result place_section(struct cbvh_file *f, uint32_t index, const void **out, cbvh_error *err)
 {
     const cbvh_section_info *s = &f->sections[index];
     const uint8_t *src = f->bytes + s->offset;
-    void *owned = NULL;
+    uint8_t *owned = NULL;
     if (s->codec == CBVH_CODEC_ZLIB) {
-        cbvh_result r = cbvh_inflate_section(&f->allocator, src, s->stored_size, s->size, index, &owned, err);
+        void *inflated;
+        cbvh_result r = cbvh_inflate_section(&f->allocator, src, s->stored_size, s->size, CBVH_SECTION_LEAD,
+                                             index, &inflated, err);
         if (r != CBVH_OK)
             return r;
+        owned = inflated;
     } else if (cbvh_in_place(f)) {
         *out = src;
         return CBVH_OK;
     } else {
-        owned = cbvh_alloc(&f->allocator, (size_t)s->size, 64);
+        owned = cbvh_alloc(&f->allocator, CBVH_SECTION_LEAD + (size_t)s->size, 64);
         if (!owned)
             return cbvh_fail(err, CBVH_ERROR_OUT_OF_MEMORY, "section %u: cannot allocate %llu bytes for an aligned copy",
                              index, (unsigned long long)s->size);
-        memcpy(owned, src, (size_t)s->size);
+        memcpy(owned + CBVH_SECTION_LEAD, src, (size_t)s->size);
     }
+    memset(owned, 0, CBVH_SECTION_LEAD);
     cbvh_file_own(f, owned);
-    *out = owned;
+    *out = owned + CBVH_SECTION_LEAD;
     return CBVH_OK;
 }
 

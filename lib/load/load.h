@@ -35,10 +35,11 @@ cbvh_result cbvh_validate_table(struct cbvh_file *f, cbvh_section_map *map, cbvh
 /* The error for section `index` whose stored bytes have CRC `computed`. */
 cbvh_result cbvh_crc_mismatch(const struct cbvh_file *f, uint32_t index, uint32_t computed, cbvh_error *err);
 
-/* Inflates one zlib stream of exactly `stored_size` bytes into a new 64-byte
- * aligned buffer of exactly `size` bytes (*out, owned by the caller). */
+/* Inflates one zlib stream of exactly `stored_size` bytes into a new 64-byte aligned buffer (*out, owned
+ * by the caller) of `lead` bytes, left for the caller, and then exactly `size` bytes. */
 cbvh_result cbvh_inflate_section(const cbvh_allocator *a, const uint8_t *src, uint64_t stored_size,
-                                 uint64_t size, uint32_t section_index, void **out, cbvh_error *err);
+                                 uint64_t size, size_t lead, uint32_t section_index, void **out,
+                                 cbvh_error *err);
 
 /* Element checks. Each runs over consecutive ranges [begin, end) of its section's elements, in order
  * (cbvh_check_sections feeds them chunk by chunk, each chunk checked while in cache), then finishes. */

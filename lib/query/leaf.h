@@ -99,16 +99,18 @@ CBVH_KERNEL void leaf_triangle(const void *restrict tris, const int tri_enc, con
 }
 
 #ifdef CBVH_HAVE_SIMD
-/* Vertex i as (x, y, z, 0): two loads for floats (never past the vertex's 12 bytes), or dequantized. */
+/* Vertex i as (any, x, y, z): for floats one 16-byte load ending with the vertex's 12 bytes, so starting 4
+ * bytes before them, which every placed section has readable (CBVH_SECTION_LEAD) and never past them; or
+ * dequantized. */
 CBVH_KERNEL __m128 leaf_vertex4(const void *restrict verts, const int vert_enc, const float *restrict grid_origin,
                                 const float *restrict grid_scale, uint32_t i)
 {
     if (vert_enc == CBVH_VERTS_F32)
-        return cbvh_load3((const float *)verts + 3u * (size_t)i);
+        return _mm_loadu_ps((const float *)(const void *)((const uint8_t *)verts + 12u * (size_t)i - 4u));
     const uint16_t *q = (const uint16_t *)verts + 3u * (size_t)i;
-    return _mm_setr_ps(cbvh_dequantize(q[0], grid_origin[0], grid_scale[0]),
+    return _mm_setr_ps(0.0f, cbvh_dequantize(q[0], grid_origin[0], grid_scale[0]),
                        cbvh_dequantize(q[1], grid_origin[1], grid_scale[1]),
-                       cbvh_dequantize(q[2], grid_origin[2], grid_scale[2]), 0.0f);
+                       cbvh_dequantize(q[2], grid_origin[2], grid_scale[2]));
 }
 
 /* Four triangles gathered for the SIMD filter, a lane per triangle: c[v][a][j] is axis a of vertex v of
@@ -134,10 +136,10 @@ CBVH_KERNEL void leaf_gather4(const void *restrict tris, const int tri_enc, cons
         __m128 r1 = leaf_vertex4(verts, vert_enc, grid_origin, grid_scale, idx[1][v]);
         __m128 r2 = leaf_vertex4(verts, vert_enc, grid_origin, grid_scale, idx[2][v]);
         __m128 r3 = leaf_vertex4(verts, vert_enc, grid_origin, grid_scale, idx[3][v]);
-        _MM_TRANSPOSE4_PS(r0, r1, r2, r3);
-        _mm_store_ps(q->c[v][0], r0);
-        _mm_store_ps(q->c[v][1], r1);
-        _mm_store_ps(q->c[v][2], r2);
+        _MM_TRANSPOSE4_PS(r0, r1, r2, r3); /* r0: the lanes before x (leaf_vertex4) */
+        _mm_store_ps(q->c[v][0], r1);
+        _mm_store_ps(q->c[v][1], r2);
+        _mm_store_ps(q->c[v][2], r3);
     }
 }
 
