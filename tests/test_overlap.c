@@ -173,7 +173,7 @@ static void test_overlaps(void **state)
             assert_true(scene_terrain(&s, 3000, 40.0f));
         assert_int_equal(ref_fixture_open(&fx, s.positions, s.vertex_count, s.indices, s.triangle_count, test_options()),
                          CBVH_OK);
-        run_overlaps(&fx, 300, 50 + (uint64_t)m);
+        run_overlaps(&fx, (int)test_reps(300), 50 + (uint64_t)m);
         ref_fixture_close(&fx);
         scene_free(&s);
     }

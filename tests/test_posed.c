@@ -214,7 +214,7 @@ static void test_sweep_with_is_plain_sweep(void **state)
     for (int m = 0; m < 2; m++) {
         ref_fixture fx;
         open_scene(&fx, m);
-        for (int q = 0; q < 150; q++) {
+        for (int q = 0; q < test_reps(150); q++) {
             cbvh_shape s;
             ref_shape r;
             float delta[3];
@@ -286,7 +286,7 @@ static void test_oriented_and_placed_sweeps(void **state)
         const int placed = m % 2;
         placed_scene ps;
         placed_scene_open(&ps, &st, m / 2, placed);
-        for (int q = 0; q < 120; q++) {
+        for (int q = 0; q < test_reps(120); q++) {
             cbvh_shape s;
             ref_shape r;
             float delta[3];
@@ -303,7 +303,7 @@ static void test_oriented_and_placed_sweeps(void **state)
         placed_scene_close(&ps);
     }
     fprintf(stderr, "test_posed (%s): %ld sweep hits, %ld starting in contact\n", test_layout_name(), hits, starts);
-    assert_true(hits > 200 && starts > 20);
+    assert_true(hits > test_least(200) && starts > test_least(20));
 }
 
 /* 1 when the shape certainly overlaps the triangle (shrunk by tol it still does), -1 when it certainly does
@@ -335,7 +335,7 @@ static void test_overlaps_and_contacts(void **state)
         placed_scene_open(&ps, &st, m / 2, m % 2);
         const ref_tris *world = &ps.world;
         const double d = ps.d, tol = 2e-5 * d;
-        for (int q = 0; q < 120; q++) {
+        for (int q = 0; q < test_reps(120); q++) {
             cbvh_shape s;
             ref_shape r;
             float delta[3];
@@ -385,7 +385,7 @@ static void test_overlaps_and_contacts(void **state)
     }
     fprintf(stderr, "test_posed (%s): %ld overlapping triangles, %ld box contacts\n", test_layout_name(), found,
             box_contacts);
-    assert_true(found > 200 && box_contacts > 50);
+    assert_true(found > test_least(200) && box_contacts > test_least(50));
 }
 
 /* Without a transform, the ball and capsule contacts are those of cbvh_contacts_sphere / _capsule. */
@@ -462,7 +462,7 @@ static void test_cull_and_filter(void **state)
     const ref_tris *world = &ps.world;
     const double d = ps.d;
     long culled_hits = 0, filtered_hits = 0;
-    for (int q = 0; q < 150; q++) {
+    for (int q = 0; q < test_reps(150); q++) {
         cbvh_shape s;
         ref_shape r;
         float delta[3];
@@ -513,7 +513,7 @@ static void test_cull_and_filter(void **state)
     }
     fprintf(stderr, "test_posed (%s): %ld culled and %ld filtered sweep hits\n", test_layout_name(), culled_hits,
             filtered_hits);
-    assert_true(culled_hits > 30 && filtered_hits > 30);
+    assert_true(culled_hits > test_least(30) && filtered_hits > test_least(30));
     placed_scene_close(&ps);
 }
 

@@ -524,6 +524,7 @@ static void check_closest(const ref_fixture *fx, const cbvh_ray *ray, int hit, c
 static void check_fixture(const ref_fixture *fx, int rays, uint64_t seed)
 {
     uint64_t st = seed;
+    rays = (int)test_reps(rays);
     for (int r = 0; r < rays; r++) {
         const cbvh_ray ray = ref_make_ray(fx, &st, r % REF_RAY_KINDS);
         cbvh_hit h[4];
@@ -1496,13 +1497,13 @@ static void test_query_options(void **state)
     open_scene(&fx, &s, test_options());
     uint64_t st = 21;
     long culled_checks = 0;
-    for (int r = 0; r < 1500; r++) {
+    for (int r = 0; r < test_reps(1500); r++) {
         const cbvh_ray ray = ref_make_ray(&fx, &st, r % REF_RAY_KINDS);
         if (ref_ray_valid(&ray))
             check_options_ray(&fx, &s, &ray, &culled_checks);
     }
     printf("query options: %ld culled or filtered answers checked\n", culled_checks);
-    assert_true(culled_checks > 1000);
+    assert_true(culled_checks > test_least(1000));
 
     /* bad arguments: an error, never a silent miss */
     const cbvh_ray ray = {{0.0f, 0.0f, -10.0f}, 0.0f, {0.0f, 0.0f, 1.0f}, INFINITY};
@@ -1607,7 +1608,7 @@ static void test_transform(void **state)
         assert_int_equal(cbvh_query_options_init(&opt, sizeof opt), CBVH_OK);
         opt.transform = &tr;
         int hits = 0;
-        for (int r = 0; r < 400; r++) {
+        for (int r = 0; r < test_reps(400); r++) {
             const cbvh_ray ray = ref_make_ray(&world, &st, r % 3);
             cbvh_hit_record rec;
             assert_int_equal(cbvh_raycast_with(fx.file, &ray, &opt, &rec, NULL), CBVH_OK);
@@ -1629,7 +1630,7 @@ static void test_transform(void **state)
                 fail_msg("trial %d ray %d: normal (%g %g %g) against the placed triangle's, cosine %g", trial, r,
                          (double)rec.normal[0], (double)rec.normal[1], (double)rec.normal[2], dot);
         }
-        assert_true(hits > 100);
+        assert_true(hits > test_least(100));
     }
     /* A caller whose struct ends before `transform` has none: the mesh's own frame. */
     cbvh_transform far = {{0, 0, 0, 1}, {1000, 0, 0}, 1.0f};

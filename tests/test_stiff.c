@@ -406,7 +406,7 @@ static void watertight_scene(const char *name, const scene *s, int origins)
         leak_stats st;
         size_t skipped = 0;
         memset(&st, 0, sizeof st);
-        watertight_file(f, 1, origins, &st, &skipped);
+        watertight_file(f, 1, (int)test_reps(origins), &st, &skipped);
         char what[128];
         snprintf(what, sizeof what, "%s, %s", name, q ? "quantized" : "lossless");
         report_leaks(what, &st, skipped);
@@ -480,12 +480,15 @@ static void test_watertight_dragon(void **state)
     void *buf = NULL;
     cbvh_file *q = requantized(f, &buf);
     const cbvh_file *files[2] = { f, q };
+    const long stride = test_reps_stride(37);
     for (int k = 0; k < 2; k++) {
         leak_stats st;
         size_t skipped = 0;
         memset(&st, 0, sizeof st);
-        watertight_file(files[k], 37, 1, &st, &skipped);
-        report_leaks(k ? "dragon, quantized (every 37th)" : "dragon, lossless (every 37th)", &st, skipped);
+        watertight_file(files[k], (uint32_t)stride, 1, &st, &skipped);
+        char what[64];
+        snprintf(what, sizeof what, "dragon, %s (every %ldth)", k ? "quantized" : "lossless", stride);
+        report_leaks(what, &st, skipped);
     }
     cbvh_close(q);
     cbvh_buffer_free(NULL, buf);
@@ -530,7 +533,7 @@ static void test_scales(void **state)
             agree_stats st;
             memset(&st, 0, sizeof st);
             uint64_t rng = 777; /* the same rays relative to the mesh in every case */
-            for (int i = 0; i < 1000; i++) {
+            for (int i = 0; i < test_reps(1000); i++) {
                 cbvh_ray r = ref_make_ray(&fx, &rng, i % REF_RAY_KINDS);
                 check_against_reference(&fx, &r, HIT_TOL, &st);
             }

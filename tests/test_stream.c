@@ -174,8 +174,9 @@ static void test_meshes(void **state)
             assert_true(scene_sphere(&s, 3000, (float[3]){-70000.0f, 70000.0f, 1000.0f}, 5.0f));
         open_scene(&fx, &s);
         for (int coherent = 0; coherent < 2; coherent++) {
-            cbvh_ray *rays = make_rays(&fx, 6000, 7 + (uint64_t)m, coherent);
-            check_stream(&fx, rays, 6000);
+            const size_t count = (size_t)test_reps(6000);
+            cbvh_ray *rays = make_rays(&fx, count, 7 + (uint64_t)m, coherent);
+            check_stream(&fx, rays, count);
             free(rays);
         }
         ref_fixture_close(&fx);

@@ -145,7 +145,7 @@ static void test_random_sweeps(void **state)
         else
             assert_true(scene_terrain(&s, 600, 10.0f));
         open_scene(&fx, &s);
-        run_sweeps(&fx, 150, 1000 + (uint64_t)m);
+        run_sweeps(&fx, (int)test_reps(150), 1000 + (uint64_t)m);
         ref_fixture_close(&fx);
         scene_free(&s);
     }

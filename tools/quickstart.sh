@@ -77,22 +77,106 @@ if [ "$mode" = test ]; then
     [ -s "$meshes/bunny.obj" ] && export CBVH_BUNNY="$meshes/bunny.obj"
 fi
 
-# Build out of tree.
+# Build out of tree. The library is built static only here (each file compiled once, and the tool runs
+# without libtool's wrapper script: a tenth of a second a start, a thousand starts in test_corpus.sh);
+# distcheck's build below is the shared one.
+t0=$(date +%s)
 [ -x "$top/configure" ] || (cd "$top" && autoreconf -fi)
 mkdir -p "$build"
 cd "$build"
-[ -f Makefile ] || "$top/configure" -q
-make -s -j"$jobs"
-
+main_build() {
+    [ -f Makefile ] || "$top/configure" -q --disable-shared
+    make -s -j"$jobs"
+}
 if [ "$mode" = demo ]; then
+    main_build
     exec ./tools/cbvh demo
 fi
 
-# Tests: the suite, then the sanitizer build and fuzz corpus replay.
-status=0
+# Tests: the main build's `make check`, then five independent builds in folders of their own: ASan + UBSan
+# (with the fuzz corpora) and ThreadSanitizer (tests/sanitize.sh), the runtime-only build, the Windows build
+# under wine (tests/mingw_wine.sh) and distcheck's. They run in two lanes at once (CBVH_CI_LANES=1: one
+# after another), the second (the sanitizers, then the runtime-only build) from the start: each build has
+# long one-core stretches (configure, links, a last long test, wine's start) that the other lane fills,
+# which on a two-core machine saves minutes.
+results=$build/ci-results # one line per phase: pass, fail or skip, and its name
+: >"$results"
+
+# The runtime-only build (--disable-cooker): the library without the cooker, and the tests that need none;
+# warnings are errors here and in distcheck's full build (the main build keeps them warnings for users).
+runtime_only() {
+    [ "${CBVH_SKIP_RUNTIME_ONLY:-0}" != 1 ] || return 0
+    runtime=$(mktemp -d "${TMPDIR:-/tmp}/cbvh-runtime.XXXXXX")
+    t0=$(date +%s)
+    # (the CMake consumer test already ran in the main build's make check)
+    if (cd "$runtime" && "$top/configure" -q --disable-cooker --disable-shared --enable-werror &&
+        make -s -j"$jobs" &&
+        CBVH_SKIP_CMAKE_TEST=1 make -s -j"$jobs" check) \
+        >"$runtime/runtime-only.log" 2>&1; then
+        echo "runtime-only build: $(sed -n 's/^# PASS: *//p' "$runtime/test-suite.log") test programs passed in $(($(date +%s) - t0)) s"
+        echo "pass runtime-only" >>"$results"
+        rm -rf "$runtime"
+    else
+        tail -n 40 "$runtime/runtime-only.log"
+        echo "runtime-only build: FAILED (see $runtime)"
+        echo "fail runtime-only" >>"$results"
+    fi
+}
+
+# The sanitizer builds (tests/sanitize.sh).
+sanitizers() {
+    [ -x "$top/tests/sanitize.sh" ] && [ "${CBVH_SKIP_SANITIZE:-0}" != 1 ] || return 0
+    if sh "$top/tests/sanitize.sh" "$jobs"; then echo "pass sanitizers" >>"$results"; else echo "fail sanitizers" >>"$results"; fi
+}
+
+# Windows: the library and its unit test programs cross-built with MinGW-w64 and run under wine.
+windows() {
+    [ "${CBVH_SKIP_MINGW:-0}" != 1 ] || return 0
+    mingw=0
+    sh "$top/tests/mingw_wine.sh" "$jobs" || mingw=$?
+    case "$mingw" in
+    0) echo "pass mingw" >>"$results" ;;
+    77) echo "skip mingw" >>"$results" ;;
+    *) echo "fail mingw" >>"$results" ;;
+    esac
+}
+
+# The release tarball must build and pass on its own (distcheck: no file missing from the dist). It builds
+# without SIMD kernels, so the whole suite also runs on the scalar fallback (the other builds have them).
+distcheck() {
+    [ "${CBVH_SKIP_DISTCHECK:-0}" != 1 ] || return 0
+    t0=$(date +%s)
+    # The tarball's own check needs its programs and scripts, not the same long runs again: the corpus, the
+    # browser and the npm meshes ran in the main check above.
+    # The shared library only (the main build is static), and a quarter of the property tests' random
+    # queries (tests/support/layouts.h: every layout, shape and scene still runs, on the scalar kernels; the
+    # main build ran the full counts on every kernel, the scalar one included).
+    if env -u CBVH_DRAGON -u CBVH_DRAGON_MESH -u CBVH_BUNNY CBVH_SKIP_CORPUS=1 CBVH_SKIP_BROWSER=1 \
+        CBVH_TEST_REPS="${CBVH_TEST_REPS:-25}" make -s -j"$jobs" distcheck \
+        DISTCHECK_CONFIGURE_FLAGS='--enable-werror --disable-simd --disable-static' >distcheck.log 2>&1; then
+        echo "distcheck: the release tarball builds and passes its tests (scalar kernels: --disable-simd) in $(($(date +%s) - t0)) s"
+        echo "pass distcheck" >>"$results"
+    else
+        tail -n 40 distcheck.log
+        echo "distcheck: FAILED (see $build/distcheck.log)"
+        echo "fail distcheck" >>"$results"
+    fi
+}
+
+# The second lane starts now, beside the main build.
+lane=
+if [ "${CBVH_CI_LANES:-2}" -ge 2 ]; then
+    (sanitizers; runtime_only) >"$build/lane2.log" 2>&1 &
+    lane=$!
+fi
+
+main_build
+echo "build: configured and built in $(($(date +%s) - t0)) s"
 if [ -n "${CBVH_DRAGON_MESH:-}" ]; then
     ./tools/cbvh cook --quiet "$CBVH_DRAGON_MESH" "$build/dragon.cbvh" && export CBVH_DRAGON="$build/dragon.cbvh"
 fi
+status=0
+t0=$(date +%s)
 make -s -j"$jobs" check || status=1
 for log in tests/*.log; do
     case "$log" in */test-suite.log) continue ;; esac
@@ -106,54 +190,20 @@ skip=$(sed -n 's/^# SKIP: *//p' "$suite" | head -1)
 if [ "$status" != 0 ]; then
     cat "$suite" >&2 || true
 fi
-if [ -x "$top/tests/sanitize.sh" ] && [ "${CBVH_SKIP_SANITIZE:-0}" != 1 ]; then
-    if sh "$top/tests/sanitize.sh"; then pass=$((${pass:-0} + 1)); else fail=$((${fail:-0} + 1)); status=1; fi
+echo "make check: $pass test programs passed in $(($(date +%s) - t0)) s"
+
+distcheck
+windows
+if [ -n "$lane" ]; then
+    wait "$lane" || true
+    cat "$build/lane2.log"
+else
+    sanitizers
+    runtime_only
 fi
-# The runtime-only build (--disable-cooker): the library without the cooker, and the tests that need none;
-# warnings are errors here and in distcheck's full build (the main build keeps them warnings for users).
-if [ "${CBVH_SKIP_RUNTIME_ONLY:-0}" != 1 ]; then
-    runtime=$(mktemp -d "${TMPDIR:-/tmp}/cbvh-runtime.XXXXXX")
-    t0=$(date +%s)
-    # (the CMake consumer test already ran in the main build's make check)
-    if (cd "$runtime" && "$top/configure" -q --disable-cooker --disable-shared --enable-werror &&
-        make -s -j"$jobs" &&
-        CBVH_SKIP_CMAKE_TEST=1 make -s -j"$jobs" check) \
-        >"$runtime/runtime-only.log" 2>&1; then
-        echo "runtime-only build: $(sed -n 's/^# PASS: *//p' "$runtime/test-suite.log") test programs passed in $(($(date +%s) - t0)) s"
-        pass=$((${pass:-0} + 1))
-        rm -rf "$runtime"
-    else
-        tail -n 40 "$runtime/runtime-only.log" >&2
-        echo "runtime-only build: FAILED (see $runtime)"
-        fail=$((${fail:-0} + 1))
-        status=1
-    fi
-fi
-# Windows: the library and its unit test programs cross-built with MinGW-w64 and run under wine.
-if [ "${CBVH_SKIP_MINGW:-0}" != 1 ]; then
-    mingw=0
-    sh "$top/tests/mingw_wine.sh" "$jobs" || mingw=$?
-    case "$mingw" in
-    0) pass=$((${pass:-0} + 1)) ;;
-    77) skip=$((${skip:-0} + 1)) ;;
-    *) fail=$((${fail:-0} + 1)); status=1 ;;
-    esac
-fi
-# The release tarball must build and pass on its own (distcheck: no file missing from the dist). It builds
-# without SIMD kernels, so the whole suite also runs on the scalar fallback (the other builds have them).
-if [ "${CBVH_SKIP_DISTCHECK:-0}" != 1 ]; then
-    # The tarball's own check needs its programs and scripts, not the same long runs again: the corpus, the
-    # browser and the npm meshes ran in the main check above.
-    if env -u CBVH_DRAGON -u CBVH_DRAGON_MESH -u CBVH_BUNNY CBVH_SKIP_CORPUS=1 CBVH_SKIP_BROWSER=1 \
-        make -s -j"$jobs" distcheck DISTCHECK_CONFIGURE_FLAGS='--enable-werror --disable-simd' >distcheck.log 2>&1; then
-        echo "distcheck: the release tarball builds and passes its tests (scalar kernels: --disable-simd)"
-        pass=$((${pass:-0} + 1))
-    else
-        tail -n 40 distcheck.log >&2
-        echo "distcheck: FAILED (see $build/distcheck.log)"
-        fail=$((${fail:-0} + 1))
-        status=1
-    fi
-fi
+pass=$((${pass:-0} + $(grep -c '^pass ' "$results" || true)))
+fail=$((${fail:-0} + $(grep -c '^fail ' "$results" || true)))
+skip=$((${skip:-0} + $(grep -c '^skip ' "$results" || true)))
+[ "$fail" = 0 ] || status=1
 echo "${pass:-0} passed, $((${fail:-0} + ${err:-0})) failed, ${skip:-0} skipped"
 exit $status
