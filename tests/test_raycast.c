@@ -333,7 +333,7 @@ static void test_wide4_affine_box_test(void **state)
     const float dirs[] = {1.0f, -1.0f, 0.37f, -3.0f, 1e-3f, 1e-20f, -1e-30f, 1e20f, 0.0f, -0.0f};
     long affine = 0, exact = 0, entered = 0;
     uint64_t st = 12345;
-    for (int i = 0; i < 200000; i++) {
+    for (int i = 0; i < test_reps(200000); i++) {
         /* three rays in four on ordinary grids (the first three origins and scales) */
         const uint64_t extreme = scene_rand_next(&st) % 4 == 0 ? 3u : 0u;
         float go[3], gs[3];
@@ -439,7 +439,7 @@ static void test_wide4_affine_box_test(void **state)
         }
     }
     printf("affine box test: %ld rays affine, %ld exact, %ld boxes entered\n", affine, exact, entered);
-    assert_true(affine > 100000 && exact > 20000 && entered > 10000);
+    assert_true(affine > test_least(100000) && exact > test_least(20000) && entered > test_least(10000));
 }
 #endif
 
@@ -619,7 +619,8 @@ static void test_closed_mesh_no_leaks(void **state)
     open_scene(&fx, &s, test_options());
     uint64_t st = 5;
     long missed = 0, total = 0;
-    for (size_t vtx = 0; vtx < s.vertex_count; vtx++) {
+    const size_t stride = (size_t)test_reps_stride(1);
+    for (size_t vtx = 0; vtx < s.vertex_count; vtx += stride) {
         for (int kind = 0; kind < 3; kind++) {
             cbvh_ray ray = {{c[0], c[1], c[2]}, 0.0f, {0, 0, 0}, INFINITY};
             const float *p = s.positions + 3 * vtx, *q = s.positions + 3 * ((vtx + 1) % s.vertex_count);
@@ -645,7 +646,7 @@ static void test_closed_mesh_no_leaks(void **state)
         }
     }
     assert_int_equal(missed, 0);
-    assert_true(total > 100000);
+    assert_true(total > test_least(100000));
     ref_fixture_close(&fx);
     scene_free(&s);
 }
@@ -813,7 +814,7 @@ static void test_far_side_boxes(void **state)
             idx[k] = k;
         ref_fixture fx;
         assert_int_equal(ref_fixture_open(&fx, pos, 3 * TRIS, idx, TRIS, test_options()), CBVH_OK);
-        for (int i = 0; i < RAYS; i++) {
+        for (int i = 0; i < test_reps(RAYS); i++) {
             const uint32_t tri = (uint32_t)(scene_rand_unit(&st) * TRIS) % TRIS;
             const size_t at = fx.index_of_id[tri];
             if (at == (size_t)-1)
@@ -848,7 +849,7 @@ static void test_far_side_boxes(void **state)
     }
     printf("far side: %d rays, %d with halved box tests\n", rays, halved);
     /* both cases: origins moved next to the mesh, and boxes tested at half scale */
-    assert_true(rays > 2000 && halved > 500 && rays - halved > 500);
+    assert_true(rays > test_least(2000) && halved > test_least(500) && rays - halved > test_least(500));
 }
 
 /* The F8 fix first let a finite float sum overflow skip the sign test:
@@ -983,7 +984,7 @@ static void test_sliver_t(void **state)
         uint64_t st = 7 + (uint64_t)e;
         double worst = 0.0;
         int hits = 0;
-        for (int i = 0; i < 2000; i++) {
+        for (int i = 0; i < test_reps(2000); i++) {
             /* a point well inside: x in [300, 700], y in [0.2, 0.4] w (inside for x in [250, 750]) */
             const double x = 300.0 + 400.0 * scene_rand_unit(&st), y = w * (0.2 + 0.2 * scene_rand_unit(&st));
             const double th = PI * scene_rand_unit(&st), ph = 2.0 * PI * scene_rand_unit(&st);
@@ -1006,7 +1007,7 @@ static void test_sliver_t(void **state)
         }
         if (!(worst <= 1e-5 * 1e3))
             fail_msg("aspect 1e%d: hit point %g off the plane", e, worst);
-        assert_true(hits > 500);
+        assert_true(hits > test_least(500));
         cbvh_close(f);
         cbvh_buffer_free(NULL, buf);
     }
@@ -1061,7 +1062,7 @@ static void test_leaf_range_filter(void **state)
                                  : scene_soup(&sc, 2000, 0.1f, 11));
         open_scene(&fx, &sc, test_options());
         uint64_t st = 99 + (uint64_t)which;
-        for (int i = 0; i < 1500; i++) {
+        for (int i = 0; i < test_reps(1500); i++) {
             const double *v = fx.tris.v + 9 * (size_t)(scene_rand_unit(&st) * (double)fx.tris.count);
             double a = scene_rand_unit(&st), b = scene_rand_unit(&st);
             if (a + b > 1.0) {
@@ -1127,7 +1128,7 @@ static void test_leaf_range_filter(void **state)
         scene_free(&sc);
     }
     test_set_kernel(was);
-    assert_true(compared > 15000);
+    assert_true(compared > test_least(15000));
 }
 
 /* F6: u, v came from the sheared edge functions, which cancel on slivers
