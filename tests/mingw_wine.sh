@@ -53,10 +53,10 @@ export WINEPREFIX="${CBVH_WINEPREFIX:-$cache/wine}" WINEDEBUG=-all
 export WINEPATH="/usr/$host/lib"
 # The dragon tests are Linux-only: under wine they would only repeat the native run, slower.
 unset CBVH_DRAGON CBVH_DRAGON_MESH CBVH_BUNNY
-# A quarter of the property tests' random queries (tests/support/layouts.h): what differs on Windows is
+# A tenth of the property tests' random queries (tests/support/layouts.h): what differs on Windows is
 # the OS layer, the ABI and MinGW's code, which every layout, kernel, shape and scene still runs through;
 # the full counts run in the native builds.
-export CBVH_TEST_REPS="${CBVH_TEST_REPS:-25}"
+export CBVH_TEST_REPS="${CBVH_TEST_REPS:-10}"
 mkdir -p "$WINEPREFIX"
 status=0
 (

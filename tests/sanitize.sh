@@ -16,12 +16,12 @@ export ASAN_OPTIONS="detect_leaks=1:abort_on_error=1:strict_string_checks=1:dete
 export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
 # The CMake consumer test builds without sanitizers: the plain make check runs it.
 export CBVH_SKIP_CMAKE_TEST=1
-# A quarter of the property tests' random queries (tests/support/layouts.h): the sanitizers still see every
-# layout, walk kernel, shape, scene and cook variant, at a quarter of the cost (almost all of it the
+# A tenth of the property tests' random queries (tests/support/layouts.h): the sanitizers still see every
+# layout, walk kernel, shape, scene and cook variant, at a tenth of the cost (almost all of it the
 # brute-force reference's, instrumented too); the plain builds run the full counts. The corrupted files,
 # allocation failures and fuzz corpora are not cut. test_threads' ASan run takes 1 s a layout (the
 # ThreadSanitizer run below keeps 3 s).
-export CBVH_TEST_REPS="${CBVH_TEST_REPS:-25}"
+export CBVH_TEST_REPS="${CBVH_TEST_REPS:-10}"
 # The cooked dragon's tests (CBVH_DRAGON: 871K triangles) run in the plain builds; here they would cost
 # minutes for code paths the smaller scenes take too.
 unset CBVH_DRAGON

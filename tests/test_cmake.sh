@@ -7,7 +7,7 @@
 set -eu
 top=${CBVH_TOP_SRCDIR:-$(cd "$(dirname "$0")/.." && pwd)}
 if [ "${CBVH_SKIP_CMAKE_TEST:-0}" = 1 ]; then
-    echo "test_cmake.sh: SKIP: CBVH_SKIP_CMAKE_TEST=1 (tests/sanitize.sh: the CMake build has no sanitizers to check)"
+    echo "test_cmake.sh: SKIP: CBVH_SKIP_CMAKE_TEST=1 (tests/sanitize.sh, the runtime-only build and distcheck in tools/quickstart.sh: the main check runs it)"
     exit 77
 fi
 if ! command -v cmake >/dev/null 2>&1; then
