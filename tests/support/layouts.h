@@ -43,8 +43,8 @@ static inline int test_set_kernel(int kernel)
 }
 
 /* CBVH_TEST_REPS: the percentage of their random queries the property tests run (default 100; 10 to 100,
- * a smaller one is 10; anything else, 100). tests/sanitize.sh and tests/mingw_wine.sh set 10,
- * quickstart's distcheck 25: there the point is what the sanitizers, Windows and the tarball see on every path (every
+ * a smaller one is 10; anything else, 100). tests/sanitize.sh and tests/mingw_wine.sh set 10, quickstart's
+ * distcheck 25: there the point is what the sanitizers, Windows and the tarball see on every path (every
  * layout, kernel, shape, scene and cook variant still runs), while the main build's full counts search for
  * wrong answers. */
 static inline int test_reps_percent(void)
