@@ -397,103 +397,140 @@ CBVH_KERNEL uint32_t walk_children_hit(const struct cbvh_file *restrict f, const
     return (uint32_t)(h0 | h1);
 }
 
-/* The walk. A node's children are tested at the node, so a missed child is
- * never pushed, and the farther ones are pushed with their entry distances:
- * one popped after the ray became shorter than that is dropped without a
- * second box test. The loader checked depth <= CBVH_MAX_DEPTH, and a walk
- * pushes at most CBVH_TREE_WIDTH - 1 references per level, so the stack
- * cannot overflow (walk_w4_descend's dead stores above the top included). The walk covers the subtree of
- * `root`, whose box the caller tested (or root_box, tested here when not CBVH_NO_BOX). The result: any hit: 1
- * when a triangle occludes the ray; closest: 0, with best filled. Counters go to stats when not NULL (a few
- * adds per node). float_boxes: NULL for the file's quantized boxes (every library walk, where the constant
- * folds the choice away); else six floats per box id (min xyz, max xyz), for tools that measure another box
- * precision on the same tree and the same walk (cbvh report's exact reference, whose rays have no box_halve).
- */
+/* A walk in progress: the ray's box test set up, the stack of children still to visit, and the node or
+ * leaf visited next. The single-ray walk keeps one on its frame; the streams' tails (stream_walk.h) keep
+ * a few and step them in turn, so that one ray's chain of dependent loads runs while another's waits. */
+struct cbvh_walk_state {
+    struct cbvh_box_ray box;
+    struct cbvh_w4_simd_ray w;
+    cbvh_ref r;
+    float r_entry; /* where the ray enters r's box (the root's: taken as its start) */
+    float tmax;    /* the ray's, shrinking with each closer hit */
+    uint32_t sp;
+    uint64_t visited, tested;
+    /* walk_w4_descend stores up to CBVH_TREE_WIDTH - 2 dead entries above the top */
+    struct cbvh_walk_entry stack[(CBVH_TREE_WIDTH - 1u) * CBVH_MAX_DEPTH + CBVH_TREE_WIDTH];
+};
+
+/* What a walk step leaves: more to do, the walk over, or (any hit) a triangle occludes the ray. */
+enum cbvh_walk_step_result { CBVH_WALK_MORE, CBVH_WALK_DONE, CBVH_WALK_HIT };
+
+/* Sets up a walk of the subtree `root`, whose box the caller tested (or root_box, tested here when not
+ * CBVH_NO_BOX), for the ray up to `tmax` (its own, or less: a best hit the caller has). Returns 0 when
+ * the ray misses root_box: nothing to walk. float_boxes: as cbvh_walk's. */
+CBVH_KERNEL int cbvh_walk_begin(const struct cbvh_file *restrict f, const uint32_t layout,
+                                const struct cbvh_ray_ctx *restrict ray, cbvh_ref root, uint32_t root_box,
+                                const float *restrict float_boxes, float tmax,
+                                struct cbvh_walk_state *restrict st)
+{
+    cbvh_box_ray_init(&st->box, f->grid_origin, f->grid_scale, ray->shear.org, ray->rcp, ray->octant);
+    if (ray->box_halve && !float_boxes)
+        cbvh_box_ray_halve(&st->box, ray->box_halve);
+    /* set for every layout: the binary layout's instances never read it (the compiler drops the set-up),
+     * and a walk whose layout is a run-time value (cbvh report's) would otherwise look to the compiler as if
+     * it might read it unset */
+    walk_w4_simd_ray_init(&st->w, &st->box, float_boxes ? 0u : ray->box_halve, ray->tmin);
+    st->sp = 0;
+    st->r = root;
+    st->r_entry = ray->tmin;
+    st->tmax = tmax;
+    st->visited = 0;
+    st->tested = 0;
+    if (root_box == CBVH_NO_BOX)
+        return 1;
+    float entry;
+    st->visited++;
+    return walk_box_test(&st->box, f, layout, float_boxes, root_box, ray->tmin, tmax, &entry);
+}
+
+/* One step of the walk: the node st->r's children against the ray (the nearest entered is the next step's,
+ * the others go onto the stack, the farthest deepest), or the leaf st->r's triangles, then the next
+ * reference off the stack still in reach. A node's children are tested at the node, so a missed child is
+ * never pushed, and the farther ones are pushed with their entry distances: one popped after the ray became
+ * shorter than that is dropped without a second box test. The loader checked depth <= CBVH_MAX_DEPTH, and
+ * a walk pushes at most CBVH_TREE_WIDTH - 1 references per level, so the stack cannot overflow
+ * (walk_w4_descend's dead stores above the top included). Closest hit: best and st->tmax follow each closer
+ * hit. `count`: whether st->visited counts the boxes tested (statistics; st->tested always counts). */
+CBVH_KERNEL enum cbvh_walk_step_result
+cbvh_walk_step(const struct cbvh_file *restrict f, const uint32_t layout,
+               const struct cbvh_ray_ctx *restrict ray, const struct cbvh_walk_mode mode,
+               const float *restrict float_boxes, int count, struct cbvh_walk_state *restrict st,
+               struct cbvh_best_hit *restrict best)
+{
+    const float tmin = ray->tmin;
+    const cbvh_ref r = st->r;
+    if (!cbvh_tree_is_leaf(f, layout, r)) {
+#ifdef CBVH_HAVE_SIMD
+        if (layout == CBVH_LAYOUT_WIDE4 && !float_boxes && !mode.scalar && mode.order != CBVH_WALK_DISTANCE) {
+            if (walk_w4_descend(f, r, &st->w, mode.order == CBVH_WALK_SORTED, ray->octant, st->tmax,
+                                st->stack, &st->sp, &st->r, &st->r_entry, count ? &st->visited : NULL))
+                return CBVH_WALK_MORE;
+        } else
+#endif
+        {
+            cbvh_ref c[CBVH_TREE_WIDTH];
+            float e[CBVH_TREE_WIDTH];
+            const uint32_t n =
+                walk_children_hit(f, layout, r, &st->box, &st->w, float_boxes, mode.order, ray->octant, tmin,
+                                  st->tmax, c, e, &st->visited, mode.scalar);
+            if (n > 0) {
+                for (uint32_t k = n; k-- > 1;) {
+                    st->stack[st->sp].ref = c[k];
+                    st->stack[st->sp].entry = e[k];
+                    st->sp++;
+                    /* a wide node is one cache line: start fetching the farther children now, and a
+                     * leaf's triangle entries (its vertices need those first) */
+                    if (layout == CBVH_LAYOUT_WIDE4 && !cbvh_w4_ref_is_leaf(c[k]))
+                        CBVH_PREFETCH(cbvh_w4_node(f->nodes, c[k]));
+                    else if (layout == CBVH_LAYOUT_WIDE4)
+                        CBVH_PREFETCH(cbvh_indices_entry(f->triangles, (int)f->triangle_encoding,
+                                                         cbvh_w4_ref_first(c[k])));
+                }
+                st->r = c[0];
+                st->r_entry = e[0];
+                return CBVH_WALK_MORE;
+            }
+        }
+    } else {
+        uint32_t first, n;
+        cbvh_tree_leaf(f, layout, r, &first, &n);
+        st->tested += n;
+        if (cbvh_leaf_visit(f, first, n, ray, mode.any, mode.scalar, st->r_entry <= tmin, &st->tmax, best))
+            return CBVH_WALK_HIT;
+    }
+    /* Pop the next reference still in reach: the padded test of ray_box.h with the current tmax. */
+    uint32_t sp = st->sp;
+    do {
+        if (sp == 0)
+            return CBVH_WALK_DONE;
+        sp--;
+    } while (!(st->stack[sp].entry <= st->tmax * CBVH_BOX_PAD));
+    st->sp = sp;
+    st->r = st->stack[sp].ref;
+    st->r_entry = st->stack[sp].entry;
+    return CBVH_WALK_MORE;
+}
+
+/* The walk: cbvh_walk_step until the walk is over. It covers the subtree of `root`, whose box the caller
+ * tested (or root_box, tested here when not CBVH_NO_BOX). The result: any hit: 1 when a triangle occludes
+ * the ray; closest: 0, with best filled. Counters go to stats when not NULL (a few adds per node).
+ * float_boxes: NULL for the file's quantized boxes (every library walk, where the constant folds the choice
+ * away); else six floats per box id (min xyz, max xyz), for tools that measure another box precision on the
+ * same tree and the same walk (cbvh report's exact reference, whose rays have no box_halve). */
 CBVH_KERNEL int cbvh_walk(const struct cbvh_file *restrict f, const uint32_t layout,
                           const struct cbvh_ray_ctx *restrict ray, cbvh_ref root, uint32_t root_box,
                           const struct cbvh_walk_mode mode, const float *restrict float_boxes,
                           struct cbvh_best_hit *restrict best, cbvh_query_stats *restrict stats)
 {
-    struct cbvh_box_ray box;
-    cbvh_box_ray_init(&box, f->grid_origin, f->grid_scale, ray->shear.org, ray->rcp, ray->octant);
-    if (ray->box_halve && !float_boxes)
-        cbvh_box_ray_halve(&box, ray->box_halve);
-    const float tmin = ray->tmin;
-    float tmax = ray->tmax;
-    /* set for every layout: the binary layout's instances never read it (the compiler drops the set-up),
-     * and a walk whose layout is a run-time value (cbvh report's) would otherwise look to the compiler as if
-     * it might read it unset */
-    struct cbvh_w4_simd_ray w;
-    walk_w4_simd_ray_init(&w, &box, float_boxes ? 0u : ray->box_halve, tmin);
-    /* walk_w4_descend stores up to CBVH_TREE_WIDTH - 2 dead entries above the top */
-    struct cbvh_walk_entry stack[(CBVH_TREE_WIDTH - 1u) * CBVH_MAX_DEPTH + CBVH_TREE_WIDTH];
-    uint32_t sp = 0;
-    cbvh_ref r = root;
-    float r_entry = tmin; /* where the ray enters r's box (the root's: taken as its start) */
-    uint64_t visited = 0, tested = 0;
-    int hit = 0;
-
-    if (root_box != CBVH_NO_BOX) {
-        float entry;
-        visited++;
-        if (!walk_box_test(&box, f, layout, float_boxes, root_box, tmin, tmax, &entry))
-            goto done;
-    }
-    for (;;) {
-        if (!cbvh_tree_is_leaf(f, layout, r)) {
-#ifdef CBVH_HAVE_SIMD
-            if (layout == CBVH_LAYOUT_WIDE4 && !float_boxes && !mode.scalar &&
-                mode.order != CBVH_WALK_DISTANCE) {
-                if (walk_w4_descend(f, r, &w, mode.order == CBVH_WALK_SORTED, ray->octant, tmax, stack, &sp,
-                                    &r, &r_entry, stats ? &visited : NULL))
-                    continue;
-            } else
-#endif
-            {
-                cbvh_ref c[CBVH_TREE_WIDTH];
-                float e[CBVH_TREE_WIDTH];
-                const uint32_t n = walk_children_hit(f, layout, r, &box, &w, float_boxes, mode.order,
-                                                     ray->octant, tmin, tmax, c, e, &visited, mode.scalar);
-                if (n > 0) {
-                    for (uint32_t k = n; k-- > 1;) {
-                        stack[sp].ref = c[k];
-                        stack[sp].entry = e[k];
-                        sp++;
-                        /* a wide node is one cache line: start fetching the farther children now, and a
-                         * leaf's triangle entries (its vertices need those first) */
-                        if (layout == CBVH_LAYOUT_WIDE4 && !cbvh_w4_ref_is_leaf(c[k]))
-                            CBVH_PREFETCH(cbvh_w4_node(f->nodes, c[k]));
-                        else if (layout == CBVH_LAYOUT_WIDE4)
-                            CBVH_PREFETCH(cbvh_indices_entry(f->triangles, (int)f->triangle_encoding,
-                                                             cbvh_w4_ref_first(c[k])));
-                    }
-                    r = c[0];
-                    r_entry = e[0];
-                    continue;
-                }
-            }
-        } else {
-            uint32_t first, count;
-            cbvh_tree_leaf(f, layout, r, &first, &count);
-            tested += count;
-            if (cbvh_leaf_visit(f, first, count, ray, mode.any, mode.scalar, r_entry <= tmin, &tmax, best)) {
-                hit = 1;
-                break;
-            }
-        }
-        /* Pop the next reference still in reach: the padded test of ray_box.h with the current tmax. */
-        do {
-            if (sp == 0)
-                goto done;
-            sp--;
-        } while (!(stack[sp].entry <= tmax * CBVH_BOX_PAD));
-        r = stack[sp].ref;
-        r_entry = stack[sp].entry;
-    }
-done:
+    struct cbvh_walk_state st;
+    enum cbvh_walk_step_result step = CBVH_WALK_DONE;
+    if (cbvh_walk_begin(f, layout, ray, root, root_box, float_boxes, ray->tmax, &st))
+        do
+            step = cbvh_walk_step(f, layout, ray, mode, float_boxes, stats != NULL, &st, best);
+        while (step == CBVH_WALK_MORE);
     if (stats)
-        cbvh_stats_add(stats, visited, tested);
-    return hit;
+        cbvh_stats_add(stats, st.visited, st.tested);
+    return step == CBVH_WALK_HIT;
 }
 
 #endif
