@@ -545,21 +545,27 @@ CBVH_API cbvh_result cbvh_occluded_with(const cbvh_file *file, const cbvh_ray *r
 
 /* Batched streams: `count` rays (any coherence) traversed together, each node
  * dequantized once per batch visit and each live ray tested against all its
- * children there, the rays entering a child listed for it. Results
- * equal cbvh_raycast / cbvh_occluded ray by ray. hits[i] (occluded[i]: 0 or 1)
- * receives ray i's result. Uses no heap memory: rays go in batches of 24 of one
- * ray octant, held on the call's stack. Stack use, measured with -fstack-usage
- * (gcc 12 -O2, x86-64), deepest path: about 15 KiB (the stack batch 6.2, which
- * the _scratch forms reserve too; the batch walk 4.4; a ray finishing alone on
- * the single-ray walk 3.3, 3.9 with the AVX2 walks; the hit's barycentrics
- * 0.3). cbvh_raycast and cbvh_occluded: about 4 KiB (4.6 with the AVX2 walks). */
+ * children there, the rays entering a child listed for it. A ray left alone
+ * at a node (incoherent rays, soon after the root) finishes that subtree on
+ * the single-ray walk, four such rays at a time, a node or leaf each in turn,
+ * so that the CPU overlaps their memory fetches. Results equal cbvh_raycast /
+ * cbvh_occluded ray by ray. hits[i] (occluded[i]: 0 or 1) receives ray i's
+ * result. Uses no heap memory: rays go in batches of 24 of one ray octant,
+ * held with the four walks' stacks on the call's stack. Stack use, measured
+ * with -fstack-usage (gcc 12 -O2, x86-64), deepest path: about 21 KiB (the
+ * stack batch and the walks' stacks 13.7; the batch walk 4.5; the four walks'
+ * steps 1.4, 2.2 with the AVX2 walks; the hit's barycentrics 0.3). The
+ * _scratch forms below, given scratch for more than 24 rays, keep all of it
+ * there: about 8 KiB of stack. cbvh_raycast and cbvh_occluded: about 4 KiB
+ * (3.9 with the AVX2 walks). */
 CBVH_API void cbvh_raycast_stream(const cbvh_file *file, const cbvh_ray *rays, size_t count,
                                   cbvh_hit *hits, cbvh_query_stats *stats);
 CBVH_API void cbvh_occluded_stream(const cbvh_file *file, const cbvh_ray *rays, size_t count,
                                    uint8_t *occluded, cbvh_query_stats *stats);
 
 /* Bytes of scratch memory with which the _scratch streams below run batches of `batch_rays` rays
- * (clamped to 1..4096). Larger batches share more node visits between rays (coherent rays gain most). */
+ * (clamped to 1..4096), the four single-ray walks' stacks (about 7.5 KiB) included. Larger batches share
+ * more node visits between rays (coherent rays gain most). */
 CBVH_API size_t cbvh_stream_scratch_size(size_t batch_rays);
 
 /* cbvh_raycast_stream / cbvh_occluded_stream with their batches in the caller's `scratch` (any alignment,

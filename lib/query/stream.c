@@ -24,7 +24,9 @@
 #define STREAM_RAY_BYTES                                                                                         \
     (8 * sizeof(float) + sizeof(struct cbvh_ray_ctx) + sizeof(struct cbvh_best_hit) + sizeof(size_t) +          \
      STREAM_LIST_PER_RAY * (sizeof(float) + sizeof(uint16_t)) + CBVH_STREAM_WINDOW_PER_RAY)
-#define STREAM_SLACK 64u
+#define STREAM_SLACK 96u /* two 32-byte alignments (the tails, box_ray), and best_hit's and size_t's */
+/* Bytes of a block before its rays: the tails (stream.h), whatever the batch's size. */
+#define STREAM_TAILS_BYTES sizeof(struct cbvh_stream_tails)
 
 /* The stream walk per layout and query kind, each a function of its own so that a frame holds one walk's
  * stack, not the sum of all (-fstack-usage); `counting` (whether the solo tails count) is read at run
@@ -126,12 +128,16 @@ static void solo_ray(const struct cbvh_file *f, const struct cbvh_ray_ctx *ctx, 
  * Returns the batch's capacity, 0 when not even one ray fits. */
 static uint32_t batch_carve(struct cbvh_stream_batch *b, uint8_t **octant, void *mem, size_t size)
 {
-    if (!mem || size < STREAM_SLACK + STREAM_RAY_BYTES)
+    if (!mem || size < STREAM_SLACK + STREAM_TAILS_BYTES + STREAM_RAY_BYTES)
         return 0;
-    size_t n = (size - STREAM_SLACK) / STREAM_RAY_BYTES;
+    size_t n = (size - STREAM_SLACK - STREAM_TAILS_BYTES) / STREAM_RAY_BYTES;
     n = n < CBVH_STREAM_MAX_BATCH ? n : CBVH_STREAM_MAX_BATCH;
-    /* box_ray: 16-byte aligned for SSE2 loads (32 kept) */
+    /* the tails first (their walk states hold SIMD vectors), then box_ray: 16-byte aligned for SSE2 loads
+     * (32 kept) */
     uintptr_t p = ((uintptr_t)mem + 31u) & ~(uintptr_t)31u;
+    b->tails = (struct cbvh_stream_tails *)p;
+    b->tails->running = 0;
+    p = (p + STREAM_TAILS_BYTES + 31u) & ~(uintptr_t)31u;
     b->box_ray = (float(*)[8])p;
     p += n * 8 * sizeof(float);
     b->ctx = (struct cbvh_ray_ctx *)p; /* 8-byte alignment holds: every array before is a multiple of 32 */
@@ -206,22 +212,34 @@ static void stream_run(const struct cbvh_file *f, const cbvh_ray *rays, size_t c
     }
 }
 
-/* A batch of CBVH_STREAM_STACK_BATCH rays on this frame, or the caller's scratch when it holds more. */
+/* The stream in a batch of CBVH_STREAM_STACK_BATCH rays (and the tails) on this frame: a function of its
+ * own, so that a caller with scratch for more does not reserve it too. */
+CBVH_NOINLINE void stream_on_stack(const struct cbvh_file *f, const cbvh_ray *rays, size_t count,
+                                   cbvh_hit *hits, uint8_t *occluded, cbvh_query_stats *stats)
+{
+    _Alignas(32) uint8_t own[STREAM_SLACK + STREAM_TAILS_BYTES + CBVH_STREAM_STACK_BATCH * STREAM_RAY_BYTES];
+    struct cbvh_stream_batch batch;
+    uint8_t *octant;
+    batch_carve(&batch, &octant, own, sizeof own);
+    stream_run(f, rays, count, hits, occluded, stats, &batch, octant);
+}
+
+/* The stream in the caller's scratch when it holds more rays than the stack batch, else on the stack. */
 static void stream_query(const struct cbvh_file *f, const cbvh_ray *rays, size_t count, cbvh_hit *hits,
                          uint8_t *occluded, cbvh_query_stats *stats, void *scratch, size_t scratch_size)
 {
-    _Alignas(32) uint8_t own[STREAM_SLACK + CBVH_STREAM_STACK_BATCH * STREAM_RAY_BYTES];
     struct cbvh_stream_batch batch;
     uint8_t *octant;
-    if (batch_carve(&batch, &octant, scratch, scratch_size) <= CBVH_STREAM_STACK_BATCH)
-        batch_carve(&batch, &octant, own, sizeof own);
-    stream_run(f, rays, count, hits, occluded, stats, &batch, octant);
+    if (batch_carve(&batch, &octant, scratch, scratch_size) > CBVH_STREAM_STACK_BATCH)
+        stream_run(f, rays, count, hits, occluded, stats, &batch, octant);
+    else
+        stream_on_stack(f, rays, count, hits, occluded, stats);
 }
 
 CBVH_API size_t cbvh_stream_scratch_size(size_t batch_rays)
 {
     const size_t n = batch_rays < 1 ? 1 : batch_rays > CBVH_STREAM_MAX_BATCH ? CBVH_STREAM_MAX_BATCH : batch_rays;
-    return STREAM_SLACK + n * STREAM_RAY_BYTES;
+    return STREAM_SLACK + STREAM_TAILS_BYTES + n * STREAM_RAY_BYTES;
 }
 
 CBVH_API void cbvh_raycast_stream_scratch(const cbvh_file *file, const cbvh_ray *rays, size_t count, cbvh_hit *hits,

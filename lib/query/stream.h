@@ -7,20 +7,40 @@
 
 #include "query/leaf.h"
 #include "query/ray_setup.h"
+#include "query/walk.h"
 
 /* One ray as the box test reads it: 32 bytes, so SSE2 loads a ray in two
  * vectors, then broadcasts each field to the lanes of the node's children. */
 enum { CBVH_LANE_OX, CBVH_LANE_OY, CBVH_LANE_OZ, CBVH_LANE_TMIN, CBVH_LANE_RX, CBVH_LANE_RY, CBVH_LANE_RZ,
        CBVH_LANE_TMAX };
 
-/* Rays per batch when the stream runs on its own stack (cbvh_raycast_stream): its frame and the walk's
- * stay within about 8 KiB. Caller scratch (cbvh_raycast_stream_scratch) takes up to CBVH_STREAM_MAX_BATCH,
+/* Rays per batch when the stream runs on its own stack (cbvh_raycast_stream; cbvh.h gives the stack use).
+ * Caller scratch (cbvh_raycast_stream_scratch) takes up to CBVH_STREAM_MAX_BATCH,
  * the most a 16-bit ray list numbers. */
 #define CBVH_STREAM_STACK_BATCH 24u
 #define CBVH_STREAM_MAX_BATCH 4096u
 
 /* The most children a node test takes (CBVH_TREE_WIDTH): one SSE2 vector of boxes per ray. */
 #define CBVH_STREAM_LANES 4u
+
+/* Rays that finish a subtree alone (stream_walk.h: a batch node with few live rays) run this many at a
+ * time, one walk step each in turn: each ray's walk is a chain of dependent loads and tests, and the CPU
+ * overlaps the chains of different rays where one ray at a time leaves it waiting (on the 871K-triangle
+ * dragon's incoherent rays, a cache miss a node). */
+#define CBVH_STREAM_TAILS 4u /* at most 4: the tails' bit masks go through cbvh_lowest_lane */
+
+/* A ray walking a subtree alone: the single-ray walk's state, and the ray's best hit as this walk knows
+ * it (synchronised with the batch's at each step, stream_walk.h). */
+struct cbvh_stream_tail {
+    struct cbvh_walk_state walk;
+    struct cbvh_best_hit best;
+    uint32_t ray; /* batch position */
+};
+
+struct cbvh_stream_tails {
+    struct cbvh_stream_tail tail[CBVH_STREAM_TAILS];
+    uint32_t running; /* bit k: tail[k] walks */
+};
 
 /* Up to `capacity` rays of one octant, so the sort byte orders the whole batch. Its arrays lie in one
  * block (the stream's stack or the caller's scratch), cut by stream.c. */
@@ -31,6 +51,7 @@ struct cbvh_stream_batch {
     size_t *ray_index;            /* position in the caller's arrays */
     uint16_t *list_ray;           /* the walk's ray lists, a stack of them (stream.c): batch positions, */
     float *list_entry;            /* and where each ray enters the list's box */
+    struct cbvh_stream_tails *tails;
     uint32_t list_capacity;       /* entries in list_ray and list_entry */
     uint32_t shrinks;             /* times a ray's TMAX shrank: a list made since is still exact */
     uint32_t count, capacity;

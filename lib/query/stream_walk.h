@@ -16,30 +16,119 @@
 #define CBVH_STREAM_SOLO 4
 #endif
 
-/* Ray r of the batch finishes the subtree of node `root` alone, starting
- * from its current tmax; its best hit (or occlusion) goes back to the batch.
- * The single-ray walk uses the same triangle test and tie rule, so the result
- * does not depend on where the batch handed the ray over. */
-static void solo_tail(const struct cbvh_file *f, struct cbvh_stream_batch *b, uint32_t r, uint32_t root,
-                      int any, uint8_t *occluded, cbvh_query_stats *stats)
+/* The tails (stream.h): rays finishing a subtree alone on the single-ray walk's steps (walk.h), a few at
+ * a time. A tail starts from the ray's current tmax and best hit; at each step it takes a closer hit the
+ * batch (or another tail of the same ray) has found, and gives the batch its own, so both prune with the
+ * nearest hit known; when it ends, its best hit goes back to the batch by the tie rule, or its occlusion
+ * ends the ray. The single-ray walk uses the same triangle test and tie rule, so the result does not
+ * depend on where the batch handed the ray over nor on how the tails' steps interleave. */
+
+/* Tail t's best hit into the batch when it is better (closest hit). */
+CBVH_KERNEL void stream_tail_give(struct cbvh_stream_batch *restrict b,
+                                  const struct cbvh_stream_tail *restrict t)
 {
-    struct cbvh_ray_ctx ctx = b->ctx[r];
-    float *box_ray = b->box_ray[r];
-    ctx.tmax = box_ray[CBVH_LANE_TMAX];
-    if (any) {
-        if (cbvh_any_subtree(f, &ctx, root, stats)) {
-            occluded[b->ray_index[r]] = 1;
-            box_ray[CBVH_LANE_TMAX] = -1.0f;
+    struct cbvh_best_hit *best = &b->best[t->ray];
+    if (t->best.tri != UINT32_MAX &&
+        (best->tri == UINT32_MAX || cbvh_hit_better(t->best.t, t->best.tri, best->t, best->tri))) {
+        *best = t->best;
+        if (b->box_ray[t->ray][CBVH_LANE_TMAX] != t->best.t) {
+            b->box_ray[t->ray][CBVH_LANE_TMAX] = t->best.t;
             b->shrinks++;
         }
-        return;
     }
-    cbvh_closest_subtree(f, &ctx, root, &b->best[r], stats);
-    if (b->best[r].tri != UINT32_MAX && b->best[r].t != box_ray[CBVH_LANE_TMAX]) {
-        /* its t is the ray's tmax: never above the one the walk started with */
-        box_ray[CBVH_LANE_TMAX] = b->best[r].t;
-        b->shrinks++;
+}
+
+/* Steps the running tails in turn until at most `leave` of them run, each ended tail's result merged into
+ * the batch. */
+CBVH_KERNEL void stream_tails_run(const struct cbvh_file *restrict f, const uint32_t layout,
+                                  struct cbvh_stream_batch *restrict b, const struct cbvh_walk_mode mode,
+                                  int counting, uint32_t leave, uint8_t *restrict occluded,
+                                  uint64_t *restrict visited, uint64_t *restrict tested)
+{
+    struct cbvh_stream_tails *restrict tails = b->tails;
+    while ((uint32_t)cbvh_w4_popcount(tails->running) > leave) {
+        for (uint32_t turn = tails->running; turn; turn &= turn - 1u) { /* not unrolled: one step's code */
+            const uint32_t k = cbvh_lowest_lane(turn);
+            struct cbvh_stream_tail *restrict t = &tails->tail[k];
+            float *batch_tmax = &b->box_ray[t->ray][CBVH_LANE_TMAX];
+            if (!CBVH_LIKELY(*batch_tmax == t->walk.tmax)) {
+                if (*batch_tmax < t->walk.tmax) { /* a closer hit elsewhere, or (any hit) the ray occluded */
+                    t->walk.tmax = *batch_tmax;
+                    if (!mode.any)
+                        t->best = b->best[t->ray];
+                } else if (!mode.any) { /* this tail's hit is the nearest */
+                    stream_tail_give(b, t);
+                }
+            }
+            const enum cbvh_walk_step_result step =
+                cbvh_walk_step(f, layout, &b->ctx[t->ray], mode, NULL, counting, &t->walk, &t->best);
+            if (step == CBVH_WALK_MORE) {
+                /* the tail's next node or leaf is fetched while the other tails step */
+                if (layout == CBVH_LAYOUT_WIDE4 && !cbvh_w4_ref_is_leaf(t->walk.r))
+                    CBVH_PREFETCH(cbvh_w4_node(f->nodes, t->walk.r));
+                else if (layout == CBVH_LAYOUT_WIDE4)
+                    CBVH_PREFETCH(cbvh_indices_entry(f->triangles, (int)f->triangle_encoding,
+                                                     cbvh_w4_ref_first(t->walk.r)));
+                continue;
+            }
+            if (step == CBVH_WALK_HIT) {
+                occluded[b->ray_index[t->ray]] = 1;
+                *batch_tmax = -1.0f;
+                b->shrinks++;
+            } else if (!mode.any) {
+                stream_tail_give(b, t);
+            }
+            *visited += t->walk.visited;
+            *tested += t->walk.tested;
+            tails->running &= ~(1u << k);
+        }
     }
+}
+
+/* stream_tails_run as a function of its own per layout and query kind (and per file: each instruction
+ * set's), which the batch walk calls from two places: inlined, the tails' walk would be compiled into
+ * every call (five times the code, four times the compile time). */
+#define STREAM_TAILS_INSTANCE(name, layout_, any_)                                                           \
+    CBVH_NOINLINE void name(const struct cbvh_file *f, struct cbvh_stream_batch *b, int scalar,              \
+                            int counting, uint32_t leave, uint8_t *occluded, uint64_t *visited,              \
+                            uint64_t *tested)                                                                \
+    {                                                                                                        \
+        const struct cbvh_walk_mode mode = {.order = CBVH_WALK_SORTED, .any = any_, .scalar = scalar};       \
+        stream_tails_run(f, layout_, b, mode, counting, leave, occluded, visited, tested);                   \
+    }
+STREAM_TAILS_INSTANCE(stream_tails_wide4_closest, CBVH_LAYOUT_WIDE4, 0)
+STREAM_TAILS_INSTANCE(stream_tails_wide4_any, CBVH_LAYOUT_WIDE4, 1)
+STREAM_TAILS_INSTANCE(stream_tails_binary_closest, CBVH_LAYOUT_BINARY, 0)
+STREAM_TAILS_INSTANCE(stream_tails_binary_any, CBVH_LAYOUT_BINARY, 1)
+#undef STREAM_TAILS_INSTANCE
+
+/* The instance of stream_tails_run for `layout` and `any` (constants in every caller). */
+CBVH_KERNEL void stream_tails(const struct cbvh_file *f, const uint32_t layout, struct cbvh_stream_batch *b,
+                              const int any, int scalar, int counting, uint32_t leave, uint8_t *occluded,
+                              uint64_t *visited, uint64_t *tested)
+{
+    if (layout == CBVH_LAYOUT_WIDE4)
+        (any ? stream_tails_wide4_any : stream_tails_wide4_closest)(f, b, scalar, counting, leave, occluded,
+                                                                    visited, tested);
+    else
+        (any ? stream_tails_binary_any : stream_tails_binary_closest)(f, b, scalar, counting, leave, occluded,
+                                                                      visited, tested);
+}
+
+/* Ray r of the batch starts a tail on the subtree of node `root` (whose box the batch tested), after the
+ * running tails made room for it. */
+CBVH_KERNEL void stream_tail_start(const struct cbvh_file *restrict f, const uint32_t layout,
+                                   struct cbvh_stream_batch *restrict b, uint32_t r, cbvh_ref root)
+{
+    struct cbvh_stream_tails *restrict tails = b->tails;
+    const uint32_t k = cbvh_lowest_lane(~tails->running & ((1u << CBVH_STREAM_TAILS) - 1u));
+    struct cbvh_stream_tail *restrict t = &tails->tail[k];
+    t->ray = r;
+    t->best = b->best[r];
+    cbvh_walk_begin(f, layout, &b->ctx[r], root, CBVH_NO_BOX, NULL, b->box_ray[r][CBVH_LANE_TMAX], &t->walk);
+    tails->running |= 1u << k;
+    if (layout == CBVH_LAYOUT_WIDE4) /* the batch tested its box in its parent: not yet fetched */
+        CBVH_PREFETCH(cbvh_w4_node(f->nodes, root));
 }
 
 /* Ray r of the batch, whose test of triangle k found `hit` at t (u, v): an occlusion, or a closer best
@@ -186,7 +275,6 @@ CBVH_KERNEL void stream_walk(const struct cbvh_file *restrict f, const uint32_t 
 {
     /* the scalar node kernel (the fallback, and its test) comes with scalar leaves */
     const int simd_leaves = node_test != cbvh_stream_node_scalar;
-    cbvh_query_stats solo = {0, 0};
     const struct cbvh_slab_select sel = cbvh_slab_select_of(octant);
     uint16_t *restrict list_ray = b->list_ray;
     float *restrict list_entry = b->list_entry;
@@ -232,8 +320,11 @@ CBVH_KERNEL void stream_walk(const struct cbvh_file *restrict f, const uint32_t 
         } else if (n <= CBVH_STREAM_SOLO || top + CBVH_TREE_WIDTH * n > b->list_capacity) {
             /* Too few rays left to share the nodes below, or no room for their lists: each finishes the
              * subtree on its own, with the single-ray walk and its current tmax. */
-            for (uint32_t j = 0; j < n; j++)
-                solo_tail(f, b, list_ray[start + j], r, any, occluded, counting ? &solo : NULL);
+            for (uint32_t j = 0; j < n; j++) {
+                stream_tails(f, layout, b, any, !simd_leaves, counting, CBVH_STREAM_TAILS - 1u, occluded, &nv,
+                             &nt);
+                stream_tail_start(f, layout, b, list_ray[start + j], r);
+            }
         } else {
             const uint32_t k = cbvh_tree_children(f, layout, r, octant, c);
             stream_boxes_of(f, layout, sel, c, k, &boxes);
@@ -273,8 +364,9 @@ CBVH_KERNEL void stream_walk(const struct cbvh_file *restrict f, const uint32_t 
                 n = stream_still_in_reach(b, list_ray + start, list_entry + start, n);
         }
     }
-    *visited += nv + solo.nodes_visited;
-    *tested += nt + solo.triangles_tested;
+    stream_tails(f, layout, b, any, !simd_leaves, counting, 0, occluded, &nv, &nt);
+    *visited += nv;
+    *tested += nt;
 }
 
 /* The wide layout's stream walks compiled for AVX2 (stream_avx2.c), for CPUs that have it: eight-lane leaf
