@@ -98,6 +98,12 @@ static inline void cbvh_triangle_indices(const struct cbvh_file *f, uint32_t tri
     cbvh_indices_decode(f->triangles, (int)f->triangle_encoding, tri, idx);
 }
 
+/* Where vertex v's coordinates start (for prefetching). */
+static inline const uint8_t *cbvh_vertex_address(const struct cbvh_file *f, uint32_t v)
+{
+    return (const uint8_t *)f->vertices + (f->vertex_encoding == CBVH_VERTS_F32 ? 12u : 6u) * (size_t)v;
+}
+
 /* Vertex index -> position, decoded exactly as the cooker decoded it. */
 static inline void cbvh_vertex_position(const struct cbvh_file *f, uint32_t v, float p[3])
 {

@@ -34,7 +34,8 @@ enum { CBVH_LANE_OX, CBVH_LANE_OY, CBVH_LANE_OZ, CBVH_LANE_TMIN, CBVH_LANE_RX, C
 struct cbvh_stream_tail {
     struct cbvh_walk_state walk;
     struct cbvh_best_hit best;
-    uint32_t ray; /* batch position */
+    uint32_t ray;     /* batch position */
+    cbvh_ref fetched; /* the leaf whose vertices were last requested (stream_walk.h) */
 };
 
 struct cbvh_stream_tails {

@@ -60,6 +60,18 @@ CBVH_KERNEL void stream_tails_run(const struct cbvh_file *restrict f, const uint
                     stream_tail_give(b, t);
                 }
             }
+            if (layout == CBVH_LAYOUT_WIDE4 && cbvh_w4_ref_is_leaf(t->walk.r) && t->fetched != t->walk.r &&
+                !f->quads) {
+                /* a leaf's vertices, in leaf order, lie close together: request the first triangle's and
+                 * the next cache lines, and test the leaf at the tail's next turn */
+                uint32_t idx[3];
+                t->fetched = t->walk.r;
+                cbvh_triangle_indices(f, cbvh_w4_ref_first(t->walk.r), idx);
+                const uint8_t *v = cbvh_vertex_address(f, idx[0]);
+                CBVH_PREFETCH(v);
+                CBVH_PREFETCH(v + 64);
+                continue;
+            }
             const enum cbvh_walk_step_result step =
                 cbvh_walk_step(f, layout, &b->ctx[t->ray], mode, NULL, counting, &t->walk, &t->best);
             if (step == CBVH_WALK_MORE) {
@@ -124,6 +136,7 @@ CBVH_KERNEL void stream_tail_start(const struct cbvh_file *restrict f, const uin
     const uint32_t k = cbvh_lowest_lane(~tails->running & ((1u << CBVH_STREAM_TAILS) - 1u));
     struct cbvh_stream_tail *restrict t = &tails->tail[k];
     t->ray = r;
+    t->fetched = CBVH_W4_LEAF_BIT - 1u; /* no leaf */
     t->best = b->best[r];
     cbvh_walk_begin(f, layout, &b->ctx[r], root, CBVH_NO_BOX, NULL, b->box_ray[r][CBVH_LANE_TMAX], &t->walk);
     tails->running |= 1u << k;
