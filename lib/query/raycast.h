@@ -21,14 +21,6 @@ void cbvh_closest(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray, cbv
 int cbvh_any(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray, cbvh_traversal traversal,
              cbvh_query_stats *stats);
 
-/* Sorted walks of the subtree `root` only, whose box the caller found
- * entered (the streams' per-ray tails, stream.c): best and the result are as
- * for the whole tree restricted to the subtree's triangles. Not for box_halve
- * rays. */
-void cbvh_closest_subtree(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray, cbvh_ref root,
-                          struct cbvh_best_hit *best, cbvh_query_stats *stats);
-int cbvh_any_subtree(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray, cbvh_ref root, cbvh_query_stats *stats);
-
 /* The wide layout's walk kernels (the binary layout has one, scalar). */
 enum cbvh_walk_kernel {
     CBVH_WALK_KERNEL_BEST,   /* the fastest the build and the CPU have: AVX2, else SSE2, else scalar */

@@ -68,7 +68,7 @@ int cbvh_walk_kernel(void)
  * it, cbvh_closest's frame was 11.6 KiB; -fstack-usage); the call costs one jump per ray. The kernel is
  * chosen before either wide instance is entered, so the AVX2 walk never runs under the SSE2 one's frame
  * (3.2 KiB and six saved registers a ray when the choice was made inside it). walk_##name walks the
- * subtree `root` (whose box the caller tested) or, when `whole`, the whole tree, for the file's layout. */
+ * whole tree for the file's layout. */
 #define WALK_INSTANCE(name, order_, any_)                                                                    \
     CBVH_NOINLINE int walk_##name##_wide4(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray,         \
                                           cbvh_ref start, const int scalar, struct cbvh_best_hit *best,      \
@@ -84,18 +84,17 @@ int cbvh_walk_kernel(void)
         const struct cbvh_walk_mode mode = {.order = order_, .any = any_};                                   \
         return cbvh_walk(f, CBVH_LAYOUT_BINARY, ray, start, start_box, mode, NULL, best, stats);             \
     }                                                                                                        \
-    static int walk_##name(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray, const int whole,       \
-                           cbvh_ref root, struct cbvh_best_hit *best, cbvh_query_stats *stats)               \
+    static int walk_##name(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray,                        \
+                           struct cbvh_best_hit *best, cbvh_query_stats *stats)                              \
     {                                                                                                        \
         const uint32_t layout = f->layout;                                                                   \
-        const cbvh_ref start = whole ? cbvh_tree_root(f, layout) : root;                                     \
+        const cbvh_ref start = cbvh_tree_root(f, layout);                                                    \
         if (layout == CBVH_LAYOUT_WIDE4) {                                                                   \
             const int kernel = walk_kernel();                                                                \
             WALK_AVX2_CALL(name)                                                                             \
             return walk_##name##_wide4(f, ray, start, kernel == CBVH_WALK_KERNEL_SCALAR, best, stats);       \
         }                                                                                                    \
-        return walk_##name##_binary(f, ray, start, whole ? cbvh_tree_root_box(f, layout) : CBVH_NO_BOX,      \
-                                    best, stats);                                                            \
+        return walk_##name##_binary(f, ray, start, cbvh_tree_root_box(f, layout), best, stats);              \
     }
 CBVH_WALK_INSTANCES(WALK_INSTANCE)
 #undef WALK_INSTANCE
@@ -106,15 +105,15 @@ void cbvh_closest(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray, cbv
                   struct cbvh_best_hit *best, cbvh_query_stats *stats)
 {
     if (ray->box_halve) { /* raycast.h: the sorted walk, whose set-up halves the box test */
-        walk_closest_sorted(f, ray, 1, 0, best, stats);
+        walk_closest_sorted(f, ray, best, stats);
         return;
     }
     switch (traversal) {
     case CBVH_TRAVERSAL_UNSORTED:
-        walk_closest_unsorted(f, ray, 1, 0, best, stats);
+        walk_closest_unsorted(f, ray, best, stats);
         break;
     case CBVH_TRAVERSAL_DISTANCE:
-        walk_closest_distance(f, ray, 1, 0, best, stats);
+        walk_closest_distance(f, ray, best, stats);
         break;
     case CBVH_TRAVERSAL_STACKLESS:
         if (f->layout == CBVH_LAYOUT_BINARY) {
@@ -123,7 +122,7 @@ void cbvh_closest(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray, cbv
         }
         /* fall through */
     default:
-        walk_closest_sorted(f, ray, 1, 0, best, stats);
+        walk_closest_sorted(f, ray, best, stats);
         break;
     }
 }
@@ -132,28 +131,17 @@ int cbvh_any(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray, cbvh_tra
              cbvh_query_stats *stats)
 {
     if (ray->box_halve)
-        return walk_any_sorted(f, ray, 1, 0, NULL, stats);
+        return walk_any_sorted(f, ray, NULL, stats);
     switch (traversal) {
     case CBVH_TRAVERSAL_UNSORTED:
-        return walk_any_unsorted(f, ray, 1, 0, NULL, stats);
+        return walk_any_unsorted(f, ray, NULL, stats);
     case CBVH_TRAVERSAL_DISTANCE:
-        return walk_any_distance(f, ray, 1, 0, NULL, stats);
+        return walk_any_distance(f, ray, NULL, stats);
     case CBVH_TRAVERSAL_STACKLESS:
         if (f->layout == CBVH_LAYOUT_BINARY)
             return cbvh_any_stackless(f, ray, stats);
         /* fall through */
     default:
-        return walk_any_sorted(f, ray, 1, 0, NULL, stats);
+        return walk_any_sorted(f, ray, NULL, stats);
     }
-}
-
-void cbvh_closest_subtree(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray, cbvh_ref root,
-                          struct cbvh_best_hit *best, cbvh_query_stats *stats)
-{
-    walk_closest_sorted(f, ray, 0, root, best, stats);
-}
-
-int cbvh_any_subtree(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray, cbvh_ref root, cbvh_query_stats *stats)
-{
-    return walk_any_sorted(f, ray, 0, root, NULL, stats);
 }
