@@ -207,6 +207,18 @@ CBVH_KERNEL uint32_t walk_w4_test_sse2(const uint8_t *restrict node, const struc
 }
 #endif
 
+/* A wide node's children lie together: its inner children are consecutive nodes from its first child,
+ * and its leaves' triangles consecutive from its first triangle. Requested as soon as the node is read,
+ * the first child's node and the first leaf's triangle entries arrive while the node's boxes are tested
+ * (the walk goes down one of them next, mostly), not after: on the 871K-triangle dragon, whose nodes and
+ * triangles do not fit in the caches, 8-14% faster incoherent and coherent rays. A node without inner
+ * children or without leaves requests a line it will not read (a prefetch never faults). */
+CBVH_KERNEL void walk_w4_prefetch_children(const struct cbvh_file *restrict f, const uint8_t *restrict node)
+{
+    CBVH_PREFETCH(cbvh_w4_node(f->nodes, cbvh_w4_first_child(node)));
+    CBVH_PREFETCH(cbvh_indices_entry(f->triangles, (int)f->triangle_encoding, cbvh_w4_first_triangle(node)));
+}
+
 /* An entry of a walk's stack: a child still to visit and where the ray enters its box. */
 struct cbvh_walk_entry {
     cbvh_ref ref;
@@ -262,6 +274,7 @@ CBVH_KERNEL int walk_w4_descend(const struct cbvh_file *restrict f, cbvh_ref r,
     const uint64_t meta = cbvh_w4_meta(node);
     const uint32_t used = cbvh_w4_used(meta);
     _Alignas(16) float e[CBVH_W4_WIDTH];
+    walk_w4_prefetch_children(f, node);
     if (boxes_tested) /* NULL when the caller wants no statistics: a predictable branch for a table lookup */
         *boxes_tested += cbvh_w4_popcount(used);
     const uint32_t hits = walk_w4_test_sse2(node, w, tmax, e) & used;
@@ -320,6 +333,7 @@ CBVH_KERNEL uint32_t walk_w4_children_hit(const struct cbvh_file *restrict f, cb
     const uint32_t used = cbvh_w4_used(meta);
     float e[CBVH_W4_WIDTH];
     uint32_t hits = 0;
+    walk_w4_prefetch_children(f, node);
     *boxes_tested += cbvh_w4_popcount(used);
 #ifdef CBVH_HAVE_SIMD
     if (!float_boxes && !scalar) {
