@@ -29,8 +29,8 @@
 #define STREAM_TAILS_BYTES sizeof(struct cbvh_stream_tails)
 
 /* The stream walk per layout and query kind, each a function of its own so that a frame holds one walk's
- * stack, not the sum of all (-fstack-usage); `counting` (whether the solo tails count) is read at run
- * time. */
+ * stack, not the sum of all (-fstack-usage); `counting` (whether the tails count the boxes they test) is
+ * read at run time. */
 #define STREAM_INSTANCE(name, layout, any)                                                                   \
     CBVH_NOINLINE void name(const struct cbvh_file *f, struct cbvh_stream_batch *b, uint32_t octant,         \
                             cbvh_stream_node_fn node_test, int counting, uint8_t *occluded,                  \

@@ -9,8 +9,8 @@
 #include "query/raycast.h"
 #include "query/stream.h"
 
-/* A batch node with at most this many live rays hands them to the single-ray
- * walk: below it the batch would mostly carry one ray per node, paying the
+/* A batch node with at most this many live rays hands them to the tails (the single-ray
+ * walk's steps, below): below it the batch would mostly carry one ray per node, paying the
  * partition and stack bookkeeping without sharing any node fetch. */
 #ifndef CBVH_STREAM_SOLO
 #define CBVH_STREAM_SOLO 4
