@@ -98,20 +98,22 @@ static inline void cbvh_triangle_indices(const struct cbvh_file *f, uint32_t tri
     cbvh_indices_decode(f->triangles, (int)f->triangle_encoding, tri, idx);
 }
 
-/* Where vertex v's coordinates start (for prefetching). */
-static inline const uint8_t *cbvh_vertex_address(const struct cbvh_file *f, uint32_t v)
+/* Where vertex v's three coordinates start: three floats, or three grid coordinates (u16). */
+static inline const void *cbvh_vertex_address(const struct cbvh_file *f, uint32_t v)
 {
-    return (const uint8_t *)f->vertices + (f->vertex_encoding == CBVH_VERTS_F32 ? 12u : 6u) * (size_t)v;
+    if (f->vertex_encoding == CBVH_VERTS_F32)
+        return (const float *)f->vertices + 3u * (size_t)v;
+    return (const uint16_t *)f->vertices + 3u * (size_t)v;
 }
 
 /* Vertex index -> position, decoded exactly as the cooker decoded it. */
 static inline void cbvh_vertex_position(const struct cbvh_file *f, uint32_t v, float p[3])
 {
     if (f->vertex_encoding == CBVH_VERTS_F32) {
-        const float *q = (const float *)f->vertices + 3u * (size_t)v;
+        const float *q = (const float *)cbvh_vertex_address(f, v);
         p[0] = q[0]; p[1] = q[1]; p[2] = q[2];
     } else {
-        const uint16_t *q = (const uint16_t *)f->vertices + 3u * (size_t)v;
+        const uint16_t *q = (const uint16_t *)cbvh_vertex_address(f, v);
         p[0] = cbvh_dequantize(q[0], f->grid_origin[0], f->grid_scale[0]);
         p[1] = cbvh_dequantize(q[1], f->grid_origin[1], f->grid_scale[1]);
         p[2] = cbvh_dequantize(q[2], f->grid_origin[2], f->grid_scale[2]);

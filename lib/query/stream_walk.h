@@ -62,12 +62,12 @@ CBVH_KERNEL void stream_tails_run(const struct cbvh_file *restrict f, const uint
             }
             if (layout == CBVH_LAYOUT_WIDE4 && cbvh_w4_ref_is_leaf(t->walk.r) && t->fetched != t->walk.r &&
                 !f->quads) {
-                /* a leaf's vertices, in leaf order, lie close together: request the first triangle's and
-                 * the next cache lines, and test the leaf at the tail's next turn */
+                /* a leaf's vertices, numbered in leaf order, lie close together: request the line of its
+                 * first triangle's first vertex and the next, and test the leaf at the tail's next turn */
                 uint32_t idx[3];
                 t->fetched = t->walk.r;
                 cbvh_triangle_indices(f, cbvh_w4_ref_first(t->walk.r), idx);
-                const uint8_t *v = cbvh_vertex_address(f, idx[0]);
+                const uint8_t *v = (const uint8_t *)cbvh_vertex_address(f, idx[0]);
                 CBVH_PREFETCH(v);
                 CBVH_PREFETCH(v + 64);
                 continue;
