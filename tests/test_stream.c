@@ -23,6 +23,9 @@
 
 /* Kernel settings of cbvh_stream_set_kernel: best, scalar, SSE2. */
 static const int kernels[3] = {0, 1, 2};
+/* With each, the tails' setting (cbvh_stream_set_tails): the best kernel runs four tails at once, which
+ * the test meshes (small: by default one tail) would not; the scalar kernel one, and SSE2 the default. */
+static const int tail_settings[3] = {CBVH_STREAM_TAILS, 1, 0};
 
 /* Rays of every kind, with invalid ones mixed in every seventh slot. */
 static cbvh_ray *make_rays(const ref_fixture *fx, size_t count, uint64_t seed, int coherent)
@@ -105,6 +108,7 @@ static void check_stream(const ref_fixture *fx, const cbvh_ray *rays, size_t cou
     assert_non_null(occ);
     for (int k = 0; k < 3; k++) {
         cbvh_stream_set_kernel(kernels[k]);
+        cbvh_stream_set_tails(tail_settings[k]);
         memset(hits, 0xAB, sizeof(cbvh_hit) * (count + 1));
         memset(occ, 0xAB, count + 1);
         cbvh_query_stats st = {0, 0};
@@ -131,6 +135,7 @@ static void check_stream(const ref_fixture *fx, const cbvh_ray *rays, size_t cou
         check_scratch(fx, rays, count, hits, occ);
     }
     cbvh_stream_set_kernel(0);
+    cbvh_stream_set_tails(0);
     free(hits);
     free(occ);
 }

@@ -167,6 +167,7 @@ static void stream_run(const struct cbvh_file *f, const cbvh_ray *rays, size_t c
                        uint8_t *restrict octant)
 {
     const cbvh_stream_node_fn node_test = cbvh_stream_node_kernel();
+    batch->tails->max = cbvh_stream_tails_for(f);
     const uint32_t window_size = CBVH_STREAM_WINDOW_PER_RAY * batch->capacity;
     struct cbvh_ray_ctx ctx;
     uint64_t visited = 0, tested = 0;

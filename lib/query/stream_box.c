@@ -1,4 +1,5 @@
-/* stream_box.c: the scalar batch node test and the run-time choice of the batch node kernel. */
+/* stream_box.c: the scalar batch node test, and the run-time choices of the batch node kernel and of the
+ * tails. */
 #ifdef HAVE_CONFIG_H
 #include "config.h"
 #endif
@@ -36,6 +37,23 @@ static atomic_int stream_kernel_setting;
 void cbvh_stream_set_kernel(int which)
 {
     atomic_store_explicit(&stream_kernel_setting, which, memory_order_relaxed);
+}
+
+static atomic_int stream_tails_setting;
+
+void cbvh_stream_set_tails(int tails)
+{
+    atomic_store_explicit(&stream_tails_setting, tails, memory_order_relaxed);
+}
+
+uint32_t cbvh_stream_tails_for(const struct cbvh_file *f)
+{
+    const int setting = atomic_load_explicit(&stream_tails_setting, memory_order_relaxed);
+    if (setting != 0)
+        return setting == 1 ? 1u : CBVH_STREAM_TAILS;
+    const size_t vertex_bytes = (size_t)((const uint8_t *)cbvh_vertex_address(f, f->info.vertex_count) -
+                                         (const uint8_t *)f->vertices);
+    return vertex_bytes <= CBVH_STREAM_CACHED_VERTEX_BYTES ? 1u : CBVH_STREAM_TAILS;
 }
 
 cbvh_stream_node_fn cbvh_stream_node_kernel(void)

@@ -46,6 +46,7 @@ CBVH_KERNEL void stream_tails_run(const struct cbvh_file *restrict f, const uint
                                   uint64_t *restrict visited, uint64_t *restrict tested)
 {
     struct cbvh_stream_tails *restrict tails = b->tails;
+    const int request_vertices = layout == CBVH_LAYOUT_WIDE4 && !f->quads && tails->max > 1u;
     while ((uint32_t)cbvh_w4_popcount(tails->running) > leave) {
         for (uint32_t turn = tails->running; turn; turn &= turn - 1u) { /* not unrolled: one step's code */
             const uint32_t k = cbvh_lowest_lane(turn);
@@ -60,8 +61,7 @@ CBVH_KERNEL void stream_tails_run(const struct cbvh_file *restrict f, const uint
                     stream_tail_give(b, t);
                 }
             }
-            if (layout == CBVH_LAYOUT_WIDE4 && cbvh_w4_ref_is_leaf(t->walk.r) && t->fetched != t->walk.r &&
-                !f->quads) {
+            if (request_vertices && cbvh_w4_ref_is_leaf(t->walk.r) && t->fetched != t->walk.r) {
                 /* a leaf's vertices, numbered in leaf order, lie close together: request the line of its
                  * first triangle's first vertex and the next, and test the leaf at the tail's next turn */
                 uint32_t idx[3];
@@ -334,7 +334,7 @@ CBVH_KERNEL void stream_walk(const struct cbvh_file *restrict f, const uint32_t 
             /* Too few rays left to share the nodes below, or no room for their lists: each finishes the
              * subtree on its own, with the single-ray walk and its current tmax. */
             for (uint32_t j = 0; j < n; j++) {
-                stream_tails(f, layout, b, any, !simd_leaves, counting, CBVH_STREAM_TAILS - 1u, occluded, &nv,
+                stream_tails(f, layout, b, any, !simd_leaves, counting, b->tails->max - 1u, occluded, &nv,
                              &nt);
                 stream_tail_start(f, layout, b, list_ray[start + j], r);
             }
