@@ -96,9 +96,9 @@ fi
 # Tests: the main build's `make check`, then five independent builds in folders of their own: ASan + UBSan
 # (with the fuzz corpora) and ThreadSanitizer (tests/sanitize.sh), the runtime-only build, the Windows build
 # under wine (tests/mingw_wine.sh) and distcheck's. They run in two lanes at once (CBVH_CI_LANES=1: one
-# after another), the second (the sanitizers, then the runtime-only build) from the start: each build has
-# long one-core stretches (configure, links, a last long test, wine's start) that the other lane fills,
-# which on a two-core machine saves minutes.
+# after another): the main build, its check and distcheck; and from the start the sanitizers, the
+# runtime-only build and the Windows one. Each build has long one-core stretches (configure, links, a last
+# long test, wine's start) that the other lane fills, which on a two-core machine saves minutes.
 results=$build/ci-results # one line per phase: pass, fail or skip, and its name
 : >"$results"
 
@@ -168,7 +168,7 @@ distcheck() {
 # The second lane starts now, beside the main build.
 lane=
 if [ "${CBVH_CI_LANES:-2}" -ge 2 ]; then
-    (sanitizers; runtime_only) >"$build/lane2.log" 2>&1 &
+    (sanitizers; runtime_only; windows) >"$build/lane2.log" 2>&1 &
     lane=$!
 fi
 
@@ -195,13 +195,13 @@ fi
 echo "make check: $pass test programs passed in $(($(date +%s) - t0)) s"
 
 distcheck
-windows
 if [ -n "$lane" ]; then
     wait "$lane" || true
     cat "$build/lane2.log"
 else
     sanitizers
     runtime_only
+    windows
 fi
 pass=$((${pass:-0} + $(grep -c '^pass ' "$results" || true)))
 fail=$((${fail:-0} + $(grep -c '^fail ' "$results" || true)))
