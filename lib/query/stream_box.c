@@ -6,6 +6,7 @@
 
 #include <stdatomic.h>
 
+#include "common/encodings.h"
 #include "query/ray_box.h"
 #include "query/stream.h"
 
@@ -51,8 +52,8 @@ uint32_t cbvh_stream_tails_for(const struct cbvh_file *f)
     const int setting = atomic_load_explicit(&stream_tails_setting, memory_order_relaxed);
     if (setting != 0)
         return setting == 1 ? 1u : CBVH_STREAM_TAILS;
-    const size_t vertex_bytes = (size_t)((const uint8_t *)cbvh_vertex_address(f, f->info.vertex_count) -
-                                         (const uint8_t *)f->vertices);
+    const uint64_t vertex_bytes =
+        (uint64_t)f->info.vertex_count * cbvh_element_size(CBVH_SECTION_VERTICES, f->vertex_encoding);
     return vertex_bytes <= CBVH_STREAM_CACHED_VERTEX_BYTES ? 1u : CBVH_STREAM_TAILS;
 }
 
