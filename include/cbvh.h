@@ -547,8 +547,10 @@ CBVH_API cbvh_result cbvh_occluded_with(const cbvh_file *file, const cbvh_ray *r
  * dequantized once per batch visit and each live ray tested against all its
  * children there, the rays entering a child listed for it. A ray left alone
  * at a node (incoherent rays, soon after the root) finishes that subtree on
- * the single-ray walk, four such rays at a time, a node or leaf each in turn,
- * so that the CPU overlaps their memory fetches. Results equal cbvh_raycast /
+ * the single-ray walk: on a mesh whose vertices take more than 512 KiB, four
+ * such rays at a time, a node or leaf each in turn, so that the CPU overlaps
+ * their memory fetches; on a smaller one, which stays in the caches, one at a
+ * time. Results equal cbvh_raycast /
  * cbvh_occluded ray by ray. hits[i] (occluded[i]: 0 or 1) receives ray i's
  * result. Uses no heap memory: rays go in batches of 24 of one ray octant,
  * held with the four walks' stacks on the call's stack. Stack use, measured
