@@ -226,36 +226,48 @@ struct cbvh_walk_entry {
 };
 
 #ifdef CBVH_HAVE_SIMD
+/* Bit s of a 4-bit mask into bit 0 of byte s: the shifts by 0, 7, 14 and 21 of the multiplier put bit s at
+ * bit 8 s (and the others where the mask clears them, without carries). */
+static inline uint32_t walk_w4_bits_to_bytes(uint32_t mask4)
+{
+    return mask4 * 0x00204081u & 0x01010101u;
+}
+
+/* Bytes 0-3 of x into lanes 0-3, zero-extended. */
+CBVH_KERNEL __m128i walk_w4_byte_lanes(uint32_t x)
+{
+#if defined(__AVX2__)
+    return _mm_cvtepu8_epi32(_mm_cvtsi32_si128((int)x));
+#else
+    const __m128i zero = _mm_setzero_si128();
+    return _mm_unpacklo_epi16(_mm_unpacklo_epi8(_mm_cvtsi32_si128((int)x), zero), zero);
+#endif
+}
+
 /* The references of a node's four slots at once, lane s for slot s: cbvh_w4_child_ref of each used slot
- * (unused slots: a value to ignore), without a branch on which are leaves. Each lane counts what its
- * slot adds before the next (low half: a leaf's triangles; high half: 1 for an internal slot); the sums
- * over the lanes before each (at most 32 triangles and 3 nodes: no carry) are its offsets from the
- * node's first triangle and first child. */
+ * (unused slots: a value to ignore), without a branch on which are leaves. In the bytes of a word, one a
+ * slot: each leaf's triangle count and each internal slot's 1; multiplied by 0x01010100, byte s holds the
+ * sum over the slots before s (at most 3 x 8 triangles: no carry), slot s's offset from the node's first
+ * triangle or first child. */
 CBVH_KERNEL __m128i walk_w4_refs(const uint8_t *restrict node, uint64_t meta)
 {
     const uint32_t m = (uint32_t)meta;
-    uint32_t nibbles = m & 0xFFFFu; /* nibble s (a leaf's count - 1, else 0) into byte s */
-    nibbles = (nibbles | nibbles << 8) & 0x00FF00FFu;
-    nibbles = (nibbles | nibbles << 4) & 0x0F0F0F0Fu;
-    const __m128i zero = _mm_setzero_si128();
-    const __m128i counts = _mm_unpacklo_epi16(_mm_unpacklo_epi8(_mm_cvtsi32_si128((int)nibbles), zero), zero);
-    const __m128i bits = _mm_set1_epi32((int)m);
-    const __m128i used_bit = _mm_setr_epi32(1 << 16, 1 << 17, 1 << 18, 1 << 19);
-    const __m128i inner_bit = _mm_setr_epi32(1 << 20, 1 << 21, 1 << 22, 1 << 23);
-    const __m128i used = _mm_cmpeq_epi32(_mm_and_si128(bits, used_bit), used_bit); /* all ones or 0 */
-    const __m128i inner = _mm_cmpeq_epi32(_mm_and_si128(bits, inner_bit), inner_bit);
-    const __m128i step = _mm_add_epi32(_mm_sub_epi32(counts, _mm_andnot_si128(inner, used)),
-                                       _mm_and_si128(inner, _mm_set1_epi32(1 << 16)));
-    __m128i before = _mm_slli_si128(step, 4); /* lanes 0, s0, s1, s2: then the sums, two steps */
-    before = _mm_add_epi32(before, _mm_slli_si128(before, 4));
-    before = _mm_add_epi32(before, _mm_slli_si128(before, 8));
+    uint32_t minus_one = m & 0xFFFFu; /* nibble s (a leaf's count - 1, else 0) into byte s */
+    minus_one = (minus_one | minus_one << 8) & 0x00FF00FFu;
+    minus_one = (minus_one | minus_one << 4) & 0x0F0F0F0Fu;
+    const uint32_t inner = walk_w4_bits_to_bytes(cbvh_w4_internal(meta));
+    const uint32_t leaves = walk_w4_bits_to_bytes(cbvh_w4_used(meta) & ~cbvh_w4_internal(meta));
+    const uint32_t triangles_before = (minus_one + leaves) * 0x01010100u;
+    const uint32_t nodes_before = inner * 0x01010100u;
     const __m128i inner_ref =
-        _mm_add_epi32(_mm_set1_epi32((int)cbvh_w4_first_child(node)), _mm_srli_epi32(before, 16));
-    const __m128i leaf_ref = _mm_or_si128(
-        _mm_add_epi32(_mm_set1_epi32((int)cbvh_w4_first_triangle(node)),
-                      _mm_and_si128(before, _mm_set1_epi32(0xFFFF))),
-        _mm_or_si128(_mm_slli_epi32(counts, CBVH_W4_COUNT_SHIFT), _mm_set1_epi32((int)CBVH_W4_LEAF_BIT)));
-    return _mm_or_si128(_mm_and_si128(inner, inner_ref), _mm_andnot_si128(inner, leaf_ref));
+        _mm_add_epi32(_mm_set1_epi32((int)cbvh_w4_first_child(node)), walk_w4_byte_lanes(nodes_before));
+    const __m128i leaf_ref =
+        _mm_or_si128(_mm_add_epi32(_mm_set1_epi32((int)(cbvh_w4_first_triangle(node) | CBVH_W4_LEAF_BIT)),
+                                   walk_w4_byte_lanes(triangles_before)),
+                     _mm_slli_epi32(walk_w4_byte_lanes(minus_one), CBVH_W4_COUNT_SHIFT));
+    /* all ones in the lanes of internal slots: each byte 0 or 0xFF, then 0 or -1 as a lane */
+    const __m128i is_inner = _mm_srai_epi32(_mm_slli_epi32(walk_w4_byte_lanes(inner * 0xFFu), 24), 24);
+    return _mm_or_si128(_mm_and_si128(is_inner, inner_ref), _mm_andnot_si128(is_inner, leaf_ref));
 }
 
 /* The SIMD walks' step down the wide layout, in the node's order for the ray's octant or in slot order
