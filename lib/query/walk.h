@@ -209,22 +209,30 @@ CBVH_KERNEL uint32_t walk_w4_test_sse2(const uint8_t *restrict node, const struc
 
 /* A wide node's children lie together: its inner children are consecutive nodes from its first child, one
  * cache line each, and its leaves' triangles consecutive from its first triangle. Requested as soon as the
- * node is read, the four lines from the first child's and the first leaf's triangle entries arrive while
- * the node's boxes are tested, not after: the walk goes down one of them next, mostly, and pops another
- * soon. Four lines whatever the node holds (lines past its inner children, or past the array, are
- * requested and not read: a prefetch never faults) rather than the child popped next once the test
- * chose it: no instruction waits for the test, and the line is there whichever child comes next. On the
- * 871K-triangle dragon, whose nodes and triangles do not fit in the caches: the first child and the first
- * triangles, 8-14% faster incoherent and coherent rays; four lines rather than the first and the second
- * in visit order, another 12% (incoherent closest) and 17% (shadow any). */
+ * node is read, the four lines from the first child's and the lines of its leaves' triangle entries
+ * arrive while the node's boxes are tested, not after: the walk goes down one of them next, mostly, and
+ * pops another soon. Whatever the node holds (lines past its inner children or its leaves, or past the
+ * arrays, are requested and not read: a prefetch never faults), and not the child popped next once the
+ * test chose it: no instruction waits for the test, and the line is there whichever child comes next. On
+ * the 871K-triangle dragon, whose nodes and triangles do not fit in the caches (driver, best and median
+ * of 6-10 runs): the first child and the first triangles, 8-14% faster incoherent and coherent rays; four
+ * child lines rather than the first and the second in visit order, another 12% (incoherent closest) and
+ * 17% (shadow any); three lines of triangle entries rather than one, another 6% and 9%. A node's leaves
+ * hold at most 4 x 8 triangles, whose LOCAL8 blocks (28 bytes for 8) take at most 140 bytes: three lines
+ * from the first entry hold them but for the tail of the largest. */
+#define CBVH_W4_LEAF_ENTRY_LINES 3u
 CBVH_KERNEL void walk_w4_prefetch_children(const struct cbvh_file *restrict f, const uint8_t *restrict node)
 {
-    /* addresses as integers: the lines past the array are no object's */
+    /* addresses as integers: the lines past the arrays are no object's */
     const uintptr_t children = (uintptr_t)cbvh_w4_node(f->nodes, cbvh_w4_first_child(node));
+    const uintptr_t entries =
+        (uintptr_t)cbvh_indices_entry(f->triangles, (int)f->triangle_encoding, cbvh_w4_first_triangle(node));
     CBVH_UNROLL(4)
     for (uintptr_t k = 0; k < CBVH_W4_WIDTH; k++)
         CBVH_PREFETCH((const void *)(children + k * CBVH_W4_NODE_SIZE));
-    CBVH_PREFETCH(cbvh_indices_entry(f->triangles, (int)f->triangle_encoding, cbvh_w4_first_triangle(node)));
+    CBVH_UNROLL(3)
+    for (uintptr_t k = 0; k < CBVH_W4_LEAF_ENTRY_LINES; k++)
+        CBVH_PREFETCH((const void *)(entries + 64u * k));
 }
 
 /* An entry of a walk's stack: a child still to visit and where the ray enters its box. */
