@@ -96,8 +96,7 @@ static int compare_double(const void *a, const void *b)
     return (x > y) - (x < y);
 }
 
-/* Sorts values[0..n) and returns their median (n >= 1). */
-static double median_of(double *values, unsigned n)
+double bench_median(double *values, unsigned n)
 {
     qsort(values, n, sizeof *values, compare_double);
     return n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
@@ -122,7 +121,7 @@ double bench_run_median(const bench_job *job, unsigned threads, unsigned reps, d
     }
     if (runs)
         *runs = reps;
-    double median = median_of(times, reps);
+    double median = bench_median(times, reps);
     free(times);
     return median;
 }
@@ -144,7 +143,7 @@ double bench_open_median(const char *command, const char *path, unsigned reps, i
         else
             cbvh_close(f);
     }
-    return median_of(times, n);
+    return bench_median(times, n);
 }
 
 double bench_open_expanded(const char *command, const char *path, int cpu_clock, cbvh_file **out, int *status)

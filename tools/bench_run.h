@@ -45,6 +45,9 @@ double bench_run_once(const bench_job *job, unsigned threads, cbvh_query_stats *
  * runs made. Negative on failure. */
 double bench_run_median(const bench_job *job, unsigned threads, unsigned reps, double budget, unsigned *runs);
 
+/* Sorts values[0..n) and returns their median (n >= 1). */
+double bench_median(double *values, unsigned n);
+
 /* Opens and closes the cbvh file at `path` `reps` times (a failure is reported
  * as "cbvh COMMAND: PATH: ..." and its exit status stored in *status, else 0).
  * Returns the median seconds of an open (bench_clock(cpu_clock)). With keep

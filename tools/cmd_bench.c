@@ -31,10 +31,12 @@ static const char usage[] =
     "as games cast) for every traversal (sorted, unsorted, stackless, distance, batched stream\n"
     "in batches of 1024, and expanded: sorted on the file with cbvh_file_expand_triangles's\n"
     "copy), each the median of the repetitions, with nodes and triangles visited\n"
-    "per ray from a separate counted pass. The peers found at configure time (Embree 3 single\n"
-    "rays and 16-ray packets, default and robust; Bullet 3 quantized BVH) run on the same\n"
-    "triangles and rays: build time, memory per triangle, MRays/s, the ratio cbvh/peer, and\n"
-    "ray-by-ray agreement with cbvh's answers.\n"
+    "per ray from a separate counted pass. The engines of a row group (a ray set, query and\n"
+    "thread count; a shape set and thread count) are timed in turns, one run each per round,\n"
+    "so a slow spell of a shared machine moves them all and their ratios hold. The peers\n"
+    "found at configure time (Embree 3 single rays and 16-ray packets, default and robust;\n"
+    "Bullet 3 quantized BVH) run on the same triangles and rays: build time, memory per\n"
+    "triangle, MRays/s, the ratio cbvh/peer, and ray-by-ray agreement with cbvh's answers.\n"
     "Then shape queries as games ask them near a surface (shapes about 1% of the diagonal\n"
     "across, capsules along random directions): sphere, capsule and box sweeps moving 1.5% of\n"
     "the diagonal, and sphere, capsule and box overlaps, beside Bullet (convex casts and its\n"
@@ -539,80 +541,166 @@ typedef struct buffers {
     uint8_t *ref_occluded, *occluded;
 } buffers;
 
-/* Times a job on `threads` threads, the median of the repetitions; returns negative when the threads
- * cannot start. A reference engine (cbvh) first makes a whole pass, counted into *stats when not NULL, so
- * counting does not perturb the timing. Every pass leaves the answers for the agreement check. A peer
- * first runs a prefix of the queries; when all of them would take longer than the budget it is timed on
- * the prefix the budget allows (job->count is cut to it): Bullet's ray walk cannot stop at the first hit,
- * and takes minutes for a million rays on a large mesh. */
-static double time_job(bench_state *s, bench_job *job, size_t probe, unsigned threads, int reference,
-                       cbvh_query_stats *stats, unsigned *runs)
+/* A job timed beside others (time_jobs). */
+typedef struct timed_job {
+    bench_job job;
+    int reference;           /* a whole counted pass first (cbvh) rather than a probe */
+    cbvh_query_stats *stats; /* the reference pass's counters, or NULL */
+    unsigned runs;
+    double total;  /* seconds of the timed runs so far */
+    double *times; /* s->reps entries */
+} timed_job;
+
+/* Called once the first timed run of jobs[k] has left its answers (the jobs share answer buffers). */
+typedef void (*answered_fn)(void *ctx, int k, const bench_job *job);
+
+/* Times jobs[0..n) on `threads` threads, each the median of its runs, into seconds[k]; returns 0, or
+ * negative (reported) when the threads cannot start. First each job makes its set-up pass: a reference
+ * engine (cbvh) a whole pass, counted into its stats when not NULL, so counting does not perturb the
+ * timing; a peer a prefix of the queries, and when all of them would take longer than the budget it is
+ * timed on the prefix the budget allows (job.count is cut to it): Bullet's ray walk cannot stop at the
+ * first hit, and takes minutes for a million rays on a large mesh. Then up to s->reps rounds run every job
+ * once in turn, a job leaving the rounds once its runs took the budget: the engines compared in a row of
+ * the tables share the same stretches of time, so a slow spell of a shared machine (seconds long here,
+ * up to 2x) moves all of them rather than one, and their ratio holds. */
+static int time_jobs(bench_state *s, timed_job *jobs, int n, size_t probe, unsigned threads, double *seconds,
+                     answered_fn answered, void *ctx)
 {
-    size_t all = job->count;
-    double t = reference ? bench_run_once(job, threads, stats) : 0.0;
-    if (!reference && s->budget > 0.0f && all > probe) {
-        job->count = probe;
-        t = bench_run_once(job, threads, NULL);
-        double allowed = t > 0.0 ? (double)probe * s->budget / t : (double)all;
-        job->count = allowed >= (double)all ? all : allowed > probe ? (size_t)allowed : probe;
+    const unsigned reps = s->reps < 1 ? 1 : s->reps;
+    int status = 0;
+    for (int k = 0; k < n; k++) {
+        jobs[k].runs = 0;
+        jobs[k].total = 0.0;
+        jobs[k].times = malloc(reps * sizeof *jobs[k].times);
+        if (!jobs[k].times)
+            status = -2;
     }
-    if (t >= 0.0)
-        t = bench_run_median(job, threads, s->reps, s->budget, runs);
-    if (t < 0.0) {
+    for (int k = 0; k < n && status == 0; k++) {
+        timed_job *t = &jobs[k];
+        const size_t all = t->job.count;
+        double x = t->reference ? bench_run_once(&t->job, threads, t->stats) : 0.0;
+        if (!t->reference && s->budget > 0.0f && all > probe) {
+            t->job.count = probe;
+            x = bench_run_once(&t->job, threads, NULL);
+            double allowed = x > 0.0 ? (double)probe * s->budget / x : (double)all;
+            t->job.count = allowed >= (double)all ? all : allowed > probe ? (size_t)allowed : probe;
+        }
+        if (x < 0.0)
+            status = -1;
+    }
+    for (unsigned r = 0; r < reps && status == 0; r++)
+        for (int k = 0; k < n && status == 0; k++) {
+            timed_job *t = &jobs[k];
+            if (r > 0 && s->budget > 0.0f && t->total > s->budget)
+                continue;
+            const double x = bench_run_once(&t->job, threads, NULL);
+            if (x < 0.0) {
+                status = -1;
+                break;
+            }
+            t->times[t->runs++] = x;
+            t->total += x;
+            if (r == 0 && answered)
+                answered(ctx, k, &t->job);
+        }
+    for (int k = 0; k < n; k++) {
+        if (status == 0)
+            seconds[k] = bench_median(jobs[k].times, jobs[k].runs);
+        free(jobs[k].times);
+        jobs[k].times = NULL;
+    }
+    if (status < 0) {
         progress_done(&s->prog);
-        cli_error(s->command, NULL, "cannot start %u threads", threads);
+        if (status == -1)
+            cli_error(s->command, NULL, "cannot start %u threads", threads);
+        else
+            cli_error(s->command, NULL, "out of memory for %u timings", reps);
     }
-    return t;
+    return status;
+}
+
+/* What the agreement check of a ray set's methods needs (set_answered). */
+typedef struct set_context {
+    bench_state *s;
+    ray_kind set;
+    int any;
+    buffers *b;
+    const int *method_of; /* timed job k -> method index */
+} set_context;
+
+/* Compares the answers of method method_of[k], just timed, with the reference's (method 0's). */
+static void set_answered(void *ctx, int k, const bench_job *job)
+{
+    set_context *c = ctx;
+    bench_state *s = c->s;
+    const int m = c->method_of[k];
+    if (m == 0)
+        return;
+    agree_row *a =
+        &s->agreements[c->any ? s->agree_count - (s->method_count - 1) + (m - 1) : s->agree_count++];
+    if (!c->any) {
+        memset(a, 0, sizeof *a);
+        a->set = c->set;
+        a->m = &s->methods[m];
+        a->closest_count = job->count;
+        bench_agree_closest(&a->closest, c->b->rays, c->b->ref_hits, c->b->hits, job->count,
+                            AGREE_TOLERANCE * s->diagonal);
+    } else {
+        a->any_count = job->count;
+        a->any_disagree = bench_disagree_any(c->b->ref_occluded, c->b->occluded, job->count);
+    }
 }
 
 /* Measures every method on one ray set: method 0 (cbvh sorted) first, as the
  * reference every other method's answers are compared with, at the first thread
- * count (where the answers are compared); the main methods again at every other. */
+ * count (where the answers are compared); the main methods again at every other.
+ * The methods of a query and thread count are timed together (time_jobs). */
 static int measure_set(bench_state *s, ray_kind set, buffers *b, int *step, int steps)
 {
     char label[96];
     for (int any = 0; any < 2; any++)
-        for (int ti = 0; ti < s->thread_count_n; ti++)
+        for (int ti = 0; ti < s->thread_count_n; ti++) {
+            const unsigned threads = s->thread_counts[ti];
+            timed_job jobs[MAX_METHODS];
+            result_row *rows[MAX_METHODS];
+            int method_of[MAX_METHODS], n = 0;
             for (int k = 0; k < s->method_count; k++) {
                 const method *m = &s->methods[k];
-                unsigned threads = s->thread_counts[ti];
                 if (ti > 0 && !m->main)
                     continue;
-                snprintf(label, sizeof label, "%s %s: %s %s, %u thread(s)", rays_kind_name(set),
-                         any ? "any" : "closest", m->engine, m->variant, threads);
-                progress_update(&s->prog, label, (double)(*step)++ / steps);
-                bench_job job = { m->kernel, m->state, b->rays, s->rays, NULL, NULL, s->cpu_clock, NULL, NULL };
-                if (any)
-                    job.occluded = k == 0 ? b->ref_occluded : b->occluded;
-                else
-                    job.hits = k == 0 ? b->ref_hits : b->hits;
+                (*step)++;
                 result_row *r = &s->results[s->result_count++];
                 memset(r, 0, sizeof *r);
                 r->set = set;
                 r->any = any;
                 r->m = m;
                 r->threads = threads;
-                double t = time_job(s, &job, BENCH_PROBE_QUERIES, threads, m->counted, m->counted ? &r->stats : NULL, &r->runs);
-                if (t < 0.0)
-                    return CLI_EXIT_USAGE;
-                r->count = job.count;
-                r->seconds = t;
-                if (k == 0 || ti > 0)
-                    continue;
-                agree_row *a =
-                    &s->agreements[any ? s->agree_count - (s->method_count - 1) + (k - 1) : s->agree_count++];
-                if (!any) {
-                    memset(a, 0, sizeof *a);
-                    a->set = set;
-                    a->m = m;
-                    a->closest_count = job.count;
-                    bench_agree_closest(&a->closest, b->rays, b->ref_hits, b->hits, job.count,
-                                        AGREE_TOLERANCE * s->diagonal);
-                } else {
-                    a->any_count = job.count;
-                    a->any_disagree = bench_disagree_any(b->ref_occluded, b->occluded, job.count);
-                }
+                bench_job job = {m->kernel, m->state, b->rays, s->rays, NULL, NULL, s->cpu_clock, NULL, NULL};
+                if (any)
+                    job.occluded = k == 0 ? b->ref_occluded : b->occluded;
+                else
+                    job.hits = k == 0 ? b->ref_hits : b->hits;
+                memset(&jobs[n], 0, sizeof jobs[n]);
+                jobs[n].job = job;
+                jobs[n].reference = m->counted;
+                jobs[n].stats = m->counted ? &r->stats : NULL;
+                rows[n] = r;
+                method_of[n++] = k;
             }
+            snprintf(label, sizeof label, "%s %s: %d methods, %u thread(s)", rays_kind_name(set),
+                     any ? "any" : "closest", n, threads);
+            progress_update(&s->prog, label, (double)*step / steps);
+            set_context ctx = {s, set, any, b, method_of};
+            double seconds[MAX_METHODS];
+            if (time_jobs(s, jobs, n, BENCH_PROBE_QUERIES, threads, seconds, ti == 0 ? set_answered : NULL,
+                          &ctx) < 0)
+                return CLI_EXIT_USAGE;
+            for (int k = 0; k < n; k++) {
+                rows[k]->count = jobs[k].job.count;
+                rows[k]->seconds = seconds[k];
+                rows[k]->runs = jobs[k].runs;
+            }
+        }
     return 0;
 }
 
@@ -690,44 +778,75 @@ static void agree_shapes(bench_state *s, shape_agree_row *a, const shape_query *
     }
 }
 
-/* Measures every shape engine on one shape set at every thread count; cbvh (engine 0) first, as the
- * reference, compared with each peer at the first thread count. */
+/* What a shape set's found counts and agreement check need (shapes_answered). */
+typedef struct shape_context {
+    bench_state *s;
+    int check; /* compare the peers' answers (the first thread count) */
+    shape_row **rows;
+    const shape_query *queries;
+    shape_answer *ref, *other;
+} shape_context;
+
+/* The triangles or hits shape engine k found, just timed, and at the first thread count its agreement with
+ * the reference (engine 0). */
+static void shapes_answered(void *ctx, int k, const bench_job *job)
+{
+    shape_context *c = ctx;
+    shape_row *r = c->rows[k];
+    const shape_answer *answers = k == 0 ? c->ref : c->other;
+    for (size_t i = 0; i < job->count; i++)
+        r->found += r->sweep ? answers[i].tri != CBVH_NO_HIT : answers[i].count;
+    if (k == 0 || !c->check)
+        return;
+    shape_agree_row *a = &c->s->shape_agreements[c->s->shape_agree_count++];
+    memset(a, 0, sizeof *a);
+    a->kind = r->kind;
+    a->sweep = r->sweep;
+    a->m = r->m;
+    agree_shapes(c->s, a, c->queries, c->ref, c->other, job->count, SWEEP_AGREE_TOLERANCE * c->s->diagonal);
+}
+
+/* Measures every shape engine on one shape set at every thread count, the engines of a thread count timed
+ * together (time_jobs); cbvh (engine 0) first, as the reference, compared with each peer at the first
+ * thread count. */
 static int measure_shapes(bench_state *s, shape_kind kind, int sweep, const shape_query *queries, shape_answer *ref,
                           shape_answer *other, int *step, int steps)
 {
     char label[96];
-    for (int ti = 0; ti < s->thread_count_n; ti++)
-        for (int k = 0; k < s->shape_method_count; k++) {
-            const shape_method *m = &s->shape_methods[k];
-            unsigned threads = s->thread_counts[ti];
-            snprintf(label, sizeof label, "%s %s: %s, %u thread(s)", shape_kind_name(kind),
-                     sweep ? "sweep" : "overlap", m->engine, threads);
-            progress_update(&s->prog, label, (double)(*step)++ / steps);
-            shape_answer *answers = k == 0 ? ref : other;
-            shape_job sj = { m, kind, sweep, queries, answers };
-            bench_job job = { NULL, NULL, NULL, s->shapes, NULL, NULL, s->cpu_clock, shape_range, &sj };
+    for (int ti = 0; ti < s->thread_count_n; ti++) {
+        const unsigned threads = s->thread_counts[ti];
+        timed_job jobs[MAX_SHAPE_METHODS];
+        shape_job sj[MAX_SHAPE_METHODS];
+        shape_row *rows[MAX_SHAPE_METHODS];
+        const int n = s->shape_method_count;
+        for (int k = 0; k < n; k++) {
+            (*step)++;
+            sj[k] = (shape_job){&s->shape_methods[k], kind, sweep, queries, k == 0 ? ref : other};
             shape_row *r = &s->shape_results[s->shape_result_count++];
             memset(r, 0, sizeof *r);
             r->kind = kind;
             r->sweep = sweep;
-            r->m = m;
+            r->m = &s->shape_methods[k];
             r->threads = threads;
-            double t = time_job(s, &job, BENCH_PROBE_SHAPES, threads, k == 0, NULL, &r->runs);
-            if (t < 0.0)
-                return CLI_EXIT_USAGE;
-            r->seconds = t;
-            r->count = job.count;
-            for (size_t i = 0; i < job.count; i++)
-                r->found += sweep ? answers[i].tri != CBVH_NO_HIT : answers[i].count;
-            if (k == 0 || ti > 0)
-                continue;
-            shape_agree_row *a = &s->shape_agreements[s->shape_agree_count++];
-            memset(a, 0, sizeof *a);
-            a->kind = kind;
-            a->sweep = sweep;
-            a->m = m;
-            agree_shapes(s, a, queries, ref, other, job.count, SWEEP_AGREE_TOLERANCE * s->diagonal);
+            rows[k] = r;
+            memset(&jobs[k], 0, sizeof jobs[k]);
+            jobs[k].job =
+                (bench_job){NULL, NULL, NULL, s->shapes, NULL, NULL, s->cpu_clock, shape_range, &sj[k]};
+            jobs[k].reference = k == 0;
         }
+        snprintf(label, sizeof label, "%s %s: %d engines, %u thread(s)", shape_kind_name(kind),
+                 sweep ? "sweep" : "overlap", n, threads);
+        progress_update(&s->prog, label, (double)*step / steps);
+        shape_context ctx = {s, ti == 0, rows, queries, ref, other};
+        double seconds[MAX_SHAPE_METHODS];
+        if (time_jobs(s, jobs, n, BENCH_PROBE_SHAPES, threads, seconds, shapes_answered, &ctx) < 0)
+            return CLI_EXIT_USAGE;
+        for (int k = 0; k < n; k++) {
+            rows[k]->seconds = seconds[k];
+            rows[k]->count = jobs[k].job.count;
+            rows[k]->runs = jobs[k].runs;
+        }
+    }
     return 0;
 }
 
