@@ -15,6 +15,7 @@
 #include <cmocka.h>
 
 #include "cbvh.h"
+#include "common/encodings.h"
 #include "query/ray_box.h"
 #include "query/ray_triangle.h"
 #include "query/raycast.h"
@@ -647,6 +648,28 @@ static void test_closed_mesh_no_leaks(void **state)
     }
     assert_int_equal(missed, 0);
     assert_true(total > test_least(100000));
+    ref_fixture_close(&fx);
+    scene_free(&s);
+}
+
+/* A mesh whose vertices do not stay in the caches (past CBVH_CACHED_VERTEX_BYTES: vertices_far) takes the
+ * walks' early vertex requests and the streams' four tails: the same answers as brute force, on every
+ * traversal. */
+static void test_far_vertices(void **state)
+{
+    (void)state;
+    /* the binary layout's walks and the scalar kernel's make no early requests: nothing new to see */
+    if (test_layout == CBVH_LAYOUT_BINARY || cbvh_walk_kernel() == CBVH_WALK_KERNEL_SCALAR)
+        return;
+    scene s;
+    ref_fixture fx;
+    assert_true(scene_sphere(&s, 100000, (float[3]){0.5f, -0.25f, 2.0f}, 3.0f)); /* 600 KB of vertices */
+    open_scene(&fx, &s, test_options());
+    assert_true(fx.file->vertices_far);
+    assert_true(fx.file->info.vertex_count *
+                    cbvh_element_size(CBVH_SECTION_VERTICES, fx.file->vertex_encoding) >
+                CBVH_CACHED_VERTEX_BYTES);
+    check_fixture(&fx, 150, 31);
     ref_fixture_close(&fx);
     scene_free(&s);
 }
@@ -1684,6 +1707,7 @@ int main(void)
         cmocka_unit_test(test_sphere_and_terrain),
         cmocka_unit_test(test_cook_variants),
         cmocka_unit_test(test_closed_mesh_no_leaks),
+        cmocka_unit_test(test_far_vertices),
         cmocka_unit_test(test_far_from_origin),
         cmocka_unit_test(test_invalid_rays),
         cmocka_unit_test(test_stats),

@@ -11,6 +11,13 @@
  * (query/leaf.h's leaf_vertex4) so that they never read past the section's end. */
 #define CBVH_SECTION_LEAD 64u
 
+/* A mesh whose vertices take up to this many bytes is taken to stay in the caches (half this machine's
+ * 1 MiB L2; struct cbvh_file's vertices_far says which side a file is on). Requesting vertices ahead
+ * hides misses; where there are none it costs only its instructions: the streams' interleaved tails made
+ * Wuson's streams 5-13% slower (3.7K triangles, `cbvh bench`), the single-ray walk's early vertex
+ * requests 1-3.5% more instructions a ray. */
+#define CBVH_CACHED_VERTEX_BYTES (512u * 1024u)
+
 /* Everything here was validated by the loader: node links, leaf ranges,
  * indices and encodings are in range, so the query kernels do not check. */
 struct cbvh_file {
@@ -30,6 +37,8 @@ struct cbvh_file {
     uint32_t triangle_encoding;  /* CBVH_TRIS_* */
     const void *vertices;        /* info.vertex_count entries */
     uint32_t vertex_encoding;    /* CBVH_VERTS_* */
+    uint32_t vertices_far;       /* 1 when there are triangles and their vertices take more than
+                                  * CBVH_CACHED_VERTEX_BYTES: the walks request vertices ahead */
     const void *remap;           /* cooked -> original triangle id; NULL = identity */
     uint32_t remap_encoding;     /* CBVH_REMAP_* */
     const uint32_t *unmap;       /* original -> cooked id (owned, built at open when remap is present): dense,
@@ -60,6 +69,15 @@ static inline const void *cbvh_indices_entry(const void *tris, int enc, uint32_t
     if (enc == CBVH_TRIS_LOCAL8)
         return t + (size_t)CBVH_LOCAL8_BLOCK_SIZE * (k / CBVH_LOCAL8_BLOCK);
     return t + (enc == CBVH_TRIS_DELTA16 ? 8u : enc == CBVH_TRIS_U16 ? 6u : 12u) * (size_t)k;
+}
+
+/* A vertex index next to triangle k's vertices, from its entry alone: a LOCAL8 triangle's block base (its
+ * vertices lie at most 255 past it), else its first vertex. For requesting a leaf's vertices early. */
+static inline uint32_t cbvh_vertex_hint(const void *tris, int enc, uint32_t k)
+{
+    const uint8_t *t = (const uint8_t *)cbvh_indices_entry(tris, enc, k);
+    return enc == CBVH_TRIS_U16 ? (uint32_t) * (const uint16_t *)(const void *)t
+                                : *(const uint32_t *)(const void *)t;
 }
 
 /* Triangle k's three vertex indices from a TRIANGLES section of encoding `enc` (CBVH_TRIS_*). Inlined

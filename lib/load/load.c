@@ -67,6 +67,10 @@ static cbvh_result place_sections(struct cbvh_file *f, const cbvh_section_map *m
     f->material_names = where[cbvh_section_slot(CBVH_SECTION_MATERIAL_NAMES)];
     f->triangle_encoding = f->sections[map->index[CBVH_SECTION_TRIANGLES - 1]].encoding;
     f->vertex_encoding = f->sections[map->index[CBVH_SECTION_VERTICES - 1]].encoding;
+    f->vertices_far =
+        f->info.triangle_count > 0 &&
+        (uint64_t)f->info.vertex_count * cbvh_element_size(CBVH_SECTION_VERTICES, f->vertex_encoding) >
+            CBVH_CACHED_VERTEX_BYTES;
     if (f->remap)
         f->remap_encoding = f->sections[map->index[CBVH_SECTION_REMAP - 1]].encoding;
     if (f->materials)

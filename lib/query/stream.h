@@ -29,12 +29,6 @@ enum { CBVH_LANE_OX, CBVH_LANE_OY, CBVH_LANE_OZ, CBVH_LANE_TMIN, CBVH_LANE_RX, C
  * dragon's incoherent rays, a cache miss a node). */
 #define CBVH_STREAM_TAILS 4u /* at most 4: the tails' bit masks go through cbvh_lowest_lane */
 
-/* A mesh whose vertices take up to this many bytes is taken to stay in the caches (half this machine's
- * 1 MiB L2): its tails run one at a time and test a leaf without first requesting its vertices.
- * Interleaving hides misses; where there are none it costs only its bookkeeping (Wuson's streams, 3.7K
- * triangles: 5-13% slower with four tails in `cbvh bench`). */
-#define CBVH_STREAM_CACHED_VERTEX_BYTES (512u * 1024u)
-
 /* A ray walking a subtree alone: the single-ray walk's state, and the ray's best hit as this walk knows
  * it (synchronised with the batch's at each step, stream_walk.h). */
 struct cbvh_stream_tail {
@@ -117,7 +111,7 @@ void cbvh_stream_set_kernel(int which);
 cbvh_stream_node_fn cbvh_stream_node_kernel(void);
 
 /* Test hook, not exported: how many tails run at once. 0 = by the mesh (default: 1 for a mesh whose
- * vertices take at most CBVH_STREAM_CACHED_VERTEX_BYTES, else CBVH_STREAM_TAILS), 1 = one, else
+ * vertices stay in the caches (struct cbvh_file's vertices_far clear), else CBVH_STREAM_TAILS), 1 = one, else
  * CBVH_STREAM_TAILS, so the tests run both on their small meshes. Set like cbvh_stream_set_kernel. */
 void cbvh_stream_set_tails(int tails);
 /* The tails that run at once on f's streams by the current setting. */

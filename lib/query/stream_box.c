@@ -6,7 +6,6 @@
 
 #include <stdatomic.h>
 
-#include "common/encodings.h"
 #include "query/ray_box.h"
 #include "query/stream.h"
 
@@ -52,9 +51,8 @@ uint32_t cbvh_stream_tails_for(const struct cbvh_file *f)
     const int setting = atomic_load_explicit(&stream_tails_setting, memory_order_relaxed);
     if (setting != 0)
         return setting == 1 ? 1u : CBVH_STREAM_TAILS;
-    const uint64_t vertex_bytes =
-        (uint64_t)f->info.vertex_count * cbvh_element_size(CBVH_SECTION_VERTICES, f->vertex_encoding);
-    return vertex_bytes <= CBVH_STREAM_CACHED_VERTEX_BYTES ? 1u : CBVH_STREAM_TAILS;
+    /* a mesh in the caches has no miss to overlap: one tail, without the vertex-request turn */
+    return f->vertices_far ? CBVH_STREAM_TAILS : 1u;
 }
 
 cbvh_stream_node_fn cbvh_stream_node_kernel(void)

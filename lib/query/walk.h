@@ -235,6 +235,22 @@ CBVH_KERNEL void walk_w4_prefetch_children(const struct cbvh_file *restrict f, c
         CBVH_PREFETCH((const void *)(entries + 64u * k));
 }
 
+/* On a mesh whose vertices do not stay in the caches (struct cbvh_file's vertices_far), the leaf a walk
+ * goes to next has three lines of vertices requested as soon as the node chose it, from its first
+ * triangle's entry (cbvh_vertex_hint: a LOCAL8 block's base), which the node's own request
+ * (walk_w4_prefetch_children) has mostly brought by then: the leaf's decode and its vertex loads then
+ * wait less. A node next (no leaf) requests the lines of triangle 0's, without a branch on which it is.
+ * On the 871K-triangle dragon (driver, medians of 8 runs): incoherent closest +5-9%, shadow any +5%. */
+CBVH_KERNEL void walk_w4_prefetch_leaf_vertices(const struct cbvh_file *restrict f, cbvh_ref next)
+{
+    const uint32_t k = next & CBVH_W4_FIRST_MASK & (0u - (next >> 31));
+    const uintptr_t v =
+        (uintptr_t)cbvh_vertex_address(f, cbvh_vertex_hint(f->triangles, (int)f->triangle_encoding, k));
+    CBVH_UNROLL(3)
+    for (uintptr_t line = 0; line < 3u; line++)
+        CBVH_PREFETCH((const void *)(v + 64u * line));
+}
+
 /* An entry of a walk's stack: a child still to visit and where the ray enters its box. */
 struct cbvh_walk_entry {
     cbvh_ref ref;
@@ -332,6 +348,8 @@ CBVH_KERNEL int walk_w4_descend(const struct cbvh_file *restrict f, cbvh_ref r,
     *next = ref[descent >> 24];
     *next_entry = e[descent >> 24];
 #endif
+    if (f->vertices_far) /* a predictable branch: the file's */
+        walk_w4_prefetch_leaf_vertices(f, *next);
     *sp += cbvh_w4_popcount(hits) - 1u;
     return 1;
 }
