@@ -598,6 +598,75 @@ static void test_read_mode_allocation_failures(void **state)
 
 /* ------------------------------------------------------------------ tests on cooked files */
 #if CBVH_HAVE_COOKER
+/* Mappings of this process that carry the huge-page advice ("hg" among their VmFlags in
+ * /proc/self/smaps), or -1 where the system does not say (not Linux, or a kernel without transparent huge
+ * pages). */
+static long advised_mappings(void)
+{
+    FILE *fp = fopen("/proc/self/smaps", "r");
+    if (!fp || access("/sys/kernel/mm/transparent_hugepage/enabled", R_OK) != 0) {
+        if (fp)
+            fclose(fp);
+        return -1;
+    }
+    char line[512];
+    long n = 0;
+    while (fgets(line, sizeof line, fp))
+        if (strncmp(line, "VmFlags:", 8) == 0 && strstr(line, " hg"))
+            n++;
+    fclose(fp);
+    return n;
+}
+
+/* A file of several MiB read into memory (cbvh_open_path_read) and its expanded triangles, both from the
+ * default allocator, ask for 2 MiB pages where the system has the advice (Linux); answers as the mapped
+ * file's. A caller's allocator gets no advice. (After close the advice may stay on the C library's heap,
+ * which keeps freed memory: harmless, and not checked.) */
+static void test_read_mode_large_pages(void **state)
+{
+    (void)state;
+    random_mesh m = make_random_mesh(17, 150000, 300000);
+    input in = cook_input("large", &m, 0, CBVH_VERTEX_FLOAT32, 1);
+    assert_true(in.size > (size_t)6 << 20);
+    char dir[200];
+    test_temp_dir(dir, sizeof dir, "cbvh-test-load");
+    char path[256];
+    snprintf(path, sizeof path, "%s/large.cbvh", dir);
+    FILE *fp = fopen(path, "wb");
+    assert_non_null(fp);
+    assert_int_equal(fwrite(in.data, 1, in.size, fp), in.size);
+    assert_int_equal(fclose(fp), 0);
+    const long before = advised_mappings();
+    cbvh_file *mapped = NULL, *read = NULL, *own = NULL;
+    cbvh_error err;
+    assert_int_equal(cbvh_open_path(path, NULL, &mapped, &err), CBVH_OK);
+    assert_int_equal(cbvh_open_path_read(path, NULL, &read, &err), CBVH_OK);
+    const long after_read = advised_mappings();
+    assert_int_equal(cbvh_file_expand_triangles(read, &err), CBVH_OK);
+    const long after_expand = advised_mappings();
+    counting_alloc c;
+    cbvh_allocator a = counting_allocator(&c, -1, 0);
+    assert_int_equal(cbvh_open_path_read(path, &a, &own, &err), CBVH_OK);
+    const long with_own = advised_mappings();
+    assert_same_hits(mapped, read);
+    assert_same_hits(mapped, own);
+    if (before >= 0) {
+#if defined(__linux__)
+        assert_true(after_read > before);
+        assert_true(after_expand > after_read);
+        assert_int_equal(with_own, after_expand);
+#endif
+    } else {
+        printf("no huge-page advice to see on this system: only the answers checked\n");
+    }
+    cbvh_close(own);
+    cbvh_close(read);
+    cbvh_close(mapped);
+    unlink(path);
+    rmdir(dir);
+    test_aligned_free(in.data);
+    free_random_mesh(&m);
+}
 
 static int degenerate_input(const random_mesh *m, size_t t)
 {
@@ -794,6 +863,7 @@ int main(void)
         cmocka_unit_test(test_cooked_files),
         cmocka_unit_test(test_cooked_sizes_by_path),
         cmocka_unit_test(test_cooked_truncations_and_allocations),
+        cmocka_unit_test(test_read_mode_large_pages),
 #else
         cmocka_unit_test(test_cooked_files_need_the_cooker),
 #endif

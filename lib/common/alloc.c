@@ -32,6 +32,14 @@ void *cbvh_alloc(const cbvh_allocator *a, size_t size, size_t align)
     return a->alloc(a->user, size, align);
 }
 
+void *cbvh_alloc_walked(const cbvh_allocator *a, size_t size, size_t align)
+{
+    void *p = cbvh_alloc(a, size, align);
+    if (p && a->alloc == default_alloc)
+        cbvh_os_advise_large_pages(p, size);
+    return p;
+}
+
 void cbvh_free(const cbvh_allocator *a, void *ptr)
 {
     if (ptr)

@@ -8,6 +8,12 @@
 /* Resolves NULL to the default allocator (posix_memalign or _aligned_malloc, in common/os.h). */
 cbvh_allocator cbvh_allocator_resolve(const cbvh_allocator *allocator);
 
+/* Allocates `size` bytes for the query kernels to walk at random (a file read into memory, its expanded
+ * triangles), as cbvh_alloc; from the default allocator, a block of at least 2 MiB is advised to the
+ * system's 2 MiB pages (cbvh_os_advise_large_pages) before it is written: on a large mesh, a walk's
+ * scattered node and vertex loads miss the translation cache less. A caller's allocator is left alone. */
+void *cbvh_alloc_walked(const cbvh_allocator *a, size_t size, size_t align);
+
 /* Allocates `size` bytes aligned to `align` (power of two <= 64); NULL on failure
  * or when size is 0. */
 void *cbvh_alloc(const cbvh_allocator *a, size_t size, size_t align);

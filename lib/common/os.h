@@ -18,6 +18,11 @@ typedef pthread_t cbvh_os_thread_id;
 void *cbvh_os_aligned_alloc(size_t size, size_t align);
 void cbvh_os_aligned_free(void *ptr);
 
+/* Advises the system to back the whole 2 MiB pages within [p, p + size) with 2 MiB pages (Linux's
+ * transparent huge pages, madvise MADV_HUGEPAGE; no effect where the system has no such advice or the
+ * pages are already there). For memory not yet written, from the default allocator only. */
+void cbvh_os_advise_large_pages(void *p, size_t size);
+
 /* The whole content of a regular file. */
 struct cbvh_os_file_bytes {
     const uint8_t *bytes; /* NULL when size is 0 */

@@ -32,11 +32,25 @@ void cbvh_os_aligned_free(void *ptr)
     free(ptr);
 }
 
+void cbvh_os_advise_large_pages(void *p, size_t size)
+{
+#ifdef MADV_HUGEPAGE
+    const uintptr_t page = (uintptr_t)2 << 20;
+    const uintptr_t begin = ((uintptr_t)p + page - 1u) & ~(page - 1u),
+                    end = ((uintptr_t)p + size) & ~(page - 1u);
+    if (begin < end)
+        (void)madvise((void *)begin, end - begin, MADV_HUGEPAGE); /* advice: a refusal changes nothing */
+#else
+    (void)p;
+    (void)size;
+#endif
+}
+
 /* The whole file into a 64-byte aligned buffer from `a`. */
 static cbvh_result read_all(int fd, const char *path, const cbvh_allocator *a, struct cbvh_os_file_bytes *out,
                             cbvh_error *err)
 {
-    uint8_t *buffer = cbvh_alloc(a, out->size, 64);
+    uint8_t *buffer = cbvh_alloc_walked(a, out->size, 64);
     if (!buffer)
         return cbvh_fail(err, CBVH_ERROR_OUT_OF_MEMORY, "%s: cannot allocate %zu bytes to read it into", path,
                          out->size);

@@ -20,6 +20,14 @@ void cbvh_os_aligned_free(void *ptr)
     _aligned_free(ptr);
 }
 
+/* Windows backs memory with large pages only when it is allocated so (VirtualAlloc with MEM_LARGE_PAGES,
+ * which needs a privilege a game rarely has): no advice to give. */
+void cbvh_os_advise_large_pages(void *p, size_t size)
+{
+    (void)p;
+    (void)size;
+}
+
 /* The system's text for an error code, without its trailing period and line break. */
 static const char *system_message(DWORD code, char *buf, size_t size)
 {

@@ -19,7 +19,8 @@ cbvh_result cbvh_file_expand_triangles(cbvh_file *file, cbvh_error *err)
     if (f->quads || n == 0)
         return CBVH_OK;
     const size_t groups = ((size_t)n + 3u) / 4u;
-    struct leaf_quad *q = cbvh_alloc_array(&f->allocator, groups, sizeof *q, 64);
+    struct leaf_quad *q =
+        groups <= SIZE_MAX / sizeof *q ? cbvh_alloc_walked(&f->allocator, groups * sizeof *q, 64) : NULL;
     if (!q)
         return cbvh_fail(err, CBVH_ERROR_OUT_OF_MEMORY, "cannot allocate %llu bytes for the expanded triangles",
                          (unsigned long long)(groups * sizeof *q));
