@@ -618,10 +618,10 @@ static long advised_mappings(void)
     return n;
 }
 
-/* A file of several MiB read into memory (cbvh_open_path_read) and its expanded triangles, both from the
- * default allocator, ask for 2 MiB pages where the system has the advice (Linux); answers as the mapped
- * file's. A caller's allocator gets no advice. (After close the advice may stay on the C library's heap,
- * which keeps freed memory: harmless, and not checked.) */
+/* A file of several MiB read into memory (cbvh_open_path_read), its expanded triangles and the sections
+ * of a compressed one, inflated at open, all from the default allocator, ask for 2 MiB pages where the system
+ * has the advice (Linux); answers as the mapped file's. A caller's allocator gets no advice. (After close the
+ * advice may stay on the C library's heap, which keeps freed memory: harmless, and not checked.) */
 static void test_read_mode_large_pages(void **state)
 {
     (void)state;
@@ -648,20 +648,29 @@ static void test_read_mode_large_pages(void **state)
     cbvh_allocator a = counting_allocator(&c, -1, 0);
     assert_int_equal(cbvh_open_path_read(path, &a, &own, &err), CBVH_OK);
     const long with_own = advised_mappings();
+    /* a compressed file's sections, inflated at open */
+    input zipped = cook_input("large-zlib", &m, 6, CBVH_VERTEX_FLOAT32, 1);
+    cbvh_file *inflated = NULL;
+    assert_int_equal(cbvh_open_memory(zipped.data, zipped.size, NULL, &inflated, &err), CBVH_OK);
+    const long after_inflate = advised_mappings();
     assert_same_hits(mapped, read);
     assert_same_hits(mapped, own);
+    assert_same_hits(mapped, inflated);
     if (before >= 0) {
 #if defined(__linux__)
         assert_true(after_read > before);
         assert_true(after_expand > after_read);
         assert_int_equal(with_own, after_expand);
+        assert_true(after_inflate > with_own);
 #endif
     } else {
         printf("no huge-page advice to see on this system: only the answers checked\n");
     }
+    cbvh_close(inflated);
     cbvh_close(own);
     cbvh_close(read);
     cbvh_close(mapped);
+    test_aligned_free(zipped.data);
     unlink(path);
     rmdir(dir);
     test_aligned_free(in.data);

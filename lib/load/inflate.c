@@ -74,7 +74,7 @@ cbvh_result cbvh_inflate_section(const cbvh_allocator *a, const uint8_t *src, ui
     if (size > SIZE_MAX - lead)
         return cbvh_fail(err, CBVH_ERROR_OUT_OF_MEMORY, "section %u: %llu bytes do not fit in memory", section_index,
                          (unsigned long long)size);
-    uint8_t *buffer = cbvh_alloc(a, lead + (size_t)size, 64);
+    uint8_t *buffer = cbvh_alloc_walked(a, lead + (size_t)size, 64);
     if (!buffer)
         return cbvh_fail(err, CBVH_ERROR_OUT_OF_MEMORY, "section %u: cannot allocate %llu bytes to inflate into",
                          section_index, (unsigned long long)size);

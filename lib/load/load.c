@@ -34,7 +34,7 @@ static cbvh_result place_section(struct cbvh_file *f, uint32_t index, const void
         *out = src;
         return CBVH_OK;
     } else {
-        owned = cbvh_alloc(&f->allocator, CBVH_SECTION_LEAD + (size_t)s->size, 64);
+        owned = cbvh_alloc_walked(&f->allocator, CBVH_SECTION_LEAD + (size_t)s->size, 64);
         if (!owned)
             return cbvh_fail(err, CBVH_ERROR_OUT_OF_MEMORY, "section %u: cannot allocate %llu bytes for an aligned copy",
                              index, (unsigned long long)s->size);
