@@ -658,8 +658,11 @@ static void test_read_mode_large_pages(void **state)
     assert_same_hits(mapped, inflated);
     if (before >= 0) {
 #if defined(__linux__)
+        cbvh_file_info info;
+        cbvh_file_get_info(read, &info, sizeof info);
         assert_true(after_read > before);
-        assert_true(after_expand > after_read);
+        /* a build without SIMD kernels expands nothing (cbvh_file_expand_triangles) */
+        assert_true(info.expanded_bytes > 0 ? after_expand > after_read : after_expand == after_read);
         assert_int_equal(with_own, after_expand);
         assert_true(after_inflate > with_own);
 #endif
