@@ -474,6 +474,16 @@ static void test_arguments(void **state)
     test_aligned_free(in.data);
 }
 
+/* `path` holds exactly data[0..size) (size 0: an empty file). */
+static void write_whole_file(const char *path, const void *data, size_t size)
+{
+    FILE *fp = fopen(path, "wb");
+    assert_non_null(fp);
+    if (size > 0)
+        assert_int_equal(fwrite(data, 1, size, fp), size);
+    assert_int_equal(fclose(fp), 0);
+}
+
 /* Both ways of opening a path report the same errors. */
 static void test_path_errors(void **state)
 {
@@ -485,9 +495,7 @@ static void test_path_errors(void **state)
     test_temp_dir(dir, sizeof dir, "cbvh-test-load");
     char path[256];
     snprintf(path, sizeof path, "%s/empty.cbvh", dir);
-    FILE *fp = fopen(path, "wb");
-    assert_non_null(fp);
-    fclose(fp);
+    write_whole_file(path, NULL, 0);
     char missing[256];
     snprintf(missing, sizeof missing, "%s/missing.cbvh", dir);
     for (size_t i = 0; i < sizeof opens / sizeof opens[0]; i++) {
@@ -546,19 +554,14 @@ static void test_read_mode_survives_truncation(void **state)
     snprintf(path, sizeof path, "%s/hot.cbvh", dir);
     for (size_t i = 0; i < VALID_VECTOR_COUNT; i++) {
         input in = load_vector(valid_vectors[i]);
-        FILE *fp = fopen(path, "wb");
-        assert_non_null(fp);
-        assert_int_equal(fwrite(in.data, 1, in.size, fp), in.size);
-        assert_int_equal(fclose(fp), 0);
+        write_whole_file(path, in.data, in.size);
         counting_alloc c;
         cbvh_allocator a = counting_allocator(&c, -1, 0);
         cbvh_file *f = NULL, *reference = NULL;
         cbvh_error err;
         assert_int_equal(cbvh_open_path_read(path, &a, &f, &err), CBVH_OK);
         assert_true(c.live_bytes >= in.size); /* the whole file is in memory */
-        fp = fopen(path, "wb"); /* truncated to 0 bytes, as `cp` over it would start */
-        assert_non_null(fp);
-        assert_int_equal(fclose(fp), 0);
+        write_whole_file(path, NULL, 0);      /* truncated to 0 bytes, as `cp` over it would start */
         assert_int_equal(cbvh_open_memory(in.data, in.size, NULL, &reference, &err), CBVH_OK);
         assert_same_info(f, reference);
         assert_same_hits(f, reference);
@@ -632,10 +635,7 @@ static void test_read_mode_large_pages(void **state)
     test_temp_dir(dir, sizeof dir, "cbvh-test-load");
     char path[256];
     snprintf(path, sizeof path, "%s/large.cbvh", dir);
-    FILE *fp = fopen(path, "wb");
-    assert_non_null(fp);
-    assert_int_equal(fwrite(in.data, 1, in.size, fp), in.size);
-    assert_int_equal(fclose(fp), 0);
+    write_whole_file(path, in.data, in.size);
     const long before = advised_mappings();
     cbvh_file *mapped = NULL, *read = NULL, *own = NULL;
     cbvh_error err;
