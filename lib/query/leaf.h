@@ -120,28 +120,127 @@ struct leaf_quad {
     _Alignas(16) float c[3][3][4];
 };
 
-/* Triangles k + lane[j] (j = 0..3) into q, lane j for triangle k + lane[j]. */
-CBVH_KERNEL void leaf_gather4(const void *restrict tris, const int tri_enc, const void *restrict verts,
-                              const int vert_enc, const float *restrict grid_origin,
-                              const float *restrict grid_scale, uint32_t k, const uint32_t lane[4],
-                              struct leaf_quad *restrict q)
+/* The vertices idx[v][j] (vertex v of lane j's triangle) into q. */
+CBVH_KERNEL void leaf_gather4_vertices(const void *restrict verts, const int vert_enc,
+                                       const float *restrict grid_origin, const float *restrict grid_scale,
+                                       const uint32_t idx[3][4], struct leaf_quad *restrict q)
 {
-    uint32_t idx[4][3];
-    CBVH_UNROLL(4)
-    for (uint32_t j = 0; j < 4; j++)
-        cbvh_indices_decode(tris, tri_enc, k + lane[j], idx[j]);
     CBVH_UNROLL(3)
     for (uint32_t v = 0; v < 3; v++) {
-        __m128 r0 = leaf_vertex4(verts, vert_enc, grid_origin, grid_scale, idx[0][v]);
-        __m128 r1 = leaf_vertex4(verts, vert_enc, grid_origin, grid_scale, idx[1][v]);
-        __m128 r2 = leaf_vertex4(verts, vert_enc, grid_origin, grid_scale, idx[2][v]);
-        __m128 r3 = leaf_vertex4(verts, vert_enc, grid_origin, grid_scale, idx[3][v]);
+        __m128 r0 = leaf_vertex4(verts, vert_enc, grid_origin, grid_scale, idx[v][0]);
+        __m128 r1 = leaf_vertex4(verts, vert_enc, grid_origin, grid_scale, idx[v][1]);
+        __m128 r2 = leaf_vertex4(verts, vert_enc, grid_origin, grid_scale, idx[v][2]);
+        __m128 r3 = leaf_vertex4(verts, vert_enc, grid_origin, grid_scale, idx[v][3]);
         _MM_TRANSPOSE4_PS(r0, r1, r2, r3); /* r0: the lanes before x (leaf_vertex4) */
         _mm_store_ps(q->c[v][0], r1);
         _mm_store_ps(q->c[v][1], r2);
         _mm_store_ps(q->c[v][2], r3);
     }
 }
+
+/* Triangles k + lane[j] (j = 0..3) into q, lane j for triangle k + lane[j]. */
+CBVH_KERNEL void leaf_gather4(const void *restrict tris, const int tri_enc, const void *restrict verts,
+                              const int vert_enc, const float *restrict grid_origin,
+                              const float *restrict grid_scale, uint32_t k, const uint32_t lane[4],
+                              struct leaf_quad *restrict q)
+{
+    uint32_t idx[3][4];
+    CBVH_UNROLL(4)
+    for (uint32_t j = 0; j < 4; j++) {
+        uint32_t t[3];
+        cbvh_indices_decode(tris, tri_enc, k + lane[j], t);
+        idx[0][j] = t[0];
+        idx[1][j] = t[1];
+        idx[2][j] = t[2];
+    }
+    leaf_gather4_vertices(verts, vert_enc, grid_origin, grid_scale, idx, q);
+}
+
+#if defined(__AVX2__)
+/* The LOCAL8 indices of a group of four (format.h: blocks of 8 triangles, a u32 base and 3 offset bytes a
+ * triangle) by byte shuffles rather than a block address, a base and three byte loads a lane. The group
+ * of n (1..4) triangles from k starts at slot r = k % 8 of its block, and its lanes past slot 7 are the
+ * next block's first slots. Two 16-byte loads hold every offset it needs: `lo`, bytes 3 m to 3 m + 15 of
+ * the block (m = min(r, 4): slots r to min(r + 3, 7), and never past the block's 28 bytes), and `hi`,
+ * the next block's bytes 0 to 15 (slots 0 to 3) when the group reaches it, else the block's own (then
+ * unused, and never past the section). Table entry [r][n - 1] gives, for each vertex v, the shuffle
+ * moving lane j's offset byte from `lo` (lo[v]) or `hi` (hi[v]) into byte 0 of lane j (0x80: zero), and
+ * `second`, all ones in the lanes from the next block, which take its base. Lanes past n repeat lane 0
+ * (leaf_group), as the shuffles say. */
+#define L8_LANE(n, j) ((j) < (n) ? (j) : 0)
+#define L8_SLOT(r, n, j) ((r) + L8_LANE(n, j))
+#define L8_SECOND(r, n, j) (L8_SLOT(r, n, j) >= 8)
+#define L8_LO_BYTE(r, n, v, j)                                                                               \
+    (L8_SECOND(r, n, j) ? 0x80 : 4 + 3 * (L8_SLOT(r, n, j) - ((r) < 4 ? (r) : 4)) + (v))
+#define L8_HI_BYTE(r, n, v, j) (L8_SECOND(r, n, j) ? 4 + 3 * (L8_SLOT(r, n, j) - 8) + (v) : 0x80)
+#define L8_LO(r, n, v)                                                                                       \
+    {                                                                                                        \
+        L8_LO_BYTE(r, n, v, 0), 0x80, 0x80, 0x80, L8_LO_BYTE(r, n, v, 1), 0x80, 0x80, 0x80,                  \
+            L8_LO_BYTE(r, n, v, 2), 0x80, 0x80, 0x80, L8_LO_BYTE(r, n, v, 3), 0x80, 0x80, 0x80               \
+    }
+#define L8_HI(r, n, v)                                                                                       \
+    {                                                                                                        \
+        L8_HI_BYTE(r, n, v, 0), 0x80, 0x80, 0x80, L8_HI_BYTE(r, n, v, 1), 0x80, 0x80, 0x80,                  \
+            L8_HI_BYTE(r, n, v, 2), 0x80, 0x80, 0x80, L8_HI_BYTE(r, n, v, 3), 0x80, 0x80, 0x80               \
+    }
+#define L8_MASK(r, n, j) (L8_SECOND(r, n, j) ? 0xFF : 0)
+#define L8_SECOND_LANES(r, n)                                                                                \
+    {                                                                                                        \
+        L8_MASK(r, n, 0), L8_MASK(r, n, 0), L8_MASK(r, n, 0), L8_MASK(r, n, 0), L8_MASK(r, n, 1),            \
+            L8_MASK(r, n, 1), L8_MASK(r, n, 1), L8_MASK(r, n, 1), L8_MASK(r, n, 2), L8_MASK(r, n, 2),        \
+            L8_MASK(r, n, 2), L8_MASK(r, n, 2), L8_MASK(r, n, 3), L8_MASK(r, n, 3), L8_MASK(r, n, 3),        \
+            L8_MASK(r, n, 3)                                                                                 \
+    }
+#define L8_ENTRY(r, n)                                                                                       \
+    {                                                                                                        \
+        {L8_LO(r, n, 0), L8_LO(r, n, 1), L8_LO(r, n, 2)}, {L8_HI(r, n, 0), L8_HI(r, n, 1), L8_HI(r, n, 2)},  \
+            L8_SECOND_LANES(r, n)                                                                            \
+    }
+#define L8_ROW(r)                                                                                            \
+    {                                                                                                        \
+        L8_ENTRY(r, 1), L8_ENTRY(r, 2), L8_ENTRY(r, 3), L8_ENTRY(r, 4)                                       \
+    }
+struct leaf_local8_shuffle {
+    _Alignas(16) uint8_t lo[3][16];
+    _Alignas(16) uint8_t hi[3][16];
+    _Alignas(16) uint8_t second[16];
+};
+static const struct leaf_local8_shuffle leaf_local8_shuffles[CBVH_LOCAL8_BLOCK][4] = {
+    L8_ROW(0), L8_ROW(1), L8_ROW(2), L8_ROW(3), L8_ROW(4), L8_ROW(5), L8_ROW(6), L8_ROW(7)};
+#undef L8_ROW
+#undef L8_ENTRY
+#undef L8_SECOND_LANES
+#undef L8_MASK
+#undef L8_HI
+#undef L8_LO
+#undef L8_HI_BYTE
+#undef L8_LO_BYTE
+#undef L8_SECOND
+#undef L8_SLOT
+#undef L8_LANE
+
+/* idx[v][j]: vertex v of triangle k + j (j < n), of triangle k past n, from LOCAL8 triangles (above). */
+CBVH_KERNEL void leaf_local8_indices4(const void *restrict tris, uint32_t k, uint32_t n, uint32_t idx[3][4])
+{
+    const uint32_t r = k % CBVH_LOCAL8_BLOCK, m = r < 4u ? r : 4u;
+    const uint8_t *block = (const uint8_t *)tris + (size_t)CBVH_LOCAL8_BLOCK_SIZE * (k / CBVH_LOCAL8_BLOCK);
+    const uint8_t *next = block + CBVH_LOCAL8_BLOCK_SIZE * (size_t)(r + n > CBVH_LOCAL8_BLOCK);
+    const struct leaf_local8_shuffle *sh = &leaf_local8_shuffles[r][n - 1u];
+    const __m128i lo = _mm_loadu_si128((const __m128i *)(const void *)(block + 3u * m));
+    const __m128i hi = _mm_loadu_si128((const __m128i *)(const void *)next);
+    const __m128i base = _mm_blendv_epi8(_mm_set1_epi32(*(const int32_t *)(const void *)block),
+                                         _mm_set1_epi32(*(const int32_t *)(const void *)next),
+                                         _mm_load_si128((const __m128i *)(const void *)sh->second));
+    CBVH_UNROLL(3)
+    for (uint32_t v = 0; v < 3; v++) {
+        const __m128i lo_bytes =
+            _mm_shuffle_epi8(lo, _mm_load_si128((const __m128i *)(const void *)sh->lo[v]));
+        const __m128i hi_bytes =
+            _mm_shuffle_epi8(hi, _mm_load_si128((const __m128i *)(const void *)sh->hi[v]));
+        _mm_storeu_si128((__m128i *)(void *)idx[v], _mm_add_epi32(base, _mm_or_si128(lo_bytes, hi_bytes)));
+    }
+}
+#endif
 
 /* Triangles k + lane[j] of a group of n (1..4) from triangle k: lanes past the group's end repeat its first
  * triangle (leaf_gather4), and `kept` masks them out of the answers. */
@@ -179,6 +278,14 @@ leaf_group_load(const struct leaf_quad *restrict quads, const void *restrict tri
     }
     uint32_t lane[4];
     leaf_group(past, lane, mask);
+#if defined(__AVX2__)
+    if (tri_enc == CBVH_TRIS_LOCAL8) {
+        uint32_t idx[3][4];
+        leaf_local8_indices4(tris, k, past, idx);
+        leaf_gather4_vertices(verts, vert_enc, grid_origin, grid_scale, idx, scratch);
+        return scratch;
+    }
+#endif
     leaf_gather4(tris, tri_enc, verts, vert_enc, grid_origin, grid_scale, k, lane, scratch);
     return scratch;
 }
