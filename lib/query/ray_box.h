@@ -20,16 +20,23 @@ struct cbvh_slab_select {
     uint32_t near_x, near_y, near_z, far_x, far_y, far_z;
 };
 
+/* The selection for each octant (bit a set: a negative direction on axis a): near is the maximum (3 +
+ * axis) for a negative direction, else the minimum; far the other (3 + axis - near). A table, read once
+ * per ray. */
+#define CBVH_SLAB_NEAR(octant, axis) ((axis) + 3u * ((octant) >> (axis)&1u))
+#define CBVH_SLAB_SELECT(o)                                                                                  \
+    {                                                                                                        \
+        CBVH_SLAB_NEAR(o, 0), CBVH_SLAB_NEAR(o, 1), CBVH_SLAB_NEAR(o, 2), 3u - CBVH_SLAB_NEAR(o, 0),         \
+            5u - CBVH_SLAB_NEAR(o, 1), 7u - CBVH_SLAB_NEAR(o, 2)                                             \
+    }
+static const struct cbvh_slab_select cbvh_slab_selects[8] = {
+    CBVH_SLAB_SELECT(0u), CBVH_SLAB_SELECT(1u), CBVH_SLAB_SELECT(2u), CBVH_SLAB_SELECT(3u),
+    CBVH_SLAB_SELECT(4u), CBVH_SLAB_SELECT(5u), CBVH_SLAB_SELECT(6u), CBVH_SLAB_SELECT(7u)};
+#undef CBVH_SLAB_SELECT
+
 static inline struct cbvh_slab_select cbvh_slab_select_of(uint32_t octant)
 {
-    struct cbvh_slab_select s;
-    s.near_x = 3u * (octant & 1u); /* the maximum (3 + axis) for a negative direction, else the minimum */
-    s.near_y = 1u + 3u * (octant >> 1 & 1u);
-    s.near_z = 2u + 3u * (octant >> 2 & 1u);
-    s.far_x = 3u - s.near_x;
-    s.far_y = 5u - s.near_y;
-    s.far_z = 7u - s.near_z;
-    return s;
+    return cbvh_slab_selects[octant & 7u];
 }
 
 /* Slab test on an already dequantized near/far plane set. Ordered compares:
