@@ -18,14 +18,21 @@ struct cbvh_triangle_frame {
  * 1e-16 apart, the third at distance 3), differences taken from the far
  * vertex lose the short edge, and n points anywhere. Ties (and NaN lengths
  * of overflowing edges) keep vertex 0. */
+/* Vertex base + k (k = 1, 2) in cyclic order: (base + k) % 3 without a division. */
+static inline int cbvh_frame_vertex(int base, int k)
+{
+    const int i = base + k;
+    return i >= 3 ? i - 3 : i;
+}
+
 static inline void cbvh_triangle_frame_of(const cbvh_v3 v[3], struct cbvh_triangle_frame *f)
 {
     const double len0 = v3_len2(v3_sub(v[2], v[1])), len1 = v3_len2(v3_sub(v[0], v[2])),
                  len2 = v3_len2(v3_sub(v[1], v[0]));
     const int base = len1 > len0 ? (len2 > len1 ? 2 : 1) : (len2 > len0 ? 2 : 0);
     f->base = base;
-    f->e1 = v3_sub(v[(base + 1) % 3], v[base]);
-    f->e2 = v3_sub(v[(base + 2) % 3], v[base]);
+    f->e1 = v3_sub(v[cbvh_frame_vertex(base, 1)], v[base]);
+    f->e2 = v3_sub(v[cbvh_frame_vertex(base, 2)], v[base]);
     f->n = v3_cross(f->e1, f->e2);
     f->nn = v3_len2(f->n);
 }
@@ -40,6 +47,18 @@ static inline void cbvh_triangle_frame_barycentrics(const struct cbvh_triangle_f
 {
     *x = v3_dot(v3_cross(w, f->e2), f->n) / f->nn;
     *y = v3_dot(v3_cross(f->e1, w), f->n) / f->nn;
+}
+
+/* u and v (the weights of vertices 1 and 2) of the point with barycentrics x, y (the weights of vertices
+ * base + 1 and base + 2) in a frame whose base vertex is `base`. */
+static inline void cbvh_frame_uv(int base, double x, double y, float *u, float *v)
+{
+    double weight[3]; /* of vertices 0, 1, 2 */
+    weight[cbvh_frame_vertex(base, 1)] = x;
+    weight[cbvh_frame_vertex(base, 2)] = y;
+    weight[base] = 1.0 - x - y;
+    *u = (float)weight[1];
+    *v = (float)weight[2];
 }
 
 #endif
