@@ -247,6 +247,9 @@ CBVH_KERNEL int cbvh_plane_t4(const struct cbvh_ray_shear *restrict s, const cbv
      * not move along enters at -inf and leaves at +inf, which the scalar code's skip amounts to */
     const cbvh_v4d small = _mm256_min_pd(_mm256_min_pd(v[0], v[1]), v[2]);
     const cbvh_v4d big = _mm256_max_pd(_mm256_max_pd(v[0], v[1]), v[2]);
+    _Static_assert(offsetof(struct cbvh_ray_shear, dir_len2) ==
+                       offsetof(struct cbvh_ray_shear, dir_inv) + 3 * sizeof(double),
+                   "dir_inv[0..2] and dir_len2 are four consecutive doubles");
     const cbvh_v4d inv = _mm256_loadu_pd(s->dir_inv);
     const cbvh_v4d t0 = _mm256_mul_pd(_mm256_sub_pd(small, org), inv);
     const cbvh_v4d t1 = _mm256_mul_pd(_mm256_sub_pd(big, org), inv);
