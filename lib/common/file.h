@@ -18,6 +18,10 @@
  * requests 1-3.5% more instructions a ray. */
 #define CBVH_CACHED_VERTEX_BYTES (512u * 1024u)
 
+/* The margin of struct cbvh_file's origin_near box in extents of the mesh: a quarter of the distance past
+ * which a ray origin is moved (CBVH_FAR_FACTOR, query/raycast.h), so rounding cannot matter. */
+#define CBVH_NEAR_ORIGIN_FACTOR 4.0f
+
 /* Everything here was validated by the loader: node links, leaf ranges,
  * indices and encodings are in range, so the query kernels do not check. */
 struct cbvh_file {
@@ -39,6 +43,12 @@ struct cbvh_file {
     uint32_t vertex_encoding;    /* CBVH_VERTS_* */
     uint32_t vertices_far;       /* 1 when there are triangles and their vertices take more than
                                   * CBVH_CACHED_VERTEX_BYTES: the walks request vertices ahead */
+    /* An origin inside this box (lane 3 is 0 in both) is next to the mesh: cbvh_ray_prepare (query/raycast.h)
+     * then skips its far-origin and overflow tests, which it would pass. The bounds widened by
+     * CBVH_NEAR_ORIGIN_FACTOR times their largest extent; an empty box when that extent is too large for
+     * the margin to keep the overflow test passing. Set at open. */
+    _Alignas(16) float origin_near_lo[4];
+    _Alignas(16) float origin_near_hi[4];
     const void *remap;           /* cooked -> original triangle id; NULL = identity */
     uint32_t remap_encoding;     /* CBVH_REMAP_* */
     const uint32_t *unmap;       /* original -> cooked id (owned, built at open when remap is present): dense,

@@ -1,5 +1,7 @@
 /* load.c: the loading pipeline: header, table, section placement (in place, copied or inflated), section checks. */
 #include <assert.h>
+#include <float.h>
+#include <math.h>
 #include <string.h>
 
 #include "common/alloc.h"
@@ -71,6 +73,18 @@ static cbvh_result place_sections(struct cbvh_file *f, const cbvh_section_map *m
         f->info.triangle_count > 0 &&
         (uint64_t)f->info.vertex_count * cbvh_element_size(CBVH_SECTION_VERTICES, f->vertex_encoding) >
             CBVH_CACHED_VERTEX_BYTES;
+    float extent = 0.0f;
+    for (int a = 0; a < 3; a++) {
+        const float e = f->info.bounds_max[a] - f->info.bounds_min[a];
+        extent = e > extent ? e : extent;
+    }
+    /* past FLT_MAX / 64, the margin could take an origin beyond the overflow test's FLT_MAX / 4: no box */
+    const int usable = extent <= FLT_MAX / 64.0f;
+    const float margin = CBVH_NEAR_ORIGIN_FACTOR * extent;
+    for (int a = 0; a < 4; a++) {
+        f->origin_near_lo[a] = a == 3 ? 0.0f : usable ? f->info.bounds_min[a] - margin : INFINITY;
+        f->origin_near_hi[a] = a == 3 ? 0.0f : usable ? f->info.bounds_max[a] + margin : -INFINITY;
+    }
     if (f->remap)
         f->remap_encoding = f->sections[map->index[CBVH_SECTION_REMAP - 1]].encoding;
     if (f->materials)
