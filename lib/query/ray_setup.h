@@ -27,8 +27,6 @@
 struct cbvh_ray_shear {
     float org[3];
     float dir[3];      /* for t from the triangle's plane (ray_triangle.h) */
-    double dir_inv[3]; /* 1 / dir and |dir|^2 in double, for the plane t's clamps: once per ray, not per hit */
-    double dir_len2;
     float sx, sy, sz;  /* dir[kx]/dir[kz], dir[ky]/dir[kz], 1/dir[kz] */
     uint32_t kx, ky, kz; /* kz: dominant axis of dir; kx, ky keep the winding */
 };
@@ -97,11 +95,6 @@ static inline void cbvh_shear_setup(struct cbvh_ray_shear *s, const float org[3]
     cbvh_store3(&s->sx, _mm_div_ps(_mm_setr_ps(dir[kx], dir[ky], 1.0f, 1.0f), _mm_set1_ps(dir[kz])));
     cbvh_store3(s->org, cbvh_load3(org));
     cbvh_store3(s->dir, d);
-    const __m128d d01 = _mm_cvtps_pd(d), d2 = _mm_cvtps_pd(_mm_movehl_ps(d, d)), one = _mm_set1_pd(1.0);
-    _mm_storeu_pd(s->dir_inv, _mm_div_pd(one, d01));
-    _mm_store_sd(s->dir_inv + 2, _mm_div_sd(one, d2));
-    const __m128d sq01 = _mm_mul_pd(d01, d01), sq2 = _mm_mul_sd(d2, d2);
-    s->dir_len2 = _mm_cvtsd_f64(_mm_add_sd(_mm_add_sd(sq01, _mm_unpackhi_pd(sq01, sq01)), sq2));
 #else
     s->sx = dir[kx] / dir[kz];
     s->sy = dir[ky] / dir[kz];
@@ -109,9 +102,7 @@ static inline void cbvh_shear_setup(struct cbvh_ray_shear *s, const float org[3]
     for (int a = 0; a < 3; a++) {
         s->org[a] = org[a];
         s->dir[a] = dir[a];
-        s->dir_inv[a] = 1.0 / (double)dir[a];
     }
-    s->dir_len2 = (double)dir[0] * dir[0] + (double)dir[1] * dir[1] + (double)dir[2] * dir[2];
 #endif
 }
 

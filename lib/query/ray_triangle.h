@@ -88,7 +88,7 @@ CBVH_KERNEL int cbvh_plane_t(const struct cbvh_ray_shear *restrict s, const cbvh
         return 0;
     const double proj[3] = {v3_dot(v3_sub(v[0], org), dir), v3_dot(v3_sub(v[1], org), dir),
                             v3_dot(v3_sub(v[2], org), dir)};
-    double tp = cbvh_plane_t_in_span(num / den, proj, s->dir_len2);
+    double tp = cbvh_plane_t_in_span(num / den, proj, v3_len2(dir));
     /* Nor does it leave the triangle's bounding box where the line crosses it (slabs in double). A grazing
      * ray's t could otherwise fall before the entry of the box, and so of every node box holding the
      * triangle (they are conservative), and a walk that drops nodes entered past its best t so far would
@@ -100,7 +100,7 @@ CBVH_KERNEL int cbvh_plane_t(const struct cbvh_ray_shear *restrict s, const cbvh
         if (s->dir[axis] == 0.0f)
             continue;
         const double p0 = coord[axis][0], p1 = coord[axis][1], p2 = coord[axis][2];
-        const double o = s->org[axis], inv = s->dir_inv[axis];
+        const double o = s->org[axis], inv = 1.0 / (double)s->dir[axis];
         const double small = cbvh_dmin(cbvh_dmin(p0, p1), p2), big = cbvh_dmax(cbvh_dmax(p0, p1), p2);
         const double t0 = (small - o) * inv, t1 = (big - o) * inv;
         /* the slab's entry and exit: t0 <= t1 for inv > 0, t1 <= t0 for inv < 0 (both finite, and bit for
@@ -242,15 +242,12 @@ CBVH_KERNEL int cbvh_plane_t4(const struct cbvh_ray_shear *restrict s, const cbv
         return 0;
     const double proj[3] = {v4d_dot(_mm256_sub_pd(v[0], org), dir), v4d_dot(_mm256_sub_pd(v[1], org), dir),
                             v4d_dot(_mm256_sub_pd(v[2], org), dir)};
-    double tp = cbvh_plane_t_in_span(num / den, proj, s->dir_len2);
-    /* the slabs of all three axes at once (lane 3: dir_len2 as an inverse, ignored); an axis the ray does
-     * not move along enters at -inf and leaves at +inf, which the scalar code's skip amounts to */
+    double tp = cbvh_plane_t_in_span(num / den, proj, v4d_dot(dir, dir));
+    /* the slabs of all three axes at once (lane 3: 1 / 0, ignored); an axis the ray does not move along
+     * enters at -inf and leaves at +inf, which the scalar code's skip amounts to */
     const cbvh_v4d small = _mm256_min_pd(_mm256_min_pd(v[0], v[1]), v[2]);
     const cbvh_v4d big = _mm256_max_pd(_mm256_max_pd(v[0], v[1]), v[2]);
-    _Static_assert(offsetof(struct cbvh_ray_shear, dir_len2) ==
-                       offsetof(struct cbvh_ray_shear, dir_inv) + 3 * sizeof(double),
-                   "dir_inv[0..2] and dir_len2 are four consecutive doubles");
-    const cbvh_v4d inv = _mm256_loadu_pd(s->dir_inv);
+    const cbvh_v4d inv = _mm256_div_pd(_mm256_set1_pd(1.0), dir);
     const cbvh_v4d t0 = _mm256_mul_pd(_mm256_sub_pd(small, org), inv);
     const cbvh_v4d t1 = _mm256_mul_pd(_mm256_sub_pd(big, org), inv);
     const cbvh_v4d still = _mm256_cmp_pd(dir, _mm256_setzero_pd(), _CMP_EQ_OQ);
