@@ -84,8 +84,8 @@ int cbvh_walk_kernel(void)
         const struct cbvh_walk_mode mode = {.order = order_, .any = any_};                                   \
         return cbvh_walk(f, CBVH_LAYOUT_BINARY, ray, start, start_box, mode, NULL, best, stats);             \
     }                                                                                                        \
-    static int walk_##name(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray,                        \
-                           struct cbvh_best_hit *best, cbvh_query_stats *stats)                              \
+    CBVH_FORCE_INLINE int walk_##name(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray,             \
+                                      struct cbvh_best_hit *best, cbvh_query_stats *stats)                   \
     {                                                                                                        \
         const uint32_t layout = f->layout;                                                                   \
         const cbvh_ref start = cbvh_tree_root(f, layout);                                                    \
