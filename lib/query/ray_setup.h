@@ -72,7 +72,6 @@ static inline void cbvh_store3(float *p, __m128 v)
 
 static inline void cbvh_shear_setup(struct cbvh_ray_shear *s, const float org[3], const float dir[3])
 {
-    const float ax = fabsf(dir[0]), ay = fabsf(dir[1]), az = fabsf(dir[2]);
     /* kz = ax > ay ? (ax > az ? 0 : 2) : (ay > az ? 1 : 2), and kx, ky the next axes in cyclic order,
      * swapped for a negative dir[kz] (which keeps the winding, so the sign test stays the same), read
      * from tables rather than branched on: which way a ray points is as unpredictable as the ray.
@@ -81,17 +80,30 @@ static inline void cbvh_shear_setup(struct cbvh_ray_shear *s, const float org[3]
      * 0 2; 2: 0 1, 1 0). dir[kz] is the largest component of a direction that is not zero, so it is
      * not zero either and its sign bit is dir[kz] < 0. */
     enum { KZ = 0x192A, KXY = 0x148269 };
+#ifdef CBVH_HAVE_SIMD
+    /* the three compares at once: |dir| against itself rotated to (ay, az, ax) and to (az, ax, ay) (lane
+     * 3: 0 > 0, false), and the sign bits from one mask rather than a load of dir[kz] after kz */
+    const __m128 d = cbvh_load3(dir), mag = _mm_andnot_ps(_mm_set1_ps(-0.0f), d);
+    const uint32_t next = (uint32_t)_mm_movemask_ps(
+        _mm_cmpgt_ps(mag, _mm_shuffle_ps(mag, mag, _MM_SHUFFLE(3, 0, 2, 1)))); /* ax > ay, ay > az */
+    const uint32_t prev = (uint32_t)_mm_movemask_ps(
+        _mm_cmpgt_ps(mag, _mm_shuffle_ps(mag, mag, _MM_SHUFFLE(3, 1, 0, 2)))); /* ax > az */
+    const uint32_t outcome = (next & 1u) | (prev & 1u) << 1 | (next & 2u) << 1;
+    const uint32_t kz = (uint32_t)KZ >> (2u * outcome) & 3u;
+    const uint32_t negative = (uint32_t)_mm_movemask_ps(d) >> kz & 1u;
+#else
+    const float ax = fabsf(dir[0]), ay = fabsf(dir[1]), az = fabsf(dir[2]);
     const uint32_t outcome = (uint32_t)(ax > ay) | (uint32_t)(ax > az) << 1 | (uint32_t)(ay > az) << 2;
     const uint32_t kz = (uint32_t)KZ >> (2u * outcome) & 3u;
-    const uint32_t kxy = (uint32_t)KXY >> (4u * (2u * kz + (uint32_t)(dir[kz] < 0.0f)));
+    const uint32_t negative = (uint32_t)(dir[kz] < 0.0f);
+#endif
+    const uint32_t kxy = (uint32_t)KXY >> (4u * (2u * kz + negative));
     const uint32_t kx = kxy & 3u, ky = kxy >> 2 & 3u;
     s->kx = kx;
     s->ky = ky;
     s->kz = kz;
 #ifdef CBVH_HAVE_SIMD
-    /* the same quotients and products as below, three or two to an instruction (the dividers are the
-     * set-up's bottleneck) */
-    const __m128 d = cbvh_load3(dir);
+    /* the same quotients as below, three to an instruction (the dividers are the set-up's bottleneck) */
     cbvh_store3(&s->sx, _mm_div_ps(_mm_setr_ps(dir[kx], dir[ky], 1.0f, 1.0f), _mm_set1_ps(dir[kz])));
     cbvh_store3(s->org, cbvh_load3(org));
     cbvh_store3(s->dir, d);
