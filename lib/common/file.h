@@ -20,7 +20,7 @@
 
 /* The margin of struct cbvh_file's origin_near box in extents of the mesh: a quarter of the distance past
  * which a ray origin is moved (CBVH_FAR_FACTOR, query/raycast.h), so rounding cannot matter. */
-#define CBVH_NEAR_ORIGIN_FACTOR 4.0f
+#define CBVH_NEAR_ORIGIN_FACTOR 4
 
 /* Everything here was validated by the loader: node links, leaf ranges,
  * indices and encodings are in range, so the query kernels do not check. */

@@ -80,7 +80,7 @@ static cbvh_result place_sections(struct cbvh_file *f, const cbvh_section_map *m
     }
     /* past FLT_MAX / 64, the margin could take an origin beyond the overflow test's FLT_MAX / 4: no box */
     const int usable = extent <= FLT_MAX / 64.0f;
-    const float margin = CBVH_NEAR_ORIGIN_FACTOR * extent;
+    const float margin = (float)CBVH_NEAR_ORIGIN_FACTOR * extent;
     for (int a = 0; a < 4; a++) {
         f->origin_near_lo[a] = a == 3 ? 0.0f : usable ? f->info.bounds_min[a] - margin : INFINITY;
         f->origin_near_hi[a] = a == 3 ? 0.0f : usable ? f->info.bounds_max[a] + margin : -INFINITY;

@@ -50,7 +50,7 @@ int cbvh_any_stackless(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray
  * 20 of their 24 bits at the mesh (a unit mesh seen from 1e20 collapses to
  * a point), and the products of the triangle test would lose the rest. */
 #define CBVH_FAR_FACTOR 16.0f
-_Static_assert(4.0f * CBVH_NEAR_ORIGIN_FACTOR <= CBVH_FAR_FACTOR,
+_Static_assert(4 * CBVH_NEAR_ORIGIN_FACTOR <= (int)CBVH_FAR_FACTOR,
                "the near-origin box (common/file.h) lies well inside the distance that moves an origin");
 
 /* Moves the origin of a validated ray that is far from f's bounds (largest
@@ -70,9 +70,8 @@ static inline int cbvh_ray_prepare(struct cbvh_ray_ctx *ctx, const cbvh_ray *ray
 {
     if (!cbvh_ray_setup(ctx, ray))
         return 0;
-        /* Most origins lie next to the mesh (struct cbvh_file's origin_near box): neither test below can
-         * fire. */
 #ifdef CBVH_HAVE_SIMD
+    /* Most origins lie next to the mesh (struct cbvh_file's origin_near box): neither test below can fire. */
     const __m128 o = _mm_loadu_ps(ray->org); /* org and tmin (cbvh_ray_valid); lane 3 is not looked at */
     if (CBVH_LIKELY((_mm_movemask_ps(_mm_and_ps(_mm_cmpge_ps(o, _mm_load_ps(f->origin_near_lo)),
                                                 _mm_cmple_ps(o, _mm_load_ps(f->origin_near_hi)))) &
