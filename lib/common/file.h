@@ -43,10 +43,11 @@ struct cbvh_file {
     uint32_t vertex_encoding;    /* CBVH_VERTS_* */
     uint32_t vertices_far;       /* 1 when there are triangles and their vertices take more than
                                   * CBVH_CACHED_VERTEX_BYTES: the walks request vertices ahead */
+    float bounds_extent;         /* the bounds' largest extent (max over axes of max - min), set at open */
     /* An origin inside this box (lane 3 is 0 in both) is next to the mesh: cbvh_ray_prepare (query/raycast.h)
-     * then skips its far-origin and overflow tests, which it would pass. The bounds widened by
-     * CBVH_NEAR_ORIGIN_FACTOR times their largest extent; an empty box when that extent is too large for
-     * the margin to keep the overflow test passing. Set at open. */
+     * then skips cbvh_ray_place_origin, whose tests it would pass. The bounds widened by
+     * CBVH_NEAR_ORIGIN_FACTOR times bounds_extent; an empty box when that extent is too large for the
+     * margin to keep the overflow test passing. Set at open. */
     _Alignas(16) float origin_near_lo[4];
     _Alignas(16) float origin_near_hi[4];
     const void *remap;           /* cooked -> original triangle id; NULL = identity */

@@ -73,11 +73,12 @@ static cbvh_result place_sections(struct cbvh_file *f, const cbvh_section_map *m
         f->info.triangle_count > 0 &&
         (uint64_t)f->info.vertex_count * cbvh_element_size(CBVH_SECTION_VERTICES, f->vertex_encoding) >
             CBVH_CACHED_VERTEX_BYTES;
-    float extent = 0.0f;
+    float extent = 0.0f; /* the bounds were checked: min <= max */
     for (int a = 0; a < 3; a++) {
         const float e = f->info.bounds_max[a] - f->info.bounds_min[a];
         extent = e > extent ? e : extent;
     }
+    f->bounds_extent = extent;
     /* past FLT_MAX / 64, the margin could take an origin beyond the overflow test's FLT_MAX / 4: no box */
     const int usable = extent <= FLT_MAX / 64.0f;
     const float margin = (float)CBVH_NEAR_ORIGIN_FACTOR * extent;

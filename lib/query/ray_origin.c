@@ -93,15 +93,10 @@ static void move_origin(struct cbvh_ray_ctx *ctx, const cbvh_ray *ray, const flo
     cbvh_shear_setup(&ctx->shear, org, dir);
 }
 
-void cbvh_ray_move_far_origin(struct cbvh_ray_ctx *ctx, const cbvh_ray *ray, const struct cbvh_file *f, float extent)
-{
-    move_origin(ctx, ray, f->info.bounds_min, f->info.bounds_max, extent);
-}
-
 /* Every node plane lies in [grid origin, its CBVH_Q_MAX plane] and rounding
  * is monotonic: when both differences to the origin are finite, so is every
  * plane - org on that axis. */
-void cbvh_ray_mark_box_overflow(struct cbvh_ray_ctx *ctx, const struct cbvh_file *f)
+static void mark_box_overflow(struct cbvh_ray_ctx *ctx, const struct cbvh_file *f)
 {
     for (int a = 0; a < 3; a++) {
         const float o = ctx->shear.org[a], g0 = f->grid_origin[a];
@@ -109,4 +104,23 @@ void cbvh_ray_mark_box_overflow(struct cbvh_ray_ctx *ctx, const struct cbvh_file
         if (isinf(g1 - o) || isinf(o - g0))
             ctx->box_halve |= 1u << a;
     }
+}
+
+void cbvh_ray_place_origin(struct cbvh_ray_ctx *ctx, const cbvh_ray *ray, const struct cbvh_file *f)
+{
+    const float *lo = f->info.bounds_min, *hi = f->info.bounds_max, ext = f->bounds_extent;
+    float dist = 0.0f; /* how far outside the bounds, on the farthest axis (plain compares: every value is
+                        * finite, and fmaxf is a libm call without -ffast-math) */
+    for (int a = 0; a < 3; a++) {
+        const float below = lo[a] - ray->org[a], above = ray->org[a] - hi[a];
+        dist = below > dist ? below : dist;
+        dist = above > dist ? above : dist;
+    }
+    /* Ordered compare: an extent near FLT_MAX gives an infinite product and no move. */
+    if (dist > CBVH_FAR_FACTOR * ext)
+        move_origin(ctx, ray, lo, hi, ext);
+    /* Below FLT_MAX / 4 for both, every plane - org is at most about FLT_MAX / 2
+     * (node planes lie within a grid step of the bounds): no overflow. */
+    if (dist > 0.25f * FLT_MAX || ext > 0.25f * FLT_MAX)
+        mark_box_overflow(ctx, f);
 }

@@ -53,25 +53,24 @@ int cbvh_any_stackless(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray
 _Static_assert(4 * CBVH_NEAR_ORIGIN_FACTOR <= (int)CBVH_FAR_FACTOR,
                "the near-origin box (common/file.h) lies well inside the distance that moves an origin");
 
-/* Moves the origin of a validated ray that is far from f's bounds (largest
- * extent `extent`) next to them, and makes ctx's t and range relative to the
- * new origin (ctx->t_base: its t on the caller's ray). See ray_origin.c. */
-void cbvh_ray_move_far_origin(struct cbvh_ray_ctx *ctx, const cbvh_ray *ray, const struct cbvh_file *f, float extent);
-
-/* Sets ctx->box_halve: the axes on which a node plane minus the (moved)
- * origin can overflow. See ray_origin.c. */
-void cbvh_ray_mark_box_overflow(struct cbvh_ray_ctx *ctx, const struct cbvh_file *f);
+/* For a validated ray whose origin lies outside f's origin_near box (common/file.h): moves an origin
+ * farther than CBVH_FAR_FACTOR extents from f's bounds next to them, making ctx's t and range relative to
+ * the new origin (ctx->t_base: its t on the caller's ray), and sets ctx->box_halve on the axes where a
+ * node plane minus the (moved) origin can overflow. Out of line: most rays never get here. See
+ * ray_origin.c. */
+void cbvh_ray_place_origin(struct cbvh_ray_ctx *ctx, const cbvh_ray *ray, const struct cbvh_file *f);
 
 /* cbvh_ray_setup for a ray cast into file f: also moves an origin far from
- * the file's bounds next to them, so the triangle test keeps its precision.
- * Returns 0 for an invalid ray. Inline: it runs once per ray, and the far
- * case is rare. */
+ * the file's bounds next to them, so the triangle test keeps its precision
+ * (cbvh_ray_place_origin). Returns 0 for an invalid ray. Inline: it runs
+ * once per ray. */
 static inline int cbvh_ray_prepare(struct cbvh_ray_ctx *ctx, const cbvh_ray *ray, const struct cbvh_file *f)
 {
     if (!cbvh_ray_setup(ctx, ray))
         return 0;
 #ifdef CBVH_HAVE_SIMD
-    /* Most origins lie next to the mesh (struct cbvh_file's origin_near box): neither test below can fire. */
+    /* Most origins lie next to the mesh (struct cbvh_file's origin_near box), where there is nothing to do.
+     */
     const __m128 o = _mm_loadu_ps(ray->org); /* org and tmin (cbvh_ray_valid); lane 3 is not looked at */
     if (CBVH_LIKELY((_mm_movemask_ps(_mm_and_ps(_mm_cmpge_ps(o, _mm_load_ps(f->origin_near_lo)),
                                                 _mm_cmple_ps(o, _mm_load_ps(f->origin_near_hi)))) &
@@ -83,34 +82,7 @@ static inline int cbvh_ray_prepare(struct cbvh_ray_ctx *ctx, const cbvh_ray *ray
         ray->org[2] >= f->origin_near_lo[2] && ray->org[2] <= f->origin_near_hi[2])
         return 1;
 #endif
-    const float *lo = f->info.bounds_min, *hi = f->info.bounds_max;
-    float ext = 0.0f, dist = 0.0f;
-#ifdef CBVH_HAVE_SIMD
-    /* the loop below on the three axes at once (lane 3 is 0 throughout): MAXPS(a, b) is a > b ? a : b */
-    const __m128 lo4 = cbvh_load3(lo), hi4 = cbvh_load3(hi), o4 = cbvh_load3(ray->org);
-    const __m128 e4 = _mm_max_ps(_mm_sub_ps(hi4, lo4), _mm_setzero_ps());
-    const __m128 d4 = _mm_max_ps(_mm_sub_ps(o4, hi4), _mm_max_ps(_mm_sub_ps(lo4, o4), _mm_setzero_ps()));
-    const __m128 both =
-        _mm_max_ps(_mm_unpacklo_ps(e4, d4), _mm_unpackhi_ps(e4, d4)); /* e0|2, d0|2, e1|3, d1|3 */
-    const __m128 top = _mm_max_ps(both, _mm_movehl_ps(both, both));   /* ext, dist */
-    ext = _mm_cvtss_f32(top);
-    dist = _mm_cvtss_f32(_mm_shuffle_ps(top, top, 1));
-#else
-    /* Plain compares (every value is finite): fmaxf is a libm call without -ffast-math. */
-    for (int a = 0; a < 3; a++) {
-        const float o = ray->org[a], e = hi[a] - lo[a], below = lo[a] - o, above = o - hi[a];
-        ext = e > ext ? e : ext;
-        dist = below > dist ? below : dist;
-        dist = above > dist ? above : dist;
-    }
-#endif
-    /* Ordered compare: an extent near FLT_MAX gives an infinite product and no move. */
-    if (dist > CBVH_FAR_FACTOR * ext)
-        cbvh_ray_move_far_origin(ctx, ray, f, ext);
-    /* Below FLT_MAX / 4 for both, every plane - org is at most about FLT_MAX / 2
-     * (node planes lie within a grid step of the bounds): no overflow. */
-    if (dist > 0.25f * FLT_MAX || ext > 0.25f * FLT_MAX)
-        cbvh_ray_mark_box_overflow(ctx, f);
+    cbvh_ray_place_origin(ctx, ray, f);
     return 1;
 }
 
