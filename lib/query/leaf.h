@@ -115,7 +115,7 @@ CBVH_KERNEL __m128 leaf_vertex4(const void *restrict verts, const int vert_enc, 
 
 /* Four triangles gathered for the SIMD filter, a lane per triangle: c[v][a][j] is axis a of vertex v of
  * lane j's triangle. Floats rather than vectors, so that the exact test of a lane the filter keeps reads
- * its vertices back as they are (leaf_lane_test) instead of decoding the triangle again. */
+ * its vertices back as they are (leaf_group_vertices) instead of decoding the triangle again. */
 struct leaf_quad {
     _Alignas(16) float c[3][3][4];
 };
@@ -157,88 +157,73 @@ CBVH_KERNEL void leaf_gather4(const void *restrict tris, const int tri_enc, cons
 }
 
 #if defined(__AVX2__)
-/* The LOCAL8 indices of a group of four (format.h: blocks of 8 triangles, a u32 base and 3 offset bytes a
- * triangle) by byte shuffles rather than a block address, a base and three byte loads a lane. The group
- * of n (1..4) triangles from k starts at slot r = k % 8 of its block, and its lanes past slot 7 are the
- * next block's first slots. Two 16-byte loads hold every offset it needs: `lo`, bytes 3 m to 3 m + 15 of
- * the block (m = min(r, 4): slots r to min(r + 3, 7), and never past the block's 28 bytes), and `hi`,
- * the next block's bytes 0 to 15 (slots 0 to 3) when the group reaches it, else the block's own (then
- * unused, and never past the section). Table entry [r][n - 1] gives, for each vertex v, the shuffle
- * moving lane j's offset byte from `lo` (lo[v]) or `hi` (hi[v]) into byte 0 of lane j (0x80: zero), and
- * `second`, all ones in the lanes from the next block, which take its base. Lanes past n repeat lane 0
- * (leaf_group), as the shuffles say. */
-#define L8_LANE(n, j) ((j) < (n) ? (j) : 0)
-#define L8_SLOT(r, n, j) ((r) + L8_LANE(n, j))
-#define L8_SECOND(r, n, j) (L8_SLOT(r, n, j) >= 8)
-#define L8_LO_BYTE(r, n, v, j)                                                                               \
-    (L8_SECOND(r, n, j) ? 0x80 : 4 + 3 * (L8_SLOT(r, n, j) - ((r) < 4 ? (r) : 4)) + (v))
-#define L8_HI_BYTE(r, n, v, j) (L8_SECOND(r, n, j) ? 4 + 3 * (L8_SLOT(r, n, j) - 8) + (v) : 0x80)
-#define L8_LO(r, n, v)                                                                                       \
+/* The LOCAL8 indices (format.h: blocks of 8 triangles, a u32 base and 3 offset bytes a triangle) of eight
+ * triangles from k at once, by byte shuffles. Triangle k + j sits at slot r + j (r = k % 8), past slot 7 in
+ * the next block, whose 4-byte base then lies between: its offset bytes are at 4 + 3 (r + j) + v from the
+ * block, 4 more past slot 7. Two 16-byte windows hold them all, `src` bytes 4 + 3 r on in its low half
+ * (lanes 0-3) and 12 later in its high half (lanes 4-7); window entry r gives, for each vertex v, the
+ * shuffle moving each lane's byte into the low byte of the lane (0x80: zero), and `next`, all ones in the
+ * lanes that take the next block's base. The windows reach byte 52 of the two blocks' 56: the caller
+ * makes sure the next block exists (leaf_local8_window_fits). Lanes past the file's triangles, or past a
+ * leaf's, decode other bytes: every index is clamped below the vertex count, so that each lane's vertex
+ * load stays in the array, and the caller masks those lanes. */
+#define L8W_NEXT(r, j) ((r) + (j) >= 8)
+#define L8W_LANE(r, j, v) 3 * ((j) % 4) + (v) + 4 * L8W_NEXT(r, j), 0x80, 0x80, 0x80
+#define L8W_SHUFFLE(r, v)                                                                                    \
     {                                                                                                        \
-        L8_LO_BYTE(r, n, v, 0), 0x80, 0x80, 0x80, L8_LO_BYTE(r, n, v, 1), 0x80, 0x80, 0x80,                  \
-            L8_LO_BYTE(r, n, v, 2), 0x80, 0x80, 0x80, L8_LO_BYTE(r, n, v, 3), 0x80, 0x80, 0x80               \
+        L8W_LANE(r, 0, v), L8W_LANE(r, 1, v), L8W_LANE(r, 2, v), L8W_LANE(r, 3, v), L8W_LANE(r, 4, v),       \
+            L8W_LANE(r, 5, v), L8W_LANE(r, 6, v), L8W_LANE(r, 7, v)                                          \
     }
-#define L8_HI(r, n, v)                                                                                       \
+#define L8W_MASK(r, j)                                                                                       \
+    L8W_NEXT(r, j) * 0xFF, L8W_NEXT(r, j) * 0xFF, L8W_NEXT(r, j) * 0xFF, L8W_NEXT(r, j) * 0xFF
+#define L8W_ENTRY(r)                                                                                         \
     {                                                                                                        \
-        L8_HI_BYTE(r, n, v, 0), 0x80, 0x80, 0x80, L8_HI_BYTE(r, n, v, 1), 0x80, 0x80, 0x80,                  \
-            L8_HI_BYTE(r, n, v, 2), 0x80, 0x80, 0x80, L8_HI_BYTE(r, n, v, 3), 0x80, 0x80, 0x80               \
+        {L8W_SHUFFLE(r, 0), L8W_SHUFFLE(r, 1), L8W_SHUFFLE(r, 2)},                                           \
+        {                                                                                                    \
+            L8W_MASK(r, 0), L8W_MASK(r, 1), L8W_MASK(r, 2), L8W_MASK(r, 3), L8W_MASK(r, 4), L8W_MASK(r, 5),  \
+                L8W_MASK(r, 6), L8W_MASK(r, 7)                                                               \
+        }                                                                                                    \
     }
-#define L8_MASK(r, n, j) (L8_SECOND(r, n, j) ? 0xFF : 0)
-#define L8_SECOND_LANES(r, n)                                                                                \
-    {                                                                                                        \
-        L8_MASK(r, n, 0), L8_MASK(r, n, 0), L8_MASK(r, n, 0), L8_MASK(r, n, 0), L8_MASK(r, n, 1),            \
-            L8_MASK(r, n, 1), L8_MASK(r, n, 1), L8_MASK(r, n, 1), L8_MASK(r, n, 2), L8_MASK(r, n, 2),        \
-            L8_MASK(r, n, 2), L8_MASK(r, n, 2), L8_MASK(r, n, 3), L8_MASK(r, n, 3), L8_MASK(r, n, 3),        \
-            L8_MASK(r, n, 3)                                                                                 \
-    }
-#define L8_ENTRY(r, n)                                                                                       \
-    {                                                                                                        \
-        {L8_LO(r, n, 0), L8_LO(r, n, 1), L8_LO(r, n, 2)}, {L8_HI(r, n, 0), L8_HI(r, n, 1), L8_HI(r, n, 2)},  \
-            L8_SECOND_LANES(r, n)                                                                            \
-    }
-#define L8_ROW(r)                                                                                            \
-    {                                                                                                        \
-        L8_ENTRY(r, 1), L8_ENTRY(r, 2), L8_ENTRY(r, 3), L8_ENTRY(r, 4)                                       \
-    }
-struct leaf_local8_shuffle {
-    _Alignas(16) uint8_t lo[3][16];
-    _Alignas(16) uint8_t hi[3][16];
-    _Alignas(16) uint8_t second[16];
+struct leaf_local8_window {
+    _Alignas(32) uint8_t shuffle[3][32];
+    _Alignas(32) uint8_t next[32];
 };
-static const struct leaf_local8_shuffle leaf_local8_shuffles[CBVH_LOCAL8_BLOCK][4] = {
-    L8_ROW(0), L8_ROW(1), L8_ROW(2), L8_ROW(3), L8_ROW(4), L8_ROW(5), L8_ROW(6), L8_ROW(7)};
-#undef L8_ROW
-#undef L8_ENTRY
-#undef L8_SECOND_LANES
-#undef L8_MASK
-#undef L8_HI
-#undef L8_LO
-#undef L8_HI_BYTE
-#undef L8_LO_BYTE
-#undef L8_SECOND
-#undef L8_SLOT
-#undef L8_LANE
+static const struct leaf_local8_window leaf_local8_windows[CBVH_LOCAL8_BLOCK] = {
+    L8W_ENTRY(0), L8W_ENTRY(1), L8W_ENTRY(2), L8W_ENTRY(3),
+    L8W_ENTRY(4), L8W_ENTRY(5), L8W_ENTRY(6), L8W_ENTRY(7)};
+#undef L8W_ENTRY
+#undef L8W_MASK
+#undef L8W_SHUFFLE
+#undef L8W_LANE
+#undef L8W_NEXT
 
-/* idx[v][j]: vertex v of triangle k + j (j < n), of triangle k past n, from LOCAL8 triangles (above). */
-CBVH_KERNEL void leaf_local8_indices4(const void *restrict tris, uint32_t k, uint32_t n, uint32_t idx[3][4])
+/* Whether the windows of a group from k stay in a LOCAL8 section of `triangles` triangles: the block after
+ * k's exists. */
+static inline int leaf_local8_window_fits(uint32_t triangles, uint32_t k)
 {
-    const uint32_t r = k % CBVH_LOCAL8_BLOCK, m = r < 4u ? r : 4u;
+    return k / CBVH_LOCAL8_BLOCK + 1u < (triangles + CBVH_LOCAL8_BLOCK - 1u) / CBVH_LOCAL8_BLOCK;
+}
+
+/* idx[v], lane j: vertex v of triangle k + j (see above); last_vertex: the vertex count - 1 in each lane. */
+CBVH_KERNEL void leaf_local8_indices8(const void *restrict tris, uint32_t k, __m256i last_vertex,
+                                      __m256i idx[3])
+{
     const uint8_t *block = (const uint8_t *)tris + (size_t)CBVH_LOCAL8_BLOCK_SIZE * (k / CBVH_LOCAL8_BLOCK);
-    const uint8_t *next = block + CBVH_LOCAL8_BLOCK_SIZE * (size_t)(r + n > CBVH_LOCAL8_BLOCK);
-    const struct leaf_local8_shuffle *sh = &leaf_local8_shuffles[r][n - 1u];
-    const __m128i lo = _mm_loadu_si128((const __m128i *)(const void *)(block + 3u * m));
-    const __m128i hi = _mm_loadu_si128((const __m128i *)(const void *)next);
-    const __m128i base = _mm_blendv_epi8(_mm_set1_epi32(*(const int32_t *)(const void *)block),
-                                         _mm_set1_epi32(*(const int32_t *)(const void *)next),
-                                         _mm_load_si128((const __m128i *)(const void *)sh->second));
+    const uint8_t *p = block + 4u + 3u * (k % CBVH_LOCAL8_BLOCK);
+    const struct leaf_local8_window *w = &leaf_local8_windows[k % CBVH_LOCAL8_BLOCK];
+    const __m256i src =
+        _mm256_inserti128_si256(_mm256_castsi128_si256(_mm_loadu_si128((const __m128i *)(const void *)p)),
+                                _mm_loadu_si128((const __m128i *)(const void *)(p + 12)), 1);
+    const __m256i base =
+        _mm256_blendv_epi8(_mm256_set1_epi32((int)cbvh_read_u32(block)),
+                           _mm256_set1_epi32((int)cbvh_read_u32(block + CBVH_LOCAL8_BLOCK_SIZE)),
+                           _mm256_load_si256((const __m256i *)(const void *)w->next));
     CBVH_UNROLL(3)
-    for (uint32_t v = 0; v < 3; v++) {
-        const __m128i lo_bytes =
-            _mm_shuffle_epi8(lo, _mm_load_si128((const __m128i *)(const void *)sh->lo[v]));
-        const __m128i hi_bytes =
-            _mm_shuffle_epi8(hi, _mm_load_si128((const __m128i *)(const void *)sh->hi[v]));
-        _mm_storeu_si128((__m128i *)(void *)idx[v], _mm_add_epi32(base, _mm_or_si128(lo_bytes, hi_bytes)));
-    }
+    for (uint32_t v = 0; v < 3; v++)
+        idx[v] = _mm256_min_epu32(
+            _mm256_add_epi32(base, _mm256_shuffle_epi8(
+                                       src, _mm256_load_si256((const __m256i *)(const void *)w->shuffle[v]))),
+            last_vertex);
 }
 #endif
 
@@ -278,14 +263,6 @@ leaf_group_load(const struct leaf_quad *restrict quads, const void *restrict tri
     }
     uint32_t lane[4];
     leaf_group(past, lane, mask);
-#if defined(__AVX2__)
-    if (tri_enc == CBVH_TRIS_LOCAL8) {
-        uint32_t idx[3][4];
-        leaf_local8_indices4(tris, k, past, idx);
-        leaf_gather4_vertices(verts, vert_enc, grid_origin, grid_scale, idx, scratch);
-        return scratch;
-    }
-#endif
     leaf_gather4(tris, tri_enc, verts, vert_enc, grid_origin, grid_scale, k, lane, scratch);
     return scratch;
 }
@@ -301,15 +278,75 @@ struct leaf_group {
 /* At most this many groups a leaf: read in place, the first starts up to 3 triangles before the leaf. */
 #define CBVH_LEAF_GROUPS ((CBVH_MAX_LEAF_SIZE + 3u + CBVH_LANES - 1u) / CBVH_LANES)
 
+#if defined(__AVX2__)
+/* Eight lanes of triangle vertices, a corner v at a time: lane j's vertex idx[v] lane j (lanes 4-7 only
+ * when `both`: else lanes 0-3 again), as rows axis[v][a] (lane j: axis a).
+ * The vertex rows (any, x, y, z) are loaded in pairs, lane j in the low 128 bits and lane j + 4 in the
+ * high, so one 4 x 4 transpose per half (four unpacks, three shuffles) serves eight lanes. With `order`
+ * (a constant at each call), each row is first permuted by it (VPERMILPS) to (any, x_kx, y_ky, z_kz):
+ * the rows come out in the ray's sheared order. */
+CBVH_KERNEL void leaf_gather8_axes(const void *restrict verts, const __m256i idx[3], const int both,
+                                   const int permute, __m256i order, __m256 axis[3][3])
+{
+    CBVH_UNROLL(3)
+    for (uint32_t v = 0; v < 3; v++) {
+        /* each lane's float offset, 3 i (< 2^32: a wide file holds at most 2^28 triangles and 3 vertices
+         * a triangle), read back as scalars to index the loads */
+        const __m256i i = idx[v];
+        _Alignas(32) uint32_t at[8];
+        _mm256_store_si256((__m256i *)(void *)at, _mm256_add_epi32(i, _mm256_add_epi32(i, i)));
+        const float *row = (const float *)verts - 1; /* (any, x, y, z): the float before each vertex */
+        __m256 r[4];
+        CBVH_UNROLL(4)
+        for (uint32_t j = 0; j < 4; j++) {
+            r[j] = both ? _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_loadu_ps(row + at[j])),
+                                               _mm_loadu_ps(row + at[j + 4]), 1)
+                        : _mm256_broadcast_ps((const __m128 *)(const void *)(row + at[j]));
+            if (permute)
+                r[j] = _mm256_permutevar_ps(r[j], order);
+        }
+        const __m256 t0 = _mm256_unpacklo_ps(r[0], r[1]), t1 = _mm256_unpacklo_ps(r[2], r[3]);
+        const __m256 t2 = _mm256_unpackhi_ps(r[0], r[1]), t3 = _mm256_unpackhi_ps(r[2], r[3]);
+        axis[v][0] = _mm256_shuffle_ps(t0, t1, _MM_SHUFFLE(3, 2, 3, 2));
+        axis[v][1] = _mm256_shuffle_ps(t2, t3, _MM_SHUFFLE(1, 0, 1, 0));
+        axis[v][2] = _mm256_shuffle_ps(t2, t3, _MM_SHUFFLE(3, 2, 3, 2));
+    }
+}
+#endif
+
 /* Group k of a leaf [first, end) in CBVH_LANES lanes, k stepping by CBVH_LANES from leaf_groups_begin:
  * leaf_group_load on each quad of it (scratch: one quad each), the quads past the leaf's end not read
- * (the first stands in for them, its lanes masked). */
-CBVH_KERNEL void leaf_group_lanes(const struct leaf_quad *restrict quads, const void *restrict tris,
-                                  const int tri_enc, const void *restrict verts, const int vert_enc,
-                                  const float *restrict grid_origin, const float *restrict grid_scale,
-                                  uint32_t first, uint32_t end, uint32_t k,
+ * (the first stands in for them, its lanes masked). With AVX2, the usual encodings (LOCAL8 triangles,
+ * float vertices) but near the section's end gather the eight lanes at once (leaf_local8_indices8,
+ * leaf_gather8_axes), lanes past the leaf holding other triangles, masked. */
+CBVH_KERNEL void leaf_group_lanes(const struct cbvh_file *restrict f, const struct leaf_quad *restrict quads,
+                                  const int tri_enc, const int vert_enc, const float *restrict grid_origin,
+                                  const float *restrict grid_scale, uint32_t first, uint32_t end, uint32_t k,
                                   struct leaf_quad scratch[CBVH_LEAF_QUADS], struct leaf_group *restrict g)
 {
+    const void *restrict tris = f->triangles, *restrict verts = f->vertices;
+#if defined(__AVX2__)
+    /* the files' usual encodings: both halves gathered at once */
+    if (!quads && tri_enc == CBVH_TRIS_LOCAL8 && vert_enc == CBVH_VERTS_F32 &&
+        leaf_local8_window_fits(f->info.triangle_count, k)) {
+        const uint32_t n = end - k < CBVH_LANES ? end - k : CBVH_LANES;
+        const int both = n > 4u;
+        __m256i idx[3];
+        leaf_local8_indices8(tris, k, _mm256_set1_epi32((int)(f->info.vertex_count - 1u)), idx);
+        __m256 axis[3][3];
+        leaf_gather8_axes(verts, idx, both, 0, _mm256_setzero_si256(), axis);
+        CBVH_UNROLL(9)
+        for (uint32_t c = 0; c < 9; c++) {
+            _mm_store_ps(scratch[0].c[c / 3][c % 3], _mm256_castps256_ps128(axis[c / 3][c % 3]));
+            if (both)
+                _mm_store_ps(scratch[1].c[c / 3][c % 3], _mm256_extractf128_ps(axis[c / 3][c % 3], 1));
+        }
+        g->quad[0] = &scratch[0];
+        g->quad[1] = both ? &scratch[1] : &scratch[0];
+        g->mask = (1u << n) - 1u;
+        return;
+    }
+#endif
     uint32_t mask;
     g->quad[0] = leaf_group_load(quads, tris, tri_enc, verts, vert_enc, grid_origin, grid_scale, first, end,
                                  k, &scratch[0], &mask);
@@ -327,7 +364,7 @@ CBVH_KERNEL void leaf_group_lanes(const struct leaf_quad *restrict quads, const 
 /* Of the lanes of a group, those whose hit t, were the exact test (cbvh_ray_triangle_decide) to
  * accept them, would be outside [tmin, tmax] for sure: the bits of `candidates` (lanes whose float edge
  * functions u, v, w are finite, of one sign, with sum det) that it can rule out. px, py, pz: the sheared
- * vertices (the ray along +z, pz the kz coordinate relative to the origin) as leaf_reject_lanes has them.
+ * vertices (the ray along +z, pz the kz coordinate relative to the origin) as leaf_reject_rows has them.
  *
  * The exact test's t is the double plane t clamped into the span of the vertices' projections on the
  * ray and into the line's interval in the triangle's bounding box, then rounded to float. Here t is
@@ -377,7 +414,25 @@ CBVH_KERNEL uint32_t leaf_outside_lanes(const struct cbvh_ray_shear *restrict s,
     return (uint32_t)lanes_bits(lanes_and(inside, lanes_or(below, above))) & candidates;
 }
 
-/* The first test of cbvh_ray_triangle (ray_triangle.h) on the CBVH_LANES triangles of g at once, lane for
+/* A group's vertices as the filter reads them: lane j of c[v][a] is axis a of vertex v of the group's
+ * triangle j in the ray's sheared order (a = 0, 1, 2: the shear's kx, ky, kz). */
+struct leaf_rows {
+    cbvh_lanes c[3][3];
+};
+
+/* The rows of group g for the ray sheared by s. */
+CBVH_KERNEL void leaf_group_rows(const struct cbvh_ray_shear *restrict s, const struct leaf_group *restrict g,
+                                 struct leaf_rows *restrict rows)
+{
+    const uint32_t axis[3] = {s->kx, s->ky, s->kz};
+    const struct leaf_quad *restrict lo = g->quad[0], *restrict hi = g->quad[CBVH_LEAF_QUADS - 1u];
+    (void)hi;
+    CBVH_UNROLL(9)
+    for (uint32_t c = 0; c < 9; c++)
+        rows->c[c / 3][c % 3] = lanes_load_halves(lo->c[c / 3][axis[c % 3]], hi->c[c / 3][axis[c % 3]]);
+}
+
+/* The first test of cbvh_ray_triangle (ray_triangle.h) on the CBVH_LANES triangles of rows at once, lane for
  * lane the same float operations in the same order (the build contracts no multiply-add): the vertices
  * relative to the origin, sheared, then the three edge functions, left in edge[e][j] (function e of lane j).
  * Returns the bits of the lanes that test rejects for sure (finite edge functions of both signs) and, when
@@ -389,21 +444,19 @@ CBVH_KERNEL uint32_t leaf_outside_lanes(const struct cbvh_ray_shear *restrict s,
  * line crosses triangles behind the start or, from a surface, the start's own (elsewhere it costs more
  * than it saves: Wuson incoherent rays -4%, shadow rays from the surface +5%), and every leaf of an
  * occlusion query, where a lane it accepts saves the exact test and ends the walk. */
-CBVH_KERNEL uint32_t leaf_reject_lanes(const struct cbvh_ray_shear *restrict s,
-                                       const struct leaf_group *restrict g, const int ranged, float tmin,
-                                       float tmax, float edge[3][CBVH_LANES], uint32_t *restrict within)
+CBVH_KERNEL uint32_t leaf_reject_rows(const struct cbvh_ray_shear *restrict s,
+                                      const struct leaf_rows *restrict rows, const int ranged, float tmin,
+                                      float tmax, float edge[3][CBVH_LANES], uint32_t *restrict within)
 {
-    const uint32_t kx = s->kx, ky = s->ky, kz = s->kz;
     const cbvh_lanes sx = lanes_set1(s->sx), sy = lanes_set1(s->sy);
-    const cbvh_lanes ox = lanes_set1(s->org[kx]), oy = lanes_set1(s->org[ky]), oz = lanes_set1(s->org[kz]);
-    const struct leaf_quad *restrict lo = g->quad[0], *restrict hi = g->quad[CBVH_LEAF_QUADS - 1u];
+    const cbvh_lanes ox = lanes_set1(s->org[s->kx]), oy = lanes_set1(s->org[s->ky]);
+    const cbvh_lanes oz = lanes_set1(s->org[s->kz]);
     cbvh_lanes px[3], py[3], pz[3];
-    (void)hi;
     CBVH_UNROLL(3)
     for (int v = 0; v < 3; v++) {
-        pz[v] = lanes_sub(lanes_load_halves(lo->c[v][kz], hi->c[v][kz]), oz);
-        px[v] = lanes_sub(lanes_sub(lanes_load_halves(lo->c[v][kx], hi->c[v][kx]), ox), lanes_mul(sx, pz[v]));
-        py[v] = lanes_sub(lanes_sub(lanes_load_halves(lo->c[v][ky], hi->c[v][ky]), oy), lanes_mul(sy, pz[v]));
+        pz[v] = lanes_sub(rows->c[v][2], oz);
+        px[v] = lanes_sub(lanes_sub(rows->c[v][0], ox), lanes_mul(sx, pz[v]));
+        py[v] = lanes_sub(lanes_sub(rows->c[v][1], oy), lanes_mul(sy, pz[v]));
     }
     /* u = cx*by - cy*bx, v = ax*cy - ay*cx, w = bx*ay - by*ax (a, b, c = vertices 0, 1, 2) */
     const cbvh_lanes u = lanes_sub(lanes_mul(px[2], py[1]), lanes_mul(py[2], px[1]));
@@ -429,20 +482,35 @@ CBVH_KERNEL uint32_t leaf_reject_lanes(const struct cbvh_ray_shear *restrict s,
                : mixed;
 }
 
-/* The exact test of lane j of g, which leaf_reject_lanes kept: cbvh_ray_triangle_decide (ray_triangle.h)
- * on the lane's vertices and edge functions as the filter left them, the floats the scalar test computes.
- * Arguments and result as for cbvh_ray_triangle. */
-CBVH_KERNEL int leaf_lane_test(const struct cbvh_ray_shear *restrict s, const struct leaf_group *restrict g,
+/* leaf_reject_rows on group g. */
+CBVH_KERNEL uint32_t leaf_reject_lanes(const struct cbvh_ray_shear *restrict s,
+                                       const struct leaf_group *restrict g, const int ranged, float tmin,
+                                       float tmax, float edge[3][CBVH_LANES], uint32_t *restrict within)
+{
+    struct leaf_rows rows;
+    leaf_group_rows(s, g, &rows);
+    return leaf_reject_rows(s, &rows, ranged, tmin, tmax, edge, within);
+}
+
+/* The exact test of lane j, which the filter (leaf_reject_rows) kept: cbvh_ray_triangle_decide
+ * (ray_triangle.h) on the lane's vertices vert and edge functions as the filter left them, the floats the
+ * scalar test computes. Arguments and result as for cbvh_ray_triangle. */
+CBVH_KERNEL int leaf_lane_test(const struct cbvh_ray_shear *restrict s, const cbvh_v3 vert[3],
                                const float edge[3][CBVH_LANES], uint32_t j, float tmin, float tmax,
                                const int want_uv, float *t, float *u, float *v)
 {
-    const struct leaf_quad *restrict q = g->quad[j / 4u];
-    const uint32_t i = j % 4u;
-    const cbvh_v3 vert[3] = {v3(q->c[0][0][i], q->c[0][1][i], q->c[0][2][i]),
-                             v3(q->c[1][0][i], q->c[1][1][i], q->c[1][2][i]),
-                             v3(q->c[2][0][i], q->c[2][1][i], q->c[2][2][i])};
     return cbvh_ray_triangle_decide(s, vert, edge[0][j], edge[1][j], edge[2][j], tmin, tmax, want_uv, t, u,
                                     v);
+}
+
+/* The vertices of lane j of group g, as the filter read them. */
+CBVH_KERNEL void leaf_group_vertices(const struct leaf_group *restrict g, uint32_t j, cbvh_v3 vert[3])
+{
+    const struct leaf_quad *restrict q = g->quad[j / 4u];
+    const uint32_t i = j % 4u;
+    CBVH_UNROLL(3)
+    for (uint32_t c = 0; c < 3; c++)
+        vert[c] = v3(q->c[c][0][i], q->c[c][1][i], q->c[c][2][i]);
 }
 #endif
 
@@ -472,21 +540,54 @@ CBVH_KERNEL int leaf_loop(const struct cbvh_file *restrict f, uint32_t first, ui
     if (!scalar && count > 1) {
         const struct leaf_quad *restrict quads = (const struct leaf_quad *)f->quads;
         const uint32_t end = first + count;
-        for (uint32_t k = leaf_groups_begin(quads, first); k < end; k += CBVH_LANES) {
+#if defined(__AVX2__)
+        /* the files' usual encodings: each group's vertices gathered straight into the filter's rows, in the
+         * ray's sheared order (a lane it keeps reads its vertices again by index); else through quads */
+        const int direct = !quads && tri_enc == CBVH_TRIS_LOCAL8 && vert_enc == CBVH_VERTS_F32 &&
+                           leaf_local8_window_fits(f->info.triangle_count, end - 1u);
+        const __m256i order = _mm256_setr_epi32(0, 1 + (int)s->kx, 1 + (int)s->ky, 1 + (int)s->kz, 0,
+                                                1 + (int)s->kx, 1 + (int)s->ky, 1 + (int)s->kz);
+        _Alignas(32) uint32_t id[3][CBVH_LANES];
+#else
+        const int direct = 0;
+#endif
+        for (uint32_t k = direct ? first : leaf_groups_begin(quads, first); k < end; k += CBVH_LANES) {
             struct leaf_quad scratch[CBVH_LEAF_QUADS];
             struct leaf_group g;
-            leaf_group_lanes(quads, tris, tri_enc, verts, vert_enc, origin, scale, first, end, k, scratch,
-                             &g);
+            struct leaf_rows rows;
+            if (direct) {
+#if defined(__AVX2__)
+                const uint32_t n = end - k < CBVH_LANES ? end - k : CBVH_LANES;
+                __m256i idx[3];
+                leaf_local8_indices8(tris, k, _mm256_set1_epi32((int)(f->info.vertex_count - 1u)), idx);
+                leaf_gather8_axes(verts, idx, n > 4u, 1, order, rows.c);
+                CBVH_UNROLL(3)
+                for (uint32_t c = 0; c < 3; c++) /* for the exact test of the lanes the filter keeps */
+                    _mm256_store_si256((__m256i *)(void *)id[c], idx[c]);
+                g.mask = (1u << n) - 1u;
+#endif
+            } else {
+                leaf_group_lanes(f, quads, tri_enc, vert_enc, origin, scale, first, end, k, scratch, &g);
+                leaf_group_rows(s, &g, &rows);
+            }
             float edge[3][CBVH_LANES];
             uint32_t within;
             const uint32_t rejected =
-                leaf_reject_lanes(s, &g, near || occlusion, tmin, best_t, edge, &within);
+                leaf_reject_rows(s, &rows, near || occlusion, tmin, best_t, edge, &within);
             if (occlusion && (within & g.mask))
                 return 1;
             /* the lanes the filter keeps, lowest first */
             for (uint32_t kept = ~rejected & g.mask; kept; kept &= kept - 1u) {
                 const uint32_t j = lanes_lowest(kept);
-                if (leaf_lane_test(s, &g, edge, j, tmin, best_t, want_uv, &t, &u, &v) &&
+                cbvh_v3 vert[3];
+#if defined(__AVX2__)
+                if (direct)
+                    for (uint32_t c = 0; c < 3; c++)
+                        vert[c] = v3_from_f((const float *)verts + 3u * (size_t)id[c][j]);
+                else
+#endif
+                    leaf_group_vertices(&g, j, vert);
+                if (leaf_lane_test(s, vert, edge, j, tmin, best_t, want_uv, &t, &u, &v) &&
                     leaf_take(f, gate, k + j, t, u, v, any, &best_t, best))
                     return 1;
             }

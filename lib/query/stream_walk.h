@@ -187,9 +187,8 @@ CBVH_KERNEL void stream_leaf(const struct cbvh_file *f, struct cbvh_stream_batch
         const struct leaf_quad *quads = (const struct leaf_quad *)f->quads;
         for (uint32_t k = leaf_groups_begin(quads, tri0); k < end; k += CBVH_LANES, groups++) {
             group_first[groups] = k;
-            leaf_group_lanes(quads, f->triangles, (int)f->triangle_encoding, f->vertices,
-                             (int)f->vertex_encoding, f->grid_origin, f->grid_scale, tri0, end, k,
-                             scratch[groups], &q[groups]);
+            leaf_group_lanes(f, quads, (int)f->triangle_encoding, (int)f->vertex_encoding, f->grid_origin,
+                             f->grid_scale, tri0, end, k, scratch[groups], &q[groups]);
         }
         for (uint32_t j = 0; j < m; j++) {
             const uint32_t r = live[j];
@@ -212,7 +211,9 @@ CBVH_KERNEL void stream_leaf(const struct cbvh_file *f, struct cbvh_stream_batch
                 for (uint32_t kept = ~rejected & q[g].mask; kept; kept &= kept - 1u) {
                     const uint32_t lane = lanes_lowest(kept);
                     float t, u, v;
-                    const int hit = leaf_lane_test(s, &q[g], edge, lane, box_ray[CBVH_LANE_TMIN],
+                    cbvh_v3 vert[3];
+                    leaf_group_vertices(&q[g], lane, vert);
+                    const int hit = leaf_lane_test(s, vert, edge, lane, box_ray[CBVH_LANE_TMIN],
                                                    box_ray[CBVH_LANE_TMAX], !any, &t, &u, &v);
                     stream_take(b, r, group_first[g] + lane, hit, t, u, v, any, occluded);
                 }
