@@ -423,11 +423,12 @@ typedef struct cbvh_hit {
 } cbvh_hit;
 
 typedef enum cbvh_traversal {
-    CBVH_TRAVERSAL_SORTED = 0,    /* stack, nearer child by the precomputed sort byte (default) */
+    CBVH_TRAVERSAL_SORTED = 0,    /* stack, nearer child by the precomputed sort byte (default); an any-hit
+                                   * query from inside the mesh's bounds takes the farther child first */
     CBVH_TRAVERSAL_STACKLESS = 1, /* escape links, fixed depth-first order, no stack (binary layout; a
                                    * wide4 file has no escape links and walks sorted, same answers) */
     CBVH_TRAVERSAL_UNSORTED = 2,  /* stack, always the first child first (for comparison) */
-    CBVH_TRAVERSAL_DISTANCE = 3   /* stack, nearer child chosen at run time by box distance (for comparison) */
+    CBVH_TRAVERSAL_DISTANCE = 3 /* stack, nearer child chosen at run time by box distance (for comparison) */
 } cbvh_traversal;
 
 /* Work counters, for benchmarks and reports. */

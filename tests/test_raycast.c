@@ -562,6 +562,74 @@ static void open_scene(ref_fixture *fx, scene *s, const cbvh_cook_options *optio
                      CBVH_OK);
 }
 
+/* The filter of test_any_hit_order: the t of the first candidate it sees, then REJECT (the walk goes on). */
+static cbvh_filter_result first_candidate(void *user, const cbvh_hit_record *candidate)
+{
+    float *first = user;
+    if (*first < 0.0f)
+        *first = candidate->t;
+    return CBVH_FILTER_REJECT;
+}
+
+/* The order an any-hit walk visits children in (ray_setup.h's any_flip): from an origin inside the mesh's
+ * bounds the farthest first, from outside the nearest first, on every layout and kernel and on both
+ * sides of each axis. Eight parallel squares one apart, leaves of two triangles (one square): a ray along
+ * the axis through all of them from inside the bounds (half way between squares 0 and 1) sees its first
+ * candidate in the far half, one from outside in the near half; a closest-hit query, the nearest first
+ * either way, is not flipped. */
+static void test_any_hit_order(void **state)
+{
+    (void)state;
+    for (int axis = 0; axis < 3; axis++)
+        for (int sign = -1; sign <= 1; sign += 2) {
+            float pos[8 * 4 * 3];
+            uint32_t idx[8 * 6];
+            for (int q = 0; q < 8; q++) {
+                const float corners[4][2] = {{-4, -4}, {4, -4}, {4, 4}, {-4, 4}};
+                for (int c = 0; c < 4; c++) {
+                    float *p = pos + 3 * (4 * q + c);
+                    p[axis] = (float)(sign * q);
+                    p[(axis + 1) % 3] = corners[c][0];
+                    p[(axis + 2) % 3] = corners[c][1];
+                }
+                const uint32_t b = 4u * (uint32_t)q, tri[6] = {b, b + 1, b + 2, b, b + 2, b + 3};
+                memcpy(idx + 6 * q, tri, sizeof tri);
+            }
+            cbvh_cook_options co;
+            test_options_init(&co);
+            co.max_leaf_size = 2;
+            ref_fixture fx;
+            assert_int_equal(ref_fixture_open(&fx, pos, 32, idx, 16, &co), CBVH_OK);
+            const float starts[2] = {0.5f, -1.5f}; /* inside the bounds, then outside */
+            for (int outside = 0; outside < 2; outside++)
+                for (int any = 1; any >= 0; any--) {
+                    cbvh_ray ray = {{0.25f, -0.5f, 0.75f}, 0.0f, {0, 0, 0}, INFINITY};
+                    ray.org[axis] = (float)sign * starts[outside];
+                    ray.dir[axis] = (float)sign;
+                    float first = -1.0f;
+                    cbvh_query_options opt;
+                    assert_int_equal(cbvh_query_options_init(&opt, sizeof opt), CBVH_OK);
+                    opt.filter = first_candidate;
+                    opt.filter_user = &first;
+                    int occluded = -1;
+                    cbvh_hit_record rec;
+                    if (any)
+                        assert_int_equal(cbvh_occluded_with(fx.file, &ray, &opt, &occluded, NULL), CBVH_OK);
+                    else
+                        assert_int_equal(cbvh_raycast_with(fx.file, &ray, &opt, &rec, NULL), CBVH_OK);
+                    const float t0 = 1.0f - starts[outside], far = !outside && any ? 1.0f : 0.0f;
+                    /* squares 1..7 (inside) or 0..7 (outside) lie at t0 .. 7 - starts */
+                    const int in_far_half = first > 0.5f * (t0 + 7.0f - starts[outside]);
+                    if (!(first >= t0 - 1.0f) || in_far_half != (far > 0.0f))
+                        fail_msg(
+                            "%s axis %d sign %d, origin %s: first candidate at t %g, expected in the %s half",
+                            test_layout_name(), axis, sign, outside ? "outside" : "inside", (double)first,
+                            far > 0.0f ? "far" : "near");
+                }
+            ref_fixture_close(&fx);
+        }
+}
+
 static void test_soup(void **state)
 {
     (void)state;
@@ -1714,6 +1782,7 @@ int main(void)
         cmocka_unit_test(test_wide4_affine_box_test),
 #endif
         cmocka_unit_test(test_shear_axes_and_slab_select),
+        cmocka_unit_test(test_any_hit_order),
         cmocka_unit_test(test_soup),
         cmocka_unit_test(test_sphere_and_terrain),
         cmocka_unit_test(test_cook_variants),

@@ -50,6 +50,10 @@ struct cbvh_file {
      * margin to keep the overflow test passing. Set at open. */
     _Alignas(16) float origin_near_lo[4];
     _Alignas(16) float origin_near_hi[4];
+    /* info's bounds, lane 3 0 in both: an origin inside them is among the triangles (cbvh_ray_prepare's
+     * any_flip, query/ray_setup.h). Set at open. */
+    _Alignas(16) float bounds_lo[4];
+    _Alignas(16) float bounds_hi[4];
     const void *remap;           /* cooked -> original triangle id; NULL = identity */
     uint32_t remap_encoding;     /* CBVH_REMAP_* */
     const uint32_t *unmap;       /* original -> cooked id (owned, built at open when remap is present): dense,

@@ -85,6 +85,8 @@ static cbvh_result place_sections(struct cbvh_file *f, const cbvh_section_map *m
     for (int a = 0; a < 4; a++) {
         f->origin_near_lo[a] = a == 3 ? 0.0f : usable ? f->info.bounds_min[a] - margin : INFINITY;
         f->origin_near_hi[a] = a == 3 ? 0.0f : usable ? f->info.bounds_max[a] + margin : -INFINITY;
+        f->bounds_lo[a] = a == 3 ? 0.0f : f->info.bounds_min[a];
+        f->bounds_hi[a] = a == 3 ? 0.0f : f->info.bounds_max[a];
     }
     if (f->remap)
         f->remap_encoding = f->sections[map->index[CBVH_SECTION_REMAP - 1]].encoding;

@@ -43,6 +43,9 @@ struct cbvh_ray_ctx {
                            * FLT_MAX / 2), so the box test runs on that axis at half scale (ray_box.h) */
     uint32_t octant;      /* bit a set when rcp[a] has its sign bit set (so -0 counts as negative): selects
                            * the precomputed child order (layout/tree.h) */
+    uint32_t any_flip;    /* 7 when the origin lies inside the mesh's bounds, else 0 (set by
+                           * cbvh_ray_prepare): an any-hit walk takes the child order of octant ^ any_flip,
+                           * farthest child first from among the triangles (query/walk.h) */
     const struct cbvh_hit_gate *gate; /* NULL, or the culling and hit filter of a query with options
                                        * (raycast.c), asked about each candidate hit (leaf.h) */
 };
@@ -168,6 +171,7 @@ static inline int cbvh_ray_setup(struct cbvh_ray_ctx *ctx, const cbvh_ray *ray)
         ctx->rcp[a] = 1.0f / d[a];
 #endif
     ctx->octant = cbvh_ray_octant(ray);
+    ctx->any_flip = 0;
     ctx->t_base = 0.0;
     ctx->box_halve = 0;
     ctx->gate = NULL;

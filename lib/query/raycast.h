@@ -78,13 +78,25 @@ static inline int cbvh_ray_prepare(struct cbvh_ray_ctx *ctx, const cbvh_ray *ray
     const __m128 o = _mm_loadu_ps(ray->org); /* org and tmin (cbvh_ray_valid); lane 3 is not looked at */
     if (CBVH_LIKELY((_mm_movemask_ps(_mm_and_ps(_mm_cmpge_ps(o, _mm_load_ps(f->origin_near_lo)),
                                                 _mm_cmple_ps(o, _mm_load_ps(f->origin_near_hi)))) &
-                     7) == 7))
+                     7) == 7)) {
+        ctx->any_flip = (_mm_movemask_ps(_mm_and_ps(_mm_cmpge_ps(o, _mm_load_ps(f->bounds_lo)),
+                                                    _mm_cmple_ps(o, _mm_load_ps(f->bounds_hi)))) &
+                         7) == 7
+                            ? 7u
+                            : 0u;
         return 1;
+    }
 #else
     if (ray->org[0] >= f->origin_near_lo[0] && ray->org[0] <= f->origin_near_hi[0] &&
         ray->org[1] >= f->origin_near_lo[1] && ray->org[1] <= f->origin_near_hi[1] &&
-        ray->org[2] >= f->origin_near_lo[2] && ray->org[2] <= f->origin_near_hi[2])
+        ray->org[2] >= f->origin_near_lo[2] && ray->org[2] <= f->origin_near_hi[2]) {
+        ctx->any_flip = ray->org[0] >= f->bounds_lo[0] && ray->org[0] <= f->bounds_hi[0] &&
+                                ray->org[1] >= f->bounds_lo[1] && ray->org[1] <= f->bounds_hi[1] &&
+                                ray->org[2] >= f->bounds_lo[2] && ray->org[2] <= f->bounds_hi[2]
+                            ? 7u
+                            : 0u;
         return 1;
+    }
 #endif
     cbvh_ray_place_origin(ctx, ray, f);
     return 1;

@@ -544,20 +544,23 @@ cbvh_walk_step(const struct cbvh_file *restrict f, const uint32_t layout,
 {
     const float tmin = ray->tmin;
     const cbvh_ref r = st->r;
+    /* the children's order: nearest first, but an any-hit walk from among the triangles goes farthest
+     * first (ray->any_flip), where most occluders are, not around its start, where a ray leaving a surface
+     * passes the surface's neighbours: Wuson shadow rays test 12 triangles a ray rather than 21 */
+    const uint32_t octant = ray->octant ^ (mode.any ? ray->any_flip : 0u);
     if (!cbvh_tree_is_leaf(f, layout, r)) {
 #ifdef CBVH_HAVE_SIMD
         if (layout == CBVH_LAYOUT_WIDE4 && !float_boxes && !mode.scalar && mode.order != CBVH_WALK_DISTANCE) {
-            if (walk_w4_descend(f, r, &st->w, mode.order == CBVH_WALK_SORTED, ray->octant, st->tmax,
-                                st->stack, &st->sp, &st->r, &st->r_entry, count ? &st->visited : NULL))
+            if (walk_w4_descend(f, r, &st->w, mode.order == CBVH_WALK_SORTED, octant, st->tmax, st->stack,
+                                &st->sp, &st->r, &st->r_entry, count ? &st->visited : NULL))
                 return CBVH_WALK_MORE;
         } else
 #endif
         {
             cbvh_ref c[CBVH_TREE_WIDTH];
             float e[CBVH_TREE_WIDTH];
-            const uint32_t n =
-                walk_children_hit(f, layout, r, &st->box, &st->w, float_boxes, mode.order, ray->octant, tmin,
-                                  st->tmax, c, e, &st->visited, mode.scalar);
+            const uint32_t n = walk_children_hit(f, layout, r, &st->box, &st->w, float_boxes, mode.order,
+                                                 octant, tmin, st->tmax, c, e, &st->visited, mode.scalar);
             if (n > 0) {
                 for (uint32_t k = n; k-- > 1;) {
                     st->stack[st->sp].ref = c[k];
