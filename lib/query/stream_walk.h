@@ -306,9 +306,15 @@ CBVH_KERNEL void stream_walk(const struct cbvh_file *restrict f, const uint32_t 
     uint32_t sp = 0, count[CBVH_STREAM_LANES];
     uint64_t nv = 0, nt = 0;
 
-    /* The root's list: every ray, through the root box when the layout has one. */
-    for (uint32_t j = 0; j < b->count; j++)
+    /* The root's list: every ray, through the root box when the layout has one. The children's order: the
+     * batch octant's, nearest first, but farthest first for an any-hit batch whose rays mostly start inside
+     * the mesh's bounds (their any_flip: the single-ray walk's rule, walk.h) */
+    uint32_t inside = 0;
+    for (uint32_t j = 0; j < b->count; j++) {
         list_ray[j] = (uint16_t)j;
+        inside += b->ctx[j].any_flip & 1u;
+    }
+    const uint32_t order = octant ^ (any && 2u * inside > b->count ? 7u : 0u);
     uint32_t start = 0, n = b->count;
     cbvh_ref r = cbvh_tree_root(f, layout);
     const uint32_t root_box = cbvh_tree_root_box(f, layout);
@@ -340,7 +346,7 @@ CBVH_KERNEL void stream_walk(const struct cbvh_file *restrict f, const uint32_t 
                 stream_tail_start(f, layout, b, list_ray[start + j], r);
             }
         } else {
-            const uint32_t k = cbvh_tree_children(f, layout, r, octant, c);
+            const uint32_t k = cbvh_tree_children(f, layout, r, order, c);
             stream_boxes_of(f, layout, sel, c, k, &boxes);
             /* child j's list at top + (k - 1 - j) n, the nearest child's highest */
             for (uint32_t j = 0; j < CBVH_STREAM_LANES; j++) {
