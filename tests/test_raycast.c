@@ -228,18 +228,11 @@ static void test_wide4_descent_table(void **state)
 }
 
 #ifdef CBVH_HAVE_SIMD
-void cbvh_wide4_refs_avx2(const uint8_t *node, uint64_t meta, uint32_t refs[4]) __attribute__((weak));
-
 /* walk_w4_refs, the SIMD walks' references of all four slots at once, gives cbvh_w4_child_ref's for
- * every used slot of every node a file can hold: each set of used and internal slots, every leaf count.
- * Both forms: SSE2's (compiled here) and, on a CPU with the AVX2 kernel, the AVX2 walks' own. */
+ * every used slot of every node a file can hold: each set of used and internal slots, every leaf count. */
 static void test_wide4_refs(void **state)
 {
     (void)state;
-    const int avx2 = cbvh_wide4_refs_avx2 && test_set_kernel(TEST_KERNEL_AVX2);
-    test_set_kernel(TEST_KERNEL_BEST);
-    if (!avx2)
-        print_message("the AVX2 form is not checked: no AVX2 kernel in this build or on this CPU\n");
     long checked = 0;
     uint8_t node[CBVH_W4_NODE_SIZE];
     memset(node, 0, sizeof node);
@@ -259,16 +252,12 @@ static void test_wide4_refs(void **state)
                 const uint32_t first_child = 0x7FFFFFF0u - 7u * c, first_triangle = 0x0FFFFFD0u - 5u * c;
                 memcpy(node + CBVH_W4_FIRST_CHILD, &first_child, 4);
                 memcpy(node + CBVH_W4_FIRST_TRIANGLE, &first_triangle, 4);
-                _Alignas(16) uint32_t refs[2][4];
-                _mm_store_si128((__m128i *)(void *)refs[0], walk_w4_refs(node, meta));
-                if (avx2)
-                    cbvh_wide4_refs_avx2(node, meta, refs[1]);
-                for (int form = 0; form <= avx2; form++)
-                    for (uint32_t s = 0; s < 4; s++)
-                        if ((used >> s & 1u) && refs[form][s] != cbvh_w4_child_ref(node, meta, s))
-                            fail_msg("%s: used %x internal %x counts %o slot %u: %08x, expected %08x",
-                                     form ? "AVX2" : "SSE2", used, internal, c, s, refs[form][s],
-                                     cbvh_w4_child_ref(node, meta, s));
+                _Alignas(16) uint32_t refs[4];
+                _mm_store_si128((__m128i *)(void *)refs, walk_w4_refs(node, meta));
+                for (uint32_t s = 0; s < 4; s++)
+                    if ((used >> s & 1u) && refs[s] != cbvh_w4_child_ref(node, meta, s))
+                        fail_msg("used %x internal %x counts %o slot %u: %08x, expected %08x", used, internal,
+                                 c, s, refs[s], cbvh_w4_child_ref(node, meta, s));
                 checked++;
             }
         }

@@ -40,10 +40,6 @@ int cbvh_walk_set_kernel(int kernel);
 /* The kernel the wide layout's walks take now (never BEST): the streams follow it. */
 int cbvh_walk_kernel(void);
 
-/* Test hook, not exported: walk.h's walk_w4_refs as the AVX2 walks compile it (their own form), lane s into
- * refs[s], for test_raycast's check of every node a file can hold. Only on a CPU with the AVX2 kernel. */
-void cbvh_wide4_refs_avx2(const uint8_t *node, uint64_t meta, uint32_t refs[4]);
-
 /* Stackless walk over escape links (binary layout). */
 void cbvh_closest_stackless(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray, struct cbvh_best_hit *best,
                             cbvh_query_stats *stats);

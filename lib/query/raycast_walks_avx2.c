@@ -9,7 +9,6 @@
     "raycast_walks_avx2.c is compiled with AVX2, BMI1, BMI2 and FMA enabled (configure and CMake add the flags)"
 #endif
 
-#include "query/raycast.h"
 #include "query/walk.h"
 #include "query/walk_instances.h"
 
@@ -26,9 +25,4 @@
     }
 CBVH_WALK_INSTANCES(WALK_AVX2)
 #undef WALK_AVX2
-
-void cbvh_wide4_refs_avx2(const uint8_t *node, uint64_t meta, uint32_t refs[4])
-{
-    _mm_storeu_si128((__m128i *)(void *)refs, walk_w4_refs(node, meta));
-}
 #endif

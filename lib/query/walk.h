@@ -278,42 +278,12 @@ CBVH_KERNEL __m128i walk_w4_byte_lanes(uint32_t x)
 }
 
 /* The references of a node's four slots at once, lane s for slot s: cbvh_w4_child_ref of each used slot
- * (unused slots: a value to ignore), without a branch on which are leaves. Each slot's step (a leaf's
- * triangle count, an internal slot's 1) summed over the slots before it is its offset from the node's
- * first triangle or first child. With AVX2, in lanes: each lane shifts the meta by its own counts
- * (VPSLLVD), and three byte shifts and two adds sum the lanes before it, the triangle count in the low
- * half of a lane and the node count in the high half (about 60 instructions a Wuson ray fewer than the
- * word form, callgrind). Else in the bytes of a word, one a slot: multiplied by 0x01010100, byte s holds the
- * sum over the slots before s (at most 3 x 8 triangles: no carry). */
+ * (unused slots: a value to ignore), without a branch on which are leaves. In the bytes of a word, one a
+ * slot: each leaf's triangle count and each internal slot's 1; multiplied by 0x01010100, byte s holds the
+ * sum over the slots before s (at most 3 x 8 triangles: no carry), slot s's offset from the node's first
+ * triangle or first child. */
 CBVH_KERNEL __m128i walk_w4_refs(const uint8_t *restrict node, uint64_t meta)
 {
-#if defined(__AVX2__)
-    /* Lane s: the slot's nibble of counts, moved to the top and back down, and its used and internal bits
-     * moved to bit 31, spread as 0 or -1 (shift counts from memory, no other constant: GCC builds each
-     * constant vector in registers at every node) */
-    static const struct {
-        _Alignas(16) int32_t nibble[4], used[4], inner[4];
-    } shift = {{28, 24, 20, 16}, {15, 14, 13, 12}, {11, 10, 9, 8}};
-    const __m128i m = _mm_set1_epi32((int)(uint32_t)meta);
-    const __m128i minus_one =
-        _mm_srli_epi32(_mm_sllv_epi32(m, _mm_load_si128((const __m128i *)(const void *)shift.nibble)), 28);
-    const __m128i used =
-        _mm_srai_epi32(_mm_sllv_epi32(m, _mm_load_si128((const __m128i *)(const void *)shift.used)), 31);
-    const __m128i inner =
-        _mm_srai_epi32(_mm_sllv_epi32(m, _mm_load_si128((const __m128i *)(const void *)shift.inner)), 31);
-    /* a leaf's count (its nibble + 1), an internal slot's 1 (its nibble is 0) in the high half: 0xFFFF + 1,
-     * an unused slot's 0; summed over the slots before each (at most 3 x 8 and 3: no carry between halves) */
-    const __m128i step = _mm_add_epi32(_mm_sub_epi32(minus_one, used), _mm_srli_epi32(inner, 16));
-    const __m128i e1 = _mm_slli_si128(step, 4);
-    const __m128i before = _mm_add_epi32(_mm_add_epi32(e1, _mm_slli_si128(e1, 4)), _mm_slli_si128(e1, 8));
-    const __m128i inner_ref =
-        _mm_add_epi32(_mm_set1_epi32((int)cbvh_w4_first_child(node)), _mm_srli_epi32(before, 16));
-    const __m128i leaf_ref =
-        _mm_or_si128(_mm_add_epi32(_mm_set1_epi32((int)(cbvh_w4_first_triangle(node) | CBVH_W4_LEAF_BIT)),
-                                   _mm_blend_epi16(before, _mm_setzero_si128(), 0xAA)),
-                     _mm_slli_epi32(minus_one, CBVH_W4_COUNT_SHIFT));
-    return _mm_blendv_epi8(leaf_ref, inner_ref, inner);
-#else
     const uint32_t m = (uint32_t)meta;
     uint32_t minus_one = m & 0xFFFFu; /* nibble s (a leaf's count - 1, else 0) into byte s */
     minus_one = (minus_one | minus_one << 8) & 0x00FF00FFu;
@@ -331,7 +301,6 @@ CBVH_KERNEL __m128i walk_w4_refs(const uint8_t *restrict node, uint64_t meta)
     /* all ones in the lanes of internal slots: each byte 0 or 0xFF, then 0 or -1 as a lane */
     const __m128i is_inner = _mm_srai_epi32(_mm_slli_epi32(walk_w4_byte_lanes(inner * 0xFFu), 24), 24);
     return _mm_or_si128(_mm_and_si128(is_inner, inner_ref), _mm_andnot_si128(is_inner, leaf_ref));
-#endif
 }
 
 /* The SIMD walks' step down the wide layout, in the node's order for the ray's octant or in slot order
