@@ -282,9 +282,9 @@ struct leaf_group {
 /* Eight lanes of triangle vertices, a corner v at a time: lane j's vertex idx[v] lane j (lanes 4-7 only
  * when `both`: else lanes 0-3 again), as rows axis[v][a] (lane j: axis a).
  * The vertex rows (any, x, y, z) are loaded in pairs, lane j in the low 128 bits and lane j + 4 in the
- * high, so one 4 x 4 transpose per half (four unpacks, three shuffles) serves eight lanes. With `order`
- * (a constant at each call), each row is first permuted by it (VPERMILPS) to (any, x_kx, y_ky, z_kz):
- * the rows come out in the ray's sheared order. */
+ * high, so one 4 x 4 transpose per half (four unpacks, three shuffles) serves eight lanes. With `permute`
+ * (a constant at each call), each row is first permuted by the ray's `order` (VPERMILPS) to (any, x_kx,
+ * y_ky, z_kz): the rows come out in the ray's sheared order. */
 CBVH_KERNEL void leaf_gather8_axes(const void *restrict verts, const __m256i idx[3], const int both,
                                    const int permute, __m256i order, __m256 axis[3][3])
 {

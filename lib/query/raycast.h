@@ -60,40 +60,34 @@ _Static_assert(4 * CBVH_NEAR_ORIGIN_FACTOR <= (int)CBVH_FAR_FACTOR,
  * ray_origin.c. */
 void cbvh_ray_place_origin(struct cbvh_ray_ctx *ctx, const cbvh_ray *ray, const struct cbvh_file *f);
 
+/* Whether the ray's origin lies in the box [lo, hi] (lane 3 of each is not looked at; the ray's tmin follows
+ * its origin, so one 16-byte load reads it). */
+static inline int cbvh_origin_in(const cbvh_ray *ray, const float lo[4], const float hi[4])
+{
+#ifdef CBVH_HAVE_SIMD
+    const __m128 o = _mm_loadu_ps(ray->org);
+    return (_mm_movemask_ps(_mm_and_ps(_mm_cmpge_ps(o, _mm_load_ps(lo)), _mm_cmple_ps(o, _mm_load_ps(hi)))) &
+            7) == 7;
+#else
+    return ray->org[0] >= lo[0] && ray->org[0] <= hi[0] && ray->org[1] >= lo[1] && ray->org[1] <= hi[1] &&
+           ray->org[2] >= lo[2] && ray->org[2] <= hi[2];
+#endif
+}
+
 /* cbvh_ray_setup for a ray cast into file f: also moves an origin far from
  * the file's bounds next to them, so the triangle test keeps its precision
- * (cbvh_ray_place_origin). Returns 0 for an invalid ray. Inline: it runs
- * once per ray. */
+ * (cbvh_ray_place_origin), and sets any_flip for an origin inside the bounds.
+ * Returns 0 for an invalid ray. Inline: it runs once per ray. */
 static inline int cbvh_ray_prepare(struct cbvh_ray_ctx *ctx, const cbvh_ray *ray, const struct cbvh_file *f)
 {
     if (!cbvh_ray_setup(ctx, ray))
         return 0;
-#ifdef CBVH_HAVE_SIMD
-    /* Most origins lie next to the mesh (struct cbvh_file's origin_near box), where there is nothing to do.
-     */
-    const __m128 o = _mm_loadu_ps(ray->org); /* org and tmin (cbvh_ray_valid); lane 3 is not looked at */
-    if (CBVH_LIKELY((_mm_movemask_ps(_mm_and_ps(_mm_cmpge_ps(o, _mm_load_ps(f->origin_near_lo)),
-                                                _mm_cmple_ps(o, _mm_load_ps(f->origin_near_hi)))) &
-                     7) == 7)) {
-        ctx->any_flip = (_mm_movemask_ps(_mm_and_ps(_mm_cmpge_ps(o, _mm_load_ps(f->bounds_lo)),
-                                                    _mm_cmple_ps(o, _mm_load_ps(f->bounds_hi)))) &
-                         7) == 7
-                            ? 7u
-                            : 0u;
+    /* Most origins lie next to the mesh (struct cbvh_file's origin_near box), where there is nothing to do;
+     * one outside it (or any, when a huge mesh has no such box) keeps any_flip 0: nearest first */
+    if (CBVH_LIKELY(cbvh_origin_in(ray, f->origin_near_lo, f->origin_near_hi))) {
+        ctx->any_flip = cbvh_origin_in(ray, f->bounds_lo, f->bounds_hi) ? 7u : 0u;
         return 1;
     }
-#else
-    if (ray->org[0] >= f->origin_near_lo[0] && ray->org[0] <= f->origin_near_hi[0] &&
-        ray->org[1] >= f->origin_near_lo[1] && ray->org[1] <= f->origin_near_hi[1] &&
-        ray->org[2] >= f->origin_near_lo[2] && ray->org[2] <= f->origin_near_hi[2]) {
-        ctx->any_flip = ray->org[0] >= f->bounds_lo[0] && ray->org[0] <= f->bounds_hi[0] &&
-                                ray->org[1] >= f->bounds_lo[1] && ray->org[1] <= f->bounds_hi[1] &&
-                                ray->org[2] >= f->bounds_lo[2] && ray->org[2] <= f->bounds_hi[2]
-                            ? 7u
-                            : 0u;
-        return 1;
-    }
-#endif
     cbvh_ray_place_origin(ctx, ray, f);
     return 1;
 }
