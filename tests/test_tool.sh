@@ -99,6 +99,11 @@ assert cook["file_size"] == info["file_size"]
 assert sum(info["tree"]["leaf_histogram"].values()) == info["tree"]["leaves"]
 assert info["box_inflation"]["max"] >= info["box_inflation"]["mean"] >= 0
 assert abs(cook["tree"]["sah_cost"] - info["tree"]["sah_cost"]) <= 1e-3 * info["tree"]["sah_cost"]
+# boxes on a frame per node contain the exact ones, and 8-bit steps (255 divides 65535) are coarser
+# than 16-bit ones within the same frames: exact <= 16 bits <= 8 bits; 16 bits within 0.1% of exact
+tree = info["tree"]
+exact, f16, f8 = tree["sah_cost_exact"], tree["sah_cost_frame16"], tree["sah_cost_frame8"]
+assert exact * (1 - 1e-12) <= f16 <= f8 and f16 <= 1.001 * exact and f8 > f16, tree
 # the worst box is named by its node (a wide4 node carries its children's boxes: and a child slot)
 assert info["layout"] == "wide4" and info["box_inflation"]["max_node"] < info["tree"]["nodes"], info
 assert 0 <= info["box_inflation"]["max_slot"] < 4, info

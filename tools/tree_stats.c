@@ -1,5 +1,6 @@
 /* tree_stats.c: exact node boxes recomputed from the triangles, quantization inflation, SAH cost, leaf histogram. */
 #include <float.h>
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -128,6 +129,59 @@ static void stats_subtree(struct stats_walk *w, cbvh_ref r, uint32_t box, uint32
         stats_subtree(w, c[k].ref, c[k].box, depth + 1);
 }
 
+/* The SAH cost had each box been stored on a frame per node instead of the mesh grid: a child's box
+ * rounded outward to `levels` steps per axis of its parent's box as so stored (the root's: its exact box,
+ * stored in floats), as a node that carries its own frame would store it. Adds to *cost the subtree of r,
+ * whose stored box is frame[6] (min xyz, max xyz), each child's box weighted as in stats_subtree. */
+struct frame_walk {
+    const struct cbvh_file *f;
+    const float *exact;
+    double root_area, ct, ci, levels, cost;
+};
+
+static void frame_subtree(struct frame_walk *w, cbvh_ref r, const double frame[6])
+{
+    const struct cbvh_file *f = w->f;
+    struct cbvh_child c[CBVH_TREE_WIDTH];
+    const uint32_t n = cbvh_tree_children(f, f->layout, r, CBVH_NO_OCTANT, c);
+    for (uint32_t k = 0; k < n; k++) {
+        const float *e = w->exact + 6 * (size_t)c[k].box;
+        double q[6];
+        for (int a = 0; a < 3; a++) {
+            const double lo = frame[a], step = (frame[3 + a] - lo) / w->levels;
+            q[a] = step > 0 ? lo + floor(((double)e[a] - lo) / step) * step : lo;
+            q[3 + a] = step > 0 ? lo + ceil(((double)e[3 + a] - lo) / step) * step : frame[3 + a];
+            /* inside the frame, and around the exact box whatever the rounding of the steps */
+            q[a] = fmin(fmax(q[a], lo), (double)e[a]);
+            q[3 + a] = fmax(fmin(q[3 + a], frame[3 + a]), (double)e[3 + a]);
+        }
+        const double area = 2.0 * ((q[3] - q[0]) * (q[4] - q[1]) + (q[4] - q[1]) * (q[5] - q[2]) +
+                                   (q[5] - q[2]) * (q[3] - q[0]));
+        const int leaf = cbvh_tree_is_leaf(f, f->layout, c[k].ref);
+        uint32_t first = 0, count = 0;
+        if (leaf)
+            cbvh_tree_leaf(f, f->layout, c[k].ref, &first, &count);
+        w->cost += (leaf ? w->ci * count : w->ct) * (w->root_area > 0 ? area / w->root_area : 0);
+        if (!leaf)
+            frame_subtree(w, c[k].ref, q);
+    }
+}
+
+static double frame_sah(const struct cbvh_file *f, const float *exact, const float root[6], double ct,
+                        double ci, double levels)
+{
+    const double frame[6] = {root[0], root[1], root[2], root[3], root[4], root[5]};
+    struct frame_walk w = {f, exact, tree_box_area(root, root + 3), ct, ci, levels, ct};
+    const cbvh_ref r = cbvh_tree_root(f, f->layout);
+    if (cbvh_tree_is_leaf(f, f->layout, r)) { /* a one-leaf tree: its box is the root's */
+        uint32_t first, count;
+        cbvh_tree_leaf(f, f->layout, r, &first, &count);
+        return ci * count;
+    }
+    frame_subtree(&w, r, frame);
+    return w.cost;
+}
+
 int tree_stats_compute(const struct cbvh_file *f, double traversal_cost, double intersection_cost,
                        tree_stats *out)
 {
@@ -146,6 +200,8 @@ int tree_stats_compute(const struct cbvh_file *f, double traversal_cost, double 
     struct stats_walk w = {f, boxes, tree_box_area(qlo, qhi), tree_box_area(root, root + 3), traversal_cost,
                            intersection_cost, 0, 0, 0, 0, 0, out};
     stats_subtree(&w, cbvh_tree_root(f, f->layout), root_box, 1);
+    out->sah_cost_frame16 = frame_sah(f, boxes, root, traversal_cost, intersection_cost, 65535.0);
+    out->sah_cost_frame8 = frame_sah(f, boxes, root, traversal_cost, intersection_cost, 255.0);
     out->nodes = f->info.node_count;
     out->mean_leaf_size = out->leaves ? (double)w.leaf_triangles / out->leaves : 0;
     out->inflation_mean = w.boxes ? w.sum_inflation / (double)w.boxes : 0;

@@ -27,6 +27,10 @@ typedef struct tree_stats {
      * a box of its own counts at its full area). */
     double sah_cost;       /* with the dequantized boxes (what queries see) */
     double sah_cost_exact; /* with the exact boxes (what quantization costs: the difference) */
+    /* had the boxes been stored on a frame per node rather than on the mesh grid: each child's box
+     * rounded outward to 65535 (16-bit) or 255 (8-bit) steps per axis of its parent's box as stored, the
+     * root's exact (tree_stats.c's frame_sah) */
+    double sah_cost_frame16, sah_cost_frame8;
     double inflation_mean, inflation_max; /* over all boxes, see tree_box_inflation */
     double leaf_inflation_mean, internal_inflation_mean;
     uint32_t inflation_max_box;
