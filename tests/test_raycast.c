@@ -385,7 +385,7 @@ static void test_wide4_affine_box_test(void **state)
         struct cbvh_box_ray box;
         cbvh_box_ray_init(&box, go, gs, ctx.shear.org, ctx.rcp, ctx.octant);
         struct cbvh_w4_simd_ray w;
-        walk_w4_simd_ray_init(&w, &box, 0u, ctx.tmin);
+        walk_w4_simd_ray_init(&w, &box, go, gs, ctx.shear.org, ctx.rcp, ctx.octant, 0u, ctx.tmin);
         if (w.exact)
             exact++;
         else

@@ -127,10 +127,11 @@ CBVH_KERNEL void stream_tails(const struct cbvh_file *f, const uint32_t layout, 
                                                                       visited, tested);
 }
 
-/* Ray r of the batch starts a tail on the subtree of node `root` (whose box the batch tested), after the
- * running tails made room for it. */
+/* Ray r of the batch starts a tail in `mode` (the tails' own: stream_tails_run's) on the subtree of node
+ * `root` (whose box the batch tested), after the running tails made room for it. */
 CBVH_KERNEL void stream_tail_start(const struct cbvh_file *restrict f, const uint32_t layout,
-                                   struct cbvh_stream_batch *restrict b, uint32_t r, cbvh_ref root)
+                                   struct cbvh_stream_batch *restrict b, const struct cbvh_walk_mode mode,
+                                   uint32_t r, cbvh_ref root)
 {
     struct cbvh_stream_tails *restrict tails = b->tails;
     const uint32_t k = cbvh_lowest_lane(~tails->running & ((1u << CBVH_STREAM_TAILS) - 1u));
@@ -138,7 +139,8 @@ CBVH_KERNEL void stream_tail_start(const struct cbvh_file *restrict f, const uin
     t->ray = r;
     t->fetched = CBVH_W4_LEAF_BIT - 1u; /* no leaf */
     t->best = b->best[r];
-    cbvh_walk_begin(f, layout, &b->ctx[r], root, CBVH_NO_BOX, NULL, b->box_ray[r][CBVH_LANE_TMAX], &t->walk);
+    cbvh_walk_begin(f, layout, &b->ctx[r], mode, root, CBVH_NO_BOX, NULL, b->box_ray[r][CBVH_LANE_TMAX],
+                    &t->walk);
     tails->running |= 1u << k;
     if (layout == CBVH_LAYOUT_WIDE4) /* the batch tested its box in its parent: not yet fetched */
         CBVH_PREFETCH(cbvh_w4_node(f->nodes, root));
@@ -289,6 +291,8 @@ CBVH_KERNEL void stream_walk(const struct cbvh_file *restrict f, const uint32_t 
 {
     /* the scalar node kernel (the fallback, and its test) comes with scalar leaves */
     const int simd_leaves = node_test != cbvh_stream_node_scalar;
+    /* the tails' walks (stream_tails_run's mode) */
+    const struct cbvh_walk_mode tail_mode = {.order = CBVH_WALK_SORTED, .any = any, .scalar = !simd_leaves};
     const struct cbvh_slab_select sel = cbvh_slab_select_of(octant);
     uint16_t *restrict list_ray = b->list_ray;
     float *restrict list_entry = b->list_entry;
@@ -343,7 +347,7 @@ CBVH_KERNEL void stream_walk(const struct cbvh_file *restrict f, const uint32_t 
             for (uint32_t j = 0; j < n; j++) {
                 stream_tails(f, layout, b, any, !simd_leaves, counting, b->tails->max - 1u, occluded, &nv,
                              &nt);
-                stream_tail_start(f, layout, b, list_ray[start + j], r);
+                stream_tail_start(f, layout, b, tail_mode, list_ray[start + j], r);
             }
         } else {
             const uint32_t k = cbvh_tree_children(f, layout, r, order, c);

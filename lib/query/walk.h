@@ -85,7 +85,7 @@ struct cbvh_w4_simd_ray {
     __m128 a[3], near_b[3], far_b[3];           /* the affine test's, per axis, in all four lanes */
     const struct cbvh_box_ray *box;             /* the exact test's origin, scale, org and rcp */
     __m128 tmin;
-    uint32_t offset[6];
+    const uint8_t *offset; /* walk_w4_plane_offsets of the ray's octant */
     int exact;
 #else
     int unused;
@@ -95,15 +95,32 @@ struct cbvh_w4_simd_ray {
 #ifdef CBVH_HAVE_SIMD
 /* Lane k of v in all four lanes. */
 #define CBVH_LANE(v, k) _mm_shuffle_ps((v), (v), _MM_SHUFFLE(k, k, k, k))
+
+/* Per octant, the byte offsets in a node of the six planes the test uses (struct cbvh_w4_simd_ray): a
+ * table read by pointer rather than six offsets stored per ray (a ray's set-up is bound by its stores). */
+#define W4_PLANE_OFFSETS(o)                                                                                  \
+    {                                                                                                        \
+        CBVH_W4_Q + 8u * CBVH_SLAB_NEAR(o, 0), CBVH_W4_Q + 8u * CBVH_SLAB_NEAR(o, 1),                        \
+            CBVH_W4_Q + 8u * CBVH_SLAB_NEAR(o, 2), CBVH_W4_Q + 8u * (3u - CBVH_SLAB_NEAR(o, 0)),             \
+            CBVH_W4_Q + 8u * (5u - CBVH_SLAB_NEAR(o, 1)), CBVH_W4_Q + 8u * (7u - CBVH_SLAB_NEAR(o, 2))       \
+    }
+static const uint8_t walk_w4_plane_offsets[8][6] = {
+    W4_PLANE_OFFSETS(0u), W4_PLANE_OFFSETS(1u), W4_PLANE_OFFSETS(2u), W4_PLANE_OFFSETS(3u),
+    W4_PLANE_OFFSETS(4u), W4_PLANE_OFFSETS(5u), W4_PLANE_OFFSETS(6u), W4_PLANE_OFFSETS(7u)};
+#undef W4_PLANE_OFFSETS
 #endif
 
+/* Sets up w for the ray (origin org, reciprocal rcp, octant) against the grid (grid_origin, grid_scale);
+ * `box`: where the exact test finds the box ray, which the caller fills when w->exact says the test takes
+ * it (the affine test needs only what is here: box_halve, which halves the box ray, makes it exact). */
 CBVH_KERNEL void walk_w4_simd_ray_init(struct cbvh_w4_simd_ray *w, const struct cbvh_box_ray *restrict box,
+                                       const float grid_origin[3], const float grid_scale[3],
+                                       const float org_in[3], const float rcp_in[3], uint32_t octant,
                                        uint32_t box_halve, float tmin)
 {
 #ifdef CBVH_HAVE_SIMD
-    const struct cbvh_slab_select s = box->sel;
-    const __m128 origin = cbvh_load3(box->origin), scale = cbvh_load3(box->scale);
-    const __m128 org = cbvh_load3(box->org), rcp = cbvh_load3(box->rcp);
+    const __m128 origin = cbvh_load3(grid_origin), scale = cbvh_load3(grid_scale);
+    const __m128 org = cbvh_load3(org_in), rcp = cbvh_load3(rcp_in);
     const __m128 sign = _mm_set1_ps(-0.0f);
     /* lane 3 is 0 in every input: 0 there too, finite */
     const __m128 span = _mm_mul_ps(_mm_andnot_ps(sign, scale), _mm_set1_ps((float)CBVH_Q_MAX));
@@ -127,15 +144,15 @@ CBVH_KERNEL void walk_w4_simd_ray_init(struct cbvh_w4_simd_ray *w, const struct 
     w->far_b[1] = CBVH_LANE(far_b, 1);
     w->far_b[2] = CBVH_LANE(far_b, 2);
     w->box = box;
-    w->offset[0] = CBVH_W4_Q + 8u * s.near_x;
-    w->offset[1] = CBVH_W4_Q + 8u * s.near_y;
-    w->offset[2] = CBVH_W4_Q + 8u * s.near_z;
-    w->offset[3] = CBVH_W4_Q + 8u * s.far_x;
-    w->offset[4] = CBVH_W4_Q + 8u * s.far_y;
-    w->offset[5] = CBVH_W4_Q + 8u * s.far_z;
+    w->offset = walk_w4_plane_offsets[octant & 7u];
     w->tmin = _mm_set1_ps(tmin);
 #else
     (void)box;
+    (void)grid_origin;
+    (void)grid_scale;
+    (void)org_in;
+    (void)rcp_in;
+    (void)octant;
     (void)box_halve;
     (void)tmin;
     w->unused = 0;
@@ -469,21 +486,43 @@ struct cbvh_walk_state {
 /* What a walk step leaves: more to do, the walk over, or (any hit) a triangle occludes the ray. */
 enum cbvh_walk_step_result { CBVH_WALK_MORE, CBVH_WALK_DONE, CBVH_WALK_HIT };
 
-/* Sets up a walk of the subtree `root`, whose box the caller tested (or root_box, tested here when not
- * CBVH_NO_BOX), for the ray up to `tmax` (its own, or less: a best hit the caller has). Returns 0 when
- * the ray misses root_box: nothing to walk. float_boxes: as cbvh_walk's. */
-CBVH_KERNEL int cbvh_walk_begin(const struct cbvh_file *restrict f, const uint32_t layout,
-                                const struct cbvh_ray_ctx *restrict ray, cbvh_ref root, uint32_t root_box,
-                                const float *restrict float_boxes, float tmax,
-                                struct cbvh_walk_state *restrict st)
+/* Whether a walk in `mode` tests boxes one at a time on st->box (ray_box.h) rather than with the wide
+ * layout's SIMD test on st->w, which reads st->box only for the rays its affine form cannot serve. */
+CBVH_KERNEL int walk_reads_box_ray(const uint32_t layout, const struct cbvh_walk_mode mode,
+                                   const float *float_boxes, const struct cbvh_w4_simd_ray *w)
 {
-    cbvh_box_ray_init(&st->box, f->grid_origin, f->grid_scale, ray->shear.org, ray->rcp, ray->octant);
-    if (ray->box_halve && !float_boxes)
-        cbvh_box_ray_halve(&st->box, ray->box_halve);
+#ifdef CBVH_HAVE_SIMD
+    return layout != CBVH_LAYOUT_WIDE4 || float_boxes || mode.scalar || w->exact;
+#else
+    (void)layout;
+    (void)mode;
+    (void)float_boxes;
+    (void)w;
+    return 1;
+#endif
+}
+
+/* Sets up a walk in `mode` of the subtree `root`, whose box the caller tested (or root_box, tested here
+ * when not CBVH_NO_BOX), for the ray up to `tmax` (its own, or less: a best hit the caller has). Returns 0
+ * when the ray misses root_box: nothing to walk. float_boxes: as cbvh_walk's. */
+CBVH_KERNEL int cbvh_walk_begin(const struct cbvh_file *restrict f, const uint32_t layout,
+                                const struct cbvh_ray_ctx *restrict ray, const struct cbvh_walk_mode mode,
+                                cbvh_ref root, uint32_t root_box, const float *restrict float_boxes,
+                                float tmax, struct cbvh_walk_state *restrict st)
+{
     /* set for every layout: the binary layout's instances never read it (the compiler drops the set-up),
      * and a walk whose layout is a run-time value (cbvh report's) would otherwise look to the compiler as if
      * it might read it unset */
-    walk_w4_simd_ray_init(&st->w, &st->box, float_boxes ? 0u : ray->box_halve, ray->tmin);
+    walk_w4_simd_ray_init(&st->w, &st->box, f->grid_origin, f->grid_scale, ray->shear.org, ray->rcp,
+                          ray->octant, float_boxes ? 0u : ray->box_halve, ray->tmin);
+    /* only where it is read (the root box's test reads it too): its 18 stores were a tenth of the time of
+     * a ray that misses the mesh (the set-up of a ray is bound by its stores), and 8% of a Wuson camera
+     * ray's */
+    if (root_box != CBVH_NO_BOX || walk_reads_box_ray(layout, mode, float_boxes, &st->w)) {
+        cbvh_box_ray_init(&st->box, f->grid_origin, f->grid_scale, ray->shear.org, ray->rcp, ray->octant);
+        if (ray->box_halve && !float_boxes)
+            cbvh_box_ray_halve(&st->box, ray->box_halve);
+    }
     st->sp = 0;
     st->r = root;
     st->r_entry = ray->tmin;
@@ -581,7 +620,7 @@ CBVH_KERNEL int cbvh_walk(const struct cbvh_file *restrict f, const uint32_t lay
 {
     struct cbvh_walk_state st;
     enum cbvh_walk_step_result step = CBVH_WALK_DONE;
-    if (cbvh_walk_begin(f, layout, ray, root, root_box, float_boxes, ray->tmax, &st))
+    if (cbvh_walk_begin(f, layout, ray, mode, root, root_box, float_boxes, ray->tmax, &st))
         do
             step = cbvh_walk_step(f, layout, ray, mode, float_boxes, stats != NULL, &st, best);
         while (step == CBVH_WALK_MORE);
