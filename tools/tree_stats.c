@@ -7,10 +7,17 @@
 #include "layout/tree.h"
 #include "tree_stats.h"
 
+/* Surface area of the box b (min xyz, max xyz) in double. */
+static double box_area(const double b[6])
+{
+    const double dx = b[3] - b[0], dy = b[4] - b[1], dz = b[5] - b[2];
+    return 2.0 * (dx * dy + dy * dz + dz * dx);
+}
+
 double tree_box_area(const float lo[3], const float hi[3])
 {
-    double dx = (double)hi[0] - lo[0], dy = (double)hi[1] - lo[1], dz = (double)hi[2] - lo[2];
-    return 2.0 * (dx * dy + dy * dz + dz * dx);
+    const double b[6] = {lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]};
+    return box_area(b);
 }
 
 static void box_empty(float b[6])
@@ -131,14 +138,15 @@ static void stats_subtree(struct stats_walk *w, cbvh_ref r, uint32_t box, uint32
 
 /* The SAH cost had each box been stored on a frame per node instead of the mesh grid: a child's box
  * rounded outward to `levels` steps per axis of its parent's box as so stored (the root's: its exact box,
- * stored in floats), as a node that carries its own frame would store it. Adds to *cost the subtree of r,
- * whose stored box is frame[6] (min xyz, max xyz), each child's box weighted as in stats_subtree. */
+ * stored in floats), as a node that carries its own frame would store it. */
 struct frame_walk {
     const struct cbvh_file *f;
     const float *exact;
     double root_area, ct, ci, levels, cost;
 };
 
+/* Adds to w->cost the children of node r, whose stored box is frame (min xyz, max xyz), and their subtrees,
+ * each box weighted as in stats_subtree. */
 static void frame_subtree(struct frame_walk *w, cbvh_ref r, const double frame[6])
 {
     const struct cbvh_file *f = w->f;
@@ -155,8 +163,7 @@ static void frame_subtree(struct frame_walk *w, cbvh_ref r, const double frame[6
             q[a] = fmin(fmax(q[a], lo), (double)e[a]);
             q[3 + a] = fmax(fmin(q[3 + a], frame[3 + a]), (double)e[3 + a]);
         }
-        const double area = 2.0 * ((q[3] - q[0]) * (q[4] - q[1]) + (q[4] - q[1]) * (q[5] - q[2]) +
-                                   (q[5] - q[2]) * (q[3] - q[0]));
+        const double area = box_area(q);
         const int leaf = cbvh_tree_is_leaf(f, f->layout, c[k].ref);
         uint32_t first = 0, count = 0;
         if (leaf)

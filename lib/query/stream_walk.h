@@ -38,6 +38,14 @@ CBVH_KERNEL void stream_tail_give(struct cbvh_stream_batch *restrict b,
     }
 }
 
+/* The walk mode of every tail: sorted, and the batch's query kind and kernel (scalar with the scalar node
+ * kernel). */
+static inline struct cbvh_walk_mode stream_tail_mode(int any, int scalar)
+{
+    const struct cbvh_walk_mode mode = {.order = CBVH_WALK_SORTED, .any = any, .scalar = scalar};
+    return mode;
+}
+
 /* Steps the running tails in turn until at most `leave` of them run, each ended tail's result merged into
  * the batch. */
 CBVH_KERNEL void stream_tails_run(const struct cbvh_file *restrict f, const uint32_t layout,
@@ -105,8 +113,8 @@ CBVH_KERNEL void stream_tails_run(const struct cbvh_file *restrict f, const uint
                             int counting, uint32_t leave, uint8_t *occluded, uint64_t *visited,              \
                             uint64_t *tested)                                                                \
     {                                                                                                        \
-        const struct cbvh_walk_mode mode = {.order = CBVH_WALK_SORTED, .any = any_, .scalar = scalar};       \
-        stream_tails_run(f, layout_, b, mode, counting, leave, occluded, visited, tested);                   \
+        stream_tails_run(f, layout_, b, stream_tail_mode(any_, scalar), counting, leave, occluded, visited,  \
+                         tested);                                                                            \
     }
 STREAM_TAILS_INSTANCE(stream_tails_wide4_closest, CBVH_LAYOUT_WIDE4, 0)
 STREAM_TAILS_INSTANCE(stream_tails_wide4_any, CBVH_LAYOUT_WIDE4, 1)
@@ -127,8 +135,8 @@ CBVH_KERNEL void stream_tails(const struct cbvh_file *f, const uint32_t layout, 
                                                                       visited, tested);
 }
 
-/* Ray r of the batch starts a tail in `mode` (the tails' own: stream_tails_run's) on the subtree of node
- * `root` (whose box the batch tested), after the running tails made room for it. */
+/* Ray r of the batch starts a tail in `mode` (stream_tail_mode) on the subtree of node `root` (whose box
+ * the batch tested), after the running tails made room for it. */
 CBVH_KERNEL void stream_tail_start(const struct cbvh_file *restrict f, const uint32_t layout,
                                    struct cbvh_stream_batch *restrict b, const struct cbvh_walk_mode mode,
                                    uint32_t r, cbvh_ref root)
@@ -291,8 +299,7 @@ CBVH_KERNEL void stream_walk(const struct cbvh_file *restrict f, const uint32_t 
 {
     /* the scalar node kernel (the fallback, and its test) comes with scalar leaves */
     const int simd_leaves = node_test != cbvh_stream_node_scalar;
-    /* the tails' walks (stream_tails_run's mode) */
-    const struct cbvh_walk_mode tail_mode = {.order = CBVH_WALK_SORTED, .any = any, .scalar = !simd_leaves};
+    const struct cbvh_walk_mode tail_mode = stream_tail_mode(any, !simd_leaves);
     const struct cbvh_slab_select sel = cbvh_slab_select_of(octant);
     uint16_t *restrict list_ray = b->list_ray;
     float *restrict list_entry = b->list_entry;
