@@ -59,8 +59,8 @@ double bench_run_once(const bench_job *job, unsigned threads, cbvh_query_stats *
     memset(counters, 0, sizeof(counters[0]) * threads);
     for (unsigned k = 0; k < threads; k++) {
         slices[k].job = job;
-        slices[k].begin = job->count * k / threads;
-        slices[k].end = job->count * (k + 1) / threads;
+        slices[k].begin = job->first + job->count * k / threads;
+        slices[k].end = job->first + job->count * (k + 1) / threads;
         slices[k].stats = stats ? &counters[k] : NULL;
     }
     double start = cli_now();

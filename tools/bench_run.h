@@ -26,13 +26,14 @@ typedef struct bench_job {
     int cpu_clock;      /* time with the threads' CPU clocks instead of the wall clock */
     bench_range_fn range;
     const void *range_job;
+    size_t first; /* the job's queries are [first, first + count): rays[first...], hits[first...] */
 } bench_job;
 
 /* Seconds on the wall clock, or with cpu nonzero the CPU time of the whole
  * process: on a loaded machine it leaves out the time other programs ran. */
 double bench_clock(int cpu);
 
-/* Runs the job once with its rays split into `threads` contiguous slices, one
+/* Runs the job once with its queries split into `threads` contiguous slices, one
  * thread each (inline when threads is 1). Returns the wall time in seconds (with
  * job->cpu_clock, the CPU time of the slowest thread), or a negative value when
  * a thread cannot be started. With stats non-NULL the

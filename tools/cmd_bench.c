@@ -32,8 +32,10 @@ static const char usage[] =
     "in batches of 1024, and expanded: sorted on the file with cbvh_file_expand_triangles's\n"
     "copy), each the median of the repetitions, with nodes and triangles visited\n"
     "per ray from a separate counted pass. The engines of a row group (a ray set, query and\n"
-    "thread count; a shape set and thread count) are timed in turns, one run each per round,\n"
-    "so a slow spell of a shared machine moves them all and their ratios hold. The peers\n"
+    "thread count; a shape set and thread count) are timed in turns: each round cuts every\n"
+    "engine's queries into the same number of slices (up to 16, of at least 1024 queries) and\n"
+    "runs slice by slice, every engine on its slice in turn, a few milliseconds each, so a slow\n"
+    "spell of a shared machine moves them all and their ratios hold. The peers\n"
     "found at configure time (Embree 3 single rays and 16-ray packets, default and robust;\n"
     "Bullet 3 quantized BVH) run on the same triangles and rays: build time, memory per\n"
     "triangle, MRays/s, the ratio cbvh/peer, and ray-by-ray agreement with cbvh's answers.\n"
@@ -547,22 +549,33 @@ typedef struct timed_job {
     int reference;           /* a whole counted pass first (cbvh) rather than a probe */
     cbvh_query_stats *stats; /* the reference pass's counters, or NULL */
     unsigned runs;
-    double total;  /* seconds of the timed runs so far */
+    double total;  /* seconds of the timed rounds so far */
+    double round;  /* seconds of the round under way, or negative once the job left the rounds */
     double *times; /* s->reps entries */
 } timed_job;
 
-/* Called once the first timed run of jobs[k] has left its answers (the jobs share answer buffers). */
+/* Called once the answer pass of jobs[k] (time_jobs) has left its answers (the jobs share answer buffers). */
 typedef void (*answered_fn)(void *ctx, int k, const bench_job *job);
 
-/* Times jobs[0..n) on `threads` threads, each the median of its runs, into seconds[k]; returns 0, or
+/* Queries a slice of a timed round holds at least (time_jobs), so that its timer calls and, with threads,
+ * its thread starts stay a small part of it; and at most this many slices a round. */
+#define BENCH_SLICE_QUERIES 1024u
+#define BENCH_SLICES 16u
+
+/* Times jobs[0..n) on `threads` threads, each the median of its rounds, into seconds[k]; returns 0, or
  * negative (reported) when the threads cannot start. First each job makes its set-up pass: a reference
  * engine (cbvh) a whole pass, counted into its stats when not NULL, so counting does not perturb the
  * timing; a peer a prefix of the queries, and when all of them would take longer than the budget it is
  * timed on the prefix the budget allows (job.count is cut to it): Bullet's ray walk cannot stop at the
- * first hit, and takes minutes for a million rays on a large mesh. Then up to s->reps rounds run every job
- * once in turn, a job leaving the rounds once its runs took the budget: the engines compared in a row of
- * the tables share the same stretches of time, so a slow spell of a shared machine (seconds long here,
- * up to 2x) moves all of them rather than one, and their ratio holds. */
+ * first hit, and takes minutes for a million rays on a large mesh. When `answered` wants the answers,
+ * each job then runs once whole, untimed, and leaves them (the jobs share answer buffers). Then up to
+ * s->reps rounds: a round cuts every job's queries into the same number of slices and runs slice by
+ * slice, every job on its own slice in turn (the first of the turn moving on by one each slice), a job
+ * leaving the rounds once its rounds took the budget. The engines compared in a row of the tables so
+ * share the same stretches of time at a grain of milliseconds: a slow spell of a shared machine, which
+ * lasts seconds here and moves a figure by up to 2x, moves all of them, and their ratio holds (two
+ * copies of the same walk timed so, on the 3.7K-triangle Wuson, within 1% of each other, where runs of
+ * a whole set in turn differed by up to 20%). */
 static int time_jobs(bench_state *s, timed_job *jobs, int n, size_t probe, unsigned threads, double *seconds,
                      answered_fn answered, void *ctx)
 {
@@ -587,22 +600,43 @@ static int time_jobs(bench_state *s, timed_job *jobs, int n, size_t probe, unsig
         }
         if (x < 0.0)
             status = -1;
-    }
-    for (unsigned r = 0; r < reps && status == 0; r++)
-        for (int k = 0; k < n && status == 0; k++) {
-            timed_job *t = &jobs[k];
-            if (r > 0 && s->budget > 0.0f && t->total > s->budget)
-                continue;
-            const double x = bench_run_once(&t->job, threads, NULL);
-            if (x < 0.0) {
+        else if (answered) {
+            if (bench_run_once(&t->job, threads, NULL) < 0.0)
                 status = -1;
-                break;
-            }
-            t->times[t->runs++] = x;
-            t->total += x;
-            if (r == 0 && answered)
+            else
                 answered(ctx, k, &t->job);
         }
+    }
+    size_t fewest = SIZE_MAX;
+    for (int k = 0; k < n; k++)
+        fewest = jobs[k].job.count < fewest ? jobs[k].job.count : fewest;
+    const size_t slices = fewest / BENCH_SLICE_QUERIES < 1              ? 1
+                          : fewest / BENCH_SLICE_QUERIES > BENCH_SLICES ? BENCH_SLICES
+                                                                        : fewest / BENCH_SLICE_QUERIES;
+    for (unsigned r = 0; r < reps && status == 0; r++) {
+        for (int k = 0; k < n; k++) /* negative: out of the rounds */
+            jobs[k].round = r > 0 && s->budget > 0.0f && jobs[k].total > s->budget ? -1.0 : 0.0;
+        for (size_t i = 0; i < slices && status == 0; i++)
+            for (int j = 0; j < n; j++) {
+                timed_job *t = &jobs[((size_t)j + i) % (size_t)n];
+                if (t->round < 0.0)
+                    continue;
+                bench_job part = t->job;
+                part.first = t->job.first + t->job.count * i / slices;
+                part.count = t->job.first + t->job.count * (i + 1) / slices - part.first;
+                const double x = bench_run_once(&part, threads, NULL);
+                if (x < 0.0) {
+                    status = -1;
+                    break;
+                }
+                t->round += x;
+            }
+        for (int k = 0; k < n && status == 0; k++)
+            if (jobs[k].round >= 0.0) {
+                jobs[k].times[jobs[k].runs++] = jobs[k].round;
+                jobs[k].total += jobs[k].round;
+            }
+    }
     for (int k = 0; k < n; k++) {
         if (status == 0)
             seconds[k] = bench_median(jobs[k].times, jobs[k].runs);
@@ -675,7 +709,8 @@ static int measure_set(bench_state *s, ray_kind set, buffers *b, int *step, int 
                 r->any = any;
                 r->m = m;
                 r->threads = threads;
-                bench_job job = {m->kernel, m->state, b->rays, s->rays, NULL, NULL, s->cpu_clock, NULL, NULL};
+                bench_job job = {m->kernel, m->state,     b->rays, s->rays, NULL,
+                                 NULL,      s->cpu_clock, NULL,    NULL,    0};
                 if (any)
                     job.occluded = k == 0 ? b->ref_occluded : b->occluded;
                 else
@@ -831,7 +866,7 @@ static int measure_shapes(bench_state *s, shape_kind kind, int sweep, const shap
             rows[k] = r;
             memset(&jobs[k], 0, sizeof jobs[k]);
             jobs[k].job =
-                (bench_job){NULL, NULL, NULL, s->shapes, NULL, NULL, s->cpu_clock, shape_range, &sj[k]};
+                (bench_job){NULL, NULL, NULL, s->shapes, NULL, NULL, s->cpu_clock, shape_range, &sj[k], 0};
             jobs[k].reference = k == 0;
         }
         snprintf(label, sizeof label, "%s %s: %d engines, %u thread(s)", shape_kind_name(kind),
