@@ -339,7 +339,12 @@ static void exact_kernel(const void *engine, const cbvh_ray *rays, size_t count,
 /* Times closest and any hit, counts the work, and compares the answers with the brute force and the leak test. */
 static int measure(const report_state *s, mesh_ctx *c, bench_kernel kernel, const void *engine, report_row *row)
 {
-    bench_job job = {kernel, engine, c->rays, s->rays, c->hits, NULL, s->cpu_clock, NULL, NULL, 0};
+    bench_job job = {.kernel = kernel,
+                     .engine = engine,
+                     .rays = c->rays,
+                     .count = s->rays,
+                     .hits = c->hits,
+                     .cpu_clock = s->cpu_clock};
     cbvh_query_stats st = { 0, 0 };
     double t = bench_run_once(&job, 1, &st);
     double closest = t >= 0.0 ? bench_run_median(&job, 1, s->reps, 0.0, NULL) : -1.0;
@@ -380,7 +385,8 @@ static int measure(const report_state *s, mesh_ctx *c, bench_kernel kernel, cons
 
     row->leaks = -1;
     if (c->closed) {
-        bench_job leak = {kernel, engine, c->leak, c->leak_count, c->hits, NULL, 0, NULL, NULL, 0};
+        bench_job leak = {
+            .kernel = kernel, .engine = engine, .rays = c->leak, .count = c->leak_count, .hits = c->hits};
         bench_run_once(&leak, 1, NULL);
         row->leaks = 0;
         for (size_t i = 0; i < c->leak_count; i++)
@@ -626,7 +632,7 @@ static int report_mesh(report_state *s, const char *source, int generated)
         return CLI_EXIT_USAGE;
     }
     brute_engine be = { &tris, c.rays, c.ref_tri, c.ref_t };
-    bench_job job = {brute_kernel, &be, c.rays, s->sample, NULL, NULL, 0, NULL, NULL, 0};
+    bench_job job = {.kernel = brute_kernel, .engine = &be, .rays = c.rays, .count = s->sample};
     long cores = sysconf(_SC_NPROCESSORS_ONLN);
     int ok = bench_run_once(&job, cores > 0 ? (unsigned)cores : 1u, NULL) >= 0.0 && make_leak_rays(&c, &tris, lo, hi);
     ref_tris_free(&tris);
