@@ -9,15 +9,12 @@
 #include "query/raycast.h"
 #include "query/stream.h"
 
-/* A batch node with at most this many live rays hands them to the tails (the single-ray walk's steps,
- * below): below it the batch would mostly carry one ray per node, paying the partition and stack
- * bookkeeping without sharing any node fetch. With CBVH_STREAM_TAILS tails (a mesh past the caches) rays
- * go to them earlier, where their walks overlap each other's misses: 16 rather than 4, measured with
- * builds alternated chunk by chunk, incoherent closest +4% on the 871K-triangle dragon and +3% on the
- * 1M-triangle sphere, dragon shadow rays +6% (8: +3%, +5%; 32: +4%, -3%); with one tail (a mesh in the
- * caches) 16 cost Wuson's incoherent rays 10%. */
-#define CBVH_STREAM_SOLO 4u
-#define CBVH_STREAM_SOLO_TAILS 16u
+/* A batch node with at most this many live rays hands them to the tails (the single-ray
+ * walk's steps, below): below it the batch would mostly carry one ray per node, paying the
+ * partition and stack bookkeeping without sharing any node fetch. */
+#ifndef CBVH_STREAM_SOLO
+#define CBVH_STREAM_SOLO 4
+#endif
 
 /* The tails (stream.h): rays finishing a subtree alone on the single-ray walk's steps (walk.h), a few at
  * a time. A tail starts from the ray's current tmax and best hit; at each step it takes a closer hit the
@@ -304,7 +301,6 @@ CBVH_KERNEL void stream_walk(const struct cbvh_file *restrict f, const uint32_t 
     const int simd_leaves = node_test != cbvh_stream_node_scalar;
     const struct cbvh_walk_mode tail_mode = stream_tail_mode(any, !simd_leaves);
     const struct cbvh_slab_select sel = cbvh_slab_select_of(octant);
-    const uint32_t solo = b->tails->max > 1u ? CBVH_STREAM_SOLO_TAILS : CBVH_STREAM_SOLO;
     uint16_t *restrict list_ray = b->list_ray;
     float *restrict list_entry = b->list_entry;
     struct {
@@ -352,7 +348,7 @@ CBVH_KERNEL void stream_walk(const struct cbvh_file *restrict f, const uint32_t 
             cbvh_tree_leaf(f, layout, r, &tri0, &tri_count);
             nt += (uint64_t)n * tri_count;
             stream_leaf(f, b, list_ray + start, n, tri0, tri_count, any, simd_leaves, occluded);
-        } else if (n <= solo || top + CBVH_TREE_WIDTH * n > b->list_capacity) {
+        } else if (n <= CBVH_STREAM_SOLO || top + CBVH_TREE_WIDTH * n > b->list_capacity) {
             /* Too few rays left to share the nodes below, or no room for their lists: each finishes the
              * subtree on its own, with the single-ray walk and its current tmax. */
             for (uint32_t j = 0; j < n; j++) {
