@@ -549,19 +549,11 @@ typedef struct timed_job {
     bench_job job;
     int reference;           /* a whole counted pass first (cbvh) rather than a probe */
     cbvh_query_stats *stats; /* the reference pass's counters, or NULL */
-    unsigned runs;
-    double total;  /* seconds of the timed rounds so far */
-    double round;  /* seconds of the round under way, or negative once the job left the rounds */
-    double *times; /* s->reps entries */
+    unsigned runs;           /* timed rounds */
 } timed_job;
 
 /* Called once the answer pass of jobs[k] (time_jobs) has left its answers (the jobs share answer buffers). */
 typedef void (*answered_fn)(void *ctx, int k, const bench_job *job);
-
-/* Queries a slice of a timed round holds at least (time_jobs), so that its timer calls and, with threads,
- * its thread starts stay a small part of it; and at most this many slices a round. */
-#define BENCH_SLICE_QUERIES 1024u
-#define BENCH_SLICES 16u
 
 /* Times jobs[0..n) on `threads` threads, each the median of its rounds, into seconds[k]; returns 0, or
  * negative (reported) when the threads cannot start. First each job makes its set-up pass: a reference
@@ -569,27 +561,15 @@ typedef void (*answered_fn)(void *ctx, int k, const bench_job *job);
  * timing; a peer a prefix of the queries, and when all of them would take longer than the budget it is
  * timed on the prefix the budget allows (job.count is cut to it): Bullet's ray walk cannot stop at the
  * first hit, and takes minutes for a million rays on a large mesh. When `answered` wants the answers,
- * each peer then runs once whole, untimed, and leaves them (the jobs share answer buffers). Then up to
- * s->reps rounds: a round cuts every job's queries into the same number of slices and runs the jobs in
- * turns, one a slice (the first of the turn moving on by one each slice), each job first on another
- * slice untimed, then on its timed slice; a job leaves the rounds once its rounds took the budget. The
- * engines compared in a row of the tables so share the same stretches of time at a grain of
- * milliseconds: a slow spell of a shared machine, which lasts seconds here and moves a figure by up to
- * 2x, moves all of them, and their ratio holds (two copies of the same walk, the sorted and stackless
- * rows of a wide4 file, within 1-5% of each other, where whole runs of the set in turn differed by up to
- * 21%). */
+ * each peer then runs once whole, untimed, and leaves them (the jobs share answer buffers). Then the jobs
+ * are timed in turns, up to s->reps rounds, a job leaving them once its rounds took the budget
+ * (bench_time_in_turns): the engines compared in a row of the tables share the same stretches of time, and
+ * their ratios hold (two copies of the same walk, the sorted and stackless rows of a wide4 file, within
+ * 1-5% of each other, where whole runs of the set in turn differed by up to 21%). */
 static int time_jobs(bench_state *s, timed_job *jobs, int n, size_t probe, unsigned threads, double *seconds,
                      answered_fn answered, void *ctx)
 {
-    const unsigned reps = s->reps < 1 ? 1 : s->reps;
     int status = 0;
-    for (int k = 0; k < n; k++) {
-        jobs[k].runs = 0;
-        jobs[k].total = 0.0;
-        jobs[k].times = malloc(reps * sizeof *jobs[k].times);
-        if (!jobs[k].times)
-            status = -2;
-    }
     for (int k = 0; k < n && status == 0; k++) {
         timed_job *t = &jobs[k];
         const size_t all = t->job.count;
@@ -608,60 +588,20 @@ static int time_jobs(bench_state *s, timed_job *jobs, int n, size_t probe, unsig
         else if (answered)
             answered(ctx, k, &t->job);
     }
-    size_t fewest = SIZE_MAX;
+    const bench_job *timed[MAX_METHODS > MAX_SHAPE_METHODS ? MAX_METHODS : MAX_SHAPE_METHODS] = {NULL};
+    unsigned runs[sizeof timed / sizeof timed[0]];
     for (int k = 0; k < n; k++)
-        fewest = jobs[k].job.count < fewest ? jobs[k].job.count : fewest;
-    const size_t slices = fewest / BENCH_SLICE_QUERIES < 1              ? 1
-                          : fewest / BENCH_SLICE_QUERIES > BENCH_SLICES ? BENCH_SLICES
-                                                                        : fewest / BENCH_SLICE_QUERIES;
-    for (unsigned r = 0; r < reps && status == 0; r++) {
-        for (int k = 0; k < n; k++) /* negative: out of the rounds */
-            jobs[k].round = r > 0 && s->budget > 0.0f && jobs[k].total > s->budget ? -1.0 : 0.0;
-        for (size_t i = 0; i < slices && status == 0; i++)
-            for (size_t j = 0; j < (size_t)n; j++) {
-                /* job k runs slice i + k: the job before it in the turn ran another slice, so that two
-                 * cbvh traversals of one file never run the same rays in a row (the second would find
-                 * its nodes and triangles in the caches: 20% faster on the dragon) */
-                const size_t k = (j + i) % (size_t)n, slice = (i + k) % slices;
-                timed_job *t = &jobs[k];
-                if (t->round < 0.0)
-                    continue;
-                /* first, untimed, another slice: the engine's own structure in the caches again, as in a run
-                 * of the whole set, whichever engine ran before it (half a slice left 5-12% of the gap that
-                 * the engine before it made on the dragon) */
-                bench_job part = t->job;
-                const size_t warm = (slice + slices / 2u) % slices;
-                part.first = t->job.first + t->job.count * warm / slices;
-                part.count = t->job.first + t->job.count * (warm + 1u) / slices - part.first;
-                double x = slices > 1u ? bench_run_once(&part, threads, NULL) : 0.0;
-                part.first = t->job.first + t->job.count * slice / slices;
-                part.count = t->job.first + t->job.count * (slice + 1u) / slices - part.first;
-                if (x >= 0.0)
-                    x = bench_run_once(&part, threads, NULL);
-                if (x < 0.0) {
-                    status = -1;
-                    break;
-                }
-                t->round += x;
-            }
-        for (int k = 0; k < n && status == 0; k++)
-            if (jobs[k].round >= 0.0) {
-                jobs[k].times[jobs[k].runs++] = jobs[k].round;
-                jobs[k].total += jobs[k].round;
-            }
-    }
-    for (int k = 0; k < n; k++) {
-        if (status == 0)
-            seconds[k] = bench_median(jobs[k].times, jobs[k].runs);
-        free(jobs[k].times);
-        jobs[k].times = NULL;
-    }
+        timed[k] = &jobs[k].job;
+    if (status == 0)
+        status = bench_time_in_turns(timed, n, threads, s->reps, s->budget, seconds, runs);
+    for (int k = 0; k < n && status == 0; k++)
+        jobs[k].runs = runs[k];
     if (status < 0) {
         progress_done(&s->prog);
         if (status == -1)
             cli_error(s->command, NULL, "cannot start %u threads", threads);
         else
-            cli_error(s->command, NULL, "out of memory for %u timings", reps);
+            cli_error(s->command, NULL, "out of memory for %u timings", s->reps);
     }
     return status;
 }

@@ -43,7 +43,10 @@ static const char usage[] =
     "(max and RMS of |t - t_ref| over the scene diagonal), vertex error, and rays leaked through\n"
     "shared edges and vertices (rays from inside a closed mesh aimed exactly at its vertices and\n"
     "edge midpoints that miss; closed meshes only). Run time: MRays/s closest and any hit on\n"
-    "incoherent rays (one thread, median of the repetitions), open time, bytes per triangle.\n"
+    "incoherent rays (one thread; each row timed in turns with the default cook's sorted walk,\n"
+    "slice by slice, and given as its speed relative to that walk times the walk's median\n"
+    "speed over the mesh's rows, so that a slow spell of a shared machine does not move one row\n"
+    "against another), open time, bytes per triangle.\n"
     "A markdown table goes to stdout, with a recommendation per mesh: the fastest configuration\n"
     "that answers exactly like the brute force (the default when within the timing noise), and\n"
     "what smaller files and lossy choices cost.\n"
@@ -53,7 +56,7 @@ static const char usage[] =
     "  --rays N        timed incoherent rays per configuration (default 200000)\n"
     "  --sample N      of which the first N are checked by brute force (default 2000)\n"
     "  --seed S        ray generator seed (default 1)\n"
-    "  --reps R        timed repetitions, the median is reported (default 3)\n"
+    "  --reps R        timed rounds, the median is reported (default 3)\n"
     "  --out DIR       write report.md, report.json, report.svg, report.html and the cooked files\n"
     "                  into DIR\n"
     "  --cpu-time      time with CPU clocks instead of the wall clock (steadier on a busy machine)\n"
@@ -104,6 +107,8 @@ static const struct {
 /* Names of the layouts, by cbvh_layout value (as `cbvh cook --layout` spells them). */
 static const char *const layout_names[] = { "binary", "wide4" };
 #define COOK_COUNT (sizeof cook_configs / sizeof cook_configs[0])
+/* measure() calls a mesh makes at most: each cook's exact reference and its traversals. */
+#define REPORT_MAX_MEASURES (COOK_COUNT * (BENCH_CBVH_VARIANTS + 1u))
 
 typedef struct report_state {
     const char *command;
@@ -130,6 +135,13 @@ typedef struct mesh_ctx {
     int closed;
     cbvh_ray *leak;
     size_t leak_count;
+    /* The default cook's sorted walk, timed in turns with every row (measure): rows are timed as ratios to
+     * it, and its median time gives them their MRays/s (report_mesh), so that a slow spell of a shared
+     * machine does not move one row against another. */
+    cbvh_file *reference;
+    bench_cbvh reference_engine;
+    double reference_seconds[2][REPORT_MAX_MEASURES]; /* closest, any: each measure's */
+    size_t measures;
 } mesh_ctx;
 
 /* ------------------------------------------------------------------ */
@@ -336,7 +348,9 @@ static void exact_kernel(const void *engine, const cbvh_ray *rays, size_t count,
             occluded[i] = (uint8_t)exact_occluded(engine, &rays[i], stats);
 }
 
-/* Times closest and any hit, counts the work, and compares the answers with the brute force and the leak test. */
+/* Counts the work of closest and any hit, compares the answers with the brute force and the leak test, then
+ * times both in turns with the mesh's reference (its times go to c->reference_seconds): the row's MRays/s
+ * are set as ratios to the reference's, which report_mesh scales. */
 static int measure(const report_state *s, mesh_ctx *c, bench_kernel kernel, const void *engine, report_row *row)
 {
     bench_job job = {.kernel = kernel,
@@ -345,20 +359,13 @@ static int measure(const report_state *s, mesh_ctx *c, bench_kernel kernel, cons
                      .count = s->rays,
                      .hits = c->hits,
                      .cpu_clock = s->cpu_clock};
-    cbvh_query_stats st = { 0, 0 };
-    double t = bench_run_once(&job, 1, &st);
-    double closest = t >= 0.0 ? bench_run_median(&job, 1, s->reps, 0.0, NULL) : -1.0;
-    job.hits = NULL;
-    job.occluded = c->occluded;
-    double any = closest >= 0.0 ? bench_run_median(&job, 1, s->reps, 0.0, NULL) : -1.0;
-    if (any < 0.0)
+    cbvh_query_stats st = {0, 0};
+    if (bench_run_once(&job, 1, &st) < 0.0 || c->measures == REPORT_MAX_MEASURES)
         return 0;
-    row->closest_mrays = (double)s->rays / closest * 1e-6;
-    row->any_mrays = (double)s->rays / any * 1e-6;
     row->nodes_per_ray = (double)st.nodes_visited / (double)s->rays;
     row->tris_per_ray = (double)st.triangles_tested / (double)s->rays;
 
-    /* The closest-hit pass left its answers in c->hits; the sample is its first rays. */
+    /* The counted pass left its answers in c->hits; the sample is its first rays. */
     double sum2 = 0.0, worst = 0.0;
     uint64_t both = 0;
     row->compared = s->sample;
@@ -393,6 +400,26 @@ static int measure(const report_state *s, mesh_ctx *c, bench_kernel kernel, cons
             row->leaks += c->hits[i].tri == CBVH_NO_HIT;
         row->leak_rays = c->leak_count;
     }
+
+    /* closest, then any hit, in turns with the reference (answers no longer read) */
+    bench_job ref = job;
+    ref.kernel = bench_cbvh_kernel;
+    ref.engine = &c->reference_engine;
+    double *mrays[2] = {&row->closest_mrays, &row->any_mrays};
+    for (int any = 0; any < 2; any++) {
+        if (any) {
+            job.hits = ref.hits = NULL;
+            job.occluded = ref.occluded = c->occluded;
+        }
+        const bench_job *pair[2] = {&job, &ref};
+        double seconds[2];
+        unsigned runs[2];
+        if (bench_time_in_turns(pair, 2, 1, s->reps, 0.0, seconds, runs) < 0)
+            return 0;
+        *mrays[any] = seconds[1] / seconds[0]; /* scaled by report_mesh */
+        c->reference_seconds[any][c->measures] = seconds[1];
+    }
+    c->measures++;
     return 1;
 }
 
@@ -454,6 +481,30 @@ static void describe_row(report_row *row, const char *layout)
                               d ? ", " : "", row->value[d]);
 }
 
+/* Cooks the mesh with `opt` into `path`: when `keep`, the file path names (the output folder's), else a
+ * temporary file whose name goes to path (the caller unlinks it). *stats receives the cook's. Returns 0, or
+ * the exit status (reported). */
+static int cook_into(const report_state *s, const mesh_ctx *c, const cbvh_cook_options *opt, int keep,
+                     char *path, size_t size, cbvh_cook_stats *stats)
+{
+    cbvh_mesh view = bench_mesh_view(&c->mesh);
+    cbvh_cook_stats_init(stats, sizeof *stats);
+    cbvh_error err;
+    if (keep)
+        return cbvh_cook_to_path(&view, opt, NULL, path, stats, &err) == CBVH_OK
+                   ? 0
+                   : cli_report(s->command, path, &err);
+    void *data = NULL;
+    size_t bytes = 0;
+    int status;
+    if (cbvh_cook(&view, opt, NULL, &data, &bytes, stats, &err) != CBVH_OK)
+        status = cli_report(s->command, c->mesh.name, &err);
+    else
+        status = bench_write_temp(s->command, data, bytes, path, size);
+    cbvh_buffer_free(NULL, data);
+    return status;
+}
+
 static int measure_cook(report_state *s, mesh_ctx *c, size_t k, int *step, int steps)
 {
     uint32_t leaf = leaf_size(k);
@@ -471,25 +522,11 @@ static int measure_cook(report_state *s, mesh_ctx *c, size_t k, int *step, int s
     opt.max_leaf_size = leaf;
     opt.vertex_format = qverts ? CBVH_VERTEX_QUANTIZED16 : CBVH_VERTEX_FLOAT32;
     opt.compress_level = compress;
-    cbvh_mesh view = bench_mesh_view(&c->mesh);
     cbvh_cook_stats stats;
-    cbvh_cook_stats_init(&stats, sizeof stats);
-    cbvh_error err;
     char path[1024];
-    int status = 0;
-    if (s->out_dir) {
+    if (s->out_dir)
         cooked_path(s, c, k, path, sizeof path);
-        if (cbvh_cook_to_path(&view, &opt, NULL, path, &stats, &err) != CBVH_OK)
-            status = cli_report(s->command, path, &err);
-    } else {
-        void *data = NULL;
-        size_t bytes = 0;
-        if (cbvh_cook(&view, &opt, NULL, &data, &bytes, &stats, &err) != CBVH_OK)
-            status = cli_report(s->command, c->mesh.name, &err);
-        else
-            status = bench_write_temp(s->command, data, bytes, path, sizeof path);
-        cbvh_buffer_free(NULL, data);
-    }
+    int status = cook_into(s, c, &opt, s->out_dir != NULL, path, sizeof path, &stats);
     if (status) {
         progress_done(&s->prog);
         return status;
@@ -585,6 +622,7 @@ done:
 
 static void mesh_ctx_free(mesh_ctx *c)
 {
+    cbvh_close(c->reference);
     free(c->rays);
     free(c->hits);
     free(c->occluded);
@@ -642,10 +680,36 @@ static int report_mesh(report_state *s, const char *source, int generated)
         cli_error(s->command, NULL, "out of memory or cannot start a thread");
         return CLI_EXIT_USAGE;
     }
+    /* the reference every row is timed beside: the default cook, sorted */
+    snprintf(label, sizeof label, "%s: cook the timing reference (the default cook)", c.label);
+    progress_update(&s->prog, label, -1.0);
+    cbvh_cook_options opt;
+    cbvh_cook_options_init(&opt, sizeof opt);
+    char path[1024];
+    cbvh_cook_stats stats;
+    status = cook_into(s, &c, &opt, 0, path, sizeof path, &stats);
+    if (!status) {
+        status = cli_open(s->command, path, &c.reference);
+        unlink(path);
+    }
+    if (!status)
+        bench_cbvh_variant(&c.reference_engine, c.reference, c.reference, 0);
+    const size_t first_row = s->row_count;
     int step = 0, steps = (int)COOK_COUNT + 2 * (BENCH_CBVH_VARIANTS - 1);
     for (size_t k = 0; k < COOK_COUNT && !status; k++)
         status = measure_cook(s, &c, k, &step, steps);
     progress_done(&s->prog);
+    if (!status && c.measures > 0) {
+        /* the rows' ratios to the reference, times the reference's median speed */
+        const double closest =
+            (double)s->rays / bench_median(c.reference_seconds[0], (unsigned)c.measures) * 1e-6;
+        const double any =
+            (double)s->rays / bench_median(c.reference_seconds[1], (unsigned)c.measures) * 1e-6;
+        for (size_t i = first_row; i < s->row_count; i++) {
+            s->rows[i].closest_mrays *= closest;
+            s->rows[i].any_mrays *= any;
+        }
+    }
     mesh_ctx_free(&c);
     return status;
 }
@@ -657,8 +721,10 @@ static int report_mesh(report_state *s, const char *source, int generated)
 static void print_table(const report_state *s, FILE *out)
 {
     fprintf(out, "## cbvh report\n\n");
-    fprintf(out, "%zu incoherent rays per configuration (one thread, median of %u, %s), %zu checked against a "
-                 "double-precision brute force; errors relative to the scene diagonal.\n\n",
+    fprintf(out,
+            "%zu incoherent rays per configuration (one thread, median of %u rounds timed in turns with the "
+            "default cook's sorted walk, %s), %zu checked against a double-precision brute force; errors "
+            "relative to the scene diagonal.\n\n",
             s->rays, s->reps, s->cpu_clock ? "CPU time" : "wall-clock time", s->sample);
     char cell[256];
     for (int c = 0; c < REPORT_COLUMN_COUNT; c++)

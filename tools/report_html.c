@@ -114,12 +114,15 @@ int report_html_write(FILE *out, const report_row *rows, size_t count, const rep
     fputs(style_sheet, out);
     fputs("</style>\n</head>\n<body>\n<h1>cbvh report: error against run time</h1>\n", out);
     fprintf(out,
-            "<p>Every choice the file format offers, measured on the same %zu incoherent rays (one thread, median of "
-            "%u runs, %s); %zu rays are checked against a double-precision brute force. Each point is one "
+            "<p>Every choice the file format offers, measured on the same %zu incoherent rays (one thread, "
+            "median of "
+            "%u rounds timed in turns with the default configuration, %s); %zu rays are checked against a "
+            "double-precision brute force. Each point is one "
             "configuration: the default is the black star, and the other markers change one choice from it, "
             "the marker's shape and colour telling which. <strong>Lower left is better</strong> (faster and "
             "smaller error); the dashed line is the Pareto front, the configurations nothing beats on both "
-            "axes. Hover over a point, or move to it with the Tab key, to see its configuration and figures.</p>\n",
+            "axes. Hover over a point, or move to it with the Tab key, to see its configuration and "
+            "figures.</p>\n",
             setup->rays, setup->reps, setup->cpu_clock ? "CPU time" : "wall-clock time", setup->sample);
     for (size_t i = 0, mesh = 0; i < count && !status; mesh++) {
         size_t n = report_mesh_rows(rows + i, count - i);

@@ -173,7 +173,9 @@ int report_svg_write(FILE *out, const report_row *rows, size_t count, const repo
     svg_plot_text(out, width / 2, 24, 17, "middle", 1, "cbvh report: error against run time, one point per configuration");
     char caption[256];
     snprintf(caption, sizeof caption,
-             "%zu incoherent rays, one thread, median of %u (%s); lower left is better; %zu rays checked by brute force",
+             "%zu incoherent rays, one thread, median of %u rounds beside the default (%s); lower left is "
+             "better; %zu rays "
+             "checked by brute force",
              setup->rays, setup->reps, setup->cpu_clock ? "CPU time" : "wall clock", setup->sample);
     svg_plot_text(out, width / 2, 44, 12, "middle", 0, caption);
     double y = HEADING_H + 22;
