@@ -102,30 +102,6 @@ double bench_median(double *values, unsigned n)
     return n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
 }
 
-double bench_run_median(const bench_job *job, unsigned threads, unsigned reps, double budget, unsigned *runs)
-{
-    if (reps < 1)
-        reps = 1;
-    double *times = malloc(reps * sizeof *times), total = 0.0;
-    if (!times)
-        return -1.0;
-    for (unsigned r = 0; r < reps; r++) {
-        times[r] = bench_run_once(job, threads, NULL);
-        if (times[r] < 0.0) {
-            free(times);
-            return -1.0;
-        }
-        total += times[r];
-        if (budget > 0.0 && total > budget)
-            reps = r + 1;
-    }
-    if (runs)
-        *runs = reps;
-    double median = bench_median(times, reps);
-    free(times);
-    return median;
-}
-
 int bench_time_in_turns(const bench_job *const *jobs, int n, unsigned threads, unsigned reps, double budget,
                         double *seconds, unsigned *runs)
 {

@@ -40,12 +40,6 @@ double bench_clock(int cpu);
  * kernel counts and the per-thread counters are summed into *stats. */
 double bench_run_once(const bench_job *job, unsigned threads, cbvh_query_stats *stats);
 
-/* The median wall time of up to `reps` timed runs (reps >= 1): repeating stops
- * early once the runs took more than `budget` seconds in all (0: no limit), so
- * slow engines do not dominate a benchmark. *runs (may be NULL) receives the
- * runs made. Negative on failure. */
-double bench_run_median(const bench_job *job, unsigned threads, unsigned reps, double budget, unsigned *runs);
-
 /* Times *jobs[0..n) in turns on `threads` threads: up to `reps` rounds (reps >= 1), each cutting every job's
  * queries into the same slices (up to BENCH_SLICES, of at least BENCH_SLICE_QUERIES queries) and running the
  * jobs in turn slice by slice, each first on another slice untimed (its own structure back in the caches
