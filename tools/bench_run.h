@@ -41,14 +41,14 @@ double bench_clock(int cpu);
 double bench_run_once(const bench_job *job, unsigned threads, cbvh_query_stats *stats);
 
 /* Times *jobs[0..n) in turns on `threads` threads: up to `reps` rounds (reps >= 1), each cutting every job's
- * queries into the same slices (up to BENCH_SLICES, of at least BENCH_SLICE_QUERIES queries) and running the
- * jobs in turn slice by slice, each first on another slice untimed (its own structure back in the caches
- * after the job before it), then on its timed slice; job k times slice i + k, so that two jobs in a row
- * never run the same queries (a traversal after another of the same file on the same rays finds them in
- * the caches). A job leaves the rounds once its rounds took `budget` seconds (0: no limit). seconds[k]
- * receives the median of job k's rounds, runs[k] their number. The jobs so share the same stretches of time
- * at a grain of milliseconds: a slow spell of a shared machine moves all of them, and their ratios hold.
- * Returns 0, -1 when a thread cannot be started, -2 out of memory. */
+ * queries into the same slices (up to BENCH_SLICES, of at least BENCH_SLICE_QUERIES queries; one, the whole
+ * job, on more than one thread) and running the jobs in turn slice by slice, each first on another slice
+ * untimed (its own structure back in the caches after the job before it), then on its timed slice; job k
+ * times slice i + k, so that two jobs in a row never run the same queries (a traversal after another of the
+ * same file on the same rays finds them in the caches). A job leaves the rounds once its rounds took `budget`
+ * seconds (0: no limit). seconds[k] receives the median of job k's rounds, runs[k] their number. The jobs so
+ * share the same stretches of time at a grain of milliseconds: a slow spell of a shared machine moves all of
+ * them, and their ratios hold. Returns 0, -1 when a thread cannot be started, -2 out of memory. */
 #define BENCH_SLICE_QUERIES 1024u
 #define BENCH_SLICES 16u
 int bench_time_in_turns(const bench_job *const *jobs, int n, unsigned threads, unsigned reps, double budget,
