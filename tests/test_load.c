@@ -621,6 +621,103 @@ static long advised_mappings(void)
     return n;
 }
 
+/* A cooked file of the mesh, more than `least` bytes, written as NAME.cbvh in a new temporary folder. */
+typedef struct {
+    input in;
+    char dir[200];
+    char path[256];
+} temp_cooked;
+
+static void temp_cooked_write(temp_cooked *t, const random_mesh *m, const char *name, size_t least)
+{
+    t->in = cook_input(name, m, 0, CBVH_VERTEX_FLOAT32, 1);
+    assert_true(t->in.size > least);
+    test_temp_dir(t->dir, sizeof t->dir, "cbvh-test-load");
+    snprintf(t->path, sizeof t->path, "%s/%s.cbvh", t->dir, name);
+    write_whole_file(t->path, t->in.data, t->in.size);
+}
+
+static void temp_cooked_remove(temp_cooked *t)
+{
+    unlink(t->path);
+    rmdir(t->dir);
+    test_aligned_free(t->in.data);
+}
+
+/* The mappings of this process (in /proc/self/smaps), and among them those of the file whose path ends with
+ * `path` (the system names it by its full path, TMPDIR's links resolved): the first one's
+ * start and whether it carries the huge-page advice ("hg" among its VmFlags in /proc/self/smaps); -1 where
+ * the system does not say (not Linux). */
+static long mappings_of(const char *path, uintptr_t *start, int *advised, long *of_path)
+{
+    FILE *fp = fopen("/proc/self/smaps", "r");
+    if (!fp)
+        return -1;
+    char line[512];
+    long all = 0;
+    int in_path = 0;
+    *of_path = 0;
+    *advised = 0;
+    while (fgets(line, sizeof line, fp)) {
+        unsigned long lo, hi;
+        char perms[8];
+        if (sscanf(line, "%lx-%lx %7s", &lo, &hi, perms) == 3) {
+            all++;
+            line[strcspn(line, "\n")] = '\0';
+            const size_t len = strlen(line), plen = strlen(path);
+            in_path = len >= plen && strcmp(line + len - plen, path) == 0;
+            if (in_path && (*of_path)++ == 0)
+                *start = (uintptr_t)lo;
+        } else if (in_path && strncmp(line, "VmFlags:", 8) == 0 && strstr(line, " hg")) {
+            *advised = 1;
+        }
+    }
+    fclose(fp);
+    return all;
+}
+
+/* On Linux a mapped file of 2 MiB or more (cbvh_open_path) lies on a 2 MiB boundary with the huge-page advice
+ * (the kernel then maps whole 2 MiB pages of it where its page cache holds them), with nothing else of the
+ * open left mapped after cbvh_close; its answers are the copy's. */
+static void test_mapping_on_large_pages(void **state)
+{
+    (void)state;
+    random_mesh m = make_random_mesh(23, 100000, 200000);
+    temp_cooked t;
+    temp_cooked_write(&t, &m, "mapped", (size_t)2 << 20);
+    cbvh_file *mapped = NULL, *copy = NULL;
+    cbvh_error err;
+    assert_int_equal(cbvh_open_memory(t.in.data, t.in.size, NULL, &copy, &err), CBVH_OK);
+    uintptr_t start = 0;
+    int advised = 0;
+    long of_path = 0;
+    const char *name = strrchr(t.path, '/'); /* "/mapped.cbvh" ... */
+    while (name > t.path && name[-1] != '/') /* ... from the folder's name on: unique to this run */
+        name--;
+    const long before = mappings_of(name, &start, &advised, &of_path);
+    assert_int_equal(cbvh_open_path(t.path, NULL, &mapped, &err), CBVH_OK);
+    const long opened = mappings_of(name, &start, &advised, &of_path);
+    assert_same_hits(mapped, copy);
+    cbvh_close(mapped);
+    if (before >= 0) {
+#if defined(__linux__)
+        assert_int_equal(of_path, 1);
+        assert_int_equal(start % ((uintptr_t)2 << 20), 0);
+        if (access("/sys/kernel/mm/transparent_hugepage/enabled", R_OK) == 0)
+            assert_true(advised);
+        assert_int_equal(opened, before + 1);
+        const long closed = mappings_of(name, &start, &advised, &of_path);
+        assert_int_equal(of_path, 0);
+        assert_int_equal(closed, before);
+#endif
+    } else {
+        printf("no mappings to see on this system: only the answers checked\n");
+    }
+    cbvh_close(copy);
+    temp_cooked_remove(&t);
+    free_random_mesh(&m);
+}
+
 /* A file of several MiB read into memory (cbvh_open_path_read), its expanded triangles and the sections
  * of a compressed one, inflated at open, all from the default allocator, ask for 2 MiB pages where the system
  * has the advice (Linux); answers as the mapped file's. A caller's allocator gets no advice. (After close the
@@ -629,13 +726,9 @@ static void test_read_mode_large_pages(void **state)
 {
     (void)state;
     random_mesh m = make_random_mesh(17, 150000, 300000);
-    input in = cook_input("large", &m, 0, CBVH_VERTEX_FLOAT32, 1);
-    assert_true(in.size > (size_t)6 << 20);
-    char dir[200];
-    test_temp_dir(dir, sizeof dir, "cbvh-test-load");
-    char path[256];
-    snprintf(path, sizeof path, "%s/large.cbvh", dir);
-    write_whole_file(path, in.data, in.size);
+    temp_cooked t;
+    temp_cooked_write(&t, &m, "large", (size_t)6 << 20);
+    const char *path = t.path;
     const long before = advised_mappings();
     cbvh_file *mapped = NULL, *read = NULL, *own = NULL;
     cbvh_error err;
@@ -674,9 +767,7 @@ static void test_read_mode_large_pages(void **state)
     cbvh_close(read);
     cbvh_close(mapped);
     test_aligned_free(zipped.data);
-    unlink(path);
-    rmdir(dir);
-    test_aligned_free(in.data);
+    temp_cooked_remove(&t);
     free_random_mesh(&m);
 }
 
@@ -876,6 +967,7 @@ int main(void)
         cmocka_unit_test(test_cooked_sizes_by_path),
         cmocka_unit_test(test_cooked_truncations_and_allocations),
         cmocka_unit_test(test_read_mode_large_pages),
+        cmocka_unit_test(test_mapping_on_large_pages),
 #else
         cmocka_unit_test(test_cooked_files_need_the_cooker),
 #endif
