@@ -34,7 +34,8 @@ void bench_mesh_free(bench_mesh *mesh);
 cbvh_mesh bench_mesh_view(const bench_mesh *mesh);
 
 /* Writes `size` bytes to a new temporary file (in $TMPDIR or /tmp) and stores its
- * path in path[path_size]. Returns 0 on success, else reports and returns an exit status. */
+ * path in path[path_size], its pages dropped from the system's cache (read from disk at the first open,
+ * as a game loading the file does). Returns 0 on success, else reports and returns an exit status. */
 int bench_write_temp(const char *command, const void *data, size_t size, char *path, size_t path_size);
 
 #endif
