@@ -439,7 +439,9 @@ typedef enum cbvh_traversal {
 
 /* Work counters, for benchmarks and reports. */
 typedef struct cbvh_query_stats {
-    uint64_t nodes_visited;   /* node boxes tested */
+    uint64_t nodes_visited; /* node boxes tested; for a ray from outside the mesh's bounds, one more: the
+                             * box holding every box a walk tests first, tested before any walk (a ray
+                             * that misses it hits nothing and walks no further) */
     uint64_t triangles_tested;
 } cbvh_query_stats;
 

@@ -293,6 +293,12 @@ static void test_slab_edge_cases(void **state)
             float entry;
             const int hit = cbvh_slab_test(b[sel.near_x], b[sel.near_y], b[sel.near_z], b[sel.far_x], b[sel.far_y],
                                            b[sel.far_z], ctx.shear.org, ctx.rcp, ctx.tmin, ctx.tmax, &entry);
+            /* the rays' pre-test of a file's top box (raycast.h) decides as this test does, ray for ray */
+            struct cbvh_file top;
+            memset(&top, 0, sizeof top);
+            memcpy(top.top_lo, b, 3 * sizeof(float));
+            memcpy(top.top_hi, b + 3, 3 * sizeof(float));
+            assert_int_equal(cbvh_ray_enters_top_box(&ctx, ray.org, &top), hit);
             const double lo[3] = {b[0], b[1], b[2]}, hi[3] = {b[3], b[4], b[5]};
             const double o[3] = {ray.org[0], ray.org[1], ray.org[2]}, d[3] = {ray.dir[0], ray.dir[1], ray.dir[2]};
             const double gap = slab_reference(lo, hi, o, d, ray.tmin, ray.tmax < CBVH_T_LIMIT ? ray.tmax : CBVH_T_LIMIT);
@@ -317,6 +323,35 @@ static void test_slab_edge_cases(void **state)
             checked++;
         }
     assert_true(checked > 1000);
+    /* Lines through an edge of a box, where the entry and exit distances agree but for rounding (the slab
+     * test's pad decides about half of them): the pre-test decides as the slab test, ray for ray. */
+    const float box[6] = {0.0f, 0.0f, 0.0f, 1.0f, 1.0f, 1.0f};
+    struct cbvh_file top;
+    memset(&top, 0, sizeof top);
+    memcpy(top.top_lo, box, 3 * sizeof(float));
+    memcpy(top.top_hi, box + 3, 3 * sizeof(float));
+    long padded = 0;
+    for (uint64_t i = 0; i < 20000; i++) {
+        uint64_t st = 1000003u * i + 17u;
+        cbvh_ray ray = {{0, 0, 0}, 0.0f, {0, 0, 0}, INFINITY};
+        const float corner[3] = {1.0f, 1.0f, 0.25f + 0.5f * (float)scene_rand_unit(&st)};
+        ray.org[0] = (float)(0.9 * scene_rand_unit(&st));
+        ray.org[1] = (float)(1.1 + 2.0 * scene_rand_unit(&st));
+        ray.org[2] = corner[2];
+        for (int a = 0; a < 3; a++)
+            ray.dir[a] = corner[a] - ray.org[a];
+        struct cbvh_ray_ctx ctx;
+        assert_true(cbvh_ray_setup(&ctx, &ray));
+        const struct cbvh_slab_select sel = cbvh_slab_select_of(ctx.octant);
+        float entry;
+        const int hit =
+            cbvh_slab_test(box[sel.near_x], box[sel.near_y], box[sel.near_z], box[sel.far_x], box[sel.far_y],
+                           box[sel.far_z], ctx.shear.org, ctx.rcp, ctx.tmin, ctx.tmax, &entry);
+        assert_int_equal(cbvh_ray_enters_top_box(&ctx, ray.org, &top), hit);
+        const float exit_x = (box[3] - ray.org[0]) * ctx.rcp[0];
+        padded += entry > exit_x;
+    }
+    assert_true(padded > 100);
 }
 
 #ifdef CBVH_HAVE_SIMD
@@ -814,6 +849,62 @@ static void test_huge_coordinates(void **state)
     }
 }
 
+/* Rays from outside a unit cube (12 triangles, closed), along an axis (the other components 0 or -0) or
+ * diagonal, aimed at points of a face with coordinates 0, 1/2 and 1 (edges and corners: the faces of the
+ * cube's bounds, so of the top box every ray from outside is first tested against, raycast.h): each hits at
+ * the distance to the face, also with its range ending exactly there, and misses when the range ends
+ * short of it or when it passes a hair outside the cube. */
+static void test_top_box_grazing_rays(void **state)
+{
+    (void)state;
+    const float p[24] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 1, 1, 0, 0, 0, 1, 1, 0, 1, 0, 1, 1, 1, 1, 1};
+    const uint32_t idx[36] = {0, 2, 1, 1, 2, 3, 4, 5, 6, 5, 7, 6, 0, 1, 4, 1, 5, 4,
+                              2, 6, 3, 3, 6, 7, 0, 4, 2, 2, 4, 6, 1, 3, 5, 3, 7, 5};
+    void *buf = NULL;
+    cbvh_file *f = NULL;
+    assert_int_equal(ref_cook_open(p, 8, idx, 12, NULL, &buf, &f), CBVH_OK);
+    const float at[3] = {0.0f, 0.5f, 1.0f}, zeros[2] = {0.0f, -0.0f};
+    long rays = 0;
+    for (int axis = 0; axis < 3; axis++)
+        for (int side = 0; side < 2; side++)
+            for (int i = 0; i < 9; i++)
+                for (int z = 0; z < 4; z++)
+                    for (int diagonal = 0; diagonal < 2; diagonal++) {
+                        /* the target on face `side` of `axis`; the origin 0.5 outside it (1.5 along a
+                         * diagonal) */
+                        float target[3], dir[3];
+                        target[axis] = (float)side;
+                        target[(axis + 1) % 3] = at[i % 3];
+                        target[(axis + 2) % 3] = at[i / 3];
+                        dir[axis] = side ? -1.0f : 1.0f;
+                        dir[(axis + 1) % 3] = diagonal ? (at[i % 3] < 0.75f ? 1.0f : -1.0f) : zeros[z % 2];
+                        dir[(axis + 2) % 3] = diagonal ? (at[i / 3] < 0.75f ? 1.0f : -1.0f) : zeros[z / 2];
+                        cbvh_ray r = {{0, 0, 0}, 0.0f, {dir[0], dir[1], dir[2]}, INFINITY};
+                        for (int a = 0; a < 3; a++)
+                            r.org[a] = target[a] - 0.5f * dir[a];
+                        cbvh_hit h;
+                        if (!hit_everywhere(f, &r, &h))
+                            fail_msg("axis %d side %d target %g %g %g dir %g %g %g missed", axis, side,
+                                     target[0], target[1], target[2], dir[0], dir[1], dir[2]);
+                        assert_true(fabsf(h.t - 0.5f) <= 1e-6f);
+                        r.tmax = h.t;
+                        assert_int_equal(hit_everywhere(f, &r, &h), 1);
+                        r.tmax = nextafterf(0.5f, 0.0f) * 0.999f;
+                        assert_int_equal(hit_everywhere(f, &r, &h), 0);
+                        /* a hair outside the cube beside the target, along the same direction */
+                        r.tmax = INFINITY;
+                        const int off = (axis + 1) % 3;
+                        if (!diagonal && (at[i % 3] == 0.0f || at[i % 3] == 1.0f)) {
+                            r.org[off] = at[i % 3] == 0.0f ? -1e-5f : 1.0f + 1e-5f;
+                            assert_int_equal(hit_everywhere(f, &r, &h), 0);
+                        }
+                        rays++;
+                    }
+    assert_int_equal(rays, 3 * 2 * 9 * 4 * 2);
+    cbvh_close(f);
+    cbvh_buffer_free(NULL, buf);
+}
+
 /* F8: a triangle spanning the float range, rays from origins just as far
  * on the other side, so vertex - origin differences pass FLT_MAX. An
  * overflowed sheared coordinate made two float edge functions opposite
@@ -922,7 +1013,7 @@ static void test_far_side_boxes(void **state)
             if (!ref_ray_triangle(t9, &r, &t_aim, &u, &v, &margin) || fmin(fmin(u, v), 1.0 - u - v) < 0.05)
                 continue; /* rounding dir moved the aim too close to an edge */
             struct cbvh_ray_ctx ctx;
-            assert_true(cbvh_ray_prepare(&ctx, &r, fx.file));
+            assert_true(cbvh_ray_prepare(&ctx, &r, fx.file, NULL));
             halved += ctx.box_halve != 0;
             rays++;
             cbvh_hit unknown; /* an unknown traversal stays a miss, halved or not */
@@ -1781,6 +1872,7 @@ int main(void)
         cmocka_unit_test(test_invalid_rays),
         cmocka_unit_test(test_stats),
         cmocka_unit_test(test_huge_coordinates),
+        cmocka_unit_test(test_top_box_grazing_rays),
         cmocka_unit_test(test_far_origin_hits),
         cmocka_unit_test(test_sliver_t),
         cmocka_unit_test(test_sliver_barycentrics),

@@ -54,6 +54,11 @@ struct cbvh_file {
      * any_flip, query/ray_setup.h). Set at open. */
     _Alignas(16) float bounds_lo[4];
     _Alignas(16) float bounds_hi[4];
+    /* The box holding every box a walk tests first (layout/tree.h's cbvh_tree_top_box) dequantized with the
+     * box test's arithmetic, lane 3 0 in both; lo +inf and hi -inf (a box every ray misses) for a tree
+     * without one. A ray that misses it hits nothing (cbvh_ray_prepare, query/raycast.h). Set at open. */
+    _Alignas(16) float top_lo[4];
+    _Alignas(16) float top_hi[4];
     const void *remap;           /* cooked -> original triangle id; NULL = identity */
     uint32_t remap_encoding;     /* CBVH_REMAP_* */
     const uint32_t *unmap;       /* original -> cooked id (owned, built at open when remap is present): dense,

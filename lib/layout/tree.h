@@ -133,6 +133,32 @@ static inline uint32_t cbvh_tree_box_coord(const struct cbvh_file *f, const uint
     return cbvh_node_q(&cbvh_binary_nodes(f)[box])[k];
 }
 
+/* The grid coordinates (as cbvh_tree_box_coord's) of the smallest box holding every box a walk tests
+ * first: the root box (binary layout) or the root node's children's boxes (wide layout). Returns 0 when
+ * there is no such box (a tree without nodes, or a root without children). */
+static inline int cbvh_tree_top_box(const struct cbvh_file *f, const uint32_t layout, uint32_t q[6])
+{
+    struct cbvh_child c[CBVH_TREE_WIDTH];
+    uint32_t n = 0;
+    const uint32_t root_box = cbvh_tree_root_box(f, layout);
+    if (f->info.node_count == 0)
+        return 0;
+    if (root_box != CBVH_NO_BOX) {
+        c[0].box = root_box;
+        n = 1;
+    } else {
+        n = cbvh_tree_children(f, layout, cbvh_tree_root(f, layout), CBVH_NO_OCTANT, c);
+    }
+    for (uint32_t k = 0; k < 6; k++) {
+        q[k] = cbvh_tree_box_coord(f, layout, c[0].box, k);
+        for (uint32_t j = 1; j < n; j++) {
+            const uint32_t v = cbvh_tree_box_coord(f, layout, c[j].box, k);
+            q[k] = k < 3 ? (v < q[k] ? v : q[k]) : (v > q[k] ? v : q[k]);
+        }
+    }
+    return n > 0;
+}
+
 /* Box `box` dequantized on the file's grid. */
 static inline void cbvh_tree_box(const struct cbvh_file *f, const uint32_t layout, uint32_t box, float lo[3],
                                  float hi[3])

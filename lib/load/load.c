@@ -7,6 +7,7 @@
 #include "common/alloc.h"
 #include "common/endian.h"
 #include "common/error.h"
+#include "layout/tree.h"
 #include "load/load.h"
 
 void cbvh_file_own(struct cbvh_file *f, void *p)
@@ -100,6 +101,22 @@ static cbvh_result place_sections(struct cbvh_file *f, const cbvh_section_map *m
     return CBVH_OK;
 }
 
+/* The file's top box (common/file.h), from its validated tree. */
+static void set_top_box(struct cbvh_file *f)
+{
+    uint32_t q[6];
+    const int any = cbvh_tree_top_box(f, f->layout, q);
+    for (int a = 0; a < 4; a++) {
+        /* none: planes at +inf (lows) and -inf (highs), which every ray's slab test misses */
+        f->top_lo[a] = a == 3 ? 0.0f
+                       : any  ? cbvh_dequantize(q[a], f->grid_origin[a], f->grid_scale[a])
+                              : INFINITY;
+        f->top_hi[a] = a == 3 ? 0.0f
+                       : any  ? cbvh_dequantize(q[3 + a], f->grid_origin[a], f->grid_scale[a])
+                              : -INFINITY;
+    }
+}
+
 cbvh_result cbvh_load(struct cbvh_file *f, cbvh_error *err)
 {
     if (!cbvh_host_is_little_endian())
@@ -113,5 +130,7 @@ cbvh_result cbvh_load(struct cbvh_file *f, cbvh_error *err)
         r = place_sections(f, &map, err);
     if (r == CBVH_OK)
         r = cbvh_check_sections(f, &map, err);
+    if (r == CBVH_OK)
+        set_top_box(f);
     return r;
 }

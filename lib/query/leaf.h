@@ -597,6 +597,7 @@ CBVH_KERNEL int leaf_loop(const struct cbvh_file *restrict f, uint32_t first, ui
     }
 #else
     (void)scalar;
+    (void)near;
     (void)occlusion;
 #endif
     for (uint32_t k = first; k < first + count; k++) {

@@ -158,10 +158,11 @@ static inline uint32_t cbvh_ray_octant(const cbvh_ray *ray)
            (uint32_t)(signbit(ray->dir[2]) != 0) << 2;
 }
 
-/* Returns 1 and fills ctx when the ray is valid (cbvh_ray_valid), else 0. */
-static inline int cbvh_ray_setup(struct cbvh_ray_ctx *ctx, const cbvh_ray *ray)
+/* Returns 1 and fills ctx but for its shear (what a box test reads) when the ray is valid
+ * (cbvh_ray_valid), else 0. */
+static inline int cbvh_ray_setup_boxes(struct cbvh_ray_ctx *ctx, const cbvh_ray *ray)
 {
-    const float *o = ray->org, *d = ray->dir;
+    const float *d = ray->dir;
     if (!cbvh_ray_valid(ray))
         return 0;
 #ifdef CBVH_HAVE_SIMD
@@ -177,7 +178,15 @@ static inline int cbvh_ray_setup(struct cbvh_ray_ctx *ctx, const cbvh_ray *ray)
     ctx->gate = NULL;
     ctx->tmin = ray->tmin;
     ctx->tmax = ray->tmax < CBVH_T_LIMIT ? ray->tmax : CBVH_T_LIMIT;
-    cbvh_shear_setup(&ctx->shear, o, d);
+    return 1;
+}
+
+/* Returns 1 and fills ctx when the ray is valid (cbvh_ray_valid), else 0. */
+static inline int cbvh_ray_setup(struct cbvh_ray_ctx *ctx, const cbvh_ray *ray)
+{
+    if (!cbvh_ray_setup_boxes(ctx, ray))
+        return 0;
+    cbvh_shear_setup(&ctx->shear, ray->org, ray->dir);
     return 1;
 }
 

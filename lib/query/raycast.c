@@ -41,7 +41,8 @@ CBVH_API int cbvh_raycast(const cbvh_file *file, const cbvh_ray *ray, cbvh_trave
     struct cbvh_best_hit best = {UINT32_MAX, 0.0f, 0.0f, 0.0f};
     struct cbvh_ray_ctx ctx;
     ctx.t_base = 0.0;
-    if (file && ray && known_traversal(traversal) && cbvh_ray_prepare(&ctx, ray, file))
+    if (file && ray && known_traversal(traversal) &&
+        cbvh_ray_prepare(&ctx, ray, file, stats ? &stats->nodes_visited : NULL))
         cbvh_closest(file, &ctx, traversal, &best, stats);
     return cbvh_hit_output(file, &best, ctx.t_base, hit);
 }
@@ -50,7 +51,8 @@ CBVH_API int cbvh_occluded(const cbvh_file *file, const cbvh_ray *ray, cbvh_trav
                            cbvh_query_stats *stats)
 {
     struct cbvh_ray_ctx ctx;
-    if (!file || !ray || !known_traversal(traversal) || !cbvh_ray_prepare(&ctx, ray, file))
+    if (!file || !ray || !known_traversal(traversal) ||
+        !cbvh_ray_prepare(&ctx, ray, file, stats ? &stats->nodes_visited : NULL))
         return 0;
     return cbvh_any(file, &ctx, traversal, stats);
 }
@@ -183,9 +185,12 @@ static int place_ray(const struct cbvh_placement *p, const cbvh_ray *world, cbvh
     return cbvh_all_finite(local->org, 3) && cbvh_all_finite(local->dir, 3);
 }
 
-/* Checks the arguments of a query with options and prepares its ray (in the mesh's frame) and gate. */
-static cbvh_result query_prepare(const cbvh_file *file, const cbvh_ray *world, const cbvh_query_options *options,
-                                 cbvh_query_options *o, struct cbvh_ray_ctx *ctx, struct cbvh_hit_gate *gate)
+/* Checks the arguments of a query with options and prepares its ray (in the mesh's frame) and gate; *walk
+ * says whether there is anything to walk (cbvh_ray_prepare, which counts into stats). */
+static cbvh_result query_prepare(const cbvh_file *file, const cbvh_ray *world,
+                                 const cbvh_query_options *options, cbvh_query_options *o,
+                                 struct cbvh_ray_ctx *ctx, struct cbvh_hit_gate *gate,
+                                 cbvh_query_stats *stats, int *walk)
 {
     if (cbvh_query_options_read(options, o) != CBVH_OK)
         return CBVH_ERROR_INVALID_ARGUMENT;
@@ -197,8 +202,9 @@ static cbvh_result query_prepare(const cbvh_file *file, const cbvh_ray *world, c
         return CBVH_ERROR_INVALID_ARGUMENT;
     if (p)
         ray = &local;
-    if (!file || !ray || !cbvh_ray_prepare(ctx, ray, file))
+    if (!file || !ray || !cbvh_ray_valid(ray))
         return CBVH_ERROR_INVALID_ARGUMENT;
+    *walk = cbvh_ray_prepare(ctx, ray, file, stats ? &stats->nodes_visited : NULL);
     cbvh_hit_gate_init(gate, o->cull, o->filter, o->filter_user, p ? p->rotation : NULL, ray->dir, ctx->t_base);
     /* without culling or filter every hit counts: the plain walk (a transform only rotates the answer) */
     ctx->gate = o->cull != CBVH_CULL_NONE || o->filter ? gate : NULL;
@@ -215,11 +221,13 @@ CBVH_API cbvh_result cbvh_raycast_with(const cbvh_file *file, const cbvh_ray *ra
     cbvh_query_options o;
     struct cbvh_ray_ctx ctx;
     struct cbvh_hit_gate gate;
-    const cbvh_result r = query_prepare(file, ray, options, &o, &ctx, &gate);
+    int walk;
+    const cbvh_result r = query_prepare(file, ray, options, &o, &ctx, &gate, stats, &walk);
     if (r != CBVH_OK)
         return r;
     struct cbvh_best_hit best = {UINT32_MAX, 0.0f, 0.0f, 0.0f};
-    cbvh_closest(file, &ctx, o.traversal, &best, stats);
+    if (walk)
+        cbvh_closest(file, &ctx, o.traversal, &best, stats);
     if (best.tri != UINT32_MAX) {
         cbvh_hit_record_fill(file, best.tri, ctx.t_base, best.t, best.u, best.v, gate.dir, hit);
         record_place(&gate, hit);
@@ -236,9 +244,10 @@ CBVH_API cbvh_result cbvh_occluded_with(const cbvh_file *file, const cbvh_ray *r
     cbvh_query_options o;
     struct cbvh_ray_ctx ctx;
     struct cbvh_hit_gate gate;
-    const cbvh_result r = query_prepare(file, ray, options, &o, &ctx, &gate);
+    int walk;
+    const cbvh_result r = query_prepare(file, ray, options, &o, &ctx, &gate, stats, &walk);
     if (r != CBVH_OK)
         return r;
-    *occluded = cbvh_any(file, &ctx, o.traversal, stats);
+    *occluded = walk && cbvh_any(file, &ctx, o.traversal, stats);
     return CBVH_OK;
 }

@@ -193,7 +193,8 @@ static void stream_run(const struct cbvh_file *f, const cbvh_ray *rays, size_t c
                 if (octant[j] != o)
                     continue;
                 const size_t r = start + j;
-                cbvh_ray_prepare(&ctx, &rays[r], f);
+                if (!cbvh_ray_prepare(&ctx, &rays[r], f, &visited))
+                    continue; /* it misses the mesh's top box: a miss */
                 if (ctx.box_halve) {
                     /* the batch shares one dequantized box between its rays; a ray whose box test needs
                      * half scale (coordinates past FLT_MAX / 2, ray_box.h) takes the single-ray walk */

@@ -261,7 +261,7 @@ int cbvh_sweep_as_ray(const struct cbvh_file *f, const float center[3], const fl
     struct cbvh_hit_gate gate;
     struct cbvh_best_hit best = {UINT32_MAX, 0.0f, 0.0f, 0.0f};
     found->tri = UINT32_MAX;
-    if (!cbvh_ray_prepare(&ctx, &ray, f))
+    if (!cbvh_ray_prepare(&ctx, &ray, f, NULL))
         return 0;
     if (rules && (rules->cull != CBVH_CULL_NONE || rules->filter)) {
         cbvh_hit_gate_init(&gate, rules->cull, rules->filter, rules->user,

@@ -399,6 +399,7 @@ CBVH_KERNEL uint32_t walk_w4_children_hit(const struct cbvh_file *restrict f, cb
 #endif
     {
         (void)scalar;
+        (void)w;
         for (uint32_t s = 0; s < CBVH_W4_WIDTH; s++)
             if ((used >> s & 1u) &&
                 walk_box_test(box, f, CBVH_LAYOUT_WIDE4, float_boxes, CBVH_W4_WIDTH * r + s, tmin, tmax, &e[s]))
@@ -552,6 +553,7 @@ cbvh_walk_step(const struct cbvh_file *restrict f, const uint32_t layout,
 {
     const float tmin = ray->tmin;
     const cbvh_ref r = st->r;
+    (void)count; /* read by the SIMD step only */
     /* the children's order: nearest first, but an any-hit walk from among the triangles goes farthest
      * first (ray->any_flip), where most occluders are, not around its start, where a ray leaving a surface
      * passes the surface's neighbours: Wuson shadow rays test 12 triangles a ray rather than 21 */

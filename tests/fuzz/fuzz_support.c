@@ -243,13 +243,14 @@ static void check_hit(check_ctx *c, const cbvh_ray *r, const cbvh_hit *h, int go
 
 /* The boxes a walk tests when it visits every node once (stats count box tests): binary, one per node;
  * wide4, one per used slot (every node but the root fills one, every leaf one, so at most one per
- * triangle; at most four per node) and the root's. */
+ * triangle; at most four per node) and the root's; both, one more for the box holding the first ones,
+ * which a ray from outside the mesh's bounds is tested against before any walk (cbvh.h). */
 static uint64_t box_limit(const cbvh_file_info *in)
 {
     if (in->layout != CBVH_LAYOUT_WIDE4)
-        return in->node_count;
+        return in->node_count + 1u;
     const uint64_t slots = (uint64_t)in->node_count - 1u + in->triangle_count, cap = 4ull * in->node_count;
-    return (slots < cap ? slots : cap) + 1u;
+    return (slots < cap ? slots : cap) + 2u;
 }
 
 /* Counts the candidates of a query whose filter rejects every one. */
