@@ -149,6 +149,8 @@ static inline int cbvh_tree_top_box(const struct cbvh_file *f, const uint32_t la
     } else {
         n = cbvh_tree_children(f, layout, cbvh_tree_root(f, layout), CBVH_NO_OCTANT, c);
     }
+    if (n == 0)
+        return 0;
     for (uint32_t k = 0; k < 6; k++) {
         q[k] = cbvh_tree_box_coord(f, layout, c[0].box, k);
         for (uint32_t j = 1; j < n; j++) {
@@ -156,7 +158,7 @@ static inline int cbvh_tree_top_box(const struct cbvh_file *f, const uint32_t la
             q[k] = k < 3 ? (v < q[k] ? v : q[k]) : (v > q[k] ? v : q[k]);
         }
     }
-    return n > 0;
+    return 1;
 }
 
 /* Box `box` dequantized on the file's grid. */
