@@ -21,11 +21,20 @@
 #include "support/scene_gen.h"
 #include "support/layouts.h"
 
-/* Kernel settings of cbvh_stream_set_kernel: best, scalar, SSE2. */
-static const int kernels[3] = {0, 1, 2};
-/* With each, the tails' setting (cbvh_stream_set_tails): the best kernel runs four tails at once, which
- * the test meshes (small: by default one tail) would not; the scalar kernel one, and SSE2 the default. */
-static const int tail_settings[3] = {CBVH_STREAM_TAILS, 1, 0};
+/* The settings each stream check runs with: the node kernel (cbvh_stream_set_kernel: 0 best, 1 scalar, 2
+ * SSE2), the tails (cbvh_stream_set_tails: how many run at once in the batch walk, 0 by the mesh) and the
+ * occlusion streams' way (cbvh_stream_set_interleave: 0 by the mesh, 1 the batch walk, 2 every window
+ * interleaved, 3 window by window as a mesh that does not stay in the caches has it). The test meshes are
+ * small, so their defaults (the third) are one tail and the batch walk; the others force the rest: the
+ * choice by the rays' coherence (coherent rays in the batch, the others interleaved: on the scalar walk with
+ * the scalar kernel), four tails, and every window interleaved (the walk the single rays take, so that the
+ * counters can be compared too). */
+static const struct {
+    int kernel, tails, interleave;
+} settings[] = {
+    {0, CBVH_STREAM_TAILS, 3}, {1, 1, 3}, {2, 0, 0}, {0, CBVH_STREAM_TAILS, 1}, {0, 1, 2},
+};
+#define SETTINGS (sizeof settings / sizeof settings[0])
 
 /* Rays of every kind, with invalid ones mixed in every seventh slot. */
 static cbvh_ray *make_rays(const ref_fixture *fx, size_t count, uint64_t seed, int coherent)
@@ -106,9 +115,10 @@ static void check_stream(const ref_fixture *fx, const cbvh_ray *rays, size_t cou
     uint8_t *occ = malloc(count + 1);
     assert_non_null(hits);
     assert_non_null(occ);
-    for (int k = 0; k < 3; k++) {
-        cbvh_stream_set_kernel(kernels[k]);
-        cbvh_stream_set_tails(tail_settings[k]);
+    for (size_t k = 0; k < SETTINGS; k++) {
+        cbvh_stream_set_kernel(settings[k].kernel);
+        cbvh_stream_set_tails(settings[k].tails);
+        cbvh_stream_set_interleave(settings[k].interleave);
         memset(hits, 0xAB, sizeof(cbvh_hit) * (count + 1));
         memset(occ, 0xAB, count + 1);
         cbvh_query_stats st = {0, 0};
@@ -121,7 +131,7 @@ static void check_stream(const ref_fixture *fx, const cbvh_ray *rays, size_t cou
             cbvh_hit h;
             const int hit = cbvh_raycast(fx->file, &rays[r], CBVH_TRAVERSAL_SORTED, &h, NULL);
             if (hits[r].tri != h.tri || (hit && (hits[r].t != h.t || hits[r].u != h.u || hits[r].v != h.v))) {
-                fprintf(stderr, "kernel %d ray %zu: stream tri %u t %.9g, single tri %u t %.9g\n", kernels[k], r,
+                fprintf(stderr, "setting %zu ray %zu: stream tri %u t %.9g, single tri %u t %.9g\n", k, r,
                         hits[r].tri, hits[r].t, h.tri, h.t);
                 fail();
             }
@@ -132,10 +142,20 @@ static void check_stream(const ref_fixture *fx, const cbvh_ray *rays, size_t cou
         }
         if (count > 0 && ref_ray_valid(&rays[0]))
             assert_true(st.nodes_visited > 0);
+        if (settings[k].interleave == 2) {
+            /* the interleaved walks are the single-ray walks: the same boxes and triangles, ray by ray */
+            cbvh_query_stats interleaved = {0, 0}, single = {0, 0};
+            cbvh_occluded_stream(fx->file, rays, count, occ, &interleaved);
+            for (size_t r = 0; r < count; r++)
+                cbvh_occluded(fx->file, &rays[r], CBVH_TRAVERSAL_SORTED, &single);
+            assert_true(interleaved.nodes_visited == single.nodes_visited);
+            assert_true(interleaved.triangles_tested == single.triangles_tested);
+        }
         check_scratch(fx, rays, count, hits, occ);
     }
     cbvh_stream_set_kernel(0);
     cbvh_stream_set_tails(0);
+    cbvh_stream_set_interleave(0);
     free(hits);
     free(occ);
 }
@@ -359,12 +379,66 @@ static void test_null_arguments(void **state)
     cbvh_occluded_stream_scratch(NULL, rays, 2, NULL, NULL, NULL, 0);
 }
 
+/* The occlusion streams' choice of way (stream.c): a window is coherent when at least half of its sampled
+ * pairs of consecutive rays point within about 8 degrees of each other, the same way round. */
+static void test_window_coherence(void **state)
+{
+    (void)state;
+    enum { N = 1000 };
+    cbvh_ray *rays = calloc(N, sizeof *rays);
+    assert_non_null(rays);
+    uint64_t st = 5;
+    /* a camera's rays in scanline order: coherent; rays in all directions: not */
+    for (int j = 0; j < N; j++) {
+        const float x = (float)(j % 40) / 40.0f - 0.5f, y = (float)(j / 40) / 25.0f - 0.5f;
+        rays[j].dir[0] = x;
+        rays[j].dir[1] = y;
+        rays[j].dir[2] = -1.0f;
+    }
+    assert_true(cbvh_stream_window_coherent(rays, N));
+    for (int j = 0; j < N; j++)
+        for (int a = 0; a < 3; a++)
+            rays[j].dir[a] = (float)(2.0 * scene_rand_unit(&st) - 1.0);
+    assert_false(cbvh_stream_window_coherent(rays, N));
+    /* parallel rays, whatever their length: coherent; every other one turned round: not */
+    for (int j = 0; j < N; j++) {
+        const float len = 1.0f + (float)(j % 7);
+        rays[j].dir[0] = 0.0f * len;
+        rays[j].dir[1] = -0.6f * len;
+        rays[j].dir[2] = 0.8f * len;
+    }
+    assert_true(cbvh_stream_window_coherent(rays, N));
+    for (int j = 1; j < N; j += 2)
+        for (int a = 0; a < 3; a++)
+            rays[j].dir[a] = -rays[j].dir[a];
+    assert_false(cbvh_stream_window_coherent(rays, N));
+    /* about 5 degrees apart: coherent; about 12: not */
+    const double steps[2] = {5.0, 12.0};
+    for (int k = 0; k < 2; k++) {
+        for (int j = 0; j < N; j++) {
+            const double a = (double)j * steps[k] * 3.141592653589793 / 180.0;
+            rays[j].dir[0] = (float)cos(a);
+            rays[j].dir[1] = (float)sin(a);
+            rays[j].dir[2] = 0.0f;
+        }
+        assert_int_equal(cbvh_stream_window_coherent(rays, N), k == 0);
+    }
+    /* zero and NaN directions count as apart; one ray has no pair: batched */
+    memset(rays, 0, sizeof *rays * N);
+    assert_false(cbvh_stream_window_coherent(rays, N));
+    for (int j = 0; j < N; j++)
+        rays[j].dir[0] = NAN;
+    assert_false(cbvh_stream_window_coherent(rays, N));
+    assert_true(cbvh_stream_window_coherent(rays, 1));
+    free(rays);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_counts),         cmocka_unit_test(test_meshes),
         cmocka_unit_test(test_range_ends),     cmocka_unit_test(test_node_kernels_agree),
-        cmocka_unit_test(test_null_arguments),
+        cmocka_unit_test(test_null_arguments), cmocka_unit_test(test_window_coherence),
     };
     return TEST_RUN_LAYOUTS(tests, 1);
 }

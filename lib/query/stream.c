@@ -44,6 +44,19 @@ STREAM_INSTANCE(stream_binary_closest, CBVH_LAYOUT_BINARY, 0)
 STREAM_INSTANCE(stream_binary_any, CBVH_LAYOUT_BINARY, 1)
 #undef STREAM_INSTANCE
 
+/* The interleaved occlusion walks (stream_walk.h) per layout, the scalar choice at run time (a predictable
+ * branch, as in the single-ray walks). */
+#define INTERLEAVE_INSTANCE(name, layout)                                                                    \
+    CBVH_NOINLINE void name(const struct cbvh_file *f, struct cbvh_stream_batch *b, const cbvh_ray *rays,    \
+                            size_t count, uint8_t *occluded, int scalar, int counting, uint64_t *visited,    \
+                            uint64_t *tested)                                                                \
+    {                                                                                                        \
+        stream_interleave(f, layout, b, rays, count, occluded, scalar, counting, visited, tested);           \
+    }
+INTERLEAVE_INSTANCE(stream_interleave_wide4, CBVH_LAYOUT_WIDE4)
+INTERLEAVE_INSTANCE(stream_interleave_binary, CBVH_LAYOUT_BINARY)
+#undef INTERLEAVE_INSTANCE
+
 /* The stream walk for the file's layout. */
 static void stream_walk_file(const struct cbvh_file *f, struct cbvh_stream_batch *b, uint32_t octant,
                              cbvh_stream_node_fn node_test, int any, int counting, uint8_t *occluded,
@@ -65,6 +78,48 @@ static void stream_walk_file(const struct cbvh_file *f, struct cbvh_stream_batch
     else
         (any ? stream_binary_any : stream_binary_closest)(f, b, octant, node_test, counting, occluded,
                                                           visited, tested);
+}
+
+/* Occlusion rays walked interleaved (stream_interleave), on the single-ray walks' kernel (raycast.h):
+ * scalar also with the streams' scalar node kernel, the walks' own fallback and its test. */
+static void interleave_file(const struct cbvh_file *f, struct cbvh_stream_batch *b, const cbvh_ray *rays,
+                            size_t count, uint8_t *occluded, cbvh_stream_node_fn node_test, int counting,
+                            uint64_t *visited, uint64_t *tested)
+{
+    const int kernel = cbvh_walk_kernel();
+    const int scalar = node_test == cbvh_stream_node_scalar || kernel == CBVH_WALK_KERNEL_SCALAR;
+    if (f->layout == CBVH_LAYOUT_WIDE4) {
+#ifdef CBVH_HAVE_AVX2
+        if (!scalar && kernel == CBVH_WALK_KERNEL_AVX2) {
+            cbvh_stream_interleave_wide4_avx2(f, b, rays, count, occluded, counting, visited, tested);
+            return;
+        }
+#endif
+        stream_interleave_wide4(f, b, rays, count, occluded, scalar, counting, visited, tested);
+    } else {
+        stream_interleave_binary(f, b, rays, count, occluded, scalar, counting, visited, tested);
+    }
+}
+
+/* Whether the rays of a window are coherent: of up to 64 pairs of consecutive rays spread over it, at least
+ * half point within about 8 degrees of each other (a camera's rays in pixel or tile order, parallel rays),
+ * so that a batch shares its nodes between them; else (rays in all directions, rays from points spread over
+ * the mesh) each ray soon walks alone. Pairs with an invalid or zero direction count as apart. */
+#define STREAM_COHERENCE_PAIRS 64u
+int cbvh_stream_window_coherent(const cbvh_ray *rays, uint32_t n)
+{
+    const uint32_t pairs = n - 1u < STREAM_COHERENCE_PAIRS ? n - 1u : STREAM_COHERENCE_PAIRS;
+    uint32_t close = 0;
+    for (uint32_t p = 0; p < pairs; p++) {
+        const uint32_t j = 1u + (uint32_t)((uint64_t)p * (n - 1u) / pairs);
+        const float *a = rays[j - 1u].dir, *b = rays[j].dir;
+        const double dot = (double)a[0] * b[0] + (double)a[1] * b[1] + (double)a[2] * b[2];
+        const double aa = (double)a[0] * a[0] + (double)a[1] * a[1] + (double)a[2] * a[2];
+        const double bb = (double)b[0] * b[0] + (double)b[1] * b[1] + (double)b[2] * b[2];
+        /* cos^2 of the angle above 0.99^2, the same way round; NaN fails */
+        close += dot > 0.0 && dot * dot > 0.9801 * aa * bb;
+    }
+    return 2u * close >= pairs;
 }
 
 /* Adds a validated ray to the batch. */
@@ -107,22 +162,6 @@ static void batch_flush(const struct cbvh_file *f, struct cbvh_stream_batch *b, 
     b->count = 0;
 }
 
-/* A whole ray on the halved single-ray walk (raycast.h), its counters added to the stream's. */
-static void solo_ray(const struct cbvh_file *f, const struct cbvh_ray_ctx *ctx, cbvh_hit *hit, uint8_t *occluded,
-                     uint64_t *visited, uint64_t *tested)
-{
-    cbvh_query_stats stats = {0, 0};
-    if (hit) {
-        struct cbvh_best_hit best = {UINT32_MAX, 0.0f, 0.0f, 0.0f};
-        cbvh_closest(f, ctx, CBVH_TRAVERSAL_SORTED, &best, &stats);
-        cbvh_hit_output(f, &best, ctx->t_base, hit);
-    } else {
-        *occluded = (uint8_t)cbvh_any(f, ctx, CBVH_TRAVERSAL_SORTED, &stats);
-    }
-    *visited += stats.nodes_visited;
-    *tested += stats.triangles_tested;
-}
-
 /* The batch's arrays cut from `size` bytes at `mem`: as many rays as fit, at most CBVH_STREAM_MAX_BATCH
  * (the alignments need at most STREAM_SLACK bytes); *octant receives the window's octant bytes.
  * Returns the batch's capacity, 0 when not even one ray fits. */
@@ -160,20 +199,28 @@ static uint32_t batch_carve(struct cbvh_stream_batch *b, uint8_t **octant, void 
     return b->capacity;
 }
 
-/* Splits the stream into windows, each window into same-octant batches of the batch's capacity.
- * Exactly one of hits / occluded is given. Invalid rays are misses. */
+/* Splits the stream into windows, each window into same-octant batches of the batch's capacity. An
+ * occlusion stream on a mesh that does not stay in the caches walks a window of incoherent rays interleaved
+ * instead (cbvh_stream_interleaves, stream_interleave: cbvh.h says what it measured). Exactly one of hits /
+ * occluded is given. Invalid rays are misses. */
 static void stream_run(const struct cbvh_file *f, const cbvh_ray *rays, size_t count, cbvh_hit *hits,
                        uint8_t *occluded, cbvh_query_stats *stats, struct cbvh_stream_batch *restrict batch,
                        uint8_t *restrict octant)
 {
     const cbvh_stream_node_fn node_test = cbvh_stream_node_kernel();
     batch->tails->max = cbvh_stream_tails_for(f);
+    const int interleave = occluded ? cbvh_stream_interleaves(f) : 0;
     const uint32_t window_size = CBVH_STREAM_WINDOW_PER_RAY * batch->capacity;
     struct cbvh_ray_ctx ctx;
     uint64_t visited = 0, tested = 0;
 
     for (size_t start = 0; start < count; start += window_size) {
         const uint32_t window = (uint32_t)(count - start < window_size ? count - start : window_size);
+        if (interleave == 2 || (interleave == 1 && !cbvh_stream_window_coherent(rays + start, window))) {
+            interleave_file(f, batch, rays + start, window, occluded + start, node_test, stats != NULL,
+                            &visited, &tested);
+            continue;
+        }
         uint32_t present = 0; /* octants that occur in the window */
         for (uint32_t j = 0; j < window; j++) {
             const size_t r = start + j;
@@ -198,7 +245,8 @@ static void stream_run(const struct cbvh_file *f, const cbvh_ray *rays, size_t c
                 if (ctx.box_halve) {
                     /* the batch shares one dequantized box between its rays; a ray whose box test needs
                      * half scale (coordinates past FLT_MAX / 2, ray_box.h) takes the single-ray walk */
-                    solo_ray(f, &ctx, hits ? &hits[r] : NULL, occluded ? &occluded[r] : NULL, &visited, &tested);
+                    stream_solo_ray(f, &ctx, hits ? &hits[r] : NULL, occluded ? &occluded[r] : NULL, &visited,
+                                    &tested);
                     continue;
                 }
                 batch_add(batch, &ctx, r);

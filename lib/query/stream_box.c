@@ -55,6 +55,19 @@ uint32_t cbvh_stream_tails_for(const struct cbvh_file *f)
     return f->vertices_far ? CBVH_STREAM_TAILS : 1u;
 }
 
+static atomic_int stream_interleave_setting;
+
+void cbvh_stream_set_interleave(int setting)
+{
+    atomic_store_explicit(&stream_interleave_setting, setting, memory_order_relaxed);
+}
+
+int cbvh_stream_interleaves(const struct cbvh_file *f)
+{
+    const int setting = atomic_load_explicit(&stream_interleave_setting, memory_order_relaxed);
+    return setting == 0 ? (int)f->vertices_far : setting == 1 ? 0 : setting == 2 ? 2 : 1;
+}
+
 cbvh_stream_node_fn cbvh_stream_node_kernel(void)
 {
     int which = atomic_load_explicit(&stream_kernel_setting, memory_order_relaxed);
