@@ -142,8 +142,9 @@ static void check_stream(const ref_fixture *fx, const cbvh_ray *rays, size_t cou
         }
         if (count > 0 && ref_ray_valid(&rays[0]))
             assert_true(st.nodes_visited > 0);
-        if (settings[k].interleave == 2) {
-            /* the interleaved walks are the single-ray walks: the same boxes and triangles, ray by ray */
+        if (settings[k].interleave == 2 && test_layout == CBVH_LAYOUT_WIDE4) {
+            /* the interleaved walks (the wide layout's) are the single-ray walks: the same boxes and
+             * triangles, ray by ray */
             cbvh_query_stats interleaved = {0, 0}, single = {0, 0};
             cbvh_occluded_stream(fx->file, rays, count, occ, &interleaved);
             for (size_t r = 0; r < count; r++)
@@ -151,7 +152,10 @@ static void check_stream(const ref_fixture *fx, const cbvh_ray *rays, size_t cou
             assert_true(interleaved.nodes_visited == single.nodes_visited);
             assert_true(interleaved.triangles_tested == single.triangles_tested);
         }
-        check_scratch(fx, rays, count, hits, occ);
+        /* the scratch sizes with the default way, the choice by window and every window interleaved: the
+         * other settings change the walks, not how the scratch is cut */
+        if (settings[k].interleave != 1 && settings[k].kernel != 1)
+            check_scratch(fx, rays, count, hits, occ);
     }
     cbvh_stream_set_kernel(0);
     cbvh_stream_set_tails(0);

@@ -44,18 +44,14 @@ STREAM_INSTANCE(stream_binary_closest, CBVH_LAYOUT_BINARY, 0)
 STREAM_INSTANCE(stream_binary_any, CBVH_LAYOUT_BINARY, 1)
 #undef STREAM_INSTANCE
 
-/* The interleaved occlusion walks (stream_walk.h) per layout, the scalar choice at run time (a predictable
- * branch, as in the single-ray walks). */
-#define INTERLEAVE_INSTANCE(name, layout)                                                                    \
-    CBVH_NOINLINE void name(const struct cbvh_file *f, struct cbvh_stream_batch *b, const cbvh_ray *rays,    \
-                            size_t count, uint8_t *occluded, int scalar, int counting, uint64_t *visited,    \
-                            uint64_t *tested)                                                                \
-    {                                                                                                        \
-        stream_interleave(f, layout, b, rays, count, occluded, scalar, counting, visited, tested);           \
-    }
-INTERLEAVE_INSTANCE(stream_interleave_wide4, CBVH_LAYOUT_WIDE4)
-INTERLEAVE_INSTANCE(stream_interleave_binary, CBVH_LAYOUT_BINARY)
-#undef INTERLEAVE_INSTANCE
+/* The interleaved occlusion walks (stream_walk.h) on the wide layout, the scalar choice at run time (a
+ * predictable branch, as in the single-ray walks). */
+CBVH_NOINLINE void stream_interleave_wide4(const struct cbvh_file *f, struct cbvh_stream_batch *b,
+                                           const cbvh_ray *rays, size_t count, uint8_t *occluded, int scalar,
+                                           int counting, uint64_t *visited, uint64_t *tested)
+{
+    stream_interleave(f, CBVH_LAYOUT_WIDE4, b, rays, count, occluded, scalar, counting, visited, tested);
+}
 
 /* The stream walk for the file's layout. */
 static void stream_walk_file(const struct cbvh_file *f, struct cbvh_stream_batch *b, uint32_t octant,
@@ -80,25 +76,21 @@ static void stream_walk_file(const struct cbvh_file *f, struct cbvh_stream_batch
                                                           visited, tested);
 }
 
-/* Occlusion rays walked interleaved (stream_interleave), on the single-ray walks' kernel (raycast.h):
- * scalar also with the streams' scalar node kernel, the walks' own fallback and its test. */
-static void interleave_file(const struct cbvh_file *f, struct cbvh_stream_batch *b, const cbvh_ray *rays,
-                            size_t count, uint8_t *occluded, cbvh_stream_node_fn node_test, int counting,
-                            uint64_t *visited, uint64_t *tested)
+/* Occlusion rays walked interleaved on the wide layout (stream_interleave), on the single-ray walks' kernel
+ * (raycast.h): scalar also with the streams' scalar node kernel, the walks' own fallback and its test. */
+static void interleave_wide4(const struct cbvh_file *f, struct cbvh_stream_batch *b, const cbvh_ray *rays,
+                             size_t count, uint8_t *occluded, cbvh_stream_node_fn node_test, int counting,
+                             uint64_t *visited, uint64_t *tested)
 {
     const int kernel = cbvh_walk_kernel();
     const int scalar = node_test == cbvh_stream_node_scalar || kernel == CBVH_WALK_KERNEL_SCALAR;
-    if (f->layout == CBVH_LAYOUT_WIDE4) {
 #ifdef CBVH_HAVE_AVX2
-        if (!scalar && kernel == CBVH_WALK_KERNEL_AVX2) {
-            cbvh_stream_interleave_wide4_avx2(f, b, rays, count, occluded, counting, visited, tested);
-            return;
-        }
-#endif
-        stream_interleave_wide4(f, b, rays, count, occluded, scalar, counting, visited, tested);
-    } else {
-        stream_interleave_binary(f, b, rays, count, occluded, scalar, counting, visited, tested);
+    if (!scalar && kernel == CBVH_WALK_KERNEL_AVX2) {
+        cbvh_stream_interleave_wide4_avx2(f, b, rays, count, occluded, counting, visited, tested);
+        return;
     }
+#endif
+    stream_interleave_wide4(f, b, rays, count, occluded, scalar, counting, visited, tested);
 }
 
 /* Whether the rays of a window are coherent: of up to 64 pairs of consecutive rays spread over it, at least
@@ -200,8 +192,9 @@ static uint32_t batch_carve(struct cbvh_stream_batch *b, uint8_t **octant, void 
 }
 
 /* Splits the stream into windows, each window into same-octant batches of the batch's capacity. An
- * occlusion stream on a mesh that does not stay in the caches walks a window of incoherent rays interleaved
- * instead (cbvh_stream_interleaves, stream_interleave: cbvh.h says what it measured). Exactly one of hits /
+ * occlusion stream on a wide-layout mesh that does not stay in the caches walks a window of incoherent rays
+ * interleaved instead (cbvh_stream_interleaves, stream_interleave: cbvh.h says what it measured; on the
+ * binary layout's dragon it lost: shadow rays -10%, incoherent -3%). Exactly one of hits /
  * occluded is given. Invalid rays are misses. */
 static void stream_run(const struct cbvh_file *f, const cbvh_ray *rays, size_t count, cbvh_hit *hits,
                        uint8_t *occluded, cbvh_query_stats *stats, struct cbvh_stream_batch *restrict batch,
@@ -209,7 +202,7 @@ static void stream_run(const struct cbvh_file *f, const cbvh_ray *rays, size_t c
 {
     const cbvh_stream_node_fn node_test = cbvh_stream_node_kernel();
     batch->tails->max = cbvh_stream_tails_for(f);
-    const int interleave = occluded ? cbvh_stream_interleaves(f) : 0;
+    const int interleave = occluded && f->layout == CBVH_LAYOUT_WIDE4 ? cbvh_stream_interleaves(f) : 0;
     const uint32_t window_size = CBVH_STREAM_WINDOW_PER_RAY * batch->capacity;
     struct cbvh_ray_ctx ctx;
     uint64_t visited = 0, tested = 0;
@@ -217,8 +210,8 @@ static void stream_run(const struct cbvh_file *f, const cbvh_ray *rays, size_t c
     for (size_t start = 0; start < count; start += window_size) {
         const uint32_t window = (uint32_t)(count - start < window_size ? count - start : window_size);
         if (interleave == 2 || (interleave == 1 && !cbvh_stream_window_coherent(rays + start, window))) {
-            interleave_file(f, batch, rays + start, window, occluded + start, node_test, stats != NULL,
-                            &visited, &tested);
+            interleave_wide4(f, batch, rays + start, window, occluded + start, node_test, stats != NULL,
+                             &visited, &tested);
             continue;
         }
         uint32_t present = 0; /* octants that occur in the window */

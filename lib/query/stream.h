@@ -117,11 +117,12 @@ void cbvh_stream_set_tails(int tails);
 /* The tails that run at once on f's streams by the current setting. */
 uint32_t cbvh_stream_tails_for(const struct cbvh_file *f);
 
-/* Test hook, not exported: how the streams run. 0 = by the mesh (the default): for a mesh whose vertices
- * stay in the caches (struct cbvh_file's vertices_far clear) the batch walk, else window by window (stream.c)
- * the batch walk for coherent rays (cbvh_stream_window_coherent) and the rays walked interleaved for the
- * others (stream_walk.h's stream_interleave); 1 = the batch walk, 2 = interleaved, 3 = window by window, so
- * that the tests run each on their small meshes. Set like cbvh_stream_set_kernel. */
+/* Test hook, not exported: how the wide layout's occlusion streams run (closest-hit streams and the binary
+ * layout's are batched). 0 = by the mesh (the default): for a mesh whose vertices stay in the caches (struct
+ * cbvh_file's vertices_far clear) the batch walk, else window by window (stream.c) the batch walk for
+ * coherent rays (cbvh_stream_window_coherent) and the rays walked interleaved for the others (stream_walk.h's
+ * stream_interleave); 1 = the batch walk, 2 = interleaved, 3 = window by window, so that the tests run each
+ * on their small meshes. Set like cbvh_stream_set_kernel. */
 void cbvh_stream_set_interleave(int setting);
 /* f's streams by the current setting: 0 the batch walk, 1 window by window, 2 interleaved. */
 int cbvh_stream_interleaves(const struct cbvh_file *f);
