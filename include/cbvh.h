@@ -566,19 +566,20 @@ CBVH_API cbvh_result cbvh_occluded_with(const cbvh_file *file, const cbvh_ray *r
  * the single-ray walk: on a mesh whose vertices take more than 512 KiB, four
  * such rays at a time, a node or leaf each in turn, so that the CPU overlaps
  * their memory fetches; on a smaller one, which stays in the caches, one at a
- * time. An occlusion stream on such a larger mesh (wide layout) skips the batch for rays that
- * are not coherent: of each window of 8 batches' worth of rays (192 on the
- * stack), it samples 64 pairs of consecutive rays, and when fewer than half
- * point within about 8 degrees of each other (rays in all directions, shadow
- * rays from points spread over the mesh), the window's rays walk four at a time
- * from the root, a node or leaf each in turn. Measured against the batch on the
- * same rays, one process, 20 chunks of 20,000 rays in batches of 1024: shadow
- * rays +22% on the 871K-triangle dragon, +18% on a 1M-triangle sphere, +12% on
- * a 1M-triangle terrain; incoherent rays +10% and -4% (dragon, sphere); short
- * rays +5% and +8%; camera rays (batched either way) -1% and -3%. Closest-hit
- * streams keep the batch: walked that way, incoherent rays were 9% faster on
- * the dragon but 8% slower on the sphere; so does the binary layout (its shadow
- * rays 10% slower on the dragon). Results equal cbvh_raycast /
+ * time. An occlusion stream on such a larger mesh (wide layout) skips the
+ * batch for rays that are not coherent: of each window of 8 batches' worth of
+ * rays (192 on the stack), it samples 64 pairs of consecutive rays, and when
+ * fewer than half point within about 8 degrees of each other (rays in all
+ * directions, shadow rays from points spread over the mesh), the window's rays
+ * walk four at a time from the root, a node or leaf each in turn. Measured
+ * against the batch on the same rays, one process, 20 chunks of 20,000 rays in
+ * batches of 1024: shadow rays +22% on the 871K-triangle dragon, +18% on a
+ * 1M-triangle sphere, +12% on a 1M-triangle terrain; incoherent rays +10% and
+ * -4% (dragon, sphere); short rays +5% and +8%; camera rays (batched either
+ * way) -1% and -3%. Closest-hit streams keep the batch: walked that way,
+ * incoherent rays were 9% faster on the dragon but 8% slower on the sphere; so
+ * does the binary layout (its shadow rays 10% slower on the dragon). Results
+ * equal cbvh_raycast /
  * cbvh_occluded ray by ray. hits[i] (occluded[i]: 0 or 1) receives ray i's
  * result. Uses no heap memory: rays go in batches of 24 of one ray octant,
  * held with the four walks' stacks on the call's stack. Stack use, measured

@@ -193,7 +193,7 @@ static uint32_t batch_carve(struct cbvh_stream_batch *b, uint8_t **octant, void 
 
 /* Splits the stream into windows, each window into same-octant batches of the batch's capacity. An
  * occlusion stream on a wide-layout mesh that does not stay in the caches walks a window of incoherent rays
- * interleaved instead (cbvh_stream_interleaves, stream_interleave: cbvh.h says what it measured; on the
+ * interleaved instead (cbvh_stream_way_for, stream_interleave: cbvh.h says what it measured; on the
  * binary layout's dragon it lost: shadow rays -10%, incoherent -3%). Exactly one of hits /
  * occluded is given. Invalid rays are misses. */
 static void stream_run(const struct cbvh_file *f, const cbvh_ray *rays, size_t count, cbvh_hit *hits,
@@ -202,14 +202,16 @@ static void stream_run(const struct cbvh_file *f, const cbvh_ray *rays, size_t c
 {
     const cbvh_stream_node_fn node_test = cbvh_stream_node_kernel();
     batch->tails->max = cbvh_stream_tails_for(f);
-    const int interleave = occluded && f->layout == CBVH_LAYOUT_WIDE4 ? cbvh_stream_interleaves(f) : 0;
+    const enum cbvh_stream_way way =
+        occluded && f->layout == CBVH_LAYOUT_WIDE4 ? cbvh_stream_way_for(f) : CBVH_STREAM_BATCHED;
     const uint32_t window_size = CBVH_STREAM_WINDOW_PER_RAY * batch->capacity;
     struct cbvh_ray_ctx ctx;
     uint64_t visited = 0, tested = 0;
 
     for (size_t start = 0; start < count; start += window_size) {
         const uint32_t window = (uint32_t)(count - start < window_size ? count - start : window_size);
-        if (interleave == 2 || (interleave == 1 && !cbvh_stream_window_coherent(rays + start, window))) {
+        if (way == CBVH_STREAM_INTERLEAVED ||
+            (way == CBVH_STREAM_BY_WINDOW && !cbvh_stream_window_coherent(rays + start, window))) {
             interleave_wide4(f, batch, rays + start, window, occluded + start, node_test, stats != NULL,
                              &visited, &tested);
             continue;

@@ -117,15 +117,18 @@ void cbvh_stream_set_tails(int tails);
 /* The tails that run at once on f's streams by the current setting. */
 uint32_t cbvh_stream_tails_for(const struct cbvh_file *f);
 
-/* Test hook, not exported: how the wide layout's occlusion streams run (closest-hit streams and the binary
- * layout's are batched). 0 = by the mesh (the default): for a mesh whose vertices stay in the caches (struct
- * cbvh_file's vertices_far clear) the batch walk, else window by window (stream.c) the batch walk for
- * coherent rays (cbvh_stream_window_coherent) and the rays walked interleaved for the others (stream_walk.h's
- * stream_interleave); 1 = the batch walk, 2 = interleaved, 3 = window by window, so that the tests run each
- * on their small meshes. Set like cbvh_stream_set_kernel. */
+/* How the wide layout's occlusion streams walk a window of rays (closest-hit streams and the binary layout's
+ * are batched): in batches, window by window by the rays' coherence (cbvh_stream_window_coherent: coherent
+ * ones in batches, the others interleaved), or interleaved (stream_walk.h's stream_interleave). */
+enum cbvh_stream_way { CBVH_STREAM_BATCHED, CBVH_STREAM_BY_WINDOW, CBVH_STREAM_INTERLEAVED };
+
+/* Test hook, not exported: the occlusion streams' way. 0 = by the mesh (the default): batched for a mesh
+ * whose vertices stay in the caches (struct cbvh_file's vertices_far clear), else by window; 1 = batched,
+ * 2 = interleaved, 3 = by window, so that the tests run each on their small meshes. Set like
+ * cbvh_stream_set_kernel. */
 void cbvh_stream_set_interleave(int setting);
-/* f's streams by the current setting: 0 the batch walk, 1 window by window, 2 interleaved. */
-int cbvh_stream_interleaves(const struct cbvh_file *f);
+/* f's occlusion streams' way by the current setting. */
+enum cbvh_stream_way cbvh_stream_way_for(const struct cbvh_file *f);
 
 /* Whether the n rays of a window look coherent (stream.c: then they are batched). */
 int cbvh_stream_window_coherent(const cbvh_ray *rays, uint32_t n);

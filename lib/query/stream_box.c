@@ -62,10 +62,18 @@ void cbvh_stream_set_interleave(int setting)
     atomic_store_explicit(&stream_interleave_setting, setting, memory_order_relaxed);
 }
 
-int cbvh_stream_interleaves(const struct cbvh_file *f)
+enum cbvh_stream_way cbvh_stream_way_for(const struct cbvh_file *f)
 {
-    const int setting = atomic_load_explicit(&stream_interleave_setting, memory_order_relaxed);
-    return setting == 0 ? (int)f->vertices_far : setting == 1 ? 0 : setting == 2 ? 2 : 1;
+    switch (atomic_load_explicit(&stream_interleave_setting, memory_order_relaxed)) {
+    case 1:
+        return CBVH_STREAM_BATCHED;
+    case 2:
+        return CBVH_STREAM_INTERLEAVED;
+    case 3:
+        return CBVH_STREAM_BY_WINDOW;
+    default:
+        return f->vertices_far ? CBVH_STREAM_BY_WINDOW : CBVH_STREAM_BATCHED;
+    }
 }
 
 cbvh_stream_node_fn cbvh_stream_node_kernel(void)
