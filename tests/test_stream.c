@@ -23,7 +23,7 @@
 
 /* The settings each stream check runs with: the node kernel (cbvh_stream_set_kernel: 0 best, 1 scalar, 2
  * SSE2), the tails (cbvh_stream_set_tails: how many run at once in the batch walk, 0 by the mesh) and the
- * occlusion streams' way (cbvh_stream_set_interleave: 0 by the mesh, 1 the batch walk, 2 every window
+ * wide layout's streams' way (cbvh_stream_set_interleave: 0 by the mesh, 1 the batch walk, 2 every window
  * interleaved, 3 window by window as a mesh that does not stay in the caches has it). The test meshes are
  * small, so their defaults (the third) are one tail and the batch walk; the others force the rest: the
  * choice by the rays' coherence (coherent rays in the batch, the others interleaved: on the scalar walk with
@@ -120,10 +120,10 @@ static void check_stream(const ref_fixture *fx, const cbvh_ray *rays, size_t cou
     uint8_t *single_occ = malloc(count + 1);
     assert_non_null(single);
     assert_non_null(single_occ);
-    cbvh_query_stats single_stats = {0, 0};
+    cbvh_query_stats single_stats = {0, 0}, single_occ_stats = {0, 0};
     for (size_t r = 0; r < count; r++) {
-        cbvh_raycast(fx->file, &rays[r], CBVH_TRAVERSAL_SORTED, &single[r], NULL);
-        single_occ[r] = (uint8_t)cbvh_occluded(fx->file, &rays[r], CBVH_TRAVERSAL_SORTED, &single_stats);
+        cbvh_raycast(fx->file, &rays[r], CBVH_TRAVERSAL_SORTED, &single[r], &single_stats);
+        single_occ[r] = (uint8_t)cbvh_occluded(fx->file, &rays[r], CBVH_TRAVERSAL_SORTED, &single_occ_stats);
     }
     for (size_t k = 0; k < SETTINGS; k++) {
         cbvh_stream_set_kernel(settings[k].kernel);
@@ -155,8 +155,10 @@ static void check_stream(const ref_fixture *fx, const cbvh_ray *rays, size_t cou
         if (settings[k].interleave == 2 && test_layout == CBVH_LAYOUT_WIDE4) {
             /* the interleaved walks (the wide layout's) are the single-ray walks: the same boxes and
              * triangles, ray by ray */
-            assert_true(occ_stats.nodes_visited == single_stats.nodes_visited);
-            assert_true(occ_stats.triangles_tested == single_stats.triangles_tested);
+            assert_true(st.nodes_visited == single_stats.nodes_visited);
+            assert_true(st.triangles_tested == single_stats.triangles_tested);
+            assert_true(occ_stats.nodes_visited == single_occ_stats.nodes_visited);
+            assert_true(occ_stats.triangles_tested == single_occ_stats.triangles_tested);
         }
         /* the scratch sizes with the choice by window (batches and, for occlusion, interleaved windows) and
          * with every window interleaved: the other settings change the walks, not how the scratch is cut */

@@ -14,6 +14,12 @@
  * octant), so a batch shares one sort-byte mask and one near/far plane selection. */
 #define CBVH_STREAM_WINDOW_PER_RAY 8u
 
+/* The interleaved walks keep slot k's ray in the batch's ctx[k] and ray_index[k]: a batch that runs (the
+ * stack's, or the caller's scratch for more) has room for every slot. */
+_Static_assert(CBVH_STREAM_STACK_BATCH >= CBVH_STREAM_WALKS && CBVH_STREAM_WALKS >= CBVH_STREAM_TAILS &&
+                   CBVH_STREAM_WALKS <= 32u,
+               "a batch holds the interleaved walks' rays, and a word their bits");
+
 /* Entries of the walk's stack of ray lists per batch ray: the root's list and its children's take 5 a ray
  * (the wide layout's four lists, each with room for every ray, above the root's), and the lists of the
  * pending children below shrink fast on incoherent rays; a node whose lists would not fit sends its rays
@@ -25,8 +31,9 @@
     (8 * sizeof(float) + sizeof(struct cbvh_ray_ctx) + sizeof(struct cbvh_best_hit) + sizeof(size_t) +          \
      STREAM_LIST_PER_RAY * (sizeof(float) + sizeof(uint16_t)) + CBVH_STREAM_WINDOW_PER_RAY)
 #define STREAM_SLACK 96u /* two 32-byte alignments (the tails, box_ray), and best_hit's and size_t's */
-/* Bytes of a block before its rays: the tails (stream.h), whatever the batch's size. */
-#define STREAM_TAILS_BYTES sizeof(struct cbvh_stream_tails)
+/* Bytes of a block before its rays: the tails with `walks` slots (stream.h), whatever the batch's size. */
+#define STREAM_TAILS_BYTES(walks)                                                                            \
+    (sizeof(struct cbvh_stream_tails) + (walks) * sizeof(struct cbvh_stream_tail))
 
 /* The stream walk per layout and query kind, each a function of its own so that a frame holds one walk's
  * stack, not the sum of all (-fstack-usage); `counting` (whether the tails count the boxes they test) is
@@ -44,13 +51,22 @@ STREAM_INSTANCE(stream_binary_closest, CBVH_LAYOUT_BINARY, 0)
 STREAM_INSTANCE(stream_binary_any, CBVH_LAYOUT_BINARY, 1)
 #undef STREAM_INSTANCE
 
-/* The interleaved occlusion walks (stream_walk.h) on the wide layout, the scalar choice at run time (a
- * predictable branch, as in the single-ray walks). */
-CBVH_NOINLINE void stream_interleave_wide4(const struct cbvh_file *f, struct cbvh_stream_batch *b,
-                                           const cbvh_ray *rays, size_t count, uint8_t *occluded, int scalar,
-                                           int counting, uint64_t *visited, uint64_t *tested)
+/* The interleaved walks (stream_walk.h) on the wide layout, closest and any hit, the scalar choice at run
+ * time (a predictable branch, as in the single-ray walks). */
+CBVH_NOINLINE void stream_interleave_wide4_closest(const struct cbvh_file *f, struct cbvh_stream_batch *b,
+                                                   const cbvh_ray *rays, size_t count, cbvh_hit *hits,
+                                                   int scalar, int counting, uint64_t *visited,
+                                                   uint64_t *tested)
 {
-    stream_interleave(f, CBVH_LAYOUT_WIDE4, b, rays, count, occluded, scalar, counting, visited, tested);
+    stream_interleave(f, CBVH_LAYOUT_WIDE4, b, rays, count, 0, hits, NULL, scalar, counting, visited, tested);
+}
+
+CBVH_NOINLINE void stream_interleave_wide4_any(const struct cbvh_file *f, struct cbvh_stream_batch *b,
+                                               const cbvh_ray *rays, size_t count, uint8_t *occluded,
+                                               int scalar, int counting, uint64_t *visited, uint64_t *tested)
+{
+    stream_interleave(f, CBVH_LAYOUT_WIDE4, b, rays, count, 1, NULL, occluded, scalar, counting, visited,
+                      tested);
 }
 
 /* The stream walk for the file's layout. */
@@ -76,21 +92,28 @@ static void stream_walk_file(const struct cbvh_file *f, struct cbvh_stream_batch
                                                           visited, tested);
 }
 
-/* Occlusion rays walked interleaved on the wide layout (stream_interleave), on the single-ray walks' kernel
- * (raycast.h): scalar also with the streams' scalar node kernel, the walks' own fallback and its test. */
+/* Rays walked interleaved on the wide layout (stream_interleave), closest hit into hits or any hit into
+ * occluded, on the single-ray walks' kernel (raycast.h): scalar also with the streams' scalar node kernel,
+ * the walks' own fallback and its test. */
 static void interleave_wide4(const struct cbvh_file *f, struct cbvh_stream_batch *b, const cbvh_ray *rays,
-                             size_t count, uint8_t *occluded, cbvh_stream_node_fn node_test, int counting,
-                             uint64_t *visited, uint64_t *tested)
+                             size_t count, cbvh_hit *hits, uint8_t *occluded, cbvh_stream_node_fn node_test,
+                             int counting, uint64_t *visited, uint64_t *tested)
 {
     const int kernel = cbvh_walk_kernel();
     const int scalar = node_test == cbvh_stream_node_scalar || kernel == CBVH_WALK_KERNEL_SCALAR;
 #ifdef CBVH_HAVE_AVX2
     if (!scalar && kernel == CBVH_WALK_KERNEL_AVX2) {
-        cbvh_stream_interleave_wide4_avx2(f, b, rays, count, occluded, counting, visited, tested);
+        if (hits)
+            cbvh_stream_interleave_wide4_closest_avx2(f, b, rays, count, hits, counting, visited, tested);
+        else
+            cbvh_stream_interleave_wide4_any_avx2(f, b, rays, count, occluded, counting, visited, tested);
         return;
     }
 #endif
-    stream_interleave_wide4(f, b, rays, count, occluded, scalar, counting, visited, tested);
+    if (hits)
+        stream_interleave_wide4_closest(f, b, rays, count, hits, scalar, counting, visited, tested);
+    else
+        stream_interleave_wide4_any(f, b, rays, count, occluded, scalar, counting, visited, tested);
 }
 
 /* Whether the rays of a window are coherent: of up to 64 pairs of consecutive rays spread over it, at least
@@ -154,21 +177,23 @@ static void batch_flush(const struct cbvh_file *f, struct cbvh_stream_batch *b, 
     b->count = 0;
 }
 
-/* The batch's arrays cut from `size` bytes at `mem`: as many rays as fit, at most CBVH_STREAM_MAX_BATCH
- * (the alignments need at most STREAM_SLACK bytes); *octant receives the window's octant bytes.
- * Returns the batch's capacity, 0 when not even one ray fits. */
-static uint32_t batch_carve(struct cbvh_stream_batch *b, uint8_t **octant, void *mem, size_t size)
+/* The batch's arrays cut from `size` bytes at `mem`, with `walks` slots for the interleaved walks: as many
+ * rays as fit, at most CBVH_STREAM_MAX_BATCH (the alignments need at most STREAM_SLACK bytes); *octant
+ * receives the window's octant bytes. Returns the batch's capacity, 0 when not even one ray fits. */
+static uint32_t batch_carve(struct cbvh_stream_batch *b, uint8_t **octant, void *mem, size_t size,
+                            uint32_t walks)
 {
-    if (!mem || size < STREAM_SLACK + STREAM_TAILS_BYTES + STREAM_RAY_BYTES)
+    if (!mem || size < STREAM_SLACK + STREAM_TAILS_BYTES(walks) + STREAM_RAY_BYTES)
         return 0;
-    size_t n = (size - STREAM_SLACK - STREAM_TAILS_BYTES) / STREAM_RAY_BYTES;
+    size_t n = (size - STREAM_SLACK - STREAM_TAILS_BYTES(walks)) / STREAM_RAY_BYTES;
     n = n < CBVH_STREAM_MAX_BATCH ? n : CBVH_STREAM_MAX_BATCH;
     /* the tails first (their walk states hold SIMD vectors), then box_ray: 16-byte aligned for SSE2 loads
      * (32 kept) */
     uintptr_t p = ((uintptr_t)mem + 31u) & ~(uintptr_t)31u;
     b->tails = (struct cbvh_stream_tails *)p;
     b->tails->running = 0;
-    p = (p + STREAM_TAILS_BYTES + 31u) & ~(uintptr_t)31u;
+    b->tails->walks = walks;
+    p = (p + STREAM_TAILS_BYTES(walks) + 31u) & ~(uintptr_t)31u;
     b->box_ray = (float(*)[8])p;
     p += n * 8 * sizeof(float);
     b->ctx = (struct cbvh_ray_ctx *)p; /* 8-byte alignment holds: every array before is a multiple of 32 */
@@ -191,11 +216,11 @@ static uint32_t batch_carve(struct cbvh_stream_batch *b, uint8_t **octant, void 
     return b->capacity;
 }
 
-/* Splits the stream into windows, each window into same-octant batches of the batch's capacity. An
- * occlusion stream on a wide-layout mesh that does not stay in the caches walks a window of incoherent rays
- * interleaved instead (cbvh_stream_way_for, stream_interleave: cbvh.h says what it measured; on the
- * binary layout's dragon it lost: shadow rays -10%, incoherent -3%). Exactly one of hits /
- * occluded is given. Invalid rays are misses. */
+/* Splits the stream into windows, each window into same-octant batches of the batch's capacity. A stream
+ * on a wide-layout mesh that does not stay in the caches walks a window of incoherent rays interleaved
+ * instead (cbvh_stream_way_for, stream_interleave: cbvh.h says what it measured; on the binary layout's
+ * dragon it lost: shadow rays -10%, incoherent -3%). Exactly one of hits / occluded is given. Invalid rays
+ * are misses. */
 static void stream_run(const struct cbvh_file *f, const cbvh_ray *rays, size_t count, cbvh_hit *hits,
                        uint8_t *occluded, cbvh_query_stats *stats, struct cbvh_stream_batch *restrict batch,
                        uint8_t *restrict octant)
@@ -203,7 +228,7 @@ static void stream_run(const struct cbvh_file *f, const cbvh_ray *rays, size_t c
     const cbvh_stream_node_fn node_test = cbvh_stream_node_kernel();
     batch->tails->max = cbvh_stream_tails_for(f);
     const enum cbvh_stream_way way =
-        occluded && f->layout == CBVH_LAYOUT_WIDE4 ? cbvh_stream_way_for(f) : CBVH_STREAM_BATCHED;
+        f->layout == CBVH_LAYOUT_WIDE4 ? cbvh_stream_way_for(f) : CBVH_STREAM_BATCHED;
     const uint32_t window_size = CBVH_STREAM_WINDOW_PER_RAY * batch->capacity;
     struct cbvh_ray_ctx ctx;
     uint64_t visited = 0, tested = 0;
@@ -212,8 +237,8 @@ static void stream_run(const struct cbvh_file *f, const cbvh_ray *rays, size_t c
         const uint32_t window = (uint32_t)(count - start < window_size ? count - start : window_size);
         if (way == CBVH_STREAM_INTERLEAVED ||
             (way == CBVH_STREAM_BY_WINDOW && !cbvh_stream_window_coherent(rays + start, window))) {
-            interleave_wide4(f, batch, rays + start, window, occluded + start, node_test, stats != NULL,
-                             &visited, &tested);
+            interleave_wide4(f, batch, rays + start, window, hits ? hits + start : NULL,
+                             occluded ? occluded + start : NULL, node_test, stats != NULL, &visited, &tested);
             continue;
         }
         uint32_t present = 0; /* octants that occur in the window */
@@ -257,15 +282,17 @@ static void stream_run(const struct cbvh_file *f, const cbvh_ray *rays, size_t c
     }
 }
 
-/* The stream in a batch of CBVH_STREAM_STACK_BATCH rays (and the tails) on this frame: a function of its
- * own, so that a caller with scratch for more does not reserve it too. */
+/* The stream in a batch of CBVH_STREAM_STACK_BATCH rays (and the tails, CBVH_STREAM_TAILS walks: eight
+ * would take 7.5 KiB more) on this frame: a function of its own, so that a caller with scratch for more
+ * does not reserve it too. */
 CBVH_NOINLINE void stream_on_stack(const struct cbvh_file *f, const cbvh_ray *rays, size_t count,
                                    cbvh_hit *hits, uint8_t *occluded, cbvh_query_stats *stats)
 {
-    _Alignas(32) uint8_t own[STREAM_SLACK + STREAM_TAILS_BYTES + CBVH_STREAM_STACK_BATCH * STREAM_RAY_BYTES];
+    _Alignas(32) uint8_t own[STREAM_SLACK + STREAM_TAILS_BYTES(CBVH_STREAM_TAILS) +
+                             CBVH_STREAM_STACK_BATCH * STREAM_RAY_BYTES];
     struct cbvh_stream_batch batch;
     uint8_t *octant;
-    batch_carve(&batch, &octant, own, sizeof own);
+    batch_carve(&batch, &octant, own, sizeof own, CBVH_STREAM_TAILS);
     stream_run(f, rays, count, hits, occluded, stats, &batch, octant);
 }
 
@@ -275,7 +302,7 @@ static void stream_query(const struct cbvh_file *f, const cbvh_ray *rays, size_t
 {
     struct cbvh_stream_batch batch;
     uint8_t *octant;
-    if (batch_carve(&batch, &octant, scratch, scratch_size) > CBVH_STREAM_STACK_BATCH)
+    if (batch_carve(&batch, &octant, scratch, scratch_size, CBVH_STREAM_WALKS) > CBVH_STREAM_STACK_BATCH)
         stream_run(f, rays, count, hits, occluded, stats, &batch, octant);
     else
         stream_on_stack(f, rays, count, hits, occluded, stats);
@@ -284,7 +311,7 @@ static void stream_query(const struct cbvh_file *f, const cbvh_ray *rays, size_t
 CBVH_API size_t cbvh_stream_scratch_size(size_t batch_rays)
 {
     const size_t n = batch_rays < 1 ? 1 : batch_rays > CBVH_STREAM_MAX_BATCH ? CBVH_STREAM_MAX_BATCH : batch_rays;
-    return STREAM_SLACK + STREAM_TAILS_BYTES + n * STREAM_RAY_BYTES;
+    return STREAM_SLACK + STREAM_TAILS_BYTES(CBVH_STREAM_WALKS) + n * STREAM_RAY_BYTES;
 }
 
 CBVH_API void cbvh_raycast_stream_scratch(const cbvh_file *file, const cbvh_ray *rays, size_t count, cbvh_hit *hits,

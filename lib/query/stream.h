@@ -29,6 +29,13 @@ enum { CBVH_LANE_OX, CBVH_LANE_OY, CBVH_LANE_OZ, CBVH_LANE_TMIN, CBVH_LANE_RX, C
  * dragon's incoherent rays, a cache miss a node). */
 #define CBVH_STREAM_TAILS 4u /* at most 4: the tails' bit masks go through cbvh_lowest_lane */
 
+/* Rays an interleaved stream walks at once (stream_walk.h's stream_interleave), in the tails' slots. On the
+ * 871K-triangle dragon, the 1M-triangle sphere and the 500K-triangle terrain (incoherent, shadow and short
+ * rays, closest and any hit; each width timed against the single-ray walk in one process, 30 chunks of
+ * 20,000 rays alternated), eight gained 0-7% more than four, but for the dragon's short rays (3% less).
+ * Eight tails in the batch walk rather than four gained nothing (closest hit: -3% to +1%). */
+#define CBVH_STREAM_WALKS 8u
+
 /* A ray walking a subtree alone: the single-ray walk's state, and the ray's best hit as this walk knows
  * it (synchronised with the batch's at each step, stream_walk.h). */
 struct cbvh_stream_tail {
@@ -39,9 +46,11 @@ struct cbvh_stream_tail {
 };
 
 struct cbvh_stream_tails {
-    struct cbvh_stream_tail tail[CBVH_STREAM_TAILS];
     uint32_t running; /* bit k: tail[k] walks */
     uint32_t max;     /* tails that run at once: 1 or CBVH_STREAM_TAILS (cbvh_stream_tails_for) */
+    uint32_t walks;   /* the interleaved walks' slots: CBVH_STREAM_WALKS, or CBVH_STREAM_TAILS in the
+                       * stream's own stack (stream.c), which holds them all */
+    struct cbvh_stream_tail tail[]; /* `walks` of them; the batch's tails are the first CBVH_STREAM_TAILS */
 };
 
 /* Up to `capacity` rays of one octant, so the sort byte orders the whole batch. Its arrays lie in one
@@ -117,17 +126,17 @@ void cbvh_stream_set_tails(int tails);
 /* The tails that run at once on f's streams by the current setting. */
 uint32_t cbvh_stream_tails_for(const struct cbvh_file *f);
 
-/* How the wide layout's occlusion streams walk a window of rays (closest-hit streams and the binary layout's
- * are batched): in batches, window by window by the rays' coherence (cbvh_stream_window_coherent: coherent
- * ones in batches, the others interleaved), or interleaved (stream_walk.h's stream_interleave). */
+/* How the wide layout's streams walk a window of rays (the binary layout's are batched): in batches, window
+ * by window by the rays' coherence (cbvh_stream_window_coherent: coherent ones in batches, the others
+ * interleaved), or interleaved (stream_walk.h's stream_interleave). */
 enum cbvh_stream_way { CBVH_STREAM_BATCHED, CBVH_STREAM_BY_WINDOW, CBVH_STREAM_INTERLEAVED };
 
-/* Test hook, not exported: the occlusion streams' way. 0 = by the mesh (the default): batched for a mesh
+/* Test hook, not exported: the wide layout's streams' way. 0 = by the mesh (the default): batched for a mesh
  * whose vertices stay in the caches (struct cbvh_file's vertices_far clear), else by window; 1 = batched,
  * 2 = interleaved, 3 = by window, so that the tests run each on their small meshes. Set like
  * cbvh_stream_set_kernel. */
 void cbvh_stream_set_interleave(int setting);
-/* f's occlusion streams' way by the current setting. */
+/* f's streams' way by the current setting. */
 enum cbvh_stream_way cbvh_stream_way_for(const struct cbvh_file *f);
 
 /* Whether the n rays of a window look coherent (stream.c: then they are batched). */

@@ -32,10 +32,17 @@ void cbvh_stream_wide4_any_avx2(const struct cbvh_file *f, struct cbvh_stream_ba
     stream_walk(f, CBVH_LAYOUT_WIDE4, b, octant, node_test, 1, counting, occluded, visited, tested);
 }
 
-void cbvh_stream_interleave_wide4_avx2(const struct cbvh_file *f, struct cbvh_stream_batch *b,
-                                       const cbvh_ray *rays, size_t count, uint8_t *occluded, int counting,
-                                       uint64_t *visited, uint64_t *tested)
+void cbvh_stream_interleave_wide4_closest_avx2(const struct cbvh_file *f, struct cbvh_stream_batch *b,
+                                               const cbvh_ray *rays, size_t count, cbvh_hit *hits,
+                                               int counting, uint64_t *visited, uint64_t *tested)
 {
-    stream_interleave(f, CBVH_LAYOUT_WIDE4, b, rays, count, occluded, 0, counting, visited, tested);
+    stream_interleave(f, CBVH_LAYOUT_WIDE4, b, rays, count, 0, hits, NULL, 0, counting, visited, tested);
+}
+
+void cbvh_stream_interleave_wide4_any_avx2(const struct cbvh_file *f, struct cbvh_stream_batch *b,
+                                           const cbvh_ray *rays, size_t count, uint8_t *occluded,
+                                           int counting, uint64_t *visited, uint64_t *tested)
+{
+    stream_interleave(f, CBVH_LAYOUT_WIDE4, b, rays, count, 1, NULL, occluded, 0, counting, visited, tested);
 }
 #endif

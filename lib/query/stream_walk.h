@@ -417,62 +417,73 @@ CBVH_KERNEL void stream_solo_ray(const struct cbvh_file *f, const struct cbvh_ra
     *tested += stats.triangles_tested;
 }
 
-/* Input ray i starts in slot k of the interleaved occlusion walks (stream_interleave): its answer is set to
- * 0, then it is prepared and its walk begun. Returns 1 when the slot walks it; 0 when it is done already (an
- * invalid ray, one that misses the mesh's top box or, binary layout, the root box), or taken by the solo
- * walk (box_halve). */
+/* Input ray i starts in slot k of the interleaved walks (stream_interleave): its answer is set to a miss
+ * (hits[i], or occluded[i] when hits is NULL), then it is prepared and its walk begun. Returns 1 when the
+ * slot walks it; 0 when it is done already (an invalid ray, one that misses the mesh's top box or, binary
+ * layout, the root box), or taken by the solo walk (box_halve). */
 CBVH_KERNEL int stream_interleave_start(const struct cbvh_file *restrict f, const uint32_t layout,
                                         struct cbvh_stream_batch *restrict b,
                                         const struct cbvh_walk_mode mode, const cbvh_ray *restrict rays,
-                                        size_t i, uint32_t k, uint8_t *restrict occluded,
-                                        uint64_t *restrict visited, uint64_t *restrict tested)
+                                        size_t i, uint32_t k, cbvh_hit *restrict hits,
+                                        uint8_t *restrict occluded, uint64_t *restrict visited,
+                                        uint64_t *restrict tested)
 {
     struct cbvh_ray_ctx *restrict ctx = &b->ctx[k];
-    struct cbvh_walk_state *restrict walk = &b->tails->tail[k].walk;
-    occluded[i] = 0;
+    struct cbvh_stream_tail *restrict slot = &b->tails->tail[k];
+    if (hits)
+        hits[i].tri = CBVH_NO_HIT;
+    else
+        occluded[i] = 0;
     if (!cbvh_ray_prepare(ctx, &rays[i], f, visited))
         return 0;
     if (ctx->box_halve) {
-        stream_solo_ray(f, ctx, NULL, &occluded[i], visited, tested);
+        stream_solo_ray(f, ctx, hits ? &hits[i] : NULL, hits ? NULL : &occluded[i], visited, tested);
         return 0;
     }
     b->ray_index[k] = i;
+    slot->best.tri = UINT32_MAX;
     if (cbvh_walk_begin(f, layout, ctx, mode, cbvh_tree_root(f, layout), cbvh_tree_root_box(f, layout), NULL,
-                        ctx->tmax, walk))
+                        ctx->tmax, &slot->walk))
         return 1;
-    *visited += walk->visited;
+    *visited += slot->walk.visited;
     return 0;
 }
 
-/* The occlusion stream's other way (stream.c chooses it for incoherent rays on a mesh that does not stay in
- * the caches): no batch, the rays walked CBVH_STREAM_TAILS at a time by the single-ray walk, one step (a
- * node or a leaf) each in turn, in the slots of the batch's tails (their walk states, with b->ctx[k] and
- * b->ray_index[k] for slot k); a ray that ends hands its slot to the next. Each ray's walk is a chain of
+/* The streams' other way (stream.c chooses it for incoherent rays on a mesh that does not stay in the
+ * caches): no batch, the rays walked b->tails->walks at a time by the single-ray walk, one step (a node or
+ * a leaf) each in turn, in the slots of the batch's tails (their walk states and best hits, with b->ctx[k]
+ * and b->ray_index[k] for slot k); a ray that ends hands its slot to the next. Each ray's walk is a chain of
  * dependent fetches and tests that mostly waits on memory there, and the CPU overlaps the chains of the
- * slots' rays. The single-ray walk's answers. */
+ * slots' rays. Closest hit (`any` clear) into hits, any hit into occluded; the single-ray walk's answers. */
 CBVH_KERNEL void stream_interleave(const struct cbvh_file *restrict f, const uint32_t layout,
                                    struct cbvh_stream_batch *restrict b, const cbvh_ray *restrict rays,
-                                   size_t count, uint8_t *restrict occluded, int scalar, int counting,
+                                   size_t count, const int any, cbvh_hit *restrict hits,
+                                   uint8_t *restrict occluded, int scalar, int counting,
                                    uint64_t *restrict visited, uint64_t *restrict tested)
 {
-    const struct cbvh_walk_mode mode = stream_tail_mode(1, scalar);
-    struct cbvh_stream_tail *restrict tail = b->tails->tail;
+    const struct cbvh_walk_mode mode = stream_tail_mode(any, scalar);
+    struct cbvh_stream_tail *restrict slot = b->tails->tail;
+    const uint32_t walks = b->tails->walks;
     uint32_t running = 0; /* bit k: slot k walks a ray */
     size_t next = 0;
     uint64_t nv = 0, nt = 0;
     do {
-        for (uint32_t k = 0; k < CBVH_STREAM_TAILS; k++) {
+        for (uint32_t k = 0; k < walks; k++) {
             while (!(running >> k & 1u) && next < count)
-                if (stream_interleave_start(f, layout, b, mode, rays, next++, k, occluded, &nv, &nt))
+                if (stream_interleave_start(f, layout, b, mode, rays, next++, k, any ? NULL : hits, occluded,
+                                            &nv, &nt))
                     running |= 1u << k;
             if (!(running >> k & 1u))
                 continue;
-            struct cbvh_walk_state *restrict walk = &tail[k].walk;
+            struct cbvh_walk_state *restrict walk = &slot[k].walk;
             const enum cbvh_walk_step_result step =
-                cbvh_walk_step(f, layout, &b->ctx[k], mode, NULL, counting, walk, &tail[k].best);
+                cbvh_walk_step(f, layout, &b->ctx[k], mode, NULL, counting, walk, &slot[k].best);
             if (step == CBVH_WALK_MORE)
                 continue;
-            occluded[b->ray_index[k]] = step == CBVH_WALK_HIT;
+            if (any)
+                occluded[b->ray_index[k]] = step == CBVH_WALK_HIT;
+            else
+                cbvh_hit_output(f, &slot[k].best, b->ctx[k].t_base, &hits[b->ray_index[k]]);
             nv += walk->visited;
             nt += walk->tested;
             running &= ~(1u << k);
@@ -491,10 +502,13 @@ void cbvh_stream_wide4_closest_avx2(const struct cbvh_file *f, struct cbvh_strea
 void cbvh_stream_wide4_any_avx2(const struct cbvh_file *f, struct cbvh_stream_batch *b, uint32_t octant,
                                 cbvh_stream_node_fn node_test, int counting, uint8_t *occluded,
                                 uint64_t *visited, uint64_t *tested);
-/* stream_interleave on the wide layout, compiled for AVX2; arguments as its. */
-void cbvh_stream_interleave_wide4_avx2(const struct cbvh_file *f, struct cbvh_stream_batch *b,
-                                       const cbvh_ray *rays, size_t count, uint8_t *occluded, int counting,
-                                       uint64_t *visited, uint64_t *tested);
+/* stream_interleave on the wide layout, compiled for AVX2, closest and any hit; arguments as its. */
+void cbvh_stream_interleave_wide4_closest_avx2(const struct cbvh_file *f, struct cbvh_stream_batch *b,
+                                               const cbvh_ray *rays, size_t count, cbvh_hit *hits,
+                                               int counting, uint64_t *visited, uint64_t *tested);
+void cbvh_stream_interleave_wide4_any_avx2(const struct cbvh_file *f, struct cbvh_stream_batch *b,
+                                           const cbvh_ray *rays, size_t count, uint8_t *occluded,
+                                           int counting, uint64_t *visited, uint64_t *tested);
 #endif
 
 #endif
