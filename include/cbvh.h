@@ -561,39 +561,35 @@ CBVH_API cbvh_result cbvh_occluded_with(const cbvh_file *file, const cbvh_ray *r
 
 /* Batched streams: `count` rays (any coherence) traversed together, each node
  * dequantized once per batch visit and each live ray tested against all its
- * children there, the rays entering a child listed for it. A ray left alone
- * at a node (incoherent rays, soon after the root) finishes that subtree on
- * the single-ray walk: on a mesh whose vertices take more than 512 KiB, four
- * such rays at a time, a node or leaf each in turn, so that the CPU overlaps
- * their memory fetches; on a smaller one, which stays in the caches, one at a
- * time. A stream on such a larger mesh (wide layout) skips the batch for rays
- * that are not coherent: of each window of 8 batches' worth of rays (192 on
- * the stack), it samples 64 pairs of consecutive rays, and when fewer than
- * half point within about 8 degrees of each other (rays in all directions,
- * shadow rays from points spread over the mesh), the window's rays walk eight
- * at a time from the root (four in the stack's batch, below), a node or leaf
- * each in turn. Measured on the same
- * rays in one process, 20 chunks of 20,000 rays alternated, batches of 1024,
- * on the 871K-triangle dragon, a 1M-triangle sphere and a 500K-triangle
- * terrain: closest hit against the batch, incoherent rays +6% to +14%, -5% to
- * 0%, +3% to +9%, short rays +5% to +6%, +3% to +6%, +1% to +5%; any hit
- * against four rays at a time (which had gained on the batch: shadow rays
- * +22%, +18%, +12%; incoherent +10%, -4%, not measured), shadow rays 0% to
- * +6%, +3% to +4%, +9% to +13%, incoherent rays +4% to +5%, +3% to +6%, +4%
- * (two or three runs each). Without scratch (batches of 24, four walks),
- * closest hit: incoherent rays +21%, +9%, +15%, short rays +14%, +10%, +13%.
- * Camera rays are batched either way. The
- * binary layout keeps the batch (its shadow rays were 10% slower on the
- * dragon walked four at a time).
- * Results equal cbvh_raycast / cbvh_occluded ray by ray. hits[i]
- * (occluded[i]: 0 or 1) receives ray i's result. Uses no heap memory: rays
- * go in batches of 24 of one ray octant, held with four walks' stacks on the
- * call's stack. Stack use, measured with -fstack-usage (gcc 12 -O2, x86-64),
- * deepest path: about 21 KiB (the stack batch and the walks' stacks 12.8; the
- * batch walk 4.5; the tails' steps 3.0; the hit's barycentrics 0.3). The
- * _scratch forms below, given scratch for more than 24 rays, keep
- * all of it there: about 8 KiB of stack. cbvh_raycast and cbvh_occluded:
- * about 4 KiB (3.9 with the AVX2 walks). */
+ * children there, the rays entering a child listed for it. A ray left alone at
+ * a node (incoherent rays, soon after the root) finishes that subtree on the
+ * single-ray walk: on a mesh whose vertices take more than 512 KiB, four such
+ * rays at a time, a node or leaf each in turn, so that the CPU overlaps their
+ * memory fetches; on a smaller one, which stays in the caches, one at a time.
+ * A stream on such a larger mesh (wide layout) skips the batch for rays that
+ * are not coherent: of each window of 8 batches' worth of rays (192 on the
+ * stack), it samples 64 pairs of consecutive rays, and when fewer than half
+ * point within about 8 degrees of each other (rays in all directions, shadow
+ * rays from points spread over the mesh), the window's rays walk eight at a
+ * time from the root (four in the stack's batch, below), a node or leaf each
+ * in turn. Measured against the library before (the batch for closest hit,
+ * four interleaved walks for any hit, which had gained on the batch: shadow
+ * rays +22%, +18%, +12%) in one process, 20 chunks of 20,000 rays alternated,
+ * batches of 1024, on the 871K-triangle dragon, a 1M-triangle sphere and a
+ * 500K-triangle terrain: closest hit, incoherent rays +8%, -1%, +8%, short
+ * rays +10%, +9%, +11%; any hit, incoherent rays +10%, +7%, +3%, shadow rays
+ * +8%, +2%, 0%. Without scratch (batches of 24, four walks), closest hit:
+ * incoherent rays +21%, +9%, +15%, short rays +14%, +10%, +13%. Camera rays
+ * are batched either way. The binary layout keeps the batch (its shadow rays
+ * were 10% slower on the dragon walked four at a time). Results equal
+ * cbvh_raycast / cbvh_occluded ray by ray. hits[i] (occluded[i]: 0 or 1)
+ * receives ray i's result. Uses no heap memory: rays go in batches of 24 of
+ * one ray octant, held with four walks' stacks on the call's stack. Stack use,
+ * measured with -fstack-usage (gcc 12 -O2, x86-64), deepest path: about 21 KiB
+ * (the stack batch and the walks' stacks 12.8; the batch walk 4.5; the tails'
+ * steps 3.0; the hit's barycentrics 0.3). The _scratch forms below, given
+ * scratch for more than 24 rays, keep all of it there: about 8 KiB of stack.
+ * cbvh_raycast and cbvh_occluded: about 4 KiB (3.9 with the AVX2 walks). */
 CBVH_API void cbvh_raycast_stream(const cbvh_file *file, const cbvh_ray *rays, size_t count,
                                   cbvh_hit *hits, cbvh_query_stats *stats);
 CBVH_API void cbvh_occluded_stream(const cbvh_file *file, const cbvh_ray *rays, size_t count,
