@@ -160,8 +160,9 @@ static void check_stream(const ref_fixture *fx, const cbvh_ray *rays, size_t cou
             assert_true(occ_stats.nodes_visited == single_occ_stats.nodes_visited);
             assert_true(occ_stats.triangles_tested == single_occ_stats.triangles_tested);
         }
-        /* the scratch sizes with the choice by window (batches and, for occlusion, interleaved windows) and
-         * with every window interleaved: the other settings change the walks, not how the scratch is cut */
+        /* the scratch sizes (eight interleaved walks there, four on the stack) with the choice by window
+         * (batches and interleaved windows) and with every window interleaved: the other settings change the
+         * walks, not how the scratch is cut */
         if (settings[k].interleave >= 2 && settings[k].kernel != 1)
             check_scratch(fx, rays, count, hits, occ);
     }

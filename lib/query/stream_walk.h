@@ -469,7 +469,8 @@ CBVH_KERNEL int stream_interleave_start(const struct cbvh_file *restrict f, cons
  * rays -1% to +4% on the dragon, +3% to +4% on the sphere, +1% on the terrain, short rays +1% to +5% (one
  * run); in a driver with windows of 8,192 rays, +3% to +6% on the dragon and the sphere (four runs): a
  * small gain, within one run's noise, but in 9 of 10 runs. Occlusion walks lost by it (shadow rays -6% to
- * -8%). Closest hit (`any` clear) into hits, any hit into occluded; the single-ray walk's answers. */
+ * -8%). Closest hit (`any` clear) into hits, any hit into occluded (hits NULL); the single-ray walk's
+ * answers. */
 CBVH_KERNEL void stream_interleave(const struct cbvh_file *restrict f, const uint32_t layout,
                                    struct cbvh_stream_batch *restrict b, const cbvh_ray *restrict rays,
                                    size_t count, const int any, cbvh_hit *restrict hits,
@@ -485,8 +486,7 @@ CBVH_KERNEL void stream_interleave(const struct cbvh_file *restrict f, const uin
     do {
         for (uint32_t k = 0; k < walks; k++) {
             while (!(running >> k & 1u) && next < count)
-                if (stream_interleave_start(f, layout, b, mode, rays, next++, k, any ? NULL : hits, occluded,
-                                            &nv, &nt))
+                if (stream_interleave_start(f, layout, b, mode, rays, next++, k, hits, occluded, &nv, &nt))
                     running |= 1u << k;
             if (!(running >> k & 1u) ||
                 (!any && layout == CBVH_LAYOUT_WIDE4 && !f->quads && stream_tail_request_leaf(f, &slot[k])))
