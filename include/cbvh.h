@@ -581,7 +581,13 @@ CBVH_API cbvh_result cbvh_occluded_with(const cbvh_file *file, const cbvh_ray *r
  * +8%, +2%, 0%. Without scratch (batches of 24, four walks), closest hit:
  * incoherent rays +21%, +9%, +15%, short rays +14%, +10%, +13%. Camera rays
  * are batched either way. The binary layout keeps the batch (its shadow rays
- * were 10% slower on the dragon walked four at a time). Results equal
+ * were 10% slower on the dragon walked four at a time). On a mesh that stays
+ * in the caches, a window of incoherent rays skips the batch when the batch
+ * is small for the mesh (the stack's 24 rays; wide layout, also more than 8
+ * triangles a ray of the batch): its rays take the single-ray walk one at a
+ * time. The stack's batch had run such rays at 0.63-0.88x of cbvh_raycast in
+ * a loop (Wuson, the bunny, a 46K-triangle scene), batches of 1024 on the
+ * 46K-triangle scene's wide layout at 0.79-0.91x. Results equal
  * cbvh_raycast / cbvh_occluded ray by ray. hits[i] (occluded[i]: 0 or 1)
  * receives ray i's result. Uses no heap memory: rays go in batches of 24 of
  * one ray octant, held with four walks' stacks on the call's stack. Stack use,

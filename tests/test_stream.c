@@ -23,12 +23,13 @@
 
 /* The settings each stream check runs with: the node kernel (cbvh_stream_set_kernel: 0 best, 1 scalar, 2
  * SSE2), the tails (cbvh_stream_set_tails: how many run at once in the batch walk, 0 by the mesh) and the
- * wide layout's streams' way (cbvh_stream_set_interleave: 0 by the mesh, 1 the batch walk, 2 every window
- * interleaved, 3 window by window as a mesh that does not stay in the caches has it). The test meshes are
- * small, so their defaults (the third) are one tail and the batch walk; the others force the rest: the
- * choice by the rays' coherence (coherent rays in the batch, the others interleaved: on the scalar walk with
- * the scalar kernel), four tails, and every window interleaved (the walk the single rays take, so that the
- * counters can be compared too). */
+ * streams' way (cbvh_stream_set_interleave: 0 by the mesh and the batch, 1 the batch walk, 2 every window
+ * interleaved, 3 window by window as a mesh that does not stay in the caches has it; 2 and 3 batch on the
+ * binary layout). The test meshes are small, so their defaults (the third) are one tail and, in the stack's
+ * batch, the batch walk for coherent windows and single rays for the others (larger batches of the
+ * _scratch forms: the batch walk); the others force the rest: the choice by the rays' coherence (coherent
+ * rays in the batch, the others interleaved: on the scalar walk with the scalar kernel), four tails, and
+ * every window interleaved (the walk the single rays take, so that the counters can be compared too). */
 static const struct {
     int kernel, tails, interleave;
 } settings[] = {
@@ -160,10 +161,10 @@ static void check_stream(const ref_fixture *fx, const cbvh_ray *rays, size_t cou
             assert_true(occ_stats.nodes_visited == single_occ_stats.nodes_visited);
             assert_true(occ_stats.triangles_tested == single_occ_stats.triangles_tested);
         }
-        /* the scratch sizes (eight interleaved walks there, four on the stack) with the choice by window
-         * (batches and interleaved windows) and with every window interleaved: the other settings change the
-         * walks, not how the scratch is cut */
-        if (settings[k].interleave >= 2 && settings[k].kernel != 1)
+        /* the scratch sizes (eight interleaved walks there, four on the stack) with the default (whose way
+         * depends on the batch's size), the choice by window (batches and interleaved windows) and every
+         * window interleaved: the other settings change the walks, not how the scratch is cut */
+        if (settings[k].interleave != 1 && settings[k].kernel != 1)
             check_scratch(fx, rays, count, hits, occ);
     }
     cbvh_stream_set_kernel(0);
@@ -448,12 +449,54 @@ static void test_window_coherence(void **state)
     free(rays);
 }
 
+/* The streams' way (stream_box.c's cbvh_stream_way_for) for each kind of mesh and batch, and under each
+ * setting of the test hook. */
+static void test_stream_way(void **state)
+{
+    (void)state;
+    struct cbvh_file f;
+    memset(&f, 0, sizeof f);
+    for (uint32_t layout = 0; layout < 2; layout++) {
+        const int wide = layout == CBVH_LAYOUT_WIDE4;
+        f.layout = wide ? CBVH_LAYOUT_WIDE4 : CBVH_LAYOUT_BINARY;
+        /* vertices that do not stay in the caches: incoherent windows interleaved (wide), else the batch */
+        f.vertices_far = 1;
+        f.info.triangle_count = 1000000;
+        for (uint32_t capacity = 1; capacity <= CBVH_STREAM_MAX_BATCH; capacity *= 4)
+            assert_int_equal(cbvh_stream_way_for(&f, capacity),
+                             wide ? CBVH_STREAM_BY_WINDOW : CBVH_STREAM_BATCHED);
+        /* in the caches: the stack's batch walks incoherent windows one ray at a time */
+        f.vertices_far = 0;
+        f.info.triangle_count = 100;
+        assert_int_equal(cbvh_stream_way_for(&f, CBVH_STREAM_STACK_BATCH), CBVH_STREAM_BY_WINDOW_SINGLE);
+        assert_int_equal(cbvh_stream_way_for(&f, CBVH_STREAM_STACK_BATCH + 1), CBVH_STREAM_BATCHED);
+        /* a larger batch batches them up to 8 triangles a ray of the batch (wide; binary: any mesh) */
+        f.info.triangle_count = 8u * 1024u;
+        assert_int_equal(cbvh_stream_way_for(&f, 1024), CBVH_STREAM_BATCHED);
+        f.info.triangle_count = 8u * 1024u + 8u;
+        assert_int_equal(cbvh_stream_way_for(&f, 1024),
+                         wide ? CBVH_STREAM_BY_WINDOW_SINGLE : CBVH_STREAM_BATCHED);
+        assert_int_equal(cbvh_stream_way_for(&f, 1025), CBVH_STREAM_BATCHED);
+        /* the hook's settings override the mesh's way; the binary layout has no interleaved walks */
+        const enum cbvh_stream_way forced[4] = {
+            CBVH_STREAM_BATCHED, wide ? CBVH_STREAM_INTERLEAVED : CBVH_STREAM_BATCHED,
+            wide ? CBVH_STREAM_BY_WINDOW : CBVH_STREAM_BATCHED, CBVH_STREAM_BY_WINDOW_SINGLE};
+        for (int setting = 1; setting <= 4; setting++) {
+            cbvh_stream_set_interleave(setting);
+            assert_int_equal(cbvh_stream_way_for(&f, 1024), forced[setting - 1]);
+            assert_int_equal(cbvh_stream_way_for(&f, CBVH_STREAM_STACK_BATCH), forced[setting - 1]);
+        }
+        cbvh_stream_set_interleave(0);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_counts),         cmocka_unit_test(test_meshes),
         cmocka_unit_test(test_range_ends),     cmocka_unit_test(test_node_kernels_agree),
         cmocka_unit_test(test_null_arguments), cmocka_unit_test(test_window_coherence),
+        cmocka_unit_test(test_stream_way),
     };
     return TEST_RUN_LAYOUTS(tests, 1);
 }

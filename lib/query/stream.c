@@ -216,29 +216,50 @@ static uint32_t batch_carve(struct cbvh_stream_batch *b, uint8_t **octant, void 
     return b->capacity;
 }
 
-/* Splits the stream into windows, each window into same-octant batches of the batch's capacity. A stream
- * on a wide-layout mesh that does not stay in the caches walks a window of incoherent rays interleaved
- * instead (cbvh_stream_way_for, stream_interleave: cbvh.h says what it measured; on the binary layout's
- * dragon it lost: shadow rays -10%, incoherent -3%). Exactly one of hits / occluded is given. Invalid rays
- * are misses. */
+/* The count rays one at a time on the single-ray walk (an incoherent window on a mesh in the caches, where
+ * the batch's bookkeeping costs more than its few shared node visits save). */
+static void stream_single_rays(const struct cbvh_file *f, const cbvh_ray *rays, size_t count, cbvh_hit *hits,
+                               uint8_t *occluded, uint64_t *visited, uint64_t *tested)
+{
+    struct cbvh_ray_ctx ctx;
+    for (size_t i = 0; i < count; i++) {
+        if (hits)
+            hits[i].tri = CBVH_NO_HIT;
+        else
+            occluded[i] = 0;
+        if (cbvh_ray_valid(&rays[i]) && cbvh_ray_prepare(&ctx, &rays[i], f, visited))
+            stream_solo_ray(f, &ctx, hits ? &hits[i] : NULL, hits ? NULL : &occluded[i], visited, tested);
+    }
+}
+
+/* Splits the stream into windows, each window into same-octant batches of the batch's capacity. A window
+ * of incoherent rays skips the batch by the way cbvh_stream_way_for chooses: on a wide-layout mesh that does
+ * not stay in the caches it walks interleaved (stream_interleave: cbvh.h says what it measured; on the
+ * binary layout's dragon it lost: shadow rays -10%, incoherent -3%), on a mesh in the caches with a batch
+ * small for the mesh one ray at a time. Exactly one of hits / occluded is given. Invalid rays are misses. */
 static void stream_run(const struct cbvh_file *f, const cbvh_ray *rays, size_t count, cbvh_hit *hits,
                        uint8_t *occluded, cbvh_query_stats *stats, struct cbvh_stream_batch *restrict batch,
                        uint8_t *restrict octant)
 {
     const cbvh_stream_node_fn node_test = cbvh_stream_node_kernel();
     batch->tails->max = cbvh_stream_tails_for(f);
-    const enum cbvh_stream_way way =
-        f->layout == CBVH_LAYOUT_WIDE4 ? cbvh_stream_way_for(f) : CBVH_STREAM_BATCHED;
+    const enum cbvh_stream_way way = cbvh_stream_way_for(f, batch->capacity);
     const uint32_t window_size = CBVH_STREAM_WINDOW_PER_RAY * batch->capacity;
     struct cbvh_ray_ctx ctx;
     uint64_t visited = 0, tested = 0;
 
     for (size_t start = 0; start < count; start += window_size) {
         const uint32_t window = (uint32_t)(count - start < window_size ? count - start : window_size);
+        const int by_window = way == CBVH_STREAM_BY_WINDOW || way == CBVH_STREAM_BY_WINDOW_SINGLE;
         if (way == CBVH_STREAM_INTERLEAVED ||
-            (way == CBVH_STREAM_BY_WINDOW && !cbvh_stream_window_coherent(rays + start, window))) {
-            interleave_wide4(f, batch, rays + start, window, hits ? hits + start : NULL,
-                             occluded ? occluded + start : NULL, node_test, stats != NULL, &visited, &tested);
+            (by_window && !cbvh_stream_window_coherent(rays + start, window))) {
+            if (way == CBVH_STREAM_BY_WINDOW_SINGLE)
+                stream_single_rays(f, rays + start, window, hits ? hits + start : NULL,
+                                   occluded ? occluded + start : NULL, &visited, &tested);
+            else
+                interleave_wide4(f, batch, rays + start, window, hits ? hits + start : NULL,
+                                 occluded ? occluded + start : NULL, node_test, stats != NULL, &visited,
+                                 &tested);
             continue;
         }
         uint32_t present = 0; /* octants that occur in the window */

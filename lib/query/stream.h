@@ -126,18 +126,29 @@ void cbvh_stream_set_tails(int tails);
 /* The tails that run at once on f's streams by the current setting. */
 uint32_t cbvh_stream_tails_for(const struct cbvh_file *f);
 
-/* How the wide layout's streams walk a window of rays (the binary layout's are batched): in batches, window
- * by window by the rays' coherence (cbvh_stream_window_coherent: coherent ones in batches, the others
- * interleaved), or interleaved (stream_walk.h's stream_interleave). */
-enum cbvh_stream_way { CBVH_STREAM_BATCHED, CBVH_STREAM_BY_WINDOW, CBVH_STREAM_INTERLEAVED };
+/* How the streams walk a window of rays: in batches, window by window by the rays' coherence
+ * (cbvh_stream_window_coherent: coherent ones in batches, the others interleaved (wide layout), or one ray
+ * at a time on the single-ray walk), or interleaved (stream_walk.h's stream_interleave, wide layout). */
+enum cbvh_stream_way {
+    CBVH_STREAM_BATCHED,
+    CBVH_STREAM_BY_WINDOW,
+    CBVH_STREAM_INTERLEAVED,
+    CBVH_STREAM_BY_WINDOW_SINGLE
+};
 
-/* Test hook, not exported: the wide layout's streams' way. 0 = by the mesh (the default): batched for a mesh
- * whose vertices stay in the caches (struct cbvh_file's vertices_far clear), else by window; 1 = batched,
- * 2 = interleaved, 3 = by window, so that the tests run each on their small meshes. Set like
- * cbvh_stream_set_kernel. */
+/* A mesh in the caches has its incoherent rays batched (wide layout) when it has at most this many triangles
+ * a ray of the batch (stream_box.c's cbvh_stream_way_for says what was measured). */
+#define CBVH_STREAM_SHARED_TRIANGLES_PER_RAY 8u
+
+/* Test hook, not exported: the streams' way. 0 = by the mesh and the batch (the default, stream_box.c): on a
+ * mesh whose vertices do not stay in the caches (struct cbvh_file's vertices_far set), by window (wide
+ * layout) or batched (binary); on one whose vertices do, batched when the batch is large for the mesh, else
+ * by window with single rays; 1 = batched, 2 = interleaved, 3 = by window, 4 = by window with single rays
+ * (2 and 3: batched on the binary layout, which has no interleaved walks), so that the tests run each on
+ * their small meshes. Set like cbvh_stream_set_kernel. */
 void cbvh_stream_set_interleave(int setting);
-/* f's streams' way by the current setting. */
-enum cbvh_stream_way cbvh_stream_way_for(const struct cbvh_file *f);
+/* The way of f's streams in batches of batch_capacity rays by the current setting. */
+enum cbvh_stream_way cbvh_stream_way_for(const struct cbvh_file *f, uint32_t batch_capacity);
 
 /* Whether the n rays of a window look coherent (stream.c: then they are batched). */
 int cbvh_stream_window_coherent(const cbvh_ray *rays, uint32_t n);
