@@ -470,10 +470,12 @@ static void test_stream_way(void **state)
         f.info.triangle_count = 100;
         assert_int_equal(cbvh_stream_way_for(&f, CBVH_STREAM_STACK_BATCH), CBVH_STREAM_BY_WINDOW_SINGLE);
         assert_int_equal(cbvh_stream_way_for(&f, CBVH_STREAM_STACK_BATCH + 1), CBVH_STREAM_BATCHED);
-        /* a larger batch batches them up to 8 triangles a ray of the batch (wide; binary: any mesh) */
-        f.info.triangle_count = 8u * 1024u;
+        /* a larger batch batches them up to CBVH_STREAM_SHARED_TRIANGLES_PER_RAY triangles a ray of the batch
+         * (wide; binary: any mesh) */
+        const uint32_t per_ray = CBVH_STREAM_SHARED_TRIANGLES_PER_RAY;
+        f.info.triangle_count = per_ray * 1024u;
         assert_int_equal(cbvh_stream_way_for(&f, 1024), CBVH_STREAM_BATCHED);
-        f.info.triangle_count = 8u * 1024u + 8u;
+        f.info.triangle_count = per_ray * 1024u + per_ray;
         assert_int_equal(cbvh_stream_way_for(&f, 1024),
                          wide ? CBVH_STREAM_BY_WINDOW_SINGLE : CBVH_STREAM_BATCHED);
         assert_int_equal(cbvh_stream_way_for(&f, 1025), CBVH_STREAM_BATCHED);
