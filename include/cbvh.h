@@ -229,7 +229,18 @@ typedef struct cbvh_cook_stats {
     double seconds[CBVH_STATS_PHASES]; /* indexed by cbvh_phase */
     uint64_t peak_memory;          /* most bytes the cook held allocated at once, the file it returns
                                     * included (not the caller's mesh) */
+    uint64_t flushed_coordinates;  /* used coordinates below CBVH_COORDINATE_MIN in magnitude, stored as 0 */
 } cbvh_cook_stats;
+
+/* The exact range (docs/EXACTNESS.md). Every coordinate of a vertex that a triangle uses must be finite and
+ * at most CBVH_COORDINATE_MAX (2^40, about 1.1e12) in magnitude: the cooker refuses any other mesh with
+ * CBVH_ERROR_BAD_MESH, naming the vertex, the axis and the limit. Used coordinates smaller than
+ * CBVH_COORDINATE_MIN (2^-40, about 9.1e-13) in magnitude, subnormal ones included, are stored as 0 and
+ * counted in cbvh_cook_stats.flushed_coordinates (a triangle they collapse is dropped as degenerate).
+ * Within this range every query of a cooked file is watertight and decides hits as documented at
+ * cbvh_raycast, for any valid ray. */
+#define CBVH_COORDINATE_MAX 0x1p40f
+#define CBVH_COORDINATE_MIN 0x1p-40f
 
 /* Zeroes `stats` and sets stats->struct_size to `struct_size`, which must be sizeof *stats as the
  * caller sees it. Returns as cbvh_cook_options_init does. */

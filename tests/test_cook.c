@@ -595,6 +595,12 @@ static double file_sah(const parsed *p, double ct, double ci)
     return sum / root;
 }
 
+/* A coordinate as the cooker stores it (cbvh.h): below CBVH_COORDINATE_MIN in magnitude, 0. */
+static float stored_coordinate(float x)
+{
+    return fabsf(x) < CBVH_COORDINATE_MIN ? 0.0f : x;
+}
+
 /* Each cooked triangle decodes to its input triangle's vertices in the input's corner order
  * (within tol per coordinate: 0 for lossless vertices). */
 static void check_triangles_match(const parsed *p, const test_mesh *m, double tol)
@@ -607,7 +613,7 @@ static void check_triangles_match(const parsed *p, const test_mesh *m, double to
             const float *in = m->pos + 3 * (size_t)m->idx[3 * (size_t)o + (size_t)c];
             const float *out = p->verts + 3 * (size_t)p->tris[3 * (size_t)t + (size_t)c];
             for (int k = 0; k < 3; k++)
-                if (!(fabs((double)in[k] - out[k]) <= tol))
+                if (!(fabs((double)stored_coordinate(in[k]) - out[k]) <= tol))
                     fail_msg("cooked triangle %u (input %u) corner %d axis %d: %.9g vs input %.9g", t, o, c, k,
                              (double)out[k], (double)in[k]);
         }
@@ -627,6 +633,7 @@ static void check_grid(const parsed *p, const float kept_min[3], const float kep
     }
 }
 
+/* The bounds of the input mesh as stored. */
 static void input_bounds(const test_mesh *m, float lo[3], float hi[3])
 {
     for (int k = 0; k < 3; k++) {
@@ -635,7 +642,7 @@ static void input_bounds(const test_mesh *m, float lo[3], float hi[3])
     }
     for (size_t i = 0; i < 3 * m->nt; i++)
         for (int k = 0; k < 3; k++) {
-            float v = m->pos[3 * (size_t)m->idx[i] + (size_t)k];
+            float v = stored_coordinate(m->pos[3 * (size_t)m->idx[i] + (size_t)k]);
             lo[k] = fminf(lo[k], v);
             hi[k] = fmaxf(hi[k], v);
         }
@@ -1139,9 +1146,10 @@ static void test_depth_limit(void **state)
 {
     (void)state;
     test_mesh m;
-    mesh_alloc(&m, 3 * 400, 400);
-    for (size_t t = 0; t < 400; t++) {
-        double x = pow(1.2, (double)t);
+    /* from 2^-35 to 2^38.4: the series spans most of the exact range (cbvh.h, CBVH_COORDINATE_MAX) */
+    mesh_alloc(&m, 3 * 280, 280);
+    for (size_t t = 0; t < 280; t++) {
+        double x = ldexp(pow(1.2, (double)t), -35);
         const float tri[9] = { (float)x, 0, 0, (float)(x * 1.05), 0, 0, (float)x, (float)(x * 0.05), 0 };
         memcpy(m.pos + 9 * t, tri, sizeof tri);
         for (int c = 0; c < 3; c++)
@@ -1324,22 +1332,39 @@ static void test_bad_meshes(void **state)
     expect_error(&mesh, NULL, CBVH_ERROR_BAD_MESH, "triangle 3, corner 2", "4294967295");
     m.idx[3 * 3 + 2] = 0;
 
-    /* Extent beyond a float. */
+    /* The exact range (cbvh.h): one float step past CBVH_COORDINATE_MAX, on either side, is refused with the
+     * vertex, the axis and the limit named; up to it the mesh cooks (the grid spans 4 here: times 2^38 its
+     * largest coordinate is 2^40). */
     float saved = m.pos[0];
     m.pos[0] = -3e38f;
-    m.pos[3 * 24] = 3e38f;
-    expect_error(&mesh, NULL, CBVH_ERROR_BAD_MESH, "x axis", "overflows");
+    expect_error(&mesh, NULL, CBVH_ERROR_BAD_MESH, "vertex 0: x coordinate -3e+38", "exact range of +-2^40");
+    m.pos[0] = -nextafterf(CBVH_COORDINATE_MAX, INFINITY);
+    expect_error(&mesh, NULL, CBVH_ERROR_BAD_MESH, "vertex 0: x coordinate -1.09951e+12", "exact range of +-2^40");
     m.pos[0] = saved;
-    m.pos[3 * 24] = 4;
-
-    /* Huge but representable: cooks. */
+    saved = m.pos[3 * 24 + 2];
+    m.pos[3 * 24 + 2] = nextafterf(CBVH_COORDINATE_MAX, INFINITY);
+    expect_error(&mesh, NULL, CBVH_ERROR_BAD_MESH, "vertex 24: z coordinate 1.09951e+12", "exact range of +-2^40");
+    m.pos[3 * 24 + 2] = saved;
     for (size_t i = 0; i < 3 * m.nv; i++)
-        m.pos[i] *= 1e37f;
+        m.pos[i] *= 0x1p38f;
     cooked c;
     cook_and_check(&m, NULL, &c);
+    assert_int_equal(c.stats.flushed_coordinates, 0);
     cooked_free(&c);
     for (size_t i = 0; i < 3 * m.nv; i++)
-        m.pos[i] /= 1e37f;
+        m.pos[i] /= 0x1p38f;
+    /* Coordinates below CBVH_COORDINATE_MIN are stored as 0 and counted (cook_and_check compares every
+     * stored vertex with the input so flushed); CBVH_COORDINATE_MIN itself is kept. */
+    const float z5 = m.pos[3 * 5 + 2], z6 = m.pos[3 * 6 + 2], z7 = m.pos[3 * 7 + 2];
+    m.pos[3 * 5 + 2] = nextafterf(CBVH_COORDINATE_MIN, 0.0f);
+    m.pos[3 * 6 + 2] = -0x1p-149f; /* subnormal */
+    m.pos[3 * 7 + 2] = CBVH_COORDINATE_MIN;
+    cook_and_check(&m, NULL, &c);
+    assert_int_equal(c.stats.flushed_coordinates, 2);
+    cooked_free(&c);
+    m.pos[3 * 5 + 2] = z5;
+    m.pos[3 * 6 + 2] = z6;
+    m.pos[3 * 7 + 2] = z7;
 
     /* More triangles than 32-bit original ids can name: a limit, found before any index is read. */
     if (SIZE_MAX > UINT32_MAX) {
@@ -1883,7 +1908,7 @@ static void round_trip(const test_mesh *m, const cbvh_cook_options *o)
         if (o->vertex_format == CBVH_VERTEX_FLOAT32)
             for (int k = 0; k < 3; k++)
                 for (int a = 0; a < 3; a++)
-                    assert_true(v[k][a] == m->pos[3 * (size_t)m->idx[3 * (size_t)o_id + (size_t)k] + (size_t)a]);
+                    assert_true(v[k][a] == stored_coordinate(m->pos[3 * (size_t)m->idx[3 * (size_t)o_id + (size_t)k] + (size_t)a]));
     }
     cbvh_close(file);
     cooked_free(&c);

@@ -593,6 +593,156 @@ static void test_huge_extent(void **state)
 }
 
 /* ------------------------------------------------------------------ */
+/* The exact range (cbvh.h: CBVH_COORDINATE_MAX and _MIN)             */
+/* ------------------------------------------------------------------ */
+
+/* Coordinates as the cooker stores them: below CBVH_COORDINATE_MIN in magnitude, 0. */
+static void flush_below_range(float *pos, size_t count)
+{
+    for (size_t i = 0; i < count; i++)
+        pos[i] = fabsf(pos[i]) < CBVH_COORDINATE_MIN ? 0.0f : pos[i];
+}
+
+static int hit_all_paths(const cbvh_file *f, const cbvh_ray *r, cbvh_hit *out);
+
+/* The same ray with its direction scaled by 2^k (k from -100 to 100) answers at t scaled by 2^-k exactly,
+ * and every path agrees (where the scaled direction and t are normal floats and t at most FLT_MAX / 2). */
+static void check_direction_scales(const cbvh_file *f, const cbvh_ray *r)
+{
+    cbvh_hit h0;
+    const int got0 = cbvh_raycast(f, r, CBVH_TRAVERSAL_SORTED, &h0, NULL);
+    static const int ks[] = { -100, -60, -30, -8, 8, 30, 60, 100 };
+    for (size_t i = 0; i < sizeof ks / sizeof ks[0]; i++) {
+        cbvh_ray s = *r; /* the same segment: its range scaled as its t */
+        for (int a = 0; a < 3; a++)
+            s.dir[a] = ldexpf(r->dir[a], ks[i]);
+        s.tmin = ldexpf(r->tmin, -ks[i]);
+        s.tmax = ldexpf(r->tmax, -ks[i]);
+        if (!ref_ray_valid(&s) || !(fabsf(s.dir[0]) + fabsf(s.dir[1]) + fabsf(s.dir[2]) > 0.0f))
+            continue;
+        int finite = 1; /* every component kept exactly (no overflow, no underflow) */
+        for (int a = 0; a < 3; a++)
+            finite &= ldexpf(s.dir[a], -ks[i]) == r->dir[a];
+        /* and t stays a normal float no larger than the largest t a ray reports (FLT_MAX / 2) */
+        const double t_scaled = got0 ? ldexp(h0.t, -ks[i]) : 1.0;
+        if (!finite || !(t_scaled <= 0x1.fffffep126 && (t_scaled == 0.0 || t_scaled >= 0x1p-126)))
+            continue;
+        cbvh_hit h;
+        const int got = hit_all_paths(f, &s, &h);
+        if (got != got0 || (got && (h.tri != h0.tri || h.t != ldexpf(h0.t, -ks[i]))))
+            fail_msg("direction times 2^%d: %s t %g, unscaled %s t %g", ks[i], got ? "hit" : "miss", got ? h.t : 0.0,
+                     got0 ? "hit" : "miss", got0 ? h0.t : 0.0);
+    }
+}
+
+/* Meshes at the edges of the exact range: the largest accepted coordinates (a sphere just inside
+ * CBVH_COORDINATE_MAX, its triangles 32 float steps across there) and the smallest accepted features (a
+ * sphere of radius 2^-30 at the origin, its coordinates below CBVH_COORDINATE_MIN stored as 0, alone and
+ * together with a triangle at CBVH_COORDINATE_MAX: the widest dynamic range a file can hold). Each against
+ * the double reference on every path, watertight, and its rays with scaled directions exact; the large
+ * sphere one float step past the range is refused with the limit named. */
+static void test_exact_range(void **state)
+{
+    (void)state;
+    /* the largest: 2^40 - 2^26 - 2^22 at most, float steps of 2^16 there */
+    const float edge = 0x1p40f - 0x1p26f;
+    float big_c[3] = { edge - 0x1p22f, -(edge - 0x1p22f), edge - 0x1p22f };
+    scene big;
+    assert_true(scene_sphere(&big, 2000, big_c, 0x1p21f));
+    watertight_scene("sphere at the range's edge", &big, 3);
+    for (int q = 0; q < 2; q++) {
+        cbvh_cook_options o = options(q, 0);
+        ref_fixture fx;
+        assert_int_equal(ref_fixture_open(&fx, big.positions, big.vertex_count, big.indices, big.triangle_count, &o), CBVH_OK);
+        agree_stats st;
+        memset(&st, 0, sizeof st);
+        uint64_t rng = 91;
+        for (int i = 0; i < test_reps(1000); i++) {
+            cbvh_ray r = ref_make_ray(&fx, &rng, i % REF_RAY_KINDS);
+            check_against_reference(&fx, &r, HIT_TOL, &st);
+            if (i % 50 == 0)
+                check_direction_scales(fx.file, &r);
+        }
+        assert_agreement(q ? "range's edge, quantized" : "range's edge", &st);
+        ref_fixture_close(&fx);
+    }
+    /* one float step past the range: refused, naming the limit */
+    float far[9] = { 0, 0, 0, nextafterf(CBVH_COORDINATE_MAX, INFINITY), 0, 0, 0, 1, 0 };
+    const uint32_t tri[3] = { 0, 1, 2 };
+    cbvh_mesh past = { far, 3, 0, tri, 1, NULL };
+    cbvh_error err;
+    void *buf = NULL;
+    size_t size = 0;
+    assert_int_equal(cbvh_cook(&past, NULL, NULL, &buf, &size, NULL, &err), CBVH_ERROR_BAD_MESH);
+    assert_non_null(strstr(err.message, "vertex 1: x coordinate"));
+    assert_non_null(strstr(err.message, "2^40"));
+
+    /* the smallest features, alone and beside a triangle at the range's edge */
+    const float small_c[3] = { 0, 0, 0 };
+    scene small, mixed;
+    assert_true(scene_sphere(&small, 2000, small_c, 0x1p-30f));
+    flush_below_range(small.positions, 3 * small.vertex_count);
+    watertight_scene("sphere of radius 2^-30", &small, 3);
+    const float big_tri[9] = { CBVH_COORDINATE_MAX, CBVH_COORDINATE_MAX, 0, CBVH_COORDINATE_MAX, 0, CBVH_COORDINATE_MAX,
+                               0, CBVH_COORDINATE_MAX, CBVH_COORDINATE_MAX };
+    const uint32_t big_idx[3] = { 0, 1, 2 };
+    const scene far_tri = { (float *)big_tri, (uint32_t *)big_idx, NULL, 3, 1 };
+    memset(&mixed, 0, sizeof mixed);
+    assert_true(scene_append(&mixed, &small, 0) && scene_append(&mixed, &far_tri, 0));
+    for (int m = 0; m < 2; m++) {
+        const scene *sc = m ? &mixed : &small;
+        for (int q = 0; q < 2; q++) {
+            cbvh_cook_options o = options(q, 0);
+            cbvh_cook_stats stats;
+            cbvh_cook_stats_init(&stats, sizeof stats);
+            ref_fixture fx;
+            assert_int_equal(ref_fixture_open(&fx, sc->positions, sc->vertex_count, sc->indices, sc->triangle_count, &o), CBVH_OK);
+            /* judged on the small sphere's scale: its bounds and diagonal, rays from a few radii away */
+            ref_fixture local = fx;
+            for (int a = 0; a < 3; a++) {
+                local.lo[a] = -0x1p-30;
+                local.hi[a] = 0x1p-30;
+            }
+            local.diag = 0x1p-30 * 2 * sqrt(3.0);
+            agree_stats st;
+            memset(&st, 0, sizeof st);
+            uint64_t rng = 17;
+            for (int i = 0; i < test_reps(1000); i++) {
+                const size_t t = (size_t)(scene_rand_next(&rng) % small.triangle_count);
+                const double wb = 0.05 + 0.45 * scene_rand_unit(&rng), wc = 0.05 + 0.45 * scene_rand_unit(&rng);
+                /* t about 1 at the target; the range ends long before the triangle at 2^40, whose hits are
+                 * judged at its own scale, not the sphere's */
+                cbvh_ray r = { { 0, 0, 0 }, 0, { 0, 0, 0 }, 64.0f };
+                for (int a = 0; a < 3; a++) {
+                    const float *v0 = small.positions + 3 * small.indices[3 * t], *v1 = small.positions + 3 * small.indices[3 * t + 1],
+                                *v2 = small.positions + 3 * small.indices[3 * t + 2];
+                    const double target = (1 - wb - wc) * v0[a] + wb * v1[a] + wc * v2[a];
+                    r.org[a] = (float)(target + 0x1p-28 * (2 * scene_rand_unit(&rng) - 1));
+                    r.dir[a] = (float)(target - r.org[a]);
+                }
+                if (i % 3 == 0) /* an origin coordinate below the range, subnormal included */
+                    r.org[i % 2] = i % 4 ? 0x1p-149f : -0x1p-70f;
+                check_against_reference(&local, &r, HIT_TOL, &st);
+                if (i % 50 == 0)
+                    check_direction_scales(fx.file, &r);
+            }
+            char what[64];
+            snprintf(what, sizeof what, "radius 2^-30%s%s", m ? " beside 2^40" : "", q ? ", quantized" : "");
+            printf("%s: %zu rays, %zu clear hits\n", what, st.rays, st.clear_hits);
+            assert_agreement(what, &st);
+            /* quantized on a grid of 2^40 / 65535, the small sphere collapses (its triangles dropped): the
+             * clear hits are the lossless and alone cases' */
+            if (!(m && q))
+                assert_true(st.clear_hits > st.rays / 2);
+            ref_fixture_close(&fx);
+        }
+    }
+    scene_free(&mixed);
+    scene_free(&small);
+    scene_free(&big);
+}
+
+/* ------------------------------------------------------------------ */
 /* Degenerate meshes                                                  */
 /* ------------------------------------------------------------------ */
 
@@ -888,7 +1038,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_watertight),       cmocka_unit_test(test_watertight_dragon), cmocka_unit_test(test_scales),
         cmocka_unit_test(test_huge_extent),      cmocka_unit_test(test_sliver_accuracy), cmocka_unit_test(test_degenerate_meshes), cmocka_unit_test(test_extreme_rays),
-        cmocka_unit_test(test_extreme_sweeps),
+        cmocka_unit_test(test_extreme_sweeps),   cmocka_unit_test(test_exact_range),
     };
     return TEST_RUN_LAYOUTS(tests, 0);
 }

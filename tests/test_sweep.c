@@ -328,7 +328,8 @@ static void test_sliver_sweeps(void **state)
     }
 }
 
-/* Capsules whose axis runs almost along a triangle's edge of length 1e19,
+/* Capsules whose axis runs almost along a triangle's edge of length 1e12 (near the exact range's edge,
+ * cbvh.h's CBVH_COORDINATE_MAX),
  * starting inside or outside it, against the reference: the case where the
  * segment/segment closest points' Gram determinant (|d1|^2 |d2|^2 - (d1.d2)^2)
  * cancels (closest.c now forms it as |d1 x d2|^2). Written for finding F5
@@ -337,7 +338,7 @@ static void test_sliver_sweeps(void **state)
 static void test_huge_capsules(void **state)
 {
     (void)state;
-    const float L = 1e19f;
+    const float L = 1e12f;
     const float pos[9] = {0, 0, 0, L, 0, 0, 0.5f * L, L, 0};
     const uint32_t idx[3] = {0, 1, 2};
     ref_fixture fx;
@@ -365,21 +366,28 @@ static void test_huge_capsules(void **state)
  * closest-point inside tests used the long edges, whose directions carry
  * rounding far larger than the needle's angle, and a capsule overlapping
  * the needle's line beyond its tip got a contact point 2.4e16 past the tip.
- * The finding's capsule, then capsules and spheres around the tips of
- * needles of widths 1e-28 to 1e-4 (relative), overlapping at the start or
- * moving in, against the reference: contact real, point on the triangle. */
+ * The finding's needle is past the exact range (cbvh.h) and refused; the
+ * same needle at 2^-16 of its size (its tip at 4e11), capsules and spheres
+ * around the tips of needles of widths 2^-79 (the narrowest the range keeps
+ * there) to 1e-4 (relative), overlapping at the start or moving in, against
+ * the reference: contact real, point on the triangle. */
 static void test_needle_capsules(void **state)
 {
     (void)state;
-    static const float widths[4] = {0x1.1p-90f, 1e-20f, 1e-10f, 1e-4f};
+    static const float widths[4] = {0x1p-79f, 1e-20f, 1e-10f, 1e-4f};
     for (int wi = 0; wi < 5; wi++) {
         /* wi 4: the finding's triangle as the fuzzer cooked it */
-        const float tip_y = -0x1.7f4p+55f, tip_z = -0x1.8007c2p+38f, k = wi < 4 ? widths[wi] * -tip_y : 0.0f;
+        const float tip_y = wi < 4 ? -0x1.7f4p+39f : -0x1.7f4p+55f, tip_z = wi < 4 ? -0x1.8007c2p+22f : -0x1.8007c2p+38f,
+                    k = wi < 4 ? widths[wi] * -tip_y : 0.0f;
         const float pos[9] = {wi < 4 ? 0.0f : 0x1.fdp-128f, wi < 4 ? 0.0f : 0x1.020406p-91f, wi < 4 ? 0.0f : 0x1.080026p-121f,
                               wi < 4 ? k : 0x1.142214p-103f, wi < 4 ? 0.0f : 0x1.0a0816p-103f, wi < 4 ? 0.0f : 0x1.181a0ap-117f,
                               wi < 4 ? 0.0f : 0x1.fb83cp-128f, tip_y, tip_z};
         const uint32_t idx[3] = {0, 1, 2};
         ref_fixture fx;
+        if (wi == 4) {
+            assert_int_equal(ref_fixture_open(&fx, pos, 3, idx, 1, test_options()), CBVH_ERROR_BAD_MESH);
+            continue;
+        }
         assert_int_equal(ref_fixture_open(&fx, pos, 3, idx, 1, test_options()), CBVH_OK);
         ref_shape s;
         memset(&s, 0, sizeof s);

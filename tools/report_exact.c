@@ -50,7 +50,7 @@ int exact_raycast(const exact_tree *tree, const cbvh_ray *ray, cbvh_hit *hit, cb
     if (best.tri == UINT32_MAX)
         return 0;
     hit->tri = cbvh_original_id(tree->file, best.tri);
-    hit->t = best.t;
+    hit->t = cbvh_t_frame_out(&ctx.t_frame, best.t);
     hit->u = best.u;
     hit->v = best.v;
     return 1;

@@ -198,6 +198,7 @@ static void fill_stats(const cook_state *s, cbvh_cook_stats *st)
 {
     st->input_triangles = s->mesh.input_triangle_count;
     st->dropped_degenerate = s->mesh.dropped_degenerate;
+    st->flushed_coordinates = s->mesh.flushed_coordinates;
     st->triangles = s->layout.triangle_count;
     st->vertices = s->layout.vertex_count;
     st->nodes = s->layout.node_count;

@@ -33,6 +33,7 @@ typedef struct cook_mesh {
     uint32_t triangle_count;
     uint32_t input_triangle_count;
     uint64_t dropped_degenerate;
+    uint64_t flushed_coordinates; /* used coordinates below CBVH_COORDINATE_MIN in magnitude, stored as 0 */
     uint32_t *dropped;          /* the dropped_degenerate input ids of the dropped triangles, increasing: kept
                                  * triangles are the others, in order (cbvh_cook_original_id), and few are
                                  * dropped where a list of every kept one would take 4 bytes a triangle */

@@ -82,12 +82,34 @@ static cbvh_result out_of_memory(cbvh_error *err, const char *what)
     return cbvh_fail(err, CBVH_ERROR_OUT_OF_MEMORY, "out of memory while preparing the mesh (%s)", what);
 }
 
-/* Checks every used vertex is finite (the first bad one is named) and gives it the id of the
- * first used vertex with the same position, numbering distinct positions in input order;
+/* Puts a used vertex into the exact range (cbvh.h, CBVH_COORDINATE_MAX): refuses a non-finite coordinate
+ * or one beyond CBVH_COORDINATE_MAX, naming vertex v and the axis; sets a coordinate below
+ * CBVH_COORDINATE_MIN to 0, counting it in *flushed. */
+static cbvh_result into_range(float p[3], size_t v, uint64_t *flushed, cbvh_error *err)
+{
+    for (int k = 0; k < 3; k++) {
+        if (!isfinite(p[k]))
+            return cbvh_fail(err, CBVH_ERROR_BAD_MESH, "vertex %zu: %c coordinate is %s", v, axis_name[k],
+                             isnan(p[k]) ? "NaN" : "infinite");
+        if (fabsf(p[k]) > CBVH_COORDINATE_MAX)
+            return cbvh_fail(err, CBVH_ERROR_BAD_MESH,
+                             "vertex %zu: %c coordinate %g is beyond the exact range of +-2^40 (%g): move the mesh "
+                             "nearer its origin or scale it down",
+                             v, axis_name[k], (double)p[k], (double)CBVH_COORDINATE_MAX);
+        if (p[k] != 0.0f && fabsf(p[k]) < CBVH_COORDINATE_MIN) {
+            p[k] = 0.0f;
+            ++*flushed;
+        }
+    }
+    return CBVH_OK;
+}
+
+/* Checks every used vertex is in the exact range (into_range; the first bad one is named) and gives it
+ * the id of the first used vertex with the same position, numbering distinct positions in input order;
  * writes the distinct positions to `out`. */
 static cbvh_result weld(const cbvh_mesh *mesh, size_t stride, uint32_t *restrict map, size_t map_count,
-                        size_t used, float *restrict out, uint32_t *welded, const cbvh_allocator *a,
-                        cbvh_error *err)
+                        size_t used, float *restrict out, uint32_t *welded, uint64_t *flushed,
+                        const cbvh_allocator *a, cbvh_error *err)
 {
     size_t cap = 16;
     while (cap < 2 * used)
@@ -103,12 +125,11 @@ static cbvh_result weld(const cbvh_mesh *mesh, size_t stride, uint32_t *restrict
             continue;
         float p[3];
         read_position(mesh, stride, v, p);
-        for (int k = 0; k < 3; k++)
-            if (!isfinite(p[k])) {
-                cbvh_free(a, table);
-                return cbvh_fail(err, CBVH_ERROR_BAD_MESH, "vertex %zu: %c coordinate is %s", v, axis_name[k],
-                                 isnan(p[k]) ? "NaN" : "infinite");
-            }
+        const cbvh_result r = into_range(p, v, flushed, err);
+        if (r != CBVH_OK) {
+            cbvh_free(a, table);
+            return r;
+        }
         size_t slot = weld_hash(p) & mask;
         while (table[slot] != NO_VERTEX && !same_point(out + 3 * (size_t)table[slot], p))
             slot = (slot + 1) & mask;
@@ -351,7 +372,7 @@ cbvh_result cbvh_cook_prepare(const cbvh_mesh *mesh, const cbvh_allocator *a, co
     if (r == CBVH_OK) {
         cook_report(progress, 0.25);
         out->positions = cbvh_alloc_array(a, used, 3 * sizeof(float), 64);
-        r = out->positions ? weld(mesh, stride, map, map_count, used, out->positions, &welded, a, err)
+        r = out->positions ? weld(mesh, stride, map, map_count, used, out->positions, &welded, &out->flushed_coordinates, a, err)
                            : out_of_memory(err, "positions");
     }
     if (r == CBVH_OK && welded < used)

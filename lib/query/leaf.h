@@ -42,7 +42,7 @@ struct cbvh_hit_gate {
     cbvh_cull cull;
     cbvh_hit_filter_fn filter;
     void *user;
-    double t_base; /* the kernels' t plus this is t on the caller's ray */
+    struct cbvh_t_frame t_frame; /* the kernels' t on the caller's ray */
     float dir[3];  /* the ray direction in the mesh's frame */
     int placed;    /* a query transform: records are rotated into the world by `rotation` */
     double rotation[3][3];

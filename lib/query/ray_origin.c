@@ -47,23 +47,12 @@ static int line_entry(const double org[3], const float dir[3], const float lo[3]
     return tn <= tf;
 }
 
-/* x rounded to float towards +inf (up = 1) or -inf (up = 0). */
-static float round_float(double x, int up)
-{
-    float f = (float)x;
-    if (up && (double)f < x)
-        f = nextafterf(f, INFINITY);
-    if (!up && (double)f > x)
-        f = nextafterf(f, -INFINITY);
-    return f;
-}
-
 /* Moves the origin along the ray to a point about one extent before the
  * bounds (in double-double, so the new origin is on the ray's line to
  * double precision, then rounded to float once), and makes t and the range
- * relative to it: t' = t - t_base. The first step's entry is only as exact
+ * relative to it: t' = t - base (ctx's t_frame). The first step's entry is only as exact
  * as the far origin allows; the second, from near the bounds, is exact to
- * double precision. The range is rounded inwards, so t_base + t' always
+ * double precision. The range is rounded inwards, so base + t' always
  * lies in the caller's [tmin, tmax]. A ray whose line misses the bounds, or
  * which points away from them, is left alone: it hits nothing either way. */
 static void move_origin(struct cbvh_ray_ctx *ctx, const cbvh_ray *ray, const float lo[3], const float hi[3], float ext)
@@ -85,11 +74,12 @@ static void move_origin(struct cbvh_ray_ctx *ctx, const cbvh_ray *ray, const flo
     }
     if (!(base > 0.0))
         return;
-    const float org[3] = {(float)o[0], (float)o[1], (float)o[2]};
+    float org[3] = {(float)o[0], (float)o[1], (float)o[2]};
+    cbvh_origin_flush(org);
     const double tmin = (double)ctx->tmin - base;
-    ctx->tmin = tmin > 0.0 ? round_float(tmin, 1) : 0.0f;
-    ctx->tmax = round_float((double)ctx->tmax - base, 0); /* below tmin when the ray ends before the mesh */
-    ctx->t_base = base;
+    ctx->tmin = tmin > 0.0 ? cbvh_float_rounded(tmin, 1) : 0.0f;
+    ctx->tmax = cbvh_float_rounded((double)ctx->tmax - base, 0); /* below tmin when the ray ends before the mesh */
+    ctx->t_frame.base = base;
     cbvh_shear_setup(&ctx->shear, org, dir);
 }
 

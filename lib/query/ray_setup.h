@@ -9,6 +9,7 @@
 #include <math.h>
 #include <stddef.h>
 #include <stdint.h>
+#include <string.h>
 
 #include "cbvh.h"
 #include "common/compiler.h"
@@ -21,6 +22,48 @@
 
 /* The largest t a ray reports: FLT_MAX / 2, so tmax * CBVH_BOX_PAD cannot overflow. */
 #define CBVH_T_LIMIT 0x1.fffffep126f
+
+/* The query side of the exact range (docs/EXACTNESS.md): the kernels walk a ray whose direction has its
+ * largest component in [2^CBVH_DIR_EXPONENT, 2^(CBVH_DIR_EXPONENT + 1)) (a power-of-two scaling: exact),
+ * whose other direction components are 0 or at least CBVH_DIR_FLUSH times the largest, and whose origin
+ * coordinates are 0 or at least CBVH_ORIGIN_FLUSH in magnitude. With the cooker's range (cbvh.h,
+ * CBVH_COORDINATE_MIN and _MAX) no float step of a box or triangle test then rounds in the subnormal range,
+ * where rounding errors are absolute rather than relative to the operands and no relative padding covers
+ * them, and no t overflows: the distances a walk divides by the direction run from 2^-103 (the smallest
+ * non-zero plane - origin difference) to 2^129 (an origin at FLT_MAX), so t from 2^-112 to 2^121. */
+#define CBVH_DIR_EXPONENT 8
+#define CBVH_DIR_FLUSH 0x1p-60f
+#define CBVH_ORIGIN_FLUSH 0x1p-64f
+
+/* Where a kernel's t lies on the caller's ray: (base + t) * scale. base: the distance a far origin was moved
+ * (ray_origin.c), in the kernels' t; scale: the power of two the direction was divided by. */
+struct cbvh_t_frame {
+    double base, scale;
+};
+
+/* A kernel's t on the caller's ray. */
+static inline float cbvh_t_frame_out(const struct cbvh_t_frame *frame, float t)
+{
+    return (float)((frame->base + (double)t) * frame->scale);
+}
+
+/* x rounded to float towards +inf (up = 1) or -inf (up = 0). */
+static inline float cbvh_float_rounded(double x, int up)
+{
+    float f = (float)x;
+    if (up && (double)f < x)
+        f = nextafterf(f, INFINITY);
+    if (!up && (double)f > x)
+        f = nextafterf(f, -INFINITY);
+    return f;
+}
+
+/* Origin coordinates below CBVH_ORIGIN_FLUSH in magnitude become 0. */
+static inline void cbvh_origin_flush(float org[3])
+{
+    for (int a = 0; a < 3; a++)
+        org[a] = fabsf(org[a]) < CBVH_ORIGIN_FLUSH ? 0.0f : org[a];
+}
 
 /* What the triangle test needs from a ray: the origin and the shear of
  * Woop, Benthin & Wald 2013 ("Watertight ray/triangle intersection"). */
@@ -37,8 +80,7 @@ struct cbvh_ray_ctx {
     float rcp[3];         /* 1/dir: 0 and -0 give +inf and -inf, which the box test handles */
     float tmin, tmax;     /* tmax clamped to CBVH_T_LIMIT: an overflowed t never counts as a hit, and the
                            * box test's padded tmax stays finite, so a box at infinity is never entered */
-    double t_base;        /* t of shear.org on the caller's ray: 0, or the distance a far origin was moved
-                           * (ray_origin.c); the kernels' t and [tmin, tmax] are relative to it */
+    struct cbvh_t_frame t_frame; /* the kernels' t and [tmin, tmax] on the caller's ray */
     uint32_t box_halve;   /* bit a: a plane - org difference on axis a can overflow (coordinates past
                            * FLT_MAX / 2), so the box test runs on that axis at half scale (ray_box.h) */
     uint32_t octant;      /* bit a set when rcp[a] has its sign bit set (so -0 counts as negative): selects
@@ -158,35 +200,66 @@ static inline uint32_t cbvh_ray_octant(const cbvh_ray *ray)
            (uint32_t)(signbit(ray->dir[2]) != 0) << 2;
 }
 
-/* Returns 1 and fills ctx but for its shear (what a box test reads) when the ray is valid
- * (cbvh_ray_valid), else 0. */
-static inline int cbvh_ray_setup_boxes(struct cbvh_ray_ctx *ctx, const cbvh_ray *ray)
+/* The ray the kernels walk (see CBVH_DIR_FLUSH) from a valid ray, in *clean; t on the caller's ray is the
+ * kernels' t times *scale, and clean's [tmin, tmax] is the caller's range in the kernels' t, rounded inwards
+ * and clamped to CBVH_T_LIMIT on the caller's ray and on the kernels'. */
+static inline void cbvh_ray_sanitize(const cbvh_ray *ray, cbvh_ray *clean, double *scale)
 {
     const float *d = ray->dir;
+    float big = fabsf(d[0]);
+    big = fabsf(d[1]) > big ? fabsf(d[1]) : big;
+    big = fabsf(d[2]) > big ? fabsf(d[2]) : big;
+    /* 2^(CBVH_DIR_EXPONENT - floor(log2 big)) from the exponent of big as a double (a float > 0 is a
+     * normal double, its biased exponent 874 to 1150) */
+    const double wide = (double)big;
+    uint64_t bits;
+    memcpy(&bits, &wide, sizeof bits);
+    bits = (uint64_t)(2046u + CBVH_DIR_EXPONENT - (bits >> 52 & 0x7FFu)) << 52;
+    double up;
+    memcpy(&up, &bits, sizeof up);
+    for (int a = 0; a < 3; a++) {
+        const float s = (float)((double)d[a] * up);
+        clean->dir[a] = fabsf(s) < CBVH_DIR_FLUSH ? copysignf(0.0f, s) : s;
+        clean->org[a] = ray->org[a];
+    }
+    cbvh_origin_flush(clean->org);
+    const double tmax = ray->tmax < CBVH_T_LIMIT ? (double)ray->tmax : (double)CBVH_T_LIMIT;
+    clean->tmin = cbvh_float_rounded((double)ray->tmin / up, 1);
+    clean->tmax = cbvh_float_rounded(tmax / up < CBVH_T_LIMIT ? tmax / up : CBVH_T_LIMIT, 0);
+    *scale = up;
+}
+
+/* Returns 1, fills ctx but for its shear (what a box test reads) and writes the ray the kernels walk to
+ * *clean (cbvh_ray_sanitize) when the ray is valid (cbvh_ray_valid), else 0. */
+static inline int cbvh_ray_setup_boxes(struct cbvh_ray_ctx *ctx, const cbvh_ray *ray, cbvh_ray *clean)
+{
     if (!cbvh_ray_valid(ray))
         return 0;
+    cbvh_ray_sanitize(ray, clean, &ctx->t_frame.scale);
+    const float *d = clean->dir;
 #ifdef CBVH_HAVE_SIMD
     cbvh_store3(ctx->rcp, _mm_div_ps(_mm_set1_ps(1.0f), cbvh_load3(d)));
 #else
     for (int a = 0; a < 3; a++)
         ctx->rcp[a] = 1.0f / d[a];
 #endif
-    ctx->octant = cbvh_ray_octant(ray);
+    ctx->octant = cbvh_ray_octant(clean);
     ctx->any_flip = 0;
-    ctx->t_base = 0.0;
+    ctx->t_frame.base = 0.0;
     ctx->box_halve = 0;
     ctx->gate = NULL;
-    ctx->tmin = ray->tmin;
-    ctx->tmax = ray->tmax < CBVH_T_LIMIT ? ray->tmax : CBVH_T_LIMIT;
+    ctx->tmin = clean->tmin;
+    ctx->tmax = clean->tmax;
     return 1;
 }
 
 /* Returns 1 and fills ctx when the ray is valid (cbvh_ray_valid), else 0. */
 static inline int cbvh_ray_setup(struct cbvh_ray_ctx *ctx, const cbvh_ray *ray)
 {
-    if (!cbvh_ray_setup_boxes(ctx, ray))
+    cbvh_ray clean;
+    if (!cbvh_ray_setup_boxes(ctx, ray, &clean))
         return 0;
-    cbvh_shear_setup(&ctx->shear, ray->org, ray->dir);
+    cbvh_shear_setup(&ctx->shear, clean.org, clean.dir);
     return 1;
 }
 

@@ -11,7 +11,8 @@
 #include "query/raycast.h"
 #include "query/sweep_walk.h"
 
-int cbvh_hit_output(const struct cbvh_file *f, const struct cbvh_best_hit *best, double t_base, cbvh_hit *hit)
+int cbvh_hit_output(const struct cbvh_file *f, const struct cbvh_best_hit *best, const struct cbvh_t_frame *frame,
+                    cbvh_hit *hit)
 {
     if (best->tri == UINT32_MAX) {
         if (hit)
@@ -20,7 +21,7 @@ int cbvh_hit_output(const struct cbvh_file *f, const struct cbvh_best_hit *best,
     }
     if (hit) {
         hit->tri = cbvh_original_id(f, best->tri);
-        hit->t = t_base == 0.0 ? best->t : (float)(t_base + best->t);
+        hit->t = cbvh_t_frame_out(frame, best->t);
         hit->u = best->u;
         hit->v = best->v;
     }
@@ -40,11 +41,10 @@ CBVH_API int cbvh_raycast(const cbvh_file *file, const cbvh_ray *ray, cbvh_trave
 {
     struct cbvh_best_hit best = {UINT32_MAX, 0.0f, 0.0f, 0.0f};
     struct cbvh_ray_ctx ctx;
-    ctx.t_base = 0.0;
     if (file && ray && known_traversal(traversal) &&
         cbvh_ray_prepare(&ctx, ray, file, stats ? &stats->nodes_visited : NULL))
         cbvh_closest(file, &ctx, traversal, &best, stats);
-    return cbvh_hit_output(file, &best, ctx.t_base, hit);
+    return cbvh_hit_output(file, &best, &ctx.t_frame, hit);
 }
 
 CBVH_API int cbvh_occluded(const cbvh_file *file, const cbvh_ray *ray, cbvh_traversal traversal,
@@ -96,7 +96,7 @@ cbvh_result cbvh_query_options_read(const cbvh_query_options *options, cbvh_quer
 
 /* The record of cooked triangle k hit at the kernels' t: the normal from the edges in double, scaled by
  * their largest component first so that neither tiny nor huge coordinates underflow or overflow it. */
-void cbvh_hit_record_fill(const struct cbvh_file *f, uint32_t k, double t_base, float t, float u, float v,
+void cbvh_hit_record_fill(const struct cbvh_file *f, uint32_t k, const struct cbvh_t_frame *frame, float t, float u, float v,
                           const float dir[3], cbvh_hit_record *r)
 {
     float p[3][3];
@@ -123,7 +123,7 @@ void cbvh_hit_record_fill(const struct cbvh_file *f, uint32_t k, double t_base, 
         facing += n[a] * dir[a];
     }
     r->tri = cbvh_original_id(f, k);
-    r->t = t_base == 0.0 ? t : (float)(t_base + t);
+    r->t = cbvh_t_frame_out(frame, t);
     r->u = u;
     r->v = v;
     r->front = facing < 0.0;
@@ -148,7 +148,7 @@ static int gate_check(const struct cbvh_hit_gate *gate, const struct cbvh_file *
                       float v)
 {
     cbvh_hit_record r;
-    cbvh_hit_record_fill(f, k, gate->t_base, t, u, v, gate->dir, &r);
+    cbvh_hit_record_fill(f, k, &gate->t_frame, t, u, v, gate->dir, &r);
     record_place(gate, &r);
     if ((gate->cull == CBVH_CULL_BACK && !r.front) || (gate->cull == CBVH_CULL_FRONT && r.front))
         return CBVH_FILTER_REJECT;
@@ -159,13 +159,13 @@ static int gate_check(const struct cbvh_hit_gate *gate, const struct cbvh_file *
 }
 
 void cbvh_hit_gate_init(struct cbvh_hit_gate *gate, cbvh_cull cull, cbvh_hit_filter_fn filter, void *user,
-                        const double (*rotation)[3], const float dir[3], double t_base)
+                        const double (*rotation)[3], const float dir[3], const struct cbvh_t_frame *frame)
 {
     gate->check = gate_check;
     gate->cull = cull;
     gate->filter = filter;
     gate->user = user;
-    gate->t_base = t_base;
+    gate->t_frame = *frame;
     for (int a = 0; a < 3; a++)
         gate->dir[a] = dir[a];
     gate->placed = rotation != NULL;
@@ -205,7 +205,7 @@ static cbvh_result query_prepare(const cbvh_file *file, const cbvh_ray *world,
     if (!file || !ray || !cbvh_ray_valid(ray))
         return CBVH_ERROR_INVALID_ARGUMENT;
     *walk = cbvh_ray_prepare(ctx, ray, file, stats ? &stats->nodes_visited : NULL);
-    cbvh_hit_gate_init(gate, o->cull, o->filter, o->filter_user, p ? p->rotation : NULL, ray->dir, ctx->t_base);
+    cbvh_hit_gate_init(gate, o->cull, o->filter, o->filter_user, p ? p->rotation : NULL, ray->dir, &ctx->t_frame);
     /* without culling or filter every hit counts: the plain walk (a transform only rotates the answer) */
     ctx->gate = o->cull != CBVH_CULL_NONE || o->filter ? gate : NULL;
     return CBVH_OK;
@@ -229,7 +229,7 @@ CBVH_API cbvh_result cbvh_raycast_with(const cbvh_file *file, const cbvh_ray *ra
     if (walk)
         cbvh_closest(file, &ctx, o.traversal, &best, stats);
     if (best.tri != UINT32_MAX) {
-        cbvh_hit_record_fill(file, best.tri, ctx.t_base, best.t, best.u, best.v, gate.dir, hit);
+        cbvh_hit_record_fill(file, best.tri, &ctx.t_frame, best.t, best.u, best.v, gate.dir, hit);
         record_place(&gate, hit);
     }
     return CBVH_OK;

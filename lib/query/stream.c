@@ -170,7 +170,7 @@ static void batch_flush(const struct cbvh_file *f, struct cbvh_stream_batch *b, 
             if (b->best[r].tri != UINT32_MAX)
                 CBVH_PREFETCH(cbvh_remap_entry(f, b->best[r].tri));
         for (uint32_t r = 0; r < b->count; r++)
-            cbvh_hit_output(f, &b->best[r], b->ctx[r].t_base, &hits[b->ray_index[r]]);
+            cbvh_hit_output(f, &b->best[r], &b->ctx[r].t_frame, &hits[b->ray_index[r]]);
     } else {
         stream_walk_file(f, b, octant, node_test, 1, counting, occluded, visited, tested);
     }

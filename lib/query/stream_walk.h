@@ -418,7 +418,7 @@ CBVH_KERNEL void stream_solo_ray(const struct cbvh_file *f, const struct cbvh_ra
     if (hit) {
         struct cbvh_best_hit best = {UINT32_MAX, 0.0f, 0.0f, 0.0f};
         cbvh_closest(f, ctx, CBVH_TRAVERSAL_SORTED, &best, &stats);
-        cbvh_hit_output(f, &best, ctx->t_base, hit);
+        cbvh_hit_output(f, &best, &ctx->t_frame, hit);
     } else {
         *occluded = (uint8_t)cbvh_any(f, ctx, CBVH_TRAVERSAL_SORTED, &stats);
     }
@@ -499,7 +499,7 @@ CBVH_KERNEL void stream_interleave(const struct cbvh_file *restrict f, const uin
             if (any)
                 occluded[b->ray_index[k]] = step == CBVH_WALK_HIT;
             else
-                cbvh_hit_output(f, &slot[k].best, b->ctx[k].t_base, &hits[b->ray_index[k]]);
+                cbvh_hit_output(f, &slot[k].best, &b->ctx[k].t_frame, &hits[b->ray_index[k]]);
             nv += walk->visited;
             nt += walk->tested;
             running &= ~(1u << k);

@@ -88,7 +88,8 @@ static int ask_filter(const struct sweep_query *q, uint32_t k, const cbvh_v3 v[3
         w[(fr.base + 2) % 3] = y;
     }
     cbvh_hit_record r;
-    cbvh_hit_record_fill(q->f, k, 0.0, (float)c->t, (float)w[1], (float)w[2], q->delta, &r);
+    static const struct cbvh_t_frame identity = {0.0, 1.0};
+    cbvh_hit_record_fill(q->f, k, &identity, (float)c->t, (float)w[1], (float)w[2], q->delta, &r);
     if (q->rules->placement)
         v3_to_f(cbvh_rotate(q->rules->placement->rotation, v3_from_f(r.normal)), r.normal);
     return q->rules->filter(q->rules->user, &r);
@@ -265,7 +266,7 @@ int cbvh_sweep_as_ray(const struct cbvh_file *f, const float center[3], const fl
         return 0;
     if (rules && (rules->cull != CBVH_CULL_NONE || rules->filter)) {
         cbvh_hit_gate_init(&gate, rules->cull, rules->filter, rules->user,
-                           rules->placement ? rules->placement->rotation : NULL, delta, ctx.t_base);
+                           rules->placement ? rules->placement->rotation : NULL, delta, &ctx.t_frame);
         ctx.gate = &gate;
     }
     cbvh_closest(f, &ctx, CBVH_TRAVERSAL_SORTED, &best, NULL);
@@ -275,7 +276,7 @@ int cbvh_sweep_as_ray(const struct cbvh_file *f, const float center[3], const fl
     cbvh_triangle_vertices(f, best.tri, a, b, c);
     const cbvh_v3 va = v3_from_f(a), vb = v3_from_f(b), vc = v3_from_f(c);
     found->tri = best.tri;
-    found->contact.t = (float)(ctx.t_base + best.t);
+    found->contact.t = cbvh_t_frame_out(&ctx.t_frame, best.t);
     found->contact.point =
         v3_madd(v3_madd(v3_scale(va, 1.0 - (double)best.u - (double)best.v), vb, best.u), vc, best.v);
     found->contact.normal = cbvh_fallback_normal(va, vb, vc, v3_from_f(delta));
