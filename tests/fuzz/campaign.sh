@@ -35,7 +35,13 @@ dict=
     "$corpus" "$here/corpus/$target" >"$build/fuzz-$target.log" 2>&1 || status=$?
 tail -n 25 "$build/fuzz-$target.log" | grep -E '^(#|stat::|Done)|ERROR|SUMMARY' | tail -n 8 || true
 ls "$artifacts" | sed 's/^/artifact: /'
+# One line to read a campaign by: executions (libFuzzer's final count, or in fork mode the last "#N:"
+# progress line), seconds, findings (artifacts).
+execs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$build/fuzz-$target.log" | tail -n 1)
+[ -n "$execs" ] || execs=$(grep -oE '^#[0-9]+' "$build/fuzz-$target.log" | tail -n 1 | tr -d '#')
+findings=$(ls "$artifacts" | wc -l | tr -d ' ')
+echo "campaign: $target: ${execs:-0} executions in $seconds s, $findings findings"
 # keep-going mode can end with status 0 after crashes: any artifact fails the campaign
-[ -z "$(ls "$artifacts")" ] || status=${status:-1}
+[ "$findings" = 0 ] || status=${status:-1}
 [ "${status:-0}" = 0 ] || echo "campaign.sh: $target: failed (status ${status}); see $build/fuzz-$target.log" >&2
 exit ${status:-0}

@@ -87,7 +87,8 @@ static int decode(decoded *d, const uint8_t *data, size_t size)
     return 1;
 }
 
-/* What the input deserves: 2 a bad index, 1 a non-finite coordinate, 0 fine. */
+/* What the input deserves: 2 a bad index, 1 a non-finite coordinate or one beyond the exact range
+ * (CBVH_COORDINATE_MAX), 0 fine. */
 static int mesh_fault(const decoded *d)
 {
     const cbvh_mesh *m = &d->mesh;
@@ -97,10 +98,16 @@ static int mesh_fault(const decoded *d)
         if (m->indices[i] >= m->vertex_count)
             return 2;
         for (int a = 0; a < 3; a++)
-            if (!isfinite(m->positions[m->indices[i] * stride + a]))
+            if (!(fabsf(m->positions[m->indices[i] * stride + a]) <= CBVH_COORDINATE_MAX))
                 fault = 1;
     }
     return fault;
+}
+
+/* A coordinate as the cooker stores it: below CBVH_COORDINATE_MIN in magnitude, 0 (cbvh.h). */
+static float stored(float x)
+{
+    return fabsf(x) < CBVH_COORDINATE_MIN ? 0.0f : x;
 }
 
 /* Ray/triangle in double: the hit distance when the ray crosses the triangle
@@ -154,9 +161,10 @@ static void compare_with_brute_force(const cbvh_file *f, const decoded *d, uint6
     for (int i = 0; i < 16; i++) {
         seed = seed * 6364136223846793005ull + 1442695040888963407ull;
         size_t t = (size_t)(seed >> 33) % m->triangle_count;
-        const float *v[3];
+        float v[3][3];
         for (int k = 0; k < 3; k++)
-            v[k] = m->positions + m->indices[3 * t + k] * stride;
+            for (int axis = 0; axis < 3; axis++)
+                v[k][axis] = stored(m->positions[m->indices[3 * t + k] * stride + axis]);
         double a = (double)((seed >> 8) & 255) / 256.0, b = (double)((seed >> 16) & 255) / 256.0 * (1 - a);
         cbvh_ray r;
         double o[3], dir[3], ext = 0;
@@ -174,9 +182,11 @@ static void compare_with_brute_force(const cbvh_file *f, const decoded *d, uint6
         r.tmax = INFINITY;
         double best = INFINITY;
         for (size_t u = 0; u < m->triangle_count; u++) {
-            const float *w0 = m->positions + m->indices[3 * u] * stride, *w1 = m->positions + m->indices[3 * u + 1] * stride,
-                        *w2 = m->positions + m->indices[3 * u + 2] * stride;
-            double th = clear_hit(o, dir, w0, w1, w2, 1e-3);
+            float w[3][3];
+            for (int k = 0; k < 3; k++)
+                for (int axis = 0; axis < 3; axis++)
+                    w[k][axis] = stored(m->positions[m->indices[3 * u + k] * stride + axis]);
+            double th = clear_hit(o, dir, w[0], w[1], w[2], 1e-3);
             if (th >= 0 && th < best)
                 best = th;
         }
@@ -211,9 +221,11 @@ static cbvh_file *cook_and_check(const decoded *d, cbvh_layout layout, size_t si
                    "cook failed with %s: %s", cbvh_result_string(r), err.message);
         FUZZ_CHECK(r != CBVH_ERROR_EMPTY_MESH || fault == 0 || d->mesh.triangle_count == 0,
                    "bad mesh reported as empty: %s", err.message);
+        FUZZ_CHECK(r != CBVH_ERROR_BAD_MESH || fault != 0, "a mesh in the exact range refused: %s", err.message);
         return NULL;
     }
-    FUZZ_CHECK(fault == 0, "cook accepted a mesh with %s", fault == 2 ? "an index out of range" : "a non-finite coordinate");
+    FUZZ_CHECK(fault == 0, "cook accepted a mesh with %s",
+               fault == 2 ? "an index out of range" : "a coordinate that is not finite or beyond the exact range");
     FUZZ_CHECK(out != NULL && out_size == stats.file_size, "cook returned %zu bytes, stats say %llu", out_size,
                (unsigned long long)stats.file_size);
     FUZZ_CHECK(stats.input_triangles == d->mesh.triangle_count && stats.triangles + stats.dropped_degenerate == stats.input_triangles,
@@ -238,20 +250,9 @@ static cbvh_file *cook_and_check(const decoded *d, cbvh_layout layout, size_t si
                "header and stats disagree");
     FUZZ_CHECK(info.layout == (uint32_t)layout, "cooked layout %u, asked for %u", info.layout, (unsigned)layout);
 
-    /* every kept triangle is the input triangle (exactly when lossless,
-     * within the reported error when quantized); dropped ones are absent */
+    /* every kept triangle is the input triangle as stored (exactly when lossless, within the reported error
+     * when quantized); dropped ones are absent */
     size_t stride = d->mesh.position_stride / sizeof(float), present = 0;
-    /* when every kept triangle has the same id the file stores none and reports 0 */
-    int all_equal = 1;
-    uint32_t first_material = 0;
-    for (size_t t = 0, seen = 0; t < d->mesh.triangle_count; t++) {
-        float v[3][3];
-        if (!d->opt.keep_remap || !cbvh_file_get_triangle(f, (uint32_t)t, v[0], v[1], v[2]))
-            continue;
-        if (seen++ == 0)
-            first_material = d->materials[t];
-        all_equal &= d->materials[t] == first_material;
-    }
     if (d->opt.keep_remap) {
         for (size_t t = 0; t < d->mesh.triangle_count; t++) {
             float v[3][3];
@@ -260,12 +261,14 @@ static cbvh_file *cook_and_check(const decoded *d, cbvh_layout layout, size_t si
             present++;
             for (int k = 0; k < 3; k++)
                 for (int a = 0; a < 3; a++) {
-                    float in = d->positions[d->indices[3 * t + k] * stride + a];
+                    float in = stored(d->positions[d->indices[3 * t + k] * stride + a]);
                     double tol = d->opt.vertex_format == CBVH_VERTEX_QUANTIZED16 ? stats.vertex_max_error : 0;
                     FUZZ_CHECK(fabs((double)v[k][a] - in) <= tol, "triangle %zu vertex %d axis %d: %.9g stored as %.9g (error %g)",
                                t, k, a, in, v[k][a], tol);
                 }
-            uint32_t want = d->mesh.material_ids && d->opt.keep_materials && !all_equal ? d->materials[t] : 0;
+            /* every triangle's own id, also when all are equal (the file then stores it once: MATERIALS
+             * encoding 3) */
+            uint32_t want = d->mesh.material_ids && d->opt.keep_materials ? d->materials[t] : 0;
             FUZZ_CHECK(cbvh_file_get_material(f, (uint32_t)t) == want, "triangle %zu material %u, expected %u", t,
                        cbvh_file_get_material(f, (uint32_t)t), want);
         }

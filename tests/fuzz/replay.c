@@ -38,7 +38,8 @@ static int run_file(const char *path)
 
 static int cmp_names(const void *a, const void *b) { return strcmp(*(char *const *)a, *(char *const *)b); }
 
-static int run_path(const char *path)
+/* Runs the file `path`, or every file below the folder `path` whose name starts with `prefix` (NULL: all). */
+static int run_path(const char *path, const char *prefix)
 {
     struct stat st;
     if (stat(path, &st) != 0) {
@@ -54,7 +55,7 @@ static int run_path(const char *path)
     size_t count = 0, cap = 0;
     struct dirent *e;
     while ((e = readdir(d)) != NULL) {
-        if (e->d_name[0] == '.')
+        if (e->d_name[0] == '.' || (prefix && strncmp(e->d_name, prefix, strlen(prefix)) != 0))
             continue;
         if (count == cap) {
             cap = cap ? 2 * cap : 64;
@@ -71,7 +72,7 @@ static int run_path(const char *path)
     qsort(names, count, sizeof *names, cmp_names); /* same order on every machine */
     int bad = 0;
     for (size_t i = 0; i < count; i++) {
-        bad |= run_path(names[i]);
+        bad |= run_path(names[i], prefix);
         free(names[i]);
     }
     free(names);
@@ -82,19 +83,22 @@ int main(int argc, char **argv)
 {
     int bad = 0;
     if (argc < 2) {
-        /* under `make check`: the target's committed corpus in the source tree */
+        /* under `make check`: the target's committed corpus in the source tree, and its findings (named
+         * TARGET-*) */
 #ifdef FUZZ_TARGET
         const char *srcdir = getenv("srcdir");
         char path[4096];
         snprintf(path, sizeof path, "%s/tests/fuzz/corpus/%s", srcdir ? srcdir : ".", FUZZ_TARGET);
-        bad |= run_path(path);
+        bad |= run_path(path, NULL);
+        snprintf(path, sizeof path, "%s/tests/fuzz/findings", srcdir ? srcdir : ".");
+        bad |= run_path(path, FUZZ_TARGET "-");
 #else
         fprintf(stderr, "usage: %s CORPUS_DIR_OR_FILE...\n", argv[0]);
         return 2;
 #endif
     }
     for (int i = 1; i < argc; i++)
-        bad |= run_path(argv[i]);
+        bad |= run_path(argv[i], NULL);
     printf("replay: %zu inputs ran without a broken invariant\n", files_run);
     return bad || files_run == 0;
 }
