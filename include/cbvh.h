@@ -166,12 +166,9 @@ typedef void (*cbvh_progress_fn)(void *user, cbvh_phase phase, double fraction);
 
 /* Default SAH costs: traversal 4, intersection 1, leaves of up to 16 triangles.
  * A node visit on a large mesh is a dependent cache miss while a leaf's
- * triangles are read together, so a node costs several triangle tests.
- * Measured (incoherent closest-hit MRays/s, sorted, 100K rays, CPU time) against
- * the former 1 / 1 / 4: Stanford dragon (871K) 35.6 -> 23.8 bytes/triangle,
- * 1.22 -> 1.48 MRays/s (1.8 -> 5.6 triangles per leaf); 1M sphere 33.8 -> 23.7
- * bytes/triangle, 0.76 -> 1.12 MRays/s; coherent rays unchanged or faster.
- * Traversal cost 2, 3 and 6 and leaf sizes 4 and 8 were slower or larger. */
+ * triangles are read together, so a node costs several triangle tests; these
+ * defaults give both fewer bytes and faster rays than smaller costs and leaves
+ * (docs/PERFORMANCE.md). */
 typedef struct cbvh_cook_options {
     size_t struct_size;            /* sizeof the caller's struct, set by cbvh_cook_options_init */
     uint32_t max_leaf_size;        /* 1..16 triangles per leaf; default 16. A wide4 leaf holds at most
@@ -186,8 +183,8 @@ typedef struct cbvh_cook_options {
                                     * nothing when all are 0) and material_names; 0: neither */
     cbvh_progress_fn progress;     /* optional */
     void *progress_user;
-    cbvh_layout layout;            /* node layout; default CBVH_LAYOUT_WIDE4 (faster per ray than binary on
-                                    * every mesh measured, about as many bytes; binary keeps the stackless
+    cbvh_layout layout;            /* node layout; default CBVH_LAYOUT_WIDE4 (fewer node visits per ray
+                                    * than binary for about as many bytes; binary keeps the stackless
                                     * walk over escape links) */
     const cbvh_material_name *material_names; /* optional names of material ids, stored sorted by id, then
                                     * name, exact repeats once; an id may have several names. At most
@@ -287,10 +284,9 @@ typedef struct cbvh_file cbvh_file;
  * cbvh_open_path_read for hot reload there.
  * Page size: on Linux a file of 2 MiB or more is mapped on a 2 MiB boundary
  * with the huge-page advice (madvise), so a kernel whose page cache holds the
- * file in 2 MiB pages maps it with them (Linux 6.18 on ext4, for a file read
- * from disk after the open asked: the 871K-triangle dragon's incoherent rays
- * about 6% faster, the 1M-triangle sphere's 2-4%); a file the cache holds in
- * small pages (one just written, not yet evicted) is mapped with those. */
+ * file in 2 MiB pages maps it with them and a large mesh's queries miss the
+ * address translation cache less; a file the cache holds in small pages (one
+ * just written, not yet evicted) is mapped with those. */
 CBVH_API cbvh_result cbvh_open_path(const char *path, const cbvh_allocator *allocator,
                                     cbvh_file **out_file, cbvh_error *err);
 
@@ -301,10 +297,9 @@ CBVH_API cbvh_result cbvh_open_path(const char *path, const cbvh_allocator *allo
  * the file's size in memory and a copy. Safe on untrusted files. With the
  * default allocator (NULL) on Linux, the copy asks for 2 MiB pages (transparent
  * huge pages, madvise): a large mesh's queries then miss the address
- * translation cache less (incoherent rays on the 1M-triangle sphere about 9%
- * faster than the same copy on 4 KiB pages, the 871K-triangle dragon about
- * 5%, whatever the page cache holds; see cbvh_open_path for a mapping). So do
- * the sections any open inflates (zlib) or copies to align them. */
+ * translation cache less, whatever the page cache holds (see cbvh_open_path
+ * for a mapping). So do the sections any open inflates (zlib) or copies to
+ * align them. */
 CBVH_API cbvh_result cbvh_open_path_read(const char *path, const cbvh_allocator *allocator,
                                          cbvh_file **out_file, cbvh_error *err);
 
@@ -321,9 +316,8 @@ CBVH_API void cbvh_close(cbvh_file *file);
  * the ray test reads (36 bytes a triangle from the file's allocator, freed by cbvh_close), so raycasts
  * (closest and any hit, every traversal, single rays and streams) and the shape queries' leaves skip
  * decoding each triangle's indices and vertices. Answers are the same. On a mesh that stays in the
- * cache that is faster (the 3.7K-triangle Wuson: single rays about 7% incoherent, 10% short, 13%
- * shadow); on a large one the extra bytes make rays slower (the 871K-triangle dragon: 3-10%): measure
- * with `cbvh bench` (its "expanded" rows). With the default allocator on Linux the copy asks for 2 MiB
+ * cache that is faster; on a large one the extra bytes make rays slower: measure with `cbvh bench`
+ * (its "expanded" rows). With the default allocator on Linux the copy asks for 2 MiB
  * pages, as cbvh_open_path_read's does. The file is changed: call this before any thread queries
  * it. A second call does nothing; so does a build without SIMD (configure --disable-simd), whose
  * scalar test reads the file as it is. CBVH_ERROR_OUT_OF_MEMORY leaves the file as it was;
@@ -559,43 +553,17 @@ CBVH_API cbvh_result cbvh_raycast_with(const cbvh_file *file, const cbvh_ray *ra
 CBVH_API cbvh_result cbvh_occluded_with(const cbvh_file *file, const cbvh_ray *ray, const cbvh_query_options *options,
                                         int *occluded, cbvh_query_stats *stats);
 
-/* Batched streams: `count` rays (any coherence) traversed together, each node
- * dequantized once per batch visit and each live ray tested against all its
- * children there, the rays entering a child listed for it. A ray left alone at
- * a node (incoherent rays, soon after the root) finishes that subtree on the
- * single-ray walk: on a mesh whose vertices take more than 512 KiB, four such
- * rays at a time, a node or leaf each in turn, so that the CPU overlaps their
- * memory fetches; on a smaller one, which stays in the caches, one at a time.
- * A stream on such a larger mesh (wide layout) skips the batch for rays that
- * are not coherent: of each window of 8 batches' worth of rays (192 on the
- * stack), it samples 64 pairs of consecutive rays, and when fewer than half
- * point within about 8 degrees of each other (rays in all directions, shadow
- * rays from points spread over the mesh), the window's rays walk eight at a
- * time from the root (four in the stack's batch, below), a node or leaf each
- * in turn. Measured against the library before (the batch for closest hit,
- * four interleaved walks for any hit, which had gained on the batch: shadow
- * rays +22%, +18%, +12%) in one process, 20 chunks of 20,000 rays alternated,
- * batches of 1024, on the 871K-triangle dragon, a 1M-triangle sphere and a
- * 500K-triangle terrain: closest hit, incoherent rays +8%, -1%, +8%, short
- * rays +10%, +9%, +11%; any hit, incoherent rays +10%, +7%, +3%, shadow rays
- * +8%, +2%, 0%. Without scratch (batches of 24, four walks), closest hit:
- * incoherent rays +21%, +9%, +15%, short rays +14%, +10%, +13%. Camera rays
- * are batched either way. The binary layout keeps the batch (its shadow rays
- * were 10% slower on the dragon walked four at a time). On a mesh that stays
- * in the caches, a window of incoherent rays skips the batch when the batch
- * is small for the mesh (the stack's 24 rays; wide layout, also more than 8
- * triangles a ray of the batch): its rays take the single-ray walk one at a
- * time. The stack's batch had run such rays at 0.63-0.88x of cbvh_raycast in
- * a loop (Wuson, the bunny, a 46K-triangle scene), batches of 1024 on the
- * 46K-triangle scene's wide layout at 0.79-0.91x. Results equal
- * cbvh_raycast / cbvh_occluded ray by ray. hits[i] (occluded[i]: 0 or 1)
- * receives ray i's result. Uses no heap memory: rays go in batches of 24 of
- * one ray octant, held with four walks' stacks on the call's stack. Stack use,
- * measured with -fstack-usage (gcc 12 -O2, x86-64), deepest path: about 21 KiB
- * (the stack batch and the walks' stacks 12.8; the batch walk 4.5; the tails'
- * steps 3.0; the hit's barycentrics 0.3). The _scratch forms below, given
- * scratch for more than 24 rays, keep all of it there: about 8 KiB of stack.
- * cbvh_raycast and cbvh_occluded: about 4 KiB (3.9 with the AVX2 walks). */
+/* Batched streams: the closest hit (cbvh_raycast_stream) or occlusion (cbvh_occluded_stream) of each of
+ * `count` rays of any coherence. hits[i] (occluded[i]: 0 or 1) receives ray
+ * i's result, equal to cbvh_raycast / cbvh_occluded's ray by ray; stats (may be NULL) counts the work.
+ * Coherent rays are walked together in batches of one ray octant, each node's boxes dequantized once per
+ * batch visit and tested for every live ray; rays that are not coherent, or are left alone in a subtree,
+ * finish on single-ray walks (interleaved, several rays a node or leaf each in turn, on a mesh too large
+ * for the caches, so that their memory fetches overlap). Each ray costs about one single-ray walk;
+ * coherent rays share node fetches. Uses no heap memory: batches of 24 rays and the walks'
+ * stacks on the call's stack, about 21 KiB (x86-64); the _scratch forms below keep them in the caller's
+ * memory instead (about 8 KiB of stack). cbvh_raycast and cbvh_occluded use about 4 KiB. Safe to call
+ * from any number of threads on one file. */
 CBVH_API void cbvh_raycast_stream(const cbvh_file *file, const cbvh_ray *rays, size_t count,
                                   cbvh_hit *hits, cbvh_query_stats *stats);
 CBVH_API void cbvh_occluded_stream(const cbvh_file *file, const cbvh_ray *rays, size_t count,

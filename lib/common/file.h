@@ -11,11 +11,10 @@
  * (query/leaf.h's leaf_vertex4) so that they never read past the section's end. */
 #define CBVH_SECTION_LEAD 64u
 
-/* A mesh whose vertices take up to this many bytes is taken to stay in the caches (half this machine's
+/* A mesh whose vertices take up to this many bytes is taken to stay in the caches (half of a common
  * 1 MiB L2; struct cbvh_file's vertices_far says which side a file is on). Requesting vertices ahead
- * hides misses; where there are none it costs only its instructions: the streams' interleaved tails made
- * Wuson's streams 5-13% slower (3.7K triangles, `cbvh bench`), the single-ray walk's early vertex
- * requests 1-3.5% more instructions a ray. */
+ * hides misses; where there are none it costs only its instructions, so the walks request ahead, and the
+ * streams interleave their tails, only past this size (docs/PERFORMANCE.md). */
 #define CBVH_CACHED_VERTEX_BYTES (512u * 1024u)
 
 /* The margin of struct cbvh_file's origin_near box in extents of the mesh: a quarter of the distance past

@@ -75,10 +75,9 @@ static cbvh_result read_all(int fd, const char *path, const cbvh_allocator *a, s
  * advice given before any page is touched, then every page mapped at once (as MAP_POPULATE does:
  * validation reads every byte); else MAP_FAILED, and the caller maps it plainly. Where the kernel's page
  * cache holds the file in 2 MiB folios (a file read cold with the advice, on a file system with large
- * folios: ext4 on this project's 6.18 kernel), whole 2 MiB pages of the file are then mapped at once, as
+ * folios such as ext4), whole 2 MiB pages of the file are then mapped at once, as
  * cbvh_os_advise_large_pages gives a copy: a large mesh's walks miss the address translation cache less
- * (the 871K-triangle dragon, 16 MB: incoherent closest about 6% faster, shadow and short rays 5%; the
- * 1M-triangle sphere 2-4%; README). A file cached in small pages (just written) maps as before. */
+ * (docs/PERFORMANCE.md). A file cached in small pages (just written) maps as before. */
 static void *map_on_large_pages(int fd, size_t size)
 {
 #if defined(MADV_HUGEPAGE) && defined(MAP_FIXED)
@@ -129,8 +128,8 @@ static cbvh_result map_or_read(int fd, const char *path, int map, const cbvh_all
     if (out->size == 0)
         return CBVH_OK; /* nothing to map; the header check reports the empty file */
     if (map) {
-        /* Validation reads every byte at once: mapping all pages up front costs less than a fault per page
-         * (measured on the dragon's 31 MB file: 0.5 ms to populate against 3 to 5 ms of faults). */
+        /* Validation reads every byte at once: mapping all pages up front costs less than a fault per
+         * page. */
 #ifdef MAP_POPULATE
         const int flags = MAP_PRIVATE | MAP_POPULATE;
 #else

@@ -47,10 +47,9 @@ cbvh_result cbvh_cook_prepare(const cbvh_mesh *mesh, const cbvh_allocator *a, co
 void cbvh_cook_mesh_free(const cbvh_allocator *a, cook_mesh *m);
 
 /* The build needs the triangles only for their boxes, so while it holds its largest buffers the vertex
- * map stands in for the indices (4 bytes an input vertex instead of 12 a triangle; the dragon: 2 instead
- * of 12 a triangle). shelve frees the indices when there is a map, and the positions when only the build
- * reads them; restore computes the indices again from the input mesh (the same one prepared) and frees
- * the map. */
+ * map stands in for the indices (4 bytes an input vertex instead of 12 a triangle). shelve frees the
+ * indices when there is a map, and the positions when only the build reads them; restore computes the
+ * indices again from the input mesh (the same one prepared) and frees the map. */
 void cbvh_cook_mesh_shelve_triangles(cook_mesh *m, const cbvh_allocator *a);
 cbvh_result cbvh_cook_mesh_restore_triangles(cook_mesh *m, const cbvh_mesh *input, const cbvh_allocator *a,
                                              cbvh_error *err);

@@ -27,9 +27,9 @@ static uint32_t slot_to_open(const cook_tree *t, const double *area, const uint3
 
 /* The children of build node b, as build node ids: its two children, then
  * slots opened into their two children (slot_to_open) until there are four or
- * none is internal. So nodes fill up before leaves are chosen (on the Stanford
- * dragon, opening the two-leaf slots first gives 11.6% fewer nodes than
- * opening by area alone, for 0.6% more node visits per ray), and the children
+ * none is internal. So nodes fill up before leaves are chosen (opening the
+ * two-leaf slots first gives fewer nodes than opening by area alone, for
+ * slightly more node visits per ray: docs/PERFORMANCE.md), and the children
  * keep the build's spatial grouping in slot order. Returns how many (1 for a
  * leaf root). */
 static uint32_t collapse(const cook_tree *t, const double *area, uint32_t b, uint32_t kids[CBVH_W4_WIDTH])
@@ -193,7 +193,7 @@ cbvh_result cbvh_cook_place_wide4(const cook_tree *t, const cook_grid *g, float 
     cbvh_free(a, box);
     cbvh_free(a, area);
     cbvh_free(a, build_of);
-    /* The capacity is a bound (the dragon fills 43% of it): the nodes move to an array of their size. */
+    /* The capacity is a bound, well above what a tree uses: the nodes move to an array of their size. */
     uint8_t *fit = r == CBVH_OK ? cbvh_alloc_array(a, node_count, CBVH_W4_NODE_SIZE, 64) : NULL;
     if (fit)
         memcpy(fit, nodes, (size_t)node_count * CBVH_W4_NODE_SIZE);

@@ -431,8 +431,8 @@ static void init_refs(const cook_mesh *m, prim_ref *restrict refs, box *root, bo
 }
 
 /* Build nodes are allocated a page at a time as the tree grows: the worst case, 2n - 1 nodes for n prims,
- * is about five times what an SAH tree with leaves of several triangles takes (the dragon: 0.37 nodes a
- * triangle), and it was the largest buffer of a cook. */
+ * is several times what an SAH tree with leaves of several triangles takes, and would be the largest
+ * buffer of a cook. */
 #define NODE_PAGE_SHIFT 10 /* 1024 nodes, 32 KiB */
 
 /* What both builders allocate pages from. While the worker runs, both may need a page at once, and the
