@@ -148,7 +148,8 @@ typedef struct cbvh_material_name {
     const char *name;
 } cbvh_material_name;
 
-/* The most triangles a wide4 leaf holds. */
+/* The most triangles a leaf holds in any file (format spec section 7), and in a wide4 file. */
+#define CBVH_MAX_LEAF_SIZE 16u
 #define CBVH_WIDE4_MAX_LEAF 8u
 
 #if CBVH_HAVE_COOKER
@@ -171,7 +172,7 @@ typedef void (*cbvh_progress_fn)(void *user, cbvh_phase phase, double fraction);
  * (docs/PERFORMANCE.md). */
 typedef struct cbvh_cook_options {
     size_t struct_size;            /* sizeof the caller's struct, set by cbvh_cook_options_init */
-    uint32_t max_leaf_size;        /* 1..16 triangles per leaf; default 16. A wide4 leaf holds at most
+    uint32_t max_leaf_size;        /* 1..CBVH_MAX_LEAF_SIZE triangles per leaf; default 16. A wide4 leaf holds at most
                                     * CBVH_WIDE4_MAX_LEAF (8): there a larger value acts as 8 */
     uint32_t sah_bins;             /* 4..256 bins per axis; default 32 */
     float traversal_cost;          /* SAH cost of visiting a node; default 4.0 */

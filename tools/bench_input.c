@@ -8,8 +8,7 @@
 
 #include "bench_input.h"
 #include "cli.h"
-#include "common/file.h"
-#include "common/format.h"
+#include "cbvh_internal.h"
 #include "import_assimp.h"
 #include "support/scene_gen.h"
 
@@ -35,10 +34,10 @@ static int is_cbvh_file(const char *path)
     FILE *f = fopen(path, "rb");
     if (!f)
         return 0;
-    char magic[CBVH_MAGIC_SIZE];
+    char magic[CBVH_MAGIC_BYTES];
     size_t n = fread(magic, 1, sizeof magic, f);
     fclose(f);
-    return n == sizeof magic && memcmp(magic, CBVH_MAGIC, CBVH_MAGIC_SIZE) == 0;
+    return cbvh_has_magic(magic, n);
 }
 
 /* Drops the file's pages from the system's cache (written back first), so that the next open reads it from
@@ -68,8 +67,9 @@ static int load_cbvh(const char *command, const char *path, bench_mesh *out)
     cbvh_result r = cbvh_open_path(path, NULL, &file, &err);
     if (r != CBVH_OK)
         return cli_report(command, path, &err);
-    const struct cbvh_file *f = file;
-    size_t nv = f->info.vertex_count, nt = f->original_triangle_count;
+    cbvh_file_info info;
+    cbvh_file_get_info(file, &info, sizeof info);
+    size_t nv = info.vertex_count, nt = info.original_triangle_count;
     float *positions = malloc((3 * nv + 1) * sizeof(float));
     uint32_t *indices = calloc(3 * nt, sizeof(uint32_t)); /* ids never stored stay (0,0,0): zero area */
     if (!positions || !indices) {
@@ -79,10 +79,7 @@ static int load_cbvh(const char *command, const char *path, bench_mesh *out)
         cli_error(command, path, "out of memory");
         return CLI_EXIT_USAGE;
     }
-    for (uint32_t v = 0; v < nv; v++)
-        cbvh_vertex_position(f, v, positions + 3 * (size_t)v);
-    for (uint32_t t = 0; t < f->info.triangle_count; t++)
-        cbvh_triangle_indices(f, t, indices + 3 * (size_t)cbvh_original_id(f, t));
+    cbvh_file_mesh(file, positions, indices);
     cbvh_close(file);
     if (!adopt(out, positions, nv, indices, nt)) {
         cli_error(command, path, "out of memory");

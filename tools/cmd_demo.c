@@ -8,7 +8,6 @@
 
 #include "cli.h"
 #include "commands.h"
-#include "common/file.h"
 #include "support/reference.h"
 #include "support/scene_gen.h"
 
@@ -769,7 +768,7 @@ static int demo_load(demo *d, const cbvh_file *f)
     cbvh_file_info info;
     cbvh_file_get_info(f, &info, sizeof info);
     d->file = f;
-    d->tri_count = f->original_triangle_count;
+    d->tri_count = info.original_triangle_count;
     d->tris = malloc(9 * (size_t)d->tri_count * sizeof(double));
     d->valid = malloc(d->tri_count);
     if (!d->tris || !d->valid)

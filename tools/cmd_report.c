@@ -15,10 +15,9 @@
 #include "json.h"
 #include "progress.h"
 #include "report.h"
-#include "report_exact.h"
+#include "cbvh_internal.h"
 #include "support/rays.h"
 #include "support/reference.h"
-#include "tree_stats.h"
 
 static const char usage[] =
     "Usage: cbvh report [OPTIONS] MESH...\n"
@@ -342,10 +341,10 @@ static void exact_kernel(const void *engine, const cbvh_ray *rays, size_t count,
 {
     if (hits)
         for (size_t i = 0; i < count; i++)
-            exact_raycast(engine, &rays[i], &hits[i], stats);
+            cbvh_exact_raycast(engine, &rays[i], &hits[i], stats);
     else
         for (size_t i = 0; i < count; i++)
-            occluded[i] = (uint8_t)exact_occluded(engine, &rays[i], stats);
+            occluded[i] = (uint8_t)cbvh_exact_occluded(engine, &rays[i], stats);
 }
 
 /* Counts the work of closest and any hit, compares the answers with the brute force and the leak test, then
@@ -546,9 +545,10 @@ static int measure_cook(report_state *s, mesh_ctx *c, size_t k, int *step, int s
         return status;
     }
 
-    exact_tree exact;
-    tree_stats ts;
-    if (!exact_tree_build(&exact, file) || !tree_stats_compute(file, 1.0, 1.0, &ts)) {
+    cbvh_exact_tree exact = {0};
+    cbvh_tree_stats ts;
+    if (!cbvh_exact_tree_build(&exact, file) || !cbvh_tree_stats_compute(file, 1.0, 1.0, &ts)) {
+        cbvh_exact_tree_free(&exact);
         cbvh_close(file);
         cbvh_close(expanded);
         cli_error(s->command, NULL, "out of memory");
@@ -614,7 +614,7 @@ static int measure_cook(report_state *s, mesh_ctx *c, size_t k, int *step, int s
 done:
     if (status)
         cli_error(s->command, NULL, "out of memory or cannot start a thread");
-    exact_tree_free(&exact);
+    cbvh_exact_tree_free(&exact);
     cbvh_close(file);
     cbvh_close(expanded);
     return status;

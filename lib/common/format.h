@@ -4,6 +4,8 @@
 
 #include <stdint.h>
 
+#include "cbvh.h" /* CBVH_MAX_LEAF_SIZE */
+
 /* 89 'C' 'B' 'V' 'H' CR LF 1A: the high byte catches 7-bit channels, CR LF
  * catches line-ending conversion, 1A stops DOS `type` (as PNG does). */
 #define CBVH_MAGIC "\x89" "CBVH\r\n\x1a"
@@ -77,7 +79,7 @@ enum { CBVH_NAMES_TABLE = 0 }; /* MATERIAL_NAMES: u32 count, (u32 id, u32 offset
  * reference can name. Depth: the walks' fixed stacks. */
 #define CBVH_MAX_NODES 0x7FFFFFFFu
 #define CBVH_MAX_TRIANGLES 0x10000000u
-#define CBVH_MAX_LEAF_SIZE 16u
+/* CBVH_MAX_LEAF_SIZE: cbvh.h */
 #define CBVH_MAX_DEPTH 64u
 
 /* The largest grid coordinate of a 16-bit box. */
