@@ -48,10 +48,10 @@ typedef enum cbvh_result {
     CBVH_ERROR_OUT_OF_MEMORY = 2,    /* an allocation failed; nothing leaked */
     CBVH_ERROR_IO = 3,               /* open, read, map, write or rename failed */
     CBVH_ERROR_CORRUPT = 4,          /* the file is damaged or not a cbvh file */
-    CBVH_ERROR_UNSUPPORTED = 5,      /* the file is valid but newer: version, flag, codec or encoding unknown */
-    CBVH_ERROR_BAD_MESH = 6,         /* the input mesh is unusable: NaN/inf coordinate, index out of range */
-    CBVH_ERROR_EMPTY_MESH = 7,       /* no triangle left to build from (none given, or all degenerate) */
-    CBVH_ERROR_LIMIT = 8             /* the input exceeds a format limit (see fileformat/cbvh-format.md) */
+    CBVH_ERROR_UNSUPPORTED = 5, /* the file is valid but newer: version, flag, codec or encoding unknown */
+    CBVH_ERROR_BAD_MESH = 6,    /* the input mesh is unusable: NaN/inf coordinate, index out of range */
+    CBVH_ERROR_EMPTY_MESH = 7,  /* no triangle left to build from (none given, or all degenerate) */
+    CBVH_ERROR_LIMIT = 8        /* the input exceeds a format limit (see fileformat/cbvh-format.md) */
 } cbvh_result;
 
 /* A short, static, English description of a result code; never NULL. */
@@ -156,10 +156,11 @@ typedef struct cbvh_material_name {
 
 /* Cook phases, for progress reports. */
 typedef enum cbvh_phase {
-    CBVH_PHASE_PREPARE = 0, /* validate, weld, drop degenerate triangles; quantized vertices: snap to the grid */
-    CBVH_PHASE_BUILD = 1,   /* SAH build */
-    CBVH_PHASE_LAYOUT = 2,  /* quantize node boxes, sort bytes, reorder */
-    CBVH_PHASE_WRITE = 3    /* encode, compress, checksum */
+    CBVH_PHASE_PREPARE =
+        0, /* validate, weld, drop degenerate triangles; quantized vertices: snap to the grid */
+    CBVH_PHASE_BUILD = 1,  /* SAH build */
+    CBVH_PHASE_LAYOUT = 2, /* quantize node boxes, sort bytes, reorder */
+    CBVH_PHASE_WRITE = 3   /* encode, compress, checksum */
 } cbvh_phase;
 
 /* Called from the cooking thread with a fraction in [0,1] of the given phase. */
@@ -171,28 +172,28 @@ typedef void (*cbvh_progress_fn)(void *user, cbvh_phase phase, double fraction);
  * defaults give both fewer bytes and faster rays than smaller costs and leaves
  * (docs/PERFORMANCE.md). */
 typedef struct cbvh_cook_options {
-    size_t struct_size;            /* sizeof the caller's struct, set by cbvh_cook_options_init */
-    uint32_t max_leaf_size;        /* 1..CBVH_MAX_LEAF_SIZE triangles per leaf; default 16. A wide4 leaf holds at most
-                                    * CBVH_WIDE4_MAX_LEAF (8): there a larger value acts as 8 */
-    uint32_t sah_bins;             /* 4..256 bins per axis; default 32 */
-    float traversal_cost;          /* SAH cost of visiting a node; default 4.0 */
-    float intersection_cost;       /* SAH cost of one triangle test; default 1.0 */
+    size_t struct_size;      /* sizeof the caller's struct, set by cbvh_cook_options_init */
+    uint32_t max_leaf_size;  /* 1..CBVH_MAX_LEAF_SIZE triangles per leaf; default 16. A wide4 leaf holds at
+                              * most  CBVH_WIDE4_MAX_LEAF (8): there a larger value acts as 8 */
+    uint32_t sah_bins;       /* 4..256 bins per axis; default 32 */
+    float traversal_cost;    /* SAH cost of visiting a node; default 4.0 */
+    float intersection_cost; /* SAH cost of one triangle test; default 1.0 */
     cbvh_vertex_format vertex_format;
-    int compress_level;            /* 0 = raw sections (default), 1..9 = zlib level */
-    int keep_remap;                /* 1 (default): keep original triangle ids; 0: queries report cooked order */
-    int keep_materials;            /* 1 (default): store the material ids (one for all when all are equal;
-                                    * nothing when all are 0) and material_names; 0: neither */
-    cbvh_progress_fn progress;     /* optional */
+    int compress_level;        /* 0 = raw sections (default), 1..9 = zlib level */
+    int keep_remap;            /* 1 (default): keep original triangle ids; 0: queries report cooked order */
+    int keep_materials;        /* 1 (default): store the material ids (one for all when all are equal;
+                                * nothing when all are 0) and material_names; 0: neither */
+    cbvh_progress_fn progress; /* optional */
     void *progress_user;
-    cbvh_layout layout;            /* node layout; default CBVH_LAYOUT_WIDE4 (fewer node visits per ray
-                                    * than binary for about as many bytes; binary keeps the stackless
-                                    * walk over escape links) */
-    const cbvh_material_name *material_names; /* optional names of material ids, stored sorted by id, then
-                                    * name, exact repeats once; an id may have several names. At most
-                                    * CBVH_MAX_MATERIAL_NAME_BYTES in all (names, NULs and 8 bytes each) */
+    cbvh_layout layout; /* node layout; default CBVH_LAYOUT_WIDE4 (fewer node visits per ray
+                         * than binary for about as many bytes; binary keeps the stackless
+                         * walk over escape links) */
+    const cbvh_material_name
+        *material_names; /* optional names of material ids, stored sorted by id, then
+                          * name, exact repeats once; an id may have several names. At most
+                          * CBVH_MAX_MATERIAL_NAME_BYTES in all (names, NULs and 8 bytes each) */
     uint32_t material_name_count;
 } cbvh_cook_options;
-
 
 /* Fills `options` with the defaults above and sets options->struct_size to `struct_size`, which must be
  * sizeof *options as the caller sees it (see "Structs that grow"). Returns CBVH_OK, or
@@ -207,26 +208,26 @@ CBVH_API cbvh_result cbvh_cook_options_init(cbvh_cook_options *options, size_t s
 
 /* What a cook did. Sizes are stored bytes in the file (after compression). */
 typedef struct cbvh_cook_stats {
-    size_t struct_size;            /* sizeof the caller's struct, set by cbvh_cook_stats_init */
+    size_t struct_size; /* sizeof the caller's struct, set by cbvh_cook_stats_init */
     uint64_t input_triangles;
     uint64_t input_vertices;
-    uint64_t dropped_degenerate;   /* zero-area triangles removed (documented, never hit), including those
-                                    * that quantized vertices collapsed to zero area */
-    uint64_t triangles;            /* triangles in the file */
-    uint64_t vertices;             /* vertices in the file after welding equal positions */
+    uint64_t dropped_degenerate; /* zero-area triangles removed (documented, never hit), including those
+                                  * that quantized vertices collapsed to zero area */
+    uint64_t triangles;          /* triangles in the file */
+    uint64_t vertices;           /* vertices in the file after welding equal positions */
     uint64_t nodes;
     uint64_t leaves;
-    uint32_t depth;                /* nodes on the longest root-to-leaf path */
-    double sah_cost;               /* of the quantized tree, relative to the root's area, unit costs */
-    double vertex_max_error;       /* worst |decoded - input| over all coordinates (0 when lossless) */
+    uint32_t depth;          /* nodes on the longest root-to-leaf path */
+    double sah_cost;         /* of the quantized tree, relative to the root's area, unit costs */
+    double vertex_max_error; /* worst |decoded - input| over all coordinates (0 when lossless) */
     uint64_t file_size;
     uint64_t section_stored_size[CBVH_STATS_SECTION_TYPES]; /* indexed by the section type without its
-                                    * ancillary bit (CBVH_SECTION_NODES .. 6 for MATERIAL_NAMES), 0 when
-                                    * absent */
+                                                             * ancillary bit (CBVH_SECTION_NODES .. 6 for
+                                                             * MATERIAL_NAMES), 0 when absent */
     uint64_t section_size[CBVH_STATS_SECTION_TYPES];        /* uncompressed */
-    double seconds[CBVH_STATS_PHASES]; /* indexed by cbvh_phase */
-    uint64_t peak_memory;          /* most bytes the cook held allocated at once, the file it returns
-                                    * included (not the caller's mesh) */
+    double seconds[CBVH_STATS_PHASES];                      /* indexed by cbvh_phase */
+    uint64_t peak_memory; /* most bytes the cook held allocated at once, the file it returns
+                           * included (not the caller's mesh) */
 } cbvh_cook_stats;
 
 /* Zeroes `stats` and sets stats->struct_size to `struct_size`, which must be sizeof *stats as the
@@ -288,8 +289,8 @@ typedef struct cbvh_file cbvh_file;
  * file in 2 MiB pages maps it with them and a large mesh's queries miss the
  * address translation cache less; a file the cache holds in small pages (one
  * just written, not yet evicted) is mapped with those. */
-CBVH_API cbvh_result cbvh_open_path(const char *path, const cbvh_allocator *allocator,
-                                    cbvh_file **out_file, cbvh_error *err);
+CBVH_API cbvh_result cbvh_open_path(const char *path, const cbvh_allocator *allocator, cbvh_file **out_file,
+                                    cbvh_error *err);
 
 /* As cbvh_open_path, but reads the whole file into memory from `allocator`
  * (64-byte aligned, freed by cbvh_close) instead of mapping it: once it
@@ -339,9 +340,9 @@ typedef enum cbvh_section_type {
 #define CBVH_MAX_MATERIAL_NAME_BYTES (16u << 20)
 
 typedef struct cbvh_section_info {
-    uint32_t type;      /* cbvh_section_type, or an unknown ancillary type (bit 31 set) */
-    uint32_t codec;     /* 0 raw, 1 zlib */
-    uint32_t encoding;  /* element encoding, see fileformat/cbvh-format.md */
+    uint32_t type;     /* cbvh_section_type, or an unknown ancillary type (bit 31 set) */
+    uint32_t codec;    /* 0 raw, 1 zlib */
+    uint32_t encoding; /* element encoding, see fileformat/cbvh-format.md */
     uint32_t crc32;
     uint64_t offset;
     uint64_t stored_size;
@@ -349,7 +350,7 @@ typedef struct cbvh_section_info {
 } cbvh_section_info;
 
 typedef struct cbvh_file_info {
-    size_t struct_size;           /* sizeof the caller's struct, set by cbvh_file_get_info */
+    size_t struct_size; /* sizeof the caller's struct, set by cbvh_file_get_info */
     uint32_t format_version;
     uint32_t compat_flags;
     uint32_t incompat_flags;
@@ -361,16 +362,16 @@ typedef struct cbvh_file_info {
     uint32_t max_leaf_size;
     uint32_t has_remap;
     uint32_t has_materials;
-    uint32_t vertex_format;       /* cbvh_vertex_format */
-    uint32_t index_encoding;      /* triangle section encoding */
+    uint32_t vertex_format;  /* cbvh_vertex_format */
+    uint32_t index_encoding; /* triangle section encoding */
     uint64_t file_size;
     float bounds_min[3], bounds_max[3];
     float grid_origin[3], grid_scale[3];
-    uint32_t layout;              /* cbvh_layout of the nodes */
-    uint32_t material_name_count; /* names in the MATERIAL_NAMES section; 0 without one */
+    uint32_t layout;                  /* cbvh_layout of the nodes */
+    uint32_t material_name_count;     /* names in the MATERIAL_NAMES section; 0 without one */
     uint32_t original_triangle_count; /* original triangle ids are below it: the size of a side table
                                        * indexed by the ids queries report (= triangle_count without REMAP) */
-    uint64_t expanded_bytes;      /* memory held by cbvh_file_expand_triangles' copy; 0 without one */
+    uint64_t expanded_bytes;          /* memory held by cbvh_file_expand_triangles' copy; 0 without one */
 } cbvh_file_info;
 
 /* Describes an opened file: writes the first `struct_size` bytes of *info (struct_size must be
@@ -385,7 +386,8 @@ CBVH_API int cbvh_file_get_section(const cbvh_file *file, uint32_t index, cbvh_s
 
 /* The three vertices of triangle `tri` (an original id, as queries report it),
  * decoded as the queries see them. Returns 0 if tri is out of range. */
-CBVH_API int cbvh_file_get_triangle(const cbvh_file *file, uint32_t tri, float v0[3], float v1[3], float v2[3]);
+CBVH_API int cbvh_file_get_triangle(const cbvh_file *file, uint32_t tri, float v0[3], float v1[3],
+                                    float v2[3]);
 
 /* Material id of triangle `tri` (original id); 0 when the file stores none. */
 CBVH_API uint32_t cbvh_file_get_material(const cbvh_file *file, uint32_t tri);
@@ -455,8 +457,8 @@ typedef struct cbvh_query_stats {
  * only when some coordinate is past FLT_MAX / 2, 1.7e38) is walked by the sorted traversal
  * whatever `traversal` says, with the box test at half scale so nothing
  * overflows: the answer is the same, the stats are the sorted walk's. */
-CBVH_API int cbvh_raycast(const cbvh_file *file, const cbvh_ray *ray, cbvh_traversal traversal,
-                          cbvh_hit *hit, cbvh_query_stats *stats);
+CBVH_API int cbvh_raycast(const cbvh_file *file, const cbvh_ray *ray, cbvh_traversal traversal, cbvh_hit *hit,
+                          cbvh_query_stats *stats);
 
 /* Any hit (occlusion): returns 1 as soon as any triangle is hit in [tmin, tmax]. */
 CBVH_API int cbvh_occluded(const cbvh_file *file, const cbvh_ray *ray, cbvh_traversal traversal,
@@ -470,9 +472,9 @@ CBVH_API int cbvh_occluded(const cbvh_file *file, const cbvh_ray *ray, cbvh_trav
  * geometric normal points to: n = (v1 - v0) x (v2 - v0), the vertices in the
  * order the mesh gave them (counter-clockwise seen from the front). */
 typedef enum cbvh_cull {
-    CBVH_CULL_NONE = 0,  /* both faces are hit (default) */
-    CBVH_CULL_BACK = 1,  /* a ray reaching a triangle's back face passes through it */
-    CBVH_CULL_FRONT = 2  /* a ray reaching a triangle's front face passes through it */
+    CBVH_CULL_NONE = 0, /* both faces are hit (default) */
+    CBVH_CULL_BACK = 1, /* a ray reaching a triangle's back face passes through it */
+    CBVH_CULL_FRONT = 2 /* a ray reaching a triangle's front face passes through it */
 } cbvh_cull;
 
 /* A hit with what a game asks of it: the original triangle id (CBVH_NO_HIT
@@ -545,14 +547,16 @@ CBVH_API cbvh_result cbvh_query_options_init(cbvh_query_options *options, size_t
  * is not one of its enum's values. Without culling and filter the answer is
  * cbvh_raycast's, on every traversal. A filter that returns STOP can make the
  * answer depend on the order the traversal visits triangles in. */
-CBVH_API cbvh_result cbvh_raycast_with(const cbvh_file *file, const cbvh_ray *ray, const cbvh_query_options *options,
-                                       cbvh_hit_record *hit, cbvh_query_stats *stats);
+CBVH_API cbvh_result cbvh_raycast_with(const cbvh_file *file, const cbvh_ray *ray,
+                                       const cbvh_query_options *options, cbvh_hit_record *hit,
+                                       cbvh_query_stats *stats);
 
 /* Any hit under `options`: *occluded = 1 when some triangle the ray hits in
  * [tmin, tmax] passes culling and the filter, else 0. Errors as
  * cbvh_raycast_with, with *occluded = 0. */
-CBVH_API cbvh_result cbvh_occluded_with(const cbvh_file *file, const cbvh_ray *ray, const cbvh_query_options *options,
-                                        int *occluded, cbvh_query_stats *stats);
+CBVH_API cbvh_result cbvh_occluded_with(const cbvh_file *file, const cbvh_ray *ray,
+                                        const cbvh_query_options *options, int *occluded,
+                                        cbvh_query_stats *stats);
 
 /* Batched streams: the closest hit (cbvh_raycast_stream) or occlusion (cbvh_occluded_stream) of each of
  * `count` rays of any coherence. hits[i] (occluded[i]: 0 or 1) receives ray
@@ -565,8 +569,8 @@ CBVH_API cbvh_result cbvh_occluded_with(const cbvh_file *file, const cbvh_ray *r
  * stacks on the call's stack, about 21 KiB (x86-64); the _scratch forms below keep them in the caller's
  * memory instead (about 8 KiB of stack). cbvh_raycast and cbvh_occluded use about 4 KiB. Safe to call
  * from any number of threads on one file. */
-CBVH_API void cbvh_raycast_stream(const cbvh_file *file, const cbvh_ray *rays, size_t count,
-                                  cbvh_hit *hits, cbvh_query_stats *stats);
+CBVH_API void cbvh_raycast_stream(const cbvh_file *file, const cbvh_ray *rays, size_t count, cbvh_hit *hits,
+                                  cbvh_query_stats *stats);
 CBVH_API void cbvh_occluded_stream(const cbvh_file *file, const cbvh_ray *rays, size_t count,
                                    uint8_t *occluded, cbvh_query_stats *stats);
 
@@ -703,8 +707,9 @@ CBVH_API size_t cbvh_overlap_sphere(const cbvh_file *file, const float center[3]
 
 /* The same for the capsule of `radius` around the segment p0-p1 (exact segment/triangle distance; p0 == p1
  * is a sphere, radius 0 the segment itself). */
-CBVH_API size_t cbvh_overlap_capsule(const cbvh_file *file, const float p0[3], const float p1[3], float radius,
-                                     cbvh_overlap_fn callback, void *user, uint32_t *out, size_t capacity);
+CBVH_API size_t cbvh_overlap_capsule(const cbvh_file *file, const float p0[3], const float p1[3],
+                                     float radius, cbvh_overlap_fn callback, void *user, uint32_t *out,
+                                     size_t capacity);
 
 /* Overlaps that say when the output filled, and continue from there. The triangles that intersect the
  * region (the same set as cbvh_overlap_box / _sphere / _capsule) come in an order fixed by the file and the
@@ -717,18 +722,19 @@ CBVH_API size_t cbvh_overlap_capsule(const cbvh_file *file, const float p0[3], c
  * writes none and sets *more to 0. Safe on any opened file, from any number of threads. */
 CBVH_API size_t cbvh_overlap_box_from(const cbvh_file *file, const float box_min[3], const float box_max[3],
                                       size_t first, uint32_t *out, size_t capacity, int *more);
-CBVH_API size_t cbvh_overlap_sphere_from(const cbvh_file *file, const float center[3], float radius, size_t first,
-                                         uint32_t *out, size_t capacity, int *more);
-CBVH_API size_t cbvh_overlap_capsule_from(const cbvh_file *file, const float p0[3], const float p1[3], float radius,
-                                          size_t first, uint32_t *out, size_t capacity, int *more);
+CBVH_API size_t cbvh_overlap_sphere_from(const cbvh_file *file, const float center[3], float radius,
+                                         size_t first, uint32_t *out, size_t capacity, int *more);
+CBVH_API size_t cbvh_overlap_capsule_from(const cbvh_file *file, const float p0[3], const float p1[3],
+                                          float radius, size_t first, uint32_t *out, size_t capacity,
+                                          int *more);
 
 /* A triangle a ball or capsule overlaps, with what it takes to separate them: moving the shape by
  * depth * normal leaves it touching the triangle at most (a fixed struct: it never grows). */
 typedef struct cbvh_contact {
-    uint32_t tri;     /* original triangle id */
-    float depth;      /* >= 0: how far the shape reaches into the triangle */
-    float normal[3];  /* unit, from the triangle towards the shape */
-    float point[3];   /* the triangle's point nearest the shape's core (center or segment) */
+    uint32_t tri;    /* original triangle id */
+    float depth;     /* >= 0: how far the shape reaches into the triangle */
+    float normal[3]; /* unit, from the triangle towards the shape */
+    float point[3];  /* the triangle's point nearest the shape's core (center or segment) */
 } cbvh_contact;
 
 /* Contacts (penetration depth and separating direction) of the ball of `radius` around `center`, or of the
@@ -741,8 +747,9 @@ typedef struct cbvh_contact {
  * double. Returns how many contacts were written. Invalid input writes none and sets *more to 0. */
 CBVH_API size_t cbvh_contacts_sphere(const cbvh_file *file, const float center[3], float radius, size_t first,
                                      cbvh_contact *out, size_t capacity, int *more);
-CBVH_API size_t cbvh_contacts_capsule(const cbvh_file *file, const float p0[3], const float p1[3], float radius,
-                                      size_t first, cbvh_contact *out, size_t capacity, int *more);
+CBVH_API size_t cbvh_contacts_capsule(const cbvh_file *file, const float p0[3], const float p1[3],
+                                      float radius, size_t first, cbvh_contact *out, size_t capacity,
+                                      int *more);
 
 /* Overlaps and contacts of any shape (a sphere, capsule or oriented box; see cbvh_shape) under `options`
  * (NULL: the defaults), paged as cbvh_overlap_box_from: the triangles the shape overlaps (exact tests; for a

@@ -1,4 +1,5 @@
-/* cbvh_internal.h: the library's introspection interface for its own tools, tests and report (not installed). */
+/* cbvh_internal.h: the library's introspection interface for its own tools, tests and report (not installed).
+ */
 #ifndef CBVH_INTERNAL_H
 #define CBVH_INTERNAL_H
 
@@ -65,7 +66,8 @@ void cbvh_exact_tree_free(cbvh_exact_tree *tree);
 
 /* Closest hit and any hit on the exact boxes: results and counters as cbvh_raycast / cbvh_occluded with
  * CBVH_TRAVERSAL_SORTED (stats may be NULL). */
-int cbvh_exact_raycast(const cbvh_exact_tree *tree, const cbvh_ray *ray, cbvh_hit *hit, cbvh_query_stats *stats);
+int cbvh_exact_raycast(const cbvh_exact_tree *tree, const cbvh_ray *ray, cbvh_hit *hit,
+                       cbvh_query_stats *stats);
 int cbvh_exact_occluded(const cbvh_exact_tree *tree, const cbvh_ray *ray, cbvh_query_stats *stats);
 
 /* ---- the stored mesh and format names (lib/inspect/file_view.c) ---- */
@@ -84,8 +86,8 @@ typedef enum cbvh_material_storage {
 } cbvh_material_storage;
 cbvh_material_storage cbvh_file_material_storage(const cbvh_file *file, uint32_t *uniform_id);
 
-/* The name of section type `type`'s element encoding `encoding` ("u16x3", "local8", "wide4-node" ...), of codec
- * `codec` ("raw", "zlib"); "?" when unknown. Static strings. */
+/* The name of section type `type`'s element encoding `encoding` ("u16x3", "local8", "wide4-node" ...), of
+ * codec `codec` ("raw", "zlib"); "?" when unknown. Static strings. */
 const char *cbvh_encoding_name(uint32_t type, uint32_t encoding);
 const char *cbvh_codec_name(uint32_t codec);
 

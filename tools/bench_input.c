@@ -1,4 +1,5 @@
-/* bench_input.c: loads the meshes `cbvh bench` and `cbvh report` measure (generated, mesh file or cooked cbvh file). */
+/* bench_input.c: loads the meshes `cbvh bench` and `cbvh report` measure (generated, mesh file or cooked cbvh
+ * file). */
 #include <errno.h>
 #include <fcntl.h>
 #include <stdio.h>
@@ -13,7 +14,8 @@
 #include "support/scene_gen.h"
 
 /* Takes over positions and indices, adding the padding float. */
-static int adopt(bench_mesh *out, float *positions, size_t vertex_count, uint32_t *indices, size_t triangle_count)
+static int adopt(bench_mesh *out, float *positions, size_t vertex_count, uint32_t *indices,
+                 size_t triangle_count)
 {
     float *padded = realloc(positions, (3 * vertex_count + 1) * sizeof(float));
     if (!padded) {
@@ -102,7 +104,8 @@ int bench_mesh_load(const char *command, const char *source, int generated, benc
         scene s;
         if (!scene_from_spec(&s, source)) {
             cli_error(command, source,
-                      "not a generated scene (expected sphere:N, terrain:N, cube, soup:N or demo), or out of memory");
+                      "not a generated scene (expected sphere:N, terrain:N, cube, soup:N or demo), or out of "
+                      "memory");
             return CLI_EXIT_USAGE;
         }
         free(s.material_ids);

@@ -30,7 +30,9 @@ static const char usage[] =
 /* How the file stores material ids, as info prints it: "per-triangle", "uniform" or "none". */
 static const char *materials_kind(cbvh_material_storage storage)
 {
-    return storage == CBVH_MATERIALS_NONE ? "none" : storage == CBVH_MATERIALS_UNIFORM ? "uniform" : "per-triangle";
+    return storage == CBVH_MATERIALS_NONE      ? "none"
+           : storage == CBVH_MATERIALS_UNIFORM ? "uniform"
+                                               : "per-triangle";
 }
 
 /* How far cost lies above base, in percent (0 when base is not positive). */
@@ -66,7 +68,8 @@ static void print_json(const char *path, const cbvh_file *f, const cbvh_tree_sta
     json_uint(&w, "triangles", in->triangle_count);
     json_uint(&w, "original_triangles", in->original_triangle_count);
     json_uint(&w, "vertices", in->vertex_count);
-    json_string(&w, "vertex_format", in->vertex_format == CBVH_VERTEX_QUANTIZED16 ? "quantized16" : "float32");
+    json_string(&w, "vertex_format",
+                in->vertex_format == CBVH_VERTEX_QUANTIZED16 ? "quantized16" : "float32");
     json_string(&w, "layout", in->layout == CBVH_LAYOUT_WIDE4 ? "wide4" : "binary");
     json_bool(&w, "remap", (int)in->has_remap);
     json_bool(&w, "materials", (int)in->has_materials);
@@ -157,11 +160,13 @@ static void print_text(const char *path, const cbvh_file *f, const cbvh_tree_sta
            (unsigned)in->incompat_flags);
     printf("triangles: %u (original ids below %u, %s), vertices: %u (%s)\n", (unsigned)in->triangle_count,
            (unsigned)in->original_triangle_count, in->has_remap ? "remapped" : "cooked order",
-           (unsigned)in->vertex_count, in->vertex_format == CBVH_VERTEX_QUANTIZED16 ? "quantized16" : "float32");
+           (unsigned)in->vertex_count,
+           in->vertex_format == CBVH_VERTEX_QUANTIZED16 ? "quantized16" : "float32");
     if (materials == CBVH_MATERIALS_UNIFORM)
         printf("materials: id %u for every triangle", (unsigned)uniform_id);
     else
-        printf("materials: %s", materials != CBVH_MATERIALS_NONE ? "an id per triangle" : "none (every id is 0)");
+        printf("materials: %s",
+               materials != CBVH_MATERIALS_NONE ? "an id per triangle" : "none (every id is 0)");
     printf(", %u names\n", (unsigned)in->material_name_count);
     for (uint32_t k = 0; k < in->material_name_count; k++) {
         uint32_t id;
@@ -169,7 +174,7 @@ static void print_text(const char *path, const cbvh_file *f, const cbvh_tree_sta
         printf("  material %u: %s\n", (unsigned)id, name);
     }
     printf("layout: %s\n", in->layout == CBVH_LAYOUT_WIDE4 ? "wide4 (4 children per 64-byte node)"
-                                                         : "binary (2 children per 16-byte node)");
+                                                           : "binary (2 children per 16-byte node)");
     printf("bounds: [%g %g %g] - [%g %g %g]\n", in->bounds_min[0], in->bounds_min[1], in->bounds_min[2],
            in->bounds_max[0], in->bounds_max[1], in->bounds_max[2]);
     printf("grid: origin [%g %g %g], scale [%g %g %g]\n", in->grid_origin[0], in->grid_origin[1],
@@ -185,8 +190,9 @@ static void print_text(const char *path, const cbvh_file *f, const cbvh_tree_sta
                cbvh_codec_name(s.codec), cbvh_encoding_name(s.type, s.encoding), (unsigned)s.crc32,
                (double)s.stored_size * per_tri);
     }
-    printf("\ntree: %u nodes, %u leaves, depth %u, max leaf size %u, mean leaf size %.2f\n", (unsigned)ts->nodes,
-           (unsigned)ts->leaves, (unsigned)ts->depth, (unsigned)in->max_leaf_size, ts->mean_leaf_size);
+    printf("\ntree: %u nodes, %u leaves, depth %u, max leaf size %u, mean leaf size %.2f\n",
+           (unsigned)ts->nodes, (unsigned)ts->leaves, (unsigned)ts->depth, (unsigned)in->max_leaf_size,
+           ts->mean_leaf_size);
     printf("leaf sizes:");
     for (uint32_t k = 1; k <= CBVH_MAX_LEAF_SIZE; k++)
         if (ts->leaf_histogram[k])
@@ -210,7 +216,7 @@ static void print_text(const char *path, const cbvh_file *f, const cbvh_tree_sta
 
 int cmd_info(int argc, char **argv)
 {
-    static const cli_option options[] = { { "json", CLI_ARG_NONE, 1 }, { NULL, 0, 0 } };
+    static const cli_option options[] = {{"json", CLI_ARG_NONE, 1}, {NULL, 0, 0}};
     cli_parser p;
     cli_init(&p, "info", usage, argc, argv);
     const char *path = NULL, *value;

@@ -1,4 +1,5 @@
-/* file.h: the in-memory form of an opened, validated cbvh file, shared by the loader and the query kernels. */
+/* file.h: the in-memory form of an opened, validated cbvh file, shared by the loader and the query kernels.
+ */
 #ifndef CBVH_COMMON_FILE_H
 #define CBVH_COMMON_FILE_H
 
@@ -34,15 +35,15 @@ struct cbvh_file {
     cbvh_file_info info;
     cbvh_section_info sections[CBVH_MAX_SECTIONS];
 
-    const void *nodes;           /* the NODES section: read through layout/tree.h only */
-    uint32_t layout;             /* the node layout (cbvh_layout): which module reads the nodes */
-    const void *triangles;       /* info.triangle_count entries in cooked (leaf) order */
-    uint32_t triangle_encoding;  /* CBVH_TRIS_* */
-    const void *vertices;        /* info.vertex_count entries */
-    uint32_t vertex_encoding;    /* CBVH_VERTS_* */
-    uint32_t vertices_far;       /* 1 when there are triangles and their vertices take more than
-                                  * CBVH_CACHED_VERTEX_BYTES: the walks request vertices ahead */
-    float bounds_extent;         /* the bounds' largest extent (max over axes of max - min), set at open */
+    const void *nodes;          /* the NODES section: read through layout/tree.h only */
+    uint32_t layout;            /* the node layout (cbvh_layout): which module reads the nodes */
+    const void *triangles;      /* info.triangle_count entries in cooked (leaf) order */
+    uint32_t triangle_encoding; /* CBVH_TRIS_* */
+    const void *vertices;       /* info.vertex_count entries */
+    uint32_t vertex_encoding;   /* CBVH_VERTS_* */
+    uint32_t vertices_far;      /* 1 when there are triangles and their vertices take more than
+                                 * CBVH_CACHED_VERTEX_BYTES: the walks request vertices ahead */
+    float bounds_extent;        /* the bounds' largest extent (max over axes of max - min), set at open */
     /* An origin inside this box (lane 3 is 0 in both) is next to the mesh: cbvh_ray_prepare (query/raycast.h)
      * then skips cbvh_ray_place_origin, whose tests it would pass. The bounds widened by
      * CBVH_NEAR_ORIGIN_FACTOR times bounds_extent; an empty box when that extent is too large for the
@@ -58,14 +59,14 @@ struct cbvh_file {
      * without one. A ray that misses it hits nothing (cbvh_ray_prepare, query/raycast.h). Set at open. */
     _Alignas(16) float top_lo[4];
     _Alignas(16) float top_hi[4];
-    const void *remap;           /* cooked -> original triangle id; NULL = identity */
-    uint32_t remap_encoding;     /* CBVH_REMAP_* */
-    const uint32_t *unmap;       /* original -> cooked id (owned, built at open when remap is present): dense,
-                                  * original_triangle_count entries, CBVH_NO_HIT for dropped ids; or, when
-                                  * unmap_sorted, cooked ids sorted by original id (triangle_count entries) */
+    const void *remap;       /* cooked -> original triangle id; NULL = identity */
+    uint32_t remap_encoding; /* CBVH_REMAP_* */
+    const uint32_t *unmap;   /* original -> cooked id (owned, built at open when remap is present): dense,
+                              * original_triangle_count entries, CBVH_NO_HIT for dropped ids; or, when
+                              * unmap_sorted, cooked ids sorted by original id (triangle_count entries) */
     uint32_t unmap_sorted;
-    const void *materials;       /* per cooked triangle, or one for all (CBVH_MATS_UNIFORM); NULL = all 0 */
-    uint32_t material_encoding;  /* CBVH_MATS_* */
+    const void *materials;         /* per cooked triangle, or one for all (CBVH_MATS_UNIFORM); NULL = all 0 */
+    uint32_t material_encoding;    /* CBVH_MATS_* */
     const uint8_t *material_names; /* the MATERIAL_NAMES section (info.material_name_count names), or NULL */
     const void *quads; /* NULL, or the triangles expanded for the ray test (cbvh_file_expand_triangles,
                         * SIMD builds): struct leaf_quad g (query/leaf.h) holds cooked triangles
@@ -148,7 +149,9 @@ static inline void cbvh_vertex_position(const struct cbvh_file *f, uint32_t v, f
 {
     if (f->vertex_encoding == CBVH_VERTS_F32) {
         const float *q = (const float *)cbvh_vertex_address(f, v);
-        p[0] = q[0]; p[1] = q[1]; p[2] = q[2];
+        p[0] = q[0];
+        p[1] = q[1];
+        p[2] = q[2];
     } else {
         const uint16_t *q = (const uint16_t *)cbvh_vertex_address(f, v);
         p[0] = cbvh_dequantize(q[0], f->grid_origin[0], f->grid_scale[0]);
@@ -157,7 +160,8 @@ static inline void cbvh_vertex_position(const struct cbvh_file *f, uint32_t v, f
     }
 }
 
-static inline void cbvh_triangle_vertices(const struct cbvh_file *f, uint32_t tri, float v0[3], float v1[3], float v2[3])
+static inline void cbvh_triangle_vertices(const struct cbvh_file *f, uint32_t tri, float v0[3], float v1[3],
+                                          float v2[3])
 {
     uint32_t idx[3];
     cbvh_triangle_indices(f, tri, idx);
@@ -172,10 +176,14 @@ static inline uint32_t cbvh_cooked_material(const struct cbvh_file *f, uint32_t 
     if (!f->materials)
         return 0;
     switch (f->material_encoding) {
-    case CBVH_MATS_U8: return ((const uint8_t *)f->materials)[cooked];
-    case CBVH_MATS_U16: return ((const uint16_t *)f->materials)[cooked];
-    case CBVH_MATS_U32: return ((const uint32_t *)f->materials)[cooked];
-    default: return ((const uint32_t *)f->materials)[0]; /* CBVH_MATS_UNIFORM: one id for all */
+    case CBVH_MATS_U8:
+        return ((const uint8_t *)f->materials)[cooked];
+    case CBVH_MATS_U16:
+        return ((const uint16_t *)f->materials)[cooked];
+    case CBVH_MATS_U32:
+        return ((const uint32_t *)f->materials)[cooked];
+    default:
+        return ((const uint32_t *)f->materials)[0]; /* CBVH_MATS_UNIFORM: one id for all */
     }
 }
 

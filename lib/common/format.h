@@ -1,4 +1,5 @@
-/* format.h: constants and bit layouts of the cbvh file format v1 (normative text: fileformat/cbvh-format.md). */
+/* format.h: constants and bit layouts of the cbvh file format v1 (normative text: fileformat/cbvh-format.md).
+ */
 #ifndef CBVH_COMMON_FORMAT_H
 #define CBVH_COMMON_FORMAT_H
 
@@ -8,7 +9,9 @@
 
 /* 89 'C' 'B' 'V' 'H' CR LF 1A: the high byte catches 7-bit channels, CR LF
  * catches line-ending conversion, 1A stops DOS `type` (as PNG does). */
-#define CBVH_MAGIC "\x89" "CBVH\r\n\x1a"
+#define CBVH_MAGIC                                                                                           \
+    "\x89"                                                                                                   \
+    "CBVH\r\n\x1a"
 #define CBVH_MAGIC_SIZE 8
 
 #define CBVH_HEADER_SIZE 128
@@ -61,7 +64,7 @@ enum {
 enum { CBVH_CODEC_RAW = 0, CBVH_CODEC_ZLIB = 1 };
 
 /* Element encodings per section (element sizes, names and limits: common/encodings.h). */
-enum { CBVH_NODES_Q16 = 0, CBVH_NODES_W4 = 1 };                  /* binary, wide4 layout */
+enum { CBVH_NODES_Q16 = 0, CBVH_NODES_W4 = 1 }; /* binary, wide4 layout */
 /* TRIANGLES encoding 3 is reserved: the vector fileformat/unsupported-encoding stands for an unknown one. */
 enum { CBVH_TRIS_U16 = 0, CBVH_TRIS_U32 = 1, CBVH_TRIS_DELTA16 = 2, CBVH_TRIS_LOCAL8 = 4 };
 /* LOCAL8 (spec section 4): blocks of CBVH_LOCAL8_BLOCK triangles, each a u32 base vertex index and then

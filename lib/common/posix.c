@@ -147,8 +147,8 @@ static cbvh_result map_or_read(int fd, const char *path, int map, const cbvh_all
     return read_all(fd, path, a, out, err);
 }
 
-cbvh_result cbvh_os_read_file(const char *path, int map, const cbvh_allocator *a, struct cbvh_os_file_bytes *out,
-                              cbvh_error *err)
+cbvh_result cbvh_os_read_file(const char *path, int map, const cbvh_allocator *a,
+                              struct cbvh_os_file_bytes *out, cbvh_error *err)
 {
     memset(out, 0, sizeof *out);
     int fd = open(path, O_RDONLY | O_CLOEXEC);
@@ -238,8 +238,9 @@ static cbvh_result check_target(const char *path, mode_t *mode, int *keep_mode, 
                            : S_ISFIFO(st.st_mode) ? "a FIFO"
                            : S_ISSOCK(st.st_mode) ? "a socket"
                                                   : "not a regular file";
-        return cbvh_fail(err, CBVH_ERROR_IO, "%s is %s: a cooked file replaces only a regular file (or a symbolic link)",
-                         path, what);
+        return cbvh_fail(err, CBVH_ERROR_IO,
+                         "%s is %s: a cooked file replaces only a regular file (or a symbolic link)", path,
+                         what);
     }
     *mode = st.st_mode & 07777;
     *keep_mode = 1;
@@ -325,8 +326,8 @@ static int create_temp(char *temp, const char *path, int *named, sigset_t *saved
     return fd;
 }
 
-cbvh_result cbvh_os_write_file_replacing(const char *path, const uint8_t *data, size_t size, const cbvh_allocator *a,
-                                         cbvh_error *err)
+cbvh_result cbvh_os_write_file_replacing(const char *path, const uint8_t *data, size_t size,
+                                         const cbvh_allocator *a, cbvh_error *err)
 {
     mode_t mode = 0;
     int keep_mode;
@@ -340,7 +341,8 @@ cbvh_result cbvh_os_write_file_replacing(const char *path, const uint8_t *data, 
     int named;
     int fd = create_temp(temp, path, &named, &saved);
     if (fd < 0) {
-        r = cbvh_fail(err, CBVH_ERROR_IO, "cannot create a temporary file beside '%s': %s", path, strerror(errno));
+        r = cbvh_fail(err, CBVH_ERROR_IO, "cannot create a temporary file beside '%s': %s", path,
+                      strerror(errno));
         cbvh_free(a, temp);
         return r;
     }
@@ -382,8 +384,8 @@ cbvh_result cbvh_os_write_file_replacing(const char *path, const uint8_t *data, 
     if (failed) {
         if (named)
             unlink(temp);
-        r = cbvh_fail(err, CBVH_ERROR_IO, "cannot %s the temporary file '%s' for '%s': %s", failed, temp, path,
-                      strerror(saved_errno));
+        r = cbvh_fail(err, CBVH_ERROR_IO, "cannot %s the temporary file '%s' for '%s': %s", failed, temp,
+                      path, strerror(saved_errno));
     } else {
         sync_folder(temp, path);
     }

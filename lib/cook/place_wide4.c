@@ -1,4 +1,5 @@
-/* place_wide4.c: the cooker's side of the 4-wide layout: the build tree collapsed into 64-byte nodes, breadth first. */
+/* place_wide4.c: the cooker's side of the 4-wide layout: the build tree collapsed into 64-byte nodes, breadth
+ * first. */
 #include <string.h>
 
 #include "common/alloc.h"
@@ -95,8 +96,9 @@ static uint32_t octant_order(const cook_grid *g, const uint16_t q[6][4], uint32_
  * order. Breadth first, leaves of different levels that share vertices would lie far apart; depth first, a
  * subtree's triangles are consecutive, so their vertices get close ids (first-use numbering, layout.c)
  * and LOCAL8's 256-vertex windows need few copies. Writes each node's first_triangle and triangle_source. */
-static cbvh_result tile_depth_first(const cook_tree *t, const double *area, const uint32_t *build_of, uint8_t *nodes,
-                                    uint32_t depth, const cbvh_allocator *a, uint32_t *triangle_source)
+static cbvh_result tile_depth_first(const cook_tree *t, const double *area, const uint32_t *build_of,
+                                    uint8_t *nodes, uint32_t depth, const cbvh_allocator *a,
+                                    uint32_t *triangle_source)
 {
     uint32_t *stack = cbvh_alloc_array(a, (size_t)(CBVH_W4_WIDTH - 1u) * depth + 1u, sizeof(uint32_t), 64);
     if (!stack)
@@ -129,8 +131,9 @@ static cbvh_result tile_depth_first(const cook_tree *t, const double *area, cons
     return CBVH_OK;
 }
 
-cbvh_result cbvh_cook_place_wide4(const cook_tree *t, const cook_grid *g, float traversal_cost, float intersection_cost,
-                             const cbvh_allocator *a, cook_layout *out, cbvh_error *err)
+cbvh_result cbvh_cook_place_wide4(const cook_tree *t, const cook_grid *g, float traversal_cost,
+                                  float intersection_cost, const cbvh_allocator *a, cook_layout *out,
+                                  cbvh_error *err)
 {
     /* At most one wide node per internal build node. */
     const uint32_t capacity = t->node_count - t->leaf_count > 0 ? t->node_count - t->leaf_count : 1;
@@ -144,7 +147,8 @@ cbvh_result cbvh_cook_place_wide4(const cook_tree *t, const cook_grid *g, float 
         cbvh_free(a, area);
         cbvh_free(a, build_of);
         cbvh_free(a, nodes);
-        return cbvh_fail(err, CBVH_ERROR_OUT_OF_MEMORY, "out of memory while laying out %u wide nodes", capacity);
+        return cbvh_fail(err, CBVH_ERROR_OUT_OF_MEMORY, "out of memory while laying out %u wide nodes",
+                         capacity);
     }
     for (uint32_t i = 0; i < t->node_count; i++) {
         cbvh_cook_quantize_box(g, t->nodes[i].lo, t->nodes[i].hi, box[i], box[i] + 3);

@@ -1,11 +1,11 @@
-/* quantize.c: the file's 16-bit grid (spec section 6): grid from bounds, conservative node boxes, grid vertices. */
+/* quantize.c: the file's 16-bit grid (spec section 6): grid from bounds, conservative node boxes, grid
+ * vertices. */
 #include <math.h>
 #include <string.h>
 
 #include "common/error.h"
 #include "common/format.h"
 #include "cook/cook_internal.h"
-
 
 static float float_from_bits(uint32_t u)
 {
@@ -40,8 +40,8 @@ cbvh_result cbvh_cook_grid_init(cook_grid *g, const float bmin[3], const float b
         float top = cbvh_dequantize(CBVH_Q_MAX, bmin[a], g->scale[a]);
         if (!isfinite(top) || !(top >= bmax[a]))
             return cbvh_fail(err, CBVH_ERROR_BAD_MESH,
-                             "the mesh's bounds on axis %c (%g to %g) do not fit a finite 16-bit grid", "xyz"[a],
-                             (double)bmin[a], (double)bmax[a]);
+                             "the mesh's bounds on axis %c (%g to %g) do not fit a finite 16-bit grid",
+                             "xyz"[a], (double)bmin[a], (double)bmax[a]);
     }
     return CBVH_OK;
 }

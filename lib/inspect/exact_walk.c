@@ -30,15 +30,16 @@ static const struct cbvh_walk_mode exact_closest = {.order = CBVH_WALK_SORTED};
 static const struct cbvh_walk_mode exact_any = {.order = CBVH_WALK_SORTED, .any = 1};
 
 /* The sorted walk on the exact float boxes: same tree, same order, same triangle test. */
-static int exact_walk(const cbvh_exact_tree *tree, const struct cbvh_ray_ctx *ctx, const struct cbvh_walk_mode mode,
-                      struct cbvh_best_hit *best, cbvh_query_stats *stats)
+static int exact_walk(const cbvh_exact_tree *tree, const struct cbvh_ray_ctx *ctx,
+                      const struct cbvh_walk_mode mode, struct cbvh_best_hit *best, cbvh_query_stats *stats)
 {
     const struct cbvh_file *f = tree->file;
     return cbvh_walk(f, f->layout, ctx, cbvh_tree_root(f, f->layout), cbvh_tree_root_box(f, f->layout), mode,
                      tree->boxes, best, stats);
 }
 
-int cbvh_exact_raycast(const cbvh_exact_tree *tree, const cbvh_ray *ray, cbvh_hit *hit, cbvh_query_stats *stats)
+int cbvh_exact_raycast(const cbvh_exact_tree *tree, const cbvh_ray *ray, cbvh_hit *hit,
+                       cbvh_query_stats *stats)
 {
     struct cbvh_ray_ctx ctx;
     struct cbvh_best_hit best = {UINT32_MAX, 0.0f, 0.0f, 0.0f};

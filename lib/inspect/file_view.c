@@ -1,4 +1,5 @@
-/* file_view.c: an opened file's stored mesh, material storage and the names of its format values, for the tools. */
+/* file_view.c: an opened file's stored mesh, material storage and the names of its format values, for the
+ * tools. */
 #include <string.h>
 
 #include "cbvh_internal.h"

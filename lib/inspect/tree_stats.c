@@ -1,4 +1,5 @@
-/* tree_stats.c: exact node boxes recomputed from the triangles, quantization inflation, SAH cost, leaf histogram. */
+/* tree_stats.c: exact node boxes recomputed from the triangles, quantization inflation, SAH cost, leaf
+ * histogram. */
 #include <float.h>
 #include <math.h>
 #include <stdlib.h>
@@ -205,8 +206,18 @@ int cbvh_tree_stats_compute(const struct cbvh_file *f, double traversal_cost, do
         cbvh_tree_box(f, f->layout, root_box, qlo, qhi);
     else
         memcpy(qlo, root, sizeof qlo), memcpy(qhi, root + 3, sizeof qhi);
-    struct stats_walk w = {f, boxes, float_box_area(qlo, qhi), float_box_area(root, root + 3), traversal_cost,
-                           intersection_cost, 0, 0, 0, 0, 0, out};
+    struct stats_walk w = {f,
+                           boxes,
+                           float_box_area(qlo, qhi),
+                           float_box_area(root, root + 3),
+                           traversal_cost,
+                           intersection_cost,
+                           0,
+                           0,
+                           0,
+                           0,
+                           0,
+                           out};
     stats_subtree(&w, cbvh_tree_root(f, f->layout), root_box, 1);
     out->sah_cost_frame16 = frame_sah(f, boxes, root, traversal_cost, intersection_cost, 65535.0);
     out->sah_cost_frame8 = frame_sah(f, boxes, root, traversal_cost, intersection_cost, 255.0);
@@ -215,7 +226,8 @@ int cbvh_tree_stats_compute(const struct cbvh_file *f, double traversal_cost, do
     out->inflation_mean = w.boxes ? w.sum_inflation / (double)w.boxes : 0;
     out->leaf_inflation_mean = w.leaf_boxes ? w.sum_leaf_inflation / (double)w.leaf_boxes : 0;
     out->internal_inflation_mean =
-        w.boxes > w.leaf_boxes ? (w.sum_inflation - w.sum_leaf_inflation) / (double)(w.boxes - w.leaf_boxes) : 0;
+        w.boxes > w.leaf_boxes ? (w.sum_inflation - w.sum_leaf_inflation) / (double)(w.boxes - w.leaf_boxes)
+                               : 0;
     free(boxes);
     return 1;
 }
