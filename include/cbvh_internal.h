@@ -1,5 +1,4 @@
-/* cbvh_internal.h: the library's introspection interface for its own tools, tests and report (not installed).
- */
+/* cbvh_internal.h: the library's introspection for its own tools, tests and report (not installed). */
 #ifndef CBVH_INTERNAL_H
 #define CBVH_INTERNAL_H
 

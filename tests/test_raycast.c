@@ -16,7 +16,7 @@
 #include <cmocka.h>
 
 #include "cbvh.h"
-#include "common/encodings.h"
+#include "layout/encodings.h"
 #include "query/ray_box.h"
 #include "query/ray_triangle.h"
 #include "query/raycast.h"

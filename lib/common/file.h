@@ -1,7 +1,8 @@
-/* file.h: the in-memory form of an opened, validated cbvh file, shared by the loader and the query kernels.
- */
+/* file.h: the in-memory form of an opened, validated cbvh file, shared by the loader and the queries. */
 #ifndef CBVH_COMMON_FILE_H
 #define CBVH_COMMON_FILE_H
+
+#include <assert.h>
 
 #include "cbvh.h"
 #include "common/format.h"
@@ -81,6 +82,14 @@ struct cbvh_file {
     uint32_t owned_count;
 };
 
+/* Records memory the file owns so that close frees it. At most the six known sections, the unmap table, a
+ * read() buffer and the expanded triangles: the table cannot fill up. */
+static inline void cbvh_file_own(struct cbvh_file *f, void *p)
+{
+    assert(f->owned_count < sizeof f->owned / sizeof f->owned[0]);
+    f->owned[f->owned_count++] = p;
+}
+
 /* Where triangle k's entry starts in a TRIANGLES section of encoding `enc`: a LOCAL8 triangle's block
  * (its base and offsets are in the block's first 28 bytes). For prefetching a leaf before its visit. */
 static inline const void *cbvh_indices_entry(const void *tris, int enc, uint32_t k)
@@ -88,7 +97,10 @@ static inline const void *cbvh_indices_entry(const void *tris, int enc, uint32_t
     const uint8_t *t = (const uint8_t *)tris;
     if (enc == CBVH_TRIS_LOCAL8)
         return t + (size_t)CBVH_LOCAL8_BLOCK_SIZE * (k / CBVH_LOCAL8_BLOCK);
-    return t + (enc == CBVH_TRIS_DELTA16 ? 8u : enc == CBVH_TRIS_U16 ? 6u : 12u) * (size_t)k;
+    const uint32_t size = enc == CBVH_TRIS_DELTA16 ? CBVH_TRIS_DELTA16_SIZE
+                          : enc == CBVH_TRIS_U16   ? CBVH_TRIS_U16_SIZE
+                                                   : CBVH_TRIS_U32_SIZE;
+    return t + size * (size_t)k;
 }
 
 /* A vertex index next to triangle k's vertices, from its entry alone: a LOCAL8 triangle's block base (its
@@ -112,7 +124,7 @@ static inline void cbvh_indices_decode(const void *tris, int enc, uint32_t k, ui
         idx[1] = base + o[1];
         idx[2] = base + o[2];
     } else if (enc == CBVH_TRIS_DELTA16) { /* u32 base, i16 d1, i16 d2 */
-        const uint8_t *t = (const uint8_t *)tris + 8u * (size_t)k;
+        const uint8_t *t = (const uint8_t *)tris + CBVH_TRIS_DELTA16_SIZE * (size_t)k;
         const int16_t *d = (const int16_t *)(const void *)(t + 4);
         idx[0] = *(const uint32_t *)(const void *)t;
         idx[1] = idx[0] + (uint32_t)(int32_t)d[0];

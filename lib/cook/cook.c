@@ -1,11 +1,10 @@
-/* cook.c: the cooker's entry points: argument and option checks, the phases in order, statistics and timing.
- */
+/* cook.c: the cooker's entry points: argument and option checks, the phases in order, statistics, timing. */
 #include <math.h>
 #include <stdint.h>
 #include <string.h>
 
 #include "common/alloc.h"
-#include "common/encodings.h"
+#include "layout/encodings.h"
 #include "common/error.h"
 #include "common/format.h"
 #include "common/struct_size.h"

@@ -96,6 +96,9 @@ cbvh_result cbvh_cook_grid_init(cook_grid *g, const float bmin[3], const float b
 void cbvh_cook_quantize_box(const cook_grid *g, const float lo[3], const float hi[3], uint16_t qmin[3],
                             uint16_t qmax[3]);
 
+/* Half the surface area of a quantized box as readers decode it (the SAH's and the collapse's measure). */
+double cbvh_cook_quantized_half_area(const cook_grid *g, const uint16_t qmin[3], const uint16_t qmax[3]);
+
 /* Moves every position to its nearest grid point: writes the grid coordinates to q (3 per vertex)
  * and the decoded values back into positions. Returns the largest |decoded - input|. */
 double cbvh_cook_quantize_vertices(const cook_grid *g, float *positions, uint16_t *q, uint32_t count);
@@ -156,9 +159,6 @@ cbvh_result cbvh_cook_layout_place(const cook_tree *t, uint32_t triangle_count, 
                                    const cbvh_allocator *a, cook_layout *out, cbvh_error *err);
 cbvh_result cbvh_cook_layout_number(const cook_mesh *m, uint32_t vertex_size, const cbvh_allocator *a,
                                     cook_layout *l, cbvh_error *err);
-
-/* Half the surface area of a quantized box as readers decode it (the SAH's and the collapse's measure). */
-double cbvh_cook_quantized_half_area(const cook_grid *g, const uint16_t qmin[3], const uint16_t qmax[3]);
 
 /* The wide layout's placement (place_wide4.c): fills out's nodes, node and leaf counts, depth, largest
  * leaf, SAH cost and triangle_source (out->triangle_count set, triangle_source NULL on entry). */

@@ -3,7 +3,7 @@
 #include <string.h>
 
 #include "common/alloc.h"
-#include "common/encodings.h"
+#include "layout/encodings.h"
 #include "common/error.h"
 #include "common/format.h"
 #include "cook/cook_internal.h"
@@ -20,15 +20,6 @@ typedef struct node_info {
     uint32_t start; /* first cooked triangle of the subtree */
     uint32_t depth; /* nodes from the root, root = 1 */
 } node_info;
-
-double cbvh_cook_quantized_half_area(const cook_grid *g, const uint16_t qmin[3], const uint16_t qmax[3])
-{
-    double d[3];
-    for (int a = 0; a < 3; a++)
-        d[a] = (double)cbvh_dequantize(qmax[a], g->origin[a], g->scale[a]) -
-               (double)cbvh_dequantize(qmin[a], g->origin[a], g->scale[a]);
-    return d[0] * d[1] + d[1] * d[2] + d[2] * d[0];
-}
 
 /* Spec section 5: bit k set when dot(center(first) - center(second), octant_direction(k)) > 0,
  * with d[a] = (qmin + qmax of first - qmin - qmax of second) x grid_scale[a] in double (exact:

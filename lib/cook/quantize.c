@@ -139,3 +139,12 @@ double cbvh_cook_quantize_vertices(const cook_grid *g, float *positions, uint16_
     }
     return worst;
 }
+
+double cbvh_cook_quantized_half_area(const cook_grid *g, const uint16_t qmin[3], const uint16_t qmax[3])
+{
+    double d[3];
+    for (int a = 0; a < 3; a++)
+        d[a] = (double)cbvh_dequantize(qmax[a], g->origin[a], g->scale[a]) -
+               (double)cbvh_dequantize(qmin[a], g->origin[a], g->scale[a]);
+    return d[0] * d[1] + d[1] * d[2] + d[2] * d[0];
+}

@@ -3,7 +3,7 @@
 #include <string.h>
 
 #include "common/alloc.h"
-#include "common/encodings.h"
+#include "layout/encodings.h"
 #include "common/endian.h"
 #include "common/error.h"
 #include "common/format.h"

@@ -3,7 +3,7 @@
 #include <string.h>
 
 #include "cbvh_internal.h"
-#include "common/encodings.h"
+#include "layout/encodings.h"
 #include "common/endian.h"
 #include "common/file.h"
 #include "common/format.h"

@@ -1,5 +1,4 @@
-/* tree.h: the node-layout interface: subtrees, children, boxes and leaves, whatever the file's node layout.
- */
+/* tree.h: the node-layout interface: subtrees, children, boxes and leaves, whatever the node layout. */
 #ifndef CBVH_LAYOUT_TREE_H
 #define CBVH_LAYOUT_TREE_H
 

@@ -1,5 +1,4 @@
-/* file_info.c: what an opened file says about itself: info, sections, triangles and materials by original id.
- */
+/* file_info.c: what an opened file says about itself: info, sections, triangles and materials by id. */
 #include <string.h>
 
 #include "common/endian.h"

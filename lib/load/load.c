@@ -11,14 +11,6 @@
 #include "layout/tree.h"
 #include "load/load.h"
 
-void cbvh_file_own(struct cbvh_file *f, void *p)
-{
-    /* At most the six known sections, the unmap table, a read() buffer and the expanded triangles: the
-     * table cannot fill up. */
-    assert(f->owned_count < sizeof f->owned / sizeof f->owned[0]);
-    f->owned[f->owned_count++] = p;
-}
-
 /* Where a known section's decoded bytes are: in place when raw and cbvh_in_place (the offset of a
  * section is past the header: CBVH_SECTION_LEAD bytes before it are the file's), else in an owned
  * 64-byte aligned copy or inflated buffer, CBVH_SECTION_LEAD zero bytes into its allocation. */

@@ -8,7 +8,7 @@
 #include "common/compiler.h"
 #include "common/file.h"
 #include "common/crc32.h"
-#include "common/encodings.h"
+#include "layout/encodings.h"
 
 /* Index in f->sections of each known section type (0 = NODES .. 4 = MATERIALS), -1 when absent;
  * crc_pending: a raw section used in place whose CRC is checked chunk by chunk with its content. */
@@ -100,8 +100,5 @@ cbvh_result cbvh_check_sections(struct cbvh_file *f, const cbvh_section_map *map
 /* Runs every step on f->bytes / f->size (set by the caller, with f->allocator);
  * on failure the caller frees what f owns, as cbvh_close does. */
 cbvh_result cbvh_load(struct cbvh_file *f, cbvh_error *err);
-
-/* Records memory the file owns so that close frees it. */
-void cbvh_file_own(struct cbvh_file *f, void *p);
 
 #endif

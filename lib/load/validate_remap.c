@@ -1,5 +1,4 @@
-/* validate_remap.c: checks REMAP values (in range, unique) while building the original -> cooked unmap table.
- */
+/* validate_remap.c: checks REMAP values (in range, unique) while building the original -> cooked map. */
 #include <string.h>
 
 #include "common/alloc.h"

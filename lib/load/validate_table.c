@@ -2,7 +2,7 @@
  * 2, 4). */
 #include <string.h>
 
-#include "common/encodings.h"
+#include "layout/encodings.h"
 #include "common/endian.h"
 #include "common/error.h"
 #include "load/load.h"

@@ -1,5 +1,4 @@
-/* embree_peer.c: the Embree 3 benchmark peer (shared-buffer triangle scene, single rays and 16-ray packets).
- */
+/* embree_peer.c: the Embree 3 benchmark peer (shared-buffer triangle scene, single rays, 16-ray packets). */
 #include "config.h"
 
 #include <embree3/rtcore.h>

@@ -1,6 +1,6 @@
 /* encodings.h: the one table of known section types and their element encodings (format spec section 4). */
-#ifndef CBVH_COMMON_ENCODINGS_H
-#define CBVH_COMMON_ENCODINGS_H
+#ifndef CBVH_LAYOUT_ENCODINGS_H
+#define CBVH_LAYOUT_ENCODINGS_H
 
 #include <stddef.h>
 #include <stdint.h>
@@ -62,9 +62,9 @@ static inline const cbvh_section_kind *cbvh_section_kind_of(uint32_t type)
          1,
          0,
          0,
-         {[CBVH_TRIS_U16] = {6, 0xFFFFu, "u16x3"},
-          [CBVH_TRIS_U32] = {12, 0xFFFFFFFFu, "u32x3"},
-          [CBVH_TRIS_DELTA16] = {8, 0xFFFFFFFFu, "delta16"}, /* u32 base, two i16 deltas */
+         {[CBVH_TRIS_U16] = {CBVH_TRIS_U16_SIZE, 0xFFFFu, "u16x3"},
+          [CBVH_TRIS_U32] = {CBVH_TRIS_U32_SIZE, 0xFFFFFFFFu, "u32x3"},
+          [CBVH_TRIS_DELTA16] = {CBVH_TRIS_DELTA16_SIZE, 0xFFFFFFFFu, "delta16"},
           [CBVH_TRIS_LOCAL8] = {CBVH_LOCAL8_BLOCK_SIZE, 0xFFFFFFFFu, "local8", 0, CBVH_LOCAL8_BLOCK}}},
         {"VERTICES", 1, 0, 0, {[CBVH_VERTS_F32] = {12, 0, "f32x3"}, [CBVH_VERTS_Q16] = {6, 0, "q16x3"}}},
         {"REMAP",
