@@ -246,23 +246,27 @@ void cbvh_cook_layout_free(const cbvh_allocator *a, cook_layout *l)
     memset(l, 0, sizeof *l);
 }
 
+/* A binary-layout limit the mesh exceeds: what, how many, the limit, and what to do instead. */
+static cbvh_result binary_limit(cbvh_error *err, const char *what, uint32_t count, const char *unit,
+                                uint32_t max, const char *also)
+{
+    return cbvh_fail(
+        err, CBVH_ERROR_LIMIT,
+        "the %s has %u %s; a binary-layout file holds at most %u (use the wide4 layout%s or split the "
+        "mesh)",
+        what, count, unit, max, also);
+}
+
 /* The binary layout: every build node becomes a file node. */
 static cbvh_result place_binary(const cook_tree *t, const cook_grid *g, float traversal_cost,
                                 float intersection_cost, const cbvh_allocator *a, cook_layout *out,
                                 cbvh_error *err)
 {
     if (out->triangle_count > CBVH_BINARY_MAX_TRIANGLES)
-        return cbvh_fail(
-            err, CBVH_ERROR_LIMIT,
-            "the mesh has %u triangles; a binary-layout file holds at most %u (use the wide4 layout or "
-            "split the mesh)",
-            out->triangle_count, CBVH_BINARY_MAX_TRIANGLES);
+        return binary_limit(err, "mesh", out->triangle_count, "triangles", CBVH_BINARY_MAX_TRIANGLES, "");
     if (t->node_count > CBVH_BINARY_MAX_NODES)
-        return cbvh_fail(
-            err, CBVH_ERROR_LIMIT,
-            "the tree has %u nodes; a binary-layout file holds at most %u (use the wide4 layout, raise "
-            "max_leaf_size or split the mesh)",
-            t->node_count, CBVH_BINARY_MAX_NODES);
+        return binary_limit(err, "tree", t->node_count, "nodes", CBVH_BINARY_MAX_NODES,
+                            ", raise max_leaf_size");
     node_info *info = cbvh_alloc_array(a, t->node_count, sizeof(node_info), 64);
     out->nodes = cbvh_alloc_array(a, t->node_count, sizeof(cbvh_node), 64);
     out->triangle_source = cbvh_alloc_array(a, out->triangle_count, sizeof(uint32_t), 64);
