@@ -400,8 +400,8 @@ static void test_wide4_affine_box_test(void **state)
                     q1 = x;
                 }
                 const uint16_t v0 = (uint16_t)q0, v1 = (uint16_t)q1;
-                memcpy(node + CBVH_W4_Q + 8u * a + 2u * s, &v0, 2);
-                memcpy(node + CBVH_W4_Q + 8u * (3u + a) + 2u * s, &v1, 2);
+                memcpy(node + cbvh_w4_plane_offset(a, s), &v0, 2);
+                memcpy(node + cbvh_w4_plane_offset(3u + a, s), &v1, 2);
                 lo[s][a] = cbvh_dequantize(q0, go[a], gs[a]);
                 hi[s][a] = cbvh_dequantize(q1, go[a], gs[a]);
             }

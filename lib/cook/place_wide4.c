@@ -189,7 +189,7 @@ cbvh_result cbvh_cook_place_wide4(const cook_tree *t, const cook_grid *g, float 
             order[o] = octant_order(g, q, used, o);
         for (uint32_t p = 0; p < 6; p++)
             for (uint32_t s = 0; s < 4; s++)
-                cbvh_write_u16(node + CBVH_W4_Q + 8u * p + 2u * s, q[p][s]);
+                cbvh_write_u16(node + cbvh_w4_plane_offset(p, s), q[p][s]);
         cbvh_write_u64(node + CBVH_W4_META, cbvh_w4_make_meta(count, used, internal, order));
     }
     const double root_area = area[0];

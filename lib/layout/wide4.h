@@ -113,12 +113,18 @@ static inline const uint8_t *cbvh_w4_node(const void *nodes, uint32_t n)
     return (const uint8_t *)nodes + (size_t)n * CBVH_W4_NODE_SIZE;
 }
 
+/* Where plane k of slot s lies in a node: the planes' one addressing, for readers and the cooker. */
+static inline uint32_t cbvh_w4_plane_offset(uint32_t k, uint32_t s)
+{
+    return CBVH_W4_Q + 8u * k + 2u * s;
+}
+
 /* Plane k of slot s. The file is little-endian, and so is every host the library builds for (configure
  * checks). */
 static inline uint32_t cbvh_w4_plane(const uint8_t *node, uint32_t k, uint32_t s)
 {
     uint16_t q;
-    memcpy(&q, node + CBVH_W4_Q + 8u * k + 2u * s, sizeof q);
+    memcpy(&q, node + cbvh_w4_plane_offset(k, s), sizeof q);
     return q;
 }
 
