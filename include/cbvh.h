@@ -48,10 +48,10 @@ typedef enum cbvh_result {
     CBVH_ERROR_OUT_OF_MEMORY = 2,    /* an allocation failed; nothing leaked */
     CBVH_ERROR_IO = 3,               /* open, read, map, write or rename failed */
     CBVH_ERROR_CORRUPT = 4,          /* the file is damaged or not a cbvh file */
-    CBVH_ERROR_UNSUPPORTED = 5,      /* the file is valid but newer: version, flag, codec or encoding unknown */
-    CBVH_ERROR_BAD_MESH = 6,         /* the input mesh is unusable: NaN/inf coordinate, index out of range */
-    CBVH_ERROR_EMPTY_MESH = 7,       /* no triangle left to build from (none given, or all degenerate) */
-    CBVH_ERROR_LIMIT = 8             /* the input exceeds a format limit (see fileformat/cbvh-format.md) */
+    CBVH_ERROR_UNSUPPORTED = 5, /* the file is valid but newer: version, flag, codec or encoding unknown */
+    CBVH_ERROR_BAD_MESH = 6,    /* the input mesh is unusable: NaN/inf coordinate, index out of range */
+    CBVH_ERROR_EMPTY_MESH = 7,  /* no triangle left to build from (none given, or all degenerate) */
+    CBVH_ERROR_LIMIT = 8        /* the input exceeds a format limit (see fileformat/cbvh-format.md) */
 } cbvh_result;
 
 /* A short, static, English description of a result code; never NULL. */
@@ -148,17 +148,19 @@ typedef struct cbvh_material_name {
     const char *name;
 } cbvh_material_name;
 
-/* The most triangles a wide4 leaf holds. */
+/* The most triangles a leaf holds in any file (format spec section 7), and in a wide4 file. */
+#define CBVH_MAX_LEAF_SIZE 16u
 #define CBVH_WIDE4_MAX_LEAF 8u
 
 #if CBVH_HAVE_COOKER
 
 /* Cook phases, for progress reports. */
 typedef enum cbvh_phase {
-    CBVH_PHASE_PREPARE = 0, /* validate, weld, drop degenerate triangles; quantized vertices: snap to the grid */
-    CBVH_PHASE_BUILD = 1,   /* SAH build */
-    CBVH_PHASE_LAYOUT = 2,  /* quantize node boxes, sort bytes, reorder */
-    CBVH_PHASE_WRITE = 3    /* encode, compress, checksum */
+    CBVH_PHASE_PREPARE =
+        0, /* validate, weld, drop degenerate triangles; quantized vertices: snap to the grid */
+    CBVH_PHASE_BUILD = 1,  /* SAH build */
+    CBVH_PHASE_LAYOUT = 2, /* quantize node boxes, sort bytes, reorder */
+    CBVH_PHASE_WRITE = 3   /* encode, compress, checksum */
 } cbvh_phase;
 
 /* Called from the cooking thread with a fraction in [0,1] of the given phase. */
@@ -166,35 +168,32 @@ typedef void (*cbvh_progress_fn)(void *user, cbvh_phase phase, double fraction);
 
 /* Default SAH costs: traversal 4, intersection 1, leaves of up to 16 triangles.
  * A node visit on a large mesh is a dependent cache miss while a leaf's
- * triangles are read together, so a node costs several triangle tests.
- * Measured (incoherent closest-hit MRays/s, sorted, 100K rays, CPU time) against
- * the former 1 / 1 / 4: Stanford dragon (871K) 35.6 -> 23.8 bytes/triangle,
- * 1.22 -> 1.48 MRays/s (1.8 -> 5.6 triangles per leaf); 1M sphere 33.8 -> 23.7
- * bytes/triangle, 0.76 -> 1.12 MRays/s; coherent rays unchanged or faster.
- * Traversal cost 2, 3 and 6 and leaf sizes 4 and 8 were slower or larger. */
+ * triangles are read together, so a node costs several triangle tests; these
+ * defaults give both fewer bytes and faster rays than smaller costs and leaves
+ * (docs/PERFORMANCE.md). */
 typedef struct cbvh_cook_options {
-    size_t struct_size;            /* sizeof the caller's struct, set by cbvh_cook_options_init */
-    uint32_t max_leaf_size;        /* 1..16 triangles per leaf; default 16. A wide4 leaf holds at most
-                                    * CBVH_WIDE4_MAX_LEAF (8): there a larger value acts as 8 */
-    uint32_t sah_bins;             /* 4..256 bins per axis; default 32 */
-    float traversal_cost;          /* SAH cost of visiting a node; default 4.0 */
-    float intersection_cost;       /* SAH cost of one triangle test; default 1.0 */
+    size_t struct_size;      /* sizeof the caller's struct, set by cbvh_cook_options_init */
+    uint32_t max_leaf_size;  /* 1..CBVH_MAX_LEAF_SIZE triangles per leaf; default 16. A wide4 leaf holds at
+                              * most  CBVH_WIDE4_MAX_LEAF (8): there a larger value acts as 8 */
+    uint32_t sah_bins;       /* 4..256 bins per axis; default 32 */
+    float traversal_cost;    /* SAH cost of visiting a node; default 4.0 */
+    float intersection_cost; /* SAH cost of one triangle test; default 1.0 */
     cbvh_vertex_format vertex_format;
-    int compress_level;            /* 0 = raw sections (default), 1..9 = zlib level */
-    int keep_remap;                /* 1 (default): keep original triangle ids; 0: queries report cooked order */
-    int keep_materials;            /* 1 (default): store the material ids (one for all when all are equal;
-                                    * nothing when all are 0) and material_names; 0: neither */
-    cbvh_progress_fn progress;     /* optional */
+    int compress_level;        /* 0 = raw sections (default), 1..9 = zlib level */
+    int keep_remap;            /* 1 (default): keep original triangle ids; 0: queries report cooked order */
+    int keep_materials;        /* 1 (default): store the material ids (one for all when all are equal;
+                                * nothing when all are 0) and material_names; 0: neither */
+    cbvh_progress_fn progress; /* optional */
     void *progress_user;
-    cbvh_layout layout;            /* node layout; default CBVH_LAYOUT_WIDE4 (faster per ray than binary on
-                                    * every mesh measured, about as many bytes; binary keeps the stackless
-                                    * walk over escape links) */
-    const cbvh_material_name *material_names; /* optional names of material ids, stored sorted by id, then
-                                    * name, exact repeats once; an id may have several names. At most
-                                    * CBVH_MAX_MATERIAL_NAME_BYTES in all (names, NULs and 8 bytes each) */
+    cbvh_layout layout; /* node layout; default CBVH_LAYOUT_WIDE4 (fewer node visits per ray
+                         * than binary for about as many bytes; binary keeps the stackless
+                         * walk over escape links) */
+    const cbvh_material_name
+        *material_names; /* optional names of material ids, stored sorted by id, then
+                          * name, exact repeats once; an id may have several names. At most
+                          * CBVH_MAX_MATERIAL_NAME_BYTES in all (names, NULs and 8 bytes each) */
     uint32_t material_name_count;
 } cbvh_cook_options;
-
 
 /* Fills `options` with the defaults above and sets options->struct_size to `struct_size`, which must be
  * sizeof *options as the caller sees it (see "Structs that grow"). Returns CBVH_OK, or
@@ -209,27 +208,27 @@ CBVH_API cbvh_result cbvh_cook_options_init(cbvh_cook_options *options, size_t s
 
 /* What a cook did. Sizes are stored bytes in the file (after compression). */
 typedef struct cbvh_cook_stats {
-    size_t struct_size;            /* sizeof the caller's struct, set by cbvh_cook_stats_init */
+    size_t struct_size; /* sizeof the caller's struct, set by cbvh_cook_stats_init */
     uint64_t input_triangles;
     uint64_t input_vertices;
-    uint64_t dropped_degenerate;   /* zero-area triangles removed (documented, never hit), including those
-                                    * that quantized vertices collapsed to zero area */
-    uint64_t triangles;            /* triangles in the file */
-    uint64_t vertices;             /* vertices in the file after welding equal positions */
+    uint64_t dropped_degenerate; /* zero-area triangles removed (documented, never hit), including those
+                                  * that quantized vertices collapsed to zero area */
+    uint64_t triangles;          /* triangles in the file */
+    uint64_t vertices;           /* vertices in the file after welding equal positions */
     uint64_t nodes;
     uint64_t leaves;
-    uint32_t depth;                /* nodes on the longest root-to-leaf path */
-    double sah_cost;               /* of the quantized tree, relative to the root's area, unit costs */
-    double vertex_max_error;       /* worst |decoded - input| over all coordinates (0 when lossless) */
+    uint32_t depth;          /* nodes on the longest root-to-leaf path */
+    double sah_cost;         /* of the quantized tree, relative to the root's area, unit costs */
+    double vertex_max_error; /* worst |decoded - input| over all coordinates (0 when lossless) */
     uint64_t file_size;
     uint64_t section_stored_size[CBVH_STATS_SECTION_TYPES]; /* indexed by the section type without its
-                                    * ancillary bit (CBVH_SECTION_NODES .. 6 for MATERIAL_NAMES), 0 when
-                                    * absent */
+                                                             * ancillary bit (CBVH_SECTION_NODES .. 6 for
+                                                             * MATERIAL_NAMES), 0 when absent */
     uint64_t section_size[CBVH_STATS_SECTION_TYPES];        /* uncompressed */
-    double seconds[CBVH_STATS_PHASES]; /* indexed by cbvh_phase */
-    uint64_t peak_memory;          /* most bytes the cook held allocated at once, the file it returns
-                                    * included (not the caller's mesh) */
-    uint64_t flushed_coordinates;  /* used coordinates below CBVH_COORDINATE_MIN in magnitude, stored as 0 */
+    double seconds[CBVH_STATS_PHASES];                      /* indexed by cbvh_phase */
+    uint64_t peak_memory;         /* most bytes the cook held allocated at once, the file it returns
+                                   * included (not the caller's mesh) */
+    uint64_t flushed_coordinates; /* used coordinates below CBVH_COORDINATE_MIN in magnitude, stored as 0 */
 } cbvh_cook_stats;
 
 /* The exact range (docs/EXACTNESS.md). Every coordinate of a vertex that a triangle uses must be finite and
@@ -298,12 +297,11 @@ typedef struct cbvh_file cbvh_file;
  * cbvh_open_path_read for hot reload there.
  * Page size: on Linux a file of 2 MiB or more is mapped on a 2 MiB boundary
  * with the huge-page advice (madvise), so a kernel whose page cache holds the
- * file in 2 MiB pages maps it with them (Linux 6.18 on ext4, for a file read
- * from disk after the open asked: the 871K-triangle dragon's incoherent rays
- * about 6% faster, the 1M-triangle sphere's 2-4%); a file the cache holds in
- * small pages (one just written, not yet evicted) is mapped with those. */
-CBVH_API cbvh_result cbvh_open_path(const char *path, const cbvh_allocator *allocator,
-                                    cbvh_file **out_file, cbvh_error *err);
+ * file in 2 MiB pages maps it with them and a large mesh's queries miss the
+ * address translation cache less; a file the cache holds in small pages (one
+ * just written, not yet evicted) is mapped with those. */
+CBVH_API cbvh_result cbvh_open_path(const char *path, const cbvh_allocator *allocator, cbvh_file **out_file,
+                                    cbvh_error *err);
 
 /* As cbvh_open_path, but reads the whole file into memory from `allocator`
  * (64-byte aligned, freed by cbvh_close) instead of mapping it: once it
@@ -312,10 +310,9 @@ CBVH_API cbvh_result cbvh_open_path(const char *path, const cbvh_allocator *allo
  * the file's size in memory and a copy. Safe on untrusted files. With the
  * default allocator (NULL) on Linux, the copy asks for 2 MiB pages (transparent
  * huge pages, madvise): a large mesh's queries then miss the address
- * translation cache less (incoherent rays on the 1M-triangle sphere about 9%
- * faster than the same copy on 4 KiB pages, the 871K-triangle dragon about
- * 5%, whatever the page cache holds; see cbvh_open_path for a mapping). So do
- * the sections any open inflates (zlib) or copies to align them. */
+ * translation cache less, whatever the page cache holds (see cbvh_open_path
+ * for a mapping). So do the sections any open inflates (zlib) or copies to
+ * align them. */
 CBVH_API cbvh_result cbvh_open_path_read(const char *path, const cbvh_allocator *allocator,
                                          cbvh_file **out_file, cbvh_error *err);
 
@@ -332,9 +329,8 @@ CBVH_API void cbvh_close(cbvh_file *file);
  * the ray test reads (36 bytes a triangle from the file's allocator, freed by cbvh_close), so raycasts
  * (closest and any hit, every traversal, single rays and streams) and the shape queries' leaves skip
  * decoding each triangle's indices and vertices. Answers are the same. On a mesh that stays in the
- * cache that is faster (the 3.7K-triangle Wuson: single rays about 7% incoherent, 10% short, 13%
- * shadow); on a large one the extra bytes make rays slower (the 871K-triangle dragon: 3-10%): measure
- * with `cbvh bench` (its "expanded" rows). With the default allocator on Linux the copy asks for 2 MiB
+ * cache that is faster; on a large one the extra bytes make rays slower: measure with `cbvh bench`
+ * (its "expanded" rows). With the default allocator on Linux the copy asks for 2 MiB
  * pages, as cbvh_open_path_read's does. The file is changed: call this before any thread queries
  * it. A second call does nothing; so does a build without SIMD (configure --disable-simd), whose
  * scalar test reads the file as it is. CBVH_ERROR_OUT_OF_MEMORY leaves the file as it was;
@@ -355,9 +351,9 @@ typedef enum cbvh_section_type {
 #define CBVH_MAX_MATERIAL_NAME_BYTES (16u << 20)
 
 typedef struct cbvh_section_info {
-    uint32_t type;      /* cbvh_section_type, or an unknown ancillary type (bit 31 set) */
-    uint32_t codec;     /* 0 raw, 1 zlib */
-    uint32_t encoding;  /* element encoding, see fileformat/cbvh-format.md */
+    uint32_t type;     /* cbvh_section_type, or an unknown ancillary type (bit 31 set) */
+    uint32_t codec;    /* 0 raw, 1 zlib */
+    uint32_t encoding; /* element encoding, see fileformat/cbvh-format.md */
     uint32_t crc32;
     uint64_t offset;
     uint64_t stored_size;
@@ -365,7 +361,7 @@ typedef struct cbvh_section_info {
 } cbvh_section_info;
 
 typedef struct cbvh_file_info {
-    size_t struct_size;           /* sizeof the caller's struct, set by cbvh_file_get_info */
+    size_t struct_size; /* sizeof the caller's struct, set by cbvh_file_get_info */
     uint32_t format_version;
     uint32_t compat_flags;
     uint32_t incompat_flags;
@@ -377,16 +373,16 @@ typedef struct cbvh_file_info {
     uint32_t max_leaf_size;
     uint32_t has_remap;
     uint32_t has_materials;
-    uint32_t vertex_format;       /* cbvh_vertex_format */
-    uint32_t index_encoding;      /* triangle section encoding */
+    uint32_t vertex_format;  /* cbvh_vertex_format */
+    uint32_t index_encoding; /* triangle section encoding */
     uint64_t file_size;
     float bounds_min[3], bounds_max[3];
     float grid_origin[3], grid_scale[3];
-    uint32_t layout;              /* cbvh_layout of the nodes */
-    uint32_t material_name_count; /* names in the MATERIAL_NAMES section; 0 without one */
+    uint32_t layout;                  /* cbvh_layout of the nodes */
+    uint32_t material_name_count;     /* names in the MATERIAL_NAMES section; 0 without one */
     uint32_t original_triangle_count; /* original triangle ids are below it: the size of a side table
                                        * indexed by the ids queries report (= triangle_count without REMAP) */
-    uint64_t expanded_bytes;      /* memory held by cbvh_file_expand_triangles' copy; 0 without one */
+    uint64_t expanded_bytes;          /* memory held by cbvh_file_expand_triangles' copy; 0 without one */
 } cbvh_file_info;
 
 /* Describes an opened file: writes the first `struct_size` bytes of *info (struct_size must be
@@ -401,7 +397,8 @@ CBVH_API int cbvh_file_get_section(const cbvh_file *file, uint32_t index, cbvh_s
 
 /* The three vertices of triangle `tri` (an original id, as queries report it),
  * decoded as the queries see them. Returns 0 if tri is out of range. */
-CBVH_API int cbvh_file_get_triangle(const cbvh_file *file, uint32_t tri, float v0[3], float v1[3], float v2[3]);
+CBVH_API int cbvh_file_get_triangle(const cbvh_file *file, uint32_t tri, float v0[3], float v1[3],
+                                    float v2[3]);
 
 /* Material id of triangle `tri` (original id); 0 when the file stores none. */
 CBVH_API uint32_t cbvh_file_get_material(const cbvh_file *file, uint32_t tri);
@@ -471,8 +468,8 @@ typedef struct cbvh_query_stats {
  * only when some coordinate is past FLT_MAX / 2, 1.7e38) is walked by the sorted traversal
  * whatever `traversal` says, with the box test at half scale so nothing
  * overflows: the answer is the same, the stats are the sorted walk's. */
-CBVH_API int cbvh_raycast(const cbvh_file *file, const cbvh_ray *ray, cbvh_traversal traversal,
-                          cbvh_hit *hit, cbvh_query_stats *stats);
+CBVH_API int cbvh_raycast(const cbvh_file *file, const cbvh_ray *ray, cbvh_traversal traversal, cbvh_hit *hit,
+                          cbvh_query_stats *stats);
 
 /* Any hit (occlusion): returns 1 as soon as any triangle is hit in [tmin, tmax]. */
 CBVH_API int cbvh_occluded(const cbvh_file *file, const cbvh_ray *ray, cbvh_traversal traversal,
@@ -486,9 +483,9 @@ CBVH_API int cbvh_occluded(const cbvh_file *file, const cbvh_ray *ray, cbvh_trav
  * geometric normal points to: n = (v1 - v0) x (v2 - v0), the vertices in the
  * order the mesh gave them (counter-clockwise seen from the front). */
 typedef enum cbvh_cull {
-    CBVH_CULL_NONE = 0,  /* both faces are hit (default) */
-    CBVH_CULL_BACK = 1,  /* a ray reaching a triangle's back face passes through it */
-    CBVH_CULL_FRONT = 2  /* a ray reaching a triangle's front face passes through it */
+    CBVH_CULL_NONE = 0, /* both faces are hit (default) */
+    CBVH_CULL_BACK = 1, /* a ray reaching a triangle's back face passes through it */
+    CBVH_CULL_FRONT = 2 /* a ray reaching a triangle's front face passes through it */
 } cbvh_cull;
 
 /* A hit with what a game asks of it: the original triangle id (CBVH_NO_HIT
@@ -561,54 +558,30 @@ CBVH_API cbvh_result cbvh_query_options_init(cbvh_query_options *options, size_t
  * is not one of its enum's values. Without culling and filter the answer is
  * cbvh_raycast's, on every traversal. A filter that returns STOP can make the
  * answer depend on the order the traversal visits triangles in. */
-CBVH_API cbvh_result cbvh_raycast_with(const cbvh_file *file, const cbvh_ray *ray, const cbvh_query_options *options,
-                                       cbvh_hit_record *hit, cbvh_query_stats *stats);
+CBVH_API cbvh_result cbvh_raycast_with(const cbvh_file *file, const cbvh_ray *ray,
+                                       const cbvh_query_options *options, cbvh_hit_record *hit,
+                                       cbvh_query_stats *stats);
 
 /* Any hit under `options`: *occluded = 1 when some triangle the ray hits in
  * [tmin, tmax] passes culling and the filter, else 0. Errors as
  * cbvh_raycast_with, with *occluded = 0. */
-CBVH_API cbvh_result cbvh_occluded_with(const cbvh_file *file, const cbvh_ray *ray, const cbvh_query_options *options,
-                                        int *occluded, cbvh_query_stats *stats);
+CBVH_API cbvh_result cbvh_occluded_with(const cbvh_file *file, const cbvh_ray *ray,
+                                        const cbvh_query_options *options, int *occluded,
+                                        cbvh_query_stats *stats);
 
-/* Batched streams: `count` rays (any coherence) traversed together, each node
- * dequantized once per batch visit and each live ray tested against all its
- * children there, the rays entering a child listed for it. A ray left alone at
- * a node (incoherent rays, soon after the root) finishes that subtree on the
- * single-ray walk: on a mesh whose vertices take more than 512 KiB, four such
- * rays at a time, a node or leaf each in turn, so that the CPU overlaps their
- * memory fetches; on a smaller one, which stays in the caches, one at a time.
- * A stream on such a larger mesh (wide layout) skips the batch for rays that
- * are not coherent: of each window of 8 batches' worth of rays (192 on the
- * stack), it samples 64 pairs of consecutive rays, and when fewer than half
- * point within about 8 degrees of each other (rays in all directions, shadow
- * rays from points spread over the mesh), the window's rays walk eight at a
- * time from the root (four in the stack's batch, below), a node or leaf each
- * in turn. Measured against the library before (the batch for closest hit,
- * four interleaved walks for any hit, which had gained on the batch: shadow
- * rays +22%, +18%, +12%) in one process, 20 chunks of 20,000 rays alternated,
- * batches of 1024, on the 871K-triangle dragon, a 1M-triangle sphere and a
- * 500K-triangle terrain: closest hit, incoherent rays +8%, -1%, +8%, short
- * rays +10%, +9%, +11%; any hit, incoherent rays +10%, +7%, +3%, shadow rays
- * +8%, +2%, 0%. Without scratch (batches of 24, four walks), closest hit:
- * incoherent rays +21%, +9%, +15%, short rays +14%, +10%, +13%. Camera rays
- * are batched either way. The binary layout keeps the batch (its shadow rays
- * were 10% slower on the dragon walked four at a time). On a mesh that stays
- * in the caches, a window of incoherent rays skips the batch when the batch
- * is small for the mesh (the stack's 24 rays; wide layout, also more than 8
- * triangles a ray of the batch): its rays take the single-ray walk one at a
- * time. The stack's batch had run such rays at 0.63-0.88x of cbvh_raycast in
- * a loop (Wuson, the bunny, a 46K-triangle scene), batches of 1024 on the
- * 46K-triangle scene's wide layout at 0.79-0.91x. Results equal
- * cbvh_raycast / cbvh_occluded ray by ray. hits[i] (occluded[i]: 0 or 1)
- * receives ray i's result. Uses no heap memory: rays go in batches of 24 of
- * one ray octant, held with four walks' stacks on the call's stack. Stack use,
- * measured with -fstack-usage (gcc 12 -O2, x86-64), deepest path: about 21 KiB
- * (the stack batch and the walks' stacks 12.8; the batch walk 4.5; the tails'
- * steps 3.0; the hit's barycentrics 0.3). The _scratch forms below, given
- * scratch for more than 24 rays, keep all of it there: about 8 KiB of stack.
- * cbvh_raycast and cbvh_occluded: about 4 KiB (3.9 with the AVX2 walks). */
-CBVH_API void cbvh_raycast_stream(const cbvh_file *file, const cbvh_ray *rays, size_t count,
-                                  cbvh_hit *hits, cbvh_query_stats *stats);
+/* Batched streams: the closest hit (cbvh_raycast_stream) or occlusion (cbvh_occluded_stream) of each of
+ * `count` rays of any coherence. hits[i] (occluded[i]: 0 or 1) receives ray
+ * i's result, equal to cbvh_raycast / cbvh_occluded's ray by ray; stats (may be NULL) counts the work.
+ * Coherent rays are walked together in batches of one ray octant, each node's boxes dequantized once per
+ * batch visit and tested for every live ray; rays that are not coherent, or are left alone in a subtree,
+ * finish on single-ray walks (interleaved, several rays a node or leaf each in turn, on a mesh too large
+ * for the caches, so that their memory fetches overlap). Each ray costs about one single-ray walk;
+ * coherent rays share node fetches. Uses no heap memory: batches of 24 rays and the walks'
+ * stacks on the call's stack, about 21 KiB (x86-64); the _scratch forms below keep them in the caller's
+ * memory instead (about 8 KiB of stack). cbvh_raycast and cbvh_occluded use about 4 KiB. Safe to call
+ * from any number of threads on one file. */
+CBVH_API void cbvh_raycast_stream(const cbvh_file *file, const cbvh_ray *rays, size_t count, cbvh_hit *hits,
+                                  cbvh_query_stats *stats);
 CBVH_API void cbvh_occluded_stream(const cbvh_file *file, const cbvh_ray *rays, size_t count,
                                    uint8_t *occluded, cbvh_query_stats *stats);
 
@@ -745,8 +718,9 @@ CBVH_API size_t cbvh_overlap_sphere(const cbvh_file *file, const float center[3]
 
 /* The same for the capsule of `radius` around the segment p0-p1 (exact segment/triangle distance; p0 == p1
  * is a sphere, radius 0 the segment itself). */
-CBVH_API size_t cbvh_overlap_capsule(const cbvh_file *file, const float p0[3], const float p1[3], float radius,
-                                     cbvh_overlap_fn callback, void *user, uint32_t *out, size_t capacity);
+CBVH_API size_t cbvh_overlap_capsule(const cbvh_file *file, const float p0[3], const float p1[3],
+                                     float radius, cbvh_overlap_fn callback, void *user, uint32_t *out,
+                                     size_t capacity);
 
 /* Overlaps that say when the output filled, and continue from there. The triangles that intersect the
  * region (the same set as cbvh_overlap_box / _sphere / _capsule) come in an order fixed by the file and the
@@ -759,18 +733,19 @@ CBVH_API size_t cbvh_overlap_capsule(const cbvh_file *file, const float p0[3], c
  * writes none and sets *more to 0. Safe on any opened file, from any number of threads. */
 CBVH_API size_t cbvh_overlap_box_from(const cbvh_file *file, const float box_min[3], const float box_max[3],
                                       size_t first, uint32_t *out, size_t capacity, int *more);
-CBVH_API size_t cbvh_overlap_sphere_from(const cbvh_file *file, const float center[3], float radius, size_t first,
-                                         uint32_t *out, size_t capacity, int *more);
-CBVH_API size_t cbvh_overlap_capsule_from(const cbvh_file *file, const float p0[3], const float p1[3], float radius,
-                                          size_t first, uint32_t *out, size_t capacity, int *more);
+CBVH_API size_t cbvh_overlap_sphere_from(const cbvh_file *file, const float center[3], float radius,
+                                         size_t first, uint32_t *out, size_t capacity, int *more);
+CBVH_API size_t cbvh_overlap_capsule_from(const cbvh_file *file, const float p0[3], const float p1[3],
+                                          float radius, size_t first, uint32_t *out, size_t capacity,
+                                          int *more);
 
 /* A triangle a ball or capsule overlaps, with what it takes to separate them: moving the shape by
  * depth * normal leaves it touching the triangle at most (a fixed struct: it never grows). */
 typedef struct cbvh_contact {
-    uint32_t tri;     /* original triangle id */
-    float depth;      /* >= 0: how far the shape reaches into the triangle */
-    float normal[3];  /* unit, from the triangle towards the shape */
-    float point[3];   /* the triangle's point nearest the shape's core (center or segment) */
+    uint32_t tri;    /* original triangle id */
+    float depth;     /* >= 0: how far the shape reaches into the triangle */
+    float normal[3]; /* unit, from the triangle towards the shape */
+    float point[3];  /* the triangle's point nearest the shape's core (center or segment) */
 } cbvh_contact;
 
 /* Contacts (penetration depth and separating direction) of the ball of `radius` around `center`, or of the
@@ -783,8 +758,9 @@ typedef struct cbvh_contact {
  * double. Returns how many contacts were written. Invalid input writes none and sets *more to 0. */
 CBVH_API size_t cbvh_contacts_sphere(const cbvh_file *file, const float center[3], float radius, size_t first,
                                      cbvh_contact *out, size_t capacity, int *more);
-CBVH_API size_t cbvh_contacts_capsule(const cbvh_file *file, const float p0[3], const float p1[3], float radius,
-                                      size_t first, cbvh_contact *out, size_t capacity, int *more);
+CBVH_API size_t cbvh_contacts_capsule(const cbvh_file *file, const float p0[3], const float p1[3],
+                                      float radius, size_t first, cbvh_contact *out, size_t capacity,
+                                      int *more);
 
 /* Overlaps and contacts of any shape (a sphere, capsule or oriented box; see cbvh_shape) under `options`
  * (NULL: the defaults), paged as cbvh_overlap_box_from: the triangles the shape overlaps (exact tests; for a

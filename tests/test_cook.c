@@ -68,7 +68,7 @@ static void mesh_free(test_mesh *m)
 
 static cbvh_mesh as_mesh(const test_mesh *m)
 {
-    cbvh_mesh r = { m->pos, m->nv, 0, m->idx, m->nt, m->mat };
+    cbvh_mesh r = {m->pos, m->nv, 0, m->idx, m->nt, m->mat};
     return r;
 }
 
@@ -81,7 +81,8 @@ static void binary_options(cbvh_cook_options *o)
 }
 
 /* Triangles of random size scattered in a box of half size `spread` around `center`. */
-static void make_soup(test_mesh *m, size_t nt, uint64_t seed, double spread, double size, const double center[3])
+static void make_soup(test_mesh *m, size_t nt, uint64_t seed, double spread, double size,
+                      const double center[3])
 {
     rng_seed(seed);
     mesh_alloc(m, 3 * nt, nt);
@@ -114,8 +115,12 @@ static void make_grid(test_mesh *m, uint32_t n, double height, uint64_t seed)
         for (uint32_t x = 0; x < n; x++) {
             uint32_t a = y * (n + 1) + x, b = a + 1, c = a + n + 1, d = c + 1;
             uint32_t *i = m->idx + 6 * t;
-            i[0] = a; i[1] = b; i[2] = d;
-            i[3] = a; i[4] = d; i[5] = c;
+            i[0] = a;
+            i[1] = b;
+            i[2] = d;
+            i[3] = a;
+            i[4] = d;
+            i[5] = c;
             t++;
         }
 }
@@ -138,14 +143,18 @@ static void make_sphere(test_mesh *m, uint32_t rings, uint32_t segs, double r, c
         for (uint32_t j = 0; j < segs; j++) {
             uint32_t a = i * segs + j, b = i * segs + (j + 1) % segs, c = a + segs, d = b + segs;
             uint32_t *x = m->idx + 3 * t;
-            x[0] = a; x[1] = c; x[2] = d;
-            x[3] = a; x[4] = d; x[5] = b;
+            x[0] = a;
+            x[1] = c;
+            x[2] = d;
+            x[3] = a;
+            x[4] = d;
+            x[5] = b;
             t += 2;
         }
     /* The poles' rings collapse to points: those triangles are degenerate and dropped. */
 }
 
-static const double origin3[3] = { 0, 0, 0 };
+static const double origin3[3] = {0, 0, 0};
 
 /* ------------------------------------------------------------------ an independent parser */
 
@@ -178,15 +187,15 @@ typedef struct parsed {
     uint32_t codec[7], encoding[7]; /* indexed by section number: type without the ancillary bit */
     uint64_t stored[7], size[7];
     cbvh_node *nodes;
-    uint32_t *tris;   /* 3 per triangle */
-    float *verts;     /* 3 per vertex, decoded */
-    uint16_t *qverts; /* 3 per vertex, or NULL */
-    uint32_t *remap;  /* or NULL */
-    uint32_t *mats;   /* or NULL */
-    int mats_uniform; /* MATERIALS encoding 3: one id for all */
+    uint32_t *tris;      /* 3 per triangle */
+    float *verts;        /* 3 per vertex, decoded */
+    uint16_t *qverts;    /* 3 per vertex, or NULL */
+    uint32_t *remap;     /* or NULL */
+    uint32_t *mats;      /* or NULL */
+    int mats_uniform;    /* MATERIALS encoding 3: one id for all */
     uint32_t name_count; /* MATERIAL_NAMES */
     uint32_t *name_ids;
-    char **names;     /* into name_bytes */
+    char **names; /* into name_bytes */
     uint8_t *name_bytes;
 } parsed;
 
@@ -209,7 +218,10 @@ static void parse(const uint8_t *b, size_t size, parsed *p)
 {
     memset(p, 0, sizeof *p);
     assert_true(size >= 128);
-    assert_memory_equal(b, "\x89" "CBVH\r\n\x1a", 8);
+    assert_memory_equal(b,
+                        "\x89"
+                        "CBVH\r\n\x1a",
+                        8);
     assert_int_equal(cbvh_read_u32(b + 8), 1);
     assert_int_equal(cbvh_read_u32(b + 12), 128);
     assert_int_equal(cbvh_read_u32(b + 16), 0);
@@ -245,7 +257,7 @@ static void parse(const uint8_t *b, size_t size, parsed *p)
     assert_true(p->orig_count >= p->tri_count);
 
     uint64_t end = 128 + 40 * (uint64_t)p->section_count, prev_type = 0;
-    uint8_t *data[7] = { NULL };
+    uint8_t *data[7] = {NULL};
     for (uint32_t i = 0; i < p->section_count; i++) {
         const uint8_t *e = b + 128 + 40 * (size_t)i;
         uint32_t type = cbvh_read_u32(e), codec = cbvh_read_u32(e + 4);
@@ -297,7 +309,7 @@ static void parse(const uint8_t *b, size_t size, parsed *p)
     }
     /* TRIANGLES: u16 x 3, u32 x 3, DELTA16 (u32 base, two i16 deltas), or LOCAL8 (encoding 4: blocks of 8
      * triangles, a u32 base and 3 u8 offsets each; the last block's unused offsets 0) */
-    static const uint64_t tri_elem[5] = { 6, 12, 8, 0, 28 };
+    static const uint64_t tri_elem[5] = {6, 12, 8, 0, 28};
     const uint32_t tri_enc = p->encoding[2];
     assert_true(tri_enc <= 2 || tri_enc == 4);
     const uint64_t tri_elements = tri_enc == 4 ? (p->tri_count + 7u) / 8u : p->tri_count;
@@ -307,9 +319,13 @@ static void parse(const uint8_t *b, size_t size, parsed *p)
         const uint8_t *e = data[2] + tri_elem[tri_enc] * (tri_enc == 4 ? t / 8u : t);
         uint32_t *o = p->tris + 3 * (size_t)t;
         if (tri_enc == 0) {
-            o[0] = rd16(e); o[1] = rd16(e + 2); o[2] = rd16(e + 4);
+            o[0] = rd16(e);
+            o[1] = rd16(e + 2);
+            o[2] = rd16(e + 4);
         } else if (tri_enc == 1) {
-            o[0] = cbvh_read_u32(e); o[1] = cbvh_read_u32(e + 4); o[2] = cbvh_read_u32(e + 8);
+            o[0] = cbvh_read_u32(e);
+            o[1] = cbvh_read_u32(e + 4);
+            o[2] = cbvh_read_u32(e + 8);
         } else if (tri_enc == 4) {
             const uint64_t base = cbvh_read_u32(e);
             for (int c = 0; c < 3; c++) {
@@ -359,7 +375,9 @@ static void parse(const uint8_t *b, size_t size, parsed *p)
         uint8_t *seen = calloc(p->orig_count, 1);
         for (uint32_t t = 0; t < p->tri_count; t++) {
             const uint8_t *e = data[4] + width * (size_t)t;
-            p->remap[t] = width == 2 ? rd16(e) : width == 3 ? rd16(e) | (uint32_t)e[2] << 16 : cbvh_read_u32(e);
+            p->remap[t] = width == 2   ? rd16(e)
+                          : width == 3 ? rd16(e) | (uint32_t)e[2] << 16
+                                       : cbvh_read_u32(e);
             assert_true(p->remap[t] < p->orig_count);
             assert_int_equal(seen[p->remap[t]], 0);
             seen[p->remap[t]] = 1;
@@ -370,7 +388,7 @@ static void parse(const uint8_t *b, size_t size, parsed *p)
     }
     /* MATERIALS: u8, u16, u32 per triangle, or one u32 for all (encoding 3) */
     if (data[5]) {
-        static const uint64_t mat_elem[4] = { 1, 2, 4, 0 };
+        static const uint64_t mat_elem[4] = {1, 2, 4, 0};
         assert_true(p->encoding[5] <= 3);
         p->mats_uniform = p->encoding[5] == 3;
         assert_int_equal(p->size[5], p->mats_uniform ? 4 : mat_elem[p->encoding[5]] * p->tri_count);
@@ -380,8 +398,8 @@ static void parse(const uint8_t *b, size_t size, parsed *p)
             p->mats[t] = p->encoding[5] == 0 ? e[0] : p->encoding[5] == 1 ? rd16(e) : cbvh_read_u32(e);
         }
     }
-    /* MATERIAL_NAMES: u32 count, (u32 id, u32 offset) each, NUL-terminated names tiling the rest in (id, name)
-     * order */
+    /* MATERIAL_NAMES: u32 count, (u32 id, u32 offset) each, NUL-terminated names tiling the rest in (id,
+     * name) order */
     if (data[6]) {
         assert_int_equal(p->encoding[6], 0);
         assert_true(p->size[6] >= 4);
@@ -401,8 +419,9 @@ static void parse(const uint8_t *b, size_t size, parsed *p)
             assert_non_null(nul);
             at = (uint64_t)(nul - p->name_bytes) + 1;
             if (k > 0)
-                assert_true(p->name_ids[k] > p->name_ids[k - 1] ||
-                            (p->name_ids[k] == p->name_ids[k - 1] && strcmp(p->names[k - 1], p->names[k]) < 0));
+                assert_true(
+                    p->name_ids[k] > p->name_ids[k - 1] ||
+                    (p->name_ids[k] == p->name_ids[k - 1] && strcmp(p->names[k - 1], p->names[k]) < 0));
         }
         assert_int_equal(at, p->size[6]);
     }
@@ -442,7 +461,8 @@ static void check_walks(const parsed *p, int (*miss)(uint32_t))
     for (uint32_t i = 0; i < p->node_count;) {
         assert_true(k < count);
         assert_int_equal(order[k++], i);
-        uint32_t next = cbvh_node_is_leaf(p->nodes[i].word) || !(miss && miss(i)) ? i + 1 : i + subtree_size(p, i);
+        uint32_t next =
+            cbvh_node_is_leaf(p->nodes[i].word) || !(miss && miss(i)) ? i + 1 : i + subtree_size(p, i);
         assert_true(next > i); /* escape links point forward */
         i = next;
     }
@@ -524,7 +544,8 @@ static void check_conservative(const parsed *p)
             }
         }
         for (int k = 0; k < 3; k++) {
-            if (!(deq(p, k, p->nodes[i].qmin[k]) <= b[i].lo[k]) || !(deq(p, k, p->nodes[i].qmax[k]) >= b[i].hi[k]))
+            if (!(deq(p, k, p->nodes[i].qmin[k]) <= b[i].lo[k]) ||
+                !(deq(p, k, p->nodes[i].qmax[k]) >= b[i].hi[k]))
                 fail_msg("node %u axis %d: box [%.9g, %.9g] does not hold [%.9g, %.9g]", i, k,
                          (double)deq(p, k, p->nodes[i].qmin[k]), (double)deq(p, k, p->nodes[i].qmax[k]),
                          (double)b[i].lo[k], (double)b[i].hi[k]);
@@ -555,7 +576,8 @@ static void check_sort_bytes(const parsed *p)
         for (uint32_t k = 0; k < 8; k++) {
             double dot = 0;
             for (int a = 0; a < 3; a++) {
-                double d = (double)(((int)f->qmin[a] + f->qmax[a]) - ((int)s->qmin[a] + s->qmax[a])) * p->scale[a];
+                double d =
+                    (double)(((int)f->qmin[a] + f->qmax[a]) - ((int)s->qmin[a] + s->qmax[a])) * p->scale[a];
                 dot += (k >> a) & 1 ? -d : d;
             }
             if (dot > 0)
@@ -614,13 +636,14 @@ static void check_triangles_match(const parsed *p, const test_mesh *m, double to
             const float *out = p->verts + 3 * (size_t)p->tris[3 * (size_t)t + (size_t)c];
             for (int k = 0; k < 3; k++)
                 if (!(fabs((double)stored_coordinate(in[k]) - out[k]) <= tol))
-                    fail_msg("cooked triangle %u (input %u) corner %d axis %d: %.9g vs input %.9g", t, o, c, k,
-                             (double)out[k], (double)in[k]);
+                    fail_msg("cooked triangle %u (input %u) corner %d axis %d: %.9g vs input %.9g", t, o, c,
+                             k, (double)out[k], (double)in[k]);
         }
     }
 }
 
-/* The grid per spec section 6: origin = bounds_min of the kept mesh, scale the smallest reaching bounds_max. */
+/* The grid per spec section 6: origin = bounds_min of the kept mesh, scale the smallest reaching bounds_max.
+ */
 static void check_grid(const parsed *p, const float kept_min[3], const float kept_max[3])
 {
     for (int k = 0; k < 3; k++) {
@@ -712,8 +735,8 @@ static void cooked_free(cooked *c)
 static void test_soups(void **state)
 {
     (void)state;
-    static const size_t sizes[] = { 1, 2, 3, 5, 17, 100, 3000 };
-    static const uint32_t leaf[] = { 1, 4, 16 };
+    static const size_t sizes[] = {1, 2, 3, 5, 17, 100, 3000};
+    static const uint32_t leaf[] = {1, 4, 16};
     for (size_t s = 0; s < sizeof sizes / sizeof sizes[0]; s++)
         for (size_t l = 0; l < 3; l++) {
             test_mesh m;
@@ -757,9 +780,9 @@ static void test_grid_and_sphere(void **state)
 static void test_far_from_origin(void **state)
 {
     (void)state;
-    static const double offsets[] = { 1e5, 1e7, -1e7, 1e9 };
+    static const double offsets[] = {1e5, 1e7, -1e7, 1e9};
     for (size_t i = 0; i < sizeof offsets / sizeof offsets[0]; i++) {
-        const double center[3] = { offsets[i], -offsets[i] * 0.5, 7.0 };
+        const double center[3] = {offsets[i], -offsets[i] * 0.5, 7.0};
         test_mesh m;
         make_sphere(&m, 12, 24, offsets[i] > 1e8 ? 4e4 : 40.0, center);
         cooked c;
@@ -801,7 +824,7 @@ static void test_zero_and_flat(void **state)
     mesh_free(&m);
 
     /* Axis-aligned cubes: many node boxes flat on one axis, at 1e7. */
-    const double center[3] = { 1e7, 0, -1e7 };
+    const double center[3] = {1e7, 0, -1e7};
     make_soup(&m, 300, 8, 100.0, 1.0, center);
     for (size_t t = 0; t < m.nt; t++)
         m.pos[9 * t + 3 * (t % 3) + t % 3] = m.pos[9 * t + t % 3]; /* an edge parallel to a plane */
@@ -813,9 +836,9 @@ static void test_zero_and_flat(void **state)
 static void test_quantized_vertices(void **state)
 {
     (void)state;
-    static const double offsets[] = { 0, 1e5, -1e7 };
+    static const double offsets[] = {0, 1e5, -1e7};
     for (size_t i = 0; i < 3; i++) {
-        const double center[3] = { offsets[i], 1, -offsets[i] };
+        const double center[3] = {offsets[i], 1, -offsets[i]};
         test_mesh m;
         make_sphere(&m, 20, 30, 50.0, center);
         cbvh_cook_options o;
@@ -907,17 +930,17 @@ static void test_weld_and_degenerate(void **state)
 {
     (void)state;
     /* v0..v3 a quad; v4 duplicates v2; v5 = -0 copy of v0 (v0 at +0); v6 unused; v7 collinear with v0, v1. */
-    const float pos[] = { 0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0, 1, 1, 0, -0.0f, -0.0f, 0, 9, 9, 9, 2, 0, 0 };
+    const float pos[] = {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0, 1, 1, 0, -0.0f, -0.0f, 0, 9, 9, 9, 2, 0, 0};
     const uint32_t idx[] = {
-        0, 1, 2,   /* kept */
-        0, 4, 3,   /* kept: v4 welds to v2 */
-        5, 1, 3,   /* kept: v5 welds to v0 */
-        2, 4, 3,   /* degenerate after welding (v2 == v4) */
-        0, 1, 7,   /* zero area (collinear) */
-        1, 1, 2,   /* repeated index */
-        3, 2, 1,   /* kept */
+        0, 1, 2, /* kept */
+        0, 4, 3, /* kept: v4 welds to v2 */
+        5, 1, 3, /* kept: v5 welds to v0 */
+        2, 4, 3, /* degenerate after welding (v2 == v4) */
+        0, 1, 7, /* zero area (collinear) */
+        1, 1, 2, /* repeated index */
+        3, 2, 1, /* kept */
     };
-    cbvh_mesh mesh = { pos, 8, 0, idx, 7, NULL };
+    cbvh_mesh mesh = {pos, 8, 0, idx, 7, NULL};
     void *data;
     size_t size;
     cbvh_cook_stats st;
@@ -947,7 +970,7 @@ static void test_weld_and_degenerate(void **state)
         strided[5 * v + 3] = NAN; /* padding the cooker must not read */
         strided[5 * v + 4] = NAN;
     }
-    cbvh_mesh mesh2 = { strided, 8, 20, idx, 7, NULL };
+    cbvh_mesh mesh2 = {strided, 8, 20, idx, 7, NULL};
     void *data2;
     size_t size2;
     assert_int_equal(cbvh_cook(&mesh, NULL, NULL, &data, &size, NULL, NULL), CBVH_OK);
@@ -988,7 +1011,7 @@ static void test_remap_and_materials(void **state)
         assert_int_equal(cbvh_file_get_material(f, t), 7);
     cbvh_close(f);
     cooked_free(&c);
-    static const uint32_t largest[] = { 200, 60000, 70000 };
+    static const uint32_t largest[] = {200, 60000, 70000};
     for (int e = 0; e < 3; e++) {
         for (size_t t = 0; t < m.nt; t++)
             m.mat[t] = (uint32_t)(t * 7919u) % (largest[e] + 1);
@@ -1019,12 +1042,14 @@ static void test_material_names(void **state)
     (void)state;
     test_mesh m;
     make_soup(&m, 50, 9, 5.0, 1.0, origin3);
-    static const cbvh_material_name given[] = {
-        { 7, "Steel" }, { 3, "Glass" }, { 7, "Oak" }, { 7, "Steel" }, { 1000000, "\xc3\xbc" }, { 3, "" } };
+    static const cbvh_material_name given[] = {{7, "Steel"}, {3, "Glass"},          {7, "Oak"},
+                                               {7, "Steel"}, {1000000, "\xc3\xbc"}, {3, ""}};
     static const cbvh_material_name shuffled[] = {
-        { 1000000, "\xc3\xbc" }, { 3, "" }, { 7, "Oak" }, { 3, "Glass" }, { 7, "Steel" } };
-    static const struct { uint32_t id; const char *name; } want[] = {
-        { 3, "" }, { 3, "Glass" }, { 7, "Oak" }, { 7, "Steel" }, { 1000000, "\xc3\xbc" } };
+        {1000000, "\xc3\xbc"}, {3, ""}, {7, "Oak"}, {3, "Glass"}, {7, "Steel"}};
+    static const struct {
+        uint32_t id;
+        const char *name;
+    } want[] = {{3, ""}, {3, "Glass"}, {7, "Oak"}, {7, "Steel"}, {1000000, "\xc3\xbc"}};
     cbvh_cook_options o;
     binary_options(&o);
     o.material_names = given;
@@ -1076,7 +1101,7 @@ static void test_material_names(void **state)
     void *data = NULL;
     size_t size = 0;
     cbvh_error err;
-    const cbvh_material_name unnamed[] = { { 1, "a" }, { 2, NULL } };
+    const cbvh_material_name unnamed[] = {{1, "a"}, {2, NULL}};
     o.material_names = unnamed;
     o.material_name_count = 2;
     assert_int_equal(cbvh_cook(&mesh, &o, NULL, &data, &size, NULL, &err), CBVH_ERROR_INVALID_ARGUMENT);
@@ -1088,7 +1113,7 @@ static void test_material_names(void **state)
     assert_non_null(huge);
     memset(huge, 'x', CBVH_MAX_MATERIAL_NAME_BYTES - 1);
     huge[CBVH_MAX_MATERIAL_NAME_BYTES - 13] = '\0'; /* 4 + 8 + name + NUL: exactly the limit */
-    const cbvh_material_name big[] = { { 1, huge } };
+    const cbvh_material_name big[] = {{1, huge}};
     o.material_names = big;
     o.material_name_count = 1;
     assert_int_equal(cbvh_cook(&mesh, &o, NULL, &data, &size, NULL, &err), CBVH_OK);
@@ -1150,7 +1175,7 @@ static void test_depth_limit(void **state)
     mesh_alloc(&m, 3 * 280, 280);
     for (size_t t = 0; t < 280; t++) {
         double x = ldexp(pow(1.2, (double)t), -35);
-        const float tri[9] = { (float)x, 0, 0, (float)(x * 1.05), 0, 0, (float)x, (float)(x * 0.05), 0 };
+        const float tri[9] = {(float)x, 0, 0, (float)(x * 1.05), 0, 0, (float)x, (float)(x * 0.05), 0};
         memcpy(m.pos + 9 * t, tri, sizeof tri);
         for (int c = 0; c < 3; c++)
             m.idx[3 * t + (size_t)c] = (uint32_t)(3 * t + (size_t)c);
@@ -1174,12 +1199,12 @@ static void test_identical_triangles(void **state)
     (void)state;
     test_mesh m;
     mesh_alloc(&m, 3, 1000);
-    const float tri[9] = { 0, 0, 0, 1, 0, 0, 0, 1, 0 };
+    const float tri[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
     memcpy(m.pos, tri, sizeof tri);
     for (size_t t = 0; t < m.nt; t++)
         for (int c = 0; c < 3; c++)
             m.idx[3 * t + (size_t)c] = (uint32_t)c;
-    static const uint32_t leaf[] = { 1, 3, 16 };
+    static const uint32_t leaf[] = {1, 3, 16};
     for (int i = 0; i < 3; i++) {
         cbvh_cook_options o;
         binary_options(&o);
@@ -1207,8 +1232,8 @@ static int cmp_ref(const void *x, const void *y)
 
 static double median_sah(ref_tri *r, size_t n, uint32_t leaf, double *root_area)
 {
-    double lo[3] = { INFINITY, INFINITY, INFINITY }, hi[3] = { -INFINITY, -INFINITY, -INFINITY };
-    double clo[3] = { INFINITY, INFINITY, INFINITY }, chi[3] = { -INFINITY, -INFINITY, -INFINITY };
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    double clo[3] = {INFINITY, INFINITY, INFINITY}, chi[3] = {-INFINITY, -INFINITY, -INFINITY};
     for (size_t i = 0; i < n; i++)
         for (int k = 0; k < 3; k++) {
             lo[k] = fmin(lo[k], r[i].lo[k]);
@@ -1216,7 +1241,7 @@ static double median_sah(ref_tri *r, size_t n, uint32_t leaf, double *root_area)
             clo[k] = fmin(clo[k], r[i].c[k]);
             chi[k] = fmax(chi[k], r[i].c[k]);
         }
-    double d[3] = { hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2] };
+    double d[3] = {hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]};
     double area = d[0] * d[1] + d[1] * d[2] + d[2] * d[0];
     if (root_area)
         *root_area = area;
@@ -1238,7 +1263,7 @@ static void test_sah_quality(void **state)
     make_soup(&m, 4000, 31, 100.0, 0.5, origin3);
     rng_seed(99);
     for (size_t t = 0; t < 3600; t++) {
-        double c[3] = { 90 + rng_unit() * 10, 90 + rng_unit() * 10, 90 + rng_unit() * 10 };
+        double c[3] = {90 + rng_unit() * 10, 90 + rng_unit() * 10, 90 + rng_unit() * 10};
         for (int v = 0; v < 3; v++)
             for (int k = 0; k < 3; k++)
                 m.pos[9 * t + 3 * (size_t)v + (size_t)k] = (float)(c[k] + rng_unit() * 0.05);
@@ -1339,11 +1364,13 @@ static void test_bad_meshes(void **state)
     m.pos[0] = -3e38f;
     expect_error(&mesh, NULL, CBVH_ERROR_BAD_MESH, "vertex 0: x coordinate -3e+38", "exact range of +-2^40");
     m.pos[0] = -nextafterf(CBVH_COORDINATE_MAX, INFINITY);
-    expect_error(&mesh, NULL, CBVH_ERROR_BAD_MESH, "vertex 0: x coordinate -1.09951e+12", "exact range of +-2^40");
+    expect_error(&mesh, NULL, CBVH_ERROR_BAD_MESH, "vertex 0: x coordinate -1.09951e+12",
+                 "exact range of +-2^40");
     m.pos[0] = saved;
     saved = m.pos[3 * 24 + 2];
     m.pos[3 * 24 + 2] = nextafterf(CBVH_COORDINATE_MAX, INFINITY);
-    expect_error(&mesh, NULL, CBVH_ERROR_BAD_MESH, "vertex 24: z coordinate 1.09951e+12", "exact range of +-2^40");
+    expect_error(&mesh, NULL, CBVH_ERROR_BAD_MESH, "vertex 24: z coordinate 1.09951e+12",
+                 "exact range of +-2^40");
     m.pos[3 * 24 + 2] = saved;
     for (size_t i = 0; i < 3 * m.nv; i++)
         m.pos[i] *= 0x1p38f;
@@ -1417,11 +1444,11 @@ static void test_bad_options(void **state)
     assert_int_equal(o.keep_remap, 1);
     assert_int_equal(o.keep_materials, 1);
     assert_int_equal(o.layout, CBVH_LAYOUT_WIDE4);
-#define BAD(field, value)                                                                  \
-    do {                                                                                   \
-        cbvh_cook_options b = o;                                                           \
-        b.field = value;                                                                   \
-        expect_error(&mesh, &b, CBVH_ERROR_INVALID_ARGUMENT, #field, NULL);                \
+#define BAD(field, value)                                                                                    \
+    do {                                                                                                     \
+        cbvh_cook_options b = o;                                                                             \
+        b.field = value;                                                                                     \
+        expect_error(&mesh, &b, CBVH_ERROR_INVALID_ARGUMENT, #field, NULL);                                  \
     } while (0)
     BAD(max_leaf_size, 0);
     BAD(max_leaf_size, 17);
@@ -1439,7 +1466,7 @@ static void test_bad_options(void **state)
     BAD(layout, (cbvh_layout)2);
 #undef BAD
     /* The extremes of each range are accepted. */
-    static const uint32_t leaf[] = { 1, 16 }, bins[] = { 4, 256 };
+    static const uint32_t leaf[] = {1, 16}, bins[] = {4, 256};
     for (int i = 0; i < 2; i++) {
         cbvh_cook_options b = o;
         b.max_leaf_size = leaf[i];
@@ -1463,7 +1490,7 @@ static void test_peak_memory(void **state)
 {
     (void)state;
     test_mesh m;
-    const double center[3] = { 0, 0, 0 };
+    const double center[3] = {0, 0, 0};
     make_sphere(&m, 60, 90, 1.0, center);
     cbvh_mesh mesh = as_mesh(&m);
     for (int layout = CBVH_LAYOUT_BINARY; layout <= CBVH_LAYOUT_WIDE4; layout++)
@@ -1579,7 +1606,7 @@ static void test_progress(void **state)
     cbvh_mesh mesh = as_mesh(&m);
     cbvh_cook_options o;
     cbvh_cook_options_init(&o, sizeof o);
-    progress_log log = { 0, 0, 0, { 0 } };
+    progress_log log = {0, 0, 0, {0}};
     o.progress = on_progress;
     o.progress_user = &log;
     void *data;
@@ -1602,7 +1629,8 @@ static void test_progress(void **state)
 static void progress_not_expected(void *user, cbvh_phase phase, double fraction)
 {
     (void)user;
-    fail_msg("the library read options->progress past options->struct_size (phase %d, %g)", (int)phase, fraction);
+    fail_msg("the library read options->progress past options->struct_size (phase %d, %g)", (int)phase,
+             fraction);
 }
 
 #define GUARD_BYTE 0xA5
@@ -1658,7 +1686,8 @@ static void test_old_struct_sizes(void **state)
     assert_guard(&st, short_stats, sizeof st, "cbvh_cook");
     assert_int_equal(st.struct_size, short_stats);
     assert_memory_equal((const uint8_t *)&st + sizeof st.struct_size,
-                        (const uint8_t *)&whole_st + sizeof whole_st.struct_size, short_stats - sizeof st.struct_size);
+                        (const uint8_t *)&whole_st + sizeof whole_st.struct_size,
+                        short_stats - sizeof st.struct_size);
     assert_true(st.triangles > 0 && st.nodes > 0);
 
     /* cbvh_cook_to_path adds its write time to seconds, which this caller's struct does not have. */
@@ -1744,8 +1773,8 @@ static void test_bad_struct_sizes(void **state)
 
     /* Larger than this library's struct: a program built against a newer header. */
     assert_int_equal(cbvh_cook_options_init(&o, sizeof o + 8), CBVH_ERROR_INVALID_ARGUMENT);
-    snprintf(expect, sizeof expect, "options->struct_size is %zu, larger than this library's cbvh_cook_options",
-             sizeof o + 8);
+    snprintf(expect, sizeof expect,
+             "options->struct_size is %zu, larger than this library's cbvh_cook_options", sizeof o + 8);
     expect_size_error(&mesh, &o, NULL, expect, "newer cbvh.h");
 
     /* Stats: checked before any work, and left as they were. */
@@ -1908,7 +1937,9 @@ static void round_trip(const test_mesh *m, const cbvh_cook_options *o)
         if (o->vertex_format == CBVH_VERTEX_FLOAT32)
             for (int k = 0; k < 3; k++)
                 for (int a = 0; a < 3; a++)
-                    assert_true(v[k][a] == stored_coordinate(m->pos[3 * (size_t)m->idx[3 * (size_t)o_id + (size_t)k] + (size_t)a]));
+                    assert_true(v[k][a] ==
+                                stored_coordinate(
+                                    m->pos[3 * (size_t)m->idx[3 * (size_t)o_id + (size_t)k] + (size_t)a]));
     }
     cbvh_close(file);
     cooked_free(&c);
@@ -1917,7 +1948,7 @@ static void round_trip(const test_mesh *m, const cbvh_cook_options *o)
 static void test_loader_round_trip(void **state)
 {
     (void)state;
-    const double far[3] = { 1e7, -3e5, 2 };
+    const double far[3] = {1e7, -3e5, 2};
     test_mesh meshes[3];
     make_sphere(&meshes[0], 30, 50, 3.0, origin3);
     make_grid(&meshes[1], 20, 0.0, 1); /* flat: grid_scale[2] == 0 */
@@ -1942,11 +1973,17 @@ static void test_loader_round_trip(void **state)
 static void test_quantized_collapse(void **state)
 {
     (void)state;
-    float pos[] = { 0, 0, 0, 4, 0, 0, 0, 4, 0, 0, 0, 4,            /* a tetrahedron's faces, extent 4 */
-                    1, 1, 1, 1 + 1e-6f, 1, 1, 1, 1 + 1e-6f, 1,     /* tiny, inside */
-                    4.5f, 4.5f, 4.5f, 4.5f - 1e-6f, 4.5f, 4.5f, 4.5f, 4.5f - 1e-6f, 4.5f }; /* tiny, the maximum corner */
-    uint32_t idx[] = { 0, 2, 1, 0, 1, 3, 1, 2, 3, 0, 3, 2, 4, 5, 6, 7, 8, 9 };
-    test_mesh m = { pos, idx, NULL, 10, 6 };
+    float pos[] = {0,    0,    0,    4,
+                   0,    0,    0,    4,
+                   0,    0,    0,    4, /* a tetrahedron's faces, extent 4 */
+                   1,    1,    1,    1 + 1e-6f,
+                   1,    1,    1,    1 + 1e-6f,
+                   1, /* tiny, inside */
+                   4.5f, 4.5f, 4.5f, 4.5f - 1e-6f,
+                   4.5f, 4.5f, 4.5f, 4.5f - 1e-6f,
+                   4.5f}; /* tiny, the maximum corner */
+    uint32_t idx[] = {0, 2, 1, 0, 1, 3, 1, 2, 3, 0, 3, 2, 4, 5, 6, 7, 8, 9};
+    test_mesh m = {pos, idx, NULL, 10, 6};
     for (int q = 0; q < 2; q++) {
         cbvh_cook_options o;
         binary_options(&o);

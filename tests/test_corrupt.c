@@ -1,4 +1,6 @@
-/* test_corrupt.c: exhaustive structured corruption of small cooked files in both node layouts: every truncation, every byte of header, table and nodes changed, sections moved, overlapped and pointed past the end. */
+/* test_corrupt.c: exhaustive structured corruption of small cooked files in both node layouts: every
+ * truncation, every byte of header, table and nodes changed, sections moved, overlapped and pointed past the
+ * end. */
 #include <math.h>
 #include <setjmp.h>
 #include <signal.h>
@@ -18,8 +20,21 @@
 #include "support/scene_gen.h"
 #include "support/test_os.h"
 
-enum { HDR_VERSION = 8, HDR_COMPAT = 16, HDR_INCOMPAT = 20, HDR_SECTION_COUNT = 24, HDR_RESERVED = 112,
-       TABLE = 128, ENTRY = 40, E_TYPE = 0, E_CODEC = 4, E_OFFSET = 8, E_STORED = 16, E_SIZE = 24, E_ENCODING = 36 };
+enum {
+    HDR_VERSION = 8,
+    HDR_COMPAT = 16,
+    HDR_INCOMPAT = 20,
+    HDR_SECTION_COUNT = 24,
+    HDR_RESERVED = 112,
+    TABLE = 128,
+    ENTRY = 40,
+    E_TYPE = 0,
+    E_CODEC = 4,
+    E_OFFSET = 8,
+    E_STORED = 16,
+    E_SIZE = 24,
+    E_ENCODING = 36
+};
 
 /* A small valid file of each kind, cooked once: raw, zlib and quantized, in each node layout. */
 typedef struct sample {
@@ -36,12 +51,27 @@ typedef struct tally {
 } tally;
 static tally totals;
 
-static uint32_t rd32(const uint8_t *p) { return (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24; }
-static uint64_t rd64(const uint8_t *p) { return (uint64_t)rd32(p) | (uint64_t)rd32(p + 4) << 32; }
-static void wr32(uint8_t *p, uint32_t v) { for (int i = 0; i < 4; i++) p[i] = (uint8_t)(v >> (8 * i)); }
-static void wr64(uint8_t *p, uint64_t v) { wr32(p, (uint32_t)v); wr32(p + 4, (uint32_t)(v >> 32)); }
+static uint32_t rd32(const uint8_t *p)
+{
+    return (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24;
+}
+static uint64_t rd64(const uint8_t *p)
+{
+    return (uint64_t)rd32(p) | (uint64_t)rd32(p + 4) << 32;
+}
+static void wr32(uint8_t *p, uint32_t v)
+{
+    for (int i = 0; i < 4; i++)
+        p[i] = (uint8_t)(v >> (8 * i));
+}
+static void wr64(uint8_t *p, uint64_t v)
+{
+    wr32(p, (uint32_t)v);
+    wr32(p + 4, (uint32_t)(v >> 32));
+}
 
-/* A watchdog turns a hang into a failure; Windows has no alarm(), so there a hang shows as the run's timeout. */
+/* A watchdog turns a hang into a failure; Windows has no alarm(), so there a hang shows as the run's timeout.
+ */
 #ifdef SIGALRM
 #define WATCHDOG(seconds) alarm(seconds)
 static void on_alarm(int sig)
@@ -59,13 +89,13 @@ static void on_alarm(int sig)
 static int cook_sample(sample *s, const char *name, cbvh_layout layout, int quantized, int level)
 {
     scene sc;
-    float c[3] = { 1.0f, 2.0f, -3.0f };
+    float c[3] = {1.0f, 2.0f, -3.0f};
     if (!scene_sphere(&sc, 100, c, 2.0f))
         return -1;
     sc.material_ids = malloc(sc.triangle_count * sizeof(uint32_t));
     for (size_t t = 0; t < sc.triangle_count; t++)
         sc.material_ids[t] = (uint32_t)(t % 5);
-    cbvh_mesh m = { sc.positions, sc.vertex_count, 0, sc.indices, sc.triangle_count, sc.material_ids };
+    cbvh_mesh m = {sc.positions, sc.vertex_count, 0, sc.indices, sc.triangle_count, sc.material_ids};
     cbvh_cook_options o;
     cbvh_cook_options_init(&o, sizeof o);
     /* The cook defaults of the samples' first layout (leaves of 4, unit costs): the structural
@@ -75,7 +105,7 @@ static int cook_sample(sample *s, const char *name, cbvh_layout layout, int quan
     o.vertex_format = quantized ? CBVH_VERTEX_QUANTIZED16 : CBVH_VERTEX_FLOAT32;
     o.compress_level = level;
     o.layout = layout;
-    static const cbvh_material_name names[] = { { 0, "stone" }, { 1, "wood" }, { 3, "metal" }, { 3, "steel" } };
+    static const cbvh_material_name names[] = {{0, "stone"}, {1, "wood"}, {3, "metal"}, {3, "steel"}};
     o.material_names = names; /* a MATERIAL_NAMES section to corrupt too */
     o.material_name_count = 4;
     void *out = NULL;
@@ -109,7 +139,8 @@ static int group_teardown(void **state)
     (void)state;
     for (int i = 0; i < SAMPLE_COUNT; i++)
         free(samples[i].bytes);
-    printf("corruption totals: %zu files tried: %zu rejected corrupt, %zu unsupported, %zu other errors, %zu benign opened\n",
+    printf("corruption totals: %zu files tried: %zu rejected corrupt, %zu unsupported, %zu other errors, %zu "
+           "benign opened\n",
            totals.tried, totals.corrupt, totals.unsupported, totals.other_error, totals.opened);
     return 0;
 }
@@ -154,8 +185,8 @@ static void add_tally(const tally *t)
 
 static void print_tally(const char *what, const char *file, const tally *t)
 {
-    printf("%-28s %-9s tried %6zu  corrupt %6zu  unsupported %4zu  other %zu  opened %5zu\n", what, file, t->tried, t->corrupt,
-           t->unsupported, t->other_error, t->opened);
+    printf("%-28s %-9s tried %6zu  corrupt %6zu  unsupported %4zu  other %zu  opened %5zu\n", what, file,
+           t->tried, t->corrupt, t->unsupported, t->other_error, t->opened);
     add_tally(t);
 }
 
@@ -180,7 +211,8 @@ static void assert_same_answers(const uint8_t *a, size_t na, const uint8_t *b, s
         r.tmax = INFINITY;
         for (int t = 0; t < 4; t++) {
             cbvh_hit ha, hb;
-            int ga = cbvh_raycast(fa, &r, (cbvh_traversal)t, &ha, NULL), gb = cbvh_raycast(fb, &r, (cbvh_traversal)t, &hb, NULL);
+            int ga = cbvh_raycast(fa, &r, (cbvh_traversal)t, &ha, NULL),
+                gb = cbvh_raycast(fb, &r, (cbvh_traversal)t, &hb, NULL);
             assert_int_equal(ga, gb);
             if (ga)
                 assert_true(ha.t == hb.t);
@@ -203,7 +235,7 @@ static void test_truncation(void **state)
 {
     (void)state;
     for (int s = 0; s < SAMPLE_COUNT; s++) {
-        tally t = { 0 };
+        tally t = {0};
         for (size_t len = 0; len < samples[s].size; len++)
             expect_truncation_corrupt(samples[s].bytes, len, "as cut", &t);
         /* truncated with the size field and CRCs made to match the shorter file */
@@ -249,8 +281,9 @@ static int expected_code(const uint8_t *orig, const uint8_t *mut, size_t pos)
     if (pos >= HDR_COMPAT && pos < HDR_COMPAT + 4)
         return CBVH_OK; /* old readers ignore compatible flags */
     if (pos >= HDR_INCOMPAT && pos < HDR_INCOMPAT + 4) {
-        /* bits this reader does not know are unsupported; the wide4 depth-first bit (CBVH_INCOMPAT_W4_DEPTH_FIRST)
-         * changes how the leaves must tile the triangles: a tree whose two orders differ turns corrupt */
+        /* bits this reader does not know are unsupported; the wide4 depth-first bit
+         * (CBVH_INCOMPAT_W4_DEPTH_FIRST) changes how the leaves must tile the triangles: a tree whose two
+         * orders differ turns corrupt */
         if (rd32(mut + HDR_INCOMPAT) & ~0x2u)
             return CBVH_ERROR_UNSUPPORTED;
         return -1;
@@ -260,7 +293,8 @@ static int expected_code(const uint8_t *orig, const uint8_t *mut, size_t pos)
     if (pos >= TABLE && pos < TABLE + (size_t)count * ENTRY) {
         size_t field = (pos - TABLE) % ENTRY;
         const uint8_t *e = mut + TABLE + (pos - TABLE) / ENTRY * ENTRY;
-        const int ancillary = (rd32(e) & 0x80000000u) != 0; /* skipped when its codec or encoding is unknown */
+        const int ancillary =
+            (rd32(e) & 0x80000000u) != 0; /* skipped when its codec or encoding is unknown */
         if (field >= E_CODEC && field < E_CODEC + 4 && rd32(e + E_CODEC) > 1)
             return ancillary ? CBVH_OK : CBVH_ERROR_UNSUPPORTED;
         if (field < 4 && !ancillary && rd32(e) > 5)
@@ -268,7 +302,7 @@ static int expected_code(const uint8_t *orig, const uint8_t *mut, size_t pos)
         if (field >= E_ENCODING) {
             /* encodings per type 1..5 (NODES: binary, wide4; TRIANGLES: u16, u32, DELTA16, LOCAL8 = 4, 3 is
              * reserved; REMAP: u16, u32, u24; MATERIALS: u8, u16, u32, uniform) */
-            static const uint32_t known[6] = { 0, 2, 5, 2, 3, 4 };
+            static const uint32_t known[6] = {0, 2, 5, 2, 3, 4};
             uint32_t type = rd32(e), enc = rd32(e + E_ENCODING);
             if (type >= 1 && type <= 5 && (enc >= known[type] || (type == 2 && enc == 3)))
                 return CBVH_ERROR_UNSUPPORTED;
@@ -297,12 +331,14 @@ static int expected_code(const uint8_t *orig, const uint8_t *mut, size_t pos)
 /* Every byte in [lo, hi) (or `samples_wanted` evenly spread ones) set to each
  * of four changed values, once as is (the CRCs must catch it) and once with
  * the checksums repaired (the structural checks must). */
-static void flip_range(const sample *s, size_t lo, size_t hi, size_t samples_wanted, tally *as_is, tally *repaired)
+static void flip_range(const sample *s, size_t lo, size_t hi, size_t samples_wanted, tally *as_is,
+                       tally *repaired)
 {
     uint8_t *m = malloc(s->size);
     size_t step = samples_wanted && hi - lo > samples_wanted ? (hi - lo) / samples_wanted : 1;
     for (size_t pos = lo; pos < hi; pos += step) {
-        const uint8_t values[4] = { (uint8_t)(s->bytes[pos] ^ 0x01), (uint8_t)(s->bytes[pos] ^ 0x80), (uint8_t)(s->bytes[pos] ^ 0xFF), 0x00 };
+        const uint8_t values[4] = {(uint8_t)(s->bytes[pos] ^ 0x01), (uint8_t)(s->bytes[pos] ^ 0x80),
+                                   (uint8_t)(s->bytes[pos] ^ 0xFF), 0x00};
         for (int v = 0; v < 4; v++) {
             if (values[v] == s->bytes[pos])
                 continue;
@@ -310,13 +346,14 @@ static void flip_range(const sample *s, size_t lo, size_t hi, size_t samples_wan
             m[pos] = values[v];
             cbvh_result r = try_open(m, s->size, as_is);
             if (r == CBVH_OK)
-                fail_msg("%s: byte %zu set to 0x%02x opened although no checksum was repaired", s->name, pos, values[v]);
+                fail_msg("%s: byte %zu set to 0x%02x opened although no checksum was repaired", s->name, pos,
+                         values[v]);
             fuzz_repair_checksums(m, s->size);
             r = try_open(m, s->size, repaired);
             int want = expected_code(s->bytes, m, pos);
             if (want >= 0 && (int)r != want)
-                fail_msg("%s: byte %zu set to 0x%02x (checksums repaired): %s, expected %s", s->name, pos, values[v],
-                         cbvh_result_string(r), cbvh_result_string((cbvh_result)want));
+                fail_msg("%s: byte %zu set to 0x%02x (checksums repaired): %s, expected %s", s->name, pos,
+                         values[v], cbvh_result_string(r), cbvh_result_string((cbvh_result)want));
             if (want == CBVH_OK)
                 assert_same_answers(s->bytes, s->size, m, s->size);
         }
@@ -330,7 +367,7 @@ static void test_byte_changes(void **state)
     for (int i = 0; i < SAMPLE_COUNT; i++) {
         const sample *s = &samples[i];
         uint32_t count = rd32(s->bytes + HDR_SECTION_COUNT);
-        tally as_is = { 0 }, repaired = { 0 }, as_is_s = { 0 }, repaired_s = { 0 };
+        tally as_is = {0}, repaired = {0}, as_is_s = {0}, repaired_s = {0};
         size_t table_end = TABLE + (size_t)count * ENTRY;
         flip_range(s, 0, table_end, 0, &as_is, &repaired);
         /* padding after the table */
@@ -340,7 +377,8 @@ static void test_byte_changes(void **state)
             const uint8_t *e = s->bytes + TABLE + (size_t)k * ENTRY;
             size_t off = (size_t)rd64(e + E_OFFSET), stored = (size_t)rd64(e + E_STORED);
             int nodes = rd32(e + E_TYPE) == 1;
-            flip_range(s, off, off + stored, nodes ? 0 : 4096, nodes ? &as_is : &as_is_s, nodes ? &repaired : &repaired_s);
+            flip_range(s, off, off + stored, nodes ? 0 : 4096, nodes ? &as_is : &as_is_s,
+                       nodes ? &repaired : &repaired_s);
         }
         print_tally("header+table+nodes, as is", s->name, &as_is);
         print_tally("header+table+nodes, fixed", s->name, &repaired);
@@ -366,7 +404,8 @@ static cbvh_result open_edit(const edit_file *e, tally *t, uint8_t **keep, size_
 }
 
 /* Table edits on a copy of sample s, checksums repaired. */
-static cbvh_result open_table_edit(const sample *s, tally *t, void (*edit)(uint8_t *bytes, size_t *size, void *arg), void *arg)
+static cbvh_result open_table_edit(const sample *s, tally *t,
+                                   void (*edit)(uint8_t *bytes, size_t *size, void *arg), void *arg)
 {
     uint8_t *m = malloc(s->size + 4096);
     memcpy(m, s->bytes, s->size);
@@ -404,7 +443,10 @@ static void edit_overlap_by_64(uint8_t *b, size_t *n, void *arg)
     wr64(e + E_OFFSET, rd64(e + E_OFFSET) - 64);
 }
 
-typedef struct past_end { int entry; uint64_t offset, stored, size; } past_end;
+typedef struct past_end {
+    int entry;
+    uint64_t offset, stored, size;
+} past_end;
 static void edit_past_end(uint8_t *b, size_t *n, void *arg)
 {
     (void)n;
@@ -436,30 +478,32 @@ static void test_structure(void **state)
     (void)state;
     for (int i = 0; i < SAMPLE_COUNT; i++) {
         const sample *s = &samples[i];
-        tally t = { 0 }, benign = { 0 };
+        tally t = {0}, benign = {0};
         int count = (int)rd32(s->bytes + HDR_SECTION_COUNT);
         for (int k = 0; k + 1 < count; k++) {
             assert_int_equal(open_table_edit(s, &t, edit_swap_entries, &k), CBVH_ERROR_CORRUPT);
             assert_int_equal(open_table_edit(s, &t, edit_overlap, &k), CBVH_ERROR_CORRUPT);
             assert_int_equal(open_table_edit(s, &t, edit_overlap_by_64, &k), CBVH_ERROR_CORRUPT);
         }
-        const uint64_t big[] = { (uint64_t)s->size, (uint64_t)s->size + 64, UINT64_MAX - 63, UINT64_MAX - 127, 1ull << 62, 1ull << 32 };
+        const uint64_t big[] = {(uint64_t)s->size, (uint64_t)s->size + 64,
+                                UINT64_MAX - 63,   UINT64_MAX - 127,
+                                1ull << 62,        1ull << 32};
         for (int k = 0; k < count; k++)
             for (size_t j = 0; j < sizeof big / sizeof big[0]; j++) {
-                past_end p1 = { k, big[j] & ~63ull, UINT64_MAX, UINT64_MAX };      /* starts past the end */
-                past_end p2 = { k, UINT64_MAX, big[j], UINT64_MAX };               /* runs past the end */
-                past_end p3 = { k, UINT64_MAX, big[j], big[j] };                   /* runs past, sizes agree */
-                past_end p4 = { k, UINT64_MAX, UINT64_MAX, big[j] };               /* declared size huge */
+                past_end p1 = {k, big[j] & ~63ull, UINT64_MAX, UINT64_MAX}; /* starts past the end */
+                past_end p2 = {k, UINT64_MAX, big[j], UINT64_MAX};          /* runs past the end */
+                past_end p3 = {k, UINT64_MAX, big[j], big[j]};              /* runs past, sizes agree */
+                past_end p4 = {k, UINT64_MAX, UINT64_MAX, big[j]};          /* declared size huge */
                 if (p1.offset != rd64(s->bytes + TABLE + (size_t)k * ENTRY + E_OFFSET)) /* else no change */
                     assert_int_equal(open_table_edit(s, &t, edit_past_end, &p1), CBVH_ERROR_CORRUPT);
                 assert_int_equal(open_table_edit(s, &t, edit_past_end, &p2), CBVH_ERROR_CORRUPT);
                 assert_int_equal(open_table_edit(s, &t, edit_past_end, &p3), CBVH_ERROR_CORRUPT);
                 assert_int_equal(open_table_edit(s, &t, edit_past_end, &p4), CBVH_ERROR_CORRUPT);
             }
-        const uint32_t counts[] = { 0, 1, 2, (uint32_t)count - 1, (uint32_t)count + 1, 16, 17, 0xFFFFFFFFu };
+        const uint32_t counts[] = {0, 1, 2, (uint32_t)count - 1, (uint32_t)count + 1, 16, 17, 0xFFFFFFFFu};
         for (size_t j = 0; j < sizeof counts / sizeof counts[0]; j++)
             assert_int_equal(open_table_edit(s, &t, edit_count, (void *)&counts[j]), CBVH_ERROR_CORRUPT);
-        const size_t extras[] = { 1, 63, 64, 4096 };
+        const size_t extras[] = {1, 63, 64, 4096};
         for (size_t j = 0; j < sizeof extras / sizeof extras[0]; j++)
             assert_int_equal(open_table_edit(s, &t, edit_append, (void *)&extras[j]), CBVH_ERROR_CORRUPT);
 
@@ -494,7 +538,7 @@ static void test_structure(void **state)
         if (e.count < 16) {
             uint8_t *extra = malloc(100);
             memset(extra, 0xA5, 100);
-            e.s[e.count] = (edit_section){ 0x80000007u, 0, 3, extra, 100 };
+            e.s[e.count] = (edit_section){0x80000007u, 0, 3, extra, 100};
             e.count++;
             assert_int_equal(open_edit(&e, &benign, &rebuilt, &rebuilt_size), CBVH_OK);
             assert_same_answers(s->bytes, s->size, rebuilt, rebuilt_size);
@@ -545,7 +589,8 @@ static void test_structure(void **state)
         for (uint32_t n = 0; e.s[ni].encoding == 1 && n < rd32(e.header + 40); n++) {
             uint8_t *node = e.s[ni].data + 64 * n; /* wide4: the first node with a leaf slot */
             const uint64_t meta = rd64(node + 56);
-            const uint32_t first_triangle = rd32(node + 52), leaves = (uint32_t)(meta >> 16 & ~(meta >> 20)) & 15u;
+            const uint32_t first_triangle = rd32(node + 52),
+                           leaves = (uint32_t)(meta >> 16 & ~(meta >> 20)) & 15u;
             if (!leaves)
                 continue;
             const int slot = leaves & 1u ? 0 : leaves & 2u ? 1 : leaves & 4u ? 2 : 3;
@@ -595,7 +640,7 @@ static void test_paths(void **state)
     char path[256];
     snprintf(path, sizeof path, "%s/f.cbvh", dir);
     const sample *s = &samples[1];
-    const size_t lengths[] = { 0, 1, 8, 127, 128, s->size / 2, s->size - 1, s->size };
+    const size_t lengths[] = {0, 1, 8, 127, 128, s->size / 2, s->size - 1, s->size};
     for (size_t i = 0; i < sizeof lengths / sizeof lengths[0]; i++) {
         FILE *fp = fopen(path, "wb");
         assert_non_null(fp);

@@ -27,7 +27,7 @@ static void test_every_length_and_alignment(void **state)
     assert_non_null(buf);
     for (size_t i = 0; i < MAX; i++)
         buf[i] = next_byte();
-    static const uint32_t starts[] = { 0u, 0xFFFFFFFFu, 0x12345678u };
+    static const uint32_t starts[] = {0u, 0xFFFFFFFFu, 0x12345678u};
     for (size_t s = 0; s < sizeof starts / sizeof starts[0]; s++)
         for (size_t align = 0; align < 16; align++)
             for (size_t len = 0; len <= 1024; len++) {

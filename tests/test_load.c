@@ -1,4 +1,5 @@
-/* test_load.c: the loader on valid, truncated, corrupted and cooked files, with allocation failures and leak counting. */
+/* test_load.c: the loader on valid, truncated, corrupted and cooked files, with allocation failures and leak
+ * counting. */
 #include <errno.h>
 #include <math.h>
 #include <setjmp.h>
@@ -41,7 +42,7 @@ static char *vector_path(const char *name)
 
 static input load_vector(const char *name)
 {
-    input in = { name, NULL, 0 };
+    input in = {name, NULL, 0};
     FILE *fp = fopen(vector_path(name), "rb");
     if (!fp)
         fail_msg("cannot open %s", vector_path(name));
@@ -74,7 +75,8 @@ static random_mesh make_random_mesh(uint64_t seed, size_t vertices, size_t trian
     m.materials = malloc(triangles * sizeof(uint32_t));
     assert_true(m.positions && m.indices && m.materials);
     for (size_t i = 0; i < vertices * 3; i++)
-        m.positions[i] = (float)(next_random(&seed) % 200000) * 0.001f - 100.0f + (i % 3 == 0 ? 5000.0f : 0.0f);
+        m.positions[i] =
+            (float)(next_random(&seed) % 200000) * 0.001f - 100.0f + (i % 3 == 0 ? 5000.0f : 0.0f);
     for (size_t t = 0; t < triangles; t++) {
         /* mostly local triangles (as real meshes are), a few spanning the mesh */
         uint32_t base = next_random(&seed) % (uint32_t)vertices;
@@ -83,7 +85,7 @@ static random_mesh make_random_mesh(uint64_t seed, size_t vertices, size_t trian
                                                : (base + next_random(&seed) % 8) % (uint32_t)vertices;
         m.materials[t] = next_random(&seed) % 1000;
     }
-    m.mesh = (cbvh_mesh){ m.positions, vertices, 0, m.indices, triangles, m.materials };
+    m.mesh = (cbvh_mesh){m.positions, vertices, 0, m.indices, triangles, m.materials};
     return m;
 }
 
@@ -108,7 +110,7 @@ static input cook_input(const char *name, const random_mesh *m, int compress, cb
     cbvh_result r = cbvh_cook(&m->mesh, &o, NULL, &data, &size, NULL, &err);
     if (r != CBVH_OK)
         fail_msg("cook %s: %s", name, err.message);
-    input in = { name, NULL, size };
+    input in = {name, NULL, size};
     assert_non_null(in.data = test_aligned_alloc(size, 64));
     memcpy(in.data, data, size);
     cbvh_buffer_free(NULL, data);
@@ -116,10 +118,14 @@ static input cook_input(const char *name, const random_mesh *m, int compress, cb
 }
 #endif
 
-static const char *const valid_vectors[] = { "good-box-raw", "good-box-zlib", "good-box-q16",
-                                             "good-remap-u32-materials-u32-zlib", "good-single-triangle",
-                                             "good-w4-box-leaf1", "good-w4-remap-u32-materials-u32-zlib",
-                                             "good-w4-single-triangle" };
+static const char *const valid_vectors[] = {"good-box-raw",
+                                            "good-box-zlib",
+                                            "good-box-q16",
+                                            "good-remap-u32-materials-u32-zlib",
+                                            "good-single-triangle",
+                                            "good-w4-box-leaf1",
+                                            "good-w4-remap-u32-materials-u32-zlib",
+                                            "good-w4-single-triangle"};
 #define VALID_VECTOR_COUNT (sizeof valid_vectors / sizeof valid_vectors[0])
 
 /* ------------------------------------------------------------------ comparisons */
@@ -177,8 +183,8 @@ static void touch_everything(const cbvh_file *f)
     assert_false(isnan(sum));
 }
 
-static cbvh_result open_counted(const uint8_t *data, size_t size, long fail_at, counting_alloc *c, cbvh_file **f,
-                                cbvh_error *err)
+static cbvh_result open_counted(const uint8_t *data, size_t size, long fail_at, counting_alloc *c,
+                                cbvh_file **f, cbvh_error *err)
 {
     cbvh_allocator a = counting_allocator(c, fail_at, 0);
     cbvh_result r = cbvh_open_memory(data, size, &a, f, err);
@@ -288,7 +294,8 @@ static void test_flipped_bytes(void **state)
             cbvh_file *f = NULL;
             cbvh_error err;
             cbvh_result r = open_counted(in.data, in.size, -1, &c, &f, &err);
-            cbvh_result want = i >= 8 && i < 12 && (i > 8 || bit > 0) ? CBVH_ERROR_UNSUPPORTED : CBVH_ERROR_CORRUPT;
+            cbvh_result want =
+                i >= 8 && i < 12 && (i > 8 || bit > 0) ? CBVH_ERROR_UNSUPPORTED : CBVH_ERROR_CORRUPT;
             if (r != want)
                 fail_msg("byte %zu bit %d: %s (%s)", i, bit, cbvh_result_string(r), err.message);
             in.data[i] ^= (uint8_t)(1u << bit);
@@ -323,7 +330,7 @@ static void repair_crcs(uint8_t *d, size_t size)
 /* Changed bytes behind repaired CRCs: whatever the loader accepts must be safe to read everywhere. */
 static void check_changes(const input *in, size_t from)
 {
-    static const uint8_t xors[] = { 0x01, 0x02, 0x10, 0x80, 0xFF };
+    static const uint8_t xors[] = {0x01, 0x02, 0x10, 0x80, 0xFF};
     uint8_t *copy = malloc(in->size);
     assert_non_null(copy);
     for (size_t i = from; i < in->size; i++) {
@@ -350,8 +357,9 @@ static void check_changes(const input *in, size_t from)
 static void test_changes_behind_crcs(void **state)
 {
     (void)state;
-    static const char *const names[] = { "good-box-raw", "good-remap-u32-materials-u32-zlib", "good-box-delta16",
-                                         "good-w4-box-leaf1", "good-w4-remap-u32-materials-u32-zlib" };
+    static const char *const names[] = {"good-box-raw", "good-remap-u32-materials-u32-zlib",
+                                        "good-box-delta16", "good-w4-box-leaf1",
+                                        "good-w4-remap-u32-materials-u32-zlib"};
     for (size_t i = 0; i < sizeof names / sizeof names[0]; i++) {
         input in = load_vector(names[i]);
         check_changes(&in, 12); /* everything after the magic and the version */
@@ -416,7 +424,8 @@ static void test_info_struct_size(void **state)
     assert_int_equal(part.struct_size, short_size);
     assert_int_equal(part.node_count, whole.node_count);
     assert_memory_equal((const uint8_t *)&part + sizeof part.struct_size,
-                        (const uint8_t *)&whole + sizeof whole.struct_size, short_size - sizeof whole.struct_size);
+                        (const uint8_t *)&whole + sizeof whole.struct_size,
+                        short_size - sizeof whole.struct_size);
     for (size_t i = short_size; i < sizeof part; i++)
         if (((const uint8_t *)&part)[i] != 0xA5)
             fail_msg("byte %zu past struct_size %zu was written", i, short_size);
@@ -430,8 +439,12 @@ static void test_info_struct_size(void **state)
         if (((const uint8_t *)&part)[i] != 0xA5)
             fail_msg("byte %zu past struct_size %zu was written", i, offsetof(cbvh_file_info, layout));
 
-    const size_t bad[] = { 0, 1, sizeof(size_t), offsetof(cbvh_file_info, format_version) + 3, sizeof part + 1,
-                           sizeof part + 4096 };
+    const size_t bad[] = {0,
+                          1,
+                          sizeof(size_t),
+                          offsetof(cbvh_file_info, format_version) + 3,
+                          sizeof part + 1,
+                          sizeof part + 4096};
     for (size_t k = 0; k < sizeof bad / sizeof bad[0]; k++) {
         memset(&part, 0xA5, sizeof part);
         assert_int_equal(cbvh_file_get_info(f, &part, bad[k]), CBVH_ERROR_INVALID_ARGUMENT);
@@ -456,7 +469,8 @@ static void test_arguments(void **state)
     f = (cbvh_file *)&in;
     assert_int_equal(cbvh_open_path(NULL, NULL, &f, &err), CBVH_ERROR_INVALID_ARGUMENT);
     assert_null(f);
-    assert_int_equal(cbvh_open_path(vector_path("good-box-raw"), NULL, NULL, NULL), CBVH_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(cbvh_open_path(vector_path("good-box-raw"), NULL, NULL, NULL),
+                     CBVH_ERROR_INVALID_ARGUMENT);
     assert_int_equal(cbvh_open_memory(NULL, 0, NULL, &f, &err), CBVH_ERROR_CORRUPT);
     assert_null(f);
     assert_int_equal(cbvh_open_memory(in.data, in.size, NULL, &f, NULL), CBVH_OK); /* err may be NULL */
@@ -488,9 +502,8 @@ static void write_whole_file(const char *path, const void *data, size_t size)
 static void test_path_errors(void **state)
 {
     (void)state;
-    cbvh_result (*const opens[])(const char *, const cbvh_allocator *, cbvh_file **, cbvh_error *) = {
-        cbvh_open_path, cbvh_open_path_read
-    };
+    cbvh_result (*const opens[])(const char *, const cbvh_allocator *, cbvh_file **,
+                                 cbvh_error *) = {cbvh_open_path, cbvh_open_path_read};
     char dir[200];
     test_temp_dir(dir, sizeof dir, "cbvh-test-load");
     char path[256];
@@ -524,9 +537,11 @@ static void assert_same_hits(const cbvh_file *a, const cbvh_file *b)
         const int u = (axis + 1) % 3, v = (axis + 2) % 3;
         for (int i = 0; i <= 16; i++) {
             for (int j = 0; j <= 16; j++) {
-                cbvh_ray ray = { { 0, 0, 0 }, 0.0f, { 0, 0, 0 }, INFINITY };
-                ray.org[u] = info.bounds_min[u] + (info.bounds_max[u] - info.bounds_min[u]) * (float)i / 16.0f;
-                ray.org[v] = info.bounds_min[v] + (info.bounds_max[v] - info.bounds_min[v]) * (float)j / 16.0f;
+                cbvh_ray ray = {{0, 0, 0}, 0.0f, {0, 0, 0}, INFINITY};
+                ray.org[u] =
+                    info.bounds_min[u] + (info.bounds_max[u] - info.bounds_min[u]) * (float)i / 16.0f;
+                ray.org[v] =
+                    info.bounds_min[v] + (info.bounds_max[v] - info.bounds_min[v]) * (float)j / 16.0f;
                 ray.org[axis] = info.bounds_min[axis] - 1.0f;
                 ray.dir[axis] = 1.0f;
                 cbvh_hit x, y;
@@ -893,8 +908,8 @@ static void test_cooked_files(void **state)
                 cbvh_file *f = NULL;
                 cbvh_error err;
                 if (open_counted(in.data, in.size, -1, &c, &f, &err) != CBVH_OK)
-                    fail_msg("cooked file (compress %d, format %d, remap %d): %s", compress, format, keep_remap,
-                             err.message);
+                    fail_msg("cooked file (compress %d, format %d, remap %d): %s", compress, format,
+                             keep_remap, err.message);
                 if (keep_remap)
                     check_round_trip(f, &m);
                 else
@@ -914,7 +929,7 @@ static void test_cooked_sizes_by_path(void **state)
     test_temp_dir(dir, sizeof dir, "cbvh-test-load");
     char path[256];
     snprintf(path, sizeof path, "%s/mesh.cbvh", dir);
-    static const size_t sizes[][2] = { { 3, 1 }, { 4, 2 }, { 10, 7 }, { 100, 300 }, { 100000, 60000 } };
+    static const size_t sizes[][2] = {{3, 1}, {4, 2}, {10, 7}, {100, 300}, {100000, 60000}};
     for (size_t i = 0; i < sizeof sizes / sizeof sizes[0]; i++) {
         random_mesh m = make_random_mesh(1000 + i, sizes[i][0], sizes[i][1]);
         if (sizes[i][1] <= 2) /* no degenerate triangle: all have distinct corners */

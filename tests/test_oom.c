@@ -1,4 +1,5 @@
-/* test_oom.c: every allocation of cook, open, cook_to_path and expand failed in turn (clean error, nothing leaked, no partial file), and cooks killed mid-write never damage the destination. */
+/* test_oom.c: every allocation of cook, open, cook_to_path and expand failed in turn (clean error, nothing
+ * leaked, no partial file), and cooks killed mid-write never damage the destination. */
 #ifdef HAVE_CONFIG_H
 #include "config.h"
 #endif
@@ -26,14 +27,14 @@
 #include "support/test_os.h"
 #include "support/scene_gen.h"
 
-static scene mesh;        /* small, with materials: every section present */
-static scene big_mesh;    /* for the kill test */
+static scene mesh;     /* small, with materials: every section present */
+static scene big_mesh; /* for the kill test */
 static void *file_raw, *file_zlib, *file_q16;
 static size_t size_raw, size_zlib, size_q16;
 
 static cbvh_mesh as_mesh(const scene *s)
 {
-    cbvh_mesh m = { s->positions, s->vertex_count, 0, s->indices, s->triangle_count, s->material_ids };
+    cbvh_mesh m = {s->positions, s->vertex_count, 0, s->indices, s->triangle_count, s->material_ids};
     return m;
 }
 
@@ -47,7 +48,7 @@ static void options_for(cbvh_cook_options *o, int level, int quantized)
 static int group_setup(void **state)
 {
     (void)state;
-    float c[3] = { 0, 0, 0 };
+    float c[3] = {0, 0, 0};
     if (!scene_sphere(&mesh, 500, c, 1.0f) || !scene_terrain(&big_mesh, 250000, 100.0f))
         return -1;
     mesh.material_ids = malloc(mesh.triangle_count * sizeof(uint32_t));
@@ -118,8 +119,9 @@ static void test_cook_oom(void **state)
     size_t zlib = oom_loop_cook(6, 0, 0, file_zlib, size_zlib);
     size_t q16 = oom_loop_cook(0, 1, 0, file_q16, size_q16);
     size_t raw_all = oom_loop_cook(0, 0, 1, file_raw, size_raw);
-    printf("cook failure points: raw %zu, zlib %zu, quantized %zu (raw, every later allocation failing too: %zu)\n", raw, zlib,
-           q16, raw_all);
+    printf("cook failure points: raw %zu, zlib %zu, quantized %zu (raw, every later allocation failing too: "
+           "%zu)\n",
+           raw, zlib, q16, raw_all);
     assert_true(raw > 0 && zlib > 0 && q16 > 0);
 }
 
@@ -127,7 +129,7 @@ static void test_cook_oom(void **state)
 static void hits_the_sphere(const cbvh_file *f)
 {
     cbvh_hit h;
-    cbvh_ray ray = { { 0, 0, -5 }, 0, { 0, 0, 1 }, INFINITY };
+    cbvh_ray ray = {{0, 0, -5}, 0, {0, 0, 1}, INFINITY};
     assert_int_equal(cbvh_raycast(f, &ray, CBVH_TRAVERSAL_SORTED, &h, NULL), 1);
 }
 
@@ -163,8 +165,8 @@ static void test_open_oom(void **state)
     size_t by_path = oom_loop_open(NULL, 0, path);
     unlink(path);
     rmdir(dir);
-    printf("open failure points: raw %zu, zlib %zu, quantized %zu, misaligned raw %zu, zlib by path %zu\n", raw, zlib, q16,
-           misaligned, by_path);
+    printf("open failure points: raw %zu, zlib %zu, quantized %zu, misaligned raw %zu, zlib by path %zu\n",
+           raw, zlib, q16, misaligned, by_path);
 }
 
 /* The closest hits of a fan of rays through the sphere's center, into out[count]. */
@@ -172,7 +174,7 @@ static void cast_fan(const cbvh_file *f, cbvh_hit *out, size_t count)
 {
     for (size_t i = 0; i < count; i++) {
         const float a = 0.37f * (float)i, z = 1.0f - 2.0f * (float)(i + 1) / (float)(count + 1);
-        const cbvh_ray r = { { 0.01f, 0.02f, 0.03f }, 0.0f, { cosf(a), sinf(a), z }, INFINITY };
+        const cbvh_ray r = {{0.01f, 0.02f, 0.03f}, 0.0f, {cosf(a), sinf(a), z}, INFINITY};
         cbvh_raycast(f, &r, CBVH_TRAVERSAL_SORTED, &out[i], NULL);
     }
 }
@@ -264,7 +266,7 @@ static void test_cook_to_path_oom(void **state)
     cbvh_cook_options o;
     options_for(&o, 6, 0);
     static const uint8_t old_bytes[] = "an older file that must survive a failed cook";
-    size_t points[2] = { 0, 0 };
+    size_t points[2] = {0, 0};
     for (int with_old = 0; with_old < 2; with_old++) {
         for (size_t n = 0;; n++) {
             if (with_old)
@@ -287,7 +289,8 @@ static void test_cook_to_path_oom(void **state)
                 break;
             }
             if (r != CBVH_ERROR_OUT_OF_MEMORY)
-                fail_msg("cook_to_path with allocation %zu failing: %s (%s)", n, cbvh_result_string(r), err.message);
+                fail_msg("cook_to_path with allocation %zu failing: %s (%s)", n, cbvh_result_string(r),
+                         err.message);
             if (with_old) {
                 assert_non_null(got);
                 assert_int_equal(got_size, sizeof old_bytes);
@@ -303,7 +306,8 @@ static void test_cook_to_path_oom(void **state)
     }
     unlink(path);
     rmdir(dir);
-    printf("cook_to_path failure points: %zu into an empty folder, %zu over an existing file\n", points[0], points[1]);
+    printf("cook_to_path failure points: %zu into an empty folder, %zu over an existing file\n", points[0],
+           points[1]);
 }
 
 /* A child cooks a large mesh to the path and is killed after a random delay;
@@ -343,14 +347,15 @@ static void test_killed_cook(void **state)
             unlink(path);
         /* delays spread over the whole cook, the write and rename at the end
          * included; every third round lands in the last quarter, where the file is written */
-        double delay = cook_seconds * (i % 3 == 2 ? 0.8 + 0.4 * scene_rand_unit(&rng) : 1.2 * scene_rand_unit(&rng));
+        double delay =
+            cook_seconds * (i % 3 == 2 ? 0.8 + 0.4 * scene_rand_unit(&rng) : 1.2 * scene_rand_unit(&rng));
         pid_t pid = fork();
         assert_true(pid >= 0);
         if (pid == 0) {
             cbvh_result r = cbvh_cook_to_path(&m, &o, NULL, path, NULL, NULL);
             _exit(r == CBVH_OK ? 0 : 1);
         }
-        struct timespec d = { (time_t)delay, (long)((delay - (double)(time_t)delay) * 1e9) };
+        struct timespec d = {(time_t)delay, (long)((delay - (double)(time_t)delay) * 1e9)};
         nanosleep(&d, NULL);
         kill(pid, SIGKILL);
         int status;
@@ -368,8 +373,9 @@ static void test_killed_cook(void **state)
             old_kept++;
         } else {
             if (got_size != expect_size || memcmp(got, expect, expect_size) != 0)
-                fail_msg("round %d (killed after %.3f s): %s holds %zu bytes that are neither the old nor the new file", i,
-                         delay, path, got_size);
+                fail_msg("round %d (killed after %.3f s): %s holds %zu bytes that are neither the old nor "
+                         "the new file",
+                         i, delay, path, got_size);
             cbvh_file *f = NULL;
             assert_int_equal(cbvh_open_path(path, NULL, &f, NULL), CBVH_OK);
             cbvh_close(f);
@@ -378,7 +384,8 @@ static void test_killed_cook(void **state)
         free(got);
     }
     size_t leftovers = count_entries(dir, "level.cbvh");
-    printf("killed cooks: %d rounds over a %.2f s cook: destination absent %zu, old file intact %zu, new complete file %zu "
+    printf("killed cooks: %d rounds over a %.2f s cook: destination absent %zu, old file intact %zu, new "
+           "complete file %zu "
            "(%zu children finished before the kill); temporary files left by killed children: %zu\n",
            rounds, cook_seconds, absent, old_kept, new_complete, finished, leftovers);
     /* clean up what killed children left */
@@ -400,10 +407,8 @@ static void test_killed_cook(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_cook_oom),
-        cmocka_unit_test(test_open_oom),
-        cmocka_unit_test(test_expand_oom),
-        cmocka_unit_test(test_cook_to_path_oom),
+        cmocka_unit_test(test_cook_oom),    cmocka_unit_test(test_open_oom),
+        cmocka_unit_test(test_expand_oom),  cmocka_unit_test(test_cook_to_path_oom),
         cmocka_unit_test(test_killed_cook),
     };
     return cmocka_run_group_tests(tests, group_setup, group_teardown);

@@ -1,4 +1,5 @@
-/* test_overlap.c: box, sphere and capsule overlaps and contacts against brute force; the triangle/box SAT against clipping. */
+/* test_overlap.c: box, sphere and capsule overlaps and contacts against brute force; the triangle/box SAT
+ * against clipping. */
 #include <math.h>
 #include <setjmp.h>
 #include <stdarg.h>
@@ -16,7 +17,10 @@
 #include "support/scene_gen.h"
 #include "support/layouts.h"
 
-static double rnd(uint64_t *st, double lo, double hi) { return lo + (hi - lo) * scene_rand_unit(st); }
+static double rnd(uint64_t *st, double lo, double hi)
+{
+    return lo + (hi - lo) * scene_rand_unit(st);
+}
 
 /* A query region: a box [lo, hi], a ball (p0, radius) or a capsule (p0-p1, radius). */
 enum { BOX, SPHERE, CAPSULE };
@@ -27,8 +31,8 @@ typedef struct region {
 
 static const char *const kind_name[] = {"box", "sphere", "capsule"};
 
-static size_t overlap(const ref_fixture *fx, const region *g, cbvh_overlap_fn callback, void *user, uint32_t *out,
-                      size_t capacity)
+static size_t overlap(const ref_fixture *fx, const region *g, cbvh_overlap_fn callback, void *user,
+                      uint32_t *out, size_t capacity)
 {
     if (g->kind == BOX)
         return cbvh_overlap_box(fx->file, g->lo, g->hi, callback, user, out, capacity);
@@ -37,8 +41,8 @@ static size_t overlap(const ref_fixture *fx, const region *g, cbvh_overlap_fn ca
     return cbvh_overlap_capsule(fx->file, g->p0, g->p1, g->radius, callback, user, out, capacity);
 }
 
-static size_t overlap_from(const ref_fixture *fx, const region *g, size_t first, uint32_t *out, size_t capacity,
-                           int *more)
+static size_t overlap_from(const ref_fixture *fx, const region *g, size_t first, uint32_t *out,
+                           size_t capacity, int *more)
 {
     if (g->kind == BOX)
         return cbvh_overlap_box_from(fx->file, g->lo, g->hi, first, out, capacity, more);
@@ -105,7 +109,8 @@ static void run_overlaps(const ref_fixture *fx, int count, uint64_t seed)
             g.hi[a] = g.p0[a] + (float)(size * scene_rand_unit(&st));
         }
         g.radius = (float)(g.kind == CAPSULE ? 0.3 * size : size);
-        if (g.kind == CAPSULE && r % 5 == 2) /* a capsule of no length is a sphere; one of no radius a segment */
+        if (g.kind == CAPSULE &&
+            r % 5 == 2) /* a capsule of no length is a sphere; one of no radius a segment */
             memcpy(g.p1, g.p0, sizeof g.p1);
         if (g.kind == CAPSULE && r % 5 == 4)
             g.radius = 0.0f;
@@ -171,8 +176,9 @@ static void test_overlaps(void **state)
             assert_true(scene_sphere(&s, 3000, (float[3]){0, 0, 0}, 1.0f));
         else
             assert_true(scene_terrain(&s, 3000, 40.0f));
-        assert_int_equal(ref_fixture_open(&fx, s.positions, s.vertex_count, s.indices, s.triangle_count, test_options()),
-                         CBVH_OK);
+        assert_int_equal(
+            ref_fixture_open(&fx, s.positions, s.vertex_count, s.indices, s.triangle_count, test_options()),
+            CBVH_OK);
         run_overlaps(&fx, (int)test_reps(300), 50 + (uint64_t)m);
         ref_fixture_close(&fx);
         scene_free(&s);
@@ -199,10 +205,11 @@ static void test_triangle_box_sat(void **state)
             tri[2] = tri[5] = tri[8] = hi[2];
         double t;
         cbvh_v3 n;
-        const int got = cbvh_triangle_box_sweep(v3(tri[0], tri[1], tri[2]), v3(tri[3], tri[4], tri[5]),
-                                                v3(tri[6], tri[7], tri[8]), v3(0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1]), 0.5 * (lo[2] + hi[2])),
-                                                v3(0.5 * (hi[0] - lo[0]), 0.5 * (hi[1] - lo[1]), 0.5 * (hi[2] - lo[2])),
-                                                v3(0, 0, 0), 0.0, &t, &n, NULL);
+        const int got = cbvh_triangle_box_sweep(
+            v3(tri[0], tri[1], tri[2]), v3(tri[3], tri[4], tri[5]), v3(tri[6], tri[7], tri[8]),
+            v3(0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1]), 0.5 * (lo[2] + hi[2])),
+            v3(0.5 * (hi[0] - lo[0]), 0.5 * (hi[1] - lo[1]), 0.5 * (hi[2] - lo[2])), v3(0, 0, 0), 0.0, &t, &n,
+            NULL);
         const int cls = ref_box_class(tri, lo, hi, 1e-9);
         if ((cls == 2 && !got) || (cls == 0 && got)) {
             fprintf(stderr, "SAT %d, clipping class %d at case %d\n", got, cls, r);
@@ -222,7 +229,9 @@ static void test_invalid_input(void **state)
     scene s;
     ref_fixture fx;
     assert_true(scene_sphere(&s, 200, (float[3]){0, 0, 0}, 1.0f));
-    assert_int_equal(ref_fixture_open(&fx, s.positions, s.vertex_count, s.indices, s.triangle_count, test_options()), CBVH_OK);
+    assert_int_equal(
+        ref_fixture_open(&fx, s.positions, s.vertex_count, s.indices, s.triangle_count, test_options()),
+        CBVH_OK);
     const float lo[3] = {-2, -2, -2}, hi[3] = {2, 2, 2}, nan3[3] = {0, NAN, 0}, c[3] = {0, 0, 0};
     assert_true(cbvh_overlap_box(fx.file, lo, hi, NULL, NULL, NULL, 0) == fx.tris.count);
     assert_int_equal(cbvh_overlap_box(fx.file, hi, lo, NULL, NULL, NULL, 0), 0); /* min > max */
@@ -290,11 +299,13 @@ static void check_contacts(const ref_fixture *fx, int count, uint64_t seed)
             p1[a] = p0[a] + (float)(size * (2.0 * scene_rand_unit(&st) - 1.0));
         }
         const float radius = (float)(capsule ? 0.5 * size : size);
-        const size_t n = capsule ? cbvh_overlap_capsule(fx->file, p0, p1, radius, NULL, NULL, ids, fx->id_count)
-                                 : cbvh_overlap_sphere(fx->file, p0, radius, NULL, NULL, ids, fx->id_count);
+        const size_t n = capsule
+                             ? cbvh_overlap_capsule(fx->file, p0, p1, radius, NULL, NULL, ids, fx->id_count)
+                             : cbvh_overlap_sphere(fx->file, p0, radius, NULL, NULL, ids, fx->id_count);
         int more = -1;
-        const size_t m = capsule ? cbvh_contacts_capsule(fx->file, p0, p1, radius, 0, contacts, fx->id_count, &more)
-                                 : cbvh_contacts_sphere(fx->file, p0, radius, 0, contacts, fx->id_count, &more);
+        const size_t m =
+            capsule ? cbvh_contacts_capsule(fx->file, p0, p1, radius, 0, contacts, fx->id_count, &more)
+                    : cbvh_contacts_sphere(fx->file, p0, radius, 0, contacts, fx->id_count, &more);
         assert_int_equal(m, n);
         assert_int_equal(more, 0);
         for (size_t i = 0; i < m; i++) {
@@ -312,8 +323,8 @@ static void check_contacts(const ref_fixture *fx, int count, uint64_t seed)
             assert_true(c->depth >= 0.0f && d <= radius + tol);
             if (d > tol) {
                 if (!(fabs(c->depth - (radius - d)) <= tol))
-                    fail_msg("%s contact with tri %u: depth %g, radius - distance %g", capsule ? "capsule" : "sphere",
-                             c->tri, (double)c->depth, radius - d);
+                    fail_msg("%s contact with tri %u: depth %g, radius - distance %g",
+                             capsule ? "capsule" : "sphere", c->tri, (double)c->depth, radius - d);
             } else {
                 touching++;
             }
@@ -329,9 +340,11 @@ static void check_contacts(const ref_fixture *fx, int count, uint64_t seed)
                 }
                 const double moved = core_dist(fx, k, m0, capsule ? m1 : m0, capsule);
                 if (sign > 0 ? !(moved >= radius - tol) : !(moved < radius))
-                    fail_msg("%s contact with tri %u (distance %g, depth %g): moved by %g along the normal, the "
-                             "core is %g from it, radius %g", capsule ? "capsule" : "sphere", c->tri, d,
-                             (double)c->depth, move, moved, (double)radius);
+                    fail_msg(
+                        "%s contact with tri %u (distance %g, depth %g): moved by %g along the normal, the "
+                        "core is %g from it, radius %g",
+                        capsule ? "capsule" : "sphere", c->tri, d, (double)c->depth, move, moved,
+                        (double)radius);
             }
         }
         total += m;
@@ -365,8 +378,9 @@ static void test_contacts(void **state)
             assert_true(scene_terrain(&s, 3000, 40.0f));
         else
             assert_true(scene_soup(&s, 2000, 0.1f, 9));
-        assert_int_equal(ref_fixture_open(&fx, s.positions, s.vertex_count, s.indices, s.triangle_count,
-                                          test_options()), CBVH_OK);
+        assert_int_equal(
+            ref_fixture_open(&fx, s.positions, s.vertex_count, s.indices, s.triangle_count, test_options()),
+            CBVH_OK);
         check_contacts(&fx, 200, 90 + (uint64_t)m);
         ref_fixture_close(&fx);
         scene_free(&s);
@@ -375,8 +389,9 @@ static void test_contacts(void **state)
     scene s;
     ref_fixture fx;
     assert_true(scene_sphere(&s, 200, (float[3]){0, 0, 0}, 1.0f));
-    assert_int_equal(ref_fixture_open(&fx, s.positions, s.vertex_count, s.indices, s.triangle_count, test_options()),
-                     CBVH_OK);
+    assert_int_equal(
+        ref_fixture_open(&fx, s.positions, s.vertex_count, s.indices, s.triangle_count, test_options()),
+        CBVH_OK);
     const float c[3] = {0, 0, 0}, nan3[3] = {NAN, 0, 0};
     cbvh_contact out[2];
     int more = -1;
@@ -431,7 +446,8 @@ static void test_sliver_overlaps(void **state)
             } else {
                 const double f = rnd(&st, 0.05, 0.95), r = rnd(&st, 1.0, 1e8);
                 for (int a = 0; a < 3; a++)
-                    center[a] = (float)((double)p[a] * (1.0 - f) + (double)p[3 + a] * f + rnd(&st, -0.7, 0.7) * r);
+                    center[a] =
+                        (float)((double)p[a] * (1.0 - f) + (double)p[3 + a] * f + rnd(&st, -0.7, 0.7) * r);
                 radius = (float)r;
             }
             /* distance from the center to the long edge (vertex 0 - vertex 1) */
@@ -448,8 +464,9 @@ static void test_sliver_overlaps(void **state)
             uint32_t ids[2];
             const size_t n = cbvh_overlap_sphere(fx.file, center, radius, NULL, NULL, ids, 2);
             if (sqrt(d2) <= 0.999 * radius && n != 1)
-                fail_msg("aspect 1e%d sphere %d: the long edge is %g from the center, radius %g, not reported", e, i,
-                         sqrt(d2), (double)radius);
+                fail_msg(
+                    "aspect 1e%d sphere %d: the long edge is %g from the center, radius %g, not reported", e,
+                    i, sqrt(d2), (double)radius);
             region g = {SPHERE, {0, 0, 0}, {0, 0, 0}, {center[0], center[1], center[2]}, {0, 0, 0}, radius};
             check_set(&fx, ids, n, &g);
         }
@@ -460,10 +477,8 @@ static void test_sliver_overlaps(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_overlaps),
-        cmocka_unit_test(test_triangle_box_sat),
-        cmocka_unit_test(test_invalid_input),
-        cmocka_unit_test(test_sliver_overlaps),
+        cmocka_unit_test(test_overlaps),      cmocka_unit_test(test_triangle_box_sat),
+        cmocka_unit_test(test_invalid_input), cmocka_unit_test(test_sliver_overlaps),
         cmocka_unit_test(test_contacts),
     };
     return TEST_RUN_LAYOUTS(tests, 0);

@@ -1,4 +1,5 @@
-/* test_plot.c: the report's plot code: label placement (no overlap, inside the canvas, also on clustered input), axis ticks, Pareto front, SVG text. */
+/* test_plot.c: the report's plot code: label placement (no overlap, inside the canvas, also on clustered
+ * input), axis ticks, Pareto front, SVG text. */
 #include <math.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -25,17 +26,18 @@ static double next_unit(void)
 }
 
 /* Every placed box inside the area, clear of every other placed box and every obstacle. */
-static void check_spots(const label_request *req, const label_spot *spots, size_t n, const label_box *obstacles,
-                        size_t obstacle_count, const label_box *area)
+static void check_spots(const label_request *req, const label_spot *spots, size_t n,
+                        const label_box *obstacles, size_t obstacle_count, const label_box *area)
 {
     for (size_t i = 0; i < n; i++) {
         if (!spots[i].placed)
             continue;
         const label_box *b = &spots[i].box;
         if (!label_box_inside(b, area))
-            fail_msg("label %zu at [%g %g %g %g] leaves the area [%g %g %g %g]", i, b->x0, b->y0, b->x1, b->y1,
-                     area->x0, area->y0, area->x1, area->y1);
-        assert_true(fabs((b->x1 - b->x0) - req[i].width) < 1e-9 && fabs((b->y1 - b->y0) - req[i].height) < 1e-9);
+            fail_msg("label %zu at [%g %g %g %g] leaves the area [%g %g %g %g]", i, b->x0, b->y0, b->x1,
+                     b->y1, area->x0, area->y0, area->x1, area->y1);
+        assert_true(fabs((b->x1 - b->x0) - req[i].width) < 1e-9 &&
+                    fabs((b->y1 - b->y0) - req[i].height) < 1e-9);
         for (size_t j = 0; j < i; j++)
             if (spots[j].placed && label_boxes_overlap(b, &spots[j].box))
                 fail_msg("labels %zu and %zu overlap", j, i);
@@ -45,7 +47,8 @@ static void check_spots(const label_request *req, const label_spot *spots, size_
     }
 }
 
-/* Markers at the given centres, labels of the given size; checks the invariants, returns the number placed. */
+/* Markers at the given centres, labels of the given size; checks the invariants, returns the number placed.
+ */
 static size_t layout_points(const double (*xy)[2], size_t n, double w, double h, const label_box *area,
                             label_spot *spots)
 {
@@ -54,8 +57,8 @@ static size_t layout_points(const double (*xy)[2], size_t n, double w, double h,
     assert_non_null(req);
     assert_non_null(markers);
     for (size_t i = 0; i < n; i++) {
-        req[i] = (label_request){ xy[i][0], xy[i][1], w * (0.5 + (double)(i % 3) / 2), h };
-        markers[i] = (label_box){ xy[i][0] - 6, xy[i][1] - 6, xy[i][0] + 6, xy[i][1] + 6 };
+        req[i] = (label_request){xy[i][0], xy[i][1], w * (0.5 + (double)(i % 3) / 2), h};
+        markers[i] = (label_box){xy[i][0] - 6, xy[i][1] - 6, xy[i][0] + 6, xy[i][1] + 6};
     }
     size_t placed = label_layout(req, n, markers, n, area, 1.5, 8.0, spots);
     check_spots(req, spots, n, markers, n, area);
@@ -71,8 +74,8 @@ static size_t layout_points(const double (*xy)[2], size_t n, double w, double h,
 static void test_lone_label_sits_beside_its_marker(void **state)
 {
     (void)state;
-    const double xy[1][2] = { { 200, 150 } };
-    label_box area = { 0, 0, 400, 300 };
+    const double xy[1][2] = {{200, 150}};
+    label_box area = {0, 0, 400, 300};
     label_spot s;
     assert_int_equal(layout_points(xy, 1, 60, 13, &area, &s), 1);
     assert_false(s.leader);
@@ -80,7 +83,7 @@ static void test_lone_label_sits_beside_its_marker(void **state)
     assert_true(fabs((s.box.y0 + s.box.y1) / 2 - 150) < 1e-9);
 
     /* At the right edge the label goes left, still beside it. */
-    const double edge[1][2] = { { 395, 150 } };
+    const double edge[1][2] = {{395, 150}};
     assert_int_equal(layout_points(edge, 1, 60, 13, &area, &s), 1);
     assert_false(s.leader);
     assert_true(s.box.x1 <= 389);
@@ -95,7 +98,7 @@ static void test_scattered_points(void **state)
         xy[i][0] = 20 + 460 * next_unit();
         xy[i][1] = 20 + 260 * next_unit();
     }
-    label_box area = { 0, 0, 500, 300 };
+    label_box area = {0, 0, 500, 300};
     label_spot spots[N];
     assert_int_equal(layout_points(xy, N, 60, 13, &area, spots), N);
 }
@@ -105,8 +108,8 @@ static void test_points_on_one_pixel(void **state)
 {
     (void)state;
     enum { N = 20 };
-    static const double spots_at[][2] = { { 250, 150 }, { 0, 0 }, { 500, 300 }, { 500, 0 }, { 0, 300 }, { 250, 300 } };
-    label_box area = { 0, 0, 500, 300 };
+    static const double spots_at[][2] = {{250, 150}, {0, 0}, {500, 300}, {500, 0}, {0, 300}, {250, 300}};
+    label_box area = {0, 0, 500, 300};
     for (size_t k = 0; k < sizeof spots_at / sizeof spots_at[0]; k++) {
         double xy[N][2];
         for (size_t i = 0; i < N; i++) {
@@ -136,7 +139,7 @@ static void test_cluster_and_edge_line(void **state)
         xy[i][0] = 20.0 * (double)(i - 24);
         xy[i][1] = 0;
     }
-    label_box area = { 0, 0, 500, 300 };
+    label_box area = {0, 0, 500, 300};
     label_spot spots[N];
     assert_int_equal(layout_points(xy, N, 60, 13, &area, spots), N);
 }
@@ -154,34 +157,40 @@ static void test_more_labels_than_room(void **state)
         xy[i][0] = 100 + 10 * next_unit();
         xy[i][1] = 50 + 10 * next_unit();
     }
-    label_box area = { 0, 0, 200, 100 };
+    label_box area = {0, 0, 200, 100};
     size_t placed = layout_points((const double(*)[2])xy, N, 80, 13, &area, spots);
     assert_true(placed > 5 && placed < N);
     free(xy);
     free(spots);
 }
 
-/* The whole panel: clustered configurations (as the report's are) get every label inside the panel, none overlapping. */
+/* The whole panel: clustered configurations (as the report's are) get every label inside the panel, none
+ * overlapping. */
 static void test_panel_labels(void **state)
 {
     (void)state;
     enum { N = 14 };
-    static const char *const names[N] = { "default", "leaf 1", "leaf 2", "leaf 8", "leaf 16", "unsorted",
-                                          "distance", "stackless", "stream", "float boxes (reference)",
-                                          "q16 vertices", "zlib", "wide", "wide, stream" };
+    static const char *const names[N] = {
+        "default",      "leaf 1",   "leaf 2",    "leaf 8",      "leaf 16",
+        "unsorted",     "distance", "stackless", "stream",      "float boxes (reference)",
+        "q16 vertices", "zlib",     "wide",      "wide, stream"};
     plot_point pts[N];
     for (size_t i = 0; i < N; i++)
-        pts[i] = (plot_point){ 600 + 3 * next_unit(), 0.1 + 1e-3 * next_unit(), (unsigned)(i % PLOT_STYLE_COUNT),
-                               names[i], NULL, 0 };
+        pts[i] = (plot_point){600 + 3 * next_unit(),
+                              0.1 + 1e-3 * next_unit(),
+                              (unsigned)(i % PLOT_STYLE_COUNT),
+                              names[i],
+                              NULL,
+                              0};
     pts[3].x = 1e4; /* one far outlier squeezes the rest into a clump */
-    plot_panel panel = { "title", "x", "y", pts, N, 1 };
+    plot_panel panel = {"title", "x", "y", pts, N, 1};
     FILE *out = tmpfile();
     assert_non_null(out);
     label_spot spots[N];
     const double left = 100, top = 50;
     size_t placed = svg_plot_panel(out, &panel, left, top, "p", spots);
     assert_int_equal(placed, N);
-    label_box canvas = { left, top, left + PLOT_PANEL_W, top + PLOT_PANEL_H };
+    label_box canvas = {left, top, left + PLOT_PANEL_W, top + PLOT_PANEL_H};
     for (size_t i = 0; i < N; i++) {
         assert_true(spots[i].placed);
         assert_true(label_box_inside(&spots[i].box, &canvas));
@@ -232,13 +241,14 @@ static int is_125(double step)
 
 static void check_linear(const double *v, size_t n, double expect_lo)
 {
-    plot_axis a = { .pixel_lo = 0, .pixel_hi = 100 };
+    plot_axis a = {.pixel_lo = 0, .pixel_hi = 100};
     plot_axis_fit(&a, v, n);
     assert_false(a.log);
     assert_true(a.tick_count >= 4 && a.tick_count <= 11);
     assert_true(is_125(a.step));
     for (size_t i = 0; i < n; i++)
-        assert_true(!isfinite(v[i]) || (fmax(v[i], -1e300) >= a.lo && fmin(v[i], 1e300) <= a.hi)); /* clamped to +-1e300 */
+        assert_true(!isfinite(v[i]) ||
+                    (fmax(v[i], -1e300) >= a.lo && fmin(v[i], 1e300) <= a.hi)); /* clamped to +-1e300 */
     assert_true(fabs(a.ticks[0] - a.lo) < 1e-12 * fmax(1, fabs(a.lo)));
     for (size_t k = 1; k < a.tick_count; k++)
         assert_true(fabs(a.ticks[k] - a.ticks[k - 1] - a.step) < 1e-9 * a.step);
@@ -251,27 +261,27 @@ static void check_linear(const double *v, size_t n, double expect_lo)
 static void test_linear_ticks(void **state)
 {
     (void)state;
-    const double times[] = { 412, 893, 640, 701 }; /* the 400-900 ns band: many ticks, not two */
+    const double times[] = {412, 893, 640, 701}; /* the 400-900 ns band: many ticks, not two */
     check_linear(times, 4, NAN);
-    plot_axis a = { 0 };
+    plot_axis a = {0};
     plot_axis_fit(&a, times, 4);
     assert_true(a.step == 100 && a.lo == 400 && a.hi == 900);
     char label[32];
     plot_axis_tick_label(&a, 500, label, sizeof label);
     assert_string_equal(label, "500");
 
-    const double inflation[] = { 0.0, 0.21, 0.19, 0.25 };
+    const double inflation[] = {0.0, 0.21, 0.19, 0.25};
     check_linear(inflation, 4, 0.0);
-    const double extra[] = { -0.5, 3.2, 1.0 }; /* negative: never log */
+    const double extra[] = {-0.5, 3.2, 1.0}; /* negative: never log */
     check_linear(extra, 3, NAN);
-    const double same[] = { 7, 7, 7 };
+    const double same[] = {7, 7, 7};
     check_linear(same, 3, NAN);
-    const double none[] = { NAN, INFINITY };
+    const double none[] = {NAN, INFINITY};
     check_linear(none, 2, 0.0);
-    const double huge[] = { -1.7e308, 1.7e308 }; /* finite ticks, a handful of them */
+    const double huge[] = {-1.7e308, 1.7e308}; /* finite ticks, a handful of them */
     check_linear(huge, 2, NAN);
 
-    const double tiny[] = { 0.0, 3.1e-6, 8.7e-6 }; /* one decade: linear, ticks scaled by 10^-6 */
+    const double tiny[] = {0.0, 3.1e-6, 8.7e-6}; /* one decade: linear, ticks scaled by 10^-6 */
     plot_axis_fit(&a, tiny, 3);
     assert_false(a.log);
     assert_int_equal(a.factor_exp, -6);
@@ -284,12 +294,13 @@ static void test_linear_ticks(void **state)
 static void test_log_only_across_decades(void **state)
 {
     (void)state;
-    const double err[] = { 2e-9, 3e-8, 4.5e-5 };
-    plot_axis a = { .pixel_lo = 300, .pixel_hi = 0 };
+    const double err[] = {2e-9, 3e-8, 4.5e-5};
+    plot_axis a = {.pixel_lo = 300, .pixel_hi = 0};
     plot_axis_fit(&a, err, 3);
     assert_true(a.log);
     assert_false(a.zero_band);
-    assert_true(fabs(a.lo / 1e-9 - 1) < 1e-12 && fabs(a.hi / 1e-4 - 1) < 1e-12); /* decades, computed as powers of ten */
+    assert_true(fabs(a.lo / 1e-9 - 1) < 1e-12 &&
+                fabs(a.hi / 1e-4 - 1) < 1e-12); /* decades, computed as powers of ten */
     for (size_t k = 0; k < a.tick_count; k++) { /* decades only: five of them */
         double e = log10(a.ticks[k]);
         assert_true(fabs(e - round(e)) < 1e-9);
@@ -304,19 +315,19 @@ static void test_log_only_across_decades(void **state)
     assert_true(isnan(plot_axis_pixel(&a, 0.0)) && isnan(plot_axis_pixel(&a, -1.0)));
 
     /* zeros among values that span decades: a 0 line below the lowest decade */
-    const double with_zero[] = { 0.0, 1.5e-7, 2e-5 };
+    const double with_zero[] = {0.0, 1.5e-7, 2e-5};
     plot_axis_fit(&a, with_zero, 3);
     assert_true(a.log && a.zero_band);
     assert_true(plot_axis_pixel(&a, 0.0) == 300);
     assert_true(fabs(plot_axis_pixel(&a, a.lo) - (300 - PLOT_AXIS_ZERO_BAND)) < 1e-9);
 
     /* under PLOT_AXIS_LOG_SPAN: linear */
-    const double narrow[] = { 1.0, 50.0 };
+    const double narrow[] = {1.0, 50.0};
     plot_axis_fit(&a, narrow, 2);
     assert_false(a.log);
 
     /* two decades or fewer: 1, 2, 5 ticks */
-    const double two[] = { 1.0, 100.0 };
+    const double two[] = {1.0, 100.0};
     plot_axis_fit(&a, two, 2);
     assert_true(a.log && a.tick_count == 7);
     assert_true(a.ticks[1] == 2.0 && a.ticks[2] == 5.0);
@@ -327,11 +338,11 @@ static void test_log_only_across_decades(void **state)
 static void test_pareto_front(void **state)
 {
     (void)state;
-    const double x[] = { 1, 2, 3, 4, 2, NAN, 5, 0.5 };
-    const double y[] = { 5, 3, 4, 1, 3, 0, 1, 9 };
+    const double x[] = {1, 2, 3, 4, 2, NAN, 5, 0.5};
+    const double y[] = {5, 3, 4, 1, 3, 0, 1, 9};
     unsigned char front[8];
     assert_int_equal(pareto_front(x, y, 8, front), 5);
-    const unsigned char expect[8] = { 1, 1, 0, 1, 1, 0, 0, 1 }; /* (3,4) by (2,3); (5,1) by (4,1); NaN never */
+    const unsigned char expect[8] = {1, 1, 0, 1, 1, 0, 0, 1}; /* (3,4) by (2,3); (5,1) by (4,1); NaN never */
     assert_memory_equal(front, expect, 8);
     /* against the definition on random points */
     for (int round = 0; round < 50; round++) {
@@ -363,7 +374,8 @@ static void test_escaping_and_width(void **state)
     char buf[128];
     size_t n = fread(buf, 1, sizeof buf - 1, out);
     buf[n] = '\0';
-    assert_string_equal(buf, "a&lt;b&amp;&quot;c&#39;?\xc3\x97z"); /* control dropped, stray byte '?', UTF-8 kept */
+    assert_string_equal(
+        buf, "a&lt;b&amp;&quot;c&#39;?\xc3\x97z"); /* control dropped, stray byte '?', UTF-8 kept */
     fclose(out);
     assert_true(svg_text_width("mmmm", 10) > svg_text_width("iiii", 10));
     assert_true(svg_text_width("leaf 16", 11) > 30 && svg_text_width("leaf 16", 11) < 50);
@@ -375,8 +387,8 @@ static void test_escaping_and_width(void **state)
 /* A row of mesh "m": the default, or the default with one value changed; exact, at ns per ray. */
 static report_row advice_row(int dim, const char *value, double ns)
 {
-    static const char *const defaults[REPORT_DIM_COUNT] = { "binary layout", "q16 boxes", "float vertices",
-                                                            "leaf 16", "sorted", "raw sections" };
+    static const char *const defaults[REPORT_DIM_COUNT] = {"binary layout", "q16 boxes", "float vertices",
+                                                           "leaf 16",       "sorted",    "raw sections"};
     report_row r;
     memset(&r, 0, sizeof r);
     r.mesh = "m";
@@ -400,10 +412,10 @@ static void test_recommendation(void **state)
     (void)state;
     char text[4096];
     report_row rows[6];
-    rows[0] = advice_row(-1, NULL, 1000);                       /* the default */
-    rows[1] = advice_row(REPORT_DIM_SECTIONS, "zlib 6", 1050);  /* the same tree: 5 % noise, 10 % allowed */
+    rows[0] = advice_row(-1, NULL, 1000);                      /* the default */
+    rows[1] = advice_row(REPORT_DIM_SECTIONS, "zlib 6", 1050); /* the same tree: 5 % noise, 10 % allowed */
     rows[1].bytes_per_triangle = 13.0;
-    rows[2] = advice_row(REPORT_DIM_LEAF, "leaf 8", 950);       /* faster, within the noise */
+    rows[2] = advice_row(REPORT_DIM_LEAF, "leaf 8", 950);           /* faster, within the noise */
     rows[3] = advice_row(REPORT_DIM_VERTICES, "q16 vertices", 500); /* fastest, but lossy */
     rows[3].vertex_error = 1e-5;
     rows[3].t_err_max = 3e-5;
@@ -411,7 +423,7 @@ static void test_recommendation(void **state)
     rows[4].reference = 1;
     rows[4].open_seconds = -1;
     rows[5] = advice_row(REPORT_DIM_TRAVERSAL, "stream", 1010);
-    rows[5].flips = 1;                                          /* a wrong answer: never recommended */
+    rows[5].flips = 1; /* a wrong answer: never recommended */
     const report_row *pick = report_recommend(rows, 6, text, sizeof text);
     assert_ptr_equal(pick, &rows[0]);
     assert_non_null(strstr(text, "Recommended: the default (binary layout"));
@@ -424,7 +436,8 @@ static void test_recommendation(void **state)
     rows[2].closest_mrays = 1e3 / 800;
     pick = report_recommend(rows, 6, text, sizeof text);
     assert_ptr_equal(pick, &rows[2]);
-    assert_non_null(strstr(text, "Recommended: \"leaf 8\" (binary layout, q16 boxes, float vertices, leaf 8,"));
+    assert_non_null(
+        strstr(text, "Recommended: \"leaf 8\" (binary layout, q16 boxes, float vertices, leaf 8,"));
     assert_non_null(strstr(text, "25 % faster than the default"));
 
     /* nothing exact: no recommendation */

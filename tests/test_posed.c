@@ -1,4 +1,5 @@
-/* test_posed.c: queries with options on any shape (cbvh_sweep_with, cbvh_overlap_with, cbvh_contacts_with): oriented boxes, placed meshes, depth, culling and filters, against the double-precision reference. */
+/* test_posed.c: queries with options on any shape (cbvh_sweep_with, cbvh_overlap_with, cbvh_contacts_with):
+ * oriented boxes, placed meshes, depth, culling and filters, against the double-precision reference. */
 #include <math.h>
 #include <setjmp.h>
 #include <stdarg.h>
@@ -15,7 +16,10 @@
 #include "support/scene_gen.h"
 #include "support/layouts.h"
 
-static double rnd(uint64_t *st, double lo, double hi) { return lo + (hi - lo) * scene_rand_unit(st); }
+static double rnd(uint64_t *st, double lo, double hi)
+{
+    return lo + (hi - lo) * scene_rand_unit(st);
+}
 
 /* A placement as the test sees it: world = translation + scale * R local, R from the quaternion as given
  * (floats), normalized here in double, written out independently of the library's own conversion. */
@@ -26,7 +30,8 @@ typedef struct pose {
 
 static void quaternion_matrix(const float q[4], double m[3][3])
 {
-    const double n = sqrt((double)q[0] * q[0] + (double)q[1] * q[1] + (double)q[2] * q[2] + (double)q[3] * q[3]);
+    const double n =
+        sqrt((double)q[0] * q[0] + (double)q[1] * q[1] + (double)q[2] * q[2] + (double)q[3] * q[3]);
     const double x = q[0] / n, y = q[1] / n, z = q[2] / n, w = q[3] / n;
     const double rows[3][3] = {{w * w + x * x - y * y - z * z, 2 * (x * y - w * z), 2 * (x * z + w * y)},
                                {2 * (x * y + w * z), w * w - x * x + y * y - z * z, 2 * (y * z - w * x)},
@@ -52,8 +57,8 @@ static void random_pose(uint64_t *st, pose *p)
 static void pose_point(const pose *p, const double in[3], double out[3])
 {
     for (int i = 0; i < 3; i++)
-        out[i] = p->t.translation[i] +
-                 p->t.scale * (p->r[i][0] * in[0] + p->r[i][1] * in[1] + p->r[i][2] * in[2]);
+        out[i] =
+            p->t.translation[i] + p->t.scale * (p->r[i][0] * in[0] + p->r[i][1] * in[1] + p->r[i][2] * in[2]);
 }
 
 /* The fixture's triangles placed by p (p NULL: as they are). */
@@ -166,13 +171,14 @@ static void check_record(const ref_tris *tris, double d, const ref_shape *r, con
     if (!kh)
         return;
     if (!(h->t >= ref.t - tol_t && h->t <= ref.t + tol_t))
-        fail_msg("shape %d: kernel t %.9g (tri %u), reference %.9g (tri %u)", (int)r->kind, h->t, h->tri, ref.t,
-                 ref.tri);
+        fail_msg("shape %d: kernel t %.9g (tri %u), reference %.9g (tri %u)", (int)r->kind, h->t, h->tri,
+                 ref.t, ref.tri);
     const double *tri = tri_of(tris, h->tri);
     const double gap = ref_shape_triangle_dist(r, dd, h->t, tri);
     if (!(gap <= tol))
         fail_msg("shape %d: at t %.9g the shape is %g from tri %u", (int)r->kind, h->t, gap, h->tri);
-    const double p[3] = {h->point[0], h->point[1], h->point[2]}, n[3] = {h->normal[0], h->normal[1], h->normal[2]};
+    const double p[3] = {h->point[0], h->point[1], h->point[2]},
+                 n[3] = {h->normal[0], h->normal[1], h->normal[2]};
     assert_true(sqrt(ref_point_triangle_dist2(tri, p)) <= tol);
     assert_true(fabs(sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]) - 1.0) < 1e-5);
     if (h->t > 0.0f) {
@@ -194,8 +200,9 @@ static void open_scene(ref_fixture *fx, int which)
         assert_true(scene_soup(&s, 400, 0.15f, 31));
     else
         assert_true(scene_sphere(&s, 500, (float[3]){0.5f, 0.5f, 0.5f}, 0.5f));
-    assert_int_equal(ref_fixture_open(fx, s.positions, s.vertex_count, s.indices, s.triangle_count, test_options()),
-                     CBVH_OK);
+    assert_int_equal(
+        ref_fixture_open(fx, s.positions, s.vertex_count, s.indices, s.triangle_count, test_options()),
+        CBVH_OK);
     scene_free(&s);
 }
 
@@ -290,8 +297,8 @@ static void test_oriented_and_placed_sweeps(void **state)
             cbvh_shape s;
             ref_shape r;
             float delta[3];
-            random_shape(&st, &ps.world, ps.lo, ps.hi, ps.d, placed ? (cbvh_shape_kind)(q % 3) : CBVH_SHAPE_BOX, 1,
-                         &s, &r, delta);
+            random_shape(&st, &ps.world, ps.lo, ps.hi, ps.d,
+                         placed ? (cbvh_shape_kind)(q % 3) : CBVH_SHAPE_BOX, 1, &s, &r, delta);
             if (q % 6 == 0)
                 delta[0] = delta[1] = delta[2] = 0.0f;
             cbvh_sweep_record rec;
@@ -302,7 +309,8 @@ static void test_oriented_and_placed_sweeps(void **state)
         }
         placed_scene_close(&ps);
     }
-    fprintf(stderr, "test_posed (%s): %ld sweep hits, %ld starting in contact\n", test_layout_name(), hits, starts);
+    fprintf(stderr, "test_posed (%s): %ld sweep hits, %ld starting in contact\n", test_layout_name(), hits,
+            starts);
     assert_true(hits > test_least(200) && starts > test_least(20));
 }
 
@@ -348,7 +356,8 @@ static void test_overlaps_and_contacts(void **state)
             int more = 1;
             assert_int_equal(cbvh_overlap_with(ps.fx.file, &s, &ps.o, 0, ids, 4096, &n, &more), CBVH_OK);
             assert_int_equal(more, 0);
-            assert_int_equal(cbvh_contacts_with(ps.fx.file, &s, &ps.o, 0, contacts, 4096, &nc, &more), CBVH_OK);
+            assert_int_equal(cbvh_contacts_with(ps.fx.file, &s, &ps.o, 0, contacts, 4096, &nc, &more),
+                             CBVH_OK);
             assert_int_equal(nc, n);
             for (size_t k = 0; k < world->count; k++) {
                 const int cls = overlap_class(&r, world->v + 9 * k, tol);
@@ -370,7 +379,8 @@ static void test_overlaps_and_contacts(void **state)
                 assert_true(sqrt(ref_point_triangle_dist2(t, pt)) <= tol);
                 const ref_shape clear = moved(&r, nrm, c->depth + tol);
                 if (!(ref_shape_triangle_dist(&clear, zero, 0.0, t) > 0.0))
-                    fail_msg("shape %d: moved by depth %g + tol it overlaps tri %u", (int)r.kind, c->depth, c->tri);
+                    fail_msg("shape %d: moved by depth %g + tol it overlaps tri %u", (int)r.kind, c->depth,
+                             c->tri);
                 /* A box's depth is the least motion along the normal: by less it does not come clear. */
                 if (r.kind == REF_BOX && c->depth > 3.0 * tol) {
                     const ref_shape still = moved(&r, nrm, c->depth - 2.0 * tol);
@@ -383,8 +393,8 @@ static void test_overlaps_and_contacts(void **state)
         }
         placed_scene_close(&ps);
     }
-    fprintf(stderr, "test_posed (%s): %ld overlapping triangles, %ld box contacts\n", test_layout_name(), found,
-            box_contacts);
+    fprintf(stderr, "test_posed (%s): %ld overlapping triangles, %ld box contacts\n", test_layout_name(),
+            found, box_contacts);
     assert_true(found > test_least(200) && box_contacts > test_least(50));
 }
 
@@ -425,7 +435,8 @@ static int keep_facing(const double *t, uint32_t id, const void *ctx)
         e1[a] = t[3 + a] - t[a];
         e2[a] = t[6 + a] - t[a];
     }
-    const double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+    const double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
+                         e1[0] * e2[1] - e1[1] * e2[0]};
     return n[0] * delta[0] + n[1] * delta[1] + n[2] * delta[2] <= 0.0;
 }
 
@@ -499,7 +510,8 @@ static void test_cull_and_filter(void **state)
             assert_int_equal(log.accepted.tri, rec.tri);
             assert_true(log.accepted.t == rec.t);
             assert_int_equal(log.accepted.material, rec.material);
-            const double dot = (double)log.accepted.normal[0] * delta[0] + (double)log.accepted.normal[1] * delta[1] +
+            const double dot = (double)log.accepted.normal[0] * delta[0] +
+                               (double)log.accepted.normal[1] * delta[1] +
                                (double)log.accepted.normal[2] * delta[2];
             assert_int_equal(log.accepted.front, dot < 0.0);
         }
@@ -511,8 +523,8 @@ static void test_cull_and_filter(void **state)
         if (stop.calls)
             assert_int_equal(stop.accepted.tri, rec.tri);
     }
-    fprintf(stderr, "test_posed (%s): %ld culled and %ld filtered sweep hits\n", test_layout_name(), culled_hits,
-            filtered_hits);
+    fprintf(stderr, "test_posed (%s): %ld culled and %ld filtered sweep hits\n", test_layout_name(),
+            culled_hits, filtered_hits);
     assert_true(culled_hits > test_least(30) && filtered_hits > test_least(30));
     placed_scene_close(&ps);
 }
@@ -544,7 +556,8 @@ static void test_invalid_input(void **state)
     cbvh_shape bad = good;
     bad.kind = (cbvh_shape_kind)3;
     assert_int_equal(cbvh_sweep_with(fx.file, &bad, delta, NULL, &rec), CBVH_ERROR_INVALID_ARGUMENT);
-    assert_int_equal(cbvh_overlap_with(fx.file, &bad, NULL, 0, ids, 8, &n, &more), CBVH_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(cbvh_overlap_with(fx.file, &bad, NULL, 0, ids, 8, &n, &more),
+                     CBVH_ERROR_INVALID_ARGUMENT);
     assert_true(n == 0 && more == 0);
     bad = good;
     bad.half_extent[1] = -0.1f;
@@ -557,20 +570,24 @@ static void test_invalid_input(void **state)
     bad.radius = -1.0f;
     assert_int_equal(cbvh_sweep_with(fx.file, &bad, delta, NULL, &rec), CBVH_ERROR_INVALID_ARGUMENT);
     bad.radius = NAN;
-    assert_int_equal(cbvh_contacts_with(fx.file, &bad, NULL, 0, NULL, 0, &n, &more), CBVH_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(cbvh_contacts_with(fx.file, &bad, NULL, 0, NULL, 0, &n, &more),
+                     CBVH_ERROR_INVALID_ARGUMENT);
 
     options_with(&o, NULL);
     o.cull = (cbvh_cull)3;
     assert_int_equal(cbvh_sweep_with(fx.file, &good, delta, &o, &rec), CBVH_ERROR_INVALID_ARGUMENT);
     o.cull = CBVH_CULL_BACK; /* overlaps have no direction to cull by */
-    assert_int_equal(cbvh_overlap_with(fx.file, &good, &o, 0, ids, 8, &n, &more), CBVH_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(cbvh_overlap_with(fx.file, &good, &o, 0, ids, 8, &n, &more),
+                     CBVH_ERROR_INVALID_ARGUMENT);
     options_with(&o, NULL);
     o.filter = reject_odd;
-    assert_int_equal(cbvh_contacts_with(fx.file, &good, &o, 0, NULL, 0, &n, &more), CBVH_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(cbvh_contacts_with(fx.file, &good, &o, 0, NULL, 0, &n, &more),
+                     CBVH_ERROR_INVALID_ARGUMENT);
     options_with(&o, NULL);
     o.struct_size = 3;
     assert_int_equal(cbvh_sweep_with(fx.file, &good, delta, &o, &rec), CBVH_ERROR_INVALID_ARGUMENT);
-    assert_int_equal(cbvh_overlap_with(fx.file, &good, NULL, 0, ids, 8, NULL, &more), CBVH_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(cbvh_overlap_with(fx.file, &good, NULL, 0, ids, 8, NULL, &more),
+                     CBVH_ERROR_INVALID_ARGUMENT);
 
     cbvh_transform t = {{0, 0, 0, 0}, {0, 0, 0}, 1.0f}; /* a zero quaternion places nothing */
     options_with(&o, NULL);
@@ -578,7 +595,8 @@ static void test_invalid_input(void **state)
     assert_int_equal(cbvh_sweep_with(fx.file, &good, delta, &o, &rec), CBVH_ERROR_INVALID_ARGUMENT);
     t.rotation[3] = 1.0f;
     t.scale = 0.0f;
-    assert_int_equal(cbvh_overlap_with(fx.file, &good, &o, 0, ids, 8, &n, &more), CBVH_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(cbvh_overlap_with(fx.file, &good, &o, 0, ids, 8, &n, &more),
+                     CBVH_ERROR_INVALID_ARGUMENT);
     t.scale = 1e-30f; /* the shape does not fit in float in the mesh's frame */
     good.half_extent[0] = 1e30f;
     assert_int_equal(cbvh_sweep_with(fx.file, &good, delta, &o, &rec), CBVH_ERROR_INVALID_ARGUMENT);
@@ -588,12 +606,9 @@ static void test_invalid_input(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_sweep_with_is_plain_sweep),
-        cmocka_unit_test(test_oriented_and_placed_sweeps),
-        cmocka_unit_test(test_overlaps_and_contacts),
-        cmocka_unit_test(test_contacts_with_round_shapes),
-        cmocka_unit_test(test_cull_and_filter),
-        cmocka_unit_test(test_invalid_input),
+        cmocka_unit_test(test_sweep_with_is_plain_sweep), cmocka_unit_test(test_oriented_and_placed_sweeps),
+        cmocka_unit_test(test_overlaps_and_contacts),     cmocka_unit_test(test_contacts_with_round_shapes),
+        cmocka_unit_test(test_cull_and_filter),           cmocka_unit_test(test_invalid_input),
     };
     return TEST_RUN_LAYOUTS(tests, 0);
 }

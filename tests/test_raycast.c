@@ -1,4 +1,5 @@
-/* test_raycast.c: ray kernels: watertight triangle test, robust slab test, every traversal against brute force. */
+/* test_raycast.c: ray kernels: watertight triangle test, robust slab test, every traversal against brute
+ * force. */
 #ifdef HAVE_CONFIG_H
 #include "config.h" /* CBVH_HAVE_SIMD: the ray set-up as the library runs it */
 #endif
@@ -15,7 +16,7 @@
 #include <cmocka.h>
 
 #include "cbvh.h"
-#include "common/encodings.h"
+#include "layout/encodings.h"
 #include "query/ray_box.h"
 #include "query/ray_triangle.h"
 #include "query/raycast.h"
@@ -33,8 +34,8 @@ static const cbvh_traversal traversals[4] = {CBVH_TRAVERSAL_SORTED, CBVH_TRAVERS
 /* Primitive tests, no file                                            */
 /* ------------------------------------------------------------------ */
 
-static int tri_hit(const float org[3], const float dir[3], const float *a, const float *b, const float *c, float *t,
-                   float *u, float *v)
+static int tri_hit(const float org[3], const float dir[3], const float *a, const float *b, const float *c,
+                   float *t, float *u, float *v)
 {
     const cbvh_ray ray = {{org[0], org[1], org[2]}, 0.0f, {dir[0], dir[1], dir[2]}, INFINITY};
     struct cbvh_ray_ctx ctx;
@@ -61,7 +62,8 @@ static void test_triangle_basic(void **state)
     assert_false(tri_hit((float[3]){0.75f, 0.5f, 2.0f}, (float[3]){0, 0, -1}, a, b, c, &t, &u, &v));
     assert_false(tri_hit((float[3]){0.25f, 0.25f, 2.0f}, (float[3]){0, 0, 1}, a, b, c, &t, &u, &v));
     assert_false(tri_hit((float[3]){-1.0f, 0.25f, 0.0f}, (float[3]){1, 0, 0}, a, b, c, &t, &u, &v));
-    assert_false(tri_hit((float[3]){0.25f, 0.0f, 2.0f}, (float[3]){0, 0, -1}, a, b, (float[3]){2, 0, 0}, &t, &u, &v));
+    assert_false(
+        tri_hit((float[3]){0.25f, 0.0f, 2.0f}, (float[3]){0, 0, -1}, a, b, (float[3]){2, 0, 0}, &t, &u, &v));
     /* On the edge and on a vertex: accepted (closed triangle). */
     assert_true(tri_hit((float[3]){0.5f, 0.0f, 1.0f}, (float[3]){0, 0, -1}, a, b, c, &t, &u, &v));
     assert_true(tri_hit((float[3]){1.0f, 0.0f, 1.0f}, (float[3]){0, 0, -1}, a, b, c, &t, &u, &v));
@@ -114,8 +116,8 @@ static void test_watertight_fan(void **state)
 /* Exact answer of "does [tmin, tmax] of the ray meet the closed box", in
  * double, with each axis handled by cases instead of reciprocals. Returns
  * the gap: <= 0 when they meet, else how far apart in t-interval terms. */
-static double slab_reference(const double lo[3], const double hi[3], const double o[3], const double d[3], double tmin,
-                             double tmax)
+static double slab_reference(const double lo[3], const double hi[3], const double o[3], const double d[3],
+                             double tmin, double tmax)
 {
     double t0 = tmin, t1 = tmax;
     for (int a = 0; a < 3; a++) {
@@ -273,7 +275,9 @@ static void test_slab_edge_cases(void **state)
     (void)state;
     const float dirs[] = {0.0f, -0.0f, 1e-40f, -1e-40f, 1e30f, -1e30f, 1.0f, -1.0f, 0.37f, -3.0f};
     const float coords[] = {-2.0f, -1.0f, 0.0f, 0.5f, 1.0f, 1.5f, 3.0f};
-    const float boxes[][6] = {{-1, -1, -1, 1, 1, 1}, {0, 0, 0, 0, 0, 0}, {-1e30f, 0, 0.5f, 1e30f, 1, 0.5f},
+    const float boxes[][6] = {{-1, -1, -1, 1, 1, 1},
+                              {0, 0, 0, 0, 0, 0},
+                              {-1e30f, 0, 0.5f, 1e30f, 1, 0.5f},
                               {1e-38f, -1e-38f, 0, 2e-38f, 1e-38f, 1}};
     long checked = 0;
     for (size_t bx = 0; bx < sizeof(boxes) / sizeof(boxes[0]); bx++)
@@ -294,8 +298,9 @@ static void test_slab_edge_cases(void **state)
             const struct cbvh_slab_select sel = cbvh_slab_select_of(ctx.octant);
             const float *b = boxes[bx];
             float entry;
-            const int hit = cbvh_slab_test(b[sel.near_x], b[sel.near_y], b[sel.near_z], b[sel.far_x], b[sel.far_y],
-                                           b[sel.far_z], ctx.shear.org, ctx.rcp, ctx.tmin, ctx.tmax, &entry);
+            const int hit =
+                cbvh_slab_test(b[sel.near_x], b[sel.near_y], b[sel.near_z], b[sel.far_x], b[sel.far_y],
+                               b[sel.far_z], ctx.shear.org, ctx.rcp, ctx.tmin, ctx.tmax, &entry);
             /* the rays' pre-test of a file's top box (raycast.h) decides as this test does, ray for ray */
             struct cbvh_file top;
             memset(&top, 0, sizeof top);
@@ -303,11 +308,13 @@ static void test_slab_edge_cases(void **state)
             memcpy(top.top_hi, b + 3, 3 * sizeof(float));
             assert_int_equal(cbvh_ray_enters_top_box(&ctx, ray.org, &top), hit);
             const double lo[3] = {b[0], b[1], b[2]}, hi[3] = {b[3], b[4], b[5]};
-            const double o[3] = {ray.org[0], ray.org[1], ray.org[2]}, d[3] = {ray.dir[0], ray.dir[1], ray.dir[2]};
-            const double gap = slab_reference(lo, hi, o, d, ray.tmin, ray.tmax < CBVH_T_LIMIT ? ray.tmax : CBVH_T_LIMIT);
+            const double o[3] = {ray.org[0], ray.org[1], ray.org[2]},
+                         d[3] = {ray.dir[0], ray.dir[1], ray.dir[2]};
+            const double gap =
+                slab_reference(lo, hi, o, d, ray.tmin, ray.tmax < CBVH_T_LIMIT ? ray.tmax : CBVH_T_LIMIT);
             if (gap <= 0.0 && !hit) {
-                fprintf(stderr, "box %zu missed: org %g %g %g dir %g %g %g t [%g %g]\n", bx, o[0], o[1], o[2], d[0],
-                        d[1], d[2], ray.tmin, ray.tmax);
+                fprintf(stderr, "box %zu missed: org %g %g %g dir %g %g %g t [%g %g]\n", bx, o[0], o[1], o[2],
+                        d[0], d[1], d[2], ray.tmin, ray.tmax);
                 fail();
             }
             /* Clear misses must be misses: a ray that stays away from the box
@@ -319,8 +326,8 @@ static void test_slab_edge_cases(void **state)
                 ghi[a] = hi[a] + 1e-5 * (1.0 + fabs(hi[a]));
             }
             if (hit && slab_reference(glo, ghi, o, d, ray.tmin, ray.tmax) > 0.0) {
-                fprintf(stderr, "box %zu false hit: org %g %g %g dir %g %g %g t [%g %g]\n", bx, o[0], o[1], o[2],
-                        d[0], d[1], d[2], ray.tmin, ray.tmax);
+                fprintf(stderr, "box %zu false hit: org %g %g %g dir %g %g %g t [%g %g]\n", bx, o[0], o[1],
+                        o[2], d[0], d[1], d[2], ray.tmin, ray.tmax);
                 fail();
             }
             checked++;
@@ -396,8 +403,8 @@ static void test_wide4_affine_box_test(void **state)
                     q1 = x;
                 }
                 const uint16_t v0 = (uint16_t)q0, v1 = (uint16_t)q1;
-                memcpy(node + CBVH_W4_Q + 8u * a + 2u * s, &v0, 2);
-                memcpy(node + CBVH_W4_Q + 8u * (3u + a) + 2u * s, &v1, 2);
+                memcpy(node + cbvh_w4_plane_offset(a, s), &v0, 2);
+                memcpy(node + cbvh_w4_plane_offset(3u + a, s), &v1, 2);
                 lo[s][a] = cbvh_dequantize(q0, go[a], gs[a]);
                 hi[s][a] = cbvh_dequantize(q1, go[a], gs[a]);
             }
@@ -526,7 +533,8 @@ static void check_closest(const ref_fixture *fx, const cbvh_ray *ray, int hit, c
     if (!hit) {
         assert_int_equal(h->tri, CBVH_NO_HIT);
         if (rs)
-            fprintf(stderr, "missed a robust hit: tri %u t %.9g margin %g\n", strict.tri, strict.t, strict.margin);
+            fprintf(stderr, "missed a robust hit: tri %u t %.9g margin %g\n", strict.tri, strict.t,
+                    strict.margin);
         assert_false(rs);
         return;
     }
@@ -587,8 +595,8 @@ static void check_fixture(const ref_fixture *fx, int rays, uint64_t seed)
 
 static void open_scene(ref_fixture *fx, scene *s, const cbvh_cook_options *options)
 {
-    assert_int_equal(ref_fixture_open(fx, s->positions, s->vertex_count, s->indices, s->triangle_count, options),
-                     CBVH_OK);
+    assert_int_equal(
+        ref_fixture_open(fx, s->positions, s->vertex_count, s->indices, s->triangle_count, options), CBVH_OK);
 }
 
 /* The filter of test_any_hit_order: the t of the first candidate it sees, then REJECT (the walk goes on). */
@@ -927,8 +935,9 @@ static void test_top_box_grazing_rays(void **state)
 static void test_near_flt_max(void **state)
 {
     (void)state;
-    const float found[9] = {0x1.fefefep+127f, 0x1.fdfcp-135f, 0, 0x1.0000c2p-99f, 0x1.ff1d9ep+127f,
-                            0x1.fefefep+127f, 0, 0x1.000054p-123f, 0x1.5988p-136f};
+    const float found[9] = {0x1.fefefep+127f, 0x1.fdfcp-135f,   0, 0x1.0000c2p-99f,
+                            0x1.ff1d9ep+127f, 0x1.fefefep+127f, 0, 0x1.000054p-123f,
+                            0x1.5988p-136f};
     float pos[9];
     for (int k = 0; k < 9; k++)
         pos[k] = ldexpf(found[k], -88);
@@ -948,10 +957,10 @@ static void test_near_flt_max(void **state)
         cbvh_ray r = {{0, 0, 0}, 0, {0, 0, 0}, INFINITY};
         double reach;
         {
-            /* origins 1e13 to 1e17 or 1e38 to 3.3e38 from the target, log-uniformly: the farther ones aim at a float's
-             * precision there, so only the rays whose line crosses the triangle clearly inside (0.05 in
-             * barycentrics, and farther from an edge than a millionth of the origin's distance, far above
-             * the reference's own rounding) are checked */
+            /* origins 1e13 to 1e17 or 1e38 to 3.3e38 from the target, log-uniformly: the farther ones aim at
+             * a float's precision there, so only the rays whose line crosses the triangle clearly inside
+             * (0.05 in barycentrics, and farther from an edge than a millionth of the origin's distance, far
+             * above the reference's own rounding) are checked */
             const double wb = 0.1 + 0.4 * scene_rand_unit(&st), wc = 0.1 + 0.4 * scene_rand_unit(&st);
             reach = i % 2 ? 1e13 * pow(1e4, scene_rand_unit(&st)) : 1e38 * pow(3.3, scene_rand_unit(&st));
             for (int a = 0; a < 3; a++) {
@@ -1051,7 +1060,8 @@ static void test_far_side_boxes(void **state)
             double t_aim, u, v, margin;
             if (!ref_ray_triangle(t9, &r, &t_aim, &u, &v, &margin) || fmin(fmin(u, v), 1.0 - u - v) < 0.05 ||
                 margin < 1e-6 * reach)
-                continue; /* rounding dir moved the aim too close to an edge, or past the reference's precision */
+                continue; /* rounding dir moved the aim too close to an edge, or past the reference's
+                             precision */
             struct cbvh_ray_ctx ctx;
             assert_true(cbvh_ray_prepare(&ctx, &r, fx.file, NULL));
             halved += ctx.box_halve != 0;
@@ -1091,8 +1101,8 @@ static void test_overflowing_edge_sums(void **state)
     uint64_t st = 8;
     int misses = 0;
     for (int m = 0; m < 40; m++) {
-        float pos[9] = {-0x1p+63f, 0x1.f803b8p+61f, 0x1.ep+46f, 0x1.ep+62f, 0x1.c0002p+62f, 0x1.f803b8p+61f,
-                        0x1.ep+46f, -0x1.80008p+62f, 0x1.f803b8p+61f};
+        float pos[9] = {-0x1p+63f,       0x1.f803b8p+61f, 0x1.ep+46f,      0x1.ep+62f,     0x1.c0002p+62f,
+                        0x1.f803b8p+61f, 0x1.ep+46f,      -0x1.80008p+62f, 0x1.f803b8p+61f};
         const double scale = 3.6e10 * pow(30.0, scene_rand_unit(&st));
         const uint32_t idx[3] = {0, 1, 2};
         void *buf = NULL;
@@ -1106,8 +1116,10 @@ static void test_overflowing_edge_sums(void **state)
         if (ref_cook_open(pos, 3, idx, 1, NULL, &buf, &f) != CBVH_OK)
             continue; /* a random triangle may be degenerate */
         for (int i = 0; i < 50; i++) {
-            cbvh_ray r = {{0x1.b3a124p+62f, 0x1.9e6a3p+60f, -0x1.e5cc04p+62f}, 0,
-                          {-0x1.e48ff8p+60f, 0x1.21a5f2p+62f, 0x1.4ad5f8p+61f}, INFINITY};
+            cbvh_ray r = {{0x1.b3a124p+62f, 0x1.9e6a3p+60f, -0x1.e5cc04p+62f},
+                          0,
+                          {-0x1.e48ff8p+60f, 0x1.21a5f2p+62f, 0x1.4ad5f8p+61f},
+                          INFINITY};
             int inside = 0;
             {
                 /* weights of a, b, c: all >= 0.1 inside; one <= -0.1 outside */
@@ -1160,8 +1172,10 @@ static void test_far_origin_hits(void **state)
             continue;
         rays++;
         const float far = 0x1p66f;
-        const cbvh_ray far_ray = {{-far * dir[0], -far * dir[1], -far * dir[2]}, 0, {dir[0], dir[1], dir[2]}, INFINITY};
-        const cbvh_ray near_ray = {{-8 * dir[0], -8 * dir[1], -8 * dir[2]}, 0, {dir[0], dir[1], dir[2]}, INFINITY};
+        const cbvh_ray far_ray = {
+            {-far * dir[0], -far * dir[1], -far * dir[2]}, 0, {dir[0], dir[1], dir[2]}, INFINITY};
+        const cbvh_ray near_ray = {
+            {-8 * dir[0], -8 * dir[1], -8 * dir[2]}, 0, {dir[0], dir[1], dir[2]}, INFINITY};
         cbvh_hit hf, hn;
         assert_true(hit_everywhere(fx.file, &near_ray, &hn));
         if (!hit_everywhere(fx.file, &far_ray, &hf))
@@ -1217,8 +1231,11 @@ static void test_sliver_t(void **state)
             /* a point well inside: x in [300, 700], y in [0.2, 0.4] w (inside for x in [250, 750]) */
             const double x = 300.0 + 400.0 * scene_rand_unit(&st), y = w * (0.2 + 0.2 * scene_rand_unit(&st));
             const double th = PI * scene_rand_unit(&st), ph = 2.0 * PI * scene_rand_unit(&st);
-            const double d[3] = {sin(th) * cos(ph) * 100.0, sin(th) * sin(ph) * 100.0, cos(th) * 100.0 + (i % 2 ? 1 : -1)};
-            const cbvh_ray r = {{(float)(x - d[0]), (float)(y - d[1]), (float)(-d[2])}, 0, {(float)d[0], (float)d[1], (float)d[2]},
+            const double d[3] = {sin(th) * cos(ph) * 100.0, sin(th) * sin(ph) * 100.0,
+                                 cos(th) * 100.0 + (i % 2 ? 1 : -1)};
+            const cbvh_ray r = {{(float)(x - d[0]), (float)(y - d[1]), (float)(-d[2])},
+                                0,
+                                {(float)d[0], (float)d[1], (float)d[2]},
                                 INFINITY};
             /* the float ray crosses the plane inside the triangle? (its origin was rounded) */
             const double tz = -(double)r.org[2] / r.dir[2];
@@ -1393,11 +1410,13 @@ static void test_sliver_barycentrics(void **state)
         double gap2 = 0.0;
         for (int a = 0; a < 3; a++) {
             const double hit = r.org[a] + (double)h.t * r.dir[a];
-            const double bary = (1.0 - h.u - h.v) * pos[a] + h.u * (double)pos[3 + a] + h.v * (double)pos[6 + a];
+            const double bary =
+                (1.0 - h.u - h.v) * pos[a] + h.u * (double)pos[3 + a] + h.v * (double)pos[6 + a];
             gap2 += (hit - bary) * (hit - bary);
         }
         if (!(sqrt(gap2) <= 1e-6 * 2.67e7 * 1.8))
-            fail_msg("ray %d: the barycentric point (u %g v %g) is %g from the hit point", i, h.u, h.v, sqrt(gap2));
+            fail_msg("ray %d: the barycentric point (u %g v %g) is %g from the hit point", i, h.u, h.v,
+                     sqrt(gap2));
     }
     cbvh_close(f);
     cbvh_buffer_free(NULL, buf);
@@ -1421,8 +1440,14 @@ static void test_needle_barycentrics(void **state)
     for (int wi = 0; wi < 5; wi++) {
         /* wi 4: the finding's triangle and ray, as the fuzzer cooked them */
         const float k = wi < 4 ? (float)widths[wi] : 0x1.494948p-54f;
-        const float pos[9] = {-1.0f, 2.71875f, wi < 4 ? 0.0f : 0x1.0a0c02p-123f, -k, -k, -k,
-                              wi < 4 ? 0.0f : 0x1.040608p-113f, wi < 4 ? 0.0f : 0x1.8383p-132f,
+        const float pos[9] = {-1.0f,
+                              2.71875f,
+                              wi < 4 ? 0.0f : 0x1.0a0c02p-123f,
+                              -k,
+                              -k,
+                              -k,
+                              wi < 4 ? 0.0f : 0x1.040608p-113f,
+                              wi < 4 ? 0.0f : 0x1.8383p-132f,
                               wi < 4 ? 0.0f : 0x1.c100cp-131f};
         void *buf = NULL;
         cbvh_file *f = NULL;
@@ -1448,12 +1473,13 @@ static void test_needle_barycentrics(void **state)
             double gap2 = 0.0;
             for (int a = 0; a < 3; a++) {
                 const double hit = r.org[a] + (double)h.t * r.dir[a];
-                const double bary = (1.0 - h.u - h.v) * pos[a] + h.u * (double)pos[3 + a] + h.v * (double)pos[6 + a];
+                const double bary =
+                    (1.0 - h.u - h.v) * pos[a] + h.u * (double)pos[3 + a] + h.v * (double)pos[6 + a];
                 gap2 += (hit - bary) * (hit - bary);
             }
             if (!(sqrt(gap2) <= 3e-6))
-                fail_msg("width %g ray %d: the barycentric point (u %g v %g) is %g from the hit point", (double)k, i,
-                         h.u, h.v, sqrt(gap2));
+                fail_msg("width %g ray %d: the barycentric point (u %g v %g) is %g from the hit point",
+                         (double)k, i, h.u, h.v, sqrt(gap2));
         }
         /* rays aimed inside the cross-section hit, whatever the width */
         if (hits < (wi < 4 ? 190 : 1))
@@ -1674,7 +1700,8 @@ static void check_options_ray(const ref_fixture *fx, const scene *s, const cbvh_
             seen += all.rec[j].tri == fx->tris.id[i];
         assert_true(seen <= 1);
         if (crossed && m > slack && t > ray->tmin + tol && t < ray->tmax - tol && !seen)
-            fail_msg("all hits: triangle %u crossed at t %g (margin %g) was not reported", fx->tris.id[i], t, m);
+            fail_msg("all hits: triangle %u crossed at t %g (margin %g) was not reported", fx->tris.id[i], t,
+                     m);
         if (seen && !(crossed && m >= -slack))
             fail_msg("all hits: triangle %u reported, but the ray misses it", fx->tris.id[i]);
     }
@@ -1684,7 +1711,8 @@ static void check_options_ray(const ref_fixture *fx, const scene *s, const cbvh_
         for (int j = 0; j < all.n; j++)
             if (q == 0 && fabs(facing_cosine(s, all.rec[j].tri, ray)) < 1e-4)
                 return; /* grazing: which face the ray meets is not for the test to say */
-        const int want = nearest_kept(&all, s, ray, keeps[q], 4 * t_tolerance(fx, ray, all.n ? all.rec[0].t : 0.0));
+        const int want =
+            nearest_kept(&all, s, ray, keeps[q], 4 * t_tolerance(fx, ray, all.n ? all.rec[0].t : 0.0));
         cbvh_query_options c;
         cbvh_query_options_init(&c, sizeof c);
         if (q == 0)
@@ -1814,12 +1842,14 @@ static void test_transform(void **state)
             tr.rotation[i] = trial == 0 ? (i == 3 ? 1.0f : 0.0f) : (float)(3.0 * q[i] / len);
         tr.scale = scales[trial];
         for (int a = 0; a < 3; a++)
-            tr.translation[a] = trial == 0 ? 0.0f : (float)((2.0 * scene_rand_unit(&st) - 1.0) * 3.0 * fx.diag);
+            tr.translation[a] =
+                trial == 0 ? 0.0f : (float)((2.0 * scene_rand_unit(&st) - 1.0) * 3.0 * fx.diag);
         /* the reference placement, from the quaternion as given, normalized here */
         double qn = 0.0, m[3][3];
         for (int i = 0; i < 4; i++)
             qn += (double)tr.rotation[i] * tr.rotation[i];
-        const double x = tr.rotation[0], y = tr.rotation[1], z = tr.rotation[2], w = tr.rotation[3], k = 2.0 / qn;
+        const double x = tr.rotation[0], y = tr.rotation[1], z = tr.rotation[2], w = tr.rotation[3],
+                     k = 2.0 / qn;
         const double rows[3][3] = {{1 - k * (y * y + z * z), k * (x * y - z * w), k * (x * z + y * w)},
                                    {k * (x * y + z * w), 1 - k * (x * x + z * z), k * (y * z - x * w)},
                                    {k * (x * z - y * w), k * (y * z + x * w), 1 - k * (x * x + y * y)}};
@@ -1833,7 +1863,8 @@ static void test_transform(void **state)
         for (size_t i = 0; i < 3 * fx.tris.count; i++) {
             const double *p = fx.tris.v + 3 * i;
             for (int a = 0; a < 3; a++) {
-                const double c = tr.translation[a] + tr.scale * (m[a][0] * p[0] + m[a][1] * p[1] + m[a][2] * p[2]);
+                const double c =
+                    tr.translation[a] + tr.scale * (m[a][0] * p[0] + m[a][1] * p[1] + m[a][2] * p[2]);
                 world_v[3 * i + (size_t)a] = c;
                 world.lo[a] = fmin(world.lo[a], c);
                 world.hi[a] = fmax(world.hi[a], c);
@@ -1858,13 +1889,15 @@ static void test_transform(void **state)
             hits++;
             /* the placed triangle's unit normal, in double */
             const double *v = world_v + 9 * fx.index_of_id[rec.tri];
-            const double e1[3] = {v[3] - v[0], v[4] - v[1], v[5] - v[2]}, e2[3] = {v[6] - v[0], v[7] - v[1], v[8] - v[2]};
-            const double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+            const double e1[3] = {v[3] - v[0], v[4] - v[1], v[5] - v[2]},
+                         e2[3] = {v[6] - v[0], v[7] - v[1], v[8] - v[2]};
+            const double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
+                                 e1[0] * e2[1] - e1[1] * e2[0]};
             const double nl = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
             const double dot = (n[0] * rec.normal[0] + n[1] * rec.normal[1] + n[2] * rec.normal[2]) / nl;
             if (!(dot > 0.9999))
-                fail_msg("trial %d ray %d: normal (%g %g %g) against the placed triangle's, cosine %g", trial, r,
-                         (double)rec.normal[0], (double)rec.normal[1], (double)rec.normal[2], dot);
+                fail_msg("trial %d ray %d: normal (%g %g %g) against the placed triangle's, cosine %g", trial,
+                         r, (double)rec.normal[0], (double)rec.normal[1], (double)rec.normal[2], dot);
         }
         assert_true(hits > test_least(100));
     }
@@ -1883,8 +1916,8 @@ static void test_transform(void **state)
     assert_int_equal(cbvh_raycast_with(fx.file, &at, &opt, &with_old, NULL), CBVH_OK);
     assert_int_equal(with_old.tri, CBVH_NO_HIT);
     /* bad transforms */
-    const cbvh_transform bad[] = {{{0, 0, 0, 0}, {0, 0, 0}, 1.0f},      {{0, 0, 0, 1}, {0, 0, 0}, 0.0f},
-                                  {{0, 0, 0, 1}, {0, 0, 0}, -1.0f},     {{0, 0, 0, 1}, {0, 0, 0}, NAN},
+    const cbvh_transform bad[] = {{{0, 0, 0, 0}, {0, 0, 0}, 1.0f},        {{0, 0, 0, 1}, {0, 0, 0}, 0.0f},
+                                  {{0, 0, 0, 1}, {0, 0, 0}, -1.0f},       {{0, 0, 0, 1}, {0, 0, 0}, NAN},
                                   {{0, 0, 0, 1}, {INFINITY, 0, 0}, 1.0f}, {{NAN, 0, 0, 1}, {0, 0, 0}, 1.0f},
                                   {{0, 0, 0, 1}, {0, 0, 0}, 1e-45f}};
     for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
@@ -1892,7 +1925,8 @@ static void test_transform(void **state)
         int occluded = -1;
         assert_int_equal(cbvh_raycast_with(fx.file, &at, &opt, &with_old, NULL), CBVH_ERROR_INVALID_ARGUMENT);
         assert_int_equal(with_old.tri, CBVH_NO_HIT);
-        assert_int_equal(cbvh_occluded_with(fx.file, &at, &opt, &occluded, NULL), CBVH_ERROR_INVALID_ARGUMENT);
+        assert_int_equal(cbvh_occluded_with(fx.file, &at, &opt, &occluded, NULL),
+                         CBVH_ERROR_INVALID_ARGUMENT);
         assert_int_equal(occluded, 0);
     }
     free(world_v);

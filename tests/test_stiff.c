@@ -1,4 +1,5 @@
-/* test_stiff.c: stiff and extreme numerical cases: watertightness at shared edges and vertices, far and tiny/huge meshes, degenerate meshes, extreme rays and sweeps, against double-precision references. */
+/* test_stiff.c: stiff and extreme numerical cases: watertightness at shared edges and vertices, far and
+ * tiny/huge meshes, degenerate meshes, extreme rays and sweeps, against double-precision references. */
 #include <math.h>
 #include <setjmp.h>
 #include <stdarg.h>
@@ -30,7 +31,10 @@ static cbvh_cook_options options(int quantized, int level)
     return o;
 }
 
-static double vec_len(const float v[3]) { return sqrt((double)v[0] * v[0] + (double)v[1] * v[1] + (double)v[2] * v[2]); }
+static double vec_len(const float v[3])
+{
+    return sqrt((double)v[0] * v[0] + (double)v[1] * v[1] + (double)v[2] * v[2]);
+}
 
 /* Magnitude of the coordinates a ray against fixture fx works with. */
 static double magnitude(const ref_fixture *fx, const cbvh_ray *r)
@@ -64,7 +68,7 @@ static void check_against_reference(const ref_fixture *fx, const cbvh_ray *r, do
     ref_ray_closest(&fx->tris, r, tol, &loose);
     cbvh_hit h[4], sh;
     int got[4];
-    cbvh_query_stats qs = { 0, 0 };
+    cbvh_query_stats qs = {0, 0};
     for (int t = 0; t < 4; t++)
         got[t] = cbvh_raycast(fx->file, r, (cbvh_traversal)t, &h[t], t == 0 ? &qs : NULL);
     cbvh_raycast_stream(fx->file, r, 1, &sh, NULL);
@@ -109,18 +113,19 @@ static void check_against_reference(const ref_fixture *fx, const cbvh_ray *r, do
 static void assert_agreement(const char *what, const agree_stats *st)
 {
     if (st->missed || st->early || st->off_plane || st->disagree_paths)
-        fail_msg("%s: %zu rays, %zu clear hits: %zu missed, %zu early, %zu off the plane, %zu path disagreements", what, st->rays,
-                 st->clear_hits, st->missed, st->early, st->off_plane, st->disagree_paths);
+        fail_msg(
+            "%s: %zu rays, %zu clear hits: %zu missed, %zu early, %zu off the plane, %zu path disagreements",
+            what, st->rays, st->clear_hits, st->missed, st->early, st->off_plane, st->disagree_paths);
 }
 
 /* Every box of the subtree r (dequantized exactly as the traversal does,
  * through the layout interface) contains every vertex of every triangle
  * below it; `box` is r's own (CBVH_NO_BOX for a root without one). Fills the
  * subtree's vertex bounds and returns the number of boxes checked. */
-static size_t check_conservative(const cbvh_file *f, cbvh_ref r, uint32_t box, float lo_out[3], float hi_out[3],
-                                 size_t *bad)
+static size_t check_conservative(const cbvh_file *f, cbvh_ref r, uint32_t box, float lo_out[3],
+                                 float hi_out[3], size_t *bad)
 {
-    float sub_lo[3] = { INFINITY, INFINITY, INFINITY }, sub_hi[3] = { -INFINITY, -INFINITY, -INFINITY };
+    float sub_lo[3] = {INFINITY, INFINITY, INFINITY}, sub_hi[3] = {-INFINITY, -INFINITY, -INFINITY};
     size_t checked = 0;
     if (cbvh_tree_is_leaf(f, f->layout, r)) {
         uint32_t first, count;
@@ -176,9 +181,13 @@ typedef struct leak_stats {
 /* A ray from `org` at a point of the surface (t = 1 there) must hit at t <= 1
  * on every path: anything else went through a crack. The slack covers the
  * target's rounding (a few float steps) seen at the crossing angle. */
-static void shoot_at(const cbvh_file *f, const float org[3], const float target[3], double cosine, leak_stats *st)
+static void shoot_at(const cbvh_file *f, const float org[3], const float target[3], double cosine,
+                     leak_stats *st)
 {
-    cbvh_ray r = { { org[0], org[1], org[2] }, 0.0f, { target[0] - org[0], target[1] - org[1], target[2] - org[2] }, INFINITY };
+    cbvh_ray r = {{org[0], org[1], org[2]},
+                  0.0f,
+                  {target[0] - org[0], target[1] - org[1], target[2] - org[2]},
+                  INFINITY};
     double mag = 0;
     for (int a = 0; a < 3; a++)
         mag = fmax(mag, fmax(fabs((double)target[a]), fabs((double)org[a])));
@@ -200,13 +209,16 @@ static void shoot_at(const cbvh_file *f, const float org[3], const float target[
 
 /* The file's own topology (welded vertex indices of the cooked triangles):
  * edges sorted by their vertex pair, triangles around each vertex. */
-typedef struct edge_ref { uint64_t key; uint32_t tri; } edge_ref;
+typedef struct edge_ref {
+    uint64_t key;
+    uint32_t tri;
+} edge_ref;
 typedef struct topology {
     uint32_t tris, verts;
-    edge_ref *edges;        /* 3 per triangle, sorted by key */
-    uint32_t *vert_start;   /* verts + 1 offsets into vert_tris */
+    edge_ref *edges;      /* 3 per triangle, sorted by key */
+    uint32_t *vert_start; /* verts + 1 offsets into vert_tris */
     uint32_t *vert_tris;
-    uint8_t *border;        /* vertex on an edge not shared by exactly two triangles */
+    uint8_t *border; /* vertex on an edge not shared by exactly two triangles */
 } topology;
 
 static int cmp_edge(const void *a, const void *b)
@@ -215,7 +227,10 @@ static int cmp_edge(const void *a, const void *b)
     return (x > y) - (x < y);
 }
 
-static uint64_t edge_key(uint32_t a, uint32_t b) { return a < b ? (uint64_t)a << 32 | b : (uint64_t)b << 32 | a; }
+static uint64_t edge_key(uint32_t a, uint32_t b)
+{
+    return a < b ? (uint64_t)a << 32 | b : (uint64_t)b << 32 | a;
+}
 
 static void topology_build(const cbvh_file *f, topology *tp)
 {
@@ -230,7 +245,7 @@ static void topology_build(const cbvh_file *f, topology *tp)
         uint32_t idx[3];
         cbvh_triangle_indices(f, t, idx);
         for (int k = 0; k < 3; k++) {
-            tp->edges[3 * t + k] = (edge_ref){ edge_key(idx[k], idx[(k + 1) % 3]), t };
+            tp->edges[3 * t + k] = (edge_ref){edge_key(idx[k], idx[(k + 1) % 3]), t};
             tp->vert_start[idx[k] + 1]++;
         }
     }
@@ -282,7 +297,8 @@ static double pierces(const cbvh_file *f, const uint32_t *tris, size_t n, const 
             e1[a] = (double)v[1][a] - v[0][a];
             e2[a] = (double)v[2][a] - v[0][a];
         }
-        double nx = e1[1] * e2[2] - e1[2] * e2[1], ny = e1[2] * e2[0] - e1[0] * e2[2], nz = e1[0] * e2[1] - e1[1] * e2[0];
+        double nx = e1[1] * e2[2] - e1[2] * e2[1], ny = e1[2] * e2[0] - e1[0] * e2[2],
+               nz = e1[0] * e2[1] - e1[1] * e2[0];
         double nl = sqrt(nx * nx + ny * ny + nz * nz);
         if (!(nl > 0))
             return 0;
@@ -301,7 +317,8 @@ static double pierces(const cbvh_file *f, const uint32_t *tris, size_t n, const 
  * edge, of every `stride`-th cooked triangle; origins on a sphere around the
  * mesh, kept when target - origin is exact (the ray's line passes exactly
  * through the target) and the ray pierces the surface there (pierces()). */
-static void watertight_file(const cbvh_file *f, uint32_t stride, int origins_per_target, leak_stats *st, size_t *skipped)
+static void watertight_file(const cbvh_file *f, uint32_t stride, int origins_per_target, leak_stats *st,
+                            size_t *skipped)
 {
     topology tp;
     topology_build(f, &tp);
@@ -309,13 +326,14 @@ static void watertight_file(const cbvh_file *f, uint32_t stride, int origins_per
     cbvh_file_get_info(f, &info, sizeof info);
     double rad = 0;
     for (int a = 0; a < 3; a++) {
-        rad += ((double)info.bounds_max[a] - info.bounds_min[a]) * ((double)info.bounds_max[a] - info.bounds_min[a]);
+        rad += ((double)info.bounds_max[a] - info.bounds_min[a]) *
+               ((double)info.bounds_max[a] - info.bounds_min[a]);
     }
     rad = sqrt(rad);
     double unit_len = exp2(floor(log2(rad / 64)));
     uint64_t rng = 12345;
-    static const int along[] = { 2, 4, 4, 8 }; /* points i/n of an edge, n = 2, 4, 4, 8 with i = 1, 1, 3, 7 */
-    static const int step[] = { 1, 1, 3, 7 };
+    static const int along[] = {2, 4, 4, 8}; /* points i/n of an edge, n = 2, 4, 4, 8 with i = 1, 1, 3, 7 */
+    static const int step[] = {1, 1, 3, 7};
     for (uint32_t t = 0; t < tp.tris; t += stride) {
         uint32_t idx[3];
         float v[3][3];
@@ -334,7 +352,7 @@ static void watertight_file(const cbvh_file *f, uint32_t stride, int origins_per
                 n_around = tp.vert_start[idx[j] + 1] - tp.vert_start[idx[j]];
             } else { /* a point of edge i */
                 int i = (j - 3) / 4, k = (j - 3) % 4;
-                edge_ref key = { edge_key(idx[i], idx[(i + 1) % 3]), 0 };
+                edge_ref key = {edge_key(idx[i], idx[(i + 1) % 3]), 0};
                 edge_ref *e = bsearch(&key, tp.edges, 3 * (size_t)tp.tris, sizeof key, cmp_edge);
                 while (e > tp.edges && e[-1].key == key.key)
                     e--;
@@ -366,7 +384,7 @@ static void watertight_file(const cbvh_file *f, uint32_t stride, int origins_per
                     d[a] = (float)((double)((int)(scene_rand_unit(&rng) * 129) - 64) * unit_len);
                     org[a] = target[a] - d[a];
                 }
-                float dir[3] = { target[0] - org[0], target[1] - org[1], target[2] - org[2] };
+                float dir[3] = {target[0] - org[0], target[1] - org[1], target[2] - org[2]};
                 double cosine = pierces(f, around, n_around, dir);
                 /* the ray's line must pass exactly through the target */
                 for (int a = 0; a < 3; a++)
@@ -385,9 +403,11 @@ static void watertight_file(const cbvh_file *f, uint32_t stride, int origins_per
 
 static void report_leaks(const char *what, const leak_stats *st, size_t skipped)
 {
-    printf("watertight %-30s %7zu rays (%zu inexact or grazing skipped): leaks sorted %zu stackless %zu unsorted %zu distance %zu stream %zu "
+    printf("watertight %-30s %7zu rays (%zu inexact or grazing skipped): leaks sorted %zu stackless %zu "
+           "unsorted %zu distance %zu stream %zu "
            "occluded %zu\n",
-           what, st->rays, skipped, st->leaks[0], st->leaks[1], st->leaks[2], st->leaks[3], st->leaks[4], st->leaks[5]);
+           what, st->rays, skipped, st->leaks[0], st->leaks[1], st->leaks[2], st->leaks[3], st->leaks[4],
+           st->leaks[5]);
     assert_true(st->rays > 0);
     for (int i = 0; i < 6; i++)
         assert_int_equal(st->leaks[i], 0);
@@ -400,7 +420,7 @@ static void watertight_scene(const char *name, const scene *s, int origins)
         void *buf = NULL;
         size_t size = 0;
         cbvh_file *f = NULL;
-        cbvh_mesh m = { s->positions, s->vertex_count, 0, s->indices, s->triangle_count, NULL };
+        cbvh_mesh m = {s->positions, s->vertex_count, 0, s->indices, s->triangle_count, NULL};
         assert_int_equal(cbvh_cook(&m, &o, NULL, &buf, &size, NULL, NULL), CBVH_OK);
         assert_int_equal(cbvh_open_memory(buf, size, NULL, &f, NULL), CBVH_OK);
         leak_stats st;
@@ -419,7 +439,7 @@ static void test_watertight(void **state)
 {
     (void)state;
     scene s;
-    float c[3] = { 0.3f, -0.2f, 0.1f }, lo[3] = { -1, -2, -3 }, hi[3] = { 1.5f, 2.5f, 0.5f };
+    float c[3] = {0.3f, -0.2f, 0.1f}, lo[3] = {-1, -2, -3}, hi[3] = {1.5f, 2.5f, 0.5f};
     assert_true(scene_sphere(&s, 3000, c, 1.0f));
     watertight_scene("sphere 3000", &s, 3);
     scene_free(&s);
@@ -427,7 +447,7 @@ static void test_watertight(void **state)
     watertight_scene("cube", &s, 400);
     scene_free(&s);
     /* far away: the float spacing of the vertices is coarse */
-    float far_c[3] = { 1e5f, -3e5f, 2e5f };
+    float far_c[3] = {1e5f, -3e5f, 2e5f};
     assert_true(scene_sphere(&s, 3000, far_c, 10.0f));
     watertight_scene("sphere 3000 at 1e5", &s, 3);
     scene_free(&s);
@@ -452,7 +472,7 @@ static cbvh_file *requantized(const cbvh_file *f, void **buffer)
             memcpy(pos + 3 * (size_t)idx[3 * (size_t)t + k], v[k], sizeof v[k]);
     }
     cbvh_cook_options o = options(1, 0);
-    cbvh_mesh m = { pos, info.vertex_count, 0, idx, info.triangle_count, NULL };
+    cbvh_mesh m = {pos, info.vertex_count, 0, idx, info.triangle_count, NULL};
     size_t size = 0;
     cbvh_file *q = NULL;
     assert_int_equal(cbvh_cook(&m, &o, NULL, buffer, &size, NULL, NULL), CBVH_OK);
@@ -470,7 +490,8 @@ static void test_watertight_dragon(void **state)
     (void)state;
     const char *path = getenv("CBVH_DRAGON");
     if (!path || !*path) {
-        printf("CBVH_DRAGON not set (path of a cooked dragon, e.g. `cbvh cook dragon_vrip.ply dragon.cbvh`): skipped\n");
+        printf("CBVH_DRAGON not set (path of a cooked dragon, e.g. `cbvh cook dragon_vrip.ply dragon.cbvh`): "
+               "skipped\n");
         skip();
     }
     cbvh_file *f = NULL;
@@ -479,7 +500,7 @@ static void test_watertight_dragon(void **state)
         fail_msg("CBVH_DRAGON=%s: %s", path, err.message);
     void *buf = NULL;
     cbvh_file *q = requantized(f, &buf);
-    const cbvh_file *files[2] = { f, q };
+    const cbvh_file *files[2] = {f, q};
     const long stride = test_reps_stride(37);
     for (int k = 0; k < 2; k++) {
         leak_stats st;
@@ -509,27 +530,32 @@ static void test_scales(void **state)
 {
     (void)state;
     scene base;
-    float c[3] = { 0, 0, 0 };
+    float c[3] = {0, 0, 0};
     assert_true(scene_sphere(&base, 2000, c, 1000.0f)); /* a 2 km object: still resolved at 1e7 */
     float *pos = malloc(3 * base.vertex_count * sizeof(float));
-    static const struct { double scale, offset; } cases[] = {
-        { 1, 0 },    { 1, 1e3 },  { 1, -1e3 }, { 1, 1e5 }, { 1, -1e5 }, { 1, 1e7 }, { 1, -1e7 },
-        { 1e-6, 0 }, { 1e9, 0 },  { 1e-6, 1 }, { 1e9, 1e10 },
+    static const struct {
+        double scale, offset;
+    } cases[] = {
+        {1, 0},    {1, 1e3},  {1, -1e3}, {1, 1e5},  {1, -1e5},   {1, 1e7},
+        {1, -1e7}, {1e-6, 0}, {1e9, 0},  {1e-6, 1}, {1e9, 1e10},
     };
-    uint64_t nodes_at_origin[2] = { 0, 0 };
-    printf("%-8s %-8s %-9s %6s %6s %6s %6s %6s %6s %9s %8s\n", "scale", "offset", "vertices", "rays", "clear", "missed", "early",
-           "offpl", "paths", "nodes/ray", "vs orig");
+    uint64_t nodes_at_origin[2] = {0, 0};
+    printf("%-8s %-8s %-9s %6s %6s %6s %6s %6s %6s %9s %8s\n", "scale", "offset", "vertices", "rays", "clear",
+           "missed", "early", "offpl", "paths", "nodes/ray", "vs orig");
     for (size_t ci = 0; ci < sizeof cases / sizeof cases[0]; ci++) {
         transformed(&base, cases[ci].scale, cases[ci].offset, pos);
         for (int q = 0; q < 2; q++) {
             cbvh_cook_options o = options(q, 0);
             ref_fixture fx;
-            assert_int_equal(ref_fixture_open(&fx, pos, base.vertex_count, base.indices, base.triangle_count, &o), CBVH_OK);
+            assert_int_equal(
+                ref_fixture_open(&fx, pos, base.vertex_count, base.indices, base.triangle_count, &o),
+                CBVH_OK);
             size_t bad = 0, checked;
             float lo[3], hi[3];
             checked = check_tree_conservative(fx.file, lo, hi, &bad);
             if (bad)
-                fail_msg("scale %g offset %g: %zu of %zu node boxes not conservative", cases[ci].scale, cases[ci].offset, bad, checked);
+                fail_msg("scale %g offset %g: %zu of %zu node boxes not conservative", cases[ci].scale,
+                         cases[ci].offset, bad, checked);
             agree_stats st;
             memset(&st, 0, sizeof st);
             uint64_t rng = 777; /* the same rays relative to the mesh in every case */
@@ -540,11 +566,12 @@ static void test_scales(void **state)
             if (ci == 0)
                 nodes_at_origin[q] = st.nodes;
             double ratio = (double)st.nodes / (double)nodes_at_origin[q];
-            printf("%-8g %-8g %-9s %6zu %6zu %6zu %6zu %6zu %6zu %9.2f %8.2f\n", cases[ci].scale, cases[ci].offset,
-                   q ? "quantized" : "lossless", st.rays, st.clear_hits, st.missed, st.early, st.off_plane, st.disagree_paths,
-                   (double)st.nodes / (double)st.rays, ratio);
+            printf("%-8g %-8g %-9s %6zu %6zu %6zu %6zu %6zu %6zu %9.2f %8.2f\n", cases[ci].scale,
+                   cases[ci].offset, q ? "quantized" : "lossless", st.rays, st.clear_hits, st.missed,
+                   st.early, st.off_plane, st.disagree_paths, (double)st.nodes / (double)st.rays, ratio);
             char what[96];
-            snprintf(what, sizeof what, "scale %g offset %g %s", cases[ci].scale, cases[ci].offset, q ? "quantized" : "lossless");
+            snprintf(what, sizeof what, "scale %g offset %g %s", cases[ci].scale, cases[ci].offset,
+                     q ? "quantized" : "lossless");
             assert_agreement(what, &st);
             if (ratio > 2.0)
                 fail_msg("%s: %.2fx the node visits of the mesh at the origin", what, ratio);
@@ -563,9 +590,9 @@ static void test_huge_extent(void **state)
     printf("huge extents (tetrahedron of edge s, 200 rays through a face):");
     for (int e = 9; e <= 30; e += 3) {
         float s = powf(10.0f, (float)e);
-        float p[12] = { 0, 0, 0, s, 0, 0, 0, s, 0, 0, 0, s };
-        uint32_t idx[12] = { 0, 2, 1, 0, 1, 3, 1, 2, 3, 0, 3, 2 };
-        cbvh_mesh m = { p, 4, 0, idx, 4, NULL };
+        float p[12] = {0, 0, 0, s, 0, 0, 0, s, 0, 0, 0, s};
+        uint32_t idx[12] = {0, 2, 1, 0, 1, 3, 1, 2, 3, 0, 3, 2};
+        cbvh_mesh m = {p, 4, 0, idx, 4, NULL};
         void *buf = NULL;
         size_t n = 0;
         cbvh_result r = cbvh_cook(&m, test_options(), NULL, &buf, &n, NULL, NULL);
@@ -578,9 +605,9 @@ static void test_huge_extent(void **state)
         int miss = 0;
         for (int i = 0; i < 200; i++) {
             float a = (float)(i % 10 + 0.5) / 20, b = (float)(i / 10 % 10 + 0.5) / 20;
-            cbvh_ray ray = { { a * s, b * s, -s }, 0, { 0, 0, 1 }, INFINITY };
+            cbvh_ray ray = {{a * s, b * s, -s}, 0, {0, 0, 1}, INFINITY};
             if (i >= 100)
-                ray = (cbvh_ray){ { a * s - s, b * s - 2 * s, -s }, 0, { s, 2 * s, s }, INFINITY };
+                ray = (cbvh_ray){{a * s - s, b * s - 2 * s, -s}, 0, {s, 2 * s, s}, INFINITY};
             cbvh_hit h;
             miss += !cbvh_raycast(f, &ray, CBVH_TRAVERSAL_SORTED, &h, NULL);
         }
@@ -611,7 +638,7 @@ static void check_direction_scales(const cbvh_file *f, const cbvh_ray *r)
 {
     cbvh_hit h0;
     const int got0 = cbvh_raycast(f, r, CBVH_TRAVERSAL_SORTED, &h0, NULL);
-    static const int ks[] = { -100, -60, -30, -8, 8, 30, 60, 100 };
+    static const int ks[] = {-100, -60, -30, -8, 8, 30, 60, 100};
     for (size_t i = 0; i < sizeof ks / sizeof ks[0]; i++) {
         cbvh_ray s = *r; /* the same segment: its range scaled as its t */
         for (int a = 0; a < 3; a++)
@@ -630,8 +657,8 @@ static void check_direction_scales(const cbvh_file *f, const cbvh_ray *r)
         cbvh_hit h;
         const int got = hit_all_paths(f, &s, &h);
         if (got != got0 || (got && (h.tri != h0.tri || h.t != ldexpf(h0.t, -ks[i]))))
-            fail_msg("direction times 2^%d: %s t %g, unscaled %s t %g", ks[i], got ? "hit" : "miss", got ? h.t : 0.0,
-                     got0 ? "hit" : "miss", got0 ? h0.t : 0.0);
+            fail_msg("direction times 2^%d: %s t %g, unscaled %s t %g", ks[i], got ? "hit" : "miss",
+                     got ? h.t : 0.0, got0 ? "hit" : "miss", got0 ? h0.t : 0.0);
     }
 }
 
@@ -646,14 +673,16 @@ static void test_exact_range(void **state)
     (void)state;
     /* the largest: 2^40 - 2^26 - 2^22 at most, float steps of 2^16 there */
     const float edge = 0x1p40f - 0x1p26f;
-    float big_c[3] = { edge - 0x1p22f, -(edge - 0x1p22f), edge - 0x1p22f };
+    float big_c[3] = {edge - 0x1p22f, -(edge - 0x1p22f), edge - 0x1p22f};
     scene big;
     assert_true(scene_sphere(&big, 2000, big_c, 0x1p21f));
     watertight_scene("sphere at the range's edge", &big, 3);
     for (int q = 0; q < 2; q++) {
         cbvh_cook_options o = options(q, 0);
         ref_fixture fx;
-        assert_int_equal(ref_fixture_open(&fx, big.positions, big.vertex_count, big.indices, big.triangle_count, &o), CBVH_OK);
+        assert_int_equal(
+            ref_fixture_open(&fx, big.positions, big.vertex_count, big.indices, big.triangle_count, &o),
+            CBVH_OK);
         agree_stats st;
         memset(&st, 0, sizeof st);
         uint64_t rng = 91;
@@ -667,9 +696,9 @@ static void test_exact_range(void **state)
         ref_fixture_close(&fx);
     }
     /* one float step past the range: refused, naming the limit */
-    float far[9] = { 0, 0, 0, nextafterf(CBVH_COORDINATE_MAX, INFINITY), 0, 0, 0, 1, 0 };
-    const uint32_t tri[3] = { 0, 1, 2 };
-    cbvh_mesh past = { far, 3, 0, tri, 1, NULL };
+    float far[9] = {0, 0, 0, nextafterf(CBVH_COORDINATE_MAX, INFINITY), 0, 0, 0, 1, 0};
+    const uint32_t tri[3] = {0, 1, 2};
+    cbvh_mesh past = {far, 3, 0, tri, 1, NULL};
     cbvh_error err;
     void *buf = NULL;
     size_t size = 0;
@@ -678,15 +707,16 @@ static void test_exact_range(void **state)
     assert_non_null(strstr(err.message, "2^40"));
 
     /* the smallest features, alone and beside a triangle at the range's edge */
-    const float small_c[3] = { 0, 0, 0 };
+    const float small_c[3] = {0, 0, 0};
     scene small, mixed;
     assert_true(scene_sphere(&small, 2000, small_c, 0x1p-30f));
     flush_below_range(small.positions, 3 * small.vertex_count);
     watertight_scene("sphere of radius 2^-30", &small, 3);
-    const float big_tri[9] = { CBVH_COORDINATE_MAX, CBVH_COORDINATE_MAX, 0, CBVH_COORDINATE_MAX, 0, CBVH_COORDINATE_MAX,
-                               0, CBVH_COORDINATE_MAX, CBVH_COORDINATE_MAX };
-    const uint32_t big_idx[3] = { 0, 1, 2 };
-    const scene far_tri = { (float *)big_tri, (uint32_t *)big_idx, NULL, 3, 1 };
+    const float big_tri[9] = {
+        CBVH_COORDINATE_MAX, CBVH_COORDINATE_MAX, 0, CBVH_COORDINATE_MAX, 0, CBVH_COORDINATE_MAX, 0,
+        CBVH_COORDINATE_MAX, CBVH_COORDINATE_MAX};
+    const uint32_t big_idx[3] = {0, 1, 2};
+    const scene far_tri = {(float *)big_tri, (uint32_t *)big_idx, NULL, 3, 1};
     memset(&mixed, 0, sizeof mixed);
     assert_true(scene_append(&mixed, &small, 0) && scene_append(&mixed, &far_tri, 0));
     for (int m = 0; m < 2; m++) {
@@ -696,7 +726,9 @@ static void test_exact_range(void **state)
             cbvh_cook_stats stats;
             cbvh_cook_stats_init(&stats, sizeof stats);
             ref_fixture fx;
-            assert_int_equal(ref_fixture_open(&fx, sc->positions, sc->vertex_count, sc->indices, sc->triangle_count, &o), CBVH_OK);
+            assert_int_equal(
+                ref_fixture_open(&fx, sc->positions, sc->vertex_count, sc->indices, sc->triangle_count, &o),
+                CBVH_OK);
             /* judged on the small sphere's scale: its bounds and diagonal, rays from a few radii away */
             ref_fixture local = fx;
             for (int a = 0; a < 3; a++) {
@@ -709,12 +741,14 @@ static void test_exact_range(void **state)
             uint64_t rng = 17;
             for (int i = 0; i < test_reps(1000); i++) {
                 const size_t t = (size_t)(scene_rand_next(&rng) % small.triangle_count);
-                const double wb = 0.05 + 0.45 * scene_rand_unit(&rng), wc = 0.05 + 0.45 * scene_rand_unit(&rng);
+                const double wb = 0.05 + 0.45 * scene_rand_unit(&rng),
+                             wc = 0.05 + 0.45 * scene_rand_unit(&rng);
                 /* t about 1 at the target; the range ends long before the triangle at 2^40, whose hits are
                  * judged at its own scale, not the sphere's */
-                cbvh_ray r = { { 0, 0, 0 }, 0, { 0, 0, 0 }, 64.0f };
+                cbvh_ray r = {{0, 0, 0}, 0, {0, 0, 0}, 64.0f};
                 for (int a = 0; a < 3; a++) {
-                    const float *v0 = small.positions + 3 * small.indices[3 * t], *v1 = small.positions + 3 * small.indices[3 * t + 1],
+                    const float *v0 = small.positions + 3 * small.indices[3 * t],
+                                *v1 = small.positions + 3 * small.indices[3 * t + 1],
                                 *v2 = small.positions + 3 * small.indices[3 * t + 2];
                     const double target = (1 - wb - wc) * v0[a] + wb * v1[a] + wc * v2[a];
                     r.org[a] = (float)(target + 0x1p-28 * (2 * scene_rand_unit(&rng) - 1));
@@ -751,34 +785,83 @@ typedef struct mesh_case {
     size_t vertex_count, triangle_count;
     float pos[3 * 12];
     uint32_t idx[3 * 12];
-    cbvh_result expect;  /* cook result */
-    size_t dropped;      /* triangles the cooker must drop */
-    double tolerance;    /* relative to the diagonal */
+    cbvh_result expect; /* cook result */
+    size_t dropped;     /* triangles the cooker must drop */
+    double tolerance;   /* relative to the diagonal */
 } mesh_case;
 
 static void test_degenerate_meshes(void **state)
 {
     (void)state;
     static const mesh_case cases[] = {
-        { "single triangle", 3, 1, { 0, 0, 0, 1, 0, 0, 0, 1, 0 }, { 0, 1, 2 }, CBVH_OK, 0, HIT_TOL },
-        { "sliver 1e7:1", 3, 1, { 0, 0, 0, 1e3f, 0, 0, 500, 1e-4f, 0 }, { 0, 1, 2 }, CBVH_OK, 0, HIT_TOL },
-        { "needle", 4, 2, { 0, 0, 0, 0, 0, 1e3f, 1e-4f, 0, 0, 0, 1e-4f, 1e3f }, { 0, 1, 2, 1, 3, 2 }, CBVH_OK, 0, HIT_TOL },
-        { "zero-area + good", 6, 2, { 0, 0, 0, 1, 1, 1, 2, 2, 2, 0, 0, 0, 1, 0, 0, 0, 1, 0 }, { 0, 1, 2, 3, 4, 5 }, CBVH_OK, 1, HIT_TOL },
-        { "repeated vertex", 4, 2, { 0, 0, 0, 1, 0, 0, 1, 0, 0, 0, 1, 0 }, { 0, 1, 3, 0, 2, 3 }, CBVH_OK, 0, HIT_TOL },
-        { "duplicated triangle", 3, 2, { 0, 0, 0, 1, 0, 0, 0, 1, 0 }, { 0, 1, 2, 0, 1, 2 }, CBVH_OK, 0, HIT_TOL },
-        { "back-to-back", 3, 2, { 0, 0, 0, 1, 0, 0, 0, 1, 0 }, { 0, 1, 2, 0, 2, 1 }, CBVH_OK, 0, HIT_TOL },
-        { "flat (zero z extent)", 4, 2, { 0, 0, 5, 1, 0, 5, 1, 1, 5, 0, 1, 5 }, { 0, 1, 2, 0, 2, 3 }, CBVH_OK, 0, HIT_TOL },
-        { "line (zero y,z extent)", 3, 1, { 0, 2, 2, 1, 2, 2, 3, 2, 2 }, { 0, 1, 2 }, CBVH_ERROR_EMPTY_MESH, 1, HIT_TOL },
-        { "all vertices equal", 3, 2, { 1, 1, 1, 1, 1, 1, 1, 1, 1 }, { 0, 1, 2, 2, 1, 0 }, CBVH_ERROR_EMPTY_MESH, 2, HIT_TOL },
-        { "no triangles", 3, 0, { 0 }, { 0 }, CBVH_ERROR_EMPTY_MESH, 0, HIT_TOL },
-        { "index out of range", 3, 1, { 0, 0, 0, 1, 0, 0, 0, 1, 0 }, { 0, 1, 3 }, CBVH_ERROR_BAD_MESH, 0, HIT_TOL },
-        { "NaN coordinate", 3, 1, { 0, 0, 0, NAN, 0, 0, 0, 1, 0 }, { 0, 1, 2 }, CBVH_ERROR_BAD_MESH, 0, HIT_TOL },
-        { "infinite coordinate", 3, 1, { 0, 0, 0, INFINITY, 0, 0, 0, 1, 0 }, { 0, 1, 2 }, CBVH_ERROR_BAD_MESH, 0, HIT_TOL },
+        {"single triangle", 3, 1, {0, 0, 0, 1, 0, 0, 0, 1, 0}, {0, 1, 2}, CBVH_OK, 0, HIT_TOL},
+        {"sliver 1e7:1", 3, 1, {0, 0, 0, 1e3f, 0, 0, 500, 1e-4f, 0}, {0, 1, 2}, CBVH_OK, 0, HIT_TOL},
+        {"needle",
+         4,
+         2,
+         {0, 0, 0, 0, 0, 1e3f, 1e-4f, 0, 0, 0, 1e-4f, 1e3f},
+         {0, 1, 2, 1, 3, 2},
+         CBVH_OK,
+         0,
+         HIT_TOL},
+        {"zero-area + good",
+         6,
+         2,
+         {0, 0, 0, 1, 1, 1, 2, 2, 2, 0, 0, 0, 1, 0, 0, 0, 1, 0},
+         {0, 1, 2, 3, 4, 5},
+         CBVH_OK,
+         1,
+         HIT_TOL},
+        {"repeated vertex",
+         4,
+         2,
+         {0, 0, 0, 1, 0, 0, 1, 0, 0, 0, 1, 0},
+         {0, 1, 3, 0, 2, 3},
+         CBVH_OK,
+         0,
+         HIT_TOL},
+        {"duplicated triangle", 3, 2, {0, 0, 0, 1, 0, 0, 0, 1, 0}, {0, 1, 2, 0, 1, 2}, CBVH_OK, 0, HIT_TOL},
+        {"back-to-back", 3, 2, {0, 0, 0, 1, 0, 0, 0, 1, 0}, {0, 1, 2, 0, 2, 1}, CBVH_OK, 0, HIT_TOL},
+        {"flat (zero z extent)",
+         4,
+         2,
+         {0, 0, 5, 1, 0, 5, 1, 1, 5, 0, 1, 5},
+         {0, 1, 2, 0, 2, 3},
+         CBVH_OK,
+         0,
+         HIT_TOL},
+        {"line (zero y,z extent)",
+         3,
+         1,
+         {0, 2, 2, 1, 2, 2, 3, 2, 2},
+         {0, 1, 2},
+         CBVH_ERROR_EMPTY_MESH,
+         1,
+         HIT_TOL},
+        {"all vertices equal",
+         3,
+         2,
+         {1, 1, 1, 1, 1, 1, 1, 1, 1},
+         {0, 1, 2, 2, 1, 0},
+         CBVH_ERROR_EMPTY_MESH,
+         2,
+         HIT_TOL},
+        {"no triangles", 3, 0, {0}, {0}, CBVH_ERROR_EMPTY_MESH, 0, HIT_TOL},
+        {"index out of range", 3, 1, {0, 0, 0, 1, 0, 0, 0, 1, 0}, {0, 1, 3}, CBVH_ERROR_BAD_MESH, 0, HIT_TOL},
+        {"NaN coordinate", 3, 1, {0, 0, 0, NAN, 0, 0, 0, 1, 0}, {0, 1, 2}, CBVH_ERROR_BAD_MESH, 0, HIT_TOL},
+        {"infinite coordinate",
+         3,
+         1,
+         {0, 0, 0, INFINITY, 0, 0, 0, 1, 0},
+         {0, 1, 2},
+         CBVH_ERROR_BAD_MESH,
+         0,
+         HIT_TOL},
     };
     for (size_t ci = 0; ci < sizeof cases / sizeof cases[0]; ci++) {
         const mesh_case *mc = &cases[ci];
         for (int q = 0; q < 2; q++) {
-            cbvh_mesh m = { mc->pos, mc->vertex_count, 0, mc->idx, mc->triangle_count, NULL };
+            cbvh_mesh m = {mc->pos, mc->vertex_count, 0, mc->idx, mc->triangle_count, NULL};
             cbvh_cook_options o = options(q, 0);
             cbvh_cook_stats stats;
             cbvh_cook_stats_init(&stats, sizeof stats);
@@ -786,11 +869,11 @@ static void test_degenerate_meshes(void **state)
             void *buf = NULL;
             size_t n = 0;
             cbvh_result r = cbvh_cook(&m, &o, NULL, &buf, &n, &stats, &err);
-            printf("mesh %-24s %-9s: %s%s%s\n", mc->name, q ? "quantized" : "lossless", cbvh_result_string(r), r ? ": " : "",
-                   r ? err.message : "");
+            printf("mesh %-24s %-9s: %s%s%s\n", mc->name, q ? "quantized" : "lossless", cbvh_result_string(r),
+                   r ? ": " : "", r ? err.message : "");
             if (r != mc->expect)
-                fail_msg("%s: cook gave %s, expected %s (%s)", mc->name, cbvh_result_string(r), cbvh_result_string(mc->expect),
-                         err.message);
+                fail_msg("%s: cook gave %s, expected %s (%s)", mc->name, cbvh_result_string(r),
+                         cbvh_result_string(mc->expect), err.message);
             if (r != CBVH_OK) {
                 assert_true(err.message[0] != 0);
                 continue;
@@ -799,7 +882,8 @@ static void test_degenerate_meshes(void **state)
                 assert_int_equal(stats.dropped_degenerate, mc->dropped);
             cbvh_buffer_free(NULL, buf);
             ref_fixture fx;
-            assert_int_equal(ref_fixture_open(&fx, mc->pos, mc->vertex_count, mc->idx, mc->triangle_count, &o), CBVH_OK);
+            assert_int_equal(
+                ref_fixture_open(&fx, mc->pos, mc->vertex_count, mc->idx, mc->triangle_count, &o), CBVH_OK);
             size_t bad = 0;
             float lo[3], hi[3];
             check_tree_conservative(fx.file, lo, hi, &bad);
@@ -829,11 +913,12 @@ static void test_degenerate_meshes(void **state)
 static void test_sliver_accuracy(void **state)
 {
     (void)state;
-    printf("sliver accuracy (triangle length 1000): aspect: worst hit distance from the plane, missed of inside rays\n");
+    printf("sliver accuracy (triangle length 1000): aspect: worst hit distance from the plane, missed of "
+           "inside rays\n");
     for (int e = 0; e <= 8; e++) {
         float w = 1e3f / powf(10.0f, (float)e);
-        float pos[9] = { 0, 0, 0, 1e3f, 0, 0, 500, w, 0 };
-        uint32_t idx[3] = { 0, 1, 2 };
+        float pos[9] = {0, 0, 0, 1e3f, 0, 0, 500, w, 0};
+        uint32_t idx[3] = {0, 1, 2};
         cbvh_cook_options o = options(0, 0);
         ref_fixture fx;
         assert_int_equal(ref_fixture_open(&fx, pos, 3, idx, 1, &o), CBVH_OK);
@@ -889,57 +974,56 @@ static void test_extreme_rays(void **state)
     (void)state;
     /* a unit cube [0,1]^3: its faces lie on the node boxes' planes */
     scene s;
-    float lo[3] = { 0, 0, 0 }, hi[3] = { 1, 1, 1 };
+    float lo[3] = {0, 0, 0}, hi[3] = {1, 1, 1};
     assert_true(scene_cube(&s, lo, hi));
     cbvh_cook_options o = options(0, 0);
     ref_fixture fx;
-    assert_int_equal(ref_fixture_open(&fx, s.positions, s.vertex_count, s.indices, s.triangle_count, &o), CBVH_OK);
+    assert_int_equal(ref_fixture_open(&fx, s.positions, s.vertex_count, s.indices, s.triangle_count, &o),
+                     CBVH_OK);
     const cbvh_file *f = fx.file;
     cbvh_hit h;
     const float inf = INFINITY, nan = NAN, den = 1e-40f;
     static const char *const names[] = {
-        "dir (0,0,1)",          "dir (-0,-0,1)",       "dir (den,-den,1)",   "dir (1e30 scaled)",   "unnormalized 1e-20",
-        "origin on a face",     "origin on an edge",   "origin on a vertex", "origin on box plane", "in the face's plane",
-        "tmin = tmax at face",  "tmin > tmax",         "zero direction",     "NaN origin",          "inf origin",
-        "NaN direction",        "inf direction",       "NaN tmax",           "negative tmin",       "tmax = +inf, tmin inf",
+        "dir (0,0,1)",         "dir (-0,-0,1)",
+        "dir (den,-den,1)",    "dir (1e30 scaled)",
+        "unnormalized 1e-20",  "origin on a face",
+        "origin on an edge",   "origin on a vertex",
+        "origin on box plane", "in the face's plane",
+        "tmin = tmax at face", "tmin > tmax",
+        "zero direction",      "NaN origin",
+        "inf origin",          "NaN direction",
+        "inf direction",       "NaN tmax",
+        "negative tmin",       "tmax = +inf, tmin inf",
     };
     const cbvh_ray rays[] = {
-        { { 0.5f, 0.5f, -1 }, 0, { 0, 0, 1 }, inf },
-        { { 0.5f, 0.5f, -1 }, 0, { -0.0f, -0.0f, 1 }, inf },
-        { { 0.5f, 0.5f, -1 }, 0, { den, -den, 1 }, inf },
-        { { 0.5f, 0.5f, -1 }, 0, { 1e20f, 1e20f, 1e30f }, inf },
-        { { 0.25f, 0.75f, -1 }, 0, { 0, 0, 1e-20f }, inf },
-        { { 0.5f, 0.5f, 0 }, 0, { 0, 0, 1 }, inf },
-        { { 0.5f, 0, 0 }, 0, { 0, 0.3f, 1 }, inf },
-        { { 0, 0, 0 }, 0, { 0.3f, 0.4f, 1 }, inf },
-        { { 0.5f, 0.5f, -1 }, 0, { 0, 0, 1 }, inf }, /* origin on the plane x = 0.5? no: on y,z planes below */
-        { { -1, 0.5f, 0 }, 0, { 1, 0, 0 }, inf },
-        { { 0.5f, 0.5f, -1 }, 1, { 0, 0, 1 }, 1 },
-        { { 0.5f, 0.5f, -1 }, 2, { 0, 0, 1 }, 1 },
-        { { 0.5f, 0.5f, -1 }, 0, { 0, 0, 0 }, inf },
-        { { nan, 0.5f, -1 }, 0, { 0, 0, 1 }, inf },
-        { { inf, 0.5f, -1 }, 0, { 0, 0, 1 }, inf },
-        { { 0.5f, 0.5f, -1 }, 0, { 0, nan, 1 }, inf },
-        { { 0.5f, 0.5f, -1 }, 0, { 0, inf, 1 }, inf },
-        { { 0.5f, 0.5f, -1 }, 0, { 0, 0, 1 }, nan },
-        { { 0.5f, 0.5f, -1 }, -1, { 0, 0, 1 }, inf },
-        { { 0.5f, 0.5f, -1 }, inf, { 0, 0, 1 }, inf },
+        {{0.5f, 0.5f, -1}, 0, {0, 0, 1}, inf},        {{0.5f, 0.5f, -1}, 0, {-0.0f, -0.0f, 1}, inf},
+        {{0.5f, 0.5f, -1}, 0, {den, -den, 1}, inf},   {{0.5f, 0.5f, -1}, 0, {1e20f, 1e20f, 1e30f}, inf},
+        {{0.25f, 0.75f, -1}, 0, {0, 0, 1e-20f}, inf}, {{0.5f, 0.5f, 0}, 0, {0, 0, 1}, inf},
+        {{0.5f, 0, 0}, 0, {0, 0.3f, 1}, inf},         {{0, 0, 0}, 0, {0.3f, 0.4f, 1}, inf},
+        {{0.5f, 0.5f, -1}, 0, {0, 0, 1}, inf}, /* origin on the plane x = 0.5? no: on y,z planes below */
+        {{-1, 0.5f, 0}, 0, {1, 0, 0}, inf},           {{0.5f, 0.5f, -1}, 1, {0, 0, 1}, 1},
+        {{0.5f, 0.5f, -1}, 2, {0, 0, 1}, 1},          {{0.5f, 0.5f, -1}, 0, {0, 0, 0}, inf},
+        {{nan, 0.5f, -1}, 0, {0, 0, 1}, inf},         {{inf, 0.5f, -1}, 0, {0, 0, 1}, inf},
+        {{0.5f, 0.5f, -1}, 0, {0, nan, 1}, inf},      {{0.5f, 0.5f, -1}, 0, {0, inf, 1}, inf},
+        {{0.5f, 0.5f, -1}, 0, {0, 0, 1}, nan},        {{0.5f, 0.5f, -1}, -1, {0, 0, 1}, inf},
+        {{0.5f, 0.5f, -1}, inf, {0, 0, 1}, inf},
     };
-    cbvh_ray plane_ray = { { 0, 0.5f, -1 }, 0, { 0, 0, 1 }, inf }; /* origin on the box plane x = 0 */
+    cbvh_ray plane_ray = {{0, 0.5f, -1}, 0, {0, 0, 1}, inf}; /* origin on the box plane x = 0 */
     for (size_t i = 0; i < sizeof rays / sizeof rays[0]; i++) {
         cbvh_ray r = i == 8 ? plane_ray : rays[i];
         ref_ray_hit ref;
         int want = ref_ray_closest(&fx.tris, &r, 0, &ref);
         int got = hit_all_paths(f, &r, &h);
-        printf("ray %-22s valid %d: reference %s t %-10g  cbvh %s t %g\n", names[i], ref_ray_valid(&r), want ? "hit " : "miss",
-               want ? ref.t : 0.0, got ? "hit " : "miss", got ? h.t : 0.0);
+        printf("ray %-22s valid %d: reference %s t %-10g  cbvh %s t %g\n", names[i], ref_ray_valid(&r),
+               want ? "hit " : "miss", want ? ref.t : 0.0, got ? "hit " : "miss", got ? h.t : 0.0);
         if (!ref_ray_valid(&r)) {
             assert_int_equal(got, 0); /* cbvh.h: invalid rays miss on every query */
             assert_int_equal(h.tri, CBVH_NO_HIT);
             continue;
         }
         if (i == 9)
-            continue; /* in the plane of the x = 0 face: either answer, consistent across paths (checked above) */
+            continue; /* in the plane of the x = 0 face: either answer, consistent across paths (checked
+                         above) */
         assert_int_equal(got, want);
         if (got)
             assert_true(fabs((double)h.t - ref.t) <= 1e-6 * fmax(1.0, ref.t));
@@ -956,19 +1040,22 @@ static void test_extreme_sweeps(void **state)
 {
     (void)state;
     scene s;
-    float c[3] = { 0, 0, 0 };
+    float c[3] = {0, 0, 0};
     assert_true(scene_sphere(&s, 800, c, 1.0f));
     cbvh_cook_options o = options(0, 0);
     ref_fixture fx;
-    assert_int_equal(ref_fixture_open(&fx, s.positions, s.vertex_count, s.indices, s.triangle_count, &o), CBVH_OK);
+    assert_int_equal(ref_fixture_open(&fx, s.positions, s.vertex_count, s.indices, s.triangle_count, &o),
+                     CBVH_OK);
     const cbvh_file *f = fx.file;
     uint64_t rng = 3;
     size_t zero_agree = 0, zero_total = 0;
     for (int i = 0; i < 500; i++) {
         cbvh_ray r = ref_make_ray(&fx, &rng, i % 3);
-        float delta[3] = { r.dir[0] * 3, r.dir[1] * 3, r.dir[2] * 3 }, zero[3] = { 0, 0, 0 };
+        float delta[3] = {r.dir[0] * 3, r.dir[1] * 3, r.dir[2] * 3}, zero[3] = {0, 0, 0};
         cbvh_ray seg = r;
-        seg.dir[0] = delta[0]; seg.dir[1] = delta[1]; seg.dir[2] = delta[2];
+        seg.dir[0] = delta[0];
+        seg.dir[1] = delta[1];
+        seg.dir[2] = delta[2];
         seg.tmax = 1;
         cbvh_hit rh;
         cbvh_sweep_hit sh, ch, bh;
@@ -979,36 +1066,39 @@ static void test_extreme_sweeps(void **state)
         zero_total++;
         /* radius 0 is the raycast: same contact and t (up to the sweep's own arithmetic) */
         if (sg == rg && cg == rg && bg == rg &&
-            (!rg || (fabs((double)sh.t - rh.t) < 1e-5 && fabs((double)ch.t - rh.t) < 1e-5 && fabs((double)bh.t - rh.t) < 1e-5)))
+            (!rg || (fabs((double)sh.t - rh.t) < 1e-5 && fabs((double)ch.t - rh.t) < 1e-5 &&
+                     fabs((double)bh.t - rh.t) < 1e-5)))
             zero_agree++;
     }
     printf("sweeps of radius/half-extent 0 agreeing with the raycast: %zu of %zu\n", zero_agree, zero_total);
     assert_int_equal(zero_agree, zero_total);
 
     /* huge radius around the mesh: overlapping at the start, t = 0, unit normal */
-    float center[3] = { 0.1f, 0.2f, 0.3f }, delta[3] = { 1, 0, 0 }, half_big[3] = { 1e6f, 1e6f, 1e6f };
+    float center[3] = {0.1f, 0.2f, 0.3f}, delta[3] = {1, 0, 0}, half_big[3] = {1e6f, 1e6f, 1e6f};
     cbvh_sweep_hit h;
     assert_int_equal(cbvh_sweep_sphere(f, center, 1e6f, delta, &h), 1);
     assert_true(h.t == 0.0f && fabs(vec_len(h.normal) - 1) < 1e-4);
     assert_int_equal(cbvh_sweep_box(f, center, half_big, delta, &h), 1);
     assert_true(h.t == 0.0f && fabs(vec_len(h.normal) - 1) < 1e-4);
-    float far_p1[3] = { 0.1f, 0.2f, 1e6f };
+    float far_p1[3] = {0.1f, 0.2f, 1e6f};
     assert_int_equal(cbvh_sweep_capsule(f, center, far_p1, 1e5f, delta, &h), 1);
     assert_true(h.t == 0.0f && fabs(vec_len(h.normal) - 1) < 1e-4);
 
     /* overlapping at the start: small sphere straddling the surface */
-    float on[3] = { 0, 0, 1 }, away[3] = { 0, 0, 5 };
+    float on[3] = {0, 0, 1}, away[3] = {0, 0, 5};
     assert_int_equal(cbvh_sweep_sphere(f, on, 0.05f, away, &h), 1);
     assert_true(h.t == 0.0f && isfinite(h.normal[0]) && fabs(vec_len(h.normal) - 1) < 1e-4);
 
     /* exact touching contact on a flat face: a unit cube and a sphere whose
      * surface starts exactly on the face plane, moving away and along it */
     scene cube;
-    float lo[3] = { 0, 0, 0 }, hi[3] = { 1, 1, 1 };
+    float lo[3] = {0, 0, 0}, hi[3] = {1, 1, 1};
     assert_true(scene_cube(&cube, lo, hi));
     ref_fixture cx;
-    assert_int_equal(ref_fixture_open(&cx, cube.positions, cube.vertex_count, cube.indices, cube.triangle_count, &o), CBVH_OK);
-    float touch[3] = { 0.5f, 0.5f, 1.25f }, up[3] = { 0, 0, 1 }, down[3] = { 0, 0, -1 }, side[3] = { 0.1f, 0, 0 };
+    assert_int_equal(
+        ref_fixture_open(&cx, cube.positions, cube.vertex_count, cube.indices, cube.triangle_count, &o),
+        CBVH_OK);
+    float touch[3] = {0.5f, 0.5f, 1.25f}, up[3] = {0, 0, 1}, down[3] = {0, 0, -1}, side[3] = {0.1f, 0, 0};
     int touching = cbvh_sweep_sphere(cx.file, touch, 0.25f, up, &h);
     printf("sphere touching a face, moving away: %s", touching ? "contact" : "no contact");
     if (touching)
@@ -1020,11 +1110,11 @@ static void test_extreme_sweeps(void **state)
     assert_true(h.t == 0.0f && h.normal[2] > 0.99f);
     assert_int_equal(cbvh_sweep_sphere(cx.file, touch, 0.25f, side, &h), touching);
     /* box resting on the face */
-    float box_c[3] = { 0.5f, 0.5f, 1.5f }, box_h[3] = { 0.2f, 0.2f, 0.5f };
+    float box_c[3] = {0.5f, 0.5f, 1.5f}, box_h[3] = {0.2f, 0.2f, 0.5f};
     assert_int_equal(cbvh_sweep_box(cx.file, box_c, box_h, down, &h), 1);
     assert_true(h.t == 0.0f && fabs(vec_len(h.normal) - 1) < 1e-4);
     /* approaching from 1 away: contact at t = 0.5 of a delta of 2 */
-    float above[3] = { 0.5f, 0.5f, 2.25f }, two_down[3] = { 0, 0, -2 };
+    float above[3] = {0.5f, 0.5f, 2.25f}, two_down[3] = {0, 0, -2};
     assert_int_equal(cbvh_sweep_sphere(cx.file, above, 0.25f, two_down, &h), 1);
     assert_true(fabs(h.t - 0.5) < 1e-6 && h.normal[2] > 0.999f);
     ref_fixture_close(&cx);
@@ -1036,9 +1126,11 @@ static void test_extreme_sweeps(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_watertight),       cmocka_unit_test(test_watertight_dragon), cmocka_unit_test(test_scales),
-        cmocka_unit_test(test_huge_extent),      cmocka_unit_test(test_sliver_accuracy), cmocka_unit_test(test_degenerate_meshes), cmocka_unit_test(test_extreme_rays),
-        cmocka_unit_test(test_extreme_sweeps),   cmocka_unit_test(test_exact_range),
+        cmocka_unit_test(test_watertight),      cmocka_unit_test(test_watertight_dragon),
+        cmocka_unit_test(test_scales),          cmocka_unit_test(test_huge_extent),
+        cmocka_unit_test(test_sliver_accuracy), cmocka_unit_test(test_degenerate_meshes),
+        cmocka_unit_test(test_extreme_rays),    cmocka_unit_test(test_extreme_sweeps),
+        cmocka_unit_test(test_exact_range),
     };
     return TEST_RUN_LAYOUTS(tests, 0);
 }

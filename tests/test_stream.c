@@ -54,10 +54,18 @@ static cbvh_ray *make_rays(const ref_fixture *fx, size_t count, uint64_t seed, i
         }
         if (r % 7 == 3) {
             switch ((r / 7) % 4) {
-            case 0: rays[r].org[1] = NAN; break;
-            case 1: rays[r].dir[0] = rays[r].dir[1] = rays[r].dir[2] = 0.0f; break;
-            case 2: rays[r].tmin = -1.0f; break;
-            default: rays[r].tmax = rays[r].tmin - 1.0f; break;
+            case 0:
+                rays[r].org[1] = NAN;
+                break;
+            case 1:
+                rays[r].dir[0] = rays[r].dir[1] = rays[r].dir[2] = 0.0f;
+                break;
+            case 2:
+                rays[r].tmin = -1.0f;
+                break;
+            default:
+                rays[r].tmax = rays[r].tmin - 1.0f;
+                break;
             }
         }
     }
@@ -178,7 +186,9 @@ static void check_stream(const ref_fixture *fx, const cbvh_ray *rays, size_t cou
 
 static void open_scene(ref_fixture *fx, scene *s)
 {
-    assert_int_equal(ref_fixture_open(fx, s->positions, s->vertex_count, s->indices, s->triangle_count, test_options()), CBVH_OK);
+    assert_int_equal(
+        ref_fixture_open(fx, s->positions, s->vertex_count, s->indices, s->triangle_count, test_options()),
+        CBVH_OK);
 }
 
 /* Counts around the SIMD widths, the stack batch (32) and its octant window (256), the batch sizes of the

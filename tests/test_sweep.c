@@ -1,4 +1,5 @@
-/* test_sweep.c: sphere, capsule and box sweeps against a distance-based brute force; zero-size sweeps equal raycasts. */
+/* test_sweep.c: sphere, capsule and box sweeps against a distance-based brute force; zero-size sweeps equal
+ * raycasts. */
 #include <math.h>
 #include <setjmp.h>
 #include <stdarg.h>
@@ -16,7 +17,10 @@
 
 static long sweeps_checked, contacts_checked;
 
-static double rnd(uint64_t *st, double lo, double hi) { return lo + (hi - lo) * scene_rand_unit(st); }
+static double rnd(uint64_t *st, double lo, double hi)
+{
+    return lo + (hi - lo) * scene_rand_unit(st);
+}
 
 /* Runs the kernel for the shape and fills *hit. */
 static int kernel_sweep(const cbvh_file *f, const ref_shape *s, const float delta[3], cbvh_sweep_hit *hit)
@@ -28,16 +32,20 @@ static int kernel_sweep(const cbvh_file *f, const ref_shape *s, const float delt
         half[a] = (float)s->half[a];
     }
     switch (s->kind) {
-    case REF_SPHERE: return cbvh_sweep_sphere(f, p0, (float)s->radius, delta, hit);
-    case REF_CAPSULE: return cbvh_sweep_capsule(f, p0, p1, (float)s->radius, delta, hit);
-    default: return cbvh_sweep_box(f, p0, half, delta, hit);
+    case REF_SPHERE:
+        return cbvh_sweep_sphere(f, p0, (float)s->radius, delta, hit);
+    case REF_CAPSULE:
+        return cbvh_sweep_capsule(f, p0, p1, (float)s->radius, delta, hit);
+    default:
+        return cbvh_sweep_box(f, p0, half, delta, hit);
     }
 }
 
 /* A random shape near the mesh, moving by about a third of the mesh size,
  * often straight at a point of a triangle. Coordinates are floats, as the
  * kernels see them. */
-static void random_sweep(const ref_fixture *fx, uint64_t *st, ref_shape_kind kind, ref_shape *s, float delta[3])
+static void random_sweep(const ref_fixture *fx, uint64_t *st, ref_shape_kind kind, ref_shape *s,
+                         float delta[3])
 {
     const double d = fx->diag;
     memset(s, 0, sizeof(*s));
@@ -82,14 +90,15 @@ static void check_sweep(const ref_fixture *fx, const ref_shape *s, const float d
     assert_true(h.tri < fx->id_count && fx->index_of_id[h.tri] != (size_t)-1);
     const double *tri = fx->tris.v + 9 * fx->index_of_id[h.tri];
     if (!(h.t >= ref.t - tol_t && h.t <= ref.t + tol_t && h.t >= 0.0f && h.t <= 1.0f)) {
-        fprintf(stderr, "shape %d: kernel t %.9g (tri %u), reference t %.9g (tri %u), tol %g\n", (int)s->kind, h.t,
-                h.tri, ref.t, ref.tri, tol_t);
+        fprintf(stderr, "shape %d: kernel t %.9g (tri %u), reference t %.9g (tri %u), tol %g\n", (int)s->kind,
+                h.t, h.tri, ref.t, ref.tri, tol_t);
         fail();
     }
     /* The shape touches the reported triangle at the reported time. */
     const double gap = ref_shape_triangle_dist(s, dd, h.t, tri);
     if (!(gap <= tol_d)) {
-        fprintf(stderr, "shape %d: at t %.9g the shape is %g away from tri %u\n", (int)s->kind, h.t, gap, h.tri);
+        fprintf(stderr, "shape %d: at t %.9g the shape is %g away from tri %u\n", (int)s->kind, h.t, gap,
+                h.tri);
         fail();
     }
     /* The point is on the triangle, the normal is a unit vector. */
@@ -129,7 +138,9 @@ static void run_sweeps(const ref_fixture *fx, int count, uint64_t seed)
 
 static void open_scene(ref_fixture *fx, scene *s)
 {
-    assert_int_equal(ref_fixture_open(fx, s->positions, s->vertex_count, s->indices, s->triangle_count, test_options()), CBVH_OK);
+    assert_int_equal(
+        ref_fixture_open(fx, s->positions, s->vertex_count, s->indices, s->triangle_count, test_options()),
+        CBVH_OK);
 }
 
 static void test_random_sweeps(void **state)
@@ -210,7 +221,8 @@ static void test_start_overlap_and_no_motion(void **state)
     const float on_face[3] = {0.5f, 0.5f, 1.0f}, above[3] = {0.5f, 0.5f, 1.5f}, down[3] = {0, 0, -1};
     const float still[3] = {0, 0, 0}, half[3] = {0.1f, 0.1f, 0.1f};
     cbvh_sweep_hit h;
-    /* Center on the top face: t = 0, point under the center, normal +z (the face normal against the motion). */
+    /* Center on the top face: t = 0, point under the center, normal +z (the face normal against the motion).
+     */
     assert_true(cbvh_sweep_sphere(fx.file, on_face, 0.1f, down, &h));
     assert_true(h.t == 0.0f);
     assert_true(fabsf(h.point[2] - 1.0f) < 1e-6f && fabsf(h.point[0] - 0.5f) < 1e-6f);
@@ -244,8 +256,10 @@ static void test_start_overlap_and_no_motion(void **state)
     assert_true(fabsf(h.t - 0.5f) < 1e-6f);
     float v0[3], v1[3], v2[3];
     assert_true(cbvh_file_get_triangle(fx.file, h.tri, v0, v1, v2));
-    const double e1[3] = {v1[0] - v0[0], v1[1] - v0[1], v1[2] - v0[2]}, e2[3] = {v2[0] - v0[0], v2[1] - v0[1], v2[2] - v0[2]};
-    double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+    const double e1[3] = {v1[0] - v0[0], v1[1] - v0[1], v1[2] - v0[2]},
+                 e2[3] = {v2[0] - v0[0], v2[1] - v0[1], v2[2] - v0[2]};
+    double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
+                   e1[0] * e2[1] - e1[1] * e2[0]};
     const double len = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
     const double along = fabs(n[0] * h.normal[0] + n[1] * h.normal[1] + n[2] * h.normal[2]) / len;
     assert_true(along > 0.999999 && h.normal[2] >= 0.0f); /* the face normal, not pointing along the motion */
@@ -377,11 +391,18 @@ static void test_needle_capsules(void **state)
     static const float widths[4] = {0x1p-79f, 1e-20f, 1e-10f, 1e-4f};
     for (int wi = 0; wi < 5; wi++) {
         /* wi 4: the finding's triangle as the fuzzer cooked it */
-        const float tip_y = wi < 4 ? -0x1.7f4p+39f : -0x1.7f4p+55f, tip_z = wi < 4 ? -0x1.8007c2p+22f : -0x1.8007c2p+38f,
+        const float tip_y = wi < 4 ? -0x1.7f4p+39f : -0x1.7f4p+55f,
+                    tip_z = wi < 4 ? -0x1.8007c2p+22f : -0x1.8007c2p+38f,
                     k = wi < 4 ? widths[wi] * -tip_y : 0.0f;
-        const float pos[9] = {wi < 4 ? 0.0f : 0x1.fdp-128f, wi < 4 ? 0.0f : 0x1.020406p-91f, wi < 4 ? 0.0f : 0x1.080026p-121f,
-                              wi < 4 ? k : 0x1.142214p-103f, wi < 4 ? 0.0f : 0x1.0a0816p-103f, wi < 4 ? 0.0f : 0x1.181a0ap-117f,
-                              wi < 4 ? 0.0f : 0x1.fb83cp-128f, tip_y, tip_z};
+        const float pos[9] = {wi < 4 ? 0.0f : 0x1.fdp-128f,
+                              wi < 4 ? 0.0f : 0x1.020406p-91f,
+                              wi < 4 ? 0.0f : 0x1.080026p-121f,
+                              wi < 4 ? k : 0x1.142214p-103f,
+                              wi < 4 ? 0.0f : 0x1.0a0816p-103f,
+                              wi < 4 ? 0.0f : 0x1.181a0ap-117f,
+                              wi < 4 ? 0.0f : 0x1.fb83cp-128f,
+                              tip_y,
+                              tip_z};
         const uint32_t idx[3] = {0, 1, 2};
         ref_fixture fx;
         if (wi == 4) {

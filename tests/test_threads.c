@@ -1,4 +1,5 @@
-/* test_threads.c: several threads query one opened file with every query kind at once and must get exactly the single-threaded answers. */
+/* test_threads.c: several threads query one opened file with every query kind at once and must get exactly
+ * the single-threaded answers. */
 #include <math.h>
 #include <pthread.h>
 #include <setjmp.h>
@@ -31,7 +32,10 @@ static cbvh_ray rays[QUERY_COUNT + STREAM_SIZE];
 static float radii[QUERY_COUNT];
 static answer expected[QUERY_COUNT];
 
-typedef struct fnv { uint64_t h; uint32_t count; } fnv;
+typedef struct fnv {
+    uint64_t h;
+    uint32_t count;
+} fnv;
 static int hash_id(void *user, uint32_t tri)
 {
     fnv *f = user;
@@ -58,13 +62,19 @@ static void run_query(size_t i, answer *a)
     const cbvh_ray *r = &rays[i];
     cbvh_hit h;
     cbvh_sweep_hit s;
-    float delta[3] = { r->dir[0], r->dir[1], r->dir[2] }, p1[3] = { r->org[0] + radii[i], r->org[1], r->org[2] };
-    float half[3] = { radii[i], 0.5f * radii[i], 2.0f * radii[i] };
+    float delta[3] = {r->dir[0], r->dir[1], r->dir[2]}, p1[3] = {r->org[0] + radii[i], r->org[1], r->org[2]};
+    float half[3] = {radii[i], 0.5f * radii[i], 2.0f * radii[i]};
     switch (i % KINDS) {
-    case 0: case 1: case 2: case 3:
+    case 0:
+    case 1:
+    case 2:
+    case 3:
         /* only tri is defined on a miss */
         if (cbvh_raycast(file, r, (cbvh_traversal)(i % KINDS), &h, NULL)) {
-            a->tri = h.tri; a->t = h.t; a->u = h.u; a->v = h.v;
+            a->tri = h.tri;
+            a->t = h.t;
+            a->u = h.u;
+            a->v = h.v;
         } else {
             a->tri = h.tri;
         }
@@ -100,7 +110,8 @@ static void run_query(size_t i, answer *a)
         a->count = (uint32_t)cbvh_sweep_box(file, r->org, half, delta, &s);
     sweep:
         if (a->count) {
-            a->tri = s.tri; a->t = s.t;
+            a->tri = s.tri;
+            a->t = s.t;
             memcpy(a->point, s.point, sizeof a->point);
             memcpy(a->normal, s.normal, sizeof a->normal);
         }
@@ -108,7 +119,7 @@ static void run_query(size_t i, answer *a)
     case 9: { /* with options: back faces culled, or every hit through a filter */
         cbvh_query_options q;
         cbvh_hit_record rec;
-        fnv f = { 0, 0 };
+        fnv f = {0, 0};
         cbvh_query_options_init(&q, sizeof q);
         if ((i / KINDS) % 2) {
             q.filter = hash_candidate;
@@ -119,7 +130,9 @@ static void run_query(size_t i, answer *a)
         cbvh_raycast_with(file, r, &q, &rec, NULL);
         a->tri = rec.tri;
         if (rec.tri != CBVH_NO_HIT) {
-            a->t = rec.t; a->u = rec.u; a->v = rec.v;
+            a->t = rec.t;
+            a->u = rec.u;
+            a->v = rec.v;
             memcpy(a->normal, rec.normal, sizeof a->normal);
         }
         a->hash = f.h;
@@ -127,7 +140,7 @@ static void run_query(size_t i, answer *a)
         break;
     }
     default: {
-        fnv f = { 1469598103934665603ull, 0 };
+        fnv f = {1469598103934665603ull, 0};
         float lo[3], hi[3];
         for (int k = 0; k < 3; k++) {
             lo[k] = r->org[k] + 0.5f * r->dir[k] - radii[i];
@@ -181,7 +194,7 @@ static void test_threads_agree(void **state)
     (void)state;
     scene sc;
     assert_true(scene_demo(&sc));
-    cbvh_mesh m = { sc.positions, sc.vertex_count, 0, sc.indices, sc.triangle_count, sc.material_ids };
+    cbvh_mesh m = {sc.positions, sc.vertex_count, 0, sc.indices, sc.triangle_count, sc.material_ids};
     void *buf = NULL;
     size_t size = 0;
     cbvh_cook_options o;
@@ -229,7 +242,7 @@ static void test_threads_agree(void **state)
         w[t].seconds = seconds;
         assert_int_equal(pthread_create(&w[t].thread, NULL, work, &w[t]), 0);
     }
-    uint64_t total = 0, bad = 0, by_kind[KINDS] = { 0 };
+    uint64_t total = 0, bad = 0, by_kind[KINDS] = {0};
     for (int t = 0; t < threads; t++) {
         pthread_join(w[t].thread, NULL);
         total += w[t].queries;
@@ -240,7 +253,8 @@ static void test_threads_agree(void **state)
     for (int k = 0; k < KINDS; k++)
         if (by_kind[k])
             printf("query kind %d: %llu answers differ\n", k, (unsigned long long)by_kind[k]);
-    printf("threads: %d threads x %.1f s on one file (%u triangles): %llu queries of %d kinds, %llu differ from single-threaded\n",
+    printf("threads: %d threads x %.1f s on one file (%u triangles): %llu queries of %d kinds, %llu differ "
+           "from single-threaded\n",
            threads, seconds, info.triangle_count, (unsigned long long)total, KINDS, (unsigned long long)bad);
     assert_int_equal(bad, 0);
     assert_true(total >= (uint64_t)threads * 64);
@@ -251,6 +265,6 @@ static void test_threads_agree(void **state)
 
 int main(void)
 {
-    const struct CMUnitTest tests[] = { cmocka_unit_test(test_threads_agree) };
+    const struct CMUnitTest tests[] = {cmocka_unit_test(test_threads_agree)};
     return TEST_RUN_LAYOUTS(tests, 0);
 }

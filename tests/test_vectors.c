@@ -1,4 +1,5 @@
-/* test_vectors.c: every file in fileformat/ loads (or is rejected) as its expectation below says, by path and from memory. */
+/* test_vectors.c: every file in fileformat/ loads (or is rejected) as its expectation below says, by path and
+ * from memory. */
 #include <dirent.h>
 #include <math.h>
 #include <setjmp.h>
@@ -20,16 +21,24 @@ typedef struct mesh {
     uint32_t triangle_count;
 } mesh;
 
-enum { MESH_SINGLE, MESH_BOX, MESH_BOX_FAR, MESH_QUAD, MESH_BOX_DEGENERATE, MESH_QUAD_SPARSE, MESH_TWO_BOXES,
-       MESH_COUNT };
+enum {
+    MESH_SINGLE,
+    MESH_BOX,
+    MESH_BOX_FAR,
+    MESH_QUAD,
+    MESH_BOX_DEGENERATE,
+    MESH_QUAD_SPARSE,
+    MESH_TWO_BOXES,
+    MESH_COUNT
+};
 
 static mesh meshes[MESH_COUNT];
 
 /* fileformat/make_vectors.py's box: corners from {-1.5, 2.25} x {0, 3} x {1, 5}, two triangles per face. */
 static void make_box(mesh *m, float offset, int degenerate)
 {
-    static const uint32_t faces[6][4] = { { 0, 2, 3, 1 }, { 4, 5, 7, 6 }, { 0, 1, 5, 4 },
-                                          { 2, 6, 7, 3 }, { 0, 4, 6, 2 }, { 1, 3, 7, 5 } };
+    static const uint32_t faces[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
+                                         {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
     for (int i = 0; i < 8; i++) {
         m->v[i][0] = (i & 1 ? 2.25f : -1.5f) + offset;
         m->v[i][1] = i >> 1 & 1 ? 3.0f : 0.0f;
@@ -39,12 +48,12 @@ static void make_box(mesh *m, float offset, int degenerate)
     for (int f = 0; f < 6; f++) {
         for (int h = 0; h < 2; h++) {
             if (degenerate && (n == 3 || n == 9)) { /* original ids 3 and 9 are zero-area triangles */
-                uint32_t d[3] = { 0, 0, 1 };
+                uint32_t d[3] = {0, 0, 1};
                 if (n == 9)
                     d[0] = 2, d[1] = 5, d[2] = 2;
                 memcpy(m->t[n++], d, sizeof d);
             }
-            uint32_t t[3] = { faces[f][0], faces[f][1 + h], faces[f][2 + h] };
+            uint32_t t[3] = {faces[f][0], faces[f][1 + h], faces[f][2 + h]};
             memcpy(m->t[n++], t, sizeof t);
         }
     }
@@ -54,7 +63,7 @@ static void make_box(mesh *m, float offset, int degenerate)
 static void make_meshes(void)
 {
     mesh *s = &meshes[MESH_SINGLE];
-    const float sv[3][3] = { { 0, 0, 0 }, { 1, 0, 0 }, { 0, 1, 0.5f } };
+    const float sv[3][3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0.5f}};
     memcpy(s->v, sv, sizeof sv);
     s->t[0][0] = 0, s->t[0][1] = 1, s->t[0][2] = 2;
     s->triangle_count = 1;
@@ -62,15 +71,15 @@ static void make_meshes(void)
     make_box(&meshes[MESH_BOX_FAR], 70000.0f, 0);
     make_box(&meshes[MESH_BOX_DEGENERATE], 0.0f, 1);
     mesh *q = &meshes[MESH_QUAD];
-    const float qv[4][3] = { { 0, 0, 2.5f }, { 4, 0, 2.5f }, { 4, 2, 2.5f }, { 0, 2, 2.5f } };
+    const float qv[4][3] = {{0, 0, 2.5f}, {4, 0, 2.5f}, {4, 2, 2.5f}, {0, 2, 2.5f}};
     memcpy(q->v, qv, sizeof qv);
-    const uint32_t qt[2][3] = { { 0, 1, 2 }, { 0, 2, 3 } };
+    const uint32_t qt[2][3] = {{0, 1, 2}, {0, 2, 3}};
     memcpy(q->t, qt, sizeof qt);
     q->triangle_count = 2;
     /* the quad's triangles at original ids 1 and 4 of 5, the others degenerate */
     mesh *p = &meshes[MESH_QUAD_SPARSE];
     memcpy(p->v, qv, sizeof qv);
-    const uint32_t pt[5][3] = { { 0, 0, 1 }, { 0, 1, 2 }, { 1, 1, 1 }, { 2, 3, 2 }, { 0, 2, 3 } };
+    const uint32_t pt[5][3] = {{0, 0, 1}, {0, 1, 2}, {1, 1, 1}, {2, 3, 2}, {0, 2, 3}};
     memcpy(p->t, pt, sizeof pt);
     p->triangle_count = 5;
     /* make_vectors.py's TWO_BOXES: the box, then a copy 10 along x (vertices 8..15) */
@@ -92,8 +101,8 @@ typedef struct good {
     int mesh;
     uint32_t triangle_count, vertex_count, node_count, depth, max_leaf_size;
     uint32_t has_remap, vertex_format, index_encoding, compat_flags, section_count;
-    uint32_t material_base; /* materials are base + 7 x original id; 0: no MATERIALS section */
-    uint32_t layout;        /* cbvh_layout of the nodes */
+    uint32_t material_base;    /* materials are base + 7 x original id; 0: no MATERIALS section */
+    uint32_t layout;           /* cbvh_layout of the nodes */
     uint32_t uniform_material; /* the one id of a uniform MATERIALS section (material_base 0) */
     uint32_t name_count;       /* 3: fileformat/make_vectors.py's NAMES, else 0 */
     uint32_t incompat_flags;   /* 0x2: wide4 leaves depth first */
@@ -106,33 +115,53 @@ typedef struct expectation {
     good g;
 } expectation;
 
-#define BAD(name, text) { name, CBVH_ERROR_CORRUPT, text, { 0 } }
-#define NEWER(name, text) { name, CBVH_ERROR_UNSUPPORTED, text, { 0 } }
+#define BAD(name, text)                                                                                      \
+    {                                                                                                        \
+        name, CBVH_ERROR_CORRUPT, text,                                                                      \
+        {                                                                                                    \
+            0                                                                                                \
+        }                                                                                                    \
+    }
+#define NEWER(name, text)                                                                                    \
+    {                                                                                                        \
+        name, CBVH_ERROR_UNSUPPORTED, text,                                                                  \
+        {                                                                                                    \
+            0                                                                                                \
+        }                                                                                                    \
+    }
 #define BIN CBVH_LAYOUT_BINARY
 #define W4 CBVH_LAYOUT_WIDE4
 
 static const expectation expectations[] = {
-    { "good-single-triangle", CBVH_OK, "", { MESH_SINGLE, 1, 3, 1, 1, 4, 0, 0, 0, 0, 3, 0, BIN, 0, 0, 0 } },
-    { "good-box-raw", CBVH_OK, "", { MESH_BOX, 12, 8, 15, 4, 2, 1, 0, 0, 0, 4, 0, BIN, 0, 0, 0 } },
-    { "good-box-zlib", CBVH_OK, "", { MESH_BOX, 12, 8, 15, 4, 2, 1, 0, 0, 0, 4, 0, BIN, 0, 0, 0 } },
-    { "good-box-u32", CBVH_OK, "", { MESH_BOX, 12, 8, 15, 4, 2, 1, 0, 1, 0, 4, 0, BIN, 0, 0, 0 } },
-    { "good-box-delta16", CBVH_OK, "", { MESH_BOX, 12, 8, 15, 4, 2, 1, 0, 2, 0, 4, 0, BIN, 0, 0, 0 } },
-    { "good-box-q16", CBVH_OK, "", { MESH_BOX, 12, 8, 15, 4, 2, 1, 1, 0, 0, 4, 0, BIN, 0, 0, 0 } },
-    { "good-box-far-q16", CBVH_OK, "", { MESH_BOX_FAR, 12, 8, 15, 4, 2, 1, 1, 0, 0, 4, 0, BIN, 0, 0, 0 } },
-    { "good-quad-flat", CBVH_OK, "", { MESH_QUAD, 2, 4, 3, 2, 1, 1, 0, 0, 0, 4, 0, BIN, 0, 0, 0 } },
-    { "good-remap-materials", CBVH_OK, "", { MESH_BOX_DEGENERATE, 12, 8, 15, 4, 2, 1, 0, 0, 0, 5, 1, BIN, 0, 0, 0 } },
-    { "good-remap-u32-materials-u32-zlib", CBVH_OK, "",
-      { MESH_BOX_DEGENERATE, 12, 8, 15, 4, 2, 1, 0, 2, 0, 5, 70000, BIN, 0, 0, 0 } },
-    { "good-remap-sparse", CBVH_OK, "", { MESH_QUAD_SPARSE, 2, 4, 3, 2, 1, 1, 0, 0, 0, 5, 3, BIN, 0, 0, 0 } },
-    { "good-remap-u24", CBVH_OK, "", { MESH_BOX_DEGENERATE, 12, 8, 15, 4, 2, 1, 0, 0, 0, 5, 1, BIN, 0, 0, 0 } },
+    {"good-single-triangle", CBVH_OK, "", {MESH_SINGLE, 1, 3, 1, 1, 4, 0, 0, 0, 0, 3, 0, BIN, 0, 0, 0}},
+    {"good-box-raw", CBVH_OK, "", {MESH_BOX, 12, 8, 15, 4, 2, 1, 0, 0, 0, 4, 0, BIN, 0, 0, 0}},
+    {"good-box-zlib", CBVH_OK, "", {MESH_BOX, 12, 8, 15, 4, 2, 1, 0, 0, 0, 4, 0, BIN, 0, 0, 0}},
+    {"good-box-u32", CBVH_OK, "", {MESH_BOX, 12, 8, 15, 4, 2, 1, 0, 1, 0, 4, 0, BIN, 0, 0, 0}},
+    {"good-box-delta16", CBVH_OK, "", {MESH_BOX, 12, 8, 15, 4, 2, 1, 0, 2, 0, 4, 0, BIN, 0, 0, 0}},
+    {"good-box-q16", CBVH_OK, "", {MESH_BOX, 12, 8, 15, 4, 2, 1, 1, 0, 0, 4, 0, BIN, 0, 0, 0}},
+    {"good-box-far-q16", CBVH_OK, "", {MESH_BOX_FAR, 12, 8, 15, 4, 2, 1, 1, 0, 0, 4, 0, BIN, 0, 0, 0}},
+    {"good-quad-flat", CBVH_OK, "", {MESH_QUAD, 2, 4, 3, 2, 1, 1, 0, 0, 0, 4, 0, BIN, 0, 0, 0}},
+    {"good-remap-materials",
+     CBVH_OK,
+     "",
+     {MESH_BOX_DEGENERATE, 12, 8, 15, 4, 2, 1, 0, 0, 0, 5, 1, BIN, 0, 0, 0}},
+    {"good-remap-u32-materials-u32-zlib",
+     CBVH_OK,
+     "",
+     {MESH_BOX_DEGENERATE, 12, 8, 15, 4, 2, 1, 0, 2, 0, 5, 70000, BIN, 0, 0, 0}},
+    {"good-remap-sparse", CBVH_OK, "", {MESH_QUAD_SPARSE, 2, 4, 3, 2, 1, 1, 0, 0, 0, 5, 3, BIN, 0, 0, 0}},
+    {"good-remap-u24", CBVH_OK, "", {MESH_BOX_DEGENERATE, 12, 8, 15, 4, 2, 1, 0, 0, 0, 5, 1, BIN, 0, 0, 0}},
     BAD("bad-remap-u24-range", "original id 16777215"),
-    { "good-materials-u16-cooked-ids", CBVH_OK, "", { MESH_BOX, 12, 8, 15, 4, 2, 0, 0, 0, 0, 4, 1000, BIN, 0, 0, 0 } },
-    { "good-ancillary", CBVH_OK, "", { MESH_BOX, 12, 8, 15, 4, 2, 1, 0, 0, 0, 6, 0, BIN, 0, 0, 0 } },
-    { "good-compat-flags", CBVH_OK, "", { MESH_BOX, 12, 8, 15, 4, 2, 1, 0, 0, 0x80000005u, 4, 0, BIN, 0, 0, 0 } },
-    { "good-materials-uniform", CBVH_OK, "", { MESH_BOX, 12, 8, 15, 4, 2, 1, 0, 0, 0, 5, 0, BIN, 7, 0, 0 } },
-    { "good-material-names", CBVH_OK, "", { MESH_BOX, 12, 8, 15, 4, 2, 1, 0, 0, 0, 6, 0, BIN, 7, 3, 0 } },
-    { "good-material-names-zlib", CBVH_OK, "", { MESH_BOX, 12, 8, 15, 4, 2, 1, 0, 0, 0, 6, 0, BIN, 7, 3, 0 } },
-    { "good-material-names-future", CBVH_OK, "", { MESH_BOX, 12, 8, 15, 4, 2, 1, 0, 0, 0, 6, 0, BIN, 7, 0, 0 } },
+    {"good-materials-u16-cooked-ids",
+     CBVH_OK,
+     "",
+     {MESH_BOX, 12, 8, 15, 4, 2, 0, 0, 0, 0, 4, 1000, BIN, 0, 0, 0}},
+    {"good-ancillary", CBVH_OK, "", {MESH_BOX, 12, 8, 15, 4, 2, 1, 0, 0, 0, 6, 0, BIN, 0, 0, 0}},
+    {"good-compat-flags", CBVH_OK, "", {MESH_BOX, 12, 8, 15, 4, 2, 1, 0, 0, 0x80000005u, 4, 0, BIN, 0, 0, 0}},
+    {"good-materials-uniform", CBVH_OK, "", {MESH_BOX, 12, 8, 15, 4, 2, 1, 0, 0, 0, 5, 0, BIN, 7, 0, 0}},
+    {"good-material-names", CBVH_OK, "", {MESH_BOX, 12, 8, 15, 4, 2, 1, 0, 0, 0, 6, 0, BIN, 7, 3, 0}},
+    {"good-material-names-zlib", CBVH_OK, "", {MESH_BOX, 12, 8, 15, 4, 2, 1, 0, 0, 0, 6, 0, BIN, 7, 3, 0}},
+    {"good-material-names-future", CBVH_OK, "", {MESH_BOX, 12, 8, 15, 4, 2, 1, 0, 0, 0, 6, 0, BIN, 7, 0, 0}},
     BAD("bad-materials-uniform-size", "size 8, expected 4"),
     BAD("bad-names-order", "not after name 1"),
     BAD("bad-names-duplicate", "name 2 (id 7) is not after"),
@@ -210,18 +239,26 @@ static const expectation expectations[] = {
     NEWER("unsupported-codec", "codec 2"),
     NEWER("unsupported-encoding", "encoding 3"),
     NEWER("unsupported-critical-section", "critical section type 6"),
-    { "good-w4-single-triangle", CBVH_OK, "", { MESH_SINGLE, 1, 3, 1, 1, 4, 0, 0, 0, 0, 3, 0, W4, 0, 0, 0 } },
-    { "good-w4-box-raw", CBVH_OK, "", { MESH_BOX, 12, 8, 3, 2, 2, 1, 0, 0, 0, 4, 0, W4, 0, 0, 0 } },
-    { "good-w4-box-zlib", CBVH_OK, "", { MESH_BOX, 12, 8, 3, 2, 2, 1, 0, 0, 0, 4, 0, W4, 0, 0, 0 } },
-    { "good-w4-box-leaf1", CBVH_OK, "", { MESH_BOX, 12, 8, 5, 3, 1, 1, 0, 0, 0, 4, 0, W4, 0, 0, 0 } },
-    { "good-w4-box-leaf8", CBVH_OK, "", { MESH_BOX, 12, 8, 1, 1, 8, 1, 0, 0, 0, 4, 0, W4, 0, 0, 0 } },
-    { "good-w4-box-q16", CBVH_OK, "", { MESH_BOX, 12, 8, 3, 2, 2, 1, 1, 0, 0, 4, 0, W4, 0, 0, 0 } },
-    { "good-w4-box-far-q16", CBVH_OK, "", { MESH_BOX_FAR, 12, 8, 3, 2, 2, 1, 1, 0, 0, 4, 0, W4, 0, 0, 0 } },
-    { "good-w4-quad-flat", CBVH_OK, "", { MESH_QUAD, 2, 4, 1, 1, 1, 1, 0, 0, 0, 4, 0, W4, 0, 0, 0 } },
-    { "good-w4-remap-materials", CBVH_OK, "", { MESH_BOX_DEGENERATE, 12, 8, 3, 2, 2, 1, 0, 0, 0, 5, 1, W4, 0, 0, 0 } },
-    { "good-w4-remap-u32-materials-u32-zlib", CBVH_OK, "",
-      { MESH_BOX_DEGENERATE, 12, 8, 3, 2, 2, 1, 0, 2, 0, 5, 70000, W4, 0, 0, 0 } },
-    { "good-w4-materials-u16-cooked-ids", CBVH_OK, "", { MESH_BOX, 12, 8, 3, 2, 2, 0, 0, 0, 0, 4, 1000, W4, 0, 0, 0 } },
+    {"good-w4-single-triangle", CBVH_OK, "", {MESH_SINGLE, 1, 3, 1, 1, 4, 0, 0, 0, 0, 3, 0, W4, 0, 0, 0}},
+    {"good-w4-box-raw", CBVH_OK, "", {MESH_BOX, 12, 8, 3, 2, 2, 1, 0, 0, 0, 4, 0, W4, 0, 0, 0}},
+    {"good-w4-box-zlib", CBVH_OK, "", {MESH_BOX, 12, 8, 3, 2, 2, 1, 0, 0, 0, 4, 0, W4, 0, 0, 0}},
+    {"good-w4-box-leaf1", CBVH_OK, "", {MESH_BOX, 12, 8, 5, 3, 1, 1, 0, 0, 0, 4, 0, W4, 0, 0, 0}},
+    {"good-w4-box-leaf8", CBVH_OK, "", {MESH_BOX, 12, 8, 1, 1, 8, 1, 0, 0, 0, 4, 0, W4, 0, 0, 0}},
+    {"good-w4-box-q16", CBVH_OK, "", {MESH_BOX, 12, 8, 3, 2, 2, 1, 1, 0, 0, 4, 0, W4, 0, 0, 0}},
+    {"good-w4-box-far-q16", CBVH_OK, "", {MESH_BOX_FAR, 12, 8, 3, 2, 2, 1, 1, 0, 0, 4, 0, W4, 0, 0, 0}},
+    {"good-w4-quad-flat", CBVH_OK, "", {MESH_QUAD, 2, 4, 1, 1, 1, 1, 0, 0, 0, 4, 0, W4, 0, 0, 0}},
+    {"good-w4-remap-materials",
+     CBVH_OK,
+     "",
+     {MESH_BOX_DEGENERATE, 12, 8, 3, 2, 2, 1, 0, 0, 0, 5, 1, W4, 0, 0, 0}},
+    {"good-w4-remap-u32-materials-u32-zlib",
+     CBVH_OK,
+     "",
+     {MESH_BOX_DEGENERATE, 12, 8, 3, 2, 2, 1, 0, 2, 0, 5, 70000, W4, 0, 0, 0}},
+    {"good-w4-materials-u16-cooked-ids",
+     CBVH_OK,
+     "",
+     {MESH_BOX, 12, 8, 3, 2, 2, 0, 0, 0, 0, 4, 1000, W4, 0, 0, 0}},
     BAD("bad-w4-no-slot", "node 1: no slot in use"),
     BAD("bad-w4-internal-unused", "node 0: slots 0x8 are internal but not in use"),
     BAD("bad-w4-unused-box", "node 1: unused slot 3 has a nonzero box"),
@@ -233,7 +270,8 @@ static const expectation expectations[] = {
     BAD("bad-w4-qmin-gt-qmax", "node 2: slot 1: qmin 100 > qmax 50 on axis 1"),
     BAD("bad-w4-order-index", "node 3: order index 24 for octant 5 is not below 24"),
     BAD("bad-w4-first-child", "node 0: first_child 2, but the nodes before it leave the next child at 1"),
-    BAD("bad-w4-first-child-self", "node 3: first_child 3, but the nodes before it leave the next child at 4"),
+    BAD("bad-w4-first-child-self",
+        "node 3: first_child 3, but the nodes before it leave the next child at 4"),
     BAD("bad-w4-children-past-end", "node 3: children [4, 5) run past node_count 4"),
     BAD("bad-w4-unallocated-node", "node 5: no node before it has it as a child"),
     BAD("bad-w4-first-triangle", "node 2: first_triangle 4, but the leaves before it end at triangle 3"),
@@ -242,14 +280,20 @@ static const expectation expectations[] = {
     BAD("bad-w4-depth-mismatch", "the tree's depth is 3, the header says 4"),
     BAD("bad-w4-depth-exceeded", "node 4: at depth 3, deeper than the header's depth 2"),
     NEWER("unsupported-w4-nodes-encoding-2", "section 0 (NODES): encoding 2 is unknown"),
-    { "good-box-local8", CBVH_OK, "", { MESH_BOX, 12, 8, 15, 4, 2, 1, 0, 4, 0, 4, 0, BIN, 0, 0, 0 } },
+    {"good-box-local8", CBVH_OK, "", {MESH_BOX, 12, 8, 15, 4, 2, 1, 0, 4, 0, 4, 0, BIN, 0, 0, 0}},
     BAD("bad-local8-index", "LOCAL8 base 7 plus offset"),
     BAD("bad-local8-padding", "offset 1 of slot 4, past triangle_count 12, must be 0"),
     BAD("bad-local8-size", "expected 56 (2 elements of 28 bytes)"),
-    { "good-two-boxes", CBVH_OK, "", { MESH_TWO_BOXES, 24, 16, 47, 6, 1, 1, 0, 0, 0, 4, 0, BIN, 0, 0, 0 } },
-    { "good-w4-two-boxes", CBVH_OK, "", { MESH_TWO_BOXES, 24, 16, 10, 4, 1, 1, 0, 0, 0, 4, 0, W4, 0, 0, 0 } },
-    { "good-w4-two-boxes-local8", CBVH_OK, "", { MESH_TWO_BOXES, 24, 16, 10, 4, 1, 1, 0, 4, 0, 4, 0, W4, 0, 0, 2 } },
-    { "good-w4-local8-q16-zlib", CBVH_OK, "", { MESH_BOX_DEGENERATE, 12, 8, 3, 2, 2, 1, 1, 4, 0, 5, 1, W4, 0, 0, 2 } },
+    {"good-two-boxes", CBVH_OK, "", {MESH_TWO_BOXES, 24, 16, 47, 6, 1, 1, 0, 0, 0, 4, 0, BIN, 0, 0, 0}},
+    {"good-w4-two-boxes", CBVH_OK, "", {MESH_TWO_BOXES, 24, 16, 10, 4, 1, 1, 0, 0, 0, 4, 0, W4, 0, 0, 0}},
+    {"good-w4-two-boxes-local8",
+     CBVH_OK,
+     "",
+     {MESH_TWO_BOXES, 24, 16, 10, 4, 1, 1, 0, 4, 0, 4, 0, W4, 0, 0, 2}},
+    {"good-w4-local8-q16-zlib",
+     CBVH_OK,
+     "",
+     {MESH_BOX_DEGENERATE, 12, 8, 3, 2, 2, 1, 1, 4, 0, 5, 1, W4, 0, 0, 2}},
     BAD("bad-w4-depth-first-unflagged", "but the leaves before it end at triangle"),
     BAD("bad-w4-flag-breadth-first", "in depth-first order end at triangle"),
     BAD("bad-depth-first-binary", "depth-first flag is set on a binary-layout file"),
@@ -345,7 +389,7 @@ static void check_triangles(const cbvh_file *f, const good *g, const mesh *m)
     cbvh_file_info info;
     cbvh_file_get_info(f, &info, sizeof info);
     float v[3][3];
-    int used[14] = { 0 };
+    int used[14] = {0};
     uint32_t ids = g->has_remap ? m->triangle_count : g->triangle_count;
     for (uint32_t id = 0; id < ids; id++) {
         int got = cbvh_file_get_triangle(f, id, v[0], v[1], v[2]);
@@ -374,8 +418,10 @@ static void check_triangles(const cbvh_file *f, const good *g, const mesh *m)
 /* make_vectors.py's NAMES, in the file's (id, name) order, or none. */
 static void check_names(const cbvh_file *f, const good *g)
 {
-    static const struct { uint32_t id; const char *name; } names[3] = {
-        { 3, "Glass" }, { 7, "Oak" }, { 7, "Steel \xc3\xbc" } };
+    static const struct {
+        uint32_t id;
+        const char *name;
+    } names[3] = {{3, "Glass"}, {7, "Oak"}, {7, "Steel \xc3\xbc"}};
     uint32_t id = 0;
     for (uint32_t k = 0; k < g->name_count; k++) {
         const char *name = cbvh_file_get_material_name(f, k, &id);
@@ -404,7 +450,7 @@ static void check_sections(const cbvh_file *f, uint32_t file_size)
     cbvh_file_info info;
     cbvh_file_get_info(f, &info, sizeof info);
     assert_int_equal(info.file_size, file_size);
-    cbvh_section_info s, prev = { 0 };
+    cbvh_section_info s, prev = {0};
     for (uint32_t i = 0; i < info.section_count; i++) {
         assert_int_equal(cbvh_file_get_section(f, i, &s), 1);
         assert_int_equal(s.offset % 64, 0);
@@ -430,7 +476,7 @@ static void check_vector(const expectation *e)
     for (int how = 0; how < 3; how++) {
         cbvh_file *f = NULL;
         cbvh_error err;
-        cbvh_result r = how == 0 ? cbvh_open_path(path, NULL, &f, &err)
+        cbvh_result r = how == 0   ? cbvh_open_path(path, NULL, &f, &err)
                         : how == 1 ? cbvh_open_memory(data, size, NULL, &f, &err)
                                    : cbvh_open_memory(shifted + 1, size, NULL, &f, &err);
         if (r != e->code || strstr(err.message, e->message) == NULL)
@@ -472,17 +518,17 @@ typedef struct twin {
 } twin;
 
 static const twin twins[] = {
-    { "good-w4-single-triangle", "good-single-triangle", MESH_SINGLE, 4, CBVH_VERTEX_FLOAT32 },
-    { "good-w4-box-raw", "good-box-raw", MESH_BOX, 2, CBVH_VERTEX_FLOAT32 },
-    { "good-w4-box-leaf1", "good-box-raw", MESH_BOX, 1, CBVH_VERTEX_FLOAT32 },
-    { "good-w4-box-leaf8", "good-box-raw", MESH_BOX, 8, CBVH_VERTEX_FLOAT32 },
-    { "good-w4-box-q16", "good-box-q16", MESH_BOX, 2, CBVH_VERTEX_QUANTIZED16 },
-    { "good-w4-box-far-q16", "good-box-far-q16", MESH_BOX_FAR, 2, CBVH_VERTEX_QUANTIZED16 },
-    { "good-w4-quad-flat", "good-quad-flat", MESH_QUAD, 1, CBVH_VERTEX_FLOAT32 },
-    { "good-w4-remap-materials", "good-remap-materials", MESH_BOX_DEGENERATE, 2, CBVH_VERTEX_FLOAT32 },
-    { "good-w4-two-boxes", "good-two-boxes", MESH_TWO_BOXES, 1, CBVH_VERTEX_FLOAT32 },
-    { "good-w4-two-boxes-local8", "good-two-boxes", MESH_TWO_BOXES, 1, CBVH_VERTEX_FLOAT32 },
-    { "good-w4-local8-q16-zlib", "good-box-q16", MESH_BOX_DEGENERATE, 2, CBVH_VERTEX_QUANTIZED16 },
+    {"good-w4-single-triangle", "good-single-triangle", MESH_SINGLE, 4, CBVH_VERTEX_FLOAT32},
+    {"good-w4-box-raw", "good-box-raw", MESH_BOX, 2, CBVH_VERTEX_FLOAT32},
+    {"good-w4-box-leaf1", "good-box-raw", MESH_BOX, 1, CBVH_VERTEX_FLOAT32},
+    {"good-w4-box-leaf8", "good-box-raw", MESH_BOX, 8, CBVH_VERTEX_FLOAT32},
+    {"good-w4-box-q16", "good-box-q16", MESH_BOX, 2, CBVH_VERTEX_QUANTIZED16},
+    {"good-w4-box-far-q16", "good-box-far-q16", MESH_BOX_FAR, 2, CBVH_VERTEX_QUANTIZED16},
+    {"good-w4-quad-flat", "good-quad-flat", MESH_QUAD, 1, CBVH_VERTEX_FLOAT32},
+    {"good-w4-remap-materials", "good-remap-materials", MESH_BOX_DEGENERATE, 2, CBVH_VERTEX_FLOAT32},
+    {"good-w4-two-boxes", "good-two-boxes", MESH_TWO_BOXES, 1, CBVH_VERTEX_FLOAT32},
+    {"good-w4-two-boxes-local8", "good-two-boxes", MESH_TWO_BOXES, 1, CBVH_VERTEX_FLOAT32},
+    {"good-w4-local8-q16-zlib", "good-box-q16", MESH_BOX_DEGENERATE, 2, CBVH_VERTEX_QUANTIZED16},
 };
 
 static double next_unit(uint64_t *state)
@@ -505,7 +551,8 @@ static void point_near(const cbvh_file_info *info, double grow, uint64_t *rng, f
 static int share_a_vertex(const cbvh_file *a, uint32_t ta, const cbvh_file *b, uint32_t tb)
 {
     float va[3][3], vb[3][3];
-    if (!cbvh_file_get_triangle(a, ta, va[0], va[1], va[2]) || !cbvh_file_get_triangle(b, tb, vb[0], vb[1], vb[2]))
+    if (!cbvh_file_get_triangle(a, ta, va[0], va[1], va[2]) ||
+        !cbvh_file_get_triangle(b, tb, vb[0], vb[1], vb[2]))
         return 0;
     for (int i = 0; i < 3; i++)
         for (int j = 0; j < 3; j++)
@@ -532,13 +579,15 @@ static void assert_same_answers(const cbvh_file *a, const cbvh_file *b, const me
             j = (j + 1) % m->triangle_count;
         double u = next_unit(&rng), v = next_unit(&rng) * (1.0 - u);
         for (int k = 0; k < 3; k++)
-            target[k] = (float)((1.0 - u - v) * m->v[m->t[j][0]][k] + u * m->v[m->t[j][1]][k] + v * m->v[m->t[j][2]][k]);
+            target[k] = (float)((1.0 - u - v) * m->v[m->t[j][0]][k] + u * m->v[m->t[j][1]][k] +
+                                v * m->v[m->t[j][2]][k]);
         for (int k = 0; k < 3; k++)
             r.dir[k] = target[k] - r.org[k];
         if (i % 4 == 0) { /* along an axis: from outside the bounds, straight at the target */
             int axis = i / 4 % 3;
             for (int k = 0; k < 3; k++)
-                r.org[k] = k == axis ? r.org[k] : target[k], r.dir[k] = k == axis ? target[k] - r.org[k] : 0.0f;
+                r.org[k] = k == axis ? r.org[k] : target[k],
+                r.dir[k] = k == axis ? target[k] - r.org[k] : 0.0f;
         }
         r.tmin = 0.0f;
         r.tmax = INFINITY;
@@ -546,9 +595,11 @@ static void assert_same_answers(const cbvh_file *a, const cbvh_file *b, const me
             cbvh_hit ha, hb;
             const int ga = cbvh_raycast(a, &r, (cbvh_traversal)t, &ha, NULL);
             const int gb = cbvh_raycast(b, &r, (cbvh_traversal)t, &hb, NULL);
-            if (ga != gb || (ga && (ha.t != hb.t || (ha.tri != hb.tri && !share_a_vertex(a, ha.tri, b, hb.tri)))))
+            if (ga != gb ||
+                (ga && (ha.t != hb.t || (ha.tri != hb.tri && !share_a_vertex(a, ha.tri, b, hb.tri)))))
                 fail_msg("%s: ray %d, traversal %d: %s %u at t %.9g against %s %u at t %.9g", what, i, t,
-                         ga ? "hit" : "miss", ha.tri, ga ? ha.t : 0.0, gb ? "hit" : "miss", hb.tri, gb ? hb.t : 0.0);
+                         ga ? "hit" : "miss", ha.tri, ga ? ha.t : 0.0, gb ? "hit" : "miss", hb.tri,
+                         gb ? hb.t : 0.0);
             hits += (size_t)ga;
             assert_int_equal(cbvh_occluded(a, &r, (cbvh_traversal)t, NULL), ga);
             assert_int_equal(cbvh_occluded(b, &r, (cbvh_traversal)t, NULL), gb);
@@ -578,7 +629,7 @@ static void test_wide4_answers(void **state)
         uint32_t vertex_count = 0;
         for (uint32_t t = 0; t < 3 * m->triangle_count; t++)
             vertex_count = m->t[t / 3][t % 3] + 1 > vertex_count ? m->t[t / 3][t % 3] + 1 : vertex_count;
-        const cbvh_mesh input = { &m->v[0][0], vertex_count, 0, &m->t[0][0], m->triangle_count, NULL };
+        const cbvh_mesh input = {&m->v[0][0], vertex_count, 0, &m->t[0][0], m->triangle_count, NULL};
         cbvh_cook_options o;
         cbvh_cook_options_init(&o, sizeof o);
         o.layout = CBVH_LAYOUT_WIDE4;
@@ -616,8 +667,8 @@ static void test_every_file_is_expected(void **state)
             continue;
         files++;
         size_t i = 0;
-        while (i < EXPECTATION_COUNT &&
-               (strlen(expectations[i].name) != n - 5 || strncmp(expectations[i].name, de->d_name, n - 5) != 0))
+        while (i < EXPECTATION_COUNT && (strlen(expectations[i].name) != n - 5 ||
+                                         strncmp(expectations[i].name, de->d_name, n - 5) != 0))
             i++;
         if (i == EXPECTATION_COUNT)
             fail_msg("%s has no expectation in test_vectors.c", de->d_name);
@@ -626,9 +677,9 @@ static void test_every_file_is_expected(void **state)
     assert_int_equal(files, EXPECTATION_COUNT);
     for (size_t i = 0; i < EXPECTATION_COUNT; i++) {
         const char *name = expectations[i].name;
-        cbvh_result want = strncmp(name, "good-", 5) == 0 ? CBVH_OK
+        cbvh_result want = strncmp(name, "good-", 5) == 0  ? CBVH_OK
                            : strncmp(name, "bad-", 4) == 0 ? CBVH_ERROR_CORRUPT
-                                                            : CBVH_ERROR_UNSUPPORTED;
+                                                           : CBVH_ERROR_UNSUPPORTED;
         assert_int_equal(expectations[i].code, want);
     }
 }

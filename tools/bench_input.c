@@ -1,4 +1,5 @@
-/* bench_input.c: loads the meshes `cbvh bench` and `cbvh report` measure (generated, mesh file or cooked cbvh file). */
+/* bench_input.c: loads the meshes `cbvh bench` and `cbvh report` measure (generated, mesh file or cooked cbvh
+ * file). */
 #include <errno.h>
 #include <fcntl.h>
 #include <stdio.h>
@@ -8,13 +9,13 @@
 
 #include "bench_input.h"
 #include "cli.h"
-#include "common/file.h"
-#include "common/format.h"
+#include "cbvh_internal.h"
 #include "import_assimp.h"
 #include "support/scene_gen.h"
 
 /* Takes over positions and indices, adding the padding float. */
-static int adopt(bench_mesh *out, float *positions, size_t vertex_count, uint32_t *indices, size_t triangle_count)
+static int adopt(bench_mesh *out, float *positions, size_t vertex_count, uint32_t *indices,
+                 size_t triangle_count)
 {
     float *padded = realloc(positions, (3 * vertex_count + 1) * sizeof(float));
     if (!padded) {
@@ -35,10 +36,10 @@ static int is_cbvh_file(const char *path)
     FILE *f = fopen(path, "rb");
     if (!f)
         return 0;
-    char magic[CBVH_MAGIC_SIZE];
+    char magic[CBVH_MAGIC_BYTES];
     size_t n = fread(magic, 1, sizeof magic, f);
     fclose(f);
-    return n == sizeof magic && memcmp(magic, CBVH_MAGIC, CBVH_MAGIC_SIZE) == 0;
+    return cbvh_has_magic(magic, n);
 }
 
 /* Drops the file's pages from the system's cache (written back first), so that the next open reads it from
@@ -68,8 +69,9 @@ static int load_cbvh(const char *command, const char *path, bench_mesh *out)
     cbvh_result r = cbvh_open_path(path, NULL, &file, &err);
     if (r != CBVH_OK)
         return cli_report(command, path, &err);
-    const struct cbvh_file *f = file;
-    size_t nv = f->info.vertex_count, nt = f->original_triangle_count;
+    cbvh_file_info info;
+    cbvh_file_get_info(file, &info, sizeof info);
+    size_t nv = info.vertex_count, nt = info.original_triangle_count;
     float *positions = malloc((3 * nv + 1) * sizeof(float));
     uint32_t *indices = calloc(3 * nt, sizeof(uint32_t)); /* ids never stored stay (0,0,0): zero area */
     if (!positions || !indices) {
@@ -79,10 +81,7 @@ static int load_cbvh(const char *command, const char *path, bench_mesh *out)
         cli_error(command, path, "out of memory");
         return CLI_EXIT_USAGE;
     }
-    for (uint32_t v = 0; v < nv; v++)
-        cbvh_vertex_position(f, v, positions + 3 * (size_t)v);
-    for (uint32_t t = 0; t < f->info.triangle_count; t++)
-        cbvh_triangle_indices(f, t, indices + 3 * (size_t)cbvh_original_id(f, t));
+    cbvh_file_mesh(file, positions, indices);
     cbvh_close(file);
     if (!adopt(out, positions, nv, indices, nt)) {
         cli_error(command, path, "out of memory");
@@ -105,7 +104,8 @@ int bench_mesh_load(const char *command, const char *source, int generated, benc
         scene s;
         if (!scene_from_spec(&s, source)) {
             cli_error(command, source,
-                      "not a generated scene (expected sphere:N, terrain:N, cube, soup:N or demo), or out of memory");
+                      "not a generated scene (expected sphere:N, terrain:N, cube, soup:N or demo), or out of "
+                      "memory");
             return CLI_EXIT_USAGE;
         }
         free(s.material_ids);

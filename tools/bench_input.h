@@ -1,4 +1,5 @@
-/* bench_input.h: the meshes `cbvh bench` and `cbvh report` measure: a generated scene, a mesh file or a cooked .cbvh file. */
+/* bench_input.h: the meshes `cbvh bench` and `cbvh report` measure: a generated scene, a mesh file or a
+ * cooked .cbvh file. */
 #ifndef CBVH_TOOLS_BENCH_INPUT_H
 #define CBVH_TOOLS_BENCH_INPUT_H
 
@@ -15,8 +16,8 @@ typedef struct bench_mesh {
     size_t vertex_count;
     uint32_t *indices;
     size_t triangle_count;
-    const char *name;      /* the spec or path it came from (not owned) */
-    int is_cbvh;           /* loaded from a cooked file: cbvh_path is that file */
+    const char *name; /* the spec or path it came from (not owned) */
+    int is_cbvh;      /* loaded from a cooked file: cbvh_path is that file */
     const char *cbvh_path;
 } bench_mesh;
 

@@ -1,4 +1,5 @@
-/* bench_judge.c: whom the double-precision reference sides with where cbvh and a peer answer a shape query differently. */
+/* bench_judge.c: whom the double-precision reference sides with where cbvh and a peer answer a shape query
+ * differently. */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>

@@ -1,4 +1,5 @@
-/* bench_judge.h: whom the double-precision reference sides with where cbvh and a peer answer a shape query differently. */
+/* bench_judge.h: whom the double-precision reference sides with where cbvh and a peer answer a shape query
+ * differently. */
 #ifndef CBVH_TOOLS_BENCH_JUDGE_H
 #define CBVH_TOOLS_BENCH_JUDGE_H
 
@@ -17,7 +18,7 @@ typedef enum bench_side { BENCH_SIDE_NEITHER, BENCH_SIDE_CBVH, BENCH_SIDE_PEER, 
 typedef struct bench_judge {
     ref_tris tris;
     uint32_t id_count;
-    uint8_t *reported[2]; /* [0]: cbvh, [1]: the peer */
+    uint8_t *reported[2];                      /* [0]: cbvh, [1]: the peer */
     double overlap_tolerance, sweep_tolerance; /* lengths */
 } bench_judge;
 

@@ -1,4 +1,5 @@
-/* bench_run.c: timing a batch of ray queries split across threads, the median of repetitions, and answer agreement. */
+/* bench_run.c: timing a batch of ray queries split across threads, the median of repetitions, and answer
+ * agreement. */
 #include <math.h>
 #include <pthread.h>
 #include <stdlib.h>
@@ -160,8 +161,8 @@ int bench_time_in_turns(const bench_job *const *jobs, int n, unsigned threads, u
     return status;
 }
 
-double bench_open_median(const char *command, const char *path, unsigned reps, int cpu_clock, cbvh_file **keep,
-                         int *status)
+double bench_open_median(const char *command, const char *path, unsigned reps, int cpu_clock,
+                         cbvh_file **keep, int *status)
 {
     double times[64];
     unsigned n = reps < 1 ? 1 : reps > 64 ? 64 : reps;
@@ -203,9 +204,9 @@ void bench_cbvh_variant(bench_cbvh *e, const cbvh_file *file, const cbvh_file *e
         cbvh_traversal traversal;
         int stream, expanded;
     } variants[BENCH_CBVH_VARIANTS] = {
-        { "sorted", CBVH_TRAVERSAL_SORTED, 0, 0 },       { "unsorted", CBVH_TRAVERSAL_UNSORTED, 0, 0 },
-        { "stackless", CBVH_TRAVERSAL_STACKLESS, 0, 0 }, { "distance", CBVH_TRAVERSAL_DISTANCE, 0, 0 },
-        { "stream", CBVH_TRAVERSAL_SORTED, 1, 0 },       { "expanded", CBVH_TRAVERSAL_SORTED, 0, 1 },
+        {"sorted", CBVH_TRAVERSAL_SORTED, 0, 0},       {"unsorted", CBVH_TRAVERSAL_UNSORTED, 0, 0},
+        {"stackless", CBVH_TRAVERSAL_STACKLESS, 0, 0}, {"distance", CBVH_TRAVERSAL_DISTANCE, 0, 0},
+        {"stream", CBVH_TRAVERSAL_SORTED, 1, 0},       {"expanded", CBVH_TRAVERSAL_SORTED, 0, 1},
     };
     e->file = variants[k].expanded ? expanded : file;
     e->traversal = variants[k].traversal;
@@ -213,8 +214,8 @@ void bench_cbvh_variant(bench_cbvh *e, const cbvh_file *file, const cbvh_file *e
     e->name = variants[k].name;
 }
 
-void bench_cbvh_kernel(const void *engine, const cbvh_ray *rays, size_t count, cbvh_hit *hits, uint8_t *occluded,
-                       cbvh_query_stats *stats)
+void bench_cbvh_kernel(const void *engine, const cbvh_ray *rays, size_t count, cbvh_hit *hits,
+                       uint8_t *occluded, cbvh_query_stats *stats)
 {
     const bench_cbvh *e = engine;
     if (e->stream) {
@@ -243,11 +244,13 @@ void bench_agree_closest(bench_agreement *a, const cbvh_ray *rays, const cbvh_hi
     for (size_t i = 0; i < count; i++) {
         const float *d = rays[i].dir;
         double len = sqrt((double)d[0] * d[0] + (double)d[1] * d[1] + (double)d[2] * d[2]);
-        bench_agree_one(a, ref[i].tri, other[i].tri, fabs((double)ref[i].t - (double)other[i].t) * len, tolerance);
+        bench_agree_one(a, ref[i].tri, other[i].tri, fabs((double)ref[i].t - (double)other[i].t) * len,
+                        tolerance);
     }
 }
 
-void bench_agree_one(bench_agreement *a, uint32_t tri_ref, uint32_t tri_other, double distance, double tolerance)
+void bench_agree_one(bench_agreement *a, uint32_t tri_ref, uint32_t tri_other, double distance,
+                     double tolerance)
 {
     int hit_ref = tri_ref != CBVH_NO_HIT, hit_other = tri_other != CBVH_NO_HIT;
     if (!hit_ref && !hit_other)

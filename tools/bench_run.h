@@ -1,4 +1,5 @@
-/* bench_run.h: timing a batch of ray queries split across threads, the median of repetitions, and answer agreement. */
+/* bench_run.h: timing a batch of ray queries split across threads, the median of repetitions, and answer
+ * agreement. */
 #ifndef CBVH_TOOLS_BENCH_RUN_H
 #define CBVH_TOOLS_BENCH_RUN_H
 
@@ -21,9 +22,9 @@ typedef struct bench_job {
     const void *engine;
     const cbvh_ray *rays;
     size_t count;
-    cbvh_hit *hits;     /* closest hit queries, else NULL */
-    uint8_t *occluded;  /* any-hit queries, else NULL */
-    int cpu_clock;      /* time with the threads' CPU clocks instead of the wall clock */
+    cbvh_hit *hits;    /* closest hit queries, else NULL */
+    uint8_t *occluded; /* any-hit queries, else NULL */
+    int cpu_clock;     /* time with the threads' CPU clocks instead of the wall clock */
     bench_range_fn range;
     const void *range_job;
     size_t first; /* the job's queries are [first, first + count): rays[first...], hits[first...] */
@@ -61,8 +62,8 @@ double bench_median(double *values, unsigned n);
  * as "cbvh COMMAND: PATH: ..." and its exit status stored in *status, else 0).
  * Returns the median seconds of an open (bench_clock(cpu_clock)). With keep
  * non-NULL the file of the last open stays open in *keep. */
-double bench_open_median(const char *command, const char *path, unsigned reps, int cpu_clock, cbvh_file **keep,
-                         int *status);
+double bench_open_median(const char *command, const char *path, unsigned reps, int cpu_clock,
+                         cbvh_file **keep, int *status);
 
 /* cbvh as an engine: one traversal of an opened file, or its batched streams. */
 typedef struct bench_cbvh {
@@ -87,15 +88,15 @@ double bench_open_expanded(const char *command, const char *path, int cpu_clock,
                            int *status);
 
 /* A bench_kernel whose engine is a bench_cbvh. */
-void bench_cbvh_kernel(const void *engine, const cbvh_ray *rays, size_t count, cbvh_hit *hits, uint8_t *occluded,
-                       cbvh_query_stats *stats);
+void bench_cbvh_kernel(const void *engine, const cbvh_ray *rays, size_t count, cbvh_hit *hits,
+                       uint8_t *occluded, cbvh_query_stats *stats);
 
 /* How a peer's (or variant's) answers compare with the reference answers, ray by ray. */
 typedef struct bench_agreement {
     uint64_t same_triangle; /* both hit the same triangle at t within the tolerance */
     uint64_t both_miss;
-    uint64_t t_close;       /* both hit, other triangles, t within the tolerance (a shared edge or vertex) */
-    uint64_t disagree;      /* hit against miss, or t apart by more than the tolerance */
+    uint64_t t_close;  /* both hit, other triangles, t within the tolerance (a shared edge or vertex) */
+    uint64_t disagree; /* hit against miss, or t apart by more than the tolerance */
 } bench_agreement;
 
 /* Adds the comparison of count answers; tolerance is a distance (|t - t_ref| * |dir|). */
@@ -104,7 +105,8 @@ void bench_agree_closest(bench_agreement *a, const cbvh_ray *rays, const cbvh_hi
 
 /* Adds one comparison: whether each answer hit, the triangles, and how far apart the two hits' t lie as a
  * distance (ignored unless both hit). */
-void bench_agree_one(bench_agreement *a, uint32_t tri_ref, uint32_t tri_other, double distance, double tolerance);
+void bench_agree_one(bench_agreement *a, uint32_t tri_ref, uint32_t tri_other, double distance,
+                     double tolerance);
 
 /* Rays whose any-hit flags differ. */
 uint64_t bench_disagree_any(const uint8_t *ref, const uint8_t *other, size_t count);

@@ -12,23 +12,22 @@ typedef struct command {
 } command;
 
 static const command commands[] = {
-    { "cook", cmd_cook, "cook a mesh file (or a generated scene) into a .cbvh file" },
-    { "info", cmd_info, "describe a .cbvh file: sections, tree statistics, quantization error" },
-    { "verify", cmd_verify, "validate a .cbvh file completely" },
-    { "raycast", cmd_raycast, "cast rays read from stdin, print hits on stdout" },
-    { "demo", cmd_demo, "cook, open and query the built-in scene; check answers by brute force" },
-    { "bench", cmd_bench, "measure cbvh against Embree and Bullet on the same triangles and rays" },
-    { "report", cmd_report, "compare the format's precision and layout choices: error and run time" },
+    {"cook", cmd_cook, "cook a mesh file (or a generated scene) into a .cbvh file"},
+    {"info", cmd_info, "describe a .cbvh file: sections, tree statistics, quantization error"},
+    {"verify", cmd_verify, "validate a .cbvh file completely"},
+    {"raycast", cmd_raycast, "cast rays read from stdin, print hits on stdout"},
+    {"demo", cmd_demo, "cook, open and query the built-in scene; check answers by brute force"},
+    {"bench", cmd_bench, "measure cbvh against Embree and Bullet on the same triangles and rays"},
+    {"report", cmd_report, "compare the format's precision and layout choices: error and run time"},
 };
 
-static const char usage[] =
-    "Usage: cbvh COMMAND [ARGS...]\n"
-    "       cbvh COMMAND --help\n"
-    "       cbvh --version\n"
-    "\n"
-    "Cooks triangle meshes into quantized BVH files and queries them.\n"
-    "\n"
-    "Commands:\n";
+static const char usage[] = "Usage: cbvh COMMAND [ARGS...]\n"
+                            "       cbvh COMMAND --help\n"
+                            "       cbvh --version\n"
+                            "\n"
+                            "Cooks triangle meshes into quantized BVH files and queries them.\n"
+                            "\n"
+                            "Commands:\n";
 
 static void print_usage(FILE *out)
 {
@@ -76,7 +75,7 @@ int main(int argc, char **argv)
             return CLI_EXIT_USAGE;
         }
         static char help_option[] = "--help";
-        char *help_argv[] = { argv[2], help_option, NULL };
+        char *help_argv[] = {argv[2], help_option, NULL};
         return c->run(2, help_argv);
     }
     const command *c = find_command(name);

@@ -72,7 +72,8 @@ int cli_next(cli_parser *p, const cli_option *options, const char **value)
 
 void cli_print_version(void)
 {
-    printf("cbvh %s (library %s, file format %d)\n", CBVH_VERSION_STRING, CBVH_VERSION_STRING, CBVH_FORMAT_VERSION);
+    printf("cbvh %s (library %s, file format %d)\n", CBVH_VERSION_STRING, CBVH_VERSION_STRING,
+           CBVH_FORMAT_VERSION);
 }
 
 static void cli_vmessage(const char *command, const char *file, const char *fmt, va_list ap)
@@ -175,7 +176,7 @@ int cli_open(const char *command, const char *path, cbvh_file **out)
 
 const char *cli_section_name(uint32_t type)
 {
-    static const char *const names[] = { "unknown", "nodes", "triangles", "vertices", "remap", "materials" };
+    static const char *const names[] = {"unknown", "nodes", "triangles", "vertices", "remap", "materials"};
     if (type < sizeof names / sizeof names[0])
         return names[type];
     if ((type | 0x80000000u) == CBVH_SECTION_MATERIAL_NAMES) /* its type, or its number in cook stats */

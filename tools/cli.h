@@ -36,7 +36,7 @@ typedef struct cli_parser {
     const char *usage;   /* the subcommand's complete --help text */
     int argc;
     char **argv;
-    int index;          /* next argument to read */
+    int index;           /* next argument to read */
     int only_positional; /* after "--" */
 } cli_parser;
 

@@ -1,4 +1,5 @@
-/* cmd_bench.c: `cbvh bench`: cook, open and query speed of cbvh against Embree and Bullet on the same triangles and rays. */
+/* cmd_bench.c: `cbvh bench`: cook, open and query speed of cbvh against Embree and Bullet on the same
+ * triangles and rays. */
 #include "config.h"
 
 #include <errno.h>
@@ -78,15 +79,27 @@ static const char usage[] =
     "\n"
     "Exit status: 0 done, 1 the input is not a usable mesh or cbvh file, 2 usage or I/O error.\n";
 
-enum { OPT_GEN = 1, OPT_RAYS, OPT_SHAPES, OPT_SEED, OPT_THREADS, OPT_REPS, OPT_BUDGET, OPT_CPU, OPT_JSON, OPT_NO_PEERS, OPT_QUIET };
+enum {
+    OPT_GEN = 1,
+    OPT_RAYS,
+    OPT_SHAPES,
+    OPT_SEED,
+    OPT_THREADS,
+    OPT_REPS,
+    OPT_BUDGET,
+    OPT_CPU,
+    OPT_JSON,
+    OPT_NO_PEERS,
+    OPT_QUIET
+};
 
 static const cli_option options[] = {
-    { "gen", CLI_ARG_REQUIRED, OPT_GEN },       { "rays", CLI_ARG_REQUIRED, OPT_RAYS },
-    { "seed", CLI_ARG_REQUIRED, OPT_SEED },     { "threads", CLI_ARG_REQUIRED, OPT_THREADS },
-    { "reps", CLI_ARG_REQUIRED, OPT_REPS },     { "budget", CLI_ARG_REQUIRED, OPT_BUDGET },
-    { "cpu-time", CLI_ARG_NONE, OPT_CPU },      { "json", CLI_ARG_REQUIRED, OPT_JSON },
-    { "no-peers", CLI_ARG_NONE, OPT_NO_PEERS }, { "quiet", CLI_ARG_NONE, OPT_QUIET },
-    { "shapes", CLI_ARG_REQUIRED, OPT_SHAPES }, { NULL, 0, 0 },
+    {"gen", CLI_ARG_REQUIRED, OPT_GEN},       {"rays", CLI_ARG_REQUIRED, OPT_RAYS},
+    {"seed", CLI_ARG_REQUIRED, OPT_SEED},     {"threads", CLI_ARG_REQUIRED, OPT_THREADS},
+    {"reps", CLI_ARG_REQUIRED, OPT_REPS},     {"budget", CLI_ARG_REQUIRED, OPT_BUDGET},
+    {"cpu-time", CLI_ARG_NONE, OPT_CPU},      {"json", CLI_ARG_REQUIRED, OPT_JSON},
+    {"no-peers", CLI_ARG_NONE, OPT_NO_PEERS}, {"quiet", CLI_ARG_NONE, OPT_QUIET},
+    {"shapes", CLI_ARG_REQUIRED, OPT_SHAPES}, {NULL, 0, 0},
 };
 
 /* Rays or shape queries a peer runs first, to see whether all fit in the time budget; a shape query takes
@@ -116,8 +129,8 @@ static const cli_option options[] = {
 /* ------------------------------------------------------------------ */
 
 #ifdef HAVE_EMBREE
-static void embree_kernel(const void *engine, const cbvh_ray *rays, size_t count, cbvh_hit *hits, uint8_t *occluded,
-                          cbvh_query_stats *stats)
+static void embree_kernel(const void *engine, const cbvh_ray *rays, size_t count, cbvh_hit *hits,
+                          uint8_t *occluded, cbvh_query_stats *stats)
 {
     if (hits)
         embree_peer_raycast(engine, rays, count, hits);
@@ -136,8 +149,8 @@ static void embree16_kernel(const void *engine, const cbvh_ray *rays, size_t cou
 #endif
 
 #ifdef HAVE_BULLET
-static void bullet_kernel(const void *engine, const cbvh_ray *rays, size_t count, cbvh_hit *hits, uint8_t *occluded,
-                          cbvh_query_stats *stats)
+static void bullet_kernel(const void *engine, const cbvh_ray *rays, size_t count, cbvh_hit *hits,
+                          uint8_t *occluded, cbvh_query_stats *stats)
 {
     if (hits)
         bullet_peer_raycast(engine, rays, count, hits);
@@ -209,16 +222,17 @@ static void cbvh_overlap_each(const cbvh_file *f, shape_kind kind, const shape_q
 }
 
 /* cbvh's answer to one shape query; the engine is the opened file. */
-static void cbvh_shape_query(const cbvh_file *f, shape_kind kind, int sweep, const shape_query *q, shape_answer *a)
+static void cbvh_shape_query(const cbvh_file *f, shape_kind kind, int sweep, const shape_query *q,
+                             shape_answer *a)
 {
     memset(a, 0, sizeof *a);
     a->tri = CBVH_NO_HIT;
     a->t = INFINITY;
     if (sweep) {
         cbvh_sweep_hit h;
-        int hit = kind == SHAPE_SPHERE  ? cbvh_sweep_sphere(f, q->p0, q->size[0], q->delta, &h)
-                  : kind == SHAPE_BOX   ? cbvh_sweep_box(f, q->p0, q->size, q->delta, &h)
-                                        : cbvh_sweep_capsule(f, q->p0, q->p1, q->size[0], q->delta, &h);
+        int hit = kind == SHAPE_SPHERE ? cbvh_sweep_sphere(f, q->p0, q->size[0], q->delta, &h)
+                  : kind == SHAPE_BOX  ? cbvh_sweep_box(f, q->p0, q->size, q->delta, &h)
+                                       : cbvh_sweep_capsule(f, q->p0, q->p1, q->size[0], q->delta, &h);
         if (hit) {
             a->tri = h.tri;
             a->t = h.t;
@@ -256,7 +270,10 @@ static void bullet_shape_kernel(const void *engine, shape_kind kind, int sweep, 
         bullet_peer_overlap(engine, kind, queries, count, out);
 }
 
-static void mark_peer(void *judge, uint32_t tri) { bench_judge_mark(judge, 1, tri); }
+static void mark_peer(void *judge, uint32_t tri)
+{
+    bench_judge_mark(judge, 1, tri);
+}
 
 static void bullet_shape_mark(const void *engine, shape_kind kind, const shape_query *q, bench_judge *j)
 {
@@ -317,15 +334,15 @@ typedef struct shape_agree_row {
     shape_kind kind;
     int sweep;
     const shape_method *m;
-    bench_agreement sweeps; /* sweeps: t compared as a distance along the motion */
+    bench_agreement sweeps;                            /* sweeps: t compared as a distance along the motion */
     uint64_t same_set, both_empty, other_set;          /* overlaps */
     uint64_t ref_triangles, other_triangles;           /* overlaps: triangles reported by each */
     uint64_t ref_start_touching, other_start_touching; /* sweeps: t = 0 answers */
     double t_distance_max; /* sweeps, both hit: the largest |t - t_cbvh| * |delta| */
     double t_distance_sum; /* sweeps, the same triangle: the sum of |t - t_cbvh| * |delta| */
     size_t count;
-    uint64_t checked;   /* disagreements decided against the reference (bench_judge.h) */
-    uint64_t sides[4];  /* how many it decided for each bench_side */
+    uint64_t checked;  /* disagreements decided against the reference (bench_judge.h) */
+    uint64_t sides[4]; /* how many it decided for each bench_side */
 } shape_agree_row;
 
 #define MAX_METHODS 16
@@ -378,8 +395,8 @@ typedef struct bench_state {
 #endif
 } bench_state;
 
-static void add_method(bench_state *s, const char *engine, const char *variant, bench_kernel kernel, const void *state,
-                       int counted, int main)
+static void add_method(bench_state *s, const char *engine, const char *variant, bench_kernel kernel,
+                       const void *state, int counted, int main)
 {
     method *m = &s->methods[s->method_count++];
     m->engine = engine;
@@ -481,14 +498,14 @@ static void add_cbvh_methods(bench_state *s)
 /* Builds every peer configure found; a peer that fails to build is reported and skipped. */
 static void build_peers(bench_state *s)
 {
-    peer_mesh pm = { s->mesh.positions, s->mesh.vertex_count, s->mesh.indices, s->mesh.triangle_count };
+    peer_mesh pm = {s->mesh.positions, s->mesh.vertex_count, s->mesh.indices, s->mesh.triangle_count};
     peer_build_info info;
     char err[256];
     (void)pm;
     (void)info;
     (void)err;
 #ifdef HAVE_EMBREE
-    static const char *const names[2] = { "embree", "embree-robust" };
+    static const char *const names[2] = {"embree", "embree-robust"};
     for (int robust = 0; robust < 2; robust++) {
         progress_update(&s->prog, robust ? "building embree (robust)" : "building embree", -1.0);
         s->embree[robust] = embree_peer_create(&pm, robust, (int)max_threads(s), &info, err, sizeof err);
@@ -804,8 +821,8 @@ static void shapes_answered(void *ctx, int k, const bench_job *job)
 /* Measures every shape engine on one shape set at every thread count, the engines of a thread count timed
  * together (time_jobs); cbvh (engine 0) first, as the reference, compared with each peer at the first
  * thread count. */
-static int measure_shapes(bench_state *s, shape_kind kind, int sweep, const shape_query *queries, shape_answer *ref,
-                          shape_answer *other, int *step, int steps)
+static int measure_shapes(bench_state *s, shape_kind kind, int sweep, const shape_query *queries,
+                          shape_answer *ref, shape_answer *other, int *step, int steps)
 {
     char label[96];
     for (int ti = 0; ti < s->thread_count_n; ti++) {
@@ -881,7 +898,8 @@ static const shape_row *cbvh_shape_row(const bench_state *s, const shape_row *r)
 {
     for (int i = 0; i < s->shape_result_count; i++) {
         const shape_row *x = &s->shape_results[i];
-        if (x->kind == r->kind && x->sweep == r->sweep && x->threads == r->threads && x->m == &s->shape_methods[0])
+        if (x->kind == r->kind && x->sweep == r->sweep && x->threads == r->threads &&
+            x->m == &s->shape_methods[0])
             return x;
     }
     return r;
@@ -912,33 +930,37 @@ static void print_shape_tables(const bench_state *s)
 {
     if (s->shape_result_count == 0)
         return;
-    printf("\nShape queries near the surface, %zu per set (sizes and motions in `cbvh bench --help`); µs/query is "
+    printf("\nShape queries near the surface, %zu per set (sizes and motions in `cbvh bench --help`); "
+           "µs/query is "
            "the time one query takes on one thread, cbvh / this the ratio of queries per second at the same "
            "thread count:\n\n",
            s->shapes);
-    printf("| shape | query | engine | threads | µs/query | queries/s | queries/s/thread | hits or tris/query | "
-           "cbvh / this | runs x queries |\n");
+    printf(
+        "| shape | query | engine | threads | µs/query | queries/s | queries/s/thread | hits or tris/query | "
+        "cbvh / this | runs x queries |\n");
     printf("|---|---|---|---:|---:|---:|---:|---:|---:|---:|\n");
     for (int i = 0; i < s->shape_result_count; i++) {
         const shape_row *r = &s->shape_results[i];
         double speed = queries_per_second(r);
-        printf("| %s | %s | %s | %u | %.3f | %.0f | %.0f | %.3f | %.3f | %u x %zu |\n", shape_kind_name(r->kind),
-               r->sweep ? "sweep" : "overlap", r->m->engine, r->threads, micros_per_query(r), speed,
-               speed / r->threads, r->count ? (double)r->found / (double)r->count : 0.0, shape_ratio(s, r), r->runs,
-               r->count);
+        printf("| %s | %s | %s | %u | %.3f | %.0f | %.0f | %.3f | %.3f | %u x %zu |\n",
+               shape_kind_name(r->kind), r->sweep ? "sweep" : "overlap", r->m->engine, r->threads,
+               micros_per_query(r), speed, speed / r->threads,
+               r->count ? (double)r->found / (double)r->count : 0.0, shape_ratio(s, r), r->runs, r->count);
     }
     if (s->shape_agree_count == 0)
         return;
-    printf("\nShape agreement with cbvh, query by query (sweeps: the same first triangle, or another one with t "
-           "times the motion's length within %.0e of the scene diagonal; overlaps: the same set of triangles). "
-           "Bullet's casts stop 0.001 mesh units short of contact (its constant), so its t come early; the t apart "
-           "columns say by how much, as a fraction of the diagonal. Up to %d disagreements per set (fewer "
-           "once checking them took the budget) are decided against a double-precision brute force (the "
-           "tests' reference): it sides with an engine whose answer it bears out (sweeps: by the rule "
-           "above, a miss when the shape shrunk by %.0e of the diagonal misses too; overlaps: every triangle "
-           "that surely overlaps and none surely apart, within %.0e of the diagonal), with both, or with "
-           "neither:\n\n",
-           SWEEP_AGREE_TOLERANCE, BENCH_JUDGE_QUERIES, AGREE_TOLERANCE, AGREE_TOLERANCE);
+    printf(
+        "\nShape agreement with cbvh, query by query (sweeps: the same first triangle, or another one with t "
+        "times the motion's length within %.0e of the scene diagonal; overlaps: the same set of triangles). "
+        "Bullet's casts stop 0.001 mesh units short of contact (its constant), so its t come early; the t "
+        "apart "
+        "columns say by how much, as a fraction of the diagonal. Up to %d disagreements per set (fewer "
+        "once checking them took the budget) are decided against a double-precision brute force (the "
+        "tests' reference): it sides with an engine whose answer it bears out (sweeps: by the rule "
+        "above, a miss when the shape shrunk by %.0e of the diagonal misses too; overlaps: every triangle "
+        "that surely overlaps and none surely apart, within %.0e of the diagonal), with both, or with "
+        "neither:\n\n",
+        SWEEP_AGREE_TOLERANCE, BENCH_JUDGE_QUERIES, AGREE_TOLERANCE, AGREE_TOLERANCE);
     printf("| shape | query | engine | same triangle or set | both miss or none | t close, other triangle | "
            "disagree | checked | reference: cbvh / this / both / neither | start touching cbvh / this | "
            "same triangle: t apart mean | t apart max | tris cbvh / this | queries compared |\n");
@@ -979,7 +1001,8 @@ static void print_tables(const bench_state *s)
            s->cpu_clock ? "CPU time (process CPU for cook, build and open; slowest thread's CPU for queries)"
                         : "wall-clock time");
     const build_row *c = &s->builds[0];
-    printf("| engine | build s | Mtris/s | open ms | bytes/tri | cbvh/this bytes | cbvh open / this build |\n");
+    printf(
+        "| engine | build s | Mtris/s | open ms | bytes/tri | cbvh/this bytes | cbvh open / this build |\n");
     printf("|---|---:|---:|---:|---:|---:|---:|\n");
     for (int i = 0; i < s->build_count; i++) {
         const build_row *b = &s->builds[i];
@@ -1011,13 +1034,15 @@ static void print_tables(const bench_state *s)
     }
     printf("\n");
 
-    printf("| rays | query | engine | variant | threads | MRays/s | MRays/s/thread | nodes/ray | tris/ray | cbvh sorted / this | runs x rays |\n");
+    printf("| rays | query | engine | variant | threads | MRays/s | MRays/s/thread | nodes/ray | tris/ray | "
+           "cbvh sorted / this | runs x rays |\n");
     printf("|---|---|---|---|---:|---:|---:|---:|---:|---:|---:|\n");
     for (int i = 0; i < s->result_count; i++) {
         const result_row *r = &s->results[i];
         double speed = mrays(r), ref = mrays(sorted_row(s, r));
-        printf("| %s | %s | %s | %s | %u | %.3f | %.3f | ", rays_kind_name(r->set), r->any ? "any" : "closest",
-               r->m->engine, r->m->variant, r->threads, speed, speed / r->threads);
+        printf("| %s | %s | %s | %s | %u | %.3f | %.3f | ", rays_kind_name(r->set),
+               r->any ? "any" : "closest", r->m->engine, r->m->variant, r->threads, speed,
+               speed / r->threads);
         if (r->m->counted)
             printf("%.1f | %.2f | ", (double)r->stats.nodes_visited / (double)s->rays,
                    (double)r->stats.triangles_tested / (double)s->rays);
@@ -1026,15 +1051,18 @@ static void print_tables(const bench_state *s)
         printf("%.3f | %u x %zu |\n", speed > 0.0 ? ref / speed : 0.0, r->runs, r->count);
     }
 
-    printf("\nAgreement with cbvh sorted, ray by ray (t within %.0e of the scene diagonal):\n\n", AGREE_TOLERANCE);
-    printf("| rays | engine | variant | same triangle | both miss | t close, other triangle | disagree | any-hit disagree | rays compared |\n");
+    printf("\nAgreement with cbvh sorted, ray by ray (t within %.0e of the scene diagonal):\n\n",
+           AGREE_TOLERANCE);
+    printf("| rays | engine | variant | same triangle | both miss | t close, other triangle | disagree | "
+           "any-hit disagree | rays compared |\n");
     printf("|---|---|---|---:|---:|---:|---:|---:|---:|\n");
     for (int i = 0; i < s->agree_count; i++) {
         const agree_row *a = &s->agreements[i];
-        printf("| %s | %s | %s | %llu | %llu | %llu | %llu | %llu | %zu", rays_kind_name(a->set), a->m->engine,
-               a->m->variant, (unsigned long long)a->closest.same_triangle, (unsigned long long)a->closest.both_miss,
-               (unsigned long long)a->closest.t_close, (unsigned long long)a->closest.disagree,
-               (unsigned long long)a->any_disagree, a->closest_count);
+        printf("| %s | %s | %s | %llu | %llu | %llu | %llu | %llu | %zu", rays_kind_name(a->set),
+               a->m->engine, a->m->variant, (unsigned long long)a->closest.same_triangle,
+               (unsigned long long)a->closest.both_miss, (unsigned long long)a->closest.t_close,
+               (unsigned long long)a->closest.disagree, (unsigned long long)a->any_disagree,
+               a->closest_count);
         if (a->any_count != a->closest_count)
             printf(" (any hit: %zu)", a->any_count);
         printf(" |\n");
@@ -1214,7 +1242,7 @@ static int run(bench_state *s)
     if (status)
         return status;
     float lo[3], hi[3];
-    rays_mesh rm = { s->mesh.positions, s->mesh.vertex_count, s->mesh.indices, s->mesh.triangle_count };
+    rays_mesh rm = {s->mesh.positions, s->mesh.vertex_count, s->mesh.indices, s->mesh.triangle_count};
     s->diagonal = rays_mesh_bounds(&rm, lo, hi);
     add_cbvh_methods(s);
     if (!s->no_peers)
@@ -1234,11 +1262,12 @@ static int run(bench_state *s)
     s->results = calloc((size_t)RAYS_KIND_COUNT * 2 * ray_rows, sizeof *s->results);
     s->agreements = calloc((size_t)RAYS_KIND_COUNT * s->method_count, sizeof *s->agreements);
     s->shape_results = calloc((size_t)SHAPE_KIND_COUNT * 2 * shape_rows + 1, sizeof *s->shape_results);
-    s->shape_agreements = calloc((size_t)SHAPE_KIND_COUNT * 2 * s->shape_method_count, sizeof *s->shape_agreements);
+    s->shape_agreements =
+        calloc((size_t)SHAPE_KIND_COUNT * 2 * s->shape_method_count, sizeof *s->shape_agreements);
     shape_query *queries = malloc(s->shapes * sizeof *queries + 1);
     shape_answer *ref = malloc(s->shapes * sizeof *ref + 1), *other = malloc(s->shapes * sizeof *other + 1);
-    if (!b.rays || !b.ref_hits || !b.hits || !b.ref_occluded || !b.occluded || !s->results || !s->agreements ||
-        !s->shape_results || !s->shape_agreements || !queries || !ref || !other) {
+    if (!b.rays || !b.ref_hits || !b.hits || !b.ref_occluded || !b.occluded || !s->results ||
+        !s->agreements || !s->shape_results || !s->shape_agreements || !queries || !ref || !other) {
         cli_error(s->command, NULL, "out of memory for %zu rays and %zu shapes", s->rays, s->shapes);
         status = CLI_EXIT_USAGE;
     }
@@ -1316,14 +1345,18 @@ int cmd_bench(int argc, char **argv)
     uint32_t u;
     while ((id = cli_next(&p, options, &value)) != CLI_END) {
         switch (id) {
-        case CLI_DONE: return CLI_EXIT_OK;
-        case CLI_ERROR: return CLI_EXIT_USAGE;
+        case CLI_DONE:
+            return CLI_EXIT_OK;
+        case CLI_ERROR:
+            return CLI_EXIT_USAGE;
         case CLI_POSITIONAL:
             if (input)
                 return cli_usage_error(s.command, "one input only (got '%s' and '%s')", input, value);
             input = value;
             break;
-        case OPT_GEN: gen = value; break;
+        case OPT_GEN:
+            gen = value;
+            break;
         case OPT_RAYS:
             if (!cli_parse_u32(s.command, "--rays", value, 1, 100000000u, &u))
                 return CLI_EXIT_USAGE;
@@ -1351,14 +1384,23 @@ int cmd_bench(int argc, char **argv)
             if (!cli_parse_float(s.command, "--budget", value, 0.0f, 1e6f, &s.budget))
                 return CLI_EXIT_USAGE;
             break;
-        case OPT_CPU: s.cpu_clock = 1; break;
-        case OPT_JSON: s.json_path = value; break;
-        case OPT_NO_PEERS: s.no_peers = 1; break;
-        case OPT_QUIET: quiet = 1; break;
+        case OPT_CPU:
+            s.cpu_clock = 1;
+            break;
+        case OPT_JSON:
+            s.json_path = value;
+            break;
+        case OPT_NO_PEERS:
+            s.no_peers = 1;
+            break;
+        case OPT_QUIET:
+            quiet = 1;
+            break;
         }
     }
     if (!input == !gen)
-        return cli_usage_error(s.command, gen ? "give either INPUT or --gen, not both" : "no input (give INPUT or --gen SPEC)");
+        return cli_usage_error(s.command, gen ? "give either INPUT or --gen, not both"
+                                              : "no input (give INPUT or --gen SPEC)");
     progress_init(&s.prog, quiet);
     int status = bench_mesh_load(s.command, gen ? gen : input, gen != NULL, &s.mesh);
     if (!status)

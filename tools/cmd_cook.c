@@ -10,7 +10,6 @@
 #include <unistd.h>
 
 #include "cli.h"
-#include "common/format.h"
 #include "commands.h"
 #include "import_assimp.h"
 #include "json.h"

@@ -1,4 +1,5 @@
-/* cmd_demo.c: `cbvh demo`: cook, open and query the built-in scene with every query kind; check answers by brute force. */
+/* cmd_demo.c: `cbvh demo`: cook, open and query the built-in scene with every query kind; check answers by
+ * brute force. */
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -8,7 +9,6 @@
 
 #include "cli.h"
 #include "commands.h"
-#include "common/file.h"
 #include "support/reference.h"
 #include "support/scene_gen.h"
 
@@ -53,8 +53,14 @@ typedef struct demo {
     uint64_t rng;
 } demo;
 
-static double unit(demo *d) { return scene_rand_unit(&d->rng); }
-static float in_range(demo *d, float a, float b) { return a + (b - a) * (float)unit(d); }
+static double unit(demo *d)
+{
+    return scene_rand_unit(&d->rng);
+}
+static float in_range(demo *d, float a, float b)
+{
+    return a + (b - a) * (float)unit(d);
+}
 
 static void random_direction(demo *d, float dir[3])
 {
@@ -87,8 +93,8 @@ static void report_failure(const char *fmt, ...)
     va_end(ap);
 }
 
-static void print_row(const demo *d, const char *what, size_t count, size_t hits, double seconds, const char *unit_name,
-                      const char *check)
+static void print_row(const demo *d, const char *what, size_t count, size_t hits, double seconds,
+                      const char *unit_name, const char *check)
 {
     if (d->quiet)
         return;
@@ -100,8 +106,8 @@ static void print_row(const demo *d, const char *what, size_t count, size_t hits
 }
 
 /* A table row for a query kind whose sample of `sample` answers had `bad` disagreements. */
-static void sample_row(demo *d, const char *what, size_t count, size_t hits, double seconds, const char *unit_name,
-                       int sample, int bad)
+static void sample_row(demo *d, const char *what, size_t count, size_t hits, double seconds,
+                       const char *unit_name, int sample, int bad)
 {
     char check[64];
     snprintf(check, sizeof check, "%d of %d vs brute force: %s", sample - bad, sample, bad ? "FAILED" : "ok");
@@ -122,7 +128,7 @@ static void make_rays(demo *d, cbvh_ray *rays, size_t n)
                 r->org[a] = in_range(d, d->lo[a], d->hi[a]);
             random_direction(d, r->dir);
         } else {
-            float target[3] = { in_range(d, d->lo[0], d->hi[0]), d->lo[1], in_range(d, d->lo[2], d->hi[2]) };
+            float target[3] = {in_range(d, d->lo[0], d->hi[0]), d->lo[1], in_range(d, d->lo[2], d->hi[2])};
             r->org[0] = in_range(d, d->lo[0], d->hi[0]);
             r->org[1] = d->hi[1] + 0.25f * (float)d->diag;
             r->org[2] = in_range(d, d->lo[2], d->hi[2]);
@@ -165,7 +171,8 @@ typedef struct all_hits {
 static cbvh_filter_result collect_hit(void *user, const cbvh_hit_record *hit)
 {
     all_hits *all = user;
-    if (all->count++ == 0 || hit->t < all->nearest.t || (hit->t == all->nearest.t && hit->tri < all->nearest.tri))
+    if (all->count++ == 0 || hit->t < all->nearest.t ||
+        (hit->t == all->nearest.t && hit->tri < all->nearest.tri))
         all->nearest = *hit;
     return CBVH_FILTER_REJECT;
 }
@@ -189,9 +196,10 @@ static void demo_placed(demo *d, const cbvh_ray *rays, const cbvh_hit *ref, size
 {
     const double half = 0.2617993877991494, sn = sin(half); /* 30 degrees / 2 */
     const double axis[3] = {1.0 / 3.0, 2.0 / 3.0, 2.0 / 3.0};
-    const cbvh_transform tr = {{(float)(sn * axis[0]), (float)(sn * axis[1]), (float)(sn * axis[2]), (float)cos(half)},
-                               {5.0f, -3.0f, 2.0f},
-                               2.0f};
+    const cbvh_transform tr = {
+        {(float)(sn * axis[0]), (float)(sn * axis[1]), (float)(sn * axis[2]), (float)cos(half)},
+        {5.0f, -3.0f, 2.0f},
+        2.0f};
     double m[3][3];
     quaternion_matrix(tr.rotation, m);
     cbvh_query_options q;
@@ -207,7 +215,8 @@ static void demo_placed(demo *d, const cbvh_ray *rays, const cbvh_hit *ref, size
         world[i] = rays[i];
         for (int a = 0; a < 3; a++) {
             const float *o = rays[i].org, *dv = rays[i].dir;
-            world[i].org[a] = (float)(tr.translation[a] + tr.scale * (m[a][0] * o[0] + m[a][1] * o[1] + m[a][2] * o[2]));
+            world[i].org[a] =
+                (float)(tr.translation[a] + tr.scale * (m[a][0] * o[0] + m[a][1] * o[1] + m[a][2] * o[2]));
             world[i].dir[a] = (float)(tr.scale * (m[a][0] * dv[0] + m[a][1] * dv[1] + m[a][2] * dv[2]));
         }
     }
@@ -222,9 +231,11 @@ static void demo_placed(demo *d, const cbvh_ray *rays, const cbvh_hit *ref, size
     for (size_t i = 0; i < n; i++) { /* again, untimed, against the scene's own hits */
         cbvh_hit_record placed;
         cbvh_raycast_with(d->file, &world[i], &q, &placed, NULL);
-        const double edge = ref[i].tri == CBVH_NO_HIT ? 1.0 : fmin(fmin(ref[i].u, ref[i].v), 1.0 - ref[i].u - ref[i].v);
-        const int same = placed.tri == ref[i].tri &&
-                         (placed.tri == CBVH_NO_HIT || fabs(placed.t - ref[i].t) <= 1e-4 * fmax(1.0, ref[i].t));
+        const double edge =
+            ref[i].tri == CBVH_NO_HIT ? 1.0 : fmin(fmin(ref[i].u, ref[i].v), 1.0 - ref[i].u - ref[i].v);
+        const int same =
+            placed.tri == ref[i].tri &&
+            (placed.tri == CBVH_NO_HIT || fabs(placed.t - ref[i].t) <= 1e-4 * fmax(1.0, ref[i].t));
         if (!same && edge >= 1e-4 && differ++ == 0)
             report_failure("placed raycast: ray %zu: triangle %u at t %g, in the scene's frame %u at t %g", i,
                            (unsigned)placed.tri, placed.t, (unsigned)ref[i].tri, ref[i].t);
@@ -261,8 +272,10 @@ static void demo_options(demo *d, const cbvh_ray *rays, const cbvh_hit *ref, siz
         const int ok = plain.front ? culled.tri == plain.tri
                                    : culled.tri == CBVH_NO_HIT || (culled.front && culled.t >= plain.t);
         if (!ok && differ++ == 0)
-            report_failure("back-face culled raycast: ray %zu: triangle %u (front %d) against the plain hit %u "
-                           "(front %d)", i, (unsigned)culled.tri, culled.front, (unsigned)plain.tri, plain.front);
+            report_failure(
+                "back-face culled raycast: ray %zu: triangle %u (front %d) against the plain hit %u "
+                "(front %d)",
+                i, (unsigned)culled.tri, culled.front, (unsigned)plain.tri, plain.front);
     }
     d->failures += differ != 0;
     print_row(d, "raycast culling back faces", n, h, sec, "MRays/s",
@@ -282,9 +295,10 @@ static void demo_options(demo *d, const cbvh_ray *rays, const cbvh_hit *ref, siz
         const int ok = none.tri == CBVH_NO_HIT && (all.count == 0) == (ref[i].tri == CBVH_NO_HIT) &&
                        (all.count == 0 || (all.nearest.tri == ref[i].tri && all.nearest.t == ref[i].t));
         if (!ok && differ++ == 0)
-            report_failure("all-hits raycast: ray %zu: nearest of %zu hits is triangle %u at t %g, the closest hit "
-                           "%u at t %g", i, all.count, (unsigned)all.nearest.tri, all.nearest.t,
-                           (unsigned)ref[i].tri, ref[i].t);
+            report_failure(
+                "all-hits raycast: ray %zu: nearest of %zu hits is triangle %u at t %g, the closest hit "
+                "%u at t %g",
+                i, all.count, (unsigned)all.nearest.tri, all.nearest.t, (unsigned)ref[i].tri, ref[i].t);
     }
     sec = cli_now() - t0;
     d->failures += differ != 0;
@@ -346,7 +360,7 @@ static void demo_raycasts(demo *d)
     static const struct {
         const char *name;
         int traversal; /* -1 = stream */
-    } variants[] = { { "stackless", CBVH_TRAVERSAL_STACKLESS }, { "stream", -1 } };
+    } variants[] = {{"stackless", CBVH_TRAVERSAL_STACKLESS}, {"stream", -1}};
     for (size_t k = 0; k < 2; k++) {
         t0 = cli_now();
         if (variants[k].traversal < 0)
@@ -372,7 +386,7 @@ static void demo_raycasts(demo *d)
     static const struct {
         const char *name;
         int traversal;
-    } any[] = { { "sorted", CBVH_TRAVERSAL_SORTED }, { "stackless", CBVH_TRAVERSAL_STACKLESS }, { "stream", -1 } };
+    } any[] = {{"sorted", CBVH_TRAVERSAL_SORTED}, {"stackless", CBVH_TRAVERSAL_STACKLESS}, {"stream", -1}};
     for (size_t k = 0; k < 3; k++) {
         t0 = cli_now();
         if (any[k].traversal < 0)
@@ -385,8 +399,8 @@ static void demo_raycasts(demo *d)
         for (size_t i = 0; i < n; i++) {
             h += occ[i] != 0;
             if ((occ[i] != 0) != (ref[i].tri != CBVH_NO_HIT) && differ++ == 0)
-                report_failure("occluded %s: ray %zu: answer %d differs from the closest hit's", any[k].name, i,
-                               occ[i]);
+                report_failure("occluded %s: ray %zu: answer %d differs from the closest hit's", any[k].name,
+                               i, occ[i]);
         }
         d->failures += differ != 0;
         char name[40];
@@ -434,7 +448,8 @@ static void shape_bounds(shape_kind kind, const shape *s, double f0, double f1, 
                          double hi[3])
 {
     for (int a = 0; a < 3; a++) {
-        double ext = kind == SHAPE_BOX ? s->half[a] : s->radius + (kind == SHAPE_CAPSULE ? fabs(s->axis[a]) : 0);
+        double ext =
+            kind == SHAPE_BOX ? s->half[a] : s->radius + (kind == SHAPE_CAPSULE ? fabs(s->axis[a]) : 0);
         double c0 = s->center[a] + f0 * s->delta[a], c1 = s->center[a] + f1 * s->delta[a];
         lo[a] = fmin(c0, c1) - ext - margin;
         hi[a] = fmax(c0, c1) + ext + margin;
@@ -446,7 +461,8 @@ static int triangle_near(const demo *d, uint32_t i, const double lo[3], const do
 {
     const double *t9 = d->tris + 9 * (size_t)i;
     for (int a = 0; a < 3; a++)
-        if (fmax(t9[a], fmax(t9[3 + a], t9[6 + a])) < lo[a] || fmin(t9[a], fmin(t9[3 + a], t9[6 + a])) > hi[a])
+        if (fmax(t9[a], fmax(t9[3 + a], t9[6 + a])) < lo[a] ||
+            fmin(t9[a], fmin(t9[3 + a], t9[6 + a])) > hi[a])
             return 0;
     return d->valid[i];
 }
@@ -502,7 +518,8 @@ static int run_sweep(const demo *d, shape_kind kind, const shape *s, cbvh_sweep_
 static int sweep_agrees(const demo *d, shape_kind kind, const shape *s, int hit, const cbvh_sweep_hit *h)
 {
     double end = hit ? h->t : 1.0, lo[3], hi[3];
-    if (hit && (h->tri >= d->tri_count || !d->valid[h->tri] || !shape_touches(d, kind, s, h->t, -d->tol, h->tri)))
+    if (hit &&
+        (h->tri >= d->tri_count || !d->valid[h->tri] || !shape_touches(d, kind, s, h->t, -d->tol, h->tri)))
         return 0;
     if (end == 0)
         return 1; /* overlapping at the start: the reported triangle touches, nothing else to check */
@@ -520,7 +537,7 @@ static int sweep_agrees(const demo *d, shape_kind kind, const shape *s, int hit,
 
 static void demo_sweeps(demo *d)
 {
-    static const char *const names[] = { "sweep sphere", "sweep capsule", "sweep box" };
+    static const char *const names[] = {"sweep sphere", "sweep capsule", "sweep box"};
     shape *shapes = malloc(DEMO_SHAPES * sizeof *shapes);
     cbvh_sweep_hit *hits = malloc(DEMO_SHAPES * sizeof *hits);
     int *hit = malloc(DEMO_SHAPES * sizeof *hit);
@@ -540,8 +557,8 @@ static void demo_sweeps(demo *d)
         int bad = 0;
         for (size_t i = 0; i < DEMO_SHAPES; i += DEMO_SHAPES / DEMO_SHAPE_SAMPLE)
             if (!sweep_agrees(d, (shape_kind)kind, &shapes[i], hit[i], &hits[i]) && bad++ == 0)
-                report_failure("%s: query %zu (hit %d, t %g) disagrees with sampling the motion", names[kind], i,
-                               hit[i], hit[i] ? hits[i].t : 1.0);
+                report_failure("%s: query %zu (hit %d, t %g) disagrees with sampling the motion", names[kind],
+                               i, hit[i], hit[i] ? hits[i].t : 1.0);
         sample_row(d, names[kind], DEMO_SHAPES, count, sec, "queries/s", DEMO_SHAPE_SAMPLE, bad);
     }
 out:
@@ -606,8 +623,8 @@ static size_t run_overlap(const demo *d, shape_kind kind, int paged, const shape
 
 static void demo_overlaps(demo *d)
 {
-    static const char *const names[] = { "overlap sphere", "overlap capsule", "overlap box",
-                                         "overlap box, pages of 256" };
+    static const char *const names[] = {"overlap sphere", "overlap capsule", "overlap box",
+                                        "overlap box, pages of 256"};
     uint32_t *found = malloc(DEMO_OVERLAP_CAP * sizeof *found);
     shape *shapes = malloc(DEMO_SHAPES * sizeof *shapes);
     if (!found || !shapes) {
@@ -711,10 +728,11 @@ static void demo_oriented_boxes(demo *d)
         }
         for (uint32_t k = 0; k < d->tri_count && ok && end > 0.0; k++)
             for (int step = 0; step < DEMO_SWEEP_STEPS + !hit && ok && triangle_near(d, k, lo, hi); step++)
-                ok = ref_shape_triangle_dist(&shrunk, delta, end * step / DEMO_SWEEP_STEPS, d->tris + 9 * (size_t)k) > 0.0;
+                ok = ref_shape_triangle_dist(&shrunk, delta, end * step / DEMO_SWEEP_STEPS,
+                                             d->tris + 9 * (size_t)k) > 0.0;
         if (!ok && bad++ == 0)
-            report_failure("sweep oriented box: query %zu (hit %d, t %g) disagrees with sampling the motion", i, hit,
-                           end);
+            report_failure("sweep oriented box: query %zu (hit %d, t %g) disagrees with sampling the motion",
+                           i, hit, end);
     }
     sample_row(d, "sweep box, oriented", DEMO_SHAPES, count, sec, "queries/s", DEMO_SHAPE_SAMPLE, bad);
 out:
@@ -741,19 +759,20 @@ static void demo_contacts(demo *d)
     size_t touched = 0;
     const double t0 = cli_now();
     for (size_t i = 0; i < DEMO_SHAPES; i++)
-        touched += cbvh_contacts_sphere(d->file, shapes[i].center, shapes[i].radius, 0, contacts, DEMO_OVERLAP_CAP,
-                                        NULL) != 0;
+        touched += cbvh_contacts_sphere(d->file, shapes[i].center, shapes[i].radius, 0, contacts,
+                                        DEMO_OVERLAP_CAP, NULL) != 0;
     const double sec = cli_now() - t0;
     int bad = 0;
     for (size_t i = 0; i < DEMO_SHAPES; i += DEMO_SHAPES / DEMO_SHAPE_SAMPLE) {
         const shape *s = &shapes[i];
-        const size_t n = cbvh_contacts_sphere(d->file, s->center, s->radius, 0, contacts, DEMO_OVERLAP_CAP, NULL);
+        const size_t n =
+            cbvh_contacts_sphere(d->file, s->center, s->radius, 0, contacts, DEMO_OVERLAP_CAP, NULL);
         for (size_t k = 0; k < n; k++) {
             const double c[3] = {s->center[0], s->center[1], s->center[2]};
             const double dist = sqrt(ref_point_triangle_dist2(d->tris + 9 * (size_t)contacts[k].tri, c));
             if (!(fabs(contacts[k].depth - (s->radius - dist)) <= d->tol) && bad++ == 0)
-                report_failure("contacts sphere: query %zu, triangle %u: depth %g, radius less distance %g", i,
-                               (unsigned)contacts[k].tri, (double)contacts[k].depth, s->radius - dist);
+                report_failure("contacts sphere: query %zu, triangle %u: depth %g, radius less distance %g",
+                               i, (unsigned)contacts[k].tri, (double)contacts[k].depth, s->radius - dist);
         }
     }
     sample_row(d, "contacts sphere (depth)", DEMO_SHAPES, touched, sec, "queries/s", DEMO_SHAPE_SAMPLE, bad);
@@ -769,7 +788,7 @@ static int demo_load(demo *d, const cbvh_file *f)
     cbvh_file_info info;
     cbvh_file_get_info(f, &info, sizeof info);
     d->file = f;
-    d->tri_count = f->original_triangle_count;
+    d->tri_count = info.original_triangle_count;
     d->tris = malloc(9 * (size_t)d->tri_count * sizeof(double));
     d->valid = malloc(d->tri_count);
     if (!d->tris || !d->valid)
@@ -793,7 +812,7 @@ static int demo_load(demo *d, const cbvh_file *f)
 
 int cmd_demo(int argc, char **argv)
 {
-    static const cli_option options[] = { { "quiet", CLI_ARG_NONE, 1 }, { NULL, 0, 0 } };
+    static const cli_option options[] = {{"quiet", CLI_ARG_NONE, 1}, {NULL, 0, 0}};
     demo d;
     memset(&d, 0, sizeof d);
     d.rng = 20240601;
@@ -831,7 +850,7 @@ int cmd_demo(int argc, char **argv)
     }
     snprintf(path, sizeof path, "%s/demo.cbvh", dir);
 
-    cbvh_mesh mesh = { s.positions, s.vertex_count, 0, s.indices, s.triangle_count, s.material_ids };
+    cbvh_mesh mesh = {s.positions, s.vertex_count, 0, s.indices, s.triangle_count, s.material_ids};
     cbvh_cook_options opt;
     cbvh_cook_options_init(&opt, sizeof opt);
     cbvh_cook_stats st;
@@ -860,10 +879,11 @@ int cmd_demo(int argc, char **argv)
         goto out;
     }
     if (!d.quiet) {
-        printf("cbvh demo: built-in scene (terrain and 12 spheres, %u materials): %llu triangles, %llu vertices\n",
+        printf("cbvh demo: built-in scene (terrain and 12 spheres, %u materials): %llu triangles, %llu "
+               "vertices\n",
                (unsigned)materials, (unsigned long long)st.triangles, (unsigned long long)st.vertices);
-        printf("  cook  %8.3f s  %llu nodes, depth %u, SAH cost %.1f\n", cook_sec, (unsigned long long)st.nodes,
-               (unsigned)st.depth, st.sah_cost);
+        printf("  cook  %8.3f s  %llu nodes, depth %u, SAH cost %.1f\n", cook_sec,
+               (unsigned long long)st.nodes, (unsigned)st.depth, st.sah_cost);
         printf("  file  %8llu bytes, %.2f bytes/triangle\n", (unsigned long long)st.file_size,
                (double)st.file_size / (double)st.triangles);
         printf("  open  %8.3f ms (mapped and fully validated)\n\n", open_sec * 1e3);
@@ -875,7 +895,8 @@ int cmd_demo(int argc, char **argv)
     demo_overlaps(&d);
     demo_contacts(&d);
     if (d.failures) {
-        printf("cbvh demo: FAILED: %d check%s disagreed (details on stderr)\n", d.failures, d.failures == 1 ? "" : "s");
+        printf("cbvh demo: FAILED: %d check%s disagreed (details on stderr)\n", d.failures,
+               d.failures == 1 ? "" : "s");
         rc = CLI_EXIT_BAD_INPUT;
     } else {
         printf("cbvh demo: ok: every query kind ran and agreed with the brute-force checks\n");

@@ -3,10 +3,9 @@
 #include <string.h>
 
 #include "cli.h"
-#include "common/encodings.h"
+#include "cbvh_internal.h"
 #include "commands.h"
 #include "json.h"
-#include "tree_stats.h"
 
 static const char usage[] =
     "Usage: cbvh info [--json] FILE\n"
@@ -28,35 +27,18 @@ static const char usage[] =
     "\n"
     "Exit status: 0 success, 1 corrupt or unsupported file, 2 usage or I/O error.\n";
 
-static const char *codec_name(uint32_t codec) { return codec == CBVH_CODEC_RAW ? "raw" : codec == CBVH_CODEC_ZLIB ? "zlib" : "?"; }
-
-static const char *encoding_name(uint32_t type, uint32_t encoding)
-{
-    const cbvh_encoding *e = cbvh_encoding_of(type, encoding);
-    return e ? e->name : "?";
-}
-
 /* How the file stores material ids, as info prints it: "per-triangle", "uniform" or "none". */
-static const char *materials_kind(const cbvh_file *f)
+static const char *materials_kind(cbvh_material_storage storage)
 {
-    if (!f->materials)
-        return "none";
-    return f->material_encoding == CBVH_MATS_UNIFORM ? "uniform" : "per-triangle";
+    return storage == CBVH_MATERIALS_NONE      ? "none"
+           : storage == CBVH_MATERIALS_UNIFORM ? "uniform"
+                                               : "per-triangle";
 }
 
 /* How far cost lies above base, in percent (0 when base is not positive). */
 static double percent_over(double cost, double base)
 {
     return base > 0 ? 100.0 * (cost / base - 1.0) : 0.0;
-}
-
-/* The node and (wide4: the child slot) that box id `box` names: a binary node carries its own box, a wide4
- * node its children's (layout/tree.h). */
-static void box_place(const cbvh_file *f, uint32_t box, uint32_t *node, uint32_t *slot)
-{
-    const int wide = f->info.layout == CBVH_LAYOUT_WIDE4;
-    *node = wide ? box / CBVH_W4_WIDTH : box;
-    *slot = wide ? box % CBVH_W4_WIDTH : 0;
 }
 
 static void json_vec3(json_writer *w, const char *key, const float v[3])
@@ -67,9 +49,13 @@ static void json_vec3(json_writer *w, const char *key, const float v[3])
     json_end_array(w);
 }
 
-static void print_json(const char *path, const cbvh_file *f, const tree_stats *ts)
+static void print_json(const char *path, const cbvh_file *f, const cbvh_tree_stats *ts)
 {
-    const cbvh_file_info *in = &f->info;
+    cbvh_file_info info;
+    cbvh_file_get_info(f, &info, sizeof info);
+    const cbvh_file_info *in = &info;
+    uint32_t uniform_id = 0;
+    const cbvh_material_storage materials = cbvh_file_material_storage(f, &uniform_id);
     double per_tri = 1.0 / in->triangle_count;
     json_writer w;
     json_init(&w, stdout);
@@ -80,15 +66,16 @@ static void print_json(const char *path, const cbvh_file *f, const tree_stats *t
     json_uint(&w, "compat_flags", in->compat_flags);
     json_uint(&w, "incompat_flags", in->incompat_flags);
     json_uint(&w, "triangles", in->triangle_count);
-    json_uint(&w, "original_triangles", f->original_triangle_count);
+    json_uint(&w, "original_triangles", in->original_triangle_count);
     json_uint(&w, "vertices", in->vertex_count);
-    json_string(&w, "vertex_format", in->vertex_format == CBVH_VERTEX_QUANTIZED16 ? "quantized16" : "float32");
+    json_string(&w, "vertex_format",
+                in->vertex_format == CBVH_VERTEX_QUANTIZED16 ? "quantized16" : "float32");
     json_string(&w, "layout", in->layout == CBVH_LAYOUT_WIDE4 ? "wide4" : "binary");
     json_bool(&w, "remap", (int)in->has_remap);
     json_bool(&w, "materials", (int)in->has_materials);
-    json_string(&w, "material_ids", materials_kind(f));
-    if (f->materials && f->material_encoding == CBVH_MATS_UNIFORM)
-        json_uint(&w, "material_uniform_id", *(const uint32_t *)f->materials);
+    json_string(&w, "material_ids", materials_kind(materials));
+    if (materials == CBVH_MATERIALS_UNIFORM)
+        json_uint(&w, "material_uniform_id", uniform_id);
     json_begin_array(&w, "material_names");
     for (uint32_t k = 0; k < in->material_name_count; k++) {
         uint32_t id;
@@ -115,8 +102,8 @@ static void print_json(const char *path, const cbvh_file *f, const tree_stats *t
         json_uint(&w, "offset", s.offset);
         json_uint(&w, "size", s.size);
         json_uint(&w, "stored_size", s.stored_size);
-        json_string(&w, "codec", codec_name(s.codec));
-        json_string(&w, "encoding", encoding_name(s.type, s.encoding));
+        json_string(&w, "codec", cbvh_codec_name(s.codec));
+        json_string(&w, "encoding", cbvh_encoding_name(s.type, s.encoding));
         char crc[16];
         snprintf(crc, sizeof crc, "%08x", (unsigned)s.crc32);
         json_string(&w, "crc32", crc);
@@ -148,7 +135,7 @@ static void print_json(const char *path, const cbvh_file *f, const tree_stats *t
     json_double(&w, "mean", ts->inflation_mean);
     json_double(&w, "max", ts->inflation_max);
     uint32_t node, slot;
-    box_place(f, ts->inflation_max_box, &node, &slot);
+    cbvh_tree_box_place(f, ts->inflation_max_box, &node, &slot);
     json_uint(&w, "max_node", node);
     if (in->layout == CBVH_LAYOUT_WIDE4)
         json_uint(&w, "max_slot", slot);
@@ -159,21 +146,27 @@ static void print_json(const char *path, const cbvh_file *f, const tree_stats *t
     json_finish(&w);
 }
 
-static void print_text(const char *path, const cbvh_file *f, const tree_stats *ts)
+static void print_text(const char *path, const cbvh_file *f, const cbvh_tree_stats *ts)
 {
-    const cbvh_file_info *in = &f->info;
+    cbvh_file_info info;
+    cbvh_file_get_info(f, &info, sizeof info);
+    const cbvh_file_info *in = &info;
+    uint32_t uniform_id = 0;
+    const cbvh_material_storage materials = cbvh_file_material_storage(f, &uniform_id);
     double per_tri = 1.0 / in->triangle_count;
     printf("%s: cbvh format %u, %llu bytes, %.2f bytes/triangle\n", path, (unsigned)in->format_version,
            (unsigned long long)in->file_size, (double)in->file_size * per_tri);
     printf("flags: compatible 0x%08x, incompatible 0x%08x\n", (unsigned)in->compat_flags,
            (unsigned)in->incompat_flags);
     printf("triangles: %u (original ids below %u, %s), vertices: %u (%s)\n", (unsigned)in->triangle_count,
-           (unsigned)f->original_triangle_count, in->has_remap ? "remapped" : "cooked order",
-           (unsigned)in->vertex_count, in->vertex_format == CBVH_VERTEX_QUANTIZED16 ? "quantized16" : "float32");
-    if (f->materials && f->material_encoding == CBVH_MATS_UNIFORM)
-        printf("materials: id %u for every triangle", (unsigned)*(const uint32_t *)f->materials);
+           (unsigned)in->original_triangle_count, in->has_remap ? "remapped" : "cooked order",
+           (unsigned)in->vertex_count,
+           in->vertex_format == CBVH_VERTEX_QUANTIZED16 ? "quantized16" : "float32");
+    if (materials == CBVH_MATERIALS_UNIFORM)
+        printf("materials: id %u for every triangle", (unsigned)uniform_id);
     else
-        printf("materials: %s", f->materials ? "an id per triangle" : "none (every id is 0)");
+        printf("materials: %s",
+               materials != CBVH_MATERIALS_NONE ? "an id per triangle" : "none (every id is 0)");
     printf(", %u names\n", (unsigned)in->material_name_count);
     for (uint32_t k = 0; k < in->material_name_count; k++) {
         uint32_t id;
@@ -181,7 +174,7 @@ static void print_text(const char *path, const cbvh_file *f, const tree_stats *t
         printf("  material %u: %s\n", (unsigned)id, name);
     }
     printf("layout: %s\n", in->layout == CBVH_LAYOUT_WIDE4 ? "wide4 (4 children per 64-byte node)"
-                                                         : "binary (2 children per 16-byte node)");
+                                                           : "binary (2 children per 16-byte node)");
     printf("bounds: [%g %g %g] - [%g %g %g]\n", in->bounds_min[0], in->bounds_min[1], in->bounds_min[2],
            in->bounds_max[0], in->bounds_max[1], in->bounds_max[2]);
     printf("grid: origin [%g %g %g], scale [%g %g %g]\n", in->grid_origin[0], in->grid_origin[1],
@@ -194,11 +187,12 @@ static void print_text(const char *path, const cbvh_file *f, const tree_stats *t
             break;
         printf("  %-10s %10llu %12llu %12llu %-5s %-9s %08x %9.2f\n", cli_section_name(s.type),
                (unsigned long long)s.offset, (unsigned long long)s.size, (unsigned long long)s.stored_size,
-               codec_name(s.codec), encoding_name(s.type, s.encoding), (unsigned)s.crc32,
+               cbvh_codec_name(s.codec), cbvh_encoding_name(s.type, s.encoding), (unsigned)s.crc32,
                (double)s.stored_size * per_tri);
     }
-    printf("\ntree: %u nodes, %u leaves, depth %u, max leaf size %u, mean leaf size %.2f\n", (unsigned)ts->nodes,
-           (unsigned)ts->leaves, (unsigned)ts->depth, (unsigned)in->max_leaf_size, ts->mean_leaf_size);
+    printf("\ntree: %u nodes, %u leaves, depth %u, max leaf size %u, mean leaf size %.2f\n",
+           (unsigned)ts->nodes, (unsigned)ts->leaves, (unsigned)ts->depth, (unsigned)in->max_leaf_size,
+           ts->mean_leaf_size);
     printf("leaf sizes:");
     for (uint32_t k = 1; k <= CBVH_MAX_LEAF_SIZE; k++)
         if (ts->leaf_histogram[k])
@@ -210,7 +204,7 @@ static void print_text(const char *path, const cbvh_file *f, const tree_stats *t
            ts->sah_cost_frame16, percent_over(ts->sah_cost_frame16, ts->sah_cost_exact), ts->sah_cost_frame8,
            percent_over(ts->sah_cost_frame8, ts->sah_cost_exact));
     uint32_t node, slot;
-    box_place(f, ts->inflation_max_box, &node, &slot);
+    cbvh_tree_box_place(f, ts->inflation_max_box, &node, &slot);
     printf("box inflation (surface area, 16-bit vs exact): mean %.3f%% (leaves %.3f%%, internal %.3f%%), "
            "worst %.3f%% at node %u",
            100.0 * ts->inflation_mean, 100.0 * ts->leaf_inflation_mean, 100.0 * ts->internal_inflation_mean,
@@ -222,7 +216,7 @@ static void print_text(const char *path, const cbvh_file *f, const tree_stats *t
 
 int cmd_info(int argc, char **argv)
 {
-    static const cli_option options[] = { { "json", CLI_ARG_NONE, 1 }, { NULL, 0, 0 } };
+    static const cli_option options[] = {{"json", CLI_ARG_NONE, 1}, {NULL, 0, 0}};
     cli_parser p;
     cli_init(&p, "info", usage, argc, argv);
     const char *path = NULL, *value;
@@ -246,8 +240,8 @@ int cmd_info(int argc, char **argv)
     int rc = cli_open("info", path, &file);
     if (rc)
         return rc;
-    tree_stats ts;
-    if (!tree_stats_compute(file, 1.0, 1.0, &ts)) {
+    cbvh_tree_stats ts;
+    if (!cbvh_tree_stats_compute(file, 1.0, 1.0, &ts)) {
         cli_error("info", path, "out of memory computing tree statistics");
         cbvh_close(file);
         return CLI_EXIT_USAGE;

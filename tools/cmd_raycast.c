@@ -132,7 +132,7 @@ static void raycast_batch(raycast_job *job, size_t count)
 /* Parses one text line into a ray; on error writes the reason to `why`. */
 static int parse_ray_line(const char *line, cbvh_ray *ray, char *why, size_t why_size)
 {
-    float v[8] = { 0, 0, 0, 0, 0, 0, 0, INFINITY };
+    float v[8] = {0, 0, 0, 0, 0, 0, 0, INFINITY};
     int n = 0;
     const char *s = line;
     for (;;) {
@@ -255,9 +255,11 @@ static int parse_traversal(const char *name, int *out)
     static const struct {
         const char *name;
         int value;
-    } kinds[] = { { "sorted", CBVH_TRAVERSAL_SORTED },       { "stackless", CBVH_TRAVERSAL_STACKLESS },
-                  { "unsorted", CBVH_TRAVERSAL_UNSORTED },   { "distance", CBVH_TRAVERSAL_DISTANCE },
-                  { "stream", TRAVERSAL_STREAM } };
+    } kinds[] = {{"sorted", CBVH_TRAVERSAL_SORTED},
+                 {"stackless", CBVH_TRAVERSAL_STACKLESS},
+                 {"unsorted", CBVH_TRAVERSAL_UNSORTED},
+                 {"distance", CBVH_TRAVERSAL_DISTANCE},
+                 {"stream", TRAVERSAL_STREAM}};
     for (size_t i = 0; i < sizeof kinds / sizeof kinds[0]; i++)
         if (!strcmp(name, kinds[i].name)) {
             *out = kinds[i].value;
@@ -270,11 +272,11 @@ int cmd_raycast(int argc, char **argv)
 {
     enum { OPT_ANY = 1, OPT_TRAVERSAL, OPT_BINARY, OPT_EXPAND };
     static const cli_option options[] = {
-        { "any", CLI_ARG_NONE, OPT_ANY },
-        { "traversal", CLI_ARG_REQUIRED, OPT_TRAVERSAL },
-        { "binary", CLI_ARG_NONE, OPT_BINARY },
-        { "expand-triangles", CLI_ARG_NONE, OPT_EXPAND },
-        { NULL, 0, 0 },
+        {"any", CLI_ARG_NONE, OPT_ANY},
+        {"traversal", CLI_ARG_REQUIRED, OPT_TRAVERSAL},
+        {"binary", CLI_ARG_NONE, OPT_BINARY},
+        {"expand-triangles", CLI_ARG_NONE, OPT_EXPAND},
+        {NULL, 0, 0},
     };
     static raycast_job job; /* large: keep it off the stack */
     job.traversal = CBVH_TRAVERSAL_SORTED;
@@ -284,15 +286,25 @@ int cmd_raycast(int argc, char **argv)
     int id, expand = 0;
     while ((id = cli_next(&p, options, &value)) != CLI_END) {
         switch (id) {
-        case CLI_DONE: return CLI_EXIT_OK;
-        case CLI_ERROR: return CLI_EXIT_USAGE;
-        case OPT_ANY: job.any = 1; break;
-        case OPT_BINARY: job.binary = 1; break;
-        case OPT_EXPAND: expand = 1; break;
+        case CLI_DONE:
+            return CLI_EXIT_OK;
+        case CLI_ERROR:
+            return CLI_EXIT_USAGE;
+        case OPT_ANY:
+            job.any = 1;
+            break;
+        case OPT_BINARY:
+            job.binary = 1;
+            break;
+        case OPT_EXPAND:
+            expand = 1;
+            break;
         case OPT_TRAVERSAL:
             if (!parse_traversal(value, &job.traversal))
-                return cli_usage_error("raycast", "--traversal: '%s' is not one of sorted, stackless, unsorted, "
-                                                  "distance, stream", value);
+                return cli_usage_error("raycast",
+                                       "--traversal: '%s' is not one of sorted, stackless, unsorted, "
+                                       "distance, stream",
+                                       value);
             break;
         default:
             if (path)

@@ -1,4 +1,5 @@
-/* cmd_report.c: `cbvh report`: every precision and layout choice of the format, error and run time side by side. */
+/* cmd_report.c: `cbvh report`: every precision and layout choice of the format, error and run time side by
+ * side. */
 #include <ctype.h>
 #include <errno.h>
 #include <math.h>
@@ -15,10 +16,9 @@
 #include "json.h"
 #include "progress.h"
 #include "report.h"
-#include "report_exact.h"
+#include "cbvh_internal.h"
 #include "support/rays.h"
 #include "support/reference.h"
-#include "tree_stats.h"
 
 static const char usage[] =
     "Usage: cbvh report [OPTIONS] MESH...\n"
@@ -70,15 +70,27 @@ static const char usage[] =
     "\n"
     "Exit status: 0 done, 1 an input is not a usable mesh, 2 usage or I/O error.\n";
 
-enum { OPT_GEN = 1, OPT_RAYS, OPT_SAMPLE, OPT_SEED, OPT_REPS, OPT_CPU, OPT_OUT, OPT_JSON, OPT_SVG, OPT_HTML, OPT_QUIET };
+enum {
+    OPT_GEN = 1,
+    OPT_RAYS,
+    OPT_SAMPLE,
+    OPT_SEED,
+    OPT_REPS,
+    OPT_CPU,
+    OPT_OUT,
+    OPT_JSON,
+    OPT_SVG,
+    OPT_HTML,
+    OPT_QUIET
+};
 
 static const cli_option options[] = {
-    { "gen", CLI_ARG_REQUIRED, OPT_GEN },   { "rays", CLI_ARG_REQUIRED, OPT_RAYS },
-    { "sample", CLI_ARG_REQUIRED, OPT_SAMPLE }, { "seed", CLI_ARG_REQUIRED, OPT_SEED },
-    { "reps", CLI_ARG_REQUIRED, OPT_REPS }, { "cpu-time", CLI_ARG_NONE, OPT_CPU },
-    { "out", CLI_ARG_REQUIRED, OPT_OUT },
-    { "json", CLI_ARG_REQUIRED, OPT_JSON }, { "svg", CLI_ARG_REQUIRED, OPT_SVG }, { "html", CLI_ARG_REQUIRED, OPT_HTML },
-    { "quiet", CLI_ARG_NONE, OPT_QUIET },   { NULL, 0, 0 },
+    {"gen", CLI_ARG_REQUIRED, OPT_GEN},       {"rays", CLI_ARG_REQUIRED, OPT_RAYS},
+    {"sample", CLI_ARG_REQUIRED, OPT_SAMPLE}, {"seed", CLI_ARG_REQUIRED, OPT_SEED},
+    {"reps", CLI_ARG_REQUIRED, OPT_REPS},     {"cpu-time", CLI_ARG_NONE, OPT_CPU},
+    {"out", CLI_ARG_REQUIRED, OPT_OUT},       {"json", CLI_ARG_REQUIRED, OPT_JSON},
+    {"svg", CLI_ARG_REQUIRED, OPT_SVG},       {"html", CLI_ARG_REQUIRED, OPT_HTML},
+    {"quiet", CLI_ARG_NONE, OPT_QUIET},       {NULL, 0, 0},
 };
 
 /* Vertices and edge midpoints aimed at by the leak test, at most, each. */
@@ -95,17 +107,17 @@ static const struct {
     int quantized_vertices;
     int compress; /* zlib level, 0 for raw sections */
 } cook_configs[] = {
-    { CBVH_LAYOUT_WIDE4, 1, 0, 0 },
-    { CBVH_LAYOUT_WIDE4, 2, 0, 0 },
-    { CBVH_LAYOUT_WIDE4, 4, 0, 0 },
-    { CBVH_LAYOUT_WIDE4, DEFAULT_LEAF_SIZE, 0, 0 },
-    { CBVH_LAYOUT_WIDE4, DEFAULT_LEAF_SIZE, 1, 0 },
-    { CBVH_LAYOUT_WIDE4, DEFAULT_LEAF_SIZE, 0, 6 },
-    { CBVH_LAYOUT_BINARY, 8, 0, 0 },
-    { CBVH_LAYOUT_BINARY, DEFAULT_LEAF_SIZE, 0, 0 },
+    {CBVH_LAYOUT_WIDE4, 1, 0, 0},
+    {CBVH_LAYOUT_WIDE4, 2, 0, 0},
+    {CBVH_LAYOUT_WIDE4, 4, 0, 0},
+    {CBVH_LAYOUT_WIDE4, DEFAULT_LEAF_SIZE, 0, 0},
+    {CBVH_LAYOUT_WIDE4, DEFAULT_LEAF_SIZE, 1, 0},
+    {CBVH_LAYOUT_WIDE4, DEFAULT_LEAF_SIZE, 0, 6},
+    {CBVH_LAYOUT_BINARY, 8, 0, 0},
+    {CBVH_LAYOUT_BINARY, DEFAULT_LEAF_SIZE, 0, 0},
 };
 /* Names of the layouts, by cbvh_layout value (as `cbvh cook --layout` spells them). */
-static const char *const layout_names[] = { "binary", "wide4" };
+static const char *const layout_names[] = {"binary", "wide4"};
 #define COOK_COUNT (sizeof cook_configs / sizeof cook_configs[0])
 /* measure() calls a mesh makes at most: each cook's exact reference and its traversals. */
 #define REPORT_MAX_MEASURES (COOK_COUNT * (BENCH_CBVH_VARIANTS + 1u))
@@ -127,7 +139,7 @@ typedef struct mesh_ctx {
     bench_mesh mesh;
     const char *label; /* short name for the plot */
     double diagonal;
-    cbvh_ray *rays;    /* rays incoherent rays; the first `sample` are checked by brute force */
+    cbvh_ray *rays; /* rays incoherent rays; the first `sample` are checked by brute force */
     cbvh_hit *hits;
     uint8_t *occluded;
     uint32_t *ref_tri; /* brute-force answers for the sample */
@@ -175,8 +187,8 @@ typedef struct brute_engine {
 } brute_engine;
 
 /* A bench_kernel over helper C's double-precision brute force, so it runs on every core. */
-static void brute_kernel(const void *engine, const cbvh_ray *rays, size_t count, cbvh_hit *hits, uint8_t *occluded,
-                         cbvh_query_stats *stats)
+static void brute_kernel(const void *engine, const cbvh_ray *rays, size_t count, cbvh_hit *hits,
+                         uint8_t *occluded, cbvh_query_stats *stats)
 {
     const brute_engine *e = engine;
     for (size_t k = 0; k < count; k++) {
@@ -196,7 +208,8 @@ static const float *sort_positions; /* qsort has no user pointer */
 
 static int compare_vertex(const void *a, const void *b)
 {
-    const float *p = sort_positions + 3 * (size_t)*(const uint32_t *)a, *q = sort_positions + 3 * (size_t)*(const uint32_t *)b;
+    const float *p = sort_positions + 3 * (size_t) * (const uint32_t *)a,
+                *q = sort_positions + 3 * (size_t) * (const uint32_t *)b;
     for (int k = 0; k < 3; k++)
         if (p[k] != q[k])
             return p[k] < q[k] ? -1 : 1;
@@ -228,7 +241,8 @@ static uint64_t *closed_edges(const bench_mesh *m, size_t *unique_count, int *cl
     sort_positions = m->positions;
     qsort(order, nv, sizeof *order, compare_vertex);
     for (size_t i = 0; i < nv; i++)
-        canon[order[i]] = i > 0 && compare_vertex(&order[i - 1], &order[i]) == 0 ? canon[order[i - 1]] : order[i];
+        canon[order[i]] =
+            i > 0 && compare_vertex(&order[i - 1], &order[i]) == 0 ? canon[order[i - 1]] : order[i];
     free(order);
     size_t n = 0;
     for (size_t t = 0; t < nt; t++) {
@@ -261,11 +275,12 @@ static uint64_t *closed_edges(const bench_mesh *m, size_t *unique_count, int *cl
 
 /* A point inside a closed mesh: halfway between where a ray from outside
  * first enters the mesh and where it next crosses the surface. */
-static int interior_point(const ref_tris *tris, const float lo[3], const float hi[3], double diagonal, float out[3])
+static int interior_point(const ref_tris *tris, const float lo[3], const float hi[3], double diagonal,
+                          float out[3])
 {
-    static const double tries[][3] = { { 0.5773, 0.5774, 0.5773 }, { -0.2673, 0.5345, 0.8018 },
-                                       { 0.8729, -0.2182, 0.4364 }, { -0.4082, -0.4082, 0.8165 },
-                                       { 0.1, 0.98, -0.17 },         { -0.9, 0.3, -0.316 } };
+    static const double tries[][3] = {{0.5773, 0.5774, 0.5773},  {-0.2673, 0.5345, 0.8018},
+                                      {0.8729, -0.2182, 0.4364}, {-0.4082, -0.4082, 0.8165},
+                                      {0.1, 0.98, -0.17},        {-0.9, 0.3, -0.316}};
     for (size_t k = 0; k < sizeof tries / sizeof tries[0]; k++) {
         double n = sqrt(tries[k][0] * tries[k][0] + tries[k][1] * tries[k][1] + tries[k][2] * tries[k][2]);
         cbvh_ray r;
@@ -320,7 +335,8 @@ static int make_leak_rays(mesh_ctx *c, const ref_tris *tris, const float lo[3], 
     size_t n = 0;
     for (size_t k = 0; k < nv; k++) {
         uint64_t e = edges[k * edge_count / nv];
-        const float *a = c->mesh.positions + 3 * (size_t)(e >> 32), *b = c->mesh.positions + 3 * (size_t)(uint32_t)e;
+        const float *a = c->mesh.positions + 3 * (size_t)(e >> 32),
+                    *b = c->mesh.positions + 3 * (size_t)(uint32_t)e;
         float mid[3];
         for (int i = 0; i < 3; i++)
             mid[i] = a[i] + (b[i] - a[i]) * 0.5f;
@@ -337,21 +353,22 @@ static int make_leak_rays(mesh_ctx *c, const ref_tris *tris, const float lo[3], 
 /* ------------------------------------------------------------------ */
 
 /* The exact-float reference layout as a bench engine. */
-static void exact_kernel(const void *engine, const cbvh_ray *rays, size_t count, cbvh_hit *hits, uint8_t *occluded,
-                         cbvh_query_stats *stats)
+static void exact_kernel(const void *engine, const cbvh_ray *rays, size_t count, cbvh_hit *hits,
+                         uint8_t *occluded, cbvh_query_stats *stats)
 {
     if (hits)
         for (size_t i = 0; i < count; i++)
-            exact_raycast(engine, &rays[i], &hits[i], stats);
+            cbvh_exact_raycast(engine, &rays[i], &hits[i], stats);
     else
         for (size_t i = 0; i < count; i++)
-            occluded[i] = (uint8_t)exact_occluded(engine, &rays[i], stats);
+            occluded[i] = (uint8_t)cbvh_exact_occluded(engine, &rays[i], stats);
 }
 
 /* Counts the work of closest and any hit, compares the answers with the brute force and the leak test, then
  * times both in turns with the mesh's reference (its times go to c->reference_seconds): the row's MRays/s
  * are set as ratios to the reference's, which report_mesh scales. */
-static int measure(const report_state *s, mesh_ctx *c, bench_kernel kernel, const void *engine, report_row *row)
+static int measure(const report_state *s, mesh_ctx *c, bench_kernel kernel, const void *engine,
+                   report_row *row)
 {
     bench_job job = {.kernel = kernel,
                      .engine = engine,
@@ -444,7 +461,8 @@ static uint32_t leaf_size(size_t k)
     cbvh_cook_options defaults;
     cbvh_cook_options_init(&defaults, sizeof defaults);
     uint32_t leaf = cook_configs[k].leaf == DEFAULT_LEAF_SIZE ? defaults.max_leaf_size : cook_configs[k].leaf;
-    return cook_configs[k].layout == CBVH_LAYOUT_WIDE4 && leaf > CBVH_WIDE4_MAX_LEAF ? CBVH_WIDE4_MAX_LEAF : leaf;
+    return cook_configs[k].layout == CBVH_LAYOUT_WIDE4 && leaf > CBVH_WIDE4_MAX_LEAF ? CBVH_WIDE4_MAX_LEAF
+                                                                                     : leaf;
 }
 
 /* A file name for the cooked file of a configuration: the mesh's base name without odd characters. */
@@ -466,7 +484,8 @@ static void cooked_path(const report_state *s, const mesh_ctx *c, size_t k, char
 static void describe_row(report_row *row, const char *layout)
 {
     snprintf(row->value[REPORT_DIM_LAYOUT], sizeof row->value[0], "%s layout", layout);
-    snprintf(row->value[REPORT_DIM_BOXES], sizeof row->value[0], "%s boxes", row->float_boxes ? "float" : "q16");
+    snprintf(row->value[REPORT_DIM_BOXES], sizeof row->value[0], "%s boxes",
+             row->float_boxes ? "float" : "q16");
     snprintf(row->value[REPORT_DIM_VERTICES], sizeof row->value[0], "%s vertices",
              row->quantized_vertices ? "q16" : "float");
     snprintf(row->value[REPORT_DIM_LEAF], sizeof row->value[0], "leaf %u", (unsigned)row->leaf);
@@ -546,9 +565,10 @@ static int measure_cook(report_state *s, mesh_ctx *c, size_t k, int *step, int s
         return status;
     }
 
-    exact_tree exact;
-    tree_stats ts;
-    if (!exact_tree_build(&exact, file) || !tree_stats_compute(file, 1.0, 1.0, &ts)) {
+    cbvh_exact_tree exact = {0};
+    cbvh_tree_stats ts;
+    if (!cbvh_exact_tree_build(&exact, file) || !cbvh_tree_stats_compute(file, 1.0, 1.0, &ts)) {
+        cbvh_exact_tree_free(&exact);
         cbvh_close(file);
         cbvh_close(expanded);
         cli_error(s->command, NULL, "out of memory");
@@ -580,8 +600,8 @@ static int measure_cook(report_state *s, mesh_ctx *c, size_t k, int *step, int s
         if (v >= 0) {
             if (v > 0)
                 (*step)++;
-            snprintf(label, sizeof label, "%s: leaf %u%s, %s", c->label, (unsigned)leaf, qverts ? " qverts" : "",
-                     engine.name);
+            snprintf(label, sizeof label, "%s: leaf %u%s, %s", c->label, (unsigned)leaf,
+                     qverts ? " qverts" : "", engine.name);
             progress_update(&s->prog, label, (double)*step / steps);
             if (!measure(s, c, bench_cbvh_kernel, &engine, row))
                 goto done;
@@ -614,7 +634,7 @@ static int measure_cook(report_state *s, mesh_ctx *c, size_t k, int *step, int s
 done:
     if (status)
         cli_error(s->command, NULL, "out of memory or cannot start a thread");
-    exact_tree_free(&exact);
+    cbvh_exact_tree_free(&exact);
     cbvh_close(file);
     cbvh_close(expanded);
     return status;
@@ -640,7 +660,7 @@ static int report_mesh(report_state *s, const char *source, int generated)
     if (status)
         return status;
     c.label = strrchr(source, '/') ? strrchr(source, '/') + 1 : source;
-    rays_mesh rm = { c.mesh.positions, c.mesh.vertex_count, c.mesh.indices, c.mesh.triangle_count };
+    rays_mesh rm = {c.mesh.positions, c.mesh.vertex_count, c.mesh.indices, c.mesh.triangle_count};
     float lo[3], hi[3];
     c.diagonal = rays_mesh_bounds(&rm, lo, hi);
     if (!(c.diagonal > 0.0)) {
@@ -669,10 +689,11 @@ static int report_mesh(report_state *s, const char *source, int generated)
         cli_error(s->command, NULL, "out of memory");
         return CLI_EXIT_USAGE;
     }
-    brute_engine be = { &tris, c.rays, c.ref_tri, c.ref_t };
+    brute_engine be = {&tris, c.rays, c.ref_tri, c.ref_t};
     bench_job job = {.kernel = brute_kernel, .engine = &be, .rays = c.rays, .count = s->sample};
     long cores = sysconf(_SC_NPROCESSORS_ONLN);
-    int ok = bench_run_once(&job, cores > 0 ? (unsigned)cores : 1u, NULL) >= 0.0 && make_leak_rays(&c, &tris, lo, hi);
+    int ok = bench_run_once(&job, cores > 0 ? (unsigned)cores : 1u, NULL) >= 0.0 &&
+             make_leak_rays(&c, &tris, lo, hi);
     ref_tris_free(&tris);
     if (!ok) {
         progress_done(&s->prog);
@@ -821,7 +842,7 @@ static int write_json(const report_state *s, const char *path)
 static int write_page(const report_state *s, const char *path,
                       int (*writer)(FILE *, const report_row *, size_t, const report_setup *))
 {
-    report_setup setup = { s->rays, s->sample, s->reps, s->cpu_clock };
+    report_setup setup = {s->rays, s->sample, s->reps, s->cpu_clock};
     FILE *out = fopen(path, "w");
     if (!out) {
         cli_error(s->command, path, "cannot write: %s", strerror(errno));
@@ -903,8 +924,12 @@ int cmd_report(int argc, char **argv)
     uint32_t u;
     while (!status && (id = cli_next(&p, options, &value)) != CLI_END) {
         switch (id) {
-        case CLI_DONE: status = -1; break;
-        case CLI_ERROR: status = CLI_EXIT_USAGE; break;
+        case CLI_DONE:
+            status = -1;
+            break;
+        case CLI_ERROR:
+            status = CLI_EXIT_USAGE;
+            break;
         case CLI_POSITIONAL:
         case OPT_GEN:
             generated[count] = id == OPT_GEN;
@@ -929,12 +954,24 @@ int cmd_report(int argc, char **argv)
             if (!cli_parse_u32(s.command, "--reps", value, 1, 1000, &s.reps))
                 status = CLI_EXIT_USAGE;
             break;
-        case OPT_CPU: s.cpu_clock = 1; break;
-        case OPT_OUT: s.out_dir = value; break;
-        case OPT_JSON: s.json_path = value; break;
-        case OPT_SVG: s.svg_path = value; break;
-        case OPT_HTML: s.html_path = value; break;
-        case OPT_QUIET: quiet = 1; break;
+        case OPT_CPU:
+            s.cpu_clock = 1;
+            break;
+        case OPT_OUT:
+            s.out_dir = value;
+            break;
+        case OPT_JSON:
+            s.json_path = value;
+            break;
+        case OPT_SVG:
+            s.svg_path = value;
+            break;
+        case OPT_HTML:
+            s.html_path = value;
+            break;
+        case OPT_QUIET:
+            quiet = 1;
+            break;
         }
     }
     if (!status && count == 0)

@@ -1,4 +1,5 @@
-/* commands.h: the entry points of the cbvh subcommands; argv[0] is the subcommand name. Each returns an exit status (tools/cli.h). */
+/* commands.h: the entry points of the cbvh subcommands; argv[0] is the subcommand name. Each returns an exit
+ * status (tools/cli.h). */
 #ifndef CBVH_TOOLS_COMMANDS_H
 #define CBVH_TOOLS_COMMANDS_H
 

@@ -43,10 +43,11 @@ typedef struct import_options {
 /* Reads `path` with assimp (aiProcess_Triangulate | aiProcess_JoinIdenticalVertices |
  * aiProcess_SortByPType), through a file system that records in `o` what the import opened and what
  * it looked for in vain. A name ending in ".gz" is inflated first and read by the format of the name
- * without ".gz" (e.g. mesh.ply.gz; side files are then not read). Returns 0 on success; otherwise writes a message to
- * `message` and returns 2 when the file cannot be read, 1 when it is not a usable mesh (with
+ * without ".gz" (e.g. mesh.ply.gz; side files are then not read). Returns 0 on success; otherwise writes a
+ * message to `message` and returns 2 when the file cannot be read, 1 when it is not a usable mesh (with
  * o->select: also when no node matches). `o` may be NULL. */
-int import_assimp(const char *path, import_options *o, imported_mesh *out, char *message, size_t message_size);
+int import_assimp(const char *path, import_options *o, imported_mesh *out, char *message,
+                  size_t message_size);
 
 void import_options_free(import_options *o);
 

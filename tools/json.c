@@ -34,12 +34,24 @@ static void json_write_string(FILE *out, const char *s)
             p++;
         } else if (c < 0x20) {
             switch (c) {
-            case '\n': fputs("\\n", out); break;
-            case '\r': fputs("\\r", out); break;
-            case '\t': fputs("\\t", out); break;
-            case '\b': fputs("\\b", out); break;
-            case '\f': fputs("\\f", out); break;
-            default: fprintf(out, "\\u00%c%c", hex[c >> 4], hex[c & 15]); break;
+            case '\n':
+                fputs("\\n", out);
+                break;
+            case '\r':
+                fputs("\\r", out);
+                break;
+            case '\t':
+                fputs("\\t", out);
+                break;
+            case '\b':
+                fputs("\\b", out);
+                break;
+            case '\f':
+                fputs("\\f", out);
+                break;
+            default:
+                fprintf(out, "\\u00%c%c", hex[c >> 4], hex[c & 15]);
+                break;
             }
             p++;
         } else if (c < 0x80) {
@@ -104,10 +116,22 @@ static void json_close(json_writer *w, char bracket)
     fputc(bracket, w->out);
 }
 
-void json_begin_object(json_writer *w, const char *key) { json_open(w, key, '{'); }
-void json_end_object(json_writer *w) { json_close(w, '}'); }
-void json_begin_array(json_writer *w, const char *key) { json_open(w, key, '['); }
-void json_end_array(json_writer *w) { json_close(w, ']'); }
+void json_begin_object(json_writer *w, const char *key)
+{
+    json_open(w, key, '{');
+}
+void json_end_object(json_writer *w)
+{
+    json_close(w, '}');
+}
+void json_begin_array(json_writer *w, const char *key)
+{
+    json_open(w, key, '[');
+}
+void json_end_array(json_writer *w)
+{
+    json_close(w, ']');
+}
 
 void json_string(json_writer *w, const char *key, const char *s)
 {
@@ -148,8 +172,14 @@ static void json_number(json_writer *w, const char *key, double v, int single)
     fputs(buf, w->out);
 }
 
-void json_double(json_writer *w, const char *key, double v) { json_number(w, key, v, 0); }
-void json_float(json_writer *w, const char *key, float v) { json_number(w, key, v, 1); }
+void json_double(json_writer *w, const char *key, double v)
+{
+    json_number(w, key, v, 0);
+}
+void json_float(json_writer *w, const char *key, float v)
+{
+    json_number(w, key, v, 1);
+}
 
 void json_bool(json_writer *w, const char *key, int v)
 {

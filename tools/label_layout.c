@@ -1,4 +1,5 @@
-/* label_layout.c: places the text labels of scatter-plot markers so none overlap each other or a marker and all stay inside the plot (greedy, leader lines when displaced). */
+/* label_layout.c: places the text labels of scatter-plot markers so none overlap each other or a marker and
+ * all stay inside the plot (greedy, leader lines when displaced). */
 #include <math.h>
 
 #include "label_layout.h"
@@ -32,7 +33,7 @@ static int is_free(const layout_ctx *c, const label_box *box)
 {
     if (!label_box_inside(box, &c->area))
         return 0;
-    label_box grown = { box->x0 - c->gap, box->y0 - c->gap, box->x1 + c->gap, box->y1 + c->gap };
+    label_box grown = {box->x0 - c->gap, box->y0 - c->gap, box->x1 + c->gap, box->y1 + c->gap};
     for (size_t i = 0; i < c->obstacle_count; i++)
         if (label_boxes_overlap(&grown, &c->obstacles[i]))
             return 0;
@@ -44,17 +45,17 @@ static int is_free(const layout_ctx *c, const label_box *box)
 
 static label_box box_at(double cx, double cy, double w, double h)
 {
-    return (label_box){ cx - w / 2, cy - h / 2, cx + w / 2, cy + h / 2 };
+    return (label_box){cx - w / 2, cy - h / 2, cx + w / 2, cy + h / 2};
 }
 
 /* The positions right beside the marker, in order of preference: right, left,
  * above, below, then the four corners. */
 static int try_beside(const layout_ctx *c, const label_request *r, double reach, label_box *out)
 {
-    static const double dirs[8][2] = { { 1, 0 }, { -1, 0 }, { 0, -1 }, { 0, 1 },
-                                       { 1, -1 }, { -1, -1 }, { 1, 1 }, { -1, 1 } };
+    static const double dirs[8][2] = {{1, 0}, {-1, 0}, {0, -1}, {0, 1}, {1, -1}, {-1, -1}, {1, 1}, {-1, 1}};
     for (int k = 0; k < 8; k++) {
-        double cx = r->x + dirs[k][0] * (reach + r->width / 2), cy = r->y + dirs[k][1] * (reach + r->height / 2);
+        double cx = r->x + dirs[k][0] * (reach + r->width / 2),
+               cy = r->y + dirs[k][1] * (reach + r->height / 2);
         label_box b = box_at(cx, cy, r->width, r->height);
         if (is_free(c, &b)) {
             *out = b;
@@ -88,7 +89,7 @@ static int try_anywhere(const layout_ctx *c, const label_request *r, label_box *
     double step = fmax(r->height / 2, 1.0), best = INFINITY;
     for (double y = c->area.y0; y + r->height <= c->area.y1; y += step)
         for (double x = c->area.x0; x + r->width <= c->area.x1; x += step) {
-            label_box b = { x, y, x + r->width, y + r->height };
+            label_box b = {x, y, x + r->width, y + r->height};
             double dx = x + r->width / 2 - r->x, dy = y + r->height / 2 - r->y, d = dx * dx + dy * dy;
             if (d < best && is_free(c, &b)) {
                 best = d;
@@ -98,16 +99,16 @@ static int try_anywhere(const layout_ctx *c, const label_request *r, label_box *
     return isfinite(best);
 }
 
-size_t label_layout(const label_request *requests, size_t count, const label_box *obstacles, size_t obstacle_count,
-                    const label_box *area, double gap, double reach, label_spot *out)
+size_t label_layout(const label_request *requests, size_t count, const label_box *obstacles,
+                    size_t obstacle_count, const label_box *area, double gap, double reach, label_spot *out)
 {
-    layout_ctx c = { obstacles, obstacle_count, out, 0, *area, gap };
+    layout_ctx c = {obstacles, obstacle_count, out, 0, *area, gap};
     size_t placed = 0;
     for (size_t i = 0; i < count; i++) {
         const label_request *r = &requests[i];
         label_spot *s = &out[i];
         s->placed = s->leader = 0;
-        s->box = (label_box){ 0, 0, 0, 0 };
+        s->box = (label_box){0, 0, 0, 0};
         if (r->width > 0 && r->height > 0 && isfinite(r->x) && isfinite(r->y)) {
             if (try_beside(&c, r, reach, &s->box))
                 s->placed = 1;

@@ -1,4 +1,5 @@
-/* label_layout.h: places the text labels of scatter-plot markers so none overlap each other or a marker and all stay inside the plot (greedy, leader lines when displaced). */
+/* label_layout.h: places the text labels of scatter-plot markers so none overlap each other or a marker and
+ * all stay inside the plot (greedy, leader lines when displaced). */
 #ifndef CBVH_TOOLS_LABEL_LAYOUT_H
 #define CBVH_TOOLS_LABEL_LAYOUT_H
 
@@ -36,7 +37,7 @@ int label_box_inside(const label_box *b, const label_box *area);
  * pixels from them. A label right beside its marker has its nearest edge
  * `reach` pixels from the marker's centre. Fills out[0..count) and returns
  * the number placed. */
-size_t label_layout(const label_request *requests, size_t count, const label_box *obstacles, size_t obstacle_count,
-                    const label_box *area, double gap, double reach, label_spot *out);
+size_t label_layout(const label_request *requests, size_t count, const label_box *obstacles,
+                    size_t obstacle_count, const label_box *area, double gap, double reach, label_spot *out);
 
 #endif

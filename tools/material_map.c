@@ -1,4 +1,5 @@
-/* material_map.c: reads --material-map files and turns a mesh's assimp material indices into stored ids and names. */
+/* material_map.c: reads --material-map files and turns a mesh's assimp material indices into stored ids and
+ * names. */
 #include <errno.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -50,8 +51,8 @@ static int map_line(material_map *m, const char *path, unsigned line_no, char *l
     char *tab = strrchr(line, '\t');
     uint32_t id;
     if (!tab || tab == line || !parse_id(tab + 1, &id)) {
-        snprintf(message, message_size, "%s:%u: expected NAME<TAB>ID with ID a whole number 0 to 4294967295", path,
-                 line_no);
+        snprintf(message, message_size, "%s:%u: expected NAME<TAB>ID with ID a whole number 0 to 4294967295",
+                 path, line_no);
         return 2;
     }
     *tab = '\0';
@@ -66,8 +67,8 @@ static int map_line(material_map *m, const char *path, unsigned line_no, char *l
     }
     const material_map_entry *seen = map_find(m, line);
     if (seen) {
-        snprintf(message, message_size, "%s:%u: material '%s' is mapped already on line %u", path, line_no, line,
-                 seen->line);
+        snprintf(message, message_size, "%s:%u: material '%s' is mapped already on line %u", path, line_no,
+                 line, seen->line);
         return 2;
     }
     material_map_entry *grown = realloc(m->entries, (m->count + 1) * sizeof *grown);
@@ -119,8 +120,8 @@ static const char *material_name(const imported_mesh *mesh, uint32_t k)
 }
 
 /* With a map: each used material's new id in `to` (indexed by material; used[] says which). */
-static int map_ids(const imported_mesh *mesh, const material_map *map, const char *map_path, const uint64_t *uses,
-                   uint32_t slots, uint32_t *to, char *message, size_t message_size)
+static int map_ids(const imported_mesh *mesh, const material_map *map, const char *map_path,
+                   const uint64_t *uses, uint32_t slots, uint32_t *to, char *message, size_t message_size)
 {
     for (uint32_t k = 0; k < slots; k++) {
         if (!uses[k])
@@ -133,12 +134,16 @@ static int map_ids(const imported_mesh *mesh, const material_map *map, const cha
             to[k] = map->default_id;
         } else {
             if (name)
-                snprintf(message, message_size, "material '%s' (%llu triangles) is not in the material map %s, "
-                         "which has no '*' line", name, (unsigned long long)uses[k], map_path);
+                snprintf(message, message_size,
+                         "material '%s' (%llu triangles) is not in the material map %s, "
+                         "which has no '*' line",
+                         name, (unsigned long long)uses[k], map_path);
             else
-                snprintf(message, message_size, "%llu triangles have a material without a name (%s %u), and the "
-                         "material map %s has no '*' line", (unsigned long long)uses[k],
-                         k < mesh->material_count ? "material" : "ids from", k, map_path);
+                snprintf(message, message_size,
+                         "%llu triangles have a material without a name (%s %u), and the "
+                         "material map %s has no '*' line",
+                         (unsigned long long)uses[k], k < mesh->material_count ? "material" : "ids from", k,
+                         map_path);
             return 1;
         }
     }

@@ -21,7 +21,7 @@ typedef struct material_map_entry {
 typedef struct material_map {
     material_map_entry *entries; /* in file order */
     size_t count;
-    int has_default;             /* a `*` line */
+    int has_default; /* a `*` line */
     uint32_t default_id;
 } material_map;
 

@@ -1,4 +1,5 @@
-/* plot_axis.c: the scale of a plot axis: linear, or log10 only where the values span decades; ticks at 1-2-5 values with readable labels. */
+/* plot_axis.c: the scale of a plot axis: linear, or log10 only where the values span decades; ticks at 1-2-5
+ * values with readable labels. */
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
@@ -116,8 +117,8 @@ double plot_axis_pixel(const plot_axis *a, double v)
 /* Appends "10" and the exponent in superscript digits (UTF-8). */
 static void power_of_ten(char *buf, size_t size, int e)
 {
-    static const char *const sup[10] = { "\u2070", "\u00b9", "\u00b2", "\u00b3", "\u2074",
-                                         "\u2075", "\u2076", "\u2077", "\u2078", "\u2079" };
+    static const char *const sup[10] = {"\u2070", "\u00b9", "\u00b2", "\u00b3", "\u2074",
+                                        "\u2075", "\u2076", "\u2077", "\u2078", "\u2079"};
     char digits[16];
     snprintf(digits, sizeof digits, "%d", e < 0 ? -e : e);
     size_t n = strlen(buf);

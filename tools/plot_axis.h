@@ -1,4 +1,5 @@
-/* plot_axis.h: the scale of a plot axis: linear, or log10 only where the values span decades; ticks at 1-2-5 values with readable labels. */
+/* plot_axis.h: the scale of a plot axis: linear, or log10 only where the values span decades; ticks at 1-2-5
+ * values with readable labels. */
 #ifndef CBVH_TOOLS_PLOT_AXIS_H
 #define CBVH_TOOLS_PLOT_AXIS_H
 
@@ -38,7 +39,8 @@ double plot_axis_pixel(const plot_axis *a, double v);
  * ticks divided by 10^factor_exp). */
 void plot_axis_tick_label(const plot_axis *a, double t, char *buf, size_t size);
 
-/* What the axis title needs appended: " (×10⁻⁶)" when the ticks are scaled, " (log)" on a log axis, else "". */
+/* What the axis title needs appended: " (×10⁻⁶)" when the ticks are scaled, " (log)" on a log axis, else "".
+ */
 void plot_axis_title_note(const plot_axis *a, char *buf, size_t size);
 
 #endif

@@ -44,7 +44,7 @@ void progress_done(progress *p)
 
 void progress_cook_callback(void *user, cbvh_phase phase, double fraction)
 {
-    static const char *const names[] = { "prepare", "build", "layout", "write" };
+    static const char *const names[] = {"prepare", "build", "layout", "write"};
     const char *name = (unsigned)phase < 4 ? names[phase] : "cook";
     progress_update((progress *)user, name, fraction);
 }

@@ -5,10 +5,10 @@
 #include "cbvh.h"
 
 typedef struct progress {
-    int enabled;      /* stderr is a terminal and the user did not ask for --quiet */
-    int shown;        /* something is on the line that progress_done must clear */
+    int enabled; /* stderr is a terminal and the user did not ask for --quiet */
+    int shown;   /* something is on the line that progress_done must clear */
     const char *label;
-    int percent;      /* last percentage printed, -1 for none */
+    int percent; /* last percentage printed, -1 for none */
 } progress;
 
 /* Enables the display when `quiet` is 0 and stderr is a terminal. */

@@ -27,6 +27,8 @@ as_root() {
 # (the HTML report's test) for tests.
 packages="build-essential autoconf automake libtool pkg-config zlib1g-dev libassimp-dev libcmocka-dev libembree-dev libbullet-dev"
 [ "$mode" = test ] && packages="$packages assimp-testmodels valgrind python3 clang libclang-rt-14-dev npm chromium"
+# The formatting check of tests/test_source.sh (tools/check_format.sh).
+[ "$mode" = test ] && packages="$packages clang-format"
 # The Windows test build (tests/mingw_wine.sh): MinGW-w64, its zlib, wine; dpkg-dev unpacks cmocka's source package.
 [ "$mode" = test ] && packages="$packages gcc-mingw-w64-x86-64 libz-mingw-w64-dev wine wine64 dpkg-dev"
 # The CMake consumer test (tests/test_cmake.sh).

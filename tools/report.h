@@ -1,4 +1,5 @@
-/* report.h: the rows of `cbvh report` (one per mesh and configuration, each configuration a list of dimensions) and the writers of its plots, page and advice. */
+/* report.h: the rows of `cbvh report` (one per mesh and configuration, each configuration a list of
+ * dimensions) and the writers of its plots, page and advice. */
 #ifndef CBVH_TOOLS_REPORT_H
 #define CBVH_TOOLS_REPORT_H
 
@@ -23,16 +24,18 @@ enum {
 /* "layout", "box precision", ... for the legend. */
 extern const char *const report_dimension_names[REPORT_DIM_COUNT];
 
-/* A hit on another triangle within this fraction of the diagonal is a tie on a shared edge, not a wrong triangle. */
+/* A hit on another triangle within this fraction of the diagonal is a tie on a shared edge, not a wrong
+ * triangle. */
 #define REPORT_TIE_TOLERANCE 1e-5
 
 typedef struct report_row {
     const char *mesh;
     uint64_t triangles;
-    char value[REPORT_DIM_COUNT][32]; /* each dimension's value, self-describing: "leaf 8", "q16 boxes", "stackless" */
-    char config[192];                 /* the values joined by ", " */
-    int is_default;                   /* the default cook and traversal: the other rows vary one thing from it */
-    int reference;                    /* not something the format offers (exact float boxes): never recommended */
+    char value[REPORT_DIM_COUNT]
+              [32];   /* each dimension's value, self-describing: "leaf 8", "q16 boxes", "stackless" */
+    char config[192]; /* the values joined by ", " */
+    int is_default;   /* the default cook and traversal: the other rows vary one thing from it */
+    int reference;    /* not something the format offers (exact float boxes): never recommended */
     uint32_t leaf;
     int quantized_vertices, float_boxes, compress;
     const char *traversal;
@@ -95,8 +98,8 @@ typedef struct report_point_text {
 
 /* Fills *panel with plot k (0 <= k < REPORT_PLOT_COUNT) of one mesh's rows:
  * points[i] and text[i] (count of each, caller-provided) for rows[i]. */
-void report_plot_panel(int k, const report_row *rows, size_t count, plot_point *points, report_point_text *text,
-                       plot_panel *panel);
+void report_plot_panel(int k, const report_row *rows, size_t count, plot_point *points,
+                       report_point_text *text, plot_panel *panel);
 
 /* The legend of one mesh's rows: the default configuration in full, each
  * dimension some row varies, the Pareto front. Returns the entries written

@@ -1,4 +1,5 @@
-/* report_advice.c: the report's recommendation for one mesh, computed from its figures: the fastest exact configuration, then what a smaller file or lossy choices cost. */
+/* report_advice.c: the report's recommendation for one mesh, computed from its figures: the fastest exact
+ * configuration, then what a smaller file or lossy choices cost. */
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -6,7 +7,8 @@
 
 #include "report.h"
 
-/* Run times closer than this fraction count as equal, at least: the spread of repeated runs on a quiet machine. */
+/* Run times closer than this fraction count as equal, at least: the spread of repeated runs on a quiet
+ * machine. */
 #define TIMING_NOISE 0.03
 /* The noise allowed for is this many times the gap measured between two runs of the same tree: one pair of
  * runs underestimates the spread. */
@@ -47,7 +49,7 @@ static double percent(double a, double b)
 
 const report_row *report_recommend(const report_row *rows, size_t count, char *buf, size_t size)
 {
-    text t = { buf, size, 0 };
+    text t = {buf, size, 0};
     if (size)
         buf[0] = '\0';
     const report_row *fastest = NULL, *second = NULL;
@@ -63,8 +65,9 @@ const report_row *report_recommend(const report_row *rows, size_t count, char *b
         }
     }
     if (!fastest) {
-        say(&t, "No configuration answered every checked ray like the double-precision reference, so the report "
-                "recommends none; see the flips and leaks plot.");
+        say(&t,
+            "No configuration answered every checked ray like the double-precision reference, so the report "
+            "recommends none; see the flips and leaks plot.");
         return NULL;
     }
     /* The timing noise of this run, measured: rows that differ from the default only in how sections are
@@ -75,7 +78,8 @@ const report_row *report_recommend(const report_row *rows, size_t count, char *b
         int same = !rows[i].is_default && !rows[i].reference;
         for (int d = 0; d < REPORT_DIM_COUNT && same; d++)
             same = d == REPORT_DIM_SECTIONS || strcmp(rows[i].value[d], def->value[d]) == 0;
-        double a = report_ns_per_ray(&rows[i]), b = report_ns_per_ray(def), gap = fmax(a, b) / fmin(a, b) - 1.0;
+        double a = report_ns_per_ray(&rows[i]), b = report_ns_per_ray(def),
+               gap = fmax(a, b) / fmin(a, b) - 1.0;
         if (same && gap >= twin_gap) {
             twin_gap = gap;
             twin = &rows[i];
@@ -90,33 +94,37 @@ const report_row *report_recommend(const report_row *rows, size_t count, char *b
         kept_default = 1;
     }
     char n1[128], n2[128];
-    say(&t, "Recommended: %s (%s). It answers exactly like the double-precision reference (%llu of %llu sampled "
-            "rays flipped or wrong",
-        name_of(pick, def, n1, sizeof n1), pick->config, (unsigned long long)(pick->flips + pick->wrong_triangle),
-        (unsigned long long)pick->compared);
+    say(&t,
+        "Recommended: %s (%s). It answers exactly like the double-precision reference (%llu of %llu sampled "
+        "rays flipped or wrong",
+        name_of(pick, def, n1, sizeof n1), pick->config,
+        (unsigned long long)(pick->flips + pick->wrong_triangle), (unsigned long long)pick->compared);
     if (pick->leaks >= 0)
         say(&t, ", %lld of %llu rays aimed at shared edges and vertices leaked", (long long)pick->leaks,
             (unsigned long long)pick->leak_rays);
-    say(&t, ") and takes %.0f ns per closest-hit ray (%.2f MRays/s), ", report_ns_per_ray(pick), pick->closest_mrays);
+    say(&t, ") and takes %.0f ns per closest-hit ray (%.2f MRays/s), ", report_ns_per_ray(pick),
+        pick->closest_mrays);
     char noise_text[256];
     if (twin)
-        snprintf(noise_text, sizeof noise_text, "the default and %s run the same tree and differ by %.0f %%, so "
-                 "differences under %.0f %% count as noise", name_of(twin, def, n2, sizeof n2),
-                 twin_gap * 100, noise * 100);
+        snprintf(noise_text, sizeof noise_text,
+                 "the default and %s run the same tree and differ by %.0f %%, so "
+                 "differences under %.0f %% count as noise",
+                 name_of(twin, def, n2, sizeof n2), twin_gap * 100, noise * 100);
     else
         snprintf(noise_text, sizeof noise_text, "differences under %.0f %% count as noise", noise * 100);
     if (kept_default)
-        say(&t, "within the timing noise of the fastest exact configuration, %s at %.0f ns, so nothing needs "
-                "changing (%s). ",
+        say(&t,
+            "within the timing noise of the fastest exact configuration, %s at %.0f ns, so nothing needs "
+            "changing (%s). ",
             name_of(fastest, def, n2, sizeof n2), report_ns_per_ray(fastest), noise_text);
     else if (def && pick != def)
-        say(&t, "the fastest of the exact configurations, %.0f %% faster than the default, more than the timing "
-                "noise (%s). ",
+        say(&t,
+            "the fastest of the exact configurations, %.0f %% faster than the default, more than the timing "
+            "noise (%s). ",
             percent(report_ns_per_ray(def), report_ns_per_ray(pick)), noise_text);
     else if (second)
         say(&t, "the fastest of the exact configurations; the next, %s, is %.0f %% slower. ",
-            name_of(second, def, n2, sizeof n2),
-            percent(report_ns_per_ray(second), report_ns_per_ray(pick)));
+            name_of(second, def, n2, sizeof n2), percent(report_ns_per_ray(second), report_ns_per_ray(pick)));
     else
         say(&t, "the only exact configuration. ");
 
@@ -127,8 +135,10 @@ const report_row *report_recommend(const report_row *rows, size_t count, char *b
             (!smallest || rows[i].bytes_per_triangle < smallest->bytes_per_triangle))
             smallest = &rows[i];
     if (smallest && smallest->bytes_per_triangle < pick->bytes_per_triangle * (1.0 - SIZE_SAVING))
-        say(&t, "Where file size matters more, %s gives %.1f bytes per triangle instead of %.1f (%.0f %%) with the "
-                "same answers, at %.0f ns per ray; opening takes %.2f ms instead of %.2f ms. ",
+        say(&t,
+            "Where file size matters more, %s gives %.1f bytes per triangle instead of %.1f (%.0f %%) with "
+            "the "
+            "same answers, at %.0f ns per ray; opening takes %.2f ms instead of %.2f ms. ",
             name_of(smallest, def, n2, sizeof n2), smallest->bytes_per_triangle, pick->bytes_per_triangle,
             percent(smallest->bytes_per_triangle, pick->bytes_per_triangle), report_ns_per_ray(smallest),
             smallest->open_seconds * 1e3, pick->open_seconds * 1e3);
@@ -143,11 +153,15 @@ const report_row *report_recommend(const report_row *rows, size_t count, char *b
         say(&t, "%s ", name_of(r, def, n2, sizeof n2));
         if (saved > 0.5)
             say(&t, "saves %.0f %% of the file against %s but ", saved, name_of(base, def, n1, sizeof n1));
-        say(&t, "is not exact: hits move by up to %.1e of the scene diagonal and %llu of %llu sampled rays flip or "
-                "hit another triangle",
-            r->t_err_max, (unsigned long long)(r->flips + r->wrong_triangle), (unsigned long long)r->compared);
+        say(&t,
+            "is not exact: hits move by up to %.1e of the scene diagonal and %llu of %llu sampled rays flip "
+            "or "
+            "hit another triangle",
+            r->t_err_max, (unsigned long long)(r->flips + r->wrong_triangle),
+            (unsigned long long)r->compared);
         if (r->leaks > 0)
-            say(&t, ", and %lld of %llu edge and vertex rays leak", (long long)r->leaks, (unsigned long long)r->leak_rays);
+            say(&t, ", and %lld of %llu edge and vertex rays leak", (long long)r->leaks,
+                (unsigned long long)r->leak_rays);
         say(&t, "; choose it only when that error is acceptable. ");
     }
 
@@ -155,8 +169,9 @@ const report_row *report_recommend(const report_row *rows, size_t count, char *b
      * default's order, so the default's extra nodes are the boxes' price alone. */
     for (size_t i = 0; i < count && def; i++)
         if (rows[i].reference) {
-            say(&t, "The 16-bit node boxes are %.1f %% larger in area than exact float boxes on average and cost "
-                    "%+.2f nodes per ray (%.1f against %.1f on the default's tree), the price of 16-byte nodes.",
+            say(&t,
+                "The 16-bit node boxes are %.1f %% larger in area than exact float boxes on average and cost "
+                "%+.2f nodes per ray (%.1f against %.1f on the default's tree), the price of 16-byte nodes.",
                 100.0 * def->inflation_mean, def->extra_nodes, def->nodes_per_ray, rows[i].nodes_per_ray);
             break;
         }

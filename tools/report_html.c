@@ -1,4 +1,5 @@
-/* report_html.c: `cbvh report --html`: one self-contained page (inline CSS and SVG, no script, nothing fetched) with, per mesh, the advice, the plots and the summary table. */
+/* report_html.c: `cbvh report --html`: one self-contained page (inline CSS and SVG, no script, nothing
+ * fetched) with, per mesh, the advice, the plots and the summary table. */
 #include <stdlib.h>
 #include <string.h>
 
@@ -8,9 +9,11 @@
 
 /* Hover and focus show a point's detail box; everything reads without them. */
 static const char style_sheet[] =
-    "body{font-family:'DejaVu Sans',Verdana,sans-serif;margin:1.5em auto;max-width:1560px;padding:0 1em;color:#111}\n"
+    "body{font-family:'DejaVu Sans',Verdana,sans-serif;margin:1.5em auto;max-width:1560px;padding:0 "
+    "1em;color:#111}\n"
     "h1{font-size:1.5em}h2{font-size:1.25em;margin-top:2em;border-bottom:1px solid #ccc}\n"
-    "p{max-width:62em;line-height:1.45}.advice{background:#eef6ee;border-left:4px solid #009E73;padding:.6em .9em}\n"
+    "p{max-width:62em;line-height:1.45}.advice{background:#eef6ee;border-left:4px solid #009E73;padding:.6em "
+    ".9em}\n"
     ".plots{display:flex;flex-wrap:wrap;gap:8px}figure{margin:0}svg{max-width:100%;height:auto}\n"
     ".tip{visibility:hidden;pointer-events:none}.pt:hover+.tip,.pt:focus+.tip{visibility:visible}\n"
     ".pt{cursor:pointer;outline:none}.pt:hover .hit,.pt:focus .hit{stroke:#000;stroke-width:2}\n"

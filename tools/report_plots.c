@@ -1,12 +1,13 @@
-/* report_plots.c: the report's plots: which measure goes on which axis, marker style and label per configuration, the legend, and the `--svg` figure. */
+/* report_plots.c: the report's plots: which measure goes on which axis, marker style and label per
+ * configuration, the legend, and the `--svg` figure. */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "report.h"
 
-const char *const report_dimension_names[REPORT_DIM_COUNT] = { "layout", "box precision", "vertex precision",
-                                                               "leaf size", "traversal", "sections" };
+const char *const report_dimension_names[REPORT_DIM_COUNT] = {
+    "layout", "box precision", "vertex precision", "leaf size", "traversal", "sections"};
 
 _Static_assert(REPORT_DIM_COUNT + 1 <= PLOT_STYLE_COUNT, "a marker style per dimension plus the default's");
 
@@ -72,34 +73,49 @@ typedef struct measure {
     const char *y_format; /* printf format of the y value in the detail */
 } measure;
 
-static double inflation(const report_row *r) { return r->inflation_mean; }
-static double extra_nodes(const report_row *r) { return r->extra_nodes; }
-static double distance_error(const report_row *r) { return r->t_err_max; }
+static double inflation(const report_row *r)
+{
+    return r->inflation_mean;
+}
+static double extra_nodes(const report_row *r)
+{
+    return r->extra_nodes;
+}
+static double distance_error(const report_row *r)
+{
+    return r->t_err_max;
+}
 static double wrong_answers(const report_row *r)
 {
     return (double)(r->flips + r->wrong_triangle) + (r->leaks > 0 ? (double)r->leaks : 0.0);
 }
-static double bytes_per_triangle(const report_row *r) { return r->bytes_per_triangle; }
-static double open_ms(const report_row *r) { return r->open_seconds >= 0.0 ? r->open_seconds * 1e3 : NAN; }
+static double bytes_per_triangle(const report_row *r)
+{
+    return r->bytes_per_triangle;
+}
+static double open_ms(const report_row *r)
+{
+    return r->open_seconds >= 0.0 ? r->open_seconds * 1e3 : NAN;
+}
 
 #define NS_TITLE "closest hit, ns per ray (lower is faster)"
 static const measure measures[REPORT_PLOT_COUNT] = {
-    { "Box inflation against run time", NS_TITLE, "box area over exact box - 1, mean", report_ns_per_ray, inflation,
-      "box inflation %.4f" },
-    { "Extra work against run time", NS_TITLE, "extra nodes per ray vs exact boxes", report_ns_per_ray, extra_nodes,
-      "extra nodes per ray %+.2f" },
-    { "Distance error against run time", NS_TITLE, "worst |t - t_ref| / scene diagonal", report_ns_per_ray,
-      distance_error, "distance error %.2e" },
-    { "Flips and leaks against run time", NS_TITLE, "wrong answers (flips, triangles, leaks)", report_ns_per_ray,
-      wrong_answers, "wrong answers %.0f" },
-    { "File size against run time", NS_TITLE, "file bytes per triangle", report_ns_per_ray, bytes_per_triangle,
-      "%.2f bytes per triangle" },
-    { "Compression against open time", "open (map + validate), ms", "file bytes per triangle", open_ms,
-      bytes_per_triangle, "%.2f bytes per triangle" },
+    {"Box inflation against run time", NS_TITLE, "box area over exact box - 1, mean", report_ns_per_ray,
+     inflation, "box inflation %.4f"},
+    {"Extra work against run time", NS_TITLE, "extra nodes per ray vs exact boxes", report_ns_per_ray,
+     extra_nodes, "extra nodes per ray %+.2f"},
+    {"Distance error against run time", NS_TITLE, "worst |t - t_ref| / scene diagonal", report_ns_per_ray,
+     distance_error, "distance error %.2e"},
+    {"Flips and leaks against run time", NS_TITLE, "wrong answers (flips, triangles, leaks)",
+     report_ns_per_ray, wrong_answers, "wrong answers %.0f"},
+    {"File size against run time", NS_TITLE, "file bytes per triangle", report_ns_per_ray, bytes_per_triangle,
+     "%.2f bytes per triangle"},
+    {"Compression against open time", "open (map + validate), ms", "file bytes per triangle", open_ms,
+     bytes_per_triangle, "%.2f bytes per triangle"},
 };
 
-void report_plot_panel(int k, const report_row *rows, size_t count, plot_point *points, report_point_text *text,
-                       plot_panel *panel)
+void report_plot_panel(int k, const report_row *rows, size_t count, plot_point *points,
+                       report_point_text *text, plot_panel *panel)
 {
     const measure *m = &measures[k];
     const report_row *def = report_default_row(rows, count);
@@ -112,12 +128,12 @@ void report_plot_panel(int k, const report_row *rows, size_t count, plot_point *
         if (m->x == open_ms)
             snprintf(text[i].detail + n, sizeof text[i].detail - (size_t)n, "open %.3f ms\n%s", m->x(r), y);
         else
-            snprintf(text[i].detail + n, sizeof text[i].detail - (size_t)n, "%.0f ns per ray (%.2f MRays/s)\n%s",
-                     m->x(r), r->closest_mrays, y);
-        points[i] = (plot_point){ m->x(r), m->y(r), (unsigned)(varied_dimension(r, def) + 1), text[i].label,
-                                  text[i].detail, r->reference };
+            snprintf(text[i].detail + n, sizeof text[i].detail - (size_t)n,
+                     "%.0f ns per ray (%.2f MRays/s)\n%s", m->x(r), r->closest_mrays, y);
+        points[i] = (plot_point){m->x(r),       m->y(r),        (unsigned)(varied_dimension(r, def) + 1),
+                                 text[i].label, text[i].detail, r->reference};
     }
-    *panel = (plot_panel){ m->title, m->x_title, m->y_title, points, count, 1 };
+    *panel = (plot_panel){m->title, m->x_title, m->y_title, points, count, 1};
 }
 
 size_t report_legend(const report_row *rows, size_t count, plot_legend_entry *entries, char (*texts)[256])
@@ -126,7 +142,7 @@ size_t report_legend(const report_row *rows, size_t count, plot_legend_entry *en
     size_t n = 0;
     if (def) {
         snprintf(texts[n], sizeof texts[n], "default: %s", def->config);
-        entries[n] = (plot_legend_entry){ 0, texts[n] };
+        entries[n] = (plot_legend_entry){0, texts[n]};
         n++;
     }
     for (int d = 0; d < REPORT_DIM_COUNT; d++) {
@@ -136,11 +152,11 @@ size_t report_legend(const report_row *rows, size_t count, plot_legend_entry *en
         if (!used)
             continue;
         snprintf(texts[n], sizeof texts[n], "%s", report_dimension_names[d]);
-        entries[n] = (plot_legend_entry){ (unsigned)(d + 1), texts[n] };
+        entries[n] = (plot_legend_entry){(unsigned)(d + 1), texts[n]};
         n++;
     }
     snprintf(texts[n], sizeof texts[n], "Pareto front (nothing both faster and better)");
-    entries[n] = (plot_legend_entry){ PLOT_STYLE_FRONT, texts[n] };
+    entries[n] = (plot_legend_entry){PLOT_STYLE_FRONT, texts[n]};
     return n + 1;
 }
 
@@ -152,14 +168,16 @@ const char *report_mesh_name(const report_row *r)
 
 int report_svg_write(FILE *out, const report_row *rows, size_t count, const report_setup *setup)
 {
-    const double width = SVG_COLUMNS * PLOT_PANEL_W, rows_per_mesh = (REPORT_PLOT_COUNT + SVG_COLUMNS - 1) / SVG_COLUMNS;
+    const double width = SVG_COLUMNS * PLOT_PANEL_W,
+                 rows_per_mesh = (REPORT_PLOT_COUNT + SVG_COLUMNS - 1) / SVG_COLUMNS;
     plot_legend_entry entries[REPORT_LEGEND_MAX];
     char texts[REPORT_LEGEND_MAX][256];
     double height = HEADING_H + 22;
     for (size_t i = 0; i < count;) { /* measure first: the document's size comes first */
         size_t n = report_mesh_rows(rows + i, count - i);
         size_t e = report_legend(rows + i, n, entries, texts);
-        height += HEADING_H + svg_plot_legend(NULL, entries, e, 20, 0, width - 40) + 10 + rows_per_mesh * PLOT_PANEL_H;
+        height += HEADING_H + svg_plot_legend(NULL, entries, e, 20, 0, width - 40) + 10 +
+                  rows_per_mesh * PLOT_PANEL_H;
         i += n;
     }
     plot_point *points = malloc((count ? count : 1) * sizeof *points);
@@ -170,7 +188,8 @@ int report_svg_write(FILE *out, const report_row *rows, size_t count, const repo
         return -1;
     }
     svg_plot_begin(out, width, height, 1, "cbvh report: error against run time per configuration");
-    svg_plot_text(out, width / 2, 24, 17, "middle", 1, "cbvh report: error against run time, one point per configuration");
+    svg_plot_text(out, width / 2, 24, 17, "middle", 1,
+                  "cbvh report: error against run time, one point per configuration");
     char caption[256];
     snprintf(caption, sizeof caption,
              "%zu incoherent rays, one thread, median of %u rounds beside the default (%s); lower left is "
@@ -191,7 +210,8 @@ int report_svg_write(FILE *out, const report_row *rows, size_t count, const repo
         for (int k = 0; k < REPORT_PLOT_COUNT; k++) {
             plot_panel panel;
             report_plot_panel(k, rows + i, n, points, text, &panel);
-            svg_plot_panel(out, &panel, PLOT_PANEL_W * (k % SVG_COLUMNS), y + PLOT_PANEL_H * (k / SVG_COLUMNS), NULL, NULL);
+            svg_plot_panel(out, &panel, PLOT_PANEL_W * (k % SVG_COLUMNS),
+                           y + PLOT_PANEL_H * (k / SVG_COLUMNS), NULL, NULL);
         }
         y += rows_per_mesh * PLOT_PANEL_H;
         i += n;

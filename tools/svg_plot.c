@@ -1,4 +1,5 @@
-/* svg_plot.c: a dependency-free SVG scatter plot writer: readable axes, marker styles, legend, labels that never overlap, Pareto front, focusable points for HTML. */
+/* svg_plot.c: a dependency-free SVG scatter plot writer: readable axes, marker styles, legend, labels that
+ * never overlap, Pareto front, focusable points for HTML. */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -21,15 +22,27 @@
 #define TIP_LINE 14.0
 
 /* Okabe & Ito's palette (black first), one shape per colour. */
-static const char *const style_colour[PLOT_STYLE_COUNT] = { "#000000", "#E69F00", "#0072B2", "#D55E00",
-                                                            "#009E73", "#CC79A7", "#56B4E9", "#F0E442" };
-enum { SHAPE_STAR, SHAPE_CIRCLE, SHAPE_SQUARE, SHAPE_DIAMOND, SHAPE_TRIANGLE_UP, SHAPE_TRIANGLE_DOWN, SHAPE_HEXAGON,
-       SHAPE_PLUS };
+static const char *const style_colour[PLOT_STYLE_COUNT] = {"#000000", "#E69F00", "#0072B2", "#D55E00",
+                                                           "#009E73", "#CC79A7", "#56B4E9", "#F0E442"};
+enum {
+    SHAPE_STAR,
+    SHAPE_CIRCLE,
+    SHAPE_SQUARE,
+    SHAPE_DIAMOND,
+    SHAPE_TRIANGLE_UP,
+    SHAPE_TRIANGLE_DOWN,
+    SHAPE_HEXAGON,
+    SHAPE_PLUS
+};
 
 /* Length of the UTF-8 sequence starting with lead byte c that the following bytes complete, else 0. */
 static int utf8_length(const unsigned char *s)
 {
-    int n = s[0] < 0x80 ? 1 : (s[0] & 0xe0) == 0xc0 ? 2 : (s[0] & 0xf0) == 0xe0 ? 3 : (s[0] & 0xf8) == 0xf0 ? 4 : 0;
+    int n = s[0] < 0x80             ? 1
+            : (s[0] & 0xe0) == 0xc0 ? 2
+            : (s[0] & 0xf0) == 0xe0 ? 3
+            : (s[0] & 0xf8) == 0xf0 ? 4
+                                    : 0;
     if (n == 2 && s[0] < 0xc2)
         return 0;
     for (int k = 1; k < n; k++)
@@ -51,11 +64,21 @@ void svg_write_escaped(FILE *out, const char *text)
         }
         s++;
         switch (c) {
-        case '&': fputs("&amp;", out); break;
-        case '<': fputs("&lt;", out); break;
-        case '>': fputs("&gt;", out); break;
-        case '"': fputs("&quot;", out); break;
-        case '\'': fputs("&#39;", out); break;
+        case '&':
+            fputs("&amp;", out);
+            break;
+        case '<':
+            fputs("&lt;", out);
+            break;
+        case '>':
+            fputs("&gt;", out);
+            break;
+        case '"':
+            fputs("&quot;", out);
+            break;
+        case '\'':
+            fputs("&#39;", out);
+            break;
         default:
             if (c >= 0x80)
                 fputc('?', out);
@@ -68,10 +91,10 @@ void svg_write_escaped(FILE *out, const char *text)
 double svg_text_width(const char *text, double font_size)
 {
     /* DejaVu Sans advance widths, thousandths of an em. */
-    static const short lower[26] = { 613, 635, 550, 635, 615, 352, 635, 634, 278, 278, 579, 278, 974,
-                                     634, 612, 635, 635, 411, 521, 392, 634, 592, 818, 592, 592, 525 };
-    static const short upper[26] = { 684, 686, 698, 770, 632, 575, 775, 752, 295, 295, 656, 557, 863,
-                                     748, 787, 603, 787, 695, 635, 611, 732, 684, 989, 685, 611, 685 };
+    static const short lower[26] = {613, 635, 550, 635, 615, 352, 635, 634, 278, 278, 579, 278, 974,
+                                    634, 612, 635, 635, 411, 521, 392, 634, 592, 818, 592, 592, 525};
+    static const short upper[26] = {684, 686, 698, 770, 632, 575, 775, 752, 295, 295, 656, 557, 863,
+                                    748, 787, 603, 787, 695, 635, 611, 732, 684, 989, 685, 611, 685};
     double em = 0.0;
     const unsigned char *s = (const unsigned char *)text;
     while (s && *s) {
@@ -106,7 +129,9 @@ void svg_plot_begin(FILE *out, double width, double height, int standalone, cons
               out);
     else
         fputs("<svg class=\"plot\"", out);
-    fprintf(out, " width=\"%.0f\" height=\"%.0f\" viewBox=\"0 0 %.0f %.0f\" font-family=\"DejaVu Sans, Verdana, sans-serif\"",
+    fprintf(out,
+            " width=\"%.0f\" height=\"%.0f\" viewBox=\"0 0 %.0f %.0f\" font-family=\"DejaVu Sans, Verdana, "
+            "sans-serif\"",
             width, height, width, height);
     if (aria_label) {
         fputs(" role=\"img\" aria-label=\"", out);
@@ -122,10 +147,11 @@ int svg_plot_end(FILE *out)
     return ferror(out) ? -1 : 0;
 }
 
-void svg_plot_text(FILE *out, double x, double y, double font_size, const char *anchor, int bold, const char *text)
+void svg_plot_text(FILE *out, double x, double y, double font_size, const char *anchor, int bold,
+                   const char *text)
 {
-    fprintf(out, "<text x=\"%.1f\" y=\"%.1f\" font-size=\"%.0f\" text-anchor=\"%s\"%s>", x, y, font_size, anchor,
-            bold ? " font-weight=\"bold\"" : "");
+    fprintf(out, "<text x=\"%.1f\" y=\"%.1f\" font-size=\"%.0f\" text-anchor=\"%s\"%s>", x, y, font_size,
+            anchor, bold ? " font-weight=\"bold\"" : "");
     svg_write_escaped(out, text);
     fputs("</text>\n", out);
 }
@@ -142,21 +168,31 @@ static void marker_path(FILE *out, unsigned style, double x, double y, double r)
         }
         break;
     case SHAPE_CIRCLE:
-        fprintf(out, "M%.1f %.1fa%.1f %.1f 0 1 0 %.1f 0a%.1f %.1f 0 1 0 %.1f 0", x - r, y, r, r, 2 * r, r, r, -2 * r);
+        fprintf(out, "M%.1f %.1fa%.1f %.1f 0 1 0 %.1f 0a%.1f %.1f 0 1 0 %.1f 0", x - r, y, r, r, 2 * r, r, r,
+                -2 * r);
         break;
-    case SHAPE_SQUARE: r *= 0.9; fprintf(out, "M%.1f %.1fh%.1fv%.1fh%.1f", x - r, y - r, 2 * r, 2 * r, -2 * r); break;
-    case SHAPE_DIAMOND: r *= 1.25; fprintf(out, "M%.1f %.1fL%.1f %.1fL%.1f %.1fL%.1f %.1f", x, y - r, x + r, y, x, y + r, x - r, y); break;
+    case SHAPE_SQUARE:
+        r *= 0.9;
+        fprintf(out, "M%.1f %.1fh%.1fv%.1fh%.1f", x - r, y - r, 2 * r, 2 * r, -2 * r);
+        break;
+    case SHAPE_DIAMOND:
+        r *= 1.25;
+        fprintf(out, "M%.1f %.1fL%.1f %.1fL%.1f %.1fL%.1f %.1f", x, y - r, x + r, y, x, y + r, x - r, y);
+        break;
     case SHAPE_TRIANGLE_UP:
         r *= 1.2;
-        fprintf(out, "M%.1f %.1fL%.1f %.1fL%.1f %.1f", x, y - r, x + r * 0.87, y + r * 0.5, x - r * 0.87, y + r * 0.5);
+        fprintf(out, "M%.1f %.1fL%.1f %.1fL%.1f %.1f", x, y - r, x + r * 0.87, y + r * 0.5, x - r * 0.87,
+                y + r * 0.5);
         break;
     case SHAPE_TRIANGLE_DOWN:
         r *= 1.2;
-        fprintf(out, "M%.1f %.1fL%.1f %.1fL%.1f %.1f", x, y + r, x + r * 0.87, y - r * 0.5, x - r * 0.87, y - r * 0.5);
+        fprintf(out, "M%.1f %.1fL%.1f %.1fL%.1f %.1f", x, y + r, x + r * 0.87, y - r * 0.5, x - r * 0.87,
+                y - r * 0.5);
         break;
     case SHAPE_HEXAGON:
         for (int k = 0; k < 6; k++)
-            fprintf(out, "%c%.1f %.1f", k ? 'L' : 'M', x + r * cos(k * 1.0471976), y + r * sin(k * 1.0471976));
+            fprintf(out, "%c%.1f %.1f", k ? 'L' : 'M', x + r * cos(k * 1.0471976),
+                    y + r * sin(k * 1.0471976));
         break;
     default: { /* a thick plus */
         double t = r * 0.38;
@@ -177,7 +213,8 @@ static void write_marker(FILE *out, unsigned style, double x, double y, const ch
 }
 
 /* Tick marks, grid lines and tick labels of one axis. */
-static void write_axis(FILE *out, const plot_axis *a, int vertical, double x0, double y0, double x1, double y1)
+static void write_axis(FILE *out, const plot_axis *a, int vertical, double x0, double y0, double x1,
+                       double y1)
 {
     char label[64];
     for (size_t k = 0; k <= a->tick_count; k++) {
@@ -192,23 +229,27 @@ static void write_axis(FILE *out, const plot_axis *a, int vertical, double x0, d
             plot_axis_tick_label(a, a->ticks[k], label, sizeof label);
         }
         if (vertical) {
-            fprintf(out, "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke=\"#e4e4e4\"/>\n", x0, p, x1, p);
-            fprintf(out, "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke=\"#000\"/>\n", x0 - 4, p, x0, p);
+            fprintf(out, "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke=\"#e4e4e4\"/>\n", x0,
+                    p, x1, p);
+            fprintf(out, "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke=\"#000\"/>\n", x0 - 4,
+                    p, x0, p);
             svg_plot_text(out, x0 - 7, p + 4, 11, "end", 0, label);
         } else {
-            fprintf(out, "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke=\"#e4e4e4\"/>\n", p, y0, p, y1);
-            fprintf(out, "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke=\"#000\"/>\n", p, y0, p, y0 + 4);
+            fprintf(out, "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke=\"#e4e4e4\"/>\n", p,
+                    y0, p, y1);
+            fprintf(out, "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke=\"#000\"/>\n", p, y0,
+                    p, y0 + 4);
             svg_plot_text(out, p, y0 + 17, 11, "middle", 0, label);
         }
     }
     if (a->zero_band) { /* a break mark between the 0 line and the lowest decade */
         double dir = a->pixel_hi >= a->pixel_lo ? 1.0 : -1.0, m = a->pixel_lo + dir * PLOT_AXIS_ZERO_BAND / 2;
         if (vertical)
-            fprintf(out, "<path d=\"M%.1f %.1fl8 -4M%.1f %.1fl8 -4\" stroke=\"#000\" fill=\"none\"/>\n", x0 - 4, m + 1,
-                    x0 - 4, m + 5);
+            fprintf(out, "<path d=\"M%.1f %.1fl8 -4M%.1f %.1fl8 -4\" stroke=\"#000\" fill=\"none\"/>\n",
+                    x0 - 4, m + 1, x0 - 4, m + 5);
         else
-            fprintf(out, "<path d=\"M%.1f %.1fl4 -8M%.1f %.1fl4 -8\" stroke=\"#000\" fill=\"none\"/>\n", m - 3, y0 + 4,
-                    m + 1, y0 + 4);
+            fprintf(out, "<path d=\"M%.1f %.1fl4 -8M%.1f %.1fl4 -8\" stroke=\"#000\" fill=\"none\"/>\n",
+                    m - 3, y0 + 4, m + 1, y0 + 4);
     }
 }
 
@@ -220,7 +261,8 @@ static void axis_title(char *buf, size_t size, const char *title, const plot_axi
 }
 
 /* The front's staircase: between neighbours (by x) a horizontal then a vertical step. */
-static void write_front(FILE *out, const double *px, const double *py, const unsigned char *on_front, size_t n)
+static void write_front(FILE *out, const double *px, const double *py, const unsigned char *on_front,
+                        size_t n)
 {
     size_t *order = malloc((n ? n : 1) * sizeof *order), m = 0;
     if (!order)
@@ -235,7 +277,9 @@ static void write_front(FILE *out, const double *px, const double *py, const uns
             order[j - 1] = t;
         }
     if (m > 0) {
-        fputs("<path class=\"front\" fill=\"none\" stroke=\"#555\" stroke-width=\"1.3\" stroke-dasharray=\"5 3\" d=\"", out);
+        fputs("<path class=\"front\" fill=\"none\" stroke=\"#555\" stroke-width=\"1.3\" stroke-dasharray=\"5 "
+              "3\" d=\"",
+              out);
         for (size_t k = 0; k < m; k++) {
             if (k == 0)
                 fprintf(out, "M%.1f %.1f", px[order[k]], py[order[k]]);
@@ -272,8 +316,11 @@ static void write_tip(FILE *out, const char *detail, double x, double y, double 
     double bx = x + 10 + w <= left + PLOT_PANEL_W ? x + 10 : x - 10 - w, by = y - h / 2;
     bx = fmax(left, bx);
     by = fmin(fmax(by, top), top + PLOT_PANEL_H - h);
-    fprintf(out, "<g class=\"tip\" aria-hidden=\"true\"><rect x=\"%.1f\" y=\"%.1f\" width=\"%.1f\" height=\"%.1f\" rx=\"3\" "
-                 "fill=\"#fffff4\" stroke=\"#333\"/>\n", bx, by, w, h);
+    fprintf(out,
+            "<g class=\"tip\" aria-hidden=\"true\"><rect x=\"%.1f\" y=\"%.1f\" width=\"%.1f\" "
+            "height=\"%.1f\" rx=\"3\" "
+            "fill=\"#fffff4\" stroke=\"#333\"/>\n",
+            bx, by, w, h);
     fprintf(out, "<text font-size=\"%.0f\">", TIP_FONT);
     size_t k = 0;
     for (const char *s = detail;; k++) {
@@ -291,7 +338,8 @@ static void write_tip(FILE *out, const char *detail, double x, double y, double 
     fputs("</text></g>\n", out);
 }
 
-size_t svg_plot_panel(FILE *out, const plot_panel *panel, double left, double top, const char *id, label_spot *spots)
+size_t svg_plot_panel(FILE *out, const plot_panel *panel, double left, double top, const char *id,
+                      label_spot *spots)
 {
     size_t n = panel->count;
     const plot_point *pts = panel->points;
@@ -315,8 +363,8 @@ size_t svg_plot_panel(FILE *out, const plot_panel *panel, double left, double to
         xs[i] = pts[i].x;
         ys[i] = pts[i].y;
     }
-    plot_axis ax = { .pixel_lo = fx0 + INSET, .pixel_hi = fx1 - INSET };
-    plot_axis ay = { .pixel_lo = fy0 - INSET, .pixel_hi = fy1 + INSET };
+    plot_axis ax = {.pixel_lo = fx0 + INSET, .pixel_hi = fx1 - INSET};
+    plot_axis ay = {.pixel_lo = fy0 - INSET, .pixel_hi = fy1 + INSET};
     plot_axis_fit(&ax, xs, n);
     plot_axis_fit(&ay, ys, n);
     ax.pixel_lo = fx0 + INSET;
@@ -342,14 +390,17 @@ size_t svg_plot_panel(FILE *out, const plot_panel *panel, double left, double to
     svg_plot_text(out, left + PLOT_PANEL_W / 2, top + 20, 13, "middle", 1, panel->title);
     write_axis(out, &ay, 1, fx0, fy0, fx1, fy1);
     write_axis(out, &ax, 0, fx0, fy0, fx1, fy1);
-    fprintf(out, "<rect x=\"%.1f\" y=\"%.1f\" width=\"%.1f\" height=\"%.1f\" fill=\"none\" stroke=\"#000\"/>\n", fx0, fy1,
-            fx1 - fx0, fy0 - fy1);
+    fprintf(out,
+            "<rect x=\"%.1f\" y=\"%.1f\" width=\"%.1f\" height=\"%.1f\" fill=\"none\" stroke=\"#000\"/>\n",
+            fx0, fy1, fx1 - fx0, fy0 - fy1);
     char title[256];
     axis_title(title, sizeof title, panel->x_title, &ax);
     svg_plot_text(out, (fx0 + fx1) / 2, fy0 + 36, 12, "middle", 0, title);
     axis_title(title, sizeof title, panel->y_title, &ay);
     double cx = left + 14, cy = (fy0 + fy1) / 2;
-    fprintf(out, "<text x=\"%.1f\" y=\"%.1f\" font-size=\"12\" text-anchor=\"middle\" transform=\"rotate(-90 %.1f %.1f)\">",
+    fprintf(out,
+            "<text x=\"%.1f\" y=\"%.1f\" font-size=\"12\" text-anchor=\"middle\" transform=\"rotate(-90 %.1f "
+            "%.1f)\">",
             cx, cy, cx, cy);
     svg_write_escaped(out, title);
     fputs("</text>\n", out);
@@ -363,17 +414,18 @@ size_t svg_plot_panel(FILE *out, const plot_panel *panel, double left, double to
             if (label_rank(pts, on_front, i) == (size_t)rank)
                 order[m++] = i;
     for (size_t i = 0; i < n; i++) {
-        obstacles[i] = isfinite(px[i]) ? (label_box){ px[i] - MARKER_R - 1, py[i] - MARKER_R - 1, px[i] + MARKER_R + 1,
-                                                      py[i] + MARKER_R + 1 }
-                                       : (label_box){ 0, 0, 0, 0 };
+        obstacles[i] = isfinite(px[i]) ? (label_box){px[i] - MARKER_R - 1, py[i] - MARKER_R - 1,
+                                                     px[i] + MARKER_R + 1, py[i] + MARKER_R + 1}
+                                       : (label_box){0, 0, 0, 0};
         shown += isfinite(px[i]) != 0;
     }
     for (size_t k = 0; k < n; k++) {
         size_t i = order[k];
         int has = pts[i].label && *pts[i].label && isfinite(px[i]);
-        req[k] = (label_request){ px[i], py[i], has ? svg_text_width(pts[i].label, LABEL_FONT) : 0.0, has ? LABEL_H : 0.0 };
+        req[k] = (label_request){px[i], py[i], has ? svg_text_width(pts[i].label, LABEL_FONT) : 0.0,
+                                 has ? LABEL_H : 0.0};
     }
-    label_box area = { fx0 + 2, fy1 + 2, fx1 - 2, fy0 - 2 };
+    label_box area = {fx0 + 2, fy1 + 2, fx1 - 2, fy0 - 2};
     label_spot *ordered = malloc((n ? n : 1) * sizeof *ordered);
     if (!ordered) {
         fputs("</g>\n", out);
@@ -393,7 +445,9 @@ size_t svg_plot_panel(FILE *out, const plot_panel *panel, double left, double to
         double tx = fmin(fmax(px[i], s->box.x0), s->box.x1), ty = fmin(fmax(py[i], s->box.y0), s->box.y1);
         double dx = tx - px[i], dy = ty - py[i], d = sqrt(dx * dx + dy * dy);
         if (d > MARKER_R + 1)
-            fprintf(out, "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke=\"#888\" stroke-width=\"0.8\"/>\n",
+            fprintf(out,
+                    "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke=\"#888\" "
+                    "stroke-width=\"0.8\"/>\n",
                     px[i] + dx / d * (MARKER_R + 1), py[i] + dy / d * (MARKER_R + 1), tx, ty);
     }
     for (size_t i = 0; i < n; i++) {
@@ -412,8 +466,8 @@ size_t svg_plot_panel(FILE *out, const plot_panel *panel, double left, double to
         const label_spot *s = &spots[i];
         if (!s->placed)
             continue;
-        fprintf(out, "<text class=\"label\" x=\"%.1f\" y=\"%.1f\" font-size=\"%.0f\" fill=\"#111\">", s->box.x0 + 0.5,
-                s->box.y1 - 3, LABEL_FONT);
+        fprintf(out, "<text class=\"label\" x=\"%.1f\" y=\"%.1f\" font-size=\"%.0f\" fill=\"#111\">",
+                s->box.x0 + 0.5, s->box.y1 - 3, LABEL_FONT);
         svg_write_escaped(out, pts[i].label);
         fputs("</text>\n", out);
     }
@@ -445,7 +499,8 @@ size_t svg_plot_panel(FILE *out, const plot_panel *panel, double left, double to
         if (placed < wanted && len < sizeof note)
             snprintf(note + len, sizeof note - len, "%zu label%s left out for lack of room.", wanted - placed,
                      wanted - placed == 1 ? "" : "s");
-        for (size_t cut = strlen(note); cut > 0 && svg_text_width(note, 10) > fx1 - fx0;) { /* to the plot's width */
+        for (size_t cut = strlen(note);
+             cut > 0 && svg_text_width(note, 10) > fx1 - fx0;) { /* to the plot's width */
             do
                 cut--;
             while (cut > 0 && ((unsigned char)note[cut] & 0xc0) == 0x80); /* at a character's first byte */
@@ -478,8 +533,11 @@ double svg_plot_legend(FILE *out, const plot_legend_entry *entries, size_t count
         }
         if (out) {
             if (entries[i].style >= PLOT_STYLE_FRONT)
-                fprintf(out, "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke=\"#555\" stroke-width=\"1.3\" "
-                             "stroke-dasharray=\"5 3\"/>\n", x, y + row / 2, x + sample - 6, y + row / 2);
+                fprintf(out,
+                        "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke=\"#555\" "
+                        "stroke-width=\"1.3\" "
+                        "stroke-dasharray=\"5 3\"/>\n",
+                        x, y + row / 2, x + sample - 6, y + row / 2);
             else
                 write_marker(out, entries[i].style, x + 8, y + row / 2, NULL);
             svg_plot_text(out, x + sample - 2, y + row / 2 + 4, 12, "start", 0, entries[i].text);

@@ -1,4 +1,5 @@
-/* svg_plot.h: a dependency-free SVG scatter plot writer: readable axes, marker styles, legend, labels that never overlap, Pareto front, focusable points for HTML. */
+/* svg_plot.h: a dependency-free SVG scatter plot writer: readable axes, marker styles, legend, labels that
+ * never overlap, Pareto front, focusable points for HTML. */
 #ifndef CBVH_TOOLS_SVG_PLOT_H
 #define CBVH_TOOLS_SVG_PLOT_H
 
@@ -57,7 +58,8 @@ void svg_plot_begin(FILE *out, double width, double height, int standalone, cons
 int svg_plot_end(FILE *out);
 
 /* A line of text at (x, y) (baseline), anchor "start", "middle" or "end". */
-void svg_plot_text(FILE *out, double x, double y, double font_size, const char *anchor, int bold, const char *text);
+void svg_plot_text(FILE *out, double x, double y, double font_size, const char *anchor, int bold,
+                   const char *text);
 
 /* Writes one scatter plot into the PLOT_PANEL_W x PLOT_PANEL_H rectangle at
  * (left, top): title, axes (plot_axis.h), grid, the Pareto front, markers and
@@ -67,7 +69,8 @@ void svg_plot_text(FILE *out, double x, double y, double font_size, const char *
  * hover or focus; ids in the panel start with id. spots (may be NULL) receives
  * each point's label box in the document's coordinates. Returns the labels
  * placed; the others are counted in a note under the plot. */
-size_t svg_plot_panel(FILE *out, const plot_panel *panel, double left, double top, const char *id, label_spot *spots);
+size_t svg_plot_panel(FILE *out, const plot_panel *panel, double left, double top, const char *id,
+                      label_spot *spots);
 
 /* Writes the legend's entries (marker and text) in rows that fit `width`,
  * starting at (left, top); out NULL only measures. Returns the height used. */

@@ -21,7 +21,7 @@ cbvh_allocator cbvh_allocator_resolve(const cbvh_allocator *allocator)
 {
     if (allocator && allocator->alloc && allocator->free)
         return *allocator;
-    cbvh_allocator d = { default_alloc, default_free, NULL };
+    cbvh_allocator d = {default_alloc, default_free, NULL};
     return d;
 }
 
@@ -93,6 +93,6 @@ static void meter_free(void *user, void *ptr)
 
 cbvh_allocator cbvh_meter_allocator(cbvh_meter *m)
 {
-    cbvh_allocator a = { meter_alloc, meter_free, m };
+    cbvh_allocator a = {meter_alloc, meter_free, m};
     return a;
 }

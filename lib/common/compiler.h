@@ -1,4 +1,5 @@
-/* compiler.h: the compiler differences in one place: restrict, inlining, hints, target attributes, printf checks. */
+/* compiler.h: the compiler differences in one place: restrict, inlining, hints, target attributes, printf
+ * checks. */
 #ifndef CBVH_COMMON_COMPILER_H
 #define CBVH_COMMON_COMPILER_H
 

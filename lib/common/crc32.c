@@ -1,4 +1,5 @@
-/* crc32.c: CRC32 of any number of bytes: the PCLMULQDQ kernel for the bulk when the CPU has it, zlib for the rest. */
+/* crc32.c: CRC32 of any number of bytes: the PCLMULQDQ kernel for the bulk when the CPU has it, zlib for the
+ * rest. */
 #include <limits.h>
 #include <zlib.h>
 

@@ -12,10 +12,10 @@
  * Computation for Generic Polynomials Using PCLMULQDQ Instruction" (Intel, 2009): x^(4*128+32) and
  * x^(4*128-32) mod P (fold by 64 bytes), x^(128+32) and x^(128-32) mod P (fold by 16 bytes),
  * x^64 mod P (fold 96 to 64 bits), then P' = floor(x^64 / P) and P for the Barrett reduction. */
-static const uint64_t fold_64_bytes[2] = { 0x0154442bd4u, 0x01c6e41596u };
-static const uint64_t fold_16_bytes[2] = { 0x01751997d0u, 0x00ccaa009eu };
+static const uint64_t fold_64_bytes[2] = {0x0154442bd4u, 0x01c6e41596u};
+static const uint64_t fold_16_bytes[2] = {0x01751997d0u, 0x00ccaa009eu};
 static const uint64_t fold_96_bits = 0x0163cd6124u;
-static const uint64_t barrett[2] = { 0x01db710641u, 0x01f7011641u };
+static const uint64_t barrett[2] = {0x01db710641u, 0x01f7011641u};
 
 CBVH_TARGET("pclmul,sse4.1") static inline __m128i fold(__m128i acc, __m128i k, __m128i next)
 {
@@ -30,8 +30,7 @@ static inline __m128i load(const uint8_t *p)
 }
 
 /* `crc` is the running state before the final inversion; size >= 64 and a multiple of 16. */
-CBVH_TARGET("pclmul,sse4.1") uint32_t cbvh_crc32_pclmul(uint32_t crc, const uint8_t *restrict p,
-                                                                    size_t size)
+CBVH_TARGET("pclmul,sse4.1") uint32_t cbvh_crc32_pclmul(uint32_t crc, const uint8_t *restrict p, size_t size)
 {
     __m128i a = _mm_xor_si128(load(p), _mm_cvtsi32_si128((int)crc));
     __m128i b = load(p + 16), c = load(p + 32), d = load(p + 48);

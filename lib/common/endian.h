@@ -28,7 +28,10 @@ static inline void cbvh_write_u16(uint8_t *p, uint16_t v)
 
 static inline void cbvh_write_u32(uint8_t *p, uint32_t v)
 {
-    p[0] = (uint8_t)v; p[1] = (uint8_t)(v >> 8); p[2] = (uint8_t)(v >> 16); p[3] = (uint8_t)(v >> 24);
+    p[0] = (uint8_t)v;
+    p[1] = (uint8_t)(v >> 8);
+    p[2] = (uint8_t)(v >> 16);
+    p[3] = (uint8_t)(v >> 24);
 }
 static inline void cbvh_write_u64(uint8_t *p, uint64_t v)
 {

@@ -7,15 +7,24 @@
 const char *cbvh_result_string(cbvh_result result)
 {
     switch (result) {
-    case CBVH_OK: return "success";
-    case CBVH_ERROR_INVALID_ARGUMENT: return "invalid argument";
-    case CBVH_ERROR_OUT_OF_MEMORY: return "out of memory";
-    case CBVH_ERROR_IO: return "input/output error";
-    case CBVH_ERROR_CORRUPT: return "corrupt file";
-    case CBVH_ERROR_UNSUPPORTED: return "unsupported file (valid but newer)";
-    case CBVH_ERROR_BAD_MESH: return "bad mesh";
-    case CBVH_ERROR_EMPTY_MESH: return "empty mesh";
-    case CBVH_ERROR_LIMIT: return "format limit exceeded";
+    case CBVH_OK:
+        return "success";
+    case CBVH_ERROR_INVALID_ARGUMENT:
+        return "invalid argument";
+    case CBVH_ERROR_OUT_OF_MEMORY:
+        return "out of memory";
+    case CBVH_ERROR_IO:
+        return "input/output error";
+    case CBVH_ERROR_CORRUPT:
+        return "corrupt file";
+    case CBVH_ERROR_UNSUPPORTED:
+        return "unsupported file (valid but newer)";
+    case CBVH_ERROR_BAD_MESH:
+        return "bad mesh";
+    case CBVH_ERROR_EMPTY_MESH:
+        return "empty mesh";
+    case CBVH_ERROR_LIMIT:
+        return "format limit exceeded";
     }
     return "unknown result code";
 }

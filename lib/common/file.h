@@ -1,6 +1,8 @@
-/* file.h: the in-memory form of an opened, validated cbvh file, shared by the loader and the query kernels. */
+/* file.h: the in-memory form of an opened, validated cbvh file, shared by the loader and the queries. */
 #ifndef CBVH_COMMON_FILE_H
 #define CBVH_COMMON_FILE_H
+
+#include <assert.h>
 
 #include "cbvh.h"
 #include "common/format.h"
@@ -11,11 +13,10 @@
  * (query/leaf.h's leaf_vertex4) so that they never read past the section's end. */
 #define CBVH_SECTION_LEAD 64u
 
-/* A mesh whose vertices take up to this many bytes is taken to stay in the caches (half this machine's
+/* A mesh whose vertices take up to this many bytes is taken to stay in the caches (half of a common
  * 1 MiB L2; struct cbvh_file's vertices_far says which side a file is on). Requesting vertices ahead
- * hides misses; where there are none it costs only its instructions: the streams' interleaved tails made
- * Wuson's streams 5-13% slower (3.7K triangles, `cbvh bench`), the single-ray walk's early vertex
- * requests 1-3.5% more instructions a ray. */
+ * hides misses; where there are none it costs only its instructions, so the walks request ahead, and the
+ * streams interleave their tails, only past this size (docs/PERFORMANCE.md). */
 #define CBVH_CACHED_VERTEX_BYTES (512u * 1024u)
 
 /* The margin of struct cbvh_file's origin_near box in extents of the mesh: a quarter of the distance past
@@ -35,15 +36,15 @@ struct cbvh_file {
     cbvh_file_info info;
     cbvh_section_info sections[CBVH_MAX_SECTIONS];
 
-    const void *nodes;           /* the NODES section: read through layout/tree.h only */
-    uint32_t layout;             /* the node layout (cbvh_layout): which module reads the nodes */
-    const void *triangles;       /* info.triangle_count entries in cooked (leaf) order */
-    uint32_t triangle_encoding;  /* CBVH_TRIS_* */
-    const void *vertices;        /* info.vertex_count entries */
-    uint32_t vertex_encoding;    /* CBVH_VERTS_* */
-    uint32_t vertices_far;       /* 1 when there are triangles and their vertices take more than
-                                  * CBVH_CACHED_VERTEX_BYTES: the walks request vertices ahead */
-    float bounds_extent;         /* the bounds' largest extent (max over axes of max - min), set at open */
+    const void *nodes;          /* the NODES section: read through layout/tree.h only */
+    uint32_t layout;            /* the node layout (cbvh_layout): which module reads the nodes */
+    const void *triangles;      /* info.triangle_count entries in cooked (leaf) order */
+    uint32_t triangle_encoding; /* CBVH_TRIS_* */
+    const void *vertices;       /* info.vertex_count entries */
+    uint32_t vertex_encoding;   /* CBVH_VERTS_* */
+    uint32_t vertices_far;      /* 1 when there are triangles and their vertices take more than
+                                 * CBVH_CACHED_VERTEX_BYTES: the walks request vertices ahead */
+    float bounds_extent;        /* the bounds' largest extent (max over axes of max - min), set at open */
     /* An origin inside this box (lane 3 is 0 in both) is next to the mesh: cbvh_ray_prepare (query/raycast.h)
      * then skips cbvh_ray_place_origin, whose tests it would pass. The bounds widened by
      * CBVH_NEAR_ORIGIN_FACTOR times bounds_extent; an empty box when that extent is too large for the
@@ -59,14 +60,14 @@ struct cbvh_file {
      * without one. A ray that misses it hits nothing (cbvh_ray_prepare, query/raycast.h). Set at open. */
     _Alignas(16) float top_lo[4];
     _Alignas(16) float top_hi[4];
-    const void *remap;           /* cooked -> original triangle id; NULL = identity */
-    uint32_t remap_encoding;     /* CBVH_REMAP_* */
-    const uint32_t *unmap;       /* original -> cooked id (owned, built at open when remap is present): dense,
-                                  * original_triangle_count entries, CBVH_NO_HIT for dropped ids; or, when
-                                  * unmap_sorted, cooked ids sorted by original id (triangle_count entries) */
+    const void *remap;       /* cooked -> original triangle id; NULL = identity */
+    uint32_t remap_encoding; /* CBVH_REMAP_* */
+    const uint32_t *unmap;   /* original -> cooked id (owned, built at open when remap is present): dense,
+                              * original_triangle_count entries, CBVH_NO_HIT for dropped ids; or, when
+                              * unmap_sorted, cooked ids sorted by original id (triangle_count entries) */
     uint32_t unmap_sorted;
-    const void *materials;       /* per cooked triangle, or one for all (CBVH_MATS_UNIFORM); NULL = all 0 */
-    uint32_t material_encoding;  /* CBVH_MATS_* */
+    const void *materials;         /* per cooked triangle, or one for all (CBVH_MATS_UNIFORM); NULL = all 0 */
+    uint32_t material_encoding;    /* CBVH_MATS_* */
     const uint8_t *material_names; /* the MATERIAL_NAMES section (info.material_name_count names), or NULL */
     const void *quads; /* NULL, or the triangles expanded for the ray test (cbvh_file_expand_triangles,
                         * SIMD builds): struct leaf_quad g (query/leaf.h) holds cooked triangles
@@ -81,6 +82,14 @@ struct cbvh_file {
     uint32_t owned_count;
 };
 
+/* Records memory the file owns so that close frees it. At most the six known sections, the unmap table, a
+ * read() buffer and the expanded triangles: the table cannot fill up. */
+static inline void cbvh_file_own(struct cbvh_file *f, void *p)
+{
+    assert(f->owned_count < sizeof f->owned / sizeof f->owned[0]);
+    f->owned[f->owned_count++] = p;
+}
+
 /* Where triangle k's entry starts in a TRIANGLES section of encoding `enc`: a LOCAL8 triangle's block
  * (its base and offsets are in the block's first 28 bytes). For prefetching a leaf before its visit. */
 static inline const void *cbvh_indices_entry(const void *tris, int enc, uint32_t k)
@@ -88,7 +97,10 @@ static inline const void *cbvh_indices_entry(const void *tris, int enc, uint32_t
     const uint8_t *t = (const uint8_t *)tris;
     if (enc == CBVH_TRIS_LOCAL8)
         return t + (size_t)CBVH_LOCAL8_BLOCK_SIZE * (k / CBVH_LOCAL8_BLOCK);
-    return t + (enc == CBVH_TRIS_DELTA16 ? 8u : enc == CBVH_TRIS_U16 ? 6u : 12u) * (size_t)k;
+    const uint32_t size = enc == CBVH_TRIS_DELTA16 ? CBVH_TRIS_DELTA16_SIZE
+                          : enc == CBVH_TRIS_U16   ? CBVH_TRIS_U16_SIZE
+                                                   : CBVH_TRIS_U32_SIZE;
+    return t + size * (size_t)k;
 }
 
 /* A vertex index next to triangle k's vertices, from its entry alone: a LOCAL8 triangle's block base (its
@@ -112,7 +124,7 @@ static inline void cbvh_indices_decode(const void *tris, int enc, uint32_t k, ui
         idx[1] = base + o[1];
         idx[2] = base + o[2];
     } else if (enc == CBVH_TRIS_DELTA16) { /* u32 base, i16 d1, i16 d2 */
-        const uint8_t *t = (const uint8_t *)tris + 8u * (size_t)k;
+        const uint8_t *t = (const uint8_t *)tris + CBVH_TRIS_DELTA16_SIZE * (size_t)k;
         const int16_t *d = (const int16_t *)(const void *)(t + 4);
         idx[0] = *(const uint32_t *)(const void *)t;
         idx[1] = idx[0] + (uint32_t)(int32_t)d[0];
@@ -149,7 +161,9 @@ static inline void cbvh_vertex_position(const struct cbvh_file *f, uint32_t v, f
 {
     if (f->vertex_encoding == CBVH_VERTS_F32) {
         const float *q = (const float *)cbvh_vertex_address(f, v);
-        p[0] = q[0]; p[1] = q[1]; p[2] = q[2];
+        p[0] = q[0];
+        p[1] = q[1];
+        p[2] = q[2];
     } else {
         const uint16_t *q = (const uint16_t *)cbvh_vertex_address(f, v);
         p[0] = cbvh_dequantize(q[0], f->grid_origin[0], f->grid_scale[0]);
@@ -158,7 +172,8 @@ static inline void cbvh_vertex_position(const struct cbvh_file *f, uint32_t v, f
     }
 }
 
-static inline void cbvh_triangle_vertices(const struct cbvh_file *f, uint32_t tri, float v0[3], float v1[3], float v2[3])
+static inline void cbvh_triangle_vertices(const struct cbvh_file *f, uint32_t tri, float v0[3], float v1[3],
+                                          float v2[3])
 {
     uint32_t idx[3];
     cbvh_triangle_indices(f, tri, idx);
@@ -173,10 +188,14 @@ static inline uint32_t cbvh_cooked_material(const struct cbvh_file *f, uint32_t 
     if (!f->materials)
         return 0;
     switch (f->material_encoding) {
-    case CBVH_MATS_U8: return ((const uint8_t *)f->materials)[cooked];
-    case CBVH_MATS_U16: return ((const uint16_t *)f->materials)[cooked];
-    case CBVH_MATS_U32: return ((const uint32_t *)f->materials)[cooked];
-    default: return ((const uint32_t *)f->materials)[0]; /* CBVH_MATS_UNIFORM: one id for all */
+    case CBVH_MATS_U8:
+        return ((const uint8_t *)f->materials)[cooked];
+    case CBVH_MATS_U16:
+        return ((const uint16_t *)f->materials)[cooked];
+    case CBVH_MATS_U32:
+        return ((const uint32_t *)f->materials)[cooked];
+    default:
+        return ((const uint32_t *)f->materials)[0]; /* CBVH_MATS_UNIFORM: one id for all */
     }
 }
 

@@ -1,12 +1,16 @@
-/* format.h: constants and bit layouts of the cbvh file format v1 (normative text: fileformat/cbvh-format.md). */
+/* format.h: constants and bit layouts of the cbvh file format v1 (normative: fileformat/cbvh-format.md). */
 #ifndef CBVH_COMMON_FORMAT_H
 #define CBVH_COMMON_FORMAT_H
 
 #include <stdint.h>
 
+#include "cbvh.h" /* CBVH_MAX_LEAF_SIZE */
+
 /* 89 'C' 'B' 'V' 'H' CR LF 1A: the high byte catches 7-bit channels, CR LF
  * catches line-ending conversion, 1A stops DOS `type` (as PNG does). */
-#define CBVH_MAGIC "\x89" "CBVH\r\n\x1a"
+#define CBVH_MAGIC                                                                                           \
+    "\x89"                                                                                                   \
+    "CBVH\r\n\x1a"
 #define CBVH_MAGIC_SIZE 8
 
 #define CBVH_HEADER_SIZE 128
@@ -58,10 +62,15 @@ enum {
 
 enum { CBVH_CODEC_RAW = 0, CBVH_CODEC_ZLIB = 1 };
 
-/* Element encodings per section (element sizes, names and limits: common/encodings.h). */
-enum { CBVH_NODES_Q16 = 0, CBVH_NODES_W4 = 1 };                  /* binary, wide4 layout */
+/* Element encodings per section (element sizes, names and limits: layout/encodings.h). */
+enum { CBVH_NODES_Q16 = 0, CBVH_NODES_W4 = 1 }; /* binary, wide4 layout */
 /* TRIANGLES encoding 3 is reserved: the vector fileformat/unsupported-encoding stands for an unknown one. */
 enum { CBVH_TRIS_U16 = 0, CBVH_TRIS_U32 = 1, CBVH_TRIS_DELTA16 = 2, CBVH_TRIS_LOCAL8 = 4 };
+/* Bytes a triangle of the per-triangle encodings: three u16 or u32 indices; DELTA16's u32 base and two i16.
+ */
+#define CBVH_TRIS_U16_SIZE 6u
+#define CBVH_TRIS_U32_SIZE 12u
+#define CBVH_TRIS_DELTA16_SIZE 8u
 /* LOCAL8 (spec section 4): blocks of CBVH_LOCAL8_BLOCK triangles, each a u32 base vertex index and then
  * 3 u8 offsets a triangle (index = base + offset), so a block's vertices lie within 256 indices. */
 #define CBVH_LOCAL8_BLOCK 8u
@@ -77,7 +86,7 @@ enum { CBVH_NAMES_TABLE = 0 }; /* MATERIAL_NAMES: u32 count, (u32 id, u32 offset
  * reference can name. Depth: the walks' fixed stacks. */
 #define CBVH_MAX_NODES 0x7FFFFFFFu
 #define CBVH_MAX_TRIANGLES 0x10000000u
-#define CBVH_MAX_LEAF_SIZE 16u
+/* CBVH_MAX_LEAF_SIZE: cbvh.h */
 #define CBVH_MAX_DEPTH 64u
 
 /* The largest grid coordinate of a 16-bit box. */

@@ -1,4 +1,5 @@
-/* os.h: the operating-system calls cbvh makes, implemented once for POSIX (posix.c) and once for Windows (win32.c). */
+/* os.h: the operating-system calls cbvh makes, implemented once for POSIX (posix.c) and once for Windows
+ * (win32.c). */
 #ifndef CBVH_COMMON_OS_H
 #define CBVH_COMMON_OS_H
 
@@ -33,14 +34,14 @@ struct cbvh_os_file_bytes {
 
 /* Opens `path` (UTF-8 on Windows) and maps it read-only when `map` is set (falling back to reading when
  * the system cannot map it), or reads it into memory from `a`. Errors name the path and the cause. */
-cbvh_result cbvh_os_read_file(const char *path, int map, const cbvh_allocator *a, struct cbvh_os_file_bytes *out,
-                              cbvh_error *err);
+cbvh_result cbvh_os_read_file(const char *path, int map, const cbvh_allocator *a,
+                              struct cbvh_os_file_bytes *out, cbvh_error *err);
 void cbvh_os_unmap(const uint8_t *bytes, size_t size);
 
 /* Writes `size` bytes to `path` through a temporary file beside it, flushed to disk, then renamed over
  * `path`: readers see the old file or the new one, never a partial one. */
-cbvh_result cbvh_os_write_file_replacing(const char *path, const uint8_t *data, size_t size, const cbvh_allocator *a,
-                                         cbvh_error *err);
+cbvh_result cbvh_os_write_file_replacing(const char *path, const uint8_t *data, size_t size,
+                                         const cbvh_allocator *a, cbvh_error *err);
 
 /* A second thread running fn(arg); the struct must live until cbvh_os_thread_join. */
 struct cbvh_os_thread {

@@ -75,10 +75,9 @@ static cbvh_result read_all(int fd, const char *path, const cbvh_allocator *a, s
  * advice given before any page is touched, then every page mapped at once (as MAP_POPULATE does:
  * validation reads every byte); else MAP_FAILED, and the caller maps it plainly. Where the kernel's page
  * cache holds the file in 2 MiB folios (a file read cold with the advice, on a file system with large
- * folios: ext4 on this project's 6.18 kernel), whole 2 MiB pages of the file are then mapped at once, as
+ * folios such as ext4), whole 2 MiB pages of the file are then mapped at once, as
  * cbvh_os_advise_large_pages gives a copy: a large mesh's walks miss the address translation cache less
- * (the 871K-triangle dragon, 16 MB: incoherent closest about 6% faster, shadow and short rays 5%; the
- * 1M-triangle sphere 2-4%; README). A file cached in small pages (just written) maps as before. */
+ * (docs/PERFORMANCE.md). A file cached in small pages (just written) maps as before. */
 static void *map_on_large_pages(int fd, size_t size)
 {
 #if defined(MADV_HUGEPAGE) && defined(MAP_FIXED)
@@ -129,8 +128,8 @@ static cbvh_result map_or_read(int fd, const char *path, int map, const cbvh_all
     if (out->size == 0)
         return CBVH_OK; /* nothing to map; the header check reports the empty file */
     if (map) {
-        /* Validation reads every byte at once: mapping all pages up front costs less than a fault per page
-         * (measured on the dragon's 31 MB file: 0.5 ms to populate against 3 to 5 ms of faults). */
+        /* Validation reads every byte at once: mapping all pages up front costs less than a fault per
+         * page. */
 #ifdef MAP_POPULATE
         const int flags = MAP_PRIVATE | MAP_POPULATE;
 #else
@@ -148,8 +147,8 @@ static cbvh_result map_or_read(int fd, const char *path, int map, const cbvh_all
     return read_all(fd, path, a, out, err);
 }
 
-cbvh_result cbvh_os_read_file(const char *path, int map, const cbvh_allocator *a, struct cbvh_os_file_bytes *out,
-                              cbvh_error *err)
+cbvh_result cbvh_os_read_file(const char *path, int map, const cbvh_allocator *a,
+                              struct cbvh_os_file_bytes *out, cbvh_error *err)
 {
     memset(out, 0, sizeof *out);
     int fd = open(path, O_RDONLY | O_CLOEXEC);
@@ -239,8 +238,9 @@ static cbvh_result check_target(const char *path, mode_t *mode, int *keep_mode, 
                            : S_ISFIFO(st.st_mode) ? "a FIFO"
                            : S_ISSOCK(st.st_mode) ? "a socket"
                                                   : "not a regular file";
-        return cbvh_fail(err, CBVH_ERROR_IO, "%s is %s: a cooked file replaces only a regular file (or a symbolic link)",
-                         path, what);
+        return cbvh_fail(err, CBVH_ERROR_IO,
+                         "%s is %s: a cooked file replaces only a regular file (or a symbolic link)", path,
+                         what);
     }
     *mode = st.st_mode & 07777;
     *keep_mode = 1;
@@ -326,8 +326,8 @@ static int create_temp(char *temp, const char *path, int *named, sigset_t *saved
     return fd;
 }
 
-cbvh_result cbvh_os_write_file_replacing(const char *path, const uint8_t *data, size_t size, const cbvh_allocator *a,
-                                         cbvh_error *err)
+cbvh_result cbvh_os_write_file_replacing(const char *path, const uint8_t *data, size_t size,
+                                         const cbvh_allocator *a, cbvh_error *err)
 {
     mode_t mode = 0;
     int keep_mode;
@@ -341,7 +341,8 @@ cbvh_result cbvh_os_write_file_replacing(const char *path, const uint8_t *data, 
     int named;
     int fd = create_temp(temp, path, &named, &saved);
     if (fd < 0) {
-        r = cbvh_fail(err, CBVH_ERROR_IO, "cannot create a temporary file beside '%s': %s", path, strerror(errno));
+        r = cbvh_fail(err, CBVH_ERROR_IO, "cannot create a temporary file beside '%s': %s", path,
+                      strerror(errno));
         cbvh_free(a, temp);
         return r;
     }
@@ -383,8 +384,8 @@ cbvh_result cbvh_os_write_file_replacing(const char *path, const uint8_t *data, 
     if (failed) {
         if (named)
             unlink(temp);
-        r = cbvh_fail(err, CBVH_ERROR_IO, "cannot %s the temporary file '%s' for '%s': %s", failed, temp, path,
-                      strerror(saved_errno));
+        r = cbvh_fail(err, CBVH_ERROR_IO, "cannot %s the temporary file '%s' for '%s': %s", failed, temp,
+                      path, strerror(saved_errno));
     } else {
         sync_folder(temp, path);
     }

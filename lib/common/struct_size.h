@@ -1,4 +1,4 @@
-/* struct_size.h: the range of struct_size the public structs that grow accept (cbvh.h, "Structs that grow"). */
+/* struct_size.h: the range of struct_size the public structs that grow accept (cbvh.h). */
 #ifndef CBVH_COMMON_STRUCT_SIZE_H
 #define CBVH_COMMON_STRUCT_SIZE_H
 

@@ -1,4 +1,5 @@
-/* win32.c: the operating-system calls of os.h on Windows (file mapping, _aligned_malloc, threads, MoveFileEx). */
+/* win32.c: the operating-system calls of os.h on Windows (file mapping, _aligned_malloc, threads,
+ * MoveFileEx). */
 #define WIN32_LEAN_AND_MEAN
 #include <windows.h>
 #include <malloc.h>
@@ -58,12 +59,13 @@ static cbvh_result wide_path(const char *path, const cbvh_allocator *a, wchar_t 
 static cbvh_result fail_system(cbvh_error *err, const char *path, const char *what)
 {
     char text[160];
-    return cbvh_fail(err, CBVH_ERROR_IO, "%s: %s: %s", path, what, system_message(GetLastError(), text, sizeof text));
+    return cbvh_fail(err, CBVH_ERROR_IO, "%s: %s: %s", path, what,
+                     system_message(GetLastError(), text, sizeof text));
 }
 
 /* The whole file into a 64-byte aligned buffer from `a`. */
-static cbvh_result read_all(HANDLE h, const char *path, const cbvh_allocator *a, struct cbvh_os_file_bytes *out,
-                            cbvh_error *err)
+static cbvh_result read_all(HANDLE h, const char *path, const cbvh_allocator *a,
+                            struct cbvh_os_file_bytes *out, cbvh_error *err)
 {
     uint8_t *buffer = cbvh_alloc(a, out->size, 64);
     if (!buffer)
@@ -117,8 +119,8 @@ static cbvh_result map_or_read(HANDLE h, const char *path, int map, const cbvh_a
     return read_all(h, path, a, out, err);
 }
 
-cbvh_result cbvh_os_read_file(const char *path, int map, const cbvh_allocator *a, struct cbvh_os_file_bytes *out,
-                              cbvh_error *err)
+cbvh_result cbvh_os_read_file(const char *path, int map, const cbvh_allocator *a,
+                              struct cbvh_os_file_bytes *out, cbvh_error *err)
 {
     memset(out, 0, sizeof *out);
     wchar_t *wide;
@@ -147,7 +149,8 @@ void cbvh_os_unmap(const uint8_t *bytes, size_t size)
     UnmapViewOfFile(bytes);
 }
 
-/* "dir\name" -> "dir\.name.tmp-XXXXXXXX" with X hexadecimal: the same folder, so the rename stays on one volume. */
+/* "dir\name" -> "dir\.name.tmp-XXXXXXXX" with X hexadecimal: the same folder, so the rename stays on one
+ * volume. */
 static char *temp_name(const cbvh_allocator *a, const char *path, unsigned attempt)
 {
     const char *name = path;
@@ -158,7 +161,8 @@ static char *temp_name(const cbvh_allocator *a, const char *path, unsigned attem
     char *t = cbvh_alloc(a, len + 16, 1);
     if (!t)
         return NULL;
-    unsigned tag = (unsigned)GetCurrentProcessId() * 2654435761u ^ (unsigned)GetTickCount() ^ attempt * 40503u;
+    unsigned tag =
+        (unsigned)GetCurrentProcessId() * 2654435761u ^ (unsigned)GetTickCount() ^ attempt * 40503u;
     snprintf(t, len + 16, "%.*s.%s.tmp-%08x", (int)dir_len, path, name, tag);
     return t;
 }
@@ -200,11 +204,12 @@ static cbvh_result create_temp(const char *path, const cbvh_allocator *a, char *
                              system_message(code, text, sizeof text));
         }
     }
-    return cbvh_fail(err, CBVH_ERROR_IO, "cannot create a temporary file beside '%s': 100 names were taken", path);
+    return cbvh_fail(err, CBVH_ERROR_IO, "cannot create a temporary file beside '%s': 100 names were taken",
+                     path);
 }
 
-cbvh_result cbvh_os_write_file_replacing(const char *path, const uint8_t *data, size_t size, const cbvh_allocator *a,
-                                         cbvh_error *err)
+cbvh_result cbvh_os_write_file_replacing(const char *path, const uint8_t *data, size_t size,
+                                         const cbvh_allocator *a, cbvh_error *err)
 {
     wchar_t *wide;
     cbvh_result r = wide_path(path, a, &wide, err);
@@ -238,8 +243,8 @@ cbvh_result cbvh_os_write_file_replacing(const char *path, const uint8_t *data, 
     if (failed) {
         char text[160];
         DeleteFileW(wide_temp);
-        r = cbvh_fail(err, CBVH_ERROR_IO, "cannot %s the temporary file '%s' for '%s': %s", failed, temp, path,
-                      system_message(code, text, sizeof text));
+        r = cbvh_fail(err, CBVH_ERROR_IO, "cannot %s the temporary file '%s' for '%s': %s", failed, temp,
+                      path, system_message(code, text, sizeof text));
     }
     cbvh_free(a, wide_temp);
     cbvh_free(a, temp);

@@ -1,10 +1,10 @@
-/* cook.c: the cooker's entry points: argument and option checks, the phases in order, statistics and timing. */
+/* cook.c: the cooker's entry points: argument and option checks, the phases in order, statistics, timing. */
 #include <math.h>
 #include <stdint.h>
 #include <string.h>
 
 #include "common/alloc.h"
-#include "common/encodings.h"
+#include "layout/encodings.h"
 #include "common/error.h"
 #include "common/format.h"
 #include "common/struct_size.h"
@@ -58,7 +58,8 @@ CBVH_API void cbvh_buffer_free(const cbvh_allocator *allocator, void *data)
     cbvh_free(&a, data);
 }
 
-/* The error for a caller's struct `name` (of type `type`, filled by `init`) whose struct_size is out of range. */
+/* The error for a caller's struct `name` (of type `type`, filled by `init`) whose struct_size is out of
+ * range. */
 static cbvh_result check_struct_size(const char *name, const char *type, const char *init, size_t size,
                                      size_t smallest, size_t largest, cbvh_error *err)
 {
@@ -70,8 +71,8 @@ static cbvh_result check_struct_size(const char *name, const char *type, const c
                          "built against a newer cbvh.h than the library it runs with",
                          name, size, type, largest);
     return cbvh_fail(err, CBVH_ERROR_INVALID_ARGUMENT,
-                     "%s->struct_size is %zu; it must be %zu to %zu: fill the struct with %s(%s, sizeof *%s)", name,
-                     size, smallest, largest, init, name, name);
+                     "%s->struct_size is %zu; it must be %zu to %zu: fill the struct with %s(%s, sizeof *%s)",
+                     name, size, smallest, largest, init, name, name);
 }
 
 /* The caller's options over the defaults, as far as its struct_size reaches. */
@@ -80,8 +81,8 @@ static cbvh_result read_options(const cbvh_cook_options *user, cbvh_cook_options
     default_options(o);
     if (!user)
         return CBVH_OK;
-    cbvh_result r = check_struct_size("options", "cbvh_cook_options", "cbvh_cook_options_init", user->struct_size,
-                                      OPTIONS_SIZE_MIN, sizeof *o, err);
+    cbvh_result r = check_struct_size("options", "cbvh_cook_options", "cbvh_cook_options_init",
+                                      user->struct_size, OPTIONS_SIZE_MIN, sizeof *o, err);
     if (r == CBVH_OK)
         memcpy(o, user, user->struct_size);
     return r;
@@ -91,7 +92,8 @@ static cbvh_result check_options(const cbvh_cook_options *o, cbvh_error *err)
 {
     const cbvh_result bad = CBVH_ERROR_INVALID_ARGUMENT;
     if (o->layout != CBVH_LAYOUT_BINARY && o->layout != CBVH_LAYOUT_WIDE4)
-        return cbvh_fail(err, bad, "options->layout is %d; it must be CBVH_LAYOUT_BINARY (0) or CBVH_LAYOUT_WIDE4 (1)",
+        return cbvh_fail(err, bad,
+                         "options->layout is %d; it must be CBVH_LAYOUT_BINARY (0) or CBVH_LAYOUT_WIDE4 (1)",
                          (int)o->layout);
     if (o->max_leaf_size < 1 || o->max_leaf_size > CBVH_MAX_LEAF_SIZE)
         return cbvh_fail(err, bad, "options->max_leaf_size is %u; it must be 1 to %u", o->max_leaf_size,
@@ -105,10 +107,13 @@ static cbvh_result check_options(const cbvh_cook_options *o, cbvh_error *err)
         return cbvh_fail(err, bad, "options->intersection_cost is %g; it must be finite and > 0",
                          (double)o->intersection_cost);
     if (o->vertex_format != CBVH_VERTEX_FLOAT32 && o->vertex_format != CBVH_VERTEX_QUANTIZED16)
-        return cbvh_fail(err, bad, "options->vertex_format is %d; it must be CBVH_VERTEX_FLOAT32 (0) or "
-                         "CBVH_VERTEX_QUANTIZED16 (1)", (int)o->vertex_format);
+        return cbvh_fail(err, bad,
+                         "options->vertex_format is %d; it must be CBVH_VERTEX_FLOAT32 (0) or "
+                         "CBVH_VERTEX_QUANTIZED16 (1)",
+                         (int)o->vertex_format);
     if (o->compress_level < 0 || o->compress_level > 9)
-        return cbvh_fail(err, bad, "options->compress_level is %d; it must be 0 (raw) to 9", o->compress_level);
+        return cbvh_fail(err, bad, "options->compress_level is %d; it must be 0 (raw) to 9",
+                         o->compress_level);
     if (o->keep_remap != 0 && o->keep_remap != 1)
         return cbvh_fail(err, bad, "options->keep_remap is %d; it must be 0 or 1", o->keep_remap);
     if (o->keep_materials != 0 && o->keep_materials != 1)
@@ -121,9 +126,11 @@ static cbvh_result check_options(const cbvh_cook_options *o, cbvh_error *err)
             return cbvh_fail(err, bad, "options->material_names[%u].name (material id %u) is NULL", i,
                              o->material_names[i].id);
     if (o->material_name_count > 0 && cbvh_cook_material_names_size(o) > CBVH_MAX_MATERIAL_NAME_BYTES)
-        return cbvh_fail(err, bad, "options->material_names: %u names take %llu bytes in the file, more than the "
-                         "%u a file holds", o->material_name_count,
-                         (unsigned long long)cbvh_cook_material_names_size(o), CBVH_MAX_MATERIAL_NAME_BYTES);
+        return cbvh_fail(err, bad,
+                         "options->material_names: %u names take %llu bytes in the file, more than the "
+                         "%u a file holds",
+                         o->material_name_count, (unsigned long long)cbvh_cook_material_names_size(o),
+                         CBVH_MAX_MATERIAL_NAME_BYTES);
     return CBVH_OK;
 }
 
@@ -141,7 +148,8 @@ static cbvh_result check_mesh(const cbvh_mesh *m, cbvh_error *err)
                          m->position_stride);
     const size_t stride = m->position_stride ? m->position_stride : 3 * sizeof(float);
     if (m->vertex_count > 0 && m->vertex_count - 1 > (SIZE_MAX - 3 * sizeof(float)) / stride)
-        return cbvh_fail(err, bad, "mesh->vertex_count %zu times position_stride %zu overflows the address space",
+        return cbvh_fail(err, bad,
+                         "mesh->vertex_count %zu times position_stride %zu overflows the address space",
                          m->vertex_count, stride);
     if (m->triangle_count > SIZE_MAX / 3)
         return cbvh_fail(err, bad, "mesh->triangle_count %zu overflows the address space", m->triangle_count);
@@ -150,8 +158,8 @@ static cbvh_result check_mesh(const cbvh_mesh *m, cbvh_error *err)
 
 /* Everything a cook owns between phases, freed in one place. */
 typedef struct cook_state {
-    cbvh_meter meter;           /* counts what the cook holds; its inner allocator is the caller's */
-    cbvh_allocator a;           /* allocates through the meter */
+    cbvh_meter meter; /* counts what the cook holds; its inner allocator is the caller's */
+    cbvh_allocator a; /* allocates through the meter */
     cook_mesh mesh;
     uint16_t *quantized;
     cook_grid grid;
@@ -189,8 +197,9 @@ static cbvh_result make_grid(cook_state *s, const cbvh_cook_options *o, cbvh_coo
     if (r != CBVH_OK)
         return r;
     if (s->mesh.triangle_count == 0)
-        return cbvh_fail(err, CBVH_ERROR_EMPTY_MESH,
-                         "all triangles collapsed to zero area on the 16-bit vertex grid (quantized vertices)");
+        return cbvh_fail(
+            err, CBVH_ERROR_EMPTY_MESH,
+            "all triangles collapsed to zero area on the 16-bit vertex grid (quantized vertices)");
     return cbvh_cook_mesh_bounds(&s->mesh, err);
 }
 
@@ -210,8 +219,8 @@ static void fill_stats(const cook_state *s, cbvh_cook_stats *st)
 /* Encodes the sections, then frees the mesh and the layout before the file is put together, so the
  * cook never holds them and the file at once. */
 static cbvh_result write_file(cook_state *s, const cbvh_mesh *mesh, const cbvh_cook_options *o,
-                              const cook_progress *progress, uint8_t **out, size_t *out_size, cbvh_cook_stats *st,
-                              cbvh_error *err)
+                              const cook_progress *progress, uint8_t **out, size_t *out_size,
+                              cbvh_cook_stats *st, cbvh_error *err)
 {
     cbvh_result r =
         cbvh_cook_sections_encode(&s->layout, &s->mesh, s->quantized, mesh, o, &s->a, &s->sections, err);
@@ -268,11 +277,12 @@ CBVH_API cbvh_result cbvh_cook(const cbvh_mesh *mesh, const cbvh_cook_options *o
     memset(&s, 0, sizeof s);
     s.meter.inner = cbvh_allocator_resolve(allocator);
     s.a = cbvh_meter_allocator(&s.meter);
-    cook_progress progress = { o->progress, o->progress_user, CBVH_PHASE_PREPARE };
+    cook_progress progress = {o->progress, o->progress_user, CBVH_PHASE_PREPARE};
     /* a wide4 leaf holds at most 8 triangles: a larger limit acts as 8 */
     const uint32_t max_leaf = o->layout == CBVH_LAYOUT_WIDE4 && o->max_leaf_size > CBVH_W4_MAX_LEAF
-                                  ? CBVH_W4_MAX_LEAF : o->max_leaf_size;
-    const cook_build_params params = { max_leaf, o->sah_bins, o->traversal_cost, o->intersection_cost };
+                                  ? CBVH_W4_MAX_LEAF
+                                  : o->max_leaf_size;
+    const cook_build_params params = {max_leaf, o->sah_bins, o->traversal_cost, o->intersection_cost};
     uint8_t *file = NULL;
     size_t file_size = 0;
 
@@ -295,8 +305,9 @@ CBVH_API cbvh_result cbvh_cook(const cbvh_mesh *mesh, const cbvh_cook_options *o
         cook_report(&progress, 0.0);
         /* The reported SAH cost uses unit costs whatever the build's costs, so trees cooked
          * with different options compare (and `cbvh info` computes the same figure). */
-        const uint32_t vertex_size = cbvh_element_size(
-            CBVH_SECTION_VERTICES, o->vertex_format == CBVH_VERTEX_QUANTIZED16 ? CBVH_VERTS_Q16 : CBVH_VERTS_F32);
+        const uint32_t vertex_size =
+            cbvh_element_size(CBVH_SECTION_VERTICES,
+                              o->vertex_format == CBVH_VERTEX_QUANTIZED16 ? CBVH_VERTS_Q16 : CBVH_VERTS_F32);
         r = cbvh_cook_layout_place(&s.tree, s.mesh.triangle_count, &s.grid, o->layout, 1.0f, 1.0f, &s.a,
                                    &s.layout, err);
         cbvh_cook_tree_free(&s.a, &s.tree);

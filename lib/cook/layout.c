@@ -1,8 +1,9 @@
-/* layout.c: the file order of the built tree: the binary layout's depth-first placement (quantized boxes, subtree sizes, sort bytes), the wide one's by place_wide4.c, then triangle and vertex order. */
+/* layout.c: the file order of the built tree: the binary layout's depth-first placement (quantized boxes,
+ * subtree sizes, sort bytes), the wide one's by place_wide4.c, then triangle and vertex order. */
 #include <string.h>
 
 #include "common/alloc.h"
-#include "common/encodings.h"
+#include "layout/encodings.h"
 #include "common/error.h"
 #include "common/format.h"
 #include "cook/cook_internal.h"
@@ -12,22 +13,13 @@
 /* Per build node, what the depth-first placement needs. */
 typedef struct node_info {
     uint16_t qmin[3], qmax[3];
-    uint32_t size;   /* nodes in the subtree */
-    uint32_t tris;   /* triangles in the subtree */
-    uint32_t first;  /* build index of the child placed first (larger area) */
-    uint32_t out;    /* index in the file */
-    uint32_t start;  /* first cooked triangle of the subtree */
-    uint32_t depth;  /* nodes from the root, root = 1 */
+    uint32_t size;  /* nodes in the subtree */
+    uint32_t tris;  /* triangles in the subtree */
+    uint32_t first; /* build index of the child placed first (larger area) */
+    uint32_t out;   /* index in the file */
+    uint32_t start; /* first cooked triangle of the subtree */
+    uint32_t depth; /* nodes from the root, root = 1 */
 } node_info;
-
-double cbvh_cook_quantized_half_area(const cook_grid *g, const uint16_t qmin[3], const uint16_t qmax[3])
-{
-    double d[3];
-    for (int a = 0; a < 3; a++)
-        d[a] = (double)cbvh_dequantize(qmax[a], g->origin[a], g->scale[a]) -
-               (double)cbvh_dequantize(qmin[a], g->origin[a], g->scale[a]);
-    return d[0] * d[1] + d[1] * d[2] + d[2] * d[0];
-}
 
 /* Spec section 5: bit k set when dot(center(first) - center(second), octant_direction(k)) > 0,
  * with d[a] = (qmin + qmax of first - qmin - qmax of second) x grid_scale[a] in double (exact:
@@ -67,7 +59,8 @@ static void measure_subtrees(const cook_tree *t, const cook_grid *g, node_info *
         /* Larger surface area first: more rays enter it, and ties keep the build order. */
         info[i].first = cbvh_cook_quantized_half_area(g, r->qmin, r->qmax) >
                                 cbvh_cook_quantized_half_area(g, l->qmin, l->qmax)
-                            ? n->child + 1 : n->child;
+                            ? n->child + 1
+                            : n->child;
     }
 }
 
@@ -115,7 +108,8 @@ static int delta16_fits(uint32_t base, uint32_t v)
 enum vertex_copies {
     COPIES_NONE,    /* u16 or u32 indices: every vertex once */
     COPIES_DELTA16, /* a triangle whose deltas would not fit in i16 copies its stale vertices */
-    COPIES_LOCAL8   /* a block of CBVH_LOCAL8_BLOCK triangles copies the vertices first used before its window */
+    COPIES_LOCAL8   /* a block of CBVH_LOCAL8_BLOCK triangles copies the vertices first used before its window
+                     */
 };
 
 /* Vertices numbered by first use in cooked order, the leaves' depth-first order in both layouts:
@@ -188,13 +182,15 @@ static uint32_t wide_index_encoding(const cook_layout *l)
 static uint64_t mesh_bytes(const cook_layout *l, uint32_t enc, uint32_t vertex_size)
 {
     const cbvh_encoding *e = cbvh_encoding_of(CBVH_SECTION_TRIANGLES, enc);
-    return cbvh_elements_for(e, l->triangle_count) * e->element_size + (uint64_t)l->vertex_count * vertex_size;
+    return cbvh_elements_for(e, l->triangle_count) * e->element_size +
+           (uint64_t)l->vertex_count * vertex_size;
 }
 
 /* Numbers the vertices and picks the index encoding whose triangles and vertices take the fewest bytes
  * (spec section 4): LOCAL8 with its copies, or the narrowest other encoding (u16, DELTA16 with its
  * copies, u32); ties go to LOCAL8. */
-static cbvh_result number_vertices(const cook_mesh *m, cook_layout *l, uint32_t vertex_size, const cbvh_allocator *a)
+static cbvh_result number_vertices(const cook_mesh *m, cook_layout *l, uint32_t vertex_size,
+                                   const cbvh_allocator *a)
 {
     cbvh_result r = order_vertices(m, l, COPIES_LOCAL8, a);
     if (r != CBVH_OK)
@@ -250,26 +246,34 @@ void cbvh_cook_layout_free(const cbvh_allocator *a, cook_layout *l)
     memset(l, 0, sizeof *l);
 }
 
+/* A binary-layout limit the mesh exceeds: what, how many, the limit, and what to do instead. */
+static cbvh_result binary_limit(cbvh_error *err, const char *what, uint32_t count, const char *unit,
+                                uint32_t max, const char *also)
+{
+    return cbvh_fail(
+        err, CBVH_ERROR_LIMIT,
+        "the %s has %u %s; a binary-layout file holds at most %u (use the wide4 layout%s or split the "
+        "mesh)",
+        what, count, unit, max, also);
+}
+
 /* The binary layout: every build node becomes a file node. */
-static cbvh_result place_binary(const cook_tree *t, const cook_grid *g, float traversal_cost, float intersection_cost,
-                                const cbvh_allocator *a, cook_layout *out, cbvh_error *err)
+static cbvh_result place_binary(const cook_tree *t, const cook_grid *g, float traversal_cost,
+                                float intersection_cost, const cbvh_allocator *a, cook_layout *out,
+                                cbvh_error *err)
 {
     if (out->triangle_count > CBVH_BINARY_MAX_TRIANGLES)
-        return cbvh_fail(err, CBVH_ERROR_LIMIT,
-                         "the mesh has %u triangles; a binary-layout file holds at most %u (use the wide4 layout or "
-                         "split the mesh)",
-                         out->triangle_count, CBVH_BINARY_MAX_TRIANGLES);
+        return binary_limit(err, "mesh", out->triangle_count, "triangles", CBVH_BINARY_MAX_TRIANGLES, "");
     if (t->node_count > CBVH_BINARY_MAX_NODES)
-        return cbvh_fail(err, CBVH_ERROR_LIMIT,
-                         "the tree has %u nodes; a binary-layout file holds at most %u (use the wide4 layout, raise "
-                         "max_leaf_size or split the mesh)",
-                         t->node_count, CBVH_BINARY_MAX_NODES);
+        return binary_limit(err, "tree", t->node_count, "nodes", CBVH_BINARY_MAX_NODES,
+                            ", raise max_leaf_size");
     node_info *info = cbvh_alloc_array(a, t->node_count, sizeof(node_info), 64);
     out->nodes = cbvh_alloc_array(a, t->node_count, sizeof(cbvh_node), 64);
     out->triangle_source = cbvh_alloc_array(a, out->triangle_count, sizeof(uint32_t), 64);
     if (!info || !out->nodes || !out->triangle_source) {
         cbvh_free(a, info);
-        return cbvh_fail(err, CBVH_ERROR_OUT_OF_MEMORY, "out of memory while laying out %u nodes", t->node_count);
+        return cbvh_fail(err, CBVH_ERROR_OUT_OF_MEMORY, "out of memory while laying out %u nodes",
+                         t->node_count);
     }
     out->node_count = t->node_count;
     out->leaf_count = t->leaf_count;
@@ -308,6 +312,7 @@ cbvh_result cbvh_cook_layout_number(const cook_mesh *m, uint32_t vertex_size, co
 {
     l->triangles = cbvh_alloc_array(a, l->triangle_count, 3 * sizeof(uint32_t), 64);
     if (!l->triangles || number_vertices(m, l, vertex_size, a) != CBVH_OK)
-        return cbvh_fail(err, CBVH_ERROR_OUT_OF_MEMORY, "out of memory while ordering %u vertices", m->vertex_count);
+        return cbvh_fail(err, CBVH_ERROR_OUT_OF_MEMORY, "out of memory while ordering %u vertices",
+                         m->vertex_count);
     return CBVH_OK;
 }

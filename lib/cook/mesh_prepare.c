@@ -1,4 +1,5 @@
-/* mesh_prepare.c: validating the caller's mesh, welding equal positions, dropping degenerate triangles and unused vertices. */
+/* mesh_prepare.c: validating the caller's mesh, welding equal positions, dropping degenerate triangles and
+ * unused vertices. */
 #include <float.h>
 #include <math.h>
 #include <stdint.h>
@@ -10,7 +11,7 @@
 
 #define NO_VERTEX UINT32_MAX
 
-static const char axis_name[3] = { 'x', 'y', 'z' };
+static const char axis_name[3] = {'x', 'y', 'z'};
 
 /* The caller's array may be unaligned or strided: copy rather than cast. */
 static void read_position(const cbvh_mesh *m, size_t stride, size_t v, float p[3])
@@ -66,9 +67,10 @@ static cbvh_result check_indices(const cbvh_mesh *mesh, uint32_t *restrict map, 
         for (int c = 0; c < 3; c++) {
             uint32_t i = idx[3 * t + (size_t)c];
             if (i >= verts)
-                return cbvh_fail(err, CBVH_ERROR_BAD_MESH,
-                                 "triangle %zu, corner %d: vertex index %u is out of range (the mesh has %zu vertices)",
-                                 t, c, i, verts);
+                return cbvh_fail(
+                    err, CBVH_ERROR_BAD_MESH,
+                    "triangle %zu, corner %d: vertex index %u is out of range (the mesh has %zu vertices)", t,
+                    c, i, verts);
             n += map[i] == NO_VERTEX;
             map[i] = 0;
         }
@@ -355,11 +357,13 @@ cbvh_result cbvh_cook_prepare(const cbvh_mesh *mesh, const cbvh_allocator *a, co
         return cbvh_fail(err, CBVH_ERROR_EMPTY_MESH, "the mesh has no triangles");
     if ((uint64_t)tris > UINT32_MAX)
         return cbvh_fail(err, CBVH_ERROR_LIMIT,
-                         "the mesh has %zu triangles; original triangle ids are 32-bit (at most 4294967295)", tris);
+                         "the mesh has %zu triangles; original triangle ids are 32-bit (at most 4294967295)",
+                         tris);
     out->input_triangle_count = (uint32_t)tris;
 
     /* Indices are 32-bit, so vertices past 2^32 can never be used. */
-    const uint64_t map_count64 = (uint64_t)mesh->vertex_count > 0x100000000ull ? 0x100000000ull : mesh->vertex_count;
+    const uint64_t map_count64 =
+        (uint64_t)mesh->vertex_count > 0x100000000ull ? 0x100000000ull : mesh->vertex_count;
     const size_t map_count = (size_t)map_count64;
     uint32_t *map = cbvh_alloc_array(a, map_count ? map_count : 1, sizeof(uint32_t), 64);
     if (!map)
@@ -402,7 +406,8 @@ cbvh_result cbvh_cook_prepare(const cbvh_mesh *mesh, const cbvh_allocator *a, co
         r = cbvh_fail(err, CBVH_ERROR_EMPTY_MESH,
                       "all %zu triangles are degenerate (zero area or a repeated vertex)", tris);
     else if (out->triangle_count > CBVH_MAX_TRIANGLES)
-        r = cbvh_fail(err, CBVH_ERROR_LIMIT, "%u triangles remain after dropping degenerate ones; a file holds at most %u",
+        r = cbvh_fail(err, CBVH_ERROR_LIMIT,
+                      "%u triangles remain after dropping degenerate ones; a file holds at most %u",
                       out->triangle_count, CBVH_MAX_TRIANGLES);
     else if (drop_unused(out, welded, map, map_count, a) != CBVH_OK)
         r = out_of_memory(err, "vertex renumbering");

@@ -1,4 +1,5 @@
-/* place_wide4.c: the cooker's side of the 4-wide layout: the build tree collapsed into 64-byte nodes, breadth first. */
+/* place_wide4.c: the cooker's side of the 4-wide layout: the build tree collapsed into 64-byte nodes, breadth
+ * first. */
 #include <string.h>
 
 #include "common/alloc.h"
@@ -27,9 +28,9 @@ static uint32_t slot_to_open(const cook_tree *t, const double *area, const uint3
 
 /* The children of build node b, as build node ids: its two children, then
  * slots opened into their two children (slot_to_open) until there are four or
- * none is internal. So nodes fill up before leaves are chosen (on the Stanford
- * dragon, opening the two-leaf slots first gives 11.6% fewer nodes than
- * opening by area alone, for 0.6% more node visits per ray), and the children
+ * none is internal. So nodes fill up before leaves are chosen (opening the
+ * two-leaf slots first gives fewer nodes than opening by area alone, for
+ * slightly more node visits per ray: docs/PERFORMANCE.md), and the children
  * keep the build's spatial grouping in slot order. Returns how many (1 for a
  * leaf root). */
 static uint32_t collapse(const cook_tree *t, const double *area, uint32_t b, uint32_t kids[CBVH_W4_WIDTH])
@@ -95,8 +96,9 @@ static uint32_t octant_order(const cook_grid *g, const uint16_t q[6][4], uint32_
  * order. Breadth first, leaves of different levels that share vertices would lie far apart; depth first, a
  * subtree's triangles are consecutive, so their vertices get close ids (first-use numbering, layout.c)
  * and LOCAL8's 256-vertex windows need few copies. Writes each node's first_triangle and triangle_source. */
-static cbvh_result tile_depth_first(const cook_tree *t, const double *area, const uint32_t *build_of, uint8_t *nodes,
-                                    uint32_t depth, const cbvh_allocator *a, uint32_t *triangle_source)
+static cbvh_result tile_depth_first(const cook_tree *t, const double *area, const uint32_t *build_of,
+                                    uint8_t *nodes, uint32_t depth, const cbvh_allocator *a,
+                                    uint32_t *triangle_source)
 {
     uint32_t *stack = cbvh_alloc_array(a, (size_t)(CBVH_W4_WIDTH - 1u) * depth + 1u, sizeof(uint32_t), 64);
     if (!stack)
@@ -129,8 +131,9 @@ static cbvh_result tile_depth_first(const cook_tree *t, const double *area, cons
     return CBVH_OK;
 }
 
-cbvh_result cbvh_cook_place_wide4(const cook_tree *t, const cook_grid *g, float traversal_cost, float intersection_cost,
-                             const cbvh_allocator *a, cook_layout *out, cbvh_error *err)
+cbvh_result cbvh_cook_place_wide4(const cook_tree *t, const cook_grid *g, float traversal_cost,
+                                  float intersection_cost, const cbvh_allocator *a, cook_layout *out,
+                                  cbvh_error *err)
 {
     /* At most one wide node per internal build node. */
     const uint32_t capacity = t->node_count - t->leaf_count > 0 ? t->node_count - t->leaf_count : 1;
@@ -144,7 +147,8 @@ cbvh_result cbvh_cook_place_wide4(const cook_tree *t, const cook_grid *g, float 
         cbvh_free(a, area);
         cbvh_free(a, build_of);
         cbvh_free(a, nodes);
-        return cbvh_fail(err, CBVH_ERROR_OUT_OF_MEMORY, "out of memory while laying out %u wide nodes", capacity);
+        return cbvh_fail(err, CBVH_ERROR_OUT_OF_MEMORY, "out of memory while laying out %u wide nodes",
+                         capacity);
     }
     for (uint32_t i = 0; i < t->node_count; i++) {
         cbvh_cook_quantize_box(g, t->nodes[i].lo, t->nodes[i].hi, box[i], box[i] + 3);
@@ -185,7 +189,7 @@ cbvh_result cbvh_cook_place_wide4(const cook_tree *t, const cook_grid *g, float 
             order[o] = octant_order(g, q, used, o);
         for (uint32_t p = 0; p < 6; p++)
             for (uint32_t s = 0; s < 4; s++)
-                cbvh_write_u16(node + CBVH_W4_Q + 8u * p + 2u * s, q[p][s]);
+                cbvh_write_u16(node + cbvh_w4_plane_offset(p, s), q[p][s]);
         cbvh_write_u64(node + CBVH_W4_META, cbvh_w4_make_meta(count, used, internal, order));
     }
     const double root_area = area[0];
@@ -193,7 +197,7 @@ cbvh_result cbvh_cook_place_wide4(const cook_tree *t, const cook_grid *g, float 
     cbvh_free(a, box);
     cbvh_free(a, area);
     cbvh_free(a, build_of);
-    /* The capacity is a bound (the dragon fills 43% of it): the nodes move to an array of their size. */
+    /* The capacity is a bound, well above what a tree uses: the nodes move to an array of their size. */
     uint8_t *fit = r == CBVH_OK ? cbvh_alloc_array(a, node_count, CBVH_W4_NODE_SIZE, 64) : NULL;
     if (fit)
         memcpy(fit, nodes, (size_t)node_count * CBVH_W4_NODE_SIZE);

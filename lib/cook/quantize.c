@@ -1,11 +1,11 @@
-/* quantize.c: the file's 16-bit grid (spec section 6): grid from bounds, conservative node boxes, grid vertices. */
+/* quantize.c: the file's 16-bit grid (spec section 6): grid from bounds, conservative node boxes, grid
+ * vertices. */
 #include <math.h>
 #include <string.h>
 
 #include "common/error.h"
 #include "common/format.h"
 #include "cook/cook_internal.h"
-
 
 static float float_from_bits(uint32_t u)
 {
@@ -40,8 +40,8 @@ cbvh_result cbvh_cook_grid_init(cook_grid *g, const float bmin[3], const float b
         float top = cbvh_dequantize(CBVH_Q_MAX, bmin[a], g->scale[a]);
         if (!isfinite(top) || !(top >= bmax[a]))
             return cbvh_fail(err, CBVH_ERROR_BAD_MESH,
-                             "the mesh's bounds on axis %c (%g to %g) do not fit a finite 16-bit grid", "xyz"[a],
-                             (double)bmin[a], (double)bmax[a]);
+                             "the mesh's bounds on axis %c (%g to %g) do not fit a finite 16-bit grid",
+                             "xyz"[a], (double)bmin[a], (double)bmax[a]);
     }
     return CBVH_OK;
 }
@@ -138,4 +138,13 @@ double cbvh_cook_quantize_vertices(const cook_grid *g, float *positions, uint16_
         worst = e > worst ? e : worst;
     }
     return worst;
+}
+
+double cbvh_cook_quantized_half_area(const cook_grid *g, const uint16_t qmin[3], const uint16_t qmax[3])
+{
+    double d[3];
+    for (int a = 0; a < 3; a++)
+        d[a] = (double)cbvh_dequantize(qmax[a], g->origin[a], g->scale[a]) -
+               (double)cbvh_dequantize(qmin[a], g->origin[a], g->scale[a]);
+    return d[0] * d[1] + d[1] * d[2] + d[2] * d[0];
 }

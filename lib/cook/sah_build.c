@@ -51,9 +51,9 @@ typedef struct workspace {
 } workspace;
 
 typedef struct split {
-    int axis;       /* -1: none found */
-    uint32_t bin;   /* prims in bins below go left */
-    double cost;    /* sum of area x count over both sides */
+    int axis;     /* -1: none found */
+    uint32_t bin; /* prims in bins below go left */
+    double cost;  /* sum of area x count over both sides */
     uint32_t left_count;
     box left, right;
 } split;
@@ -431,8 +431,8 @@ static void init_refs(const cook_mesh *m, prim_ref *restrict refs, box *root, bo
 }
 
 /* Build nodes are allocated a page at a time as the tree grows: the worst case, 2n - 1 nodes for n prims,
- * is about five times what an SAH tree with leaves of several triangles takes (the dragon: 0.37 nodes a
- * triangle), and it was the largest buffer of a cook. */
+ * is several times what an SAH tree with leaves of several triangles takes, and would be the largest
+ * buffer of a cook. */
 #define NODE_PAGE_SHIFT 10 /* 1024 nodes, 32 KiB */
 
 /* What both builders allocate pages from. While the worker runs, both may need a page at once, and the
@@ -440,15 +440,15 @@ static void init_refs(const cook_mesh *m, prim_ref *restrict refs, box *root, bo
 typedef struct page_source {
     const cbvh_allocator *a;
     atomic_flag busy;
-    atomic_bool failed;         /* a page was refused: both builders stop */
+    atomic_bool failed; /* a page was refused: both builders stop */
 } page_source;
 
 /* A builder's nodes: page[i >> page_shift][i & (page_nodes - 1)]. */
 typedef struct node_pages {
-    cook_bnode **page;          /* room for every page the worst case needs; page 0 shares its block */
+    cook_bnode **page; /* room for every page the worst case needs; page 0 shares its block */
     uint32_t page_count;
     uint32_t page_shift;
-    uint32_t page_nodes;        /* a power of two: 1 << NODE_PAGE_SHIFT, or the worst case's when smaller */
+    uint32_t page_nodes; /* a power of two: 1 << NODE_PAGE_SHIFT, or the worst case's when smaller */
 } node_pages;
 
 static inline cook_bnode *node_at(const node_pages *p, uint32_t i)
@@ -491,7 +491,8 @@ static int pages_reach(node_pages *p, uint32_t last, page_source *src)
     while (atomic_flag_test_and_set_explicit(&src->busy, memory_order_acquire))
         ;
     cook_bnode *page = atomic_load_explicit(&src->failed, memory_order_relaxed)
-                           ? NULL : cbvh_alloc_array(src->a, p->page_nodes, sizeof(cook_bnode), 64);
+                           ? NULL
+                           : cbvh_alloc_array(src->a, p->page_nodes, sizeof(cook_bnode), 64);
     if (!page)
         atomic_store_explicit(&src->failed, 1, memory_order_relaxed);
     atomic_flag_clear_explicit(&src->busy, memory_order_release);
@@ -524,7 +525,7 @@ typedef struct builder {
     uint32_t leaf_count;
     uint32_t leaf_size, bins;
     double ct, ci;
-    _Atomic uint64_t done;      /* prims placed in leaves, read by the reporting thread */
+    _Atomic uint64_t done; /* prims placed in leaves, read by the reporting thread */
 } builder;
 
 enum split_outcome { MADE_LEAF, SPLIT, NO_PAGE };
@@ -584,7 +585,7 @@ static enum split_outcome split_node(builder *b, const task *t, task *lt, task *
 
 typedef struct report_state {
     const cook_progress *progress;
-    const builder *other;       /* the worker's counter, or NULL */
+    const builder *other; /* the worker's counter, or NULL */
     uint64_t total, next;
 } report_state;
 
@@ -702,7 +703,7 @@ cbvh_result cbvh_cook_build(cook_mesh *m, const cook_build_params *params, const
     memset(out, 0, sizeof *out);
     const uint32_t tris = m->triangle_count;
 
-    page_source pages = { a, ATOMIC_FLAG_INIT, 0 };
+    page_source pages = {a, ATOMIC_FLAG_INIT, 0};
     builder b;
     memset(&b, 0, sizeof b);
     b.pages = &pages;
@@ -731,7 +732,7 @@ cbvh_result cbvh_cook_build(cook_mesh *m, const cook_build_params *params, const
     root.end = tris;
     root.depth = 1;
     b.node_count = 1;
-    report_state report = { progress, NULL, tris, tris / 64 + 1 };
+    report_state report = {progress, NULL, tris, tris / 64 + 1};
 
     /* Large meshes: the root's second subtree is built on a second thread, into its own
      * nodes, then appended. The tree is the same as a one-thread build's (a subtree depends

@@ -3,7 +3,7 @@
 #include <string.h>
 
 #include "common/alloc.h"
-#include "common/encodings.h"
+#include "layout/encodings.h"
 #include "common/endian.h"
 #include "common/error.h"
 #include "common/format.h"
@@ -74,7 +74,8 @@ static int encode_triangles(const cook_layout *l, const cbvh_allocator *a, cook_
          * block's ids within CBVH_LOCAL8_WINDOW); slots past the last triangle stay 0 */
         memset(p, 0, cbvh_elements_for(e, l->triangle_count) * elem);
         for (uint32_t b = 0; b < l->triangle_count; b += CBVH_LOCAL8_BLOCK, p += elem) {
-            const uint32_t n = l->triangle_count - b < CBVH_LOCAL8_BLOCK ? l->triangle_count - b : CBVH_LOCAL8_BLOCK;
+            const uint32_t n =
+                l->triangle_count - b < CBVH_LOCAL8_BLOCK ? l->triangle_count - b : CBVH_LOCAL8_BLOCK;
             uint32_t base = UINT32_MAX;
             for (uint32_t j = 0; j < 3 * n; j++)
                 base = t[3 * (size_t)b + j] < base ? t[3 * (size_t)b + j] : base;
@@ -161,8 +162,8 @@ static int encode_ids(const cbvh_allocator *a, cook_sections *out, uint32_t type
 }
 
 /* REMAP: cooked triangle -> input id. Left out when asked, or when it would be the identity. */
-static int encode_remap(const cook_layout *l, const cook_mesh *m, const cbvh_cook_options *o, uint32_t *scratch,
-                        const cbvh_allocator *a, cook_sections *out)
+static int encode_remap(const cook_layout *l, const cook_mesh *m, const cbvh_cook_options *o,
+                        uint32_t *scratch, const cbvh_allocator *a, cook_sections *out)
 {
     out->original_triangle_count = l->triangle_count;
     if (!o->keep_remap)
@@ -207,7 +208,8 @@ static int encode_materials(const cook_layout *l, const cook_mesh *m, const cbvh
 /* Orders names by id, then by their bytes (strcmp compares them as unsigned char), as the spec's table is. */
 static int compare_names(const void *xp, const void *yp)
 {
-    const cbvh_material_name *x = *(const cbvh_material_name *const *)xp, *y = *(const cbvh_material_name *const *)yp;
+    const cbvh_material_name *x = *(const cbvh_material_name *const *)xp,
+                             *y = *(const cbvh_material_name *const *)yp;
     if (x->id != y->id)
         return x->id < y->id ? -1 : 1;
     return strcmp(x->name, y->name);

@@ -1,4 +1,5 @@
-/* write.c: the file container: header, section table, 64-byte aligned sections (raw or zlib), CRC32s, zero padding. */
+/* write.c: the file container: header, section table, 64-byte aligned sections (raw or zlib), CRC32s, zero
+ * padding. */
 #include <string.h>
 #include <zlib.h>
 
@@ -98,14 +99,14 @@ static void write_header(uint8_t *file, const cook_header *h, uint32_t section_c
     cbvh_write_u32(file + CBVH_HDR_HEADER_CRC, cbvh_crc32(0, file, CBVH_HDR_HEADER_CRC));
 }
 
-cbvh_result cbvh_cook_write_file(const cook_header *h, cook_sections *s, int compress_level, cbvh_meter *meter,
-                                 const cook_progress *progress, uint8_t **out, size_t *out_size,
-                                 uint64_t stored_size[CBVH_STATS_SECTION_TYPES],
+cbvh_result cbvh_cook_write_file(const cook_header *h, cook_sections *s, int compress_level,
+                                 cbvh_meter *meter, const cook_progress *progress, uint8_t **out,
+                                 size_t *out_size, uint64_t stored_size[CBVH_STATS_SECTION_TYPES],
                                  uint64_t size[CBVH_STATS_SECTION_TYPES], cbvh_error *err)
 {
     cbvh_allocator a = cbvh_meter_allocator(meter);
-    uint8_t *packed[COOK_SLOTS] = { NULL };
-    uint64_t packed_size[COOK_SLOTS] = { 0 }, offset[COOK_SLOTS] = { 0 };
+    uint8_t *packed[COOK_SLOTS] = {NULL};
+    uint64_t packed_size[COOK_SLOTS] = {0}, offset[COOK_SLOTS] = {0};
     cbvh_result r = CBVH_OK;
     *out = NULL;
     *out_size = 0;
@@ -163,7 +164,8 @@ cbvh_result cbvh_cook_write_file(const cook_header *h, cook_sections *s, int com
     for (uint32_t i = 0; i < s->count; i++)
         cbvh_free(&a, packed[i]);
     if (r == CBVH_ERROR_OUT_OF_MEMORY)
-        return cbvh_fail(err, r, "out of memory while writing the file (%llu bytes)", (unsigned long long)end);
+        return cbvh_fail(err, r, "out of memory while writing the file (%llu bytes)",
+                         (unsigned long long)end);
     if (r != CBVH_OK)
         return cbvh_fail(err, r, "zlib failed to compress a section");
     cook_report(progress, 1.0);

@@ -34,11 +34,26 @@ typedef struct cbvh_node {
 #define CBVH_BINARY_MAX_NODES 0x7FFFFFu
 #define CBVH_BINARY_MAX_TRIANGLES 0x7FFFFFFu
 
-static inline int cbvh_node_is_leaf(uint32_t word) { return (word & CBVH_NODE_LEAF_BIT) != 0; }
-static inline uint32_t cbvh_node_subtree_size(uint32_t word) { return word & CBVH_NODE_SIZE_MASK; }
-static inline uint32_t cbvh_node_sort_byte(uint32_t word) { return (word >> CBVH_NODE_SORT_SHIFT) & 0xFFu; }
-static inline uint32_t cbvh_leaf_first(uint32_t word) { return word & CBVH_NODE_FIRST_MASK; }
-static inline uint32_t cbvh_leaf_count(uint32_t word) { return ((word >> CBVH_NODE_COUNT_SHIFT) & 0xFu) + 1u; }
+static inline int cbvh_node_is_leaf(uint32_t word)
+{
+    return (word & CBVH_NODE_LEAF_BIT) != 0;
+}
+static inline uint32_t cbvh_node_subtree_size(uint32_t word)
+{
+    return word & CBVH_NODE_SIZE_MASK;
+}
+static inline uint32_t cbvh_node_sort_byte(uint32_t word)
+{
+    return (word >> CBVH_NODE_SORT_SHIFT) & 0xFFu;
+}
+static inline uint32_t cbvh_leaf_first(uint32_t word)
+{
+    return word & CBVH_NODE_FIRST_MASK;
+}
+static inline uint32_t cbvh_leaf_count(uint32_t word)
+{
+    return ((word >> CBVH_NODE_COUNT_SHIFT) & 0xFu) + 1u;
+}
 
 static inline uint32_t cbvh_make_internal(uint32_t subtree_size, uint32_t sort_byte)
 {

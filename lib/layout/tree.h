@@ -1,4 +1,4 @@
-/* tree.h: the node-layout interface: subtrees, children, boxes and leaves, whatever the file's node layout. */
+/* tree.h: the node-layout interface: subtrees, children, boxes and leaves, whatever the node layout. */
 #ifndef CBVH_LAYOUT_TREE_H
 #define CBVH_LAYOUT_TREE_H
 
@@ -69,8 +69,8 @@ static inline int cbvh_tree_is_leaf(const struct cbvh_file *f, const uint32_t la
 }
 
 /* A leaf's cooked triangles [*first, *first + *count). */
-static inline void cbvh_tree_leaf(const struct cbvh_file *f, const uint32_t layout, cbvh_ref r, uint32_t *first,
-                                  uint32_t *count)
+static inline void cbvh_tree_leaf(const struct cbvh_file *f, const uint32_t layout, cbvh_ref r,
+                                  uint32_t *first, uint32_t *count)
 {
     if (layout == CBVH_LAYOUT_WIDE4) {
         *first = cbvh_w4_ref_first(r);
@@ -126,7 +126,8 @@ static inline uint32_t cbvh_tree_children(const struct cbvh_file *f, const uint3
 }
 
 /* Grid coordinate k of box `box`: k = 0, 1, 2 its qmin x, y, z; 3, 4, 5 its qmax x, y, z. */
-static inline uint32_t cbvh_tree_box_coord(const struct cbvh_file *f, const uint32_t layout, uint32_t box, uint32_t k)
+static inline uint32_t cbvh_tree_box_coord(const struct cbvh_file *f, const uint32_t layout, uint32_t box,
+                                           uint32_t k)
 {
     if (layout == CBVH_LAYOUT_WIDE4)
         return cbvh_w4_plane(cbvh_w4_node(f->nodes, box / CBVH_W4_WIDTH), k, box % CBVH_W4_WIDTH);
@@ -167,7 +168,8 @@ static inline void cbvh_tree_box(const struct cbvh_file *f, const uint32_t layou
 {
     for (uint32_t a = 0; a < 3; a++) {
         lo[a] = cbvh_dequantize(cbvh_tree_box_coord(f, layout, box, a), f->grid_origin[a], f->grid_scale[a]);
-        hi[a] = cbvh_dequantize(cbvh_tree_box_coord(f, layout, box, 3 + a), f->grid_origin[a], f->grid_scale[a]);
+        hi[a] =
+            cbvh_dequantize(cbvh_tree_box_coord(f, layout, box, 3 + a), f->grid_origin[a], f->grid_scale[a]);
     }
 }
 

@@ -113,11 +113,18 @@ static inline const uint8_t *cbvh_w4_node(const void *nodes, uint32_t n)
     return (const uint8_t *)nodes + (size_t)n * CBVH_W4_NODE_SIZE;
 }
 
-/* Plane k of slot s. The file is little-endian, and so is every host the library builds for (configure checks). */
+/* Where plane k of slot s lies in a node: the planes' one addressing, for readers and the cooker. */
+static inline uint32_t cbvh_w4_plane_offset(uint32_t k, uint32_t s)
+{
+    return CBVH_W4_Q + 8u * k + 2u * s;
+}
+
+/* Plane k of slot s. The file is little-endian, and so is every host the library builds for (configure
+ * checks). */
 static inline uint32_t cbvh_w4_plane(const uint8_t *node, uint32_t k, uint32_t s)
 {
     uint16_t q;
-    memcpy(&q, node + CBVH_W4_Q + 8u * k + 2u * s, sizeof q);
+    memcpy(&q, node + cbvh_w4_plane_offset(k, s), sizeof q);
     return q;
 }
 
@@ -127,15 +134,30 @@ static inline uint32_t cbvh_w4_popcount(uint32_t mask4)
     return (uint32_t)(0x4332322132212110ull >> (4u * mask4)) & 0xFu;
 }
 
-static inline uint64_t cbvh_w4_meta(const uint8_t *node) { return cbvh_read_u64(node + CBVH_W4_META); }
-static inline uint32_t cbvh_w4_first_child(const uint8_t *node) { return cbvh_read_u32(node + CBVH_W4_FIRST_CHILD); }
+static inline uint64_t cbvh_w4_meta(const uint8_t *node)
+{
+    return cbvh_read_u64(node + CBVH_W4_META);
+}
+static inline uint32_t cbvh_w4_first_child(const uint8_t *node)
+{
+    return cbvh_read_u32(node + CBVH_W4_FIRST_CHILD);
+}
 static inline uint32_t cbvh_w4_first_triangle(const uint8_t *node)
 {
     return cbvh_read_u32(node + CBVH_W4_FIRST_TRIANGLE);
 }
-static inline uint32_t cbvh_w4_used(uint64_t meta) { return (uint32_t)(meta >> 16) & 0xFu; }
-static inline uint32_t cbvh_w4_internal(uint64_t meta) { return (uint32_t)(meta >> 20) & 0xFu; }
-static inline uint32_t cbvh_w4_count(uint64_t meta, uint32_t s) { return ((uint32_t)(meta >> (4u * s)) & 0xFu) + 1u; }
+static inline uint32_t cbvh_w4_used(uint64_t meta)
+{
+    return (uint32_t)(meta >> 16) & 0xFu;
+}
+static inline uint32_t cbvh_w4_internal(uint64_t meta)
+{
+    return (uint32_t)(meta >> 20) & 0xFu;
+}
+static inline uint32_t cbvh_w4_count(uint64_t meta, uint32_t s)
+{
+    return ((uint32_t)(meta >> (4u * s)) & 0xFu) + 1u;
+}
 static inline uint32_t cbvh_w4_order(uint64_t meta, uint32_t octant)
 {
     return (uint32_t)(meta >> (24u + 5u * octant)) & 0x1Fu;
@@ -171,8 +193,17 @@ static inline uint32_t cbvh_w4_child_ref(const uint8_t *node, uint64_t meta, uin
     return CBVH_W4_LEAF_BIT | (cbvh_w4_count(meta, s) - 1u) << CBVH_W4_COUNT_SHIFT | first;
 }
 
-static inline int cbvh_w4_ref_is_leaf(uint32_t ref) { return (ref & CBVH_W4_LEAF_BIT) != 0; }
-static inline uint32_t cbvh_w4_ref_first(uint32_t ref) { return ref & CBVH_W4_FIRST_MASK; }
-static inline uint32_t cbvh_w4_ref_count(uint32_t ref) { return ((ref >> CBVH_W4_COUNT_SHIFT) & 7u) + 1u; }
+static inline int cbvh_w4_ref_is_leaf(uint32_t ref)
+{
+    return (ref & CBVH_W4_LEAF_BIT) != 0;
+}
+static inline uint32_t cbvh_w4_ref_first(uint32_t ref)
+{
+    return ref & CBVH_W4_FIRST_MASK;
+}
+static inline uint32_t cbvh_w4_ref_count(uint32_t ref)
+{
+    return ((ref >> CBVH_W4_COUNT_SHIFT) & 7u) + 1u;
+}
 
 #endif

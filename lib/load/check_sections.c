@@ -1,4 +1,5 @@
-/* check_sections.c: runs the element checks over every known section chunk by chunk, each chunk's pending CRC first, so it is read from memory once. */
+/* check_sections.c: runs the element checks over every known section chunk by chunk, each chunk's pending CRC
+ * first, so it is read from memory once. */
 #include "common/error.h"
 #include "layout/binary.h"
 #include "layout/wide4.h"
@@ -41,8 +42,8 @@ static cbvh_result check_section(const struct cbvh_file *f, const cbvh_section_m
 
 cbvh_result cbvh_check_sections(struct cbvh_file *f, const cbvh_section_map *map, cbvh_error *err)
 {
-    cbvh_tree_walk walk = { 0 };
-    cbvh_w4_walk w4_walk = { 0 };
+    cbvh_tree_walk walk = {0};
+    cbvh_w4_walk w4_walk = {0};
     const int wide = f->layout == CBVH_LAYOUT_WIDE4;
     cbvh_vertex_bounds bounds;
     cbvh_vertex_bounds_init(&bounds);
@@ -62,8 +63,9 @@ cbvh_result cbvh_check_sections(struct cbvh_file *f, const cbvh_section_map *map
     if (r == CBVH_OK && f->material_names)
         r = check_section(f, map, CBVH_SECTION_MATERIAL_NAMES, f->material_names, NULL, NULL, err);
     if (r == CBVH_OK && f->material_names)
-        r = cbvh_material_names_check(f, &f->sections[map->index[cbvh_section_slot(CBVH_SECTION_MATERIAL_NAMES)]],
-                                      &f->info.material_name_count, err);
+        r = cbvh_material_names_check(
+            f, &f->sections[map->index[cbvh_section_slot(CBVH_SECTION_MATERIAL_NAMES)]],
+            &f->info.material_name_count, err);
     if (r == CBVH_OK)
         r = wide ? cbvh_w4_tree_finish(f, &w4_walk, err) : cbvh_tree_finish(f, &walk, err);
     if (r == CBVH_OK)

@@ -1,4 +1,4 @@
-/* file_info.c: what an opened file says about itself: info, sections, triangles and materials by original id. */
+/* file_info.c: what an opened file says about itself: info, sections, triangles and materials by id. */
 #include <string.h>
 
 #include "common/endian.h"
@@ -81,7 +81,8 @@ static const char *name_entry(const struct cbvh_file *f, uint32_t index, uint32_
 {
     const uint8_t *e = f->material_names + 4 + 8 * (size_t)index;
     *id = cbvh_read_u32(e);
-    return (const char *)f->material_names + 4 + 8 * (size_t)f->info.material_name_count + cbvh_read_u32(e + 4);
+    return (const char *)f->material_names + 4 + 8 * (size_t)f->info.material_name_count +
+           cbvh_read_u32(e + 4);
 }
 
 const char *cbvh_file_get_material_name(const cbvh_file *file, uint32_t index, uint32_t *id)

@@ -1,4 +1,5 @@
-/* load.c: the loading pipeline: header, table, section placement (in place, copied or inflated), section checks. */
+/* load.c: the loading pipeline: header, table, section placement (in place, copied or inflated), section
+ * checks. */
 #include <assert.h>
 #include <float.h>
 #include <math.h>
@@ -9,14 +10,6 @@
 #include "common/error.h"
 #include "layout/tree.h"
 #include "load/load.h"
-
-void cbvh_file_own(struct cbvh_file *f, void *p)
-{
-    /* At most the six known sections, the unmap table, a read() buffer and the expanded triangles: the
-     * table cannot fill up. */
-    assert(f->owned_count < sizeof f->owned / sizeof f->owned[0]);
-    f->owned[f->owned_count++] = p;
-}
 
 /* Where a known section's decoded bytes are: in place when raw and cbvh_in_place (the offset of a
  * section is past the header: CBVH_SECTION_LEAD bytes before it are the file's), else in an owned
@@ -39,8 +32,9 @@ static cbvh_result place_section(struct cbvh_file *f, uint32_t index, const void
     } else {
         owned = cbvh_alloc_walked(&f->allocator, CBVH_SECTION_LEAD + (size_t)s->size, 64);
         if (!owned)
-            return cbvh_fail(err, CBVH_ERROR_OUT_OF_MEMORY, "section %u: cannot allocate %llu bytes for an aligned copy",
-                             index, (unsigned long long)s->size);
+            return cbvh_fail(err, CBVH_ERROR_OUT_OF_MEMORY,
+                             "section %u: cannot allocate %llu bytes for an aligned copy", index,
+                             (unsigned long long)s->size);
         memcpy(owned + CBVH_SECTION_LEAD, src, (size_t)s->size);
     }
     memset(owned, 0, CBVH_SECTION_LEAD);
@@ -51,7 +45,7 @@ static cbvh_result place_section(struct cbvh_file *f, uint32_t index, const void
 
 static cbvh_result place_sections(struct cbvh_file *f, const cbvh_section_map *map, cbvh_error *err)
 {
-    const void *where[CBVH_KNOWN_SECTIONS] = { NULL };
+    const void *where[CBVH_KNOWN_SECTIONS] = {NULL};
     for (int t = 0; t < CBVH_KNOWN_SECTIONS; t++) {
         if (map->index[t] < 0)
             continue;
@@ -60,8 +54,9 @@ static cbvh_result place_sections(struct cbvh_file *f, const cbvh_section_map *m
             return r;
     }
     f->nodes = where[CBVH_SECTION_NODES - 1];
-    f->layout = f->sections[map->index[cbvh_section_slot(CBVH_SECTION_NODES)]].encoding == CBVH_NODES_W4 ? CBVH_LAYOUT_WIDE4
-                                                                                          : CBVH_LAYOUT_BINARY;
+    f->layout = f->sections[map->index[cbvh_section_slot(CBVH_SECTION_NODES)]].encoding == CBVH_NODES_W4
+                    ? CBVH_LAYOUT_WIDE4
+                    : CBVH_LAYOUT_BINARY;
     f->info.layout = f->layout;
     f->triangles = where[CBVH_SECTION_TRIANGLES - 1];
     f->vertices = where[CBVH_SECTION_VERTICES - 1];

@@ -8,7 +8,7 @@
 #include "common/compiler.h"
 #include "common/file.h"
 #include "common/crc32.h"
-#include "common/encodings.h"
+#include "layout/encodings.h"
 
 /* Index in f->sections of each known section type (0 = NODES .. 4 = MATERIALS), -1 when absent;
  * crc_pending: a raw section used in place whose CRC is checked chunk by chunk with its content. */
@@ -51,14 +51,16 @@ typedef struct cbvh_tree_walk {
     uint32_t begin[CBVH_MAX_DEPTH], end[CBVH_MAX_DEPTH], depth[CBVH_MAX_DEPTH]; /* pending second children */
     uint32_t top, next_triangle, max_depth, current_depth, after_leaf, bad_box;
 } cbvh_tree_walk;
-cbvh_result cbvh_tree_check(const struct cbvh_file *f, void *walk, uint32_t begin, uint32_t end, cbvh_error *err);
+cbvh_result cbvh_tree_check(const struct cbvh_file *f, void *walk, uint32_t begin, uint32_t end,
+                            cbvh_error *err);
 cbvh_result cbvh_tree_finish(const struct cbvh_file *f, const cbvh_tree_walk *walk, cbvh_error *err);
 
 /* Wide4 nodes: slots, links, levels and leaf ranges (format spec section 5.2). Start from a zeroed walk. */
 typedef struct cbvh_w4_walk {
     uint32_t next_child, next_triangle, level_end, depth;
 } cbvh_w4_walk;
-cbvh_result cbvh_w4_tree_check(const struct cbvh_file *f, void *walk, uint32_t begin, uint32_t end, cbvh_error *err);
+cbvh_result cbvh_w4_tree_check(const struct cbvh_file *f, void *walk, uint32_t begin, uint32_t end,
+                               cbvh_error *err);
 cbvh_result cbvh_w4_tree_finish(const struct cbvh_file *f, const cbvh_w4_walk *walk, cbvh_error *err);
 
 /* Triangles: every vertex index below vertex_count (no state). */
@@ -67,7 +69,7 @@ cbvh_result cbvh_indices_check(const struct cbvh_file *f, void *unused, uint32_t
 
 /* Vertices: finite, and their bounds equal to the header's. */
 typedef struct cbvh_vertex_bounds {
-    float lo[3], hi[3];    /* float vertices */
+    float lo[3], hi[3];      /* float vertices */
     uint32_t qlo[3], qhi[3]; /* grid vertices */
 } cbvh_vertex_bounds;
 void cbvh_vertex_bounds_init(cbvh_vertex_bounds *b);
@@ -82,7 +84,8 @@ typedef struct cbvh_unmap_build {
     int dense;
 } cbvh_unmap_build;
 cbvh_result cbvh_unmap_begin(struct cbvh_file *f, cbvh_unmap_build *b, cbvh_error *err);
-cbvh_result cbvh_remap_check(const struct cbvh_file *f, void *build, uint32_t begin, uint32_t end, cbvh_error *err);
+cbvh_result cbvh_remap_check(const struct cbvh_file *f, void *build, uint32_t begin, uint32_t end,
+                             cbvh_error *err);
 cbvh_result cbvh_unmap_finish(const struct cbvh_file *f, const cbvh_unmap_build *b, cbvh_error *err);
 
 /* MATERIAL_NAMES (section `s`, at f->material_names): a count, then entries of (id, offset) in increasing
@@ -97,8 +100,5 @@ cbvh_result cbvh_check_sections(struct cbvh_file *f, const cbvh_section_map *map
 /* Runs every step on f->bytes / f->size (set by the caller, with f->allocator);
  * on failure the caller frees what f owns, as cbvh_close does. */
 cbvh_result cbvh_load(struct cbvh_file *f, cbvh_error *err);
-
-/* Records memory the file owns so that close frees it. */
-void cbvh_file_own(struct cbvh_file *f, void *p);
 
 #endif

@@ -48,8 +48,8 @@ static cbvh_result finish(struct cbvh_file *f, cbvh_file **out_file, cbvh_error 
     return CBVH_OK;
 }
 
-cbvh_result cbvh_open_memory(const void *data, size_t size, const cbvh_allocator *allocator, cbvh_file **out_file,
-                             cbvh_error *err)
+cbvh_result cbvh_open_memory(const void *data, size_t size, const cbvh_allocator *allocator,
+                             cbvh_file **out_file, cbvh_error *err)
 {
     struct cbvh_file *f;
     static const uint8_t nothing;
@@ -83,7 +83,8 @@ static cbvh_result open_path(const char *path, int map, const cbvh_allocator *al
     return finish(f, out_file, err);
 }
 
-cbvh_result cbvh_open_path(const char *path, const cbvh_allocator *allocator, cbvh_file **out_file, cbvh_error *err)
+cbvh_result cbvh_open_path(const char *path, const cbvh_allocator *allocator, cbvh_file **out_file,
+                           cbvh_error *err)
 {
     return open_path(path, 1, allocator, out_file, err);
 }

@@ -28,7 +28,8 @@ static cbvh_result check_identity(const uint8_t *b, size_t size, cbvh_error *err
         while (b[i] == (uint8_t)CBVH_MAGIC[i])
             i++;
         return CORRUPT("not a cbvh file: bad magic at byte %zu (0x%02x instead of 0x%02x)%s", i, b[i],
-                       (uint8_t)CBVH_MAGIC[i], i >= 5 ? "; line endings converted by a text-mode transfer?" : "");
+                       (uint8_t)CBVH_MAGIC[i],
+                       i >= 5 ? "; line endings converted by a text-mode transfer?" : "");
     }
     if (size < CBVH_HDR_VERSION + 4)
         return CORRUPT("truncated: %zu bytes, the header needs %d", size, CBVH_HEADER_SIZE);
@@ -36,15 +37,15 @@ static cbvh_result check_identity(const uint8_t *b, size_t size, cbvh_error *err
     if (version == 0)
         return CORRUPT("header byte %d: format version 0 is not valid", CBVH_HDR_VERSION);
     if (version > CBVH_FORMAT_VERSION)
-        return cbvh_fail(err, CBVH_ERROR_UNSUPPORTED, "format version %u is newer than this reader's (%d)", version,
-                         CBVH_FORMAT_VERSION);
+        return cbvh_fail(err, CBVH_ERROR_UNSUPPORTED, "format version %u is newer than this reader's (%d)",
+                         version, CBVH_FORMAT_VERSION);
     if (size < CBVH_HEADER_SIZE)
         return CORRUPT("truncated: %zu bytes, the header needs %d", size, CBVH_HEADER_SIZE);
     uint32_t stored = cbvh_read_u32(b + CBVH_HDR_HEADER_CRC);
     uint32_t actual = cbvh_crc32(0, b, CBVH_HDR_HEADER_CRC);
     if (stored != actual)
-        return CORRUPT("header CRC mismatch (byte %d: stored 0x%08x, computed 0x%08x)", CBVH_HDR_HEADER_CRC, stored,
-                       actual);
+        return CORRUPT("header CRC mismatch (byte %d: stored 0x%08x, computed 0x%08x)", CBVH_HDR_HEADER_CRC,
+                       stored, actual);
     return CBVH_OK;
 }
 
@@ -52,26 +53,28 @@ static cbvh_result check_identity(const uint8_t *b, size_t size, cbvh_error *err
 static cbvh_result check_counts(const cbvh_file_info *in, uint32_t original, cbvh_error *err)
 {
     if (in->section_count < 3 || in->section_count > CBVH_MAX_SECTIONS)
-        return CORRUPT("header byte %d: section_count %u is outside 3..%d", CBVH_HDR_SECTION_COUNT, in->section_count,
-                       CBVH_MAX_SECTIONS);
+        return CORRUPT("header byte %d: section_count %u is outside 3..%d", CBVH_HDR_SECTION_COUNT,
+                       in->section_count, CBVH_MAX_SECTIONS);
     if (in->triangle_count < 1 || in->triangle_count > CBVH_MAX_TRIANGLES)
         return CORRUPT("header byte %d: triangle_count %u is outside 1..%u", CBVH_HDR_TRIANGLE_COUNT,
                        in->triangle_count, CBVH_MAX_TRIANGLES);
-    /* Every stored vertex is used, so at most 3 per triangle: this also bounds what a zlib section may inflate to. */
+    /* Every stored vertex is used, so at most 3 per triangle: this also bounds what a zlib section may
+     * inflate to. */
     if (in->vertex_count < 3 || (uint64_t)in->vertex_count > 3u * (uint64_t)in->triangle_count)
-        return CORRUPT("header byte %d: vertex_count %u is outside 3..3 x triangle_count (%u)", CBVH_HDR_VERTEX_COUNT,
-                       in->vertex_count, in->triangle_count);
+        return CORRUPT("header byte %d: vertex_count %u is outside 3..3 x triangle_count (%u)",
+                       CBVH_HDR_VERTEX_COUNT, in->vertex_count, in->triangle_count);
     if (in->node_count < 1 || in->node_count > CBVH_MAX_NODES)
         return CORRUPT("header byte %d: node_count %u is outside 1..%u", CBVH_HDR_NODE_COUNT, in->node_count,
                        CBVH_MAX_NODES);
     if (in->depth < 1 || in->depth > CBVH_MAX_DEPTH)
-        return CORRUPT("header byte %d: depth %u is outside 1..%u", CBVH_HDR_DEPTH, in->depth, CBVH_MAX_DEPTH);
+        return CORRUPT("header byte %d: depth %u is outside 1..%u", CBVH_HDR_DEPTH, in->depth,
+                       CBVH_MAX_DEPTH);
     if (in->max_leaf_size < 1 || in->max_leaf_size > CBVH_MAX_LEAF_SIZE)
-        return CORRUPT("header byte %d: max_leaf_size %u is outside 1..%u", CBVH_HDR_MAX_LEAF, in->max_leaf_size,
-                       CBVH_MAX_LEAF_SIZE);
+        return CORRUPT("header byte %d: max_leaf_size %u is outside 1..%u", CBVH_HDR_MAX_LEAF,
+                       in->max_leaf_size, CBVH_MAX_LEAF_SIZE);
     if (original < in->triangle_count)
-        return CORRUPT("header byte %d: original_triangle_count %u is below triangle_count %u", CBVH_HDR_ORIGINAL_TRIANGLES,
-                       original, in->triangle_count);
+        return CORRUPT("header byte %d: original_triangle_count %u is below triangle_count %u",
+                       CBVH_HDR_ORIGINAL_TRIANGLES, original, in->triangle_count);
     return CBVH_OK;
 }
 
@@ -85,7 +88,8 @@ static cbvh_result check_grid(const cbvh_file_info *in, cbvh_error *err)
         if (!isfinite(cbvh_dequantize(CBVH_Q_MAX, in->grid_origin[a], in->grid_scale[a])))
             return CORRUPT("header: grid on axis %s overflows: coordinate 65535 dequantizes to infinity",
                            axis_name(a));
-        if (!isfinite(in->bounds_min[a]) || !isfinite(in->bounds_max[a]) || !(in->bounds_min[a] <= in->bounds_max[a]))
+        if (!isfinite(in->bounds_min[a]) || !isfinite(in->bounds_max[a]) ||
+            !(in->bounds_min[a] <= in->bounds_max[a]))
             return CORRUPT("header: bounds on axis %s [%g, %g] must be finite with min <= max", axis_name(a),
                            (double)in->bounds_min[a], (double)in->bounds_max[a]);
     }
@@ -111,7 +115,8 @@ cbvh_result cbvh_validate_header(struct cbvh_file *f, cbvh_error *err)
     in->compat_flags = cbvh_read_u32(b + CBVH_HDR_COMPAT_FLAGS);
     in->incompat_flags = cbvh_read_u32(b + CBVH_HDR_INCOMPAT_FLAGS);
     if (in->incompat_flags & ~CBVH_INCOMPAT_KNOWN)
-        return cbvh_fail(err, CBVH_ERROR_UNSUPPORTED, "incompatible feature flags 0x%08x are unknown to this reader",
+        return cbvh_fail(err, CBVH_ERROR_UNSUPPORTED,
+                         "incompatible feature flags 0x%08x are unknown to this reader",
                          in->incompat_flags & ~CBVH_INCOMPAT_KNOWN);
     for (int i = CBVH_HDR_RESERVED1; i < CBVH_HDR_HEADER_CRC; i++)
         if (b[i] != 0)
@@ -140,8 +145,8 @@ cbvh_result cbvh_validate_header(struct cbvh_file *f, cbvh_error *err)
 
     in->file_size = cbvh_read_u64(b + CBVH_HDR_FILE_SIZE);
     if (in->file_size != (uint64_t)f->size)
-        return CORRUPT("header byte %d: file_size is %llu but the file has %zu bytes (%s)", CBVH_HDR_FILE_SIZE,
-                       (unsigned long long)in->file_size, f->size,
+        return CORRUPT("header byte %d: file_size is %llu but the file has %zu bytes (%s)",
+                       CBVH_HDR_FILE_SIZE, (unsigned long long)in->file_size, f->size,
                        in->file_size > (uint64_t)f->size ? "truncated" : "trailing bytes");
     return CBVH_OK;
 }

@@ -1,4 +1,5 @@
-/* validate_mesh.c: checks every vertex index against vertex_count and every vertex against the header's bounds. */
+/* validate_mesh.c: checks every vertex index against vertex_count and every vertex against the header's
+ * bounds. */
 #include <float.h>
 #include <math.h>
 
@@ -30,9 +31,10 @@ static cbvh_result find_bad_index(const struct cbvh_file *f, uint32_t begin, uin
     for (uint32_t t = begin; t < end; t++) {
         uint32_t idx[3];
         cbvh_triangle_indices(f, t, idx);
-        if (idx[0] >= f->info.vertex_count || idx[1] >= f->info.vertex_count || idx[2] >= f->info.vertex_count)
-            return CORRUPT("triangle %u (cooked order): vertex indices %u, %u, %u, vertex_count is %u", t, idx[0],
-                           idx[1], idx[2], f->info.vertex_count);
+        if (idx[0] >= f->info.vertex_count || idx[1] >= f->info.vertex_count ||
+            idx[2] >= f->info.vertex_count)
+            return CORRUPT("triangle %u (cooked order): vertex indices %u, %u, %u, vertex_count is %u", t,
+                           idx[0], idx[1], idx[2], f->info.vertex_count);
     }
     return CBVH_OK;
 }
@@ -43,12 +45,14 @@ static cbvh_result check_delta16(const struct cbvh_file *f, uint32_t begin, uint
     const uint8_t *restrict t = (const uint8_t *)f->triangles + 8u * (size_t)begin;
     const int64_t vc = f->info.vertex_count;
     for (uint32_t i = begin; i < end; i++, t += 8) {
-        const int64_t base = (int64_t)*(const uint32_t *)t;
+        const int64_t base = (int64_t) * (const uint32_t *)t;
         const int16_t *d = (const int16_t *)(t + 4);
         const int64_t a = base + d[0], b = base + d[1];
         if (base >= vc || a < 0 || a >= vc || b < 0 || b >= vc)
-            return CORRUPT("triangle %u (cooked order): DELTA16 base %lld with deltas %d, %d gives indices outside "
-                           "0..%lld", i, (long long)base, d[0], d[1], (long long)vc - 1);
+            return CORRUPT(
+                "triangle %u (cooked order): DELTA16 base %lld with deltas %d, %d gives indices outside "
+                "0..%lld",
+                i, (long long)base, d[0], d[1], (long long)vc - 1);
     }
     return CBVH_OK;
 }
@@ -74,12 +78,13 @@ static cbvh_result check_local8(const struct cbvh_file *f, uint32_t begin, uint3
         }
         for (uint32_t j = 3u * used; j < 3u * CBVH_LOCAL8_BLOCK; j++)
             if (b[4 + j] != 0)
-                return CORRUPT("triangle block %u: offset %u of slot %u, past triangle_count %llu, must be 0", i,
-                               b[4 + j], j / 3u, (unsigned long long)tc);
+                return CORRUPT("triangle block %u: offset %u of slot %u, past triangle_count %llu, must be 0",
+                               i, b[4 + j], j / 3u, (unsigned long long)tc);
         if (base + largest >= vc)
-            return CORRUPT("triangle block %u (triangles from %llu): LOCAL8 base %llu plus offset %u is not below "
-                           "vertex_count %llu", i, (unsigned long long)first, (unsigned long long)base, largest,
-                           (unsigned long long)vc);
+            return CORRUPT(
+                "triangle block %u (triangles from %llu): LOCAL8 base %llu plus offset %u is not below "
+                "vertex_count %llu",
+                i, (unsigned long long)first, (unsigned long long)base, largest, (unsigned long long)vc);
     }
     return CBVH_OK;
 }
@@ -91,10 +96,16 @@ cbvh_result cbvh_indices_check(const struct cbvh_file *f, void *unused, uint32_t
     const size_t first = 3u * (size_t)begin, n = 3u * (size_t)(end - begin);
     uint32_t max;
     switch (f->triangle_encoding) {
-    case CBVH_TRIS_U16: max = max_u16((const uint16_t *)f->triangles + first, n); break;
-    case CBVH_TRIS_U32: max = max_u32((const uint32_t *)f->triangles + first, n); break;
-    case CBVH_TRIS_LOCAL8: return check_local8(f, begin, end, err);
-    default: return check_delta16(f, begin, end, err);
+    case CBVH_TRIS_U16:
+        max = max_u16((const uint16_t *)f->triangles + first, n);
+        break;
+    case CBVH_TRIS_U32:
+        max = max_u32((const uint32_t *)f->triangles + first, n);
+        break;
+    case CBVH_TRIS_LOCAL8:
+        return check_local8(f, begin, end, err);
+    default:
+        return check_delta16(f, begin, end, err);
     }
     return max < f->info.vertex_count ? CBVH_OK : find_bad_index(f, begin, end, err);
 }
@@ -114,7 +125,8 @@ static cbvh_result find_bad_vertex(const float *restrict v, uint32_t begin, uint
     for (uint32_t i = begin; i < end; i++)
         for (int a = 0; a < 3; a++)
             if (!isfinite(v[3 * (size_t)i + a]))
-                return CORRUPT("vertex %u: coordinate %d is %g, must be finite", i, a, (double)v[3 * (size_t)i + a]);
+                return CORRUPT("vertex %u: coordinate %d is %g, must be finite", i, a,
+                               (double)v[3 * (size_t)i + a]);
     return CBVH_OK;
 }
 
@@ -122,7 +134,7 @@ static cbvh_result check_f32(const struct cbvh_file *f, cbvh_vertex_bounds *b, u
                              cbvh_error *err)
 {
     const float *restrict v = (const float *)f->vertices + 3u * (size_t)begin;
-    float lo[3] = { b->lo[0], b->lo[1], b->lo[2] }, hi[3] = { b->hi[0], b->hi[1], b->hi[2] };
+    float lo[3] = {b->lo[0], b->lo[1], b->lo[2]}, hi[3] = {b->hi[0], b->hi[1], b->hi[2]};
     int finite = 1;
     for (uint32_t i = begin; i < end; i++, v += 3) {
         for (int a = 0; a < 3; a++) {
@@ -144,7 +156,7 @@ static cbvh_result check_f32(const struct cbvh_file *f, cbvh_vertex_bounds *b, u
 static void check_q16(const struct cbvh_file *f, cbvh_vertex_bounds *b, uint32_t begin, uint32_t end)
 {
     const uint16_t *restrict v = (const uint16_t *)f->vertices + 3u * (size_t)begin;
-    uint32_t qlo[3] = { b->qlo[0], b->qlo[1], b->qlo[2] }, qhi[3] = { b->qhi[0], b->qhi[1], b->qhi[2] };
+    uint32_t qlo[3] = {b->qlo[0], b->qlo[1], b->qlo[2]}, qhi[3] = {b->qhi[0], b->qhi[1], b->qhi[2]};
     for (uint32_t i = begin; i < end; i++, v += 3) {
         for (int a = 0; a < 3; a++) {
             const uint32_t q = v[a];
@@ -178,8 +190,9 @@ cbvh_result cbvh_vertices_finish(const struct cbvh_file *f, const cbvh_vertex_bo
             hi = cbvh_dequantize(b->qhi[a], f->grid_origin[a], f->grid_scale[a]);
         }
         if (lo != f->info.bounds_min[a] || hi != f->info.bounds_max[a])
-            return CORRUPT("header bounds on axis %d [%.9g, %.9g] differ from the vertices' bounds [%.9g, %.9g]", a,
-                           (double)f->info.bounds_min[a], (double)f->info.bounds_max[a], (double)lo, (double)hi);
+            return CORRUPT(
+                "header bounds on axis %d [%.9g, %.9g] differ from the vertices' bounds [%.9g, %.9g]", a,
+                (double)f->info.bounds_min[a], (double)f->info.bounds_max[a], (double)lo, (double)hi);
     }
     return CBVH_OK;
 }

@@ -22,8 +22,9 @@ cbvh_result cbvh_material_names_check(const struct cbvh_file *f, const cbvh_sect
         const uint8_t *e = b + 4 + 8 * (size_t)i;
         const uint32_t id = cbvh_read_u32(e), offset = cbvh_read_u32(e + 4);
         if (names_start + offset != at)
-            return CORRUPT("MATERIAL_NAMES: name %u starts at offset %u, expected %llu (names follow each other)", i,
-                           offset, (unsigned long long)(at - names_start));
+            return CORRUPT(
+                "MATERIAL_NAMES: name %u starts at offset %u, expected %llu (names follow each other)", i,
+                offset, (unsigned long long)(at - names_start));
         if (at >= size)
             return CORRUPT("MATERIAL_NAMES: name %u starts past the end of the section", i);
         const uint8_t *nul = memchr(b + at, 0, (size_t)(size - at));
@@ -33,8 +34,9 @@ cbvh_result cbvh_material_names_check(const struct cbvh_file *f, const cbvh_sect
             const uint32_t prev_id = cbvh_read_u32(e - 8);
             const char *prev = (const char *)b + names_start + cbvh_read_u32(e - 4);
             if (id < prev_id || (id == prev_id && strcmp(prev, (const char *)b + at) >= 0))
-                return CORRUPT("MATERIAL_NAMES: name %u (id %u) is not after name %u (id %u) in (id, name) order", i,
-                               id, i - 1, prev_id);
+                return CORRUPT(
+                    "MATERIAL_NAMES: name %u (id %u) is not after name %u (id %u) in (id, name) order", i, id,
+                    i - 1, prev_id);
         }
         at = (uint64_t)(nul - b) + 1;
     }

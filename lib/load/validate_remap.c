@@ -1,4 +1,4 @@
-/* validate_remap.c: checks REMAP values (in range, unique) while building the original -> cooked unmap table. */
+/* validate_remap.c: checks REMAP values (in range, unique) while building the original -> cooked map. */
 #include <string.h>
 
 #include "common/alloc.h"
@@ -63,7 +63,8 @@ cbvh_result cbvh_unmap_begin(struct cbvh_file *f, cbvh_unmap_build *b, cbvh_erro
 
 /* Dense unmap, one scattered write per triangle: used when original ids are at most twice the triangles,
  * so its memory stays proportional to the file's. A slot already taken is a repeated id. */
-cbvh_result cbvh_remap_check(const struct cbvh_file *f, void *build, uint32_t begin, uint32_t end, cbvh_error *err)
+cbvh_result cbvh_remap_check(const struct cbvh_file *f, void *build, uint32_t begin, uint32_t end,
+                             cbvh_error *err)
 {
     const cbvh_unmap_build *b = build;
     if (!b->dense)

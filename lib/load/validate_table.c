@@ -1,7 +1,8 @@
-/* validate_table.c: checks the section table, the file layout and every section's CRC (format spec sections 2, 4). */
+/* validate_table.c: checks the section table, the file layout and every section's CRC (format spec sections
+ * 2, 4). */
 #include <string.h>
 
-#include "common/encodings.h"
+#include "layout/encodings.h"
 #include "common/endian.h"
 #include "common/error.h"
 #include "load/load.h"
@@ -15,17 +16,21 @@ static uint64_t element_count(const cbvh_file_info *in, const cbvh_section_info 
     if (cbvh_section_kind_of(s->type)->sized_by_content)
         return s->size / e->element_size;
     switch (s->type) {
-    case CBVH_SECTION_NODES: return cbvh_elements_for(e, in->node_count);
-    case CBVH_SECTION_VERTICES: return cbvh_elements_for(e, in->vertex_count);
-    default: return cbvh_elements_for(e, in->triangle_count); /* TRIANGLES, REMAP, MATERIALS: per cooked triangle */
+    case CBVH_SECTION_NODES:
+        return cbvh_elements_for(e, in->node_count);
+    case CBVH_SECTION_VERTICES:
+        return cbvh_elements_for(e, in->vertex_count);
+    default:
+        return cbvh_elements_for(e,
+                                 in->triangle_count); /* TRIANGLES, REMAP, MATERIALS: per cooked triangle */
     }
 }
 
 cbvh_result cbvh_crc_mismatch(const struct cbvh_file *f, uint32_t index, uint32_t computed, cbvh_error *err)
 {
     const cbvh_section_info *s = &f->sections[index];
-    return CORRUPT("section %u (type 0x%x) at byte %llu: CRC mismatch (stored 0x%08x, computed 0x%08x)", index,
-                   s->type, (unsigned long long)s->offset, s->crc32, computed);
+    return CORRUPT("section %u (type 0x%x) at byte %llu: CRC mismatch (stored 0x%08x, computed 0x%08x)",
+                   index, s->type, (unsigned long long)s->offset, s->crc32, computed);
 }
 
 /* Bounds, alignment, order and zero padding before it. */
@@ -40,13 +45,13 @@ static cbvh_result check_layout(const uint8_t *b, uint64_t file_size, const cbvh
                        (unsigned long long)s->offset, i == 0 ? "the section table" : "the previous section",
                        (unsigned long long)*prev_end);
     if (s->offset > file_size || s->stored_size > file_size - s->offset)
-        return CORRUPT("section %u (type 0x%x): bytes %llu + %llu run past the end of the file (%llu bytes)", i,
-                       s->type, (unsigned long long)s->offset, (unsigned long long)s->stored_size,
+        return CORRUPT("section %u (type 0x%x): bytes %llu + %llu run past the end of the file (%llu bytes)",
+                       i, s->type, (unsigned long long)s->offset, (unsigned long long)s->stored_size,
                        (unsigned long long)file_size);
     for (uint64_t p = *prev_end; p < s->offset; p++)
         if (b[p] != 0)
-            return CORRUPT("byte %llu: padding before section %u is 0x%02x, must be 0", (unsigned long long)p, i,
-                           b[p]);
+            return CORRUPT("byte %llu: padding before section %u is 0x%02x, must be 0", (unsigned long long)p,
+                           i, b[p]);
     *prev_end = s->offset + s->stored_size;
     return CBVH_OK;
 }
@@ -62,22 +67,23 @@ static cbvh_result check_content(const cbvh_file_info *in, const cbvh_section_in
     for (uint32_t j = 0; j < i; j++)
         if (sections[j].type == s->type)
             return k ? CORRUPT("section %u: second %s section (the first is section %u)", i, k->name, j)
-                     : CORRUPT("section %u: second section of type 0x%x (the first is section %u)", i, s->type, j);
+                     : CORRUPT("section %u: second section of type 0x%x (the first is section %u)", i,
+                               s->type, j);
     const int known_codec = s->codec == CBVH_CODEC_RAW || s->codec == CBVH_CODEC_ZLIB;
     if ((s->type & CBVH_SECTION_ANCILLARY_BIT) &&
         (!k || !known_codec || !cbvh_encoding_of(s->type, s->encoding)))
         return CBVH_OK;
     if (!k || slot < 0)
-        return cbvh_fail(err, CBVH_ERROR_UNSUPPORTED, "section %u: critical section type %u is unknown to this reader",
-                         i, s->type);
+        return cbvh_fail(err, CBVH_ERROR_UNSUPPORTED,
+                         "section %u: critical section type %u is unknown to this reader", i, s->type);
     map->index[slot] = (int)i;
     if (!known_codec)
-        return cbvh_fail(err, CBVH_ERROR_UNSUPPORTED, "section %u (%s): codec %u is unknown to this reader", i,
-                         k->name, s->codec);
+        return cbvh_fail(err, CBVH_ERROR_UNSUPPORTED, "section %u (%s): codec %u is unknown to this reader",
+                         i, k->name, s->codec);
     const uint32_t element_size = cbvh_element_size(s->type, s->encoding);
     if (element_size == 0)
-        return cbvh_fail(err, CBVH_ERROR_UNSUPPORTED, "section %u (%s): encoding %u is unknown to this reader", i,
-                         k->name, s->encoding);
+        return cbvh_fail(err, CBVH_ERROR_UNSUPPORTED,
+                         "section %u (%s): encoding %u is unknown to this reader", i, k->name, s->encoding);
     if (k->sized_by_content && (s->size < 4 || s->size > CBVH_MAX_MATERIAL_NAME_BYTES))
         return CORRUPT("section %u (%s): size %llu; it must be 4 to %u bytes", i, k->name,
                        (unsigned long long)s->size, CBVH_MAX_MATERIAL_NAME_BYTES);
@@ -142,8 +148,10 @@ cbvh_result cbvh_validate_table(struct cbvh_file *f, cbvh_section_map *map, cbvh
     for (uint32_t type = 1; type <= CBVH_KNOWN_SECTIONS; type++)
         if (cbvh_section_kind_of(type) && cbvh_section_kind_of(type)->required && map->index[type - 1] < 0)
             return CORRUPT("required section %s is missing", cbvh_section_kind_of(type)->name);
-    if (map->index[cbvh_section_slot(CBVH_SECTION_REMAP)] < 0 && f->original_triangle_count != f->info.triangle_count)
-        return CORRUPT("header byte %d: original_triangle_count %u != triangle_count %u without a REMAP section",
-                       CBVH_HDR_ORIGINAL_TRIANGLES, f->original_triangle_count, f->info.triangle_count);
+    if (map->index[cbvh_section_slot(CBVH_SECTION_REMAP)] < 0 &&
+        f->original_triangle_count != f->info.triangle_count)
+        return CORRUPT(
+            "header byte %d: original_triangle_count %u != triangle_count %u without a REMAP section",
+            CBVH_HDR_ORIGINAL_TRIANGLES, f->original_triangle_count, f->info.triangle_count);
     return CBVH_OK;
 }

@@ -1,4 +1,5 @@
-/* validate_tree.c: checks every node in one linear, resumable pass (format spec section 5): boxes, links, depth, leaves. */
+/* validate_tree.c: checks every node in one linear, resumable pass (format spec section 5): boxes, links,
+ * depth, leaves. */
 #include "common/error.h"
 #include "layout/binary.h"
 #include "load/load.h"
@@ -16,7 +17,8 @@ static cbvh_result find_bad_box(const cbvh_node *nodes, uint32_t n, cbvh_error *
     for (uint32_t i = 0; i < n; i++)
         for (int a = 0; a < 3; a++)
             if (nodes[i].qmin[a] > nodes[i].qmax[a])
-                return CORRUPT("node %u: qmin %u > qmax %u on axis %d", i, nodes[i].qmin[a], nodes[i].qmax[a], a);
+                return CORRUPT("node %u: qmin %u > qmax %u on axis %d", i, nodes[i].qmin[a], nodes[i].qmax[a],
+                               a);
     return CBVH_OK;
 }
 
@@ -25,7 +27,8 @@ static cbvh_result check_leaf(uint32_t i, uint32_t word, uint32_t next_triangle,
 {
     const uint32_t first = cbvh_leaf_first(word), count = cbvh_leaf_count(word);
     if (first != next_triangle)
-        return CORRUPT("node %u: leaf starts at triangle %u, the previous leaf ended at %u", i, first, next_triangle);
+        return CORRUPT("node %u: leaf starts at triangle %u, the previous leaf ended at %u", i, first,
+                       next_triangle);
     if (count > max_leaf)
         return CORRUPT("node %u: leaf holds %u triangles, more than max_leaf_size %u", i, count, max_leaf);
     if (count > triangle_count - first)
@@ -61,8 +64,8 @@ cbvh_result cbvh_tree_check(const struct cbvh_file *f, void *walk_state, uint32_
         return CORRUPT("triangle_count %u is more than a binary-layout file holds (%u)", triangle_count,
                        CBVH_BINARY_MAX_TRIANGLES);
     if (begin == 0 && subtree_size(nodes[0].word) != node_count)
-        return CORRUPT("node 0: subtree size %u, but its parent leaves it nodes [0, %u)", subtree_size(nodes[0].word),
-                       node_count);
+        return CORRUPT("node 0: subtree size %u, but its parent leaves it nodes [0, %u)",
+                       subtree_size(nodes[0].word), node_count);
     uint32_t top = w->top, next_triangle = w->next_triangle, max_depth = w->max_depth;
     uint32_t depth = w->current_depth, after_leaf = w->after_leaf, bad_box = w->bad_box;
     cbvh_result r = CBVH_OK;
@@ -78,8 +81,8 @@ cbvh_result cbvh_tree_check(const struct cbvh_file *f, void *walk_state, uint32_
             }
             top--;
             if (subtree_size(word) != w->end[top] - i) {
-                r = CORRUPT("node %u: subtree size %u, but its parent leaves it nodes [%u, %u)", i, subtree_size(word),
-                            i, w->end[top]);
+                r = CORRUPT("node %u: subtree size %u, but its parent leaves it nodes [%u, %u)", i,
+                            subtree_size(word), i, w->end[top]);
                 break;
             }
             depth = w->depth[top];
@@ -89,7 +92,8 @@ cbvh_result cbvh_tree_check(const struct cbvh_file *f, void *walk_state, uint32_
         if (depth > max_depth) {
             max_depth = depth;
             if (depth > header_depth) {
-                r = CORRUPT("node %u: at depth %u, deeper than the header's depth %u", i, depth, header_depth);
+                r = CORRUPT("node %u: at depth %u, deeper than the header's depth %u", i, depth,
+                            header_depth);
                 break;
             }
         }
@@ -111,8 +115,9 @@ cbvh_result cbvh_tree_check(const struct cbvh_file *f, void *walk_state, uint32_
         /* i + s lies inside the parent's range, so node i + 1 exists */
         const uint32_t first_size = subtree_size(nodes[i + 1].word);
         if (first_size < 1 || first_size > s - 2) {
-            r = CORRUPT("node %u: first child %u has subtree size %u, leaving no room for a second child within %u", i,
-                        i + 1, first_size, s);
+            r = CORRUPT(
+                "node %u: first child %u has subtree size %u, leaving no room for a second child within %u",
+                i, i + 1, first_size, s);
             break;
         }
         /* top < depth <= 64 before this push */
@@ -137,6 +142,7 @@ cbvh_result cbvh_tree_finish(const struct cbvh_file *f, const cbvh_tree_walk *w,
     if (w->max_depth != f->info.depth)
         return CORRUPT("the tree's depth is %u, the header says %u", w->max_depth, f->info.depth);
     if (w->next_triangle != f->info.triangle_count)
-        return CORRUPT("leaves cover triangles [0, %u), triangle_count is %u", w->next_triangle, f->info.triangle_count);
+        return CORRUPT("leaves cover triangles [0, %u), triangle_count is %u", w->next_triangle,
+                       f->info.triangle_count);
     return CBVH_OK;
 }

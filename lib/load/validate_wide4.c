@@ -1,4 +1,5 @@
-/* validate_wide4.c: checks every wide4 node in one linear, resumable pass (format spec section 5.2): slots, links, levels, leaves. */
+/* validate_wide4.c: checks every wide4 node in one linear, resumable pass (format spec section 5.2): slots,
+ * links, levels, leaves. */
 #include "common/error.h"
 #include "layout/wide4.h"
 #include "load/load.h"
@@ -6,19 +7,21 @@
 #define CORRUPT(...) cbvh_fail(err, CBVH_ERROR_CORRUPT, __VA_ARGS__)
 
 /* One node's own bytes: used slots, their boxes and leaf sizes, unused slots all zero, orders in range. */
-static cbvh_result check_slots(const uint8_t *node, uint32_t i, uint64_t meta, uint32_t max_leaf, cbvh_error *err)
+static cbvh_result check_slots(const uint8_t *node, uint32_t i, uint64_t meta, uint32_t max_leaf,
+                               cbvh_error *err)
 {
     const uint32_t used = cbvh_w4_used(meta), internal = cbvh_w4_internal(meta);
     if (used == 0)
         return CORRUPT("node %u: no slot in use", i);
     if (internal & ~used)
-        return CORRUPT("node %u: slots 0x%x are internal but not in use (in use: 0x%x)", i, internal & ~used, used);
+        return CORRUPT("node %u: slots 0x%x are internal but not in use (in use: 0x%x)", i, internal & ~used,
+                       used);
     for (uint32_t s = 0; s < CBVH_W4_WIDTH; s++) {
         const uint32_t nibble = (uint32_t)(meta >> (4u * s)) & 0xFu;
         if (!(used >> s & 1u) || (internal >> s & 1u)) {
             if (nibble != 0)
-                return CORRUPT("node %u: slot %u is %s but has a triangle count field of %u (must be 0)", i, s,
-                               used >> s & 1u ? "internal" : "unused", nibble);
+                return CORRUPT("node %u: slot %u is %s but has a triangle count field of %u (must be 0)", i,
+                               s, used >> s & 1u ? "internal" : "unused", nibble);
         } else if (nibble + 1u > max_leaf) {
             return CORRUPT("node %u: slot %u is a leaf of %u triangles, more than max_leaf_size %u", i, s,
                            nibble + 1u, max_leaf);
@@ -33,8 +36,8 @@ static cbvh_result check_slots(const uint8_t *node, uint32_t i, uint64_t meta, u
     }
     for (uint32_t k = 0; k < 8; k++)
         if (cbvh_w4_order(meta, k) >= CBVH_W4_ORDERS)
-            return CORRUPT("node %u: order index %u for octant %u is not below %u", i, cbvh_w4_order(meta, k), k,
-                           CBVH_W4_ORDERS);
+            return CORRUPT("node %u: order index %u for octant %u is not below %u", i, cbvh_w4_order(meta, k),
+                           k, CBVH_W4_ORDERS);
     return CBVH_OK;
 }
 
@@ -53,7 +56,8 @@ static cbvh_result check_depth_first_triangles(const struct cbvh_file *f, cbvh_e
         const uint32_t used = cbvh_w4_used(meta), internal = cbvh_w4_internal(meta);
         if (cbvh_w4_first_triangle(node) != next)
             return CORRUPT("node %u: first_triangle %u, but the leaves before it in depth-first order end at "
-                           "triangle %u", i, cbvh_w4_first_triangle(node), next);
+                           "triangle %u",
+                           i, cbvh_w4_first_triangle(node), next);
         for (uint32_t s = 0; s < CBVH_W4_WIDTH; s++)
             if ((used & ~internal) >> s & 1u)
                 next += cbvh_w4_count(meta, s);
@@ -84,7 +88,8 @@ cbvh_result cbvh_w4_tree_check(const struct cbvh_file *f, void *walk_state, uint
             return CORRUPT("triangle_count %u is more than a wide4 file holds (%u)", triangle_count,
                            CBVH_W4_MAX_TRIANGLES);
         if (max_leaf > CBVH_W4_MAX_LEAF)
-            return CORRUPT("max_leaf_size %u is more than a wide4 leaf holds (%u)", max_leaf, CBVH_W4_MAX_LEAF);
+            return CORRUPT("max_leaf_size %u is more than a wide4 leaf holds (%u)", max_leaf,
+                           CBVH_W4_MAX_LEAF);
         w->next_child = 1;
         w->level_end = 1;
         w->depth = 1;
@@ -101,7 +106,8 @@ cbvh_result cbvh_w4_tree_check(const struct cbvh_file *f, void *walk_state, uint
             w->depth++;
             w->level_end = w->next_child;
             if (w->depth > header_depth)
-                return CORRUPT("node %u: at depth %u, deeper than the header's depth %u", i, w->depth, header_depth);
+                return CORRUPT("node %u: at depth %u, deeper than the header's depth %u", i, w->depth,
+                               header_depth);
         }
         const uint32_t first_child = cbvh_w4_first_child(node), first_triangle = cbvh_w4_first_triangle(node);
         if (first_child != w->next_child)

@@ -1,4 +1,5 @@
-/* file_edit.c: takes a valid cbvh file apart into sections and lays it out again, for seed corpora and corruption tests. */
+/* file_edit.c: takes a valid cbvh file apart into sections and lays it out again, for seed corpora and
+ * corruption tests. */
 #include <stdlib.h>
 #include <string.h>
 #include <zlib.h>
@@ -6,10 +7,24 @@
 #include "file_edit.h"
 #include "fuzz_support.h"
 
-static uint32_t rd32(const uint8_t *p) { return (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24; }
-static uint64_t rd64(const uint8_t *p) { return (uint64_t)rd32(p) | (uint64_t)rd32(p + 4) << 32; }
-static void wr32(uint8_t *p, uint32_t v) { for (int i = 0; i < 4; i++) p[i] = (uint8_t)(v >> (8 * i)); }
-static void wr64(uint8_t *p, uint64_t v) { wr32(p, (uint32_t)v); wr32(p + 4, (uint32_t)(v >> 32)); }
+static uint32_t rd32(const uint8_t *p)
+{
+    return (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24;
+}
+static uint64_t rd64(const uint8_t *p)
+{
+    return (uint64_t)rd32(p) | (uint64_t)rd32(p + 4) << 32;
+}
+static void wr32(uint8_t *p, uint32_t v)
+{
+    for (int i = 0; i < 4; i++)
+        p[i] = (uint8_t)(v >> (8 * i));
+}
+static void wr64(uint8_t *p, uint64_t v)
+{
+    wr32(p, (uint32_t)v);
+    wr32(p + 4, (uint32_t)(v >> 32));
+}
 
 int edit_parse(edit_file *e, const uint8_t *bytes, size_t size)
 {
@@ -50,7 +65,7 @@ fail:
 
 uint8_t *edit_build(const edit_file *e, size_t *size)
 {
-    uint8_t *stored[16] = { 0 };
+    uint8_t *stored[16] = {0};
     size_t stored_size[16];
     size_t total = (128 + 40 * (size_t)e->count + 63) & ~(size_t)63;
     for (uint32_t i = 0; i < e->count; i++) {

@@ -1,4 +1,5 @@
-/* file_edit.h: takes a valid cbvh file apart into sections and lays it out again (re-encoded, reordered, recompressed), for seed corpora and corruption tests. */
+/* file_edit.h: takes a valid cbvh file apart into sections and lays it out again (re-encoded, reordered,
+ * recompressed), for seed corpora and corruption tests. */
 #ifndef CBVH_FILE_EDIT_H
 #define CBVH_FILE_EDIT_H
 

@@ -1,4 +1,6 @@
-/* fuzz_cook.c: libFuzzer target: cook a mesh decoded from the bytes (NaN, inf, huge values, bad indices included) in both node layouts; a clean error or files that open, answer like brute force and like each other. */
+/* fuzz_cook.c: libFuzzer target: cook a mesh decoded from the bytes (NaN, inf, huge values, bad indices
+ * included) in both node layouts; a clean error or files that open, answer like brute force and like each
+ * other. */
 #include <float.h>
 #include <math.h>
 #include <stdint.h>
@@ -39,7 +41,7 @@ static float read_f32(const uint8_t *p)
 
 static int decode(decoded *d, const uint8_t *data, size_t size)
 {
-    static const int levels[4] = { 0, 1, 6, 9 };
+    static const int levels[4] = {0, 1, 6, 9};
     if (size < 3)
         return 0;
     uint8_t flags = data[0];
@@ -112,7 +114,8 @@ static float stored(float x)
 
 /* Ray/triangle in double: the hit distance when the ray crosses the triangle
  * at least `margin` (barycentric) inside every edge, else -1. */
-static double clear_hit(const double o[3], const double dir[3], const float *v0, const float *v1, const float *v2, double margin)
+static double clear_hit(const double o[3], const double dir[3], const float *v0, const float *v1,
+                        const float *v2, double margin)
 {
     double e1[3], e2[3], s[3], p[3], q[3];
     for (int a = 0; a < 3; a++) {
@@ -120,25 +123,31 @@ static double clear_hit(const double o[3], const double dir[3], const float *v0,
         e2[a] = (double)v2[a] - v0[a];
         s[a] = o[a] - v0[a];
     }
-    p[0] = dir[1] * e2[2] - dir[2] * e2[1]; p[1] = dir[2] * e2[0] - dir[0] * e2[2]; p[2] = dir[0] * e2[1] - dir[1] * e2[0];
+    p[0] = dir[1] * e2[2] - dir[2] * e2[1];
+    p[1] = dir[2] * e2[0] - dir[0] * e2[2];
+    p[2] = dir[0] * e2[1] - dir[1] * e2[0];
     double det = e1[0] * p[0] + e1[1] * p[1] + e1[2] * p[2];
     if (det == 0 || !isfinite(det))
         return -1;
     double u = (s[0] * p[0] + s[1] * p[1] + s[2] * p[2]) / det;
-    q[0] = s[1] * e1[2] - s[2] * e1[1]; q[1] = s[2] * e1[0] - s[0] * e1[2]; q[2] = s[0] * e1[1] - s[1] * e1[0];
+    q[0] = s[1] * e1[2] - s[2] * e1[1];
+    q[1] = s[2] * e1[0] - s[0] * e1[2];
+    q[2] = s[0] * e1[1] - s[1] * e1[0];
     double v = (dir[0] * q[0] + dir[1] * q[1] + dir[2] * q[2]) / det;
     double t = (e2[0] * q[0] + e2[1] * q[1] + e2[2] * q[2]) / det;
     if (u < margin || v < margin || u + v > 1 - margin || !(t > 0))
         return -1;
     /* and at least 1e-5 of the coordinates' magnitude from every edge: a
      * needle thinner than the float spacing at the ray origin is no clear hit */
-    double n[3] = { e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0] };
+    double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
+                   e1[0] * e2[1] - e1[1] * e2[0]};
     double area2 = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]), mag = 0, e3[3];
     for (int a = 0; a < 3; a++) {
         e3[a] = (double)v2[a] - v1[a];
         mag = fmax(mag, fmax(fabs(o[a]), fmax(fabs(v0[a]), fmax(fabs(v1[a]), fabs(v2[a])))));
     }
-    double len1 = sqrt(e1[0] * e1[0] + e1[1] * e1[1] + e1[2] * e1[2]), len2 = sqrt(e2[0] * e2[0] + e2[1] * e2[1] + e2[2] * e2[2]),
+    double len1 = sqrt(e1[0] * e1[0] + e1[1] * e1[1] + e1[2] * e1[2]),
+           len2 = sqrt(e2[0] * e2[0] + e2[1] * e2[1] + e2[2] * e2[2]),
            len3 = sqrt(e3[0] * e3[0] + e3[1] * e3[1] + e3[2] * e3[2]), tol = 1e-5 * mag;
     if (v * area2 < tol * len1 || u * area2 < tol * len2 || (1 - u - v) * area2 < tol * len3)
         return -1;
@@ -195,14 +204,16 @@ static void compare_with_brute_force(const cbvh_file *f, const decoded *d, uint6
         cbvh_hit h;
         int got = cbvh_raycast(f, &r, CBVH_TRAVERSAL_SORTED, &h, NULL);
         FUZZ_CHECK(got, "ray %d misses, brute force hits clearly at t %.9g", i, best);
-        FUZZ_CHECK(h.t <= best * (1 + 1e-4) + 1e-30, "ray %d: hit at t %.9g behind the clear hit at %.9g", i, h.t, best);
+        FUZZ_CHECK(h.t <= best * (1 + 1e-4) + 1e-30, "ray %d: hit at t %.9g behind the clear hit at %.9g", i,
+                   h.t, best);
     }
 }
 
 /* Cooks the mesh in one node layout and checks the file: a clean error (NULL, the code in *result), or a
  * deterministic file that opens from the guarded copy *g, keeps every kept triangle and material under its
  * id, misses no clear hit and passes the strict query checks (the open file is returned). */
-static cbvh_file *cook_and_check(const decoded *d, cbvh_layout layout, size_t size, guard_buffer *g, cbvh_result *result)
+static cbvh_file *cook_and_check(const decoded *d, cbvh_layout layout, size_t size, guard_buffer *g,
+                                 cbvh_result *result)
 {
     cbvh_cook_options opt = d->opt;
     opt.layout = layout;
@@ -221,21 +232,25 @@ static cbvh_file *cook_and_check(const decoded *d, cbvh_layout layout, size_t si
                    "cook failed with %s: %s", cbvh_result_string(r), err.message);
         FUZZ_CHECK(r != CBVH_ERROR_EMPTY_MESH || fault == 0 || d->mesh.triangle_count == 0,
                    "bad mesh reported as empty: %s", err.message);
-        FUZZ_CHECK(r != CBVH_ERROR_BAD_MESH || fault != 0, "a mesh in the exact range refused: %s", err.message);
+        FUZZ_CHECK(r != CBVH_ERROR_BAD_MESH || fault != 0, "a mesh in the exact range refused: %s",
+                   err.message);
         return NULL;
     }
     FUZZ_CHECK(fault == 0, "cook accepted a mesh with %s",
-               fault == 2 ? "an index out of range" : "a coordinate that is not finite or beyond the exact range");
-    FUZZ_CHECK(out != NULL && out_size == stats.file_size, "cook returned %zu bytes, stats say %llu", out_size,
-               (unsigned long long)stats.file_size);
-    FUZZ_CHECK(stats.input_triangles == d->mesh.triangle_count && stats.triangles + stats.dropped_degenerate == stats.input_triangles,
+               fault == 2 ? "an index out of range"
+                          : "a coordinate that is not finite or beyond the exact range");
+    FUZZ_CHECK(out != NULL && out_size == stats.file_size, "cook returned %zu bytes, stats say %llu",
+               out_size, (unsigned long long)stats.file_size);
+    FUZZ_CHECK(stats.input_triangles == d->mesh.triangle_count &&
+                   stats.triangles + stats.dropped_degenerate == stats.input_triangles,
                "stats: %llu in, %llu kept, %llu dropped", (unsigned long long)stats.input_triangles,
                (unsigned long long)stats.triangles, (unsigned long long)stats.dropped_degenerate);
 
     /* deterministic */
     void *again = NULL;
     size_t again_size = 0;
-    FUZZ_CHECK(cbvh_cook(&d->mesh, &opt, NULL, &again, &again_size, NULL, NULL) == CBVH_OK, "second cook failed");
+    FUZZ_CHECK(cbvh_cook(&d->mesh, &opt, NULL, &again, &again_size, NULL, NULL) == CBVH_OK,
+               "second cook failed");
     FUZZ_CHECK(again_size == out_size && memcmp(again, out, out_size) == 0, "two cooks of one mesh differ");
     cbvh_buffer_free(NULL, again);
 
@@ -246,9 +261,11 @@ static cbvh_file *cook_and_check(const decoded *d, cbvh_layout layout, size_t si
     FUZZ_CHECK(r == CBVH_OK, "the cooker's own file does not open: %s", err.message);
     cbvh_file_info info;
     cbvh_file_get_info(f, &info, sizeof info);
-    FUZZ_CHECK(info.triangle_count == stats.triangles && info.node_count == stats.nodes && info.depth == stats.depth,
+    FUZZ_CHECK(info.triangle_count == stats.triangles && info.node_count == stats.nodes &&
+                   info.depth == stats.depth,
                "header and stats disagree");
-    FUZZ_CHECK(info.layout == (uint32_t)layout, "cooked layout %u, asked for %u", info.layout, (unsigned)layout);
+    FUZZ_CHECK(info.layout == (uint32_t)layout, "cooked layout %u, asked for %u", info.layout,
+               (unsigned)layout);
 
     /* every kept triangle is the input triangle as stored (exactly when lossless, within the reported error
      * when quantized); dropped ones are absent */
@@ -263,16 +280,19 @@ static cbvh_file *cook_and_check(const decoded *d, cbvh_layout layout, size_t si
                 for (int a = 0; a < 3; a++) {
                     float in = stored(d->positions[d->indices[3 * t + k] * stride + a]);
                     double tol = d->opt.vertex_format == CBVH_VERTEX_QUANTIZED16 ? stats.vertex_max_error : 0;
-                    FUZZ_CHECK(fabs((double)v[k][a] - in) <= tol, "triangle %zu vertex %d axis %d: %.9g stored as %.9g (error %g)",
-                               t, k, a, in, v[k][a], tol);
+                    FUZZ_CHECK(fabs((double)v[k][a] - in) <= tol,
+                               "triangle %zu vertex %d axis %d: %.9g stored as %.9g (error %g)", t, k, a, in,
+                               v[k][a], tol);
                 }
             /* every triangle's own id, also when all are equal (the file then stores it once: MATERIALS
              * encoding 3) */
             uint32_t want = d->mesh.material_ids && d->opt.keep_materials ? d->materials[t] : 0;
-            FUZZ_CHECK(cbvh_file_get_material(f, (uint32_t)t) == want, "triangle %zu material %u, expected %u", t,
-                       cbvh_file_get_material(f, (uint32_t)t), want);
+            FUZZ_CHECK(cbvh_file_get_material(f, (uint32_t)t) == want,
+                       "triangle %zu material %u, expected %u", t, cbvh_file_get_material(f, (uint32_t)t),
+                       want);
         }
-        FUZZ_CHECK(present == stats.triangles, "%zu triangles readable, %llu kept", present, (unsigned long long)stats.triangles);
+        FUZZ_CHECK(present == stats.triangles, "%zu triangles readable, %llu kept", present,
+                   (unsigned long long)stats.triangles);
         compare_with_brute_force(f, d, size);
     }
     fuzz_check_queries(f, g->data, g->size, size, 1);
@@ -297,7 +317,8 @@ static void compare_layouts(const cbvh_file *binary, const cbvh_file *wide, cons
         seed = seed * 6364136223846793005ull + 1442695040888963407ull;
         cbvh_ray r;
         const size_t t = (size_t)(seed >> 33) % m->triangle_count;
-        const double a = (double)((seed >> 8) & 255) / 256.0, b = (double)((seed >> 16) & 255) / 256.0 * (1 - a);
+        const double a = (double)((seed >> 8) & 255) / 256.0,
+                     b = (double)((seed >> 16) & 255) / 256.0 * (1 - a);
         const uint32_t axis = i % 8 == 6 ? (uint32_t)(seed >> 62) % 3 : 3; /* some rays along an axis */
         for (uint32_t k = 0; k < 3; k++) {
             double target = (1 - a - b) * m->positions[m->indices[3 * t] * stride + k] +
@@ -305,7 +326,8 @@ static void compare_layouts(const cbvh_file *binary, const cbvh_file *wide, cons
                             b * m->positions[m->indices[3 * t + 2] * stride + k];
             const double off = (double)((int)((seed >> (20 + 8 * k)) & 255) - 128) / 64.0;
             if (i & 1) /* between two points around the bounds */
-                target = info.bounds_min[k] + ((double)((seed >> (44 + 6 * k)) & 63) / 32.0 - 0.5) * (ext + 1);
+                target =
+                    info.bounds_min[k] + ((double)((seed >> (44 + 6 * k)) & 63) / 32.0 - 0.5) * (ext + 1);
             r.org[k] = (float)(axis == 3 || axis == k ? target + (off == 0 ? 1 : off) * (ext + 1) : target);
             r.dir[k] = (float)(target - r.org[k]);
         }
@@ -316,9 +338,11 @@ static void compare_layouts(const cbvh_file *binary, const cbvh_file *wide, cons
             const int gb = cbvh_raycast(binary, &r, (cbvh_traversal)k, &hb, NULL);
             const int gw = cbvh_raycast(wide, &r, (cbvh_traversal)k, &hw, NULL);
             FUZZ_CHECK(gb == gw && (!gb || hb.t == hw.t),
-                       "ray %d traversal %d: binary %s tri %u t %.9g, wide4 %s tri %u t %.9g", i, k, gb ? "hits" : "misses",
-                       hb.tri, gb ? hb.t : 0.0, gw ? "hits" : "misses", hw.tri, gw ? hw.t : 0.0);
-            FUZZ_CHECK(cbvh_occluded(binary, &r, (cbvh_traversal)k, NULL) == cbvh_occluded(wide, &r, (cbvh_traversal)k, NULL),
+                       "ray %d traversal %d: binary %s tri %u t %.9g, wide4 %s tri %u t %.9g", i, k,
+                       gb ? "hits" : "misses", hb.tri, gb ? hb.t : 0.0, gw ? "hits" : "misses", hw.tri,
+                       gw ? hw.t : 0.0);
+            FUZZ_CHECK(cbvh_occluded(binary, &r, (cbvh_traversal)k, NULL) ==
+                           cbvh_occluded(wide, &r, (cbvh_traversal)k, NULL),
                        "ray %d traversal %d: binary and wide4 disagree on occluded", i, k);
         }
     }

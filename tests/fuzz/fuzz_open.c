@@ -1,4 +1,5 @@
-/* fuzz_open.c: libFuzzer target: open any bytes from memory (as given, and with checksums repaired) and query what opens. */
+/* fuzz_open.c: libFuzzer target: open any bytes from memory (as given, and with checksums repaired) and query
+ * what opens. */
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
@@ -23,10 +24,12 @@ static void open_and_query(const guard_buffer *g, uint64_t seed)
     FUZZ_CHECK(f != NULL, "open succeeded with a NULL file");
     cbvh_file_info info;
     cbvh_file_get_info(f, &info, sizeof info);
-    FUZZ_CHECK(info.file_size == g->size, "file_size %llu for %zu bytes", (unsigned long long)info.file_size, g->size);
+    FUZZ_CHECK(info.file_size == g->size, "file_size %llu for %zu bytes", (unsigned long long)info.file_size,
+               g->size);
     FUZZ_CHECK(info.format_version == CBVH_FORMAT_VERSION, "opened format version %u", info.format_version);
     FUZZ_CHECK(info.triangle_count >= 1 && info.node_count >= 1 && info.depth >= 1 && info.depth <= 64,
-               "opened a file with %u triangles, %u nodes, depth %u", info.triangle_count, info.node_count, info.depth);
+               "opened a file with %u triangles, %u nodes, depth %u", info.triangle_count, info.node_count,
+               info.depth);
     for (uint32_t i = 0; i < info.section_count; i++) {
         cbvh_section_info s;
         FUZZ_CHECK(cbvh_file_get_section(f, i, &s), "section %u of %u not described", i, info.section_count);
@@ -44,11 +47,13 @@ static void open_and_query(const guard_buffer *g, uint64_t seed)
         FUZZ_CHECK(!prev || id > prev_id || (id == prev_id && strcmp(prev, name) < 0),
                    "material name %u out of (id, name) order", k);
         const char *first = cbvh_file_find_material_name(f, id);
-        FUZZ_CHECK(first && (first == name || (prev && prev_id == id)), "material name %u not found by id %u", k, id);
+        FUZZ_CHECK(first && (first == name || (prev && prev_id == id)), "material name %u not found by id %u",
+                   k, id);
         prev = name;
         prev_id = id;
     }
-    FUZZ_CHECK(!cbvh_file_get_material_name(f, info.material_name_count, NULL), "material name past the count");
+    FUZZ_CHECK(!cbvh_file_get_material_name(f, info.material_name_count, NULL),
+               "material name past the count");
     fuzz_check_queries(f, g->data, g->size, seed, 0);
     cbvh_close(f);
 }

@@ -1,4 +1,5 @@
-/* fuzz_support.c: guard-page copies, checksum repair and the query invariants every fuzz target and corruption test asserts. */
+/* fuzz_support.c: guard-page copies, checksum repair and the query invariants every fuzz target and
+ * corruption test asserts. */
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -12,9 +13,17 @@
 /* Header and table offsets, as in lib/common/format.h (the harness stays
  * independent of the library's internals). */
 enum {
-    HDR_SIZE = 128, HDR_SECTION_COUNT = 24, HDR_TABLE_CRC = 28, HDR_ORIGINAL_TRIS = 52,
-    HDR_FILE_SIZE = 104, HDR_CRC = 124, ENTRY_SIZE = 40, ENTRY_OFFSET = 8, ENTRY_STORED = 16,
-    ENTRY_CRC = 32, MAX_SECTIONS = 16
+    HDR_SIZE = 128,
+    HDR_SECTION_COUNT = 24,
+    HDR_TABLE_CRC = 28,
+    HDR_ORIGINAL_TRIS = 52,
+    HDR_FILE_SIZE = 104,
+    HDR_CRC = 124,
+    ENTRY_SIZE = 40,
+    ENTRY_OFFSET = 8,
+    ENTRY_STORED = 16,
+    ENTRY_CRC = 32,
+    MAX_SECTIONS = 16
 };
 
 void fuzz_fail(const char *fmt, ...)
@@ -54,10 +63,24 @@ void guard_release(guard_buffer *g)
     memset(g, 0, sizeof *g);
 }
 
-static uint32_t get_u32(const uint8_t *p) { return (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24; }
-static uint64_t get_u64(const uint8_t *p) { return (uint64_t)get_u32(p) | (uint64_t)get_u32(p + 4) << 32; }
-static void put_u32(uint8_t *p, uint32_t v) { for (int i = 0; i < 4; i++) p[i] = (uint8_t)(v >> (8 * i)); }
-static void put_u64(uint8_t *p, uint64_t v) { put_u32(p, (uint32_t)v); put_u32(p + 4, (uint32_t)(v >> 32)); }
+static uint32_t get_u32(const uint8_t *p)
+{
+    return (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24;
+}
+static uint64_t get_u64(const uint8_t *p)
+{
+    return (uint64_t)get_u32(p) | (uint64_t)get_u32(p + 4) << 32;
+}
+static void put_u32(uint8_t *p, uint32_t v)
+{
+    for (int i = 0; i < 4; i++)
+        p[i] = (uint8_t)(v >> (8 * i));
+}
+static void put_u64(uint8_t *p, uint64_t v)
+{
+    put_u32(p, (uint32_t)v);
+    put_u32(p + 4, (uint32_t)(v >> 32));
+}
 
 static uint32_t crc_of(const uint8_t *p, uint64_t n)
 {
@@ -102,15 +125,45 @@ void fuzz_check_error(cbvh_result r, const cbvh_error *err)
 
 /* ---- double-precision geometry for the checks ---- */
 
-typedef struct dvec { double x, y, z; } dvec;
-static dvec dv(const float p[3]) { dvec r = { p[0], p[1], p[2] }; return r; }
-static dvec dsub(dvec a, dvec b) { dvec r = { a.x - b.x, a.y - b.y, a.z - b.z }; return r; }
-static dvec dadd(dvec a, dvec b) { dvec r = { a.x + b.x, a.y + b.y, a.z + b.z }; return r; }
-static dvec dmul(dvec a, double s) { dvec r = { a.x * s, a.y * s, a.z * s }; return r; }
-static double ddot(dvec a, dvec b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
-static double dlen(dvec a) { return sqrt(ddot(a, a)); }
-static double dmaxabs(dvec a) { return fmax(fabs(a.x), fmax(fabs(a.y), fabs(a.z))); }
-static int dfinite(dvec a) { return isfinite(a.x) && isfinite(a.y) && isfinite(a.z); }
+typedef struct dvec {
+    double x, y, z;
+} dvec;
+static dvec dv(const float p[3])
+{
+    dvec r = {p[0], p[1], p[2]};
+    return r;
+}
+static dvec dsub(dvec a, dvec b)
+{
+    dvec r = {a.x - b.x, a.y - b.y, a.z - b.z};
+    return r;
+}
+static dvec dadd(dvec a, dvec b)
+{
+    dvec r = {a.x + b.x, a.y + b.y, a.z + b.z};
+    return r;
+}
+static dvec dmul(dvec a, double s)
+{
+    dvec r = {a.x * s, a.y * s, a.z * s};
+    return r;
+}
+static double ddot(dvec a, dvec b)
+{
+    return a.x * b.x + a.y * b.y + a.z * b.z;
+}
+static double dlen(dvec a)
+{
+    return sqrt(ddot(a, a));
+}
+static double dmaxabs(dvec a)
+{
+    return fmax(fabs(a.x), fmax(fabs(a.y), fabs(a.z)));
+}
+static int dfinite(dvec a)
+{
+    return isfinite(a.x) && isfinite(a.y) && isfinite(a.z);
+}
 
 static dvec closest_on_segment(dvec p, dvec a, dvec b)
 {
@@ -121,7 +174,7 @@ static dvec closest_on_segment(dvec p, dvec a, dvec b)
 
 static dvec dcross(dvec a, dvec b)
 {
-    dvec r = { a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x };
+    dvec r = {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
     return r;
 }
 
@@ -136,9 +189,15 @@ static dvec closest_on_triangle(dvec p, dvec a, dvec b, dvec c)
      * the short one and tilt the plane (a rotation keeps the orientation) */
     double la = dlen(dsub(c, b)), lb = dlen(dsub(a, c)), lc = dlen(dsub(b, a));
     if (lb > la && lb >= lc) {
-        dvec t = a; a = b; b = c; c = t;
+        dvec t = a;
+        a = b;
+        b = c;
+        c = t;
     } else if (lc > la && lc > lb) {
-        dvec t = a; a = c; c = b; b = t;
+        dvec t = a;
+        a = c;
+        c = b;
+        b = t;
     }
     dvec n = dcross(dsub(b, a), dsub(c, a));
     double nn = ddot(n, n);
@@ -148,7 +207,7 @@ static dvec closest_on_triangle(dvec p, dvec a, dvec b, dvec c)
             ddot(dcross(dsub(a, c), dsub(q, c)), n) >= 0)
             return q;
     }
-    dvec e[3] = { closest_on_segment(p, a, b), closest_on_segment(p, b, c), closest_on_segment(p, c, a) };
+    dvec e[3] = {closest_on_segment(p, a, b), closest_on_segment(p, b, c), closest_on_segment(p, c, a)};
     int best = 0;
     for (int i = 1; i < 3; i++)
         if (dlen(dsub(p, e[i])) < dlen(dsub(p, e[best])))
@@ -162,7 +221,7 @@ typedef struct check_ctx {
     const cbvh_file *f;
     cbvh_file_info info;
     uint32_t original_count;
-    double scale;  /* magnitude of the file's coordinates, for tolerances */
+    double scale; /* magnitude of the file's coordinates, for tolerances */
     int strict;
     uint64_t rng;
     size_t queries;
@@ -192,7 +251,9 @@ static int triangle_of(const check_ctx *c, uint32_t tri, dvec v[3])
     float a[3], b[3], d[3];
     if (!cbvh_file_get_triangle(c->f, tri, a, b, d))
         return 0;
-    v[0] = dv(a); v[1] = dv(b); v[2] = dv(d);
+    v[0] = dv(a);
+    v[1] = dv(b);
+    v[2] = dv(d);
     return 1;
 }
 
@@ -215,7 +276,8 @@ static void check_hit(check_ctx *c, const cbvh_ray *r, const cbvh_hit *h, int go
     FUZZ_CHECK(ray_valid(r), "%s: invalid ray hit triangle %u", what, h->tri);
     dvec v[3];
     FUZZ_CHECK(triangle_of(c, h->tri, v), "%s: hit triangle id %u out of range", what, h->tri);
-    FUZZ_CHECK(h->t >= r->tmin && h->t <= r->tmax, "%s: t %.9g outside [%.9g, %.9g]", what, h->t, r->tmin, r->tmax);
+    FUZZ_CHECK(h->t >= r->tmin && h->t <= r->tmax, "%s: t %.9g outside [%.9g, %.9g]", what, h->t, r->tmin,
+               r->tmax);
     const double eps = 1e-4;
     FUZZ_CHECK(h->u >= -eps && h->v >= -eps && (double)h->u + h->v <= 1 + eps,
                "%s: barycentrics u %.9g v %.9g outside the triangle", what, h->u, h->v);
@@ -237,7 +299,8 @@ static void check_hit(check_ctx *c, const cbvh_ray *r, const cbvh_hit *h, int go
     /* a fixed tolerance at every aspect: u, v come from the hit point in
      * double since finding F6 was fixed */
     FUZZ_CHECK(line_gap * cosine <= 1e-3 * mag + 1e-30 && plane_gap <= 1e-3 * mag + 1e-30,
-               "%s: tri %u t %.9g u %.9g v %.9g: barycentric point %.3g off the ray, ray point %.3g off the plane (scale %.3g)",
+               "%s: tri %u t %.9g u %.9g v %.9g: barycentric point %.3g off the ray, ray point %.3g off the "
+               "plane (scale %.3g)",
                what, h->tri, h->t, h->u, h->v, line_gap, plane_gap, mag);
 }
 
@@ -265,7 +328,7 @@ static cbvh_filter_result fuzz_collect(void *user, const cbvh_hit_record *hit)
     return CBVH_FILTER_REJECT;
 }
 
-static const char *traversal_name[4] = { "sorted", "stackless", "unsorted", "distance" };
+static const char *traversal_name[4] = {"sorted", "stackless", "unsorted", "distance"};
 
 /* One ray through every ray query; `strict` compares them with each other. */
 static void check_ray(check_ctx *c, const cbvh_ray *r)
@@ -274,12 +337,13 @@ static void check_ray(check_ctx *c, const cbvh_ray *r)
     int got[4];
     for (int t = 0; t < 4; t++) {
         memset(&hits[t], 0x5A, sizeof hits[t]);
-        cbvh_query_stats st = { 0, 0 };
+        cbvh_query_stats st = {0, 0};
         got[t] = cbvh_raycast(c->f, r, (cbvh_traversal)t, &hits[t], &st);
         FUZZ_CHECK(got[t] == 0 || got[t] == 1, "raycast returned %d", got[t]);
         check_hit(c, r, &hits[t], got[t], traversal_name[t]);
-        FUZZ_CHECK(st.nodes_visited <= box_limit(&c->info), "%s: %llu box tests for %u nodes (a node visited twice)",
-                   traversal_name[t], (unsigned long long)st.nodes_visited, c->info.node_count);
+        FUZZ_CHECK(st.nodes_visited <= box_limit(&c->info),
+                   "%s: %llu box tests for %u nodes (a node visited twice)", traversal_name[t],
+                   (unsigned long long)st.nodes_visited, c->info.node_count);
         int occ = cbvh_occluded(c->f, r, (cbvh_traversal)t, NULL);
         FUZZ_CHECK(occ == 0 || occ == 1, "occluded returned %d", occ);
         if (!ray_valid(r))
@@ -294,15 +358,18 @@ static void check_ray(check_ctx *c, const cbvh_ray *r)
     cbvh_query_options_init(&q, sizeof q);
     cbvh_hit_record rec;
     const cbvh_result qr = cbvh_raycast_with(c->f, r, &q, &rec, NULL);
-    FUZZ_CHECK(qr == (ray_valid(r) ? CBVH_OK : CBVH_ERROR_INVALID_ARGUMENT), "raycast_with returned %d", (int)qr);
-    FUZZ_CHECK(rec.tri == hits[0].tri && (!got[0] || rec.t == hits[0].t), "raycast_with differs from raycast");
-    fuzz_hits all = { 0 };
+    FUZZ_CHECK(qr == (ray_valid(r) ? CBVH_OK : CBVH_ERROR_INVALID_ARGUMENT), "raycast_with returned %d",
+               (int)qr);
+    FUZZ_CHECK(rec.tri == hits[0].tri && (!got[0] || rec.t == hits[0].t),
+               "raycast_with differs from raycast");
+    fuzz_hits all = {0};
     q.filter = fuzz_collect;
     q.filter_user = &all;
     q.cull = CBVH_CULL_BACK;
     cbvh_raycast_with(c->f, r, &q, &rec, NULL);
     FUZZ_CHECK(rec.tri == CBVH_NO_HIT && all.count <= c->info.triangle_count,
-               "all hits: %zu candidates for %u triangles, answer %u", all.count, c->info.triangle_count, rec.tri);
+               "all hits: %zu candidates for %u triangles, answer %u", all.count, c->info.triangle_count,
+               rec.tri);
     c->queries += 2;
     cbvh_hit sh;
     uint8_t socc = 0x77;
@@ -318,18 +385,21 @@ static void check_ray(check_ctx *c, const cbvh_ray *r)
     cbvh_raycast_stream_scratch(c->f, r, 1, &ssh, NULL, scratch + 1, sizeof scratch - 1);
     cbvh_occluded_stream_scratch(c->f, r, 1, &ssocc, NULL, scratch + 1, sizeof scratch - 1);
     FUZZ_CHECK(ssh.tri == sh.tri && (sh.tri == CBVH_NO_HIT || ssh.t == sh.t) && ssocc == socc,
-               "stream in scratch differs (tri %u t %.9g occ %u vs tri %u t %.9g occ %u)", ssh.tri, ssh.t, ssocc,
-               sh.tri, sh.t, socc);
+               "stream in scratch differs (tri %u t %.9g occ %u vs tri %u t %.9g occ %u)", ssh.tri, ssh.t,
+               ssocc, sh.tri, sh.t, socc);
     c->queries += 4;
     if (!c->strict)
         return;
     for (int t = 1; t < 4; t++) {
-        FUZZ_CHECK(got[t] == got[0], "%s and sorted disagree: hit %d vs %d", traversal_name[t], got[t], got[0]);
+        FUZZ_CHECK(got[t] == got[0], "%s and sorted disagree: hit %d vs %d", traversal_name[t], got[t],
+                   got[0]);
         if (got[0])
-            FUZZ_CHECK(hits[t].t == hits[0].t, "%s t %.9g, sorted t %.9g", traversal_name[t], hits[t].t, hits[0].t);
+            FUZZ_CHECK(hits[t].t == hits[0].t, "%s t %.9g, sorted t %.9g", traversal_name[t], hits[t].t,
+                       hits[0].t);
     }
     FUZZ_CHECK((sh.tri != CBVH_NO_HIT) == got[0] && (!got[0] || sh.t == hits[0].t),
-               "stream differs from raycast (tri %u t %.9g vs tri %u t %.9g)", sh.tri, sh.t, hits[0].tri, hits[0].t);
+               "stream differs from raycast (tri %u t %.9g vs tri %u t %.9g)", sh.tri, sh.t, hits[0].tri,
+               hits[0].t);
     FUZZ_CHECK(socc == got[0], "occluded stream %d but raycast %d", socc, got[0]);
 }
 
@@ -362,7 +432,8 @@ static void check_sweep_hit(check_ctx *c, const cbvh_sweep_hit *h, const char *w
     FUZZ_CHECK(triangle_of(c, h->tri, v), "%s: triangle id %u out of range", what, h->tri);
     FUZZ_CHECK(h->t >= 0 && h->t <= 1, "%s: t %.9g outside [0,1]", what, h->t);
     dvec n = dv(h->normal), p = dv(h->point);
-    FUZZ_CHECK(dfinite(n) && fabs(dlen(n) - 1) < 1e-3, "%s: normal (%g %g %g) not of unit length", what, n.x, n.y, n.z);
+    FUZZ_CHECK(dfinite(n) && fabs(dlen(n) - 1) < 1e-3, "%s: normal (%g %g %g) not of unit length", what, n.x,
+               n.y, n.z);
     if (!dfinite(p))
         return;
     double mag = fmax(dmaxabs(p), fmax(dmaxabs(v[0]), fmax(dmaxabs(v[1]), dmaxabs(v[2]))));
@@ -371,7 +442,8 @@ static void check_sweep_hit(check_ctx *c, const cbvh_sweep_hit *h, const char *w
      * computed from coordinates of that magnitude: a tiny triangle in a huge
      * file gets the file's precision, not its own */
     if (c->strict)
-        FUZZ_CHECK(gap <= 1e-4 * fmax(mag, c->scale) + 1e-30, "%s: contact point %.3g off triangle %u", what, gap, h->tri);
+        FUZZ_CHECK(gap <= 1e-4 * fmax(mag, c->scale) + 1e-30, "%s: contact point %.3g off triangle %u", what,
+                   gap, h->tri);
 }
 
 /* Sweeps: ids, t and normals always; with strict, the contact distance, and
@@ -395,9 +467,11 @@ static void check_sweeps(check_ctx *c)
         if (c->strict && isfinite(h.point[0])) {
             dvec at = dadd(dv(center), dmul(dv(delta), h.t));
             double dist = dlen(dsub(at, dv(h.point))), tol = 1e-4 * fmax(c->scale, dmaxabs(at)) + 1e-30;
-            FUZZ_CHECK(dist <= radius + tol, "sphere sweep: contact %.9g from the center, radius %.9g", dist, radius);
+            FUZZ_CHECK(dist <= radius + tol, "sphere sweep: contact %.9g from the center, radius %.9g", dist,
+                       radius);
             if (h.t > 0)
-                FUZZ_CHECK(dist >= radius - tol, "sphere sweep at t %.9g: contact %.9g inside radius %.9g", h.t, dist, radius);
+                FUZZ_CHECK(dist >= radius - tol, "sphere sweep at t %.9g: contact %.9g inside radius %.9g",
+                           h.t, dist, radius);
         }
     }
     if (cbvh_sweep_capsule(c->f, center, p1, radius, delta, &h))
@@ -418,7 +492,9 @@ static void check_sweeps(check_ctx *c)
     box.rotation[3] = (float)unit(c);
     cbvh_sweep_record rec;
     if (cbvh_sweep_with(c->f, &box, delta, NULL, &rec) == CBVH_OK && rec.tri != CBVH_NO_HIT) {
-        cbvh_sweep_hit as_hit = {rec.tri, rec.t, {rec.point[0], rec.point[1], rec.point[2]},
+        cbvh_sweep_hit as_hit = {rec.tri,
+                                 rec.t,
+                                 {rec.point[0], rec.point[1], rec.point[2]},
                                  {rec.normal[0], rec.normal[1], rec.normal[2]}};
         check_sweep_hit(c, &as_hit, "oriented box sweep");
         FUZZ_CHECK(isfinite(rec.depth) && rec.depth >= 0 && (rec.t == 0 || rec.depth == 0),
@@ -428,12 +504,12 @@ static void check_sweeps(check_ctx *c)
     uint32_t over[8];
     int more_over = 0;
     if (cbvh_overlap_with(c->f, &box, NULL, 0, over, 8, &n_over, &more_over) == CBVH_OK)
-        FUZZ_CHECK(n_over <= 8 && (more_over == 0 || n_over == 8), "oriented box overlap: %zu written, more %d",
-                   n_over, more_over);
+        FUZZ_CHECK(n_over <= 8 && (more_over == 0 || n_over == 8),
+                   "oriented box overlap: %zu written, more %d", n_over, more_over);
     c->queries += 2;
 
     /* invalid shapes miss */
-    float bad_radius = -1.0f, nan_center[3] = { NAN, 0, 0 };
+    float bad_radius = -1.0f, nan_center[3] = {NAN, 0, 0};
     FUZZ_CHECK(!cbvh_sweep_sphere(c->f, center, bad_radius, delta, &h), "negative radius sweep hit");
     FUZZ_CHECK(!cbvh_sweep_sphere(c->f, nan_center, radius, delta, &h), "NaN center sweep hit");
     FUZZ_CHECK(!cbvh_sweep_capsule(c->f, center, nan_center, radius, delta, &h), "NaN capsule sweep hit");
@@ -442,7 +518,7 @@ static void check_sweeps(check_ctx *c)
     if (!c->strict)
         return;
     /* a sphere of radius 0 is a ray from center along delta with t in [0,1] */
-    cbvh_ray r = { { center[0], center[1], center[2] }, 0.0f, { delta[0], delta[1], delta[2] }, 1.0f };
+    cbvh_ray r = {{center[0], center[1], center[2]}, 0.0f, {delta[0], delta[1], delta[2]}, 1.0f};
     cbvh_hit rh;
     int rgot = cbvh_raycast(c->f, &r, CBVH_TRAVERSAL_SORTED, &rh, NULL);
     int sgot = cbvh_sweep_sphere(c->f, center, 0.0f, delta, &h);
@@ -475,7 +551,8 @@ static int cmp_u32(const void *a, const void *b)
 
 /* Checks one overlap answer: ids valid and unique, the capped `out` copy a
  * prefix of the callback's list, early stop honoured. Returns the sorted log. */
-static void check_overlap_answer(check_ctx *c, overlap_log *log, size_t n, const uint32_t *out, size_t out_n, const char *what)
+static void check_overlap_answer(check_ctx *c, overlap_log *log, size_t n, const uint32_t *out, size_t out_n,
+                                 const char *what)
 {
     FUZZ_CHECK(n == log->count, "%s: returned %zu, callback saw %zu", what, n, log->count);
     size_t kept = log->count < 4096 ? log->count : 4096;
@@ -484,7 +561,8 @@ static void check_overlap_answer(check_ctx *c, overlap_log *log, size_t n, const
         FUZZ_CHECK(triangle_of(c, log->ids[i], v), "%s: triangle id %u out of range", what, log->ids[i]);
     }
     for (size_t i = 0; i < out_n; i++)
-        FUZZ_CHECK(out[i] == log->ids[i], "%s: out[%zu] %u differs from the callback's %u", what, i, out[i], log->ids[i]);
+        FUZZ_CHECK(out[i] == log->ids[i], "%s: out[%zu] %u differs from the callback's %u", what, i, out[i],
+                   log->ids[i]);
     qsort(log->ids, kept, sizeof log->ids[0], cmp_u32);
     for (size_t i = 1; i < kept; i++)
         FUZZ_CHECK(log->ids[i] != log->ids[i - 1], "%s: triangle %u reported twice", what, log->ids[i]);
@@ -532,8 +610,8 @@ static void check_overlaps(check_ctx *c)
     size_t paged = 0;
     for (int more = 1, page = 0; more; page++) {
         const size_t k = cbvh_overlap_box_from(c->f, lo, hi, paged, out, 8, &more);
-        FUZZ_CHECK(k <= 8 && paged + k <= total && (more ? k == 8 : 1), "box overlap page %d: %zu at %zu of %zu",
-                   page, k, paged, total);
+        FUZZ_CHECK(k <= 8 && paged + k <= total && (more ? k == 8 : 1),
+                   "box overlap page %d: %zu at %zu of %zu", page, k, paged, total);
         FUZZ_CHECK(page > 0 || k == (total < 8 ? total : 8), "first box overlap page: %zu of %zu", k, total);
         paged += k;
         if (paged >= total)
@@ -553,7 +631,8 @@ static void check_overlaps(check_ctx *c)
     /* a capsule from the sphere's center: it holds the ball, so it reports at least the ball's triangles */
     float tip[3];
     random_point(c, 0.1, tip);
-    for (int k = 0; k < 3; k++) { /* in double: the difference of two floats near FLT_MAX overflows in float */
+    for (int k = 0; k < 3;
+         k++) { /* in double: the difference of two floats near FLT_MAX overflows in float */
         tip[k] = (float)((double)center[k] + 0.3 * ((double)tip[k] - center[k]));
         if (!isfinite(tip[k])) /* 0.7 center + 0.3 point: finite unless rounding met FLT_MAX */
             tip[k] = center[k];
@@ -577,8 +656,8 @@ static void check_overlaps(check_ctx *c)
                                    (double)page[j].normal[1] * page[j].normal[1] +
                                    (double)page[j].normal[2] * page[j].normal[2]);
             FUZZ_CHECK(page[j].depth >= 0.0f && fabs(nl - 1.0) < 1e-4 && triangle_of(c, page[j].tri, v),
-                       "capsule contact: triangle %u depth %g normal length %g", page[j].tri, (double)page[j].depth,
-                       nl);
+                       "capsule contact: triangle %u depth %g normal length %g", page[j].tri,
+                       (double)page[j].depth, nl);
         }
         contacts += k;
         FUZZ_CHECK(k > 0 || !more, "capsule contacts: an empty page with more to come");
@@ -587,16 +666,18 @@ static void check_overlaps(check_ctx *c)
     c->queries += 2;
 
     /* invalid queries report nothing */
-    float nan3[3] = { NAN, NAN, NAN };
-    FUZZ_CHECK(cbvh_overlap_box(c->f, nan3, hi, NULL, NULL, out, 8) == 0, "NaN box overlap reported triangles");
-    FUZZ_CHECK(cbvh_overlap_sphere(c->f, center, -1.0f, NULL, NULL, out, 8) == 0, "negative radius overlap reported triangles");
+    float nan3[3] = {NAN, NAN, NAN};
+    FUZZ_CHECK(cbvh_overlap_box(c->f, nan3, hi, NULL, NULL, out, 8) == 0,
+               "NaN box overlap reported triangles");
+    FUZZ_CHECK(cbvh_overlap_sphere(c->f, center, -1.0f, NULL, NULL, out, 8) == 0,
+               "negative radius overlap reported triangles");
     c->queries += 2;
 
     if (!c->strict || log.count >= 4096 || slog.count >= 4096)
         return;
     /* brute force: reported triangles touch the query (up to rounding), and
      * every triangle that certainly touches it was reported */
-    dvec bc = { 0.5 * ((double)lo[0] + hi[0]), 0.5 * ((double)lo[1] + hi[1]), 0.5 * ((double)lo[2] + hi[2]) };
+    dvec bc = {0.5 * ((double)lo[0] + hi[0]), 0.5 * ((double)lo[1] + hi[1]), 0.5 * ((double)lo[2] + hi[2])};
     double tol = 1e-5 * c->scale + 1e-30;
     /* near FLT_MAX a query bound can round to inf: such a query is invalid
      * and reports nothing, so it makes no "must report" claim */
@@ -610,26 +691,31 @@ static void check_overlaps(check_ctx *c)
         if (!triangle_of(c, t, v))
             continue;
         dvec cp = closest_on_triangle(bc, v[0], v[1], v[2]);
-        double out_by = fmax(fmax(lo[0] - cp.x, cp.x - hi[0]), fmax(fmax(lo[1] - cp.y, cp.y - hi[1]), fmax(lo[2] - cp.z, cp.z - hi[2])));
+        double out_by = fmax(fmax(lo[0] - cp.x, cp.x - hi[0]),
+                             fmax(fmax(lo[1] - cp.y, cp.y - hi[1]), fmax(lo[2] - cp.z, cp.z - hi[2])));
         int inside_vertex = 0;
         for (int k = 0; k < 3; k++)
-            inside_vertex |= v[k].x > lo[0] + tol && v[k].x < hi[0] - tol && v[k].y > lo[1] + tol && v[k].y < hi[1] - tol &&
-                             v[k].z > lo[2] + tol && v[k].z < hi[2] - tol;
+            inside_vertex |= v[k].x > lo[0] + tol && v[k].x < hi[0] - tol && v[k].y > lo[1] + tol &&
+                             v[k].y < hi[1] - tol && v[k].z > lo[2] + tol && v[k].z < hi[2] - tol;
         if (box_valid && (inside_vertex || out_by < -tol))
             FUZZ_CHECK(sorted_has(&log, t), "box overlap missed triangle %u", t);
         if (sorted_has(&log, t)) {
             int apart = 0;
-            double mn[3] = { fmin(v[0].x, fmin(v[1].x, v[2].x)), fmin(v[0].y, fmin(v[1].y, v[2].y)), fmin(v[0].z, fmin(v[1].z, v[2].z)) };
-            double mx[3] = { fmax(v[0].x, fmax(v[1].x, v[2].x)), fmax(v[0].y, fmax(v[1].y, v[2].y)), fmax(v[0].z, fmax(v[1].z, v[2].z)) };
+            double mn[3] = {fmin(v[0].x, fmin(v[1].x, v[2].x)), fmin(v[0].y, fmin(v[1].y, v[2].y)),
+                            fmin(v[0].z, fmin(v[1].z, v[2].z))};
+            double mx[3] = {fmax(v[0].x, fmax(v[1].x, v[2].x)), fmax(v[0].y, fmax(v[1].y, v[2].y)),
+                            fmax(v[0].z, fmax(v[1].z, v[2].z))};
             for (int k = 0; k < 3; k++)
                 apart |= mn[k] > hi[k] + tol || mx[k] < lo[k] - tol;
             FUZZ_CHECK(!apart, "box overlap reported triangle %u whose bounds miss the box", t);
         }
         double sd = dlen(dsub(dv(center), closest_on_triangle(dv(center), v[0], v[1], v[2])));
         if (sphere_valid && sd < radius - tol)
-            FUZZ_CHECK(sorted_has(&slog, t), "sphere overlap missed triangle %u at distance %.9g < %.9g", t, sd, radius);
+            FUZZ_CHECK(sorted_has(&slog, t), "sphere overlap missed triangle %u at distance %.9g < %.9g", t,
+                       sd, radius);
         if (sorted_has(&slog, t))
-            FUZZ_CHECK(sd <= radius + tol, "sphere overlap reported triangle %u at distance %.9g > %.9g", t, sd, radius);
+            FUZZ_CHECK(sd <= radius + tol, "sphere overlap reported triangle %u at distance %.9g > %.9g", t,
+                       sd, radius);
     }
 }
 
@@ -655,8 +741,8 @@ size_t fuzz_check_queries(const cbvh_file *f, const uint8_t *bytes, size_t size,
     c.rng = seed;
     cbvh_file_get_info(f, &c.info, sizeof c.info);
     c.original_count = size >= 56 ? get_u32(bytes + HDR_ORIGINAL_TRIS) : c.info.triangle_count;
-    FUZZ_CHECK(c.original_count >= c.info.triangle_count, "original count %u below the triangle count %u", c.original_count,
-               c.info.triangle_count);
+    FUZZ_CHECK(c.original_count >= c.info.triangle_count, "original count %u below the triangle count %u",
+               c.original_count, c.info.triangle_count);
     for (int a = 0; a < 3; a++)
         c.scale = fmax(c.scale, fmax(fabs(c.info.bounds_min[a]), fabs(c.info.bounds_max[a])));
     /* the cooker drops every triangle of zero area, also those that quantizing
@@ -677,7 +763,7 @@ size_t fuzz_check_queries(const cbvh_file *f, const uint8_t *bytes, size_t size,
     /* axis rays through the center, from both sides, signed zeros in the other components */
     for (int a = 0; a < 3; a++)
         for (int s = -1; s <= 1; s += 2) {
-            cbvh_ray r = { { center[0], center[1], center[2] }, 0.0f, { -0.0f, 0.0f, -0.0f }, inf };
+            cbvh_ray r = {{center[0], center[1], center[2]}, 0.0f, {-0.0f, 0.0f, -0.0f}, inf};
             double ext = (double)c.info.bounds_max[a] - c.info.bounds_min[a];
             r.org[a] = (float)(center[a] - s * (ext + 1.0));
             r.dir[a] = (float)s;
@@ -710,12 +796,18 @@ size_t fuzz_check_queries(const cbvh_file *f, const uint8_t *bytes, size_t size,
     }
     /* invalid rays: each must miss everything */
     static const float bad[][8] = {
-        { NAN, 0, 0, 0, 1, 0, 0, INFINITY }, { 0, 0, 0, 0, NAN, 1, 0, INFINITY }, { 0, 0, 0, 0, INFINITY, 0, 0, INFINITY },
-        { 0, 0, 0, 0, 0, 0, 0, INFINITY },   { 0, 0, 0, -1, 1, 0, 0, INFINITY }, { 0, 0, 0, 2, 1, 0, 0, 1 },
-        { 0, 0, 0, 0, 1, 0, 0, NAN },        { 0, INFINITY, 0, 0, 0, 1, 0, INFINITY },
+        {NAN, 0, 0, 0, 1, 0, 0, INFINITY},
+        {0, 0, 0, 0, NAN, 1, 0, INFINITY},
+        {0, 0, 0, 0, INFINITY, 0, 0, INFINITY},
+        {0, 0, 0, 0, 0, 0, 0, INFINITY},
+        {0, 0, 0, -1, 1, 0, 0, INFINITY},
+        {0, 0, 0, 2, 1, 0, 0, 1},
+        {0, 0, 0, 0, 1, 0, 0, NAN},
+        {0, INFINITY, 0, 0, 0, 1, 0, INFINITY},
     };
     for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
-        cbvh_ray r = { { bad[i][0], bad[i][1], bad[i][2] }, bad[i][3], { bad[i][4], bad[i][5], bad[i][6] }, bad[i][7] };
+        cbvh_ray r = {
+            {bad[i][0], bad[i][1], bad[i][2]}, bad[i][3], {bad[i][4], bad[i][5], bad[i][6]}, bad[i][7]};
         if (i < 3 || i == 7) { /* aim at the mesh so only the invalid component can explain a miss */
             for (int a = 0; a < 3; a++)
                 if (isfinite(r.org[a]) && r.org[a] == 0)

@@ -1,4 +1,5 @@
-/* fuzz_support.h: shared by the fuzz targets, the replay driver and the corruption tests: guard-page copies, CRC repair, query invariants. */
+/* fuzz_support.h: shared by the fuzz targets, the replay driver and the corruption tests: guard-page copies,
+ * CRC repair, query invariants. */
 #ifndef CBVH_FUZZ_SUPPORT_H
 #define CBVH_FUZZ_SUPPORT_H
 
@@ -12,7 +13,7 @@
 typedef struct guard_buffer {
     uint8_t *data; /* the copy; writable */
     size_t size;
-    void *map;     /* the whole mapping */
+    void *map; /* the whole mapping */
     size_t map_size;
 } guard_buffer;
 
@@ -40,7 +41,11 @@ void fuzz_fail(const char *fmt, ...)
     __attribute__((format(FUZZ_PRINTF, 1, 2), noreturn))
 #endif
     ;
-#define FUZZ_CHECK(cond, ...) do { if (!(cond)) fuzz_fail(__VA_ARGS__); } while (0)
+#define FUZZ_CHECK(cond, ...)                                                                                \
+    do {                                                                                                     \
+        if (!(cond))                                                                                         \
+            fuzz_fail(__VA_ARGS__);                                                                          \
+    } while (0)
 
 /* Checks an open error: a known failing code and a non-empty message. */
 void fuzz_check_error(cbvh_result r, const cbvh_error *err);

@@ -1,4 +1,5 @@
-/* make_corpus.c: writes the fuzz seed corpora (tests/fuzz/corpus/open, tests/fuzz/corpus/cook); run once by hand, its output is checked in. */
+/* make_corpus.c: writes the fuzz seed corpora (tests/fuzz/corpus/open, tests/fuzz/corpus/cook); run once by
+ * hand, its output is checked in. */
 #include <errno.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -29,9 +30,10 @@ static void write_file(const char *sub, const char *name, const void *data, size
     printf("%s/%s: %zu bytes\n", sub, name, size);
 }
 
-static uint8_t *cook(const scene *s, cbvh_layout layout, int quantized, int level, int keep_remap, size_t *size)
+static uint8_t *cook(const scene *s, cbvh_layout layout, int quantized, int level, int keep_remap,
+                     size_t *size)
 {
-    cbvh_mesh m = { s->positions, s->vertex_count, 0, s->indices, s->triangle_count, s->material_ids };
+    cbvh_mesh m = {s->positions, s->vertex_count, 0, s->indices, s->triangle_count, s->material_ids};
     cbvh_cook_options o;
     cbvh_cook_options_init(&o, sizeof o);
     o.vertex_format = quantized ? CBVH_VERTEX_QUANTIZED16 : CBVH_VERTEX_FLOAT32;
@@ -39,7 +41,8 @@ static uint8_t *cook(const scene *s, cbvh_layout layout, int quantized, int leve
     o.keep_remap = keep_remap;
     o.layout = layout;
     /* scenes with material ids get names too (a MATERIAL_NAMES section) */
-    static const cbvh_material_name names[] = { { 0, "stone" }, { 9, "glass" }, { 70000, "wood" }, { 140000, "metal" } };
+    static const cbvh_material_name names[] = {
+        {0, "stone"}, {9, "glass"}, {70000, "wood"}, {140000, "metal"}};
     o.material_names = s->material_ids ? names : NULL;
     o.material_name_count = s->material_ids ? 4 : 0;
     void *out = NULL;
@@ -54,7 +57,8 @@ static uint8_t *cook(const scene *s, cbvh_layout layout, int quantized, int leve
     return copy;
 }
 
-static void write_cooked(const scene *s, cbvh_layout layout, int quantized, int level, int keep_remap, const char *name)
+static void write_cooked(const scene *s, cbvh_layout layout, int quantized, int level, int keep_remap,
+                         const char *name)
 {
     size_t n;
     uint8_t *file = cook(s, layout, quantized, level, keep_remap, &n);
@@ -62,13 +66,25 @@ static void write_cooked(const scene *s, cbvh_layout layout, int quantized, int 
     free(file);
 }
 
-static void put16(uint8_t *p, uint32_t v) { p[0] = (uint8_t)v; p[1] = (uint8_t)(v >> 8); }
-static void put32(uint8_t *p, uint32_t v) { for (int i = 0; i < 4; i++) p[i] = (uint8_t)(v >> (8 * i)); }
-static uint32_t get16(const uint8_t *p) { return (uint32_t)p[0] | (uint32_t)p[1] << 8; }
+static void put16(uint8_t *p, uint32_t v)
+{
+    p[0] = (uint8_t)v;
+    p[1] = (uint8_t)(v >> 8);
+}
+static void put32(uint8_t *p, uint32_t v)
+{
+    for (int i = 0; i < 4; i++)
+        p[i] = (uint8_t)(v >> (8 * i));
+}
+static uint32_t get16(const uint8_t *p)
+{
+    return (uint32_t)p[0] | (uint32_t)p[1] << 8;
+}
 
 /* Re-encodes a u16 TRIANGLES (and REMAP) section of a raw file as `tris`
  * (1 = u32, 2 = DELTA16) and REMAP as u32, then writes it. */
-static void write_transcoded(const uint8_t *file, size_t size, int tris, int remap32, int zlib, const char *name)
+static void write_transcoded(const uint8_t *file, size_t size, int tris, int remap32, int zlib,
+                             const char *name)
 {
     edit_file e;
     if (!edit_parse(&e, file, size)) {
@@ -80,11 +96,16 @@ static void write_transcoded(const uint8_t *file, size_t size, int tris, int rem
         size_t n = e.s[ti].size / 6;
         uint8_t *d = calloc(n, tris == 1 ? 12 : 8);
         for (size_t t = 0; t < n; t++) {
-            uint32_t i0 = get16(e.s[ti].data + 6 * t), i1 = get16(e.s[ti].data + 6 * t + 2), i2 = get16(e.s[ti].data + 6 * t + 4);
+            uint32_t i0 = get16(e.s[ti].data + 6 * t), i1 = get16(e.s[ti].data + 6 * t + 2),
+                     i2 = get16(e.s[ti].data + 6 * t + 4);
             if (tris == 1) {
-                put32(d + 12 * t, i0); put32(d + 12 * t + 4, i1); put32(d + 12 * t + 8, i2);
+                put32(d + 12 * t, i0);
+                put32(d + 12 * t + 4, i1);
+                put32(d + 12 * t + 8, i2);
             } else {
-                put32(d + 8 * t, i0); put16(d + 8 * t + 4, (uint32_t)(int32_t)(i1 - i0)); put16(d + 8 * t + 6, (uint32_t)(int32_t)(i2 - i0));
+                put32(d + 8 * t, i0);
+                put16(d + 8 * t + 4, (uint32_t)(int32_t)(i1 - i0));
+                put16(d + 8 * t + 6, (uint32_t)(int32_t)(i2 - i0));
             }
         }
         edit_replace(&e, ti, d, n * (tris == 1 ? 12 : 8), (uint32_t)tris);
@@ -106,14 +127,15 @@ static void write_transcoded(const uint8_t *file, size_t size, int tris, int rem
 }
 
 /* The fuzz_cook input format (see fuzz_cook.c): int8 coordinates. */
-static void write_cook_seed(const char *name, uint8_t flags, const int8_t *coords, size_t nv, const uint8_t *tris, size_t nt, int materials)
+static void write_cook_seed(const char *name, uint8_t flags, const int8_t *coords, size_t nv,
+                            const uint8_t *tris, size_t nt, int materials)
 {
     uint8_t buf[4096];
     size_t n = 0;
     buf[n++] = (uint8_t)(flags | 32);
     buf[n++] = 0x13;
     buf[n++] = (uint8_t)nv;
-    buf[n++] = 128; /* scale 1 */
+    buf[n++] = 128;        /* scale 1 */
     memset(buf + n, 0, 4); /* offset 0.0f */
     n += 4;
     memcpy(buf + n, coords, 3 * nv);
@@ -152,7 +174,7 @@ int main(int argc, char **argv)
     out_dir = argv[1];
     test_mkdir(out_dir);
     scene sphere, cube, soup;
-    float c[3] = { 0.5f, -1.0f, 2.0f }, lo[3] = { -1, -1, -1 }, hi[3] = { 1, 2, 3 };
+    float c[3] = {0.5f, -1.0f, 2.0f}, lo[3] = {-1, -1, -1}, hi[3] = {1, 2, 3};
     if (!scene_sphere(&sphere, 40, c, 1.5f) || !scene_cube(&cube, lo, hi) || !scene_soup(&soup, 24, 0.3f, 7))
         return 1;
     soup.material_ids = malloc(soup.triangle_count * sizeof(uint32_t));
@@ -172,7 +194,7 @@ int main(int argc, char **argv)
     bad[n / 2] ^= 0x40; /* CRC catches it */
     write_file("open", "bad-crc.cbvh", bad, n);
     memcpy(bad, raw, n);
-    bad[8] = 2;         /* newer version: unsupported */
+    bad[8] = 2; /* newer version: unsupported */
     write_file("open", "unsupported-version2.cbvh", bad, n);
     free(bad);
     free(raw);
@@ -200,18 +222,19 @@ int main(int argc, char **argv)
 
     /* cook seeds: a tetrahedron, a cube with a degenerate and a duplicated
      * triangle, a bad index, a sliver */
-    static const int8_t tet[] = { 0, 0, 0, 100, 0, 0, 0, 100, 0, 0, 0, 100 };
-    static const uint8_t tet_t[] = { 0, 2, 1, 0, 1, 3, 1, 2, 3, 0, 3, 2 };
+    static const int8_t tet[] = {0, 0, 0, 100, 0, 0, 0, 100, 0, 0, 0, 100};
+    static const uint8_t tet_t[] = {0, 2, 1, 0, 1, 3, 1, 2, 3, 0, 3, 2};
     write_cook_seed("tetra.bin", 0, tet, 4, tet_t, 4, 0);
     write_cook_seed("tetra-q16-zlib-materials.bin", 1 | 4, tet, 4, tet_t, 4, 1);
-    static const int8_t box[] = { -50, -50, -50, 50, -50, -50, 50, 50, -50, -50, 50, -50, -50, -50, 50, 50, -50, 50, 50, 50, 50, -50, 50, 50 };
-    static const uint8_t box_t[] = { 0, 2, 1, 0, 3, 2, 4, 5, 6, 4, 6, 7, 0, 1, 5, 0, 5, 4, 1, 2, 6, 1, 6, 5,
-                                     2, 3, 7, 2, 7, 6, 3, 0, 4, 3, 4, 7, 0, 0, 1, 4, 5, 6 };
+    static const int8_t box[] = {-50, -50, -50, 50, -50, -50, 50, 50, -50, -50, 50, -50,
+                                 -50, -50, 50,  50, -50, 50,  50, 50, 50,  -50, 50, 50};
+    static const uint8_t box_t[] = {0, 2, 1, 0, 3, 2, 4, 5, 6, 4, 6, 7, 0, 1, 5, 0, 5, 4, 1, 2, 6,
+                                    1, 6, 5, 2, 3, 7, 2, 7, 6, 3, 0, 4, 3, 4, 7, 0, 0, 1, 4, 5, 6};
     write_cook_seed("cube-degenerate-duplicate.bin", 8, box, 8, box_t, 14, 0);
-    static const uint8_t bad_t[] = { 0, 1, 2, 0, 1, 9 };
+    static const uint8_t bad_t[] = {0, 1, 2, 0, 1, 9};
     write_cook_seed("bad-index.bin", 0, tet, 4, bad_t, 2, 0);
-    static const int8_t sliver[] = { -127, 0, 0, 127, 0, 0, 0, 1, 0, 0, -1, 0 };
-    static const uint8_t sliver_t[] = { 0, 1, 2, 1, 0, 3 };
+    static const int8_t sliver[] = {-127, 0, 0, 127, 0, 0, 0, 1, 0, 0, -1, 0};
+    static const uint8_t sliver_t[] = {0, 1, 2, 1, 0, 3};
     write_cook_seed("sliver.bin", 2, sliver, 4, sliver_t, 2, 0);
     if (sphere.vertex_count <= 255) {
         write_cook_seed_float("sphere-float.bin", 0, 0x23, &sphere);

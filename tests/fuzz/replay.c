@@ -1,4 +1,5 @@
-/* replay.c: runs a fuzz target's LLVMFuzzerTestOneInput on every file of the given corpus folders or files (no libFuzzer needed), as zstd's regression_driver.c does. */
+/* replay.c: runs a fuzz target's LLVMFuzzerTestOneInput on every file of the given corpus folders or files
+ * (no libFuzzer needed), as zstd's regression_driver.c does. */
 #include <dirent.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -36,7 +37,10 @@ static int run_file(const char *path)
     return 0;
 }
 
-static int cmp_names(const void *a, const void *b) { return strcmp(*(char *const *)a, *(char *const *)b); }
+static int cmp_names(const void *a, const void *b)
+{
+    return strcmp(*(char *const *)a, *(char *const *)b);
+}
 
 /* Runs the file `path`, or every file below the folder `path` whose name starts with `prefix` (NULL: all). */
 static int run_path(const char *path, const char *prefix)

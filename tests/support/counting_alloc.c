@@ -1,4 +1,5 @@
-/* counting_alloc.c: an allocator for tests that counts live blocks and bytes and fails a chosen call; the open failure loop. */
+/* counting_alloc.c: an allocator for tests that counts live blocks and bytes and fails a chosen call; the
+ * open failure loop. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -58,14 +59,16 @@ cbvh_allocator counting_allocator(counting_alloc *c, long fail_at, int fail_all)
     return a;
 }
 
-size_t counting_open_failures(const void *data, size_t size, const char *path, void (*opened)(const cbvh_file *file))
+size_t counting_open_failures(const void *data, size_t size, const char *path,
+                              void (*opened)(const cbvh_file *file))
 {
     for (size_t n = 0;; n++) {
         counting_alloc c;
         cbvh_allocator a = counting_allocator(&c, (long)n, 0);
         cbvh_file *f = NULL;
         cbvh_error err;
-        cbvh_result r = path ? cbvh_open_path(path, &a, &f, &err) : cbvh_open_memory(data, size, &a, &f, &err);
+        cbvh_result r =
+            path ? cbvh_open_path(path, &a, &f, &err) : cbvh_open_memory(data, size, &a, &f, &err);
         if (r == CBVH_OK) {
             if (opened)
                 opened(f);

@@ -7,10 +7,10 @@
 #include "cbvh.h"
 
 typedef struct counting_alloc {
-    long calls;        /* allocations asked for so far */
-    long fail_at;      /* the call that fails (0-based); -1: none */
-    int fail_all;      /* also fail every call after fail_at */
-    long live;         /* blocks not yet freed */
+    long calls;   /* allocations asked for so far */
+    long fail_at; /* the call that fails (0-based); -1: none */
+    int fail_all; /* also fail every call after fail_at */
+    long live;    /* blocks not yet freed */
     long peak_live;
     size_t live_bytes; /* their sizes, as asked for */
     size_t peak_bytes; /* the most live_bytes reached */
@@ -27,6 +27,7 @@ cbvh_allocator counting_allocator(counting_alloc *c, long fail_at, int fail_all)
  * live block (a cmocka failure otherwise). On success `opened` (may be NULL)
  * runs on the file, which is then closed with no block left live. Returns
  * the number of failure points. */
-size_t counting_open_failures(const void *data, size_t size, const char *path, void (*opened)(const cbvh_file *file));
+size_t counting_open_failures(const void *data, size_t size, const char *path,
+                              void (*opened)(const cbvh_file *file));
 
 #endif

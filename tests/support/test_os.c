@@ -1,4 +1,5 @@
-/* test_os.c: the few operating-system calls the tests make, for POSIX and for Windows (MinGW-w64, run under wine). */
+/* test_os.c: the few operating-system calls the tests make, for POSIX and for Windows (MinGW-w64, run under
+ * wine). */
 #ifndef _WIN32
 #define _DEFAULT_SOURCE 1 /* MAP_ANONYMOUS is not POSIX.1-2008 */
 #endif

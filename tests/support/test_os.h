@@ -1,4 +1,5 @@
-/* test_os.h: the few operating-system calls the tests make, for POSIX and for Windows (MinGW-w64, run under wine). */
+/* test_os.h: the few operating-system calls the tests make, for POSIX and for Windows (MinGW-w64, run under
+ * wine). */
 #ifndef CBVH_TEST_OS_H
 #define CBVH_TEST_OS_H
 

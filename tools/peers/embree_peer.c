@@ -1,4 +1,4 @@
-/* embree_peer.c: the Embree 3 benchmark peer (shared-buffer triangle scene, single rays and 16-ray packets). */
+/* embree_peer.c: the Embree 3 benchmark peer (shared-buffer triangle scene, single rays, 16-ray packets). */
 #include "config.h"
 
 #include <embree3/rtcore.h>
@@ -183,7 +183,8 @@ void embree_peer_raycast16(const embree_peer *peer, const cbvh_ray *rays, size_t
             rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
         rtcIntersect16(valid, peer->scene, &context, &rh);
         for (size_t k = 0; k < n; k++)
-            store_hit(&hits[i + k], rh.hit.geomID[k], rh.hit.primID[k], rh.ray.tfar[k], rh.hit.u[k], rh.hit.v[k]);
+            store_hit(&hits[i + k], rh.hit.geomID[k], rh.hit.primID[k], rh.ray.tfar[k], rh.hit.u[k],
+                      rh.hit.v[k]);
     }
 }
 

@@ -1,4 +1,5 @@
-/* peers.h: a C interface to the libraries cbvh is benchmarked against (Embree 3, Bullet 3), when configure found them. */
+/* peers.h: a C interface to the libraries cbvh is benchmarked against (Embree 3, Bullet 3), when configure
+ * found them. */
 #ifndef CBVH_PEERS_H
 #define CBVH_PEERS_H
 

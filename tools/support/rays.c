@@ -1,4 +1,5 @@
-/* rays.c: deterministic benchmark ray sets (incoherent, coherent camera tiles, shadow rays, short probes) from a seed. */
+/* rays.c: deterministic benchmark ray sets (incoherent, coherent camera tiles, shadow rays, short probes)
+ * from a seed. */
 #include <math.h>
 
 #include "rays.h"
@@ -9,10 +10,14 @@
 const char *rays_kind_name(ray_kind kind)
 {
     switch (kind) {
-    case RAYS_INCOHERENT: return "incoherent";
-    case RAYS_COHERENT: return "coherent";
-    case RAYS_SHORT: return "short";
-    default: return "shadow";
+    case RAYS_INCOHERENT:
+        return "incoherent";
+    case RAYS_COHERENT:
+        return "coherent";
+    case RAYS_SHORT:
+        return "short";
+    default:
+        return "shadow";
     }
 }
 
@@ -73,7 +78,7 @@ static void coherent(const float lo[3], const float hi[3], double diag, uint64_t
                      size_t count)
 {
     double center[3], eye[3], fwd[3], right[3], up[3];
-    const double view[3] = { 0.48, 0.42, 0.77 }; /* roughly unit, off every axis */
+    const double view[3] = {0.48, 0.42, 0.77}; /* roughly unit, off every axis */
     double radius = 0.5 * diag + 1e-6, dist = 3.0 * radius;
     double vn = sqrt(view[0] * view[0] + view[1] * view[1] + view[2] * view[2]);
     for (int a = 0; a < 3; a++) {
@@ -173,7 +178,7 @@ static void short_rays(const rays_mesh *mesh, double diag, uint64_t *state, cbvh
 static void shadow(const rays_mesh *mesh, const float lo[3], const float hi[3], double diag, uint64_t *state,
                    cbvh_ray *out, size_t count)
 {
-    const double toward[3] = { 0.3, 0.9, 0.3 };
+    const double toward[3] = {0.3, 0.9, 0.3};
     double tn = sqrt(toward[0] * toward[0] + toward[1] * toward[1] + toward[2] * toward[2]);
     double light[3];
     for (int a = 0; a < 3; a++)
@@ -200,9 +205,17 @@ void rays_generate(ray_kind kind, const rays_mesh *mesh, uint64_t seed, cbvh_ray
     /* One stream per kind so the sets do not depend on one another. */
     uint64_t state = seed ^ (0xA0761D6478BD642Full * (uint64_t)(kind + 1));
     switch (kind) {
-    case RAYS_INCOHERENT: incoherent(lo, hi, diag, &state, out, count); break;
-    case RAYS_COHERENT: coherent(lo, hi, diag, &state, out, count); break;
-    case RAYS_SHORT: short_rays(mesh, diag, &state, out, count); break;
-    default: shadow(mesh, lo, hi, diag, &state, out, count); break;
+    case RAYS_INCOHERENT:
+        incoherent(lo, hi, diag, &state, out, count);
+        break;
+    case RAYS_COHERENT:
+        coherent(lo, hi, diag, &state, out, count);
+        break;
+    case RAYS_SHORT:
+        short_rays(mesh, diag, &state, out, count);
+        break;
+    default:
+        shadow(mesh, lo, hi, diag, &state, out, count);
+        break;
     }
 }

@@ -1,4 +1,5 @@
-/* rays.h: deterministic benchmark ray sets (incoherent, coherent camera tiles, shadow rays, short probes) from a seed. */
+/* rays.h: deterministic benchmark ray sets (incoherent, coherent camera tiles, shadow rays, short probes)
+ * from a seed. */
 #ifndef CBVH_RAYS_H
 #define CBVH_RAYS_H
 

@@ -1,4 +1,5 @@
-/* reference.c: double-precision brute-force references for every cbvh query, by methods independent of the kernels. */
+/* reference.c: double-precision brute-force references for every cbvh query, by methods independent of the
+ * kernels. */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -14,7 +15,10 @@ static void sub3(const double *a, const double *b, double *r)
     r[1] = a[1] - b[1];
     r[2] = a[2] - b[2];
 }
-static double dot3(const double *a, const double *b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+static double dot3(const double *a, const double *b)
+{
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
 static void cross3(const double *a, const double *b, double *r)
 {
     r[0] = a[1] * b[2] - a[2] * b[1];
@@ -62,8 +66,9 @@ void ref_tris_free(ref_tris *tris)
 
 int ref_expand_triangles;
 
-cbvh_result ref_cook_open(const float *positions, size_t vertex_count, const uint32_t *indices, size_t triangle_count,
-                          const cbvh_cook_options *options, void **buffer, cbvh_file **file)
+cbvh_result ref_cook_open(const float *positions, size_t vertex_count, const uint32_t *indices,
+                          size_t triangle_count, const cbvh_cook_options *options, void **buffer,
+                          cbvh_file **file)
 {
     const cbvh_mesh mesh = {positions, vertex_count, 0, indices, triangle_count, NULL};
     size_t size;
@@ -87,11 +92,12 @@ cbvh_result ref_cook_open(const float *positions, size_t vertex_count, const uin
     return r;
 }
 
-cbvh_result ref_fixture_open(ref_fixture *fx, const float *positions, size_t vertex_count, const uint32_t *indices,
-                             size_t triangle_count, const cbvh_cook_options *options)
+cbvh_result ref_fixture_open(ref_fixture *fx, const float *positions, size_t vertex_count,
+                             const uint32_t *indices, size_t triangle_count, const cbvh_cook_options *options)
 {
     memset(fx, 0, sizeof(*fx));
-    cbvh_result r = ref_cook_open(positions, vertex_count, indices, triangle_count, options, &fx->buffer, &fx->file);
+    cbvh_result r =
+        ref_cook_open(positions, vertex_count, indices, triangle_count, options, &fx->buffer, &fx->file);
     if (r != CBVH_OK)
         return r;
     fx->id_count = (uint32_t)triangle_count;
@@ -140,9 +146,11 @@ int ref_ray_valid(const cbvh_ray *ray)
     return ray->tmin >= 0 && ray->tmin <= ray->tmax;
 }
 
-int ref_ray_triangle(const double tri[9], const cbvh_ray *ray, double *t, double *u, double *v, double *margin)
+int ref_ray_triangle(const double tri[9], const cbvh_ray *ray, double *t, double *u, double *v,
+                     double *margin)
 {
-    const double o[3] = {ray->org[0], ray->org[1], ray->org[2]}, d[3] = {ray->dir[0], ray->dir[1], ray->dir[2]};
+    const double o[3] = {ray->org[0], ray->org[1], ray->org[2]},
+                 d[3] = {ray->dir[0], ray->dir[1], ray->dir[2]};
     double e1[3], e2[3], n[3], ao[3];
     sub3(tri + 3, tri, e1);
     sub3(tri + 6, tri, e2);
@@ -158,7 +166,8 @@ int ref_ray_triangle(const double tri[9], const cbvh_ray *ray, double *t, double
      * projection along dir), where they are well conditioned at any angle. */
     const double dl = sqrt(dot3(d, d));
     const double dn[3] = {d[0] / dl, d[1] / dl, d[2] / dl};
-    const int least = fabs(dn[0]) < fabs(dn[1]) ? (fabs(dn[0]) < fabs(dn[2]) ? 0 : 2) : (fabs(dn[1]) < fabs(dn[2]) ? 1 : 2);
+    const int least =
+        fabs(dn[0]) < fabs(dn[1]) ? (fabs(dn[0]) < fabs(dn[2]) ? 0 : 2) : (fabs(dn[1]) < fabs(dn[2]) ? 1 : 2);
     double axis[3] = {0, 0, 0}, b1[3], b2[3], q[3][2], rel[3];
     axis[least] = 1.0;
     cross3(dn, axis, b1);
@@ -252,7 +261,8 @@ double ref_point_triangle_dist2(const double tri[9], const double p[3])
         for (int k = 0; k < 3; k++)
             mag = fmax(mag, fmax(fabs(p[k]), fmax(fabs(tri[k]), fmax(fabs(tri[3 + k]), fabs(tri[6 + k])))));
         for (int k = 0; k < 3 && inside; k++) {
-            const double lo = fmin(tri[k], fmin(tri[3 + k], tri[6 + k])), hi = fmax(tri[k], fmax(tri[3 + k], tri[6 + k]));
+            const double lo = fmin(tri[k], fmin(tri[3 + k], tri[6 + k])),
+                         hi = fmax(tri[k], fmax(tri[3 + k], tri[6 + k]));
             inside = q[k] >= lo - 1e-9 * mag && q[k] <= hi + 1e-9 * mag;
         }
         if (inside)
@@ -415,7 +425,8 @@ double ref_shape_triangle_dist(const ref_shape *shape, const double delta[3], do
             double e[3];
             sub3(tri + 3 * v, p0, e);
             for (int j = 0; j < 3; j++)
-                local[3 * v + j] = shape->axes[0][j] * e[0] + shape->axes[1][j] * e[1] + shape->axes[2][j] * e[2];
+                local[3 * v + j] =
+                    shape->axes[0][j] * e[0] + shape->axes[1][j] * e[1] + shape->axes[2][j] * e[2];
         }
         return ref_box_triangle_dist(local, lo, hi);
     }
@@ -438,7 +449,9 @@ static void swept_bounds(const ref_shape *s, const double delta[3], double lo[3]
     for (int k = 0; k < 3; k++) {
         double a = fmin(s->p0[k], s->kind == REF_CAPSULE ? s->p1[k] : s->p0[k]);
         double b = fmax(s->p0[k], s->kind == REF_CAPSULE ? s->p1[k] : s->p0[k]);
-        const double grow = s->kind != REF_BOX ? s->radius : s->rotated ? sqrt(dot3(s->half, s->half)) : s->half[k];
+        const double grow = s->kind != REF_BOX ? s->radius
+                            : s->rotated       ? sqrt(dot3(s->half, s->half))
+                                               : s->half[k];
         lo[k] = fmin(a, a + delta[k]) - grow;
         hi[k] = fmax(b, b + delta[k]) + grow;
     }
@@ -470,7 +483,8 @@ static int sweep_far_apart(const ref_shape *s, const double delta[3], const doub
     return sqrt(point_segment_dist2(cen, center, end)) > reach + r_shape + eps;
 }
 
-int ref_sweep(const ref_tris *tris, const ref_shape *shape, const double delta[3], double eps, ref_sweep_hit *hit)
+int ref_sweep(const ref_tris *tris, const ref_shape *shape, const double delta[3], double eps,
+              ref_sweep_hit *hit)
 {
     double lo[3], hi[3];
     swept_bounds(shape, delta, lo, hi);
@@ -577,4 +591,3 @@ cbvh_ray ref_make_ray(const ref_fixture *fx, uint64_t *st, int kind)
         ray.dir[0] = 1.0f;
     return ray;
 }
-

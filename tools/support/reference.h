@@ -1,4 +1,5 @@
-/* reference.h: double-precision brute-force references for every cbvh query, by methods independent of the kernels. */
+/* reference.h: double-precision brute-force references for every cbvh query, by methods independent of the
+ * kernels. */
 #ifndef CBVH_TEST_REFERENCE_H
 #define CBVH_TEST_REFERENCE_H
 
@@ -26,24 +27,26 @@ void ref_tris_free(ref_tris *tris);
  * bytes until the caller closes the file and frees it with cbvh_buffer_free.
  * Returns CBVH_OK or the first error. */
 extern int ref_expand_triangles;
-cbvh_result ref_cook_open(const float *positions, size_t vertex_count, const uint32_t *indices, size_t triangle_count,
-                          const cbvh_cook_options *options, void **buffer, cbvh_file **file);
+cbvh_result ref_cook_open(const float *positions, size_t vertex_count, const uint32_t *indices,
+                          size_t triangle_count, const cbvh_cook_options *options, void **buffer,
+                          cbvh_file **file);
 
 /* A cooked and opened mesh with its reference triangles, for tests and tools. */
 typedef struct ref_fixture {
-    void *buffer;          /* the file bytes */
+    void *buffer; /* the file bytes */
     cbvh_file *file;
     ref_tris tris;
-    size_t *index_of_id;   /* original id -> index into tris, (size_t)-1 when dropped */
-    uint32_t id_count;     /* the input triangle count */
-    double lo[3], hi[3];   /* bounds of the reference triangles */
-    double diag;           /* length of the bounds' diagonal */
+    size_t *index_of_id; /* original id -> index into tris, (size_t)-1 when dropped */
+    uint32_t id_count;   /* the input triangle count */
+    double lo[3], hi[3]; /* bounds of the reference triangles */
+    double diag;         /* length of the bounds' diagonal */
 } ref_fixture;
 
 /* ref_cook_open plus the reference triangles and bounds. Returns CBVH_OK or
  * the first error (CBVH_ERROR_OUT_OF_MEMORY when the references do not fit). */
-cbvh_result ref_fixture_open(ref_fixture *fx, const float *positions, size_t vertex_count, const uint32_t *indices,
-                             size_t triangle_count, const cbvh_cook_options *options);
+cbvh_result ref_fixture_open(ref_fixture *fx, const float *positions, size_t vertex_count,
+                             const uint32_t *indices, size_t triangle_count,
+                             const cbvh_cook_options *options);
 void ref_fixture_close(ref_fixture *fx);
 
 /* A ray for fixture fx from the generator state st, of kind (0 .. REF_RAY_KINDS-1):
@@ -62,7 +65,8 @@ int ref_ray_valid(const cbvh_ray *ray);
  * barycentrics u, v of the crossing point and its margin: the distance across
  * the ray from the ray's line to the nearest edge of the triangle (>= 0
  * inside, < 0 outside), measured in the plane perpendicular to dir. */
-int ref_ray_triangle(const double tri[9], const cbvh_ray *ray, double *t, double *u, double *v, double *margin);
+int ref_ray_triangle(const double tri[9], const cbvh_ray *ray, double *t, double *u, double *v,
+                     double *margin);
 
 typedef struct ref_ray_hit {
     size_t index; /* into ref_tris; (size_t)-1 for none */
@@ -122,6 +126,7 @@ typedef struct ref_sweep_hit {
  * that is above eps there is no contact, else bisection finds the first t
  * where the distance falls to eps. Independent of the kernels' closed forms:
  * it only evaluates distances. The earliest over all triangles wins. */
-int ref_sweep(const ref_tris *tris, const ref_shape *shape, const double delta[3], double eps, ref_sweep_hit *hit);
+int ref_sweep(const ref_tris *tris, const ref_shape *shape, const double delta[3], double eps,
+              ref_sweep_hit *hit);
 
 #endif

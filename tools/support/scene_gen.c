@@ -55,16 +55,17 @@ int scene_sphere(scene *out, size_t triangles, const float center[3], float radi
     }
     uint32_t *ix = out->indices;
     size_t f = 0;
-#define RING(i, j) ((uint32_t)(2 + ((i) - 1) * slices + ((j) % slices)))
+#define RING(i, j) ((uint32_t)(2 + ((i)-1) * slices + ((j) % slices)))
     for (size_t j = 0; j < slices; j++) {
-        uint32_t top[3] = { 0, RING(1, j + 1), RING(1, j) };
-        uint32_t bottom[3] = { 1, RING(stacks - 1, j), RING(stacks - 1, j + 1) };
+        uint32_t top[3] = {0, RING(1, j + 1), RING(1, j)};
+        uint32_t bottom[3] = {1, RING(stacks - 1, j), RING(stacks - 1, j + 1)};
         memcpy(ix + 3 * f++, top, sizeof top);
         memcpy(ix + 3 * f++, bottom, sizeof bottom);
     }
     for (size_t i = 1; i + 1 < stacks; i++)
         for (size_t j = 0; j < slices; j++) {
-            uint32_t q[6] = { RING(i, j), RING(i, j + 1), RING(i + 1, j), RING(i, j + 1), RING(i + 1, j + 1), RING(i + 1, j) };
+            uint32_t q[6] = {RING(i, j),     RING(i, j + 1),     RING(i + 1, j),
+                             RING(i, j + 1), RING(i + 1, j + 1), RING(i + 1, j)};
             memcpy(ix + 3 * f, q, sizeof q);
             f += 2;
         }
@@ -78,8 +79,8 @@ int scene_sphere(scene *out, size_t triangles, const float center[3], float radi
 static float terrain_height(double x, double z, double size)
 {
     double u = x / size * 6.283185307179586, w = z / size * 6.283185307179586;
-    double h = 0.5 * sin(2 * u + 0.3) * cos(3 * w) + 0.3 * sin(5 * u + 7 * w) + 0.2 * cos(11 * u - 4 * w + 1.0)
-             + 0.05 * sin(37 * u) * sin(41 * w);
+    double h = 0.5 * sin(2 * u + 0.3) * cos(3 * w) + 0.3 * sin(5 * u + 7 * w) +
+               0.2 * cos(11 * u - 4 * w + 1.0) + 0.05 * sin(37 * u) * sin(41 * w);
     return (float)(h * size / 16.0 + size / 16.0);
 }
 
@@ -102,7 +103,7 @@ int scene_terrain(scene *out, size_t triangles, float size)
     for (size_t j = 0; j < n; j++)
         for (size_t i = 0; i < n; i++) {
             uint32_t a = (uint32_t)(j * (n + 1) + i), b = a + 1, c = a + (uint32_t)(n + 1), d = c + 1;
-            uint32_t q[6] = { a, c, b, b, c, d };
+            uint32_t q[6] = {a, c, b, b, c, d};
             memcpy(out->indices + 3 * f, q, sizeof q);
             f += 2;
         }
@@ -121,10 +122,10 @@ int scene_cube(scene *out, const float lo[3], const float hi[3])
         out->positions[3 * v + 2] = (v & 4) ? hi[2] : lo[2];
     }
     /* Outward-facing quads, split along one diagonal each. */
-    static const uint32_t quads[6][4] = { { 0, 2, 3, 1 }, { 4, 5, 7, 6 }, { 0, 1, 5, 4 },
-                                          { 2, 6, 7, 3 }, { 0, 4, 6, 2 }, { 1, 3, 7, 5 } };
+    static const uint32_t quads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
+                                         {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
     for (int q = 0; q < 6; q++) {
-        uint32_t t[6] = { quads[q][0], quads[q][1], quads[q][2], quads[q][0], quads[q][2], quads[q][3] };
+        uint32_t t[6] = {quads[q][0], quads[q][1], quads[q][2], quads[q][0], quads[q][2], quads[q][3]};
         memcpy(out->indices + 6 * q, t, sizeof t);
     }
     out->vertex_count = 8;
@@ -186,9 +187,10 @@ int scene_demo(scene *out)
     uint64_t st = 7;
     for (uint32_t k = 0; k < 12; k++) {
         scene ball;
-        float x = 10.0f + 80.0f * (float)scene_rand_unit(&st), z = 10.0f + 80.0f * (float)scene_rand_unit(&st);
+        float x = 10.0f + 80.0f * (float)scene_rand_unit(&st),
+              z = 10.0f + 80.0f * (float)scene_rand_unit(&st);
         float r = 2.0f + 4.0f * (float)scene_rand_unit(&st);
-        float c[3] = { x, terrain_height(x, z, 100.0) + r * 0.8f, z };
+        float c[3] = {x, terrain_height(x, z, 100.0) + r * 0.8f, z};
         if (!scene_sphere(&ball, 2048, c, r)) {
             scene_free(out);
             return 0;
@@ -215,7 +217,7 @@ int scene_from_spec(scene *out, const char *spec)
         n = (size_t)v;
     }
     size_t name_len = colon ? (size_t)(colon - spec) : strlen(spec);
-    static const float origin[3] = { 0, 0, 0 }, unit_lo[3] = { -1, -1, -1 }, unit_hi[3] = { 1, 1, 1 };
+    static const float origin[3] = {0, 0, 0}, unit_lo[3] = {-1, -1, -1}, unit_hi[3] = {1, 1, 1};
     if (name_len == 6 && !strncmp(spec, "sphere", 6))
         return scene_sphere(out, colon ? n : 1000000, origin, 1.0f);
     if (name_len == 7 && !strncmp(spec, "terrain", 7))

@@ -1,4 +1,5 @@
-/* scene_gen.h: deterministic generated meshes (sphere, terrain, cube, triangle soup, demo scene) for the tool, benchmarks and tests. */
+/* scene_gen.h: deterministic generated meshes (sphere, terrain, cube, triangle soup, demo scene) for the
+ * tool, benchmarks and tests. */
 #ifndef CBVH_SCENE_GEN_H
 #define CBVH_SCENE_GEN_H
 

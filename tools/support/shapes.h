@@ -1,4 +1,5 @@
-/* shapes.h: deterministic benchmark shape queries (sphere, capsule and box sweeps and overlaps near a surface) from a seed. */
+/* shapes.h: deterministic benchmark shape queries (sphere, capsule and box sweeps and overlaps near a
+ * surface) from a seed. */
 #ifndef CBVH_SHAPES_H
 #define CBVH_SHAPES_H
 
@@ -33,7 +34,8 @@ typedef struct shape_answer {
 /* Adds triangle `tri` to an overlap's set. */
 static inline void shape_answer_add(shape_answer *a, uint32_t tri)
 {
-    uint64_t x = ((uint64_t)tri + 1) * 0x9E3779B97F4A7C15ull; /* splitmix64's finalizer: one bit of tri moves all 64 */
+    uint64_t x =
+        ((uint64_t)tri + 1) * 0x9E3779B97F4A7C15ull; /* splitmix64's finalizer: one bit of tri moves all 64 */
     x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
     x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
     a->count++;

@@ -1,11 +1,13 @@
-/* tree_stats.c: exact node boxes recomputed from the triangles, quantization inflation, SAH cost, leaf histogram. */
+/* tree_stats.c: exact node boxes recomputed from the triangles, quantization inflation, SAH cost, leaf
+ * histogram. */
 #include <float.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
+#include "cbvh_internal.h"
+#include "inspect/inspect.h"
 #include "layout/tree.h"
-#include "tree_stats.h"
 
 /* Surface area of the box b (min xyz, max xyz) in double. */
 static double box_area(const double b[6])
@@ -14,7 +16,7 @@ static double box_area(const double b[6])
     return 2.0 * (dx * dy + dy * dz + dz * dx);
 }
 
-double tree_box_area(const float lo[3], const float hi[3])
+static double float_box_area(const float lo[3], const float hi[3])
 {
     const double b[6] = {lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]};
     return box_area(b);
@@ -61,7 +63,7 @@ static void exact_subtree(const struct cbvh_file *f, cbvh_ref r, float *boxes, f
     }
 }
 
-void tree_exact_boxes(const struct cbvh_file *f, float *boxes, float root[6])
+void cbvh_exact_boxes(const struct cbvh_file *f, float *boxes, float root[6])
 {
     const uint32_t root_box = cbvh_tree_root_box(f, f->layout);
     exact_subtree(f, cbvh_tree_root(f, f->layout), boxes, root);
@@ -69,13 +71,13 @@ void tree_exact_boxes(const struct cbvh_file *f, float *boxes, float root[6])
         memcpy(boxes + 6 * (size_t)root_box, root, 6 * sizeof(float));
 }
 
-double tree_box_inflation(const struct cbvh_file *f, uint32_t box, const float *exact_boxes)
+static double box_inflation(const struct cbvh_file *f, uint32_t box, const float *exact_boxes)
 {
     float lo[3], hi[3];
     cbvh_tree_box(f, f->layout, box, lo, hi);
     const float *e = exact_boxes + 6 * (size_t)box;
-    double exact = tree_box_area(e, e + 3);
-    return exact > 0 ? tree_box_area(lo, hi) / exact - 1.0 : 0.0;
+    double exact = float_box_area(e, e + 3);
+    return exact > 0 ? float_box_area(lo, hi) / exact - 1.0 : 0.0;
 }
 
 /* What the recursion over the tree accumulates. */
@@ -85,14 +87,14 @@ struct stats_walk {
     double root_area, root_exact, ct, ci;
     double sum_inflation, sum_leaf_inflation;
     uint64_t boxes, leaf_boxes, leaf_triangles;
-    tree_stats *out;
+    cbvh_tree_stats *out;
 };
 
 /* The subtree r, whose box is `box` (CBVH_NO_BOX for a root without one), at depth `depth`. */
 static void stats_subtree(struct stats_walk *w, cbvh_ref r, uint32_t box, uint32_t depth)
 {
     const struct cbvh_file *f = w->f;
-    tree_stats *out = w->out;
+    cbvh_tree_stats *out = w->out;
     const int leaf = cbvh_tree_is_leaf(f, f->layout, r);
     uint32_t first = 0, count = 0;
     if (leaf)
@@ -104,9 +106,9 @@ static void stats_subtree(struct stats_walk *w, cbvh_ref r, uint32_t box, uint32
         float lo[3], hi[3];
         cbvh_tree_box(f, f->layout, box, lo, hi);
         const float *e = w->exact + 6 * (size_t)box;
-        const double area = w->root_area > 0 ? tree_box_area(lo, hi) / w->root_area : 0;
-        const double exact = w->root_exact > 0 ? tree_box_area(e, e + 3) / w->root_exact : 0;
-        const double inflation = tree_box_inflation(f, box, w->exact);
+        const double area = w->root_area > 0 ? float_box_area(lo, hi) / w->root_area : 0;
+        const double exact = w->root_exact > 0 ? float_box_area(e, e + 3) / w->root_exact : 0;
+        const double inflation = box_inflation(f, box, w->exact);
         const double cost = leaf ? w->ci * count : w->ct;
         w->boxes++;
         w->sum_inflation += inflation;
@@ -178,7 +180,7 @@ static double frame_sah(const struct cbvh_file *f, const float *exact, const flo
                         double ci, double levels)
 {
     const double frame[6] = {root[0], root[1], root[2], root[3], root[4], root[5]};
-    struct frame_walk w = {f, exact, tree_box_area(root, root + 3), ct, ci, levels, ct};
+    struct frame_walk w = {f, exact, float_box_area(root, root + 3), ct, ci, levels, ct};
     const cbvh_ref r = cbvh_tree_root(f, f->layout);
     if (cbvh_tree_is_leaf(f, f->layout, r)) { /* a one-leaf tree: its box is the root's */
         uint32_t first, count;
@@ -189,8 +191,8 @@ static double frame_sah(const struct cbvh_file *f, const float *exact, const flo
     return w.cost;
 }
 
-int tree_stats_compute(const struct cbvh_file *f, double traversal_cost, double intersection_cost,
-                       tree_stats *out)
+int cbvh_tree_stats_compute(const struct cbvh_file *f, double traversal_cost, double intersection_cost,
+                            cbvh_tree_stats *out)
 {
     const uint32_t box_count = cbvh_tree_box_count(f, f->layout);
     float *boxes = malloc(6 * (size_t)box_count * sizeof(float));
@@ -198,14 +200,24 @@ int tree_stats_compute(const struct cbvh_file *f, double traversal_cost, double 
         return 0;
     memset(out, 0, sizeof *out);
     float root[6], qlo[3], qhi[3];
-    tree_exact_boxes(f, boxes, root);
+    cbvh_exact_boxes(f, boxes, root);
     const uint32_t root_box = cbvh_tree_root_box(f, f->layout);
     if (root_box != CBVH_NO_BOX)
         cbvh_tree_box(f, f->layout, root_box, qlo, qhi);
     else
         memcpy(qlo, root, sizeof qlo), memcpy(qhi, root + 3, sizeof qhi);
-    struct stats_walk w = {f, boxes, tree_box_area(qlo, qhi), tree_box_area(root, root + 3), traversal_cost,
-                           intersection_cost, 0, 0, 0, 0, 0, out};
+    struct stats_walk w = {f,
+                           boxes,
+                           float_box_area(qlo, qhi),
+                           float_box_area(root, root + 3),
+                           traversal_cost,
+                           intersection_cost,
+                           0,
+                           0,
+                           0,
+                           0,
+                           0,
+                           out};
     stats_subtree(&w, cbvh_tree_root(f, f->layout), root_box, 1);
     out->sah_cost_frame16 = frame_sah(f, boxes, root, traversal_cost, intersection_cost, 65535.0);
     out->sah_cost_frame8 = frame_sah(f, boxes, root, traversal_cost, intersection_cost, 255.0);
@@ -214,7 +226,15 @@ int tree_stats_compute(const struct cbvh_file *f, double traversal_cost, double 
     out->inflation_mean = w.boxes ? w.sum_inflation / (double)w.boxes : 0;
     out->leaf_inflation_mean = w.leaf_boxes ? w.sum_leaf_inflation / (double)w.leaf_boxes : 0;
     out->internal_inflation_mean =
-        w.boxes > w.leaf_boxes ? (w.sum_inflation - w.sum_leaf_inflation) / (double)(w.boxes - w.leaf_boxes) : 0;
+        w.boxes > w.leaf_boxes ? (w.sum_inflation - w.sum_leaf_inflation) / (double)(w.boxes - w.leaf_boxes)
+                               : 0;
     free(boxes);
     return 1;
+}
+
+void cbvh_tree_box_place(const struct cbvh_file *f, uint32_t box, uint32_t *node, uint32_t *slot)
+{
+    const int wide = f->layout == CBVH_LAYOUT_WIDE4;
+    *node = wide ? box / CBVH_W4_WIDTH : box;
+    *slot = wide ? box % CBVH_W4_WIDTH : 0;
 }

@@ -1,27 +1,26 @@
-/* report_exact.c: the report's reference layout: a cooked tree with float node boxes recomputed exactly from its triangles. */
+/* exact_walk.c: the library's sorted walk on exact float node boxes, the reference of box quantization. */
 #include "config.h" /* CBVH_HAVE_SIMD: the walk's leaves as the library runs them, so its time compares */
 
 #include <stdlib.h>
 
-#include "common/file.h"
+#include "cbvh_internal.h"
+#include "inspect/inspect.h"
 #include "query/walk.h"
-#include "report_exact.h"
-#include "tree_stats.h"
 
-int exact_tree_build(exact_tree *tree, const cbvh_file *file)
+int cbvh_exact_tree_build(cbvh_exact_tree *tree, const cbvh_file *file)
 {
-    uint32_t n = cbvh_tree_box_count(file, file->layout);
+    const uint32_t n = cbvh_tree_box_count(file, file->layout);
     float *boxes = malloc((size_t)n * 6 * sizeof(float)), root[6];
     if (!boxes)
         return 0;
-    tree_exact_boxes(file, boxes, root);
+    cbvh_exact_boxes(file, boxes, root);
     tree->file = file;
     tree->boxes = boxes;
-    tree->node_count = n;
+    tree->box_count = n;
     return 1;
 }
 
-void exact_tree_free(exact_tree *tree)
+void cbvh_exact_tree_free(cbvh_exact_tree *tree)
 {
     free(tree->boxes);
     tree->boxes = NULL;
@@ -30,19 +29,20 @@ void exact_tree_free(exact_tree *tree)
 static const struct cbvh_walk_mode exact_closest = {.order = CBVH_WALK_SORTED};
 static const struct cbvh_walk_mode exact_any = {.order = CBVH_WALK_SORTED, .any = 1};
 
-/* The library's sorted walk on the exact float boxes: same tree, same order, same triangle test. */
-static int exact_walk(const exact_tree *tree, const struct cbvh_ray_ctx *ctx, const struct cbvh_walk_mode mode,
-                      struct cbvh_best_hit *best, cbvh_query_stats *stats)
+/* The sorted walk on the exact float boxes: same tree, same order, same triangle test. */
+static int exact_walk(const cbvh_exact_tree *tree, const struct cbvh_ray_ctx *ctx,
+                      const struct cbvh_walk_mode mode, struct cbvh_best_hit *best, cbvh_query_stats *stats)
 {
     const struct cbvh_file *f = tree->file;
     return cbvh_walk(f, f->layout, ctx, cbvh_tree_root(f, f->layout), cbvh_tree_root_box(f, f->layout), mode,
                      tree->boxes, best, stats);
 }
 
-int exact_raycast(const exact_tree *tree, const cbvh_ray *ray, cbvh_hit *hit, cbvh_query_stats *stats)
+int cbvh_exact_raycast(const cbvh_exact_tree *tree, const cbvh_ray *ray, cbvh_hit *hit,
+                       cbvh_query_stats *stats)
 {
     struct cbvh_ray_ctx ctx;
-    struct cbvh_best_hit best = { UINT32_MAX, 0.0f, 0.0f, 0.0f };
+    struct cbvh_best_hit best = {UINT32_MAX, 0.0f, 0.0f, 0.0f};
     hit->tri = CBVH_NO_HIT;
     if (!cbvh_ray_setup(&ctx, ray))
         return 0;
@@ -56,7 +56,7 @@ int exact_raycast(const exact_tree *tree, const cbvh_ray *ray, cbvh_hit *hit, cb
     return 1;
 }
 
-int exact_occluded(const exact_tree *tree, const cbvh_ray *ray, cbvh_query_stats *stats)
+int cbvh_exact_occluded(const cbvh_exact_tree *tree, const cbvh_ray *ray, cbvh_query_stats *stats)
 {
     struct cbvh_ray_ctx ctx;
     if (!cbvh_ray_setup(&ctx, ray))

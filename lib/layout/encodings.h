@@ -1,6 +1,6 @@
 /* encodings.h: the one table of known section types and their element encodings (format spec section 4). */
-#ifndef CBVH_COMMON_ENCODINGS_H
-#define CBVH_COMMON_ENCODINGS_H
+#ifndef CBVH_LAYOUT_ENCODINGS_H
+#define CBVH_LAYOUT_ENCODINGS_H
 
 #include <stddef.h>
 #include <stdint.h>
@@ -43,33 +43,46 @@ static inline int cbvh_section_slot(uint32_t type)
     const int ancillary = (type & CBVH_SECTION_ANCILLARY_BIT) != 0;
     if (number < 1 || number > CBVH_KNOWN_SECTIONS)
         return -1;
-    return ancillary == (number == (CBVH_SECTION_MATERIAL_NAMES & ~CBVH_SECTION_ANCILLARY_BIT)) ? (int)number - 1
-                                                                                                : -1;
+    return ancillary == (number == (CBVH_SECTION_MATERIAL_NAMES & ~CBVH_SECTION_ANCILLARY_BIT))
+               ? (int)number - 1
+               : -1;
 }
 
 /* The known section type `type` (CBVH_SECTION_*), or NULL for any other. */
 static inline const cbvh_section_kind *cbvh_section_kind_of(uint32_t type)
 {
     static const cbvh_section_kind kinds[CBVH_KNOWN_SECTIONS] = {
-        { "NODES", 1, 0, 0,
-          { [CBVH_NODES_Q16] = { CBVH_NODE_SIZE, 0, "q16-node" },
-            [CBVH_NODES_W4] = { CBVH_W4_NODE_SIZE, 0, "wide4-node" } } },
-        { "TRIANGLES", 1, 0, 0,
-          { [CBVH_TRIS_U16] = { 6, 0xFFFFu, "u16x3" },
-            [CBVH_TRIS_U32] = { 12, 0xFFFFFFFFu, "u32x3" },
-            [CBVH_TRIS_DELTA16] = { 8, 0xFFFFFFFFu, "delta16" },     /* u32 base, two i16 deltas */
-            [CBVH_TRIS_LOCAL8] = { CBVH_LOCAL8_BLOCK_SIZE, 0xFFFFFFFFu, "local8", 0, CBVH_LOCAL8_BLOCK } } },
-        { "VERTICES", 1, 0, 0, { [CBVH_VERTS_F32] = { 12, 0, "f32x3" }, [CBVH_VERTS_Q16] = { 6, 0, "q16x3" } } },
-        { "REMAP", 0, 0, 0,
-          { [CBVH_REMAP_U16] = { 2, 0xFFFFu, "u16", 0 },
-            [CBVH_REMAP_U32] = { 4, 0xFFFFFFFFu, "u32", 0 },
-            [CBVH_REMAP_U24] = { 3, 0xFFFFFFu, "u24", 0 } } },
-        { "MATERIALS", 0, 0, 0,
-          { [CBVH_MATS_U8] = { 1, 0xFFu, "u8", 0 },
-            [CBVH_MATS_U16] = { 2, 0xFFFFu, "u16", 0 },
-            [CBVH_MATS_U32] = { 4, 0xFFFFFFFFu, "u32", 0 },
-            [CBVH_MATS_UNIFORM] = { 4, 0xFFFFFFFFu, "uniform", 1 } } },
-        { "MATERIAL_NAMES", 0, 1, 1, { [CBVH_NAMES_TABLE] = { 1, 0, "id-name-table", 0 } } },
+        {"NODES",
+         1,
+         0,
+         0,
+         {[CBVH_NODES_Q16] = {CBVH_NODE_SIZE, 0, "q16-node"},
+          [CBVH_NODES_W4] = {CBVH_W4_NODE_SIZE, 0, "wide4-node"}}},
+        {"TRIANGLES",
+         1,
+         0,
+         0,
+         {[CBVH_TRIS_U16] = {CBVH_TRIS_U16_SIZE, 0xFFFFu, "u16x3"},
+          [CBVH_TRIS_U32] = {CBVH_TRIS_U32_SIZE, 0xFFFFFFFFu, "u32x3"},
+          [CBVH_TRIS_DELTA16] = {CBVH_TRIS_DELTA16_SIZE, 0xFFFFFFFFu, "delta16"},
+          [CBVH_TRIS_LOCAL8] = {CBVH_LOCAL8_BLOCK_SIZE, 0xFFFFFFFFu, "local8", 0, CBVH_LOCAL8_BLOCK}}},
+        {"VERTICES", 1, 0, 0, {[CBVH_VERTS_F32] = {12, 0, "f32x3"}, [CBVH_VERTS_Q16] = {6, 0, "q16x3"}}},
+        {"REMAP",
+         0,
+         0,
+         0,
+         {[CBVH_REMAP_U16] = {2, 0xFFFFu, "u16", 0},
+          [CBVH_REMAP_U32] = {4, 0xFFFFFFFFu, "u32", 0},
+          [CBVH_REMAP_U24] = {3, 0xFFFFFFu, "u24", 0}}},
+        {"MATERIALS",
+         0,
+         0,
+         0,
+         {[CBVH_MATS_U8] = {1, 0xFFu, "u8", 0},
+          [CBVH_MATS_U16] = {2, 0xFFFFu, "u16", 0},
+          [CBVH_MATS_U32] = {4, 0xFFFFFFFFu, "u32", 0},
+          [CBVH_MATS_UNIFORM] = {4, 0xFFFFFFFFu, "uniform", 1}}},
+        {"MATERIAL_NAMES", 0, 1, 1, {[CBVH_NAMES_TABLE] = {1, 0, "id-name-table", 0}}},
     };
     const int slot = cbvh_section_slot(type);
     return slot >= 0 ? &kinds[slot] : NULL;
