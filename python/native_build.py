@@ -11,7 +11,8 @@ import subprocess
 import sys
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-REPOSITORY = os.path.dirname(HERE)
+# The repository: python/'s parent, or $CBVH_SOURCE_DIR for a copy of python/ built elsewhere.
+REPOSITORY = os.environ.get("CBVH_SOURCE_DIR") or os.path.dirname(HERE)
 NATIVE = os.path.join(HERE, "build", "native")
 
 
