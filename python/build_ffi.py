@@ -64,8 +64,12 @@ typedef struct cbvh_sweep_record { uint32_t tri; float t; float point[3]; float 
     uint32_t material; ...; } cbvh_sweep_record;
 typedef struct cbvh_contact { uint32_t tri; float depth; float normal[3]; float point[3]; ...; } cbvh_contact;
 
-void cbvhpy_hit_details(const cbvh_file *file, const cbvh_hit *hits, size_t count, float *normals,
-                        uint32_t *materials);
+typedef struct cbvhpy_rays { const float *org, *dir, *tmin, *tmax; size_t org_step, dir_step, tmin_step, tmax_step;
+    } cbvhpy_rays;
+cbvh_result cbvhpy_raycast(const cbvh_file *file, const cbvhpy_rays *rays, size_t begin, size_t end,
+                           cbvh_hit *hits, float *normals, uint32_t *materials, void *scratch, size_t scratch_size);
+cbvh_result cbvhpy_occluded(const cbvh_file *file, const cbvhpy_rays *rays, size_t begin, size_t end,
+                            uint8_t *occluded, void *scratch, size_t scratch_size);
 cbvh_result cbvhpy_sweeps(const cbvh_file *file, const cbvh_shape *shapes, const float *deltas, size_t count,
                           cbvh_sweep_record *records, size_t *failed);
 cbvh_result cbvhpy_overlaps(const cbvh_file *file, const cbvh_shape *shapes, size_t count, size_t *query,
@@ -76,37 +80,96 @@ void cbvhpy_triangles(const cbvh_file *file, uint32_t count, float *vertices);
 
 HELPERS = r"""
 #include <math.h>
+#include <stdlib.h>
 #include <string.h>
 #include "cbvh.h"
 #if !CBVH_HAVE_COOKER
 #error "the cbvh Python package needs a libcbvh with the cooker (one not configured with --disable-cooker)"
 #endif
 
-/* The unit geometric normal (v1 - v0) x (v2 - v0), in double, and the material of each hit's triangle, as
- * cbvh_hit_record reports them; zeros for a miss. */
-static void cbvhpy_hit_details(const cbvh_file *file, const cbvh_hit *hits, size_t count, float *normals,
-                               uint32_t *materials)
+/* Rays as numpy holds them: four arrays, each read `step` floats apart (0: one value for every ray). */
+typedef struct cbvhpy_rays {
+    const float *org, *dir, *tmin, *tmax;
+    size_t org_step, dir_step, tmin_step, tmax_step;
+} cbvhpy_rays;
+
+/* The cbvh_ray records of rays begin..end-1 (malloc'ed; NULL when out of memory), for the streams to take in
+ * one call, which runs faster than many small calls over the same rays. */
+static cbvh_ray *cbvhpy_records(const cbvhpy_rays *r, size_t begin, size_t end)
 {
-    for (size_t i = 0; i < count; i++) {
-        float v[3][3];
-        float *n = normals + 3 * i;
-        n[0] = n[1] = n[2] = 0.0f;
-        materials[i] = 0;
-        if (hits[i].tri == CBVH_NO_HIT || !cbvh_file_get_triangle(file, hits[i].tri, v[0], v[1], v[2]))
-            continue;
-        double e1[3], e2[3];
-        for (int a = 0; a < 3; a++) {
-            e1[a] = (double)v[1][a] - v[0][a];
-            e2[a] = (double)v[2][a] - v[0][a];
-        }
-        const double c[3] = { e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
-                              e1[0] * e2[1] - e1[1] * e2[0] };
-        const double length = sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
-        if (length > 0)
-            for (int a = 0; a < 3; a++)
-                n[a] = (float)(c[a] / length);
-        materials[i] = cbvh_file_get_material(file, hits[i].tri);
+    cbvh_ray *rays = malloc((end - begin) * sizeof *rays + 1);
+    if (!rays)
+        return NULL;
+    for (size_t i = begin; i < end; i++) {
+        cbvh_ray *ray = &rays[i - begin];
+        memcpy(ray->org, r->org + i * r->org_step, sizeof ray->org);
+        memcpy(ray->dir, r->dir + i * r->dir_step, sizeof ray->dir);
+        ray->tmin = r->tmin[i * r->tmin_step];
+        ray->tmax = r->tmax[i * r->tmax_step];
     }
+    return rays;
+}
+
+/* The unit geometric normal (v1 - v0) x (v2 - v0), in double, as cbvh_hit_record reports it. */
+static void cbvhpy_normal(const cbvh_file *file, uint32_t tri, float *n)
+{
+    float v[3][3];
+    n[0] = n[1] = n[2] = 0.0f;
+    if (!cbvh_file_get_triangle(file, tri, v[0], v[1], v[2]))
+        return;
+    double e1[3], e2[3];
+    for (int a = 0; a < 3; a++) {
+        e1[a] = (double)v[1][a] - v[0][a];
+        e2[a] = (double)v[2][a] - v[0][a];
+    }
+    const double c[3] = { e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0] };
+    const double length = sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+    if (length > 0)
+        for (int a = 0; a < 3; a++)
+            n[a] = (float)(c[a] / length);
+}
+
+/* Closest hits of rays begin..end-1 into hits[begin..end-1] through cbvh_raycast_stream_scratch, a miss with
+ * t = inf, u = v = 0; normals and materials (when not NULL) get each hit triangle's normal and material,
+ * zeros for a miss. */
+static cbvh_result cbvhpy_raycast(const cbvh_file *file, const cbvhpy_rays *rays, size_t begin, size_t end,
+                                  cbvh_hit *hits, float *normals, uint32_t *materials, void *scratch,
+                                  size_t scratch_size)
+{
+    cbvh_ray *records = cbvhpy_records(rays, begin, end);
+    if (!records)
+        return CBVH_ERROR_OUT_OF_MEMORY;
+    cbvh_raycast_stream_scratch(file, records, end - begin, hits + begin, NULL, scratch, scratch_size);
+    free(records);
+    for (size_t i = begin; i < end; i++) {
+        cbvh_hit *h = &hits[i];
+        const int hit = h->tri != CBVH_NO_HIT;
+        if (!hit) {
+            h->t = INFINITY;
+            h->u = h->v = 0.0f;
+        }
+        if (normals) {
+            if (hit)
+                cbvhpy_normal(file, h->tri, normals + 3 * i);
+            else
+                normals[3 * i] = normals[3 * i + 1] = normals[3 * i + 2] = 0.0f;
+        }
+        if (materials)
+            materials[i] = hit ? cbvh_file_get_material(file, h->tri) : 0;
+    }
+    return CBVH_OK;
+}
+
+/* Any hits of rays begin..end-1 (cbvh_occluded_stream_scratch). */
+static cbvh_result cbvhpy_occluded(const cbvh_file *file, const cbvhpy_rays *rays, size_t begin, size_t end,
+                                   uint8_t *occluded, void *scratch, size_t scratch_size)
+{
+    cbvh_ray *records = cbvhpy_records(rays, begin, end);
+    if (!records)
+        return CBVH_ERROR_OUT_OF_MEMORY;
+    cbvh_occluded_stream_scratch(file, records, end - begin, occluded + begin, NULL, scratch, scratch_size);
+    free(records);
+    return CBVH_OK;
 }
 
 /* cbvh_sweep_with for each shape; stops at the first error, its index in *failed. */

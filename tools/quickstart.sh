@@ -186,7 +186,7 @@ python_package() {
     rm -rf "$build/python-src" && cp -R "$top/python" "$build/python-src" && rm -rf "$build/python-src/build"
     if CBVH_SOURCE_DIR=$top "$venv/bin/pip" install -q --disable-pip-version-check "$build/python-src" >>"$log" 2>&1 &&
         (cd "$build" && "$venv/bin/pytest" -q "$build/python-src/tests") >>"$log" 2>&1; then
-        echo "python: the package built and $(tail -n 1 "$log" | sed 's/^=* *//; s/ *=*$//') in $(($(date +%s) - t0)) s"
+        echo "python: the package built, pytest: $(tail -n 1 "$log" | sed 's/^=* *//; s/ *=*$//') ($(($(date +%s) - t0)) s in all)"
         echo "pass python" >>"$results"
     else
         tail -n 40 "$log"

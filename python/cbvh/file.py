@@ -11,7 +11,7 @@ from typing import Any, Callable, Dict, List, Optional, Tuple, Union
 
 import numpy as np
 
-from ._lib import CONTACT, HIT, NO_HIT, RAY, SHAPE, SWEEP_RECORD, CbvhError, ffi, lib, pointer, raise_for
+from ._lib import CONTACT, HIT, NO_HIT, SHAPE, SWEEP_RECORD, CbvhError, ffi, lib, pointer, raise_for
 
 ArrayLike = Union[np.ndarray, float, List[float], Tuple[float, ...]]
 # Rays the streams take a batch (the library's scratch holds at most 4096; `cbvh raycast` uses 1024 too).
@@ -23,13 +23,13 @@ class Hits:
     """Closest hits, one entry per ray: tri is the original triangle id (NO_HIT, 0xFFFFFFFF, for a miss), t
     the distance in units of the direction (inf for a miss), u and v the barycentrics of the point
     (1-u-v)*v0 + u*v1 + v*v2, normal the unit geometric normal (v1-v0) x (v2-v0), material the triangle's
-    material id (zeros for a miss)."""
+    material id (zeros for a miss). tri, t, u and v are views of one array of cbvh_hit records (cbvh.HIT)."""
     tri: np.ndarray
     t: np.ndarray
     u: np.ndarray
     v: np.ndarray
-    normal: np.ndarray
-    material: np.ndarray
+    normal: Optional[np.ndarray]
+    material: Optional[np.ndarray]
 
     @property
     def hit(self) -> np.ndarray:
@@ -202,63 +202,59 @@ class File:
 
     # -- rays -------------------------------------------------------------------------------------------
 
-    def _rays(self, origins: ArrayLike, directions: ArrayLike, tmin: ArrayLike, tmax: ArrayLike) -> np.ndarray:
+    @staticmethod
+    def _rays(origins: ArrayLike, directions: ArrayLike, tmin: ArrayLike, tmax: ArrayLike):
+        """The rays as cbvhpy_rays over contiguous float32 arrays (kept alive in the returned list) and
+        their count; a single origin, direction or bound serves every ray."""
         vectors = {"origins": _vectors("origins", origins), "directions": _vectors("directions", directions)}
         scalars = {"tmin": _scalars("tmin", tmin), "tmax": _scalars("tmax", tmax)}
-        rays = np.empty(_batch_size(vectors, scalars), RAY)
-        rays["org"] = vectors["origins"]
-        rays["dir"] = vectors["directions"]
-        rays["tmin"] = scalars["tmin"]
-        rays["tmax"] = scalars["tmax"]
-        return rays
+        count = _batch_size(vectors, scalars)
+        arrays = [np.ascontiguousarray(a).reshape(a.shape) for a in (*vectors.values(), *scalars.values())]
+        rays = ffi.new("cbvhpy_rays *")
+        for name, array, width in zip(("org", "dir", "tmin", "tmax"), arrays, (3, 3, 1, 1)):
+            per_ray = array.ndim == (2 if width == 3 else 1)
+            setattr(rays, name, pointer("float *", array))
+            setattr(rays, name + "_step", width if per_ray else 0)
+        return rays, arrays, count
 
     def raycast(self, origins: ArrayLike, directions: ArrayLike, tmin: ArrayLike = 0.0,
-                tmax: ArrayLike = np.inf, *, threads: int = 1) -> Hits:
+                tmax: ArrayLike = np.inf, *, details: bool = True, threads: int = 1) -> Hits:
         """Closest hits of the rays origins + t * directions, t in [tmin, tmax] (arrays (N, 3) and (N,), or
         one value for all). A ray cbvh calls invalid (NaN, zero direction, tmin < 0 or > tmax) misses. The
-        answers are cbvh_raycast's, ray by ray (through cbvh_raycast_stream_scratch)."""
-        rays = self._rays(origins, directions, tmin, tmax)
-        count = len(rays)
-        hits = np.empty(count, HIT)
-        normal = np.empty((count, 3), np.float32)
-        material = np.empty(count, np.uint32)
+        answers are cbvh_raycast's, ray by ray (through cbvh_raycast_stream_scratch). details=False leaves
+        normal and material out (None)."""
+        rays, keep_alive, count = self._rays(origins, directions, tmin, tmax)
+        records = np.empty(count, HIT)
+        normal = np.empty((count, 3), np.float32) if details else None
+        material = np.empty(count, np.uint32) if details else None
         handle = self._handle()
         scratch_size = lib.cbvh_stream_scratch_size(_STREAM_BATCH)
 
         def run(begin: int, end: int) -> None:
             scratch = ffi.new("char[]", scratch_size)
-            lib.cbvh_raycast_stream_scratch(handle, pointer("cbvh_ray *", rays[begin:end]), end - begin,
-                                            pointer("cbvh_hit *", hits[begin:end]), ffi.NULL, scratch,
-                                            scratch_size)
-            lib.cbvhpy_hit_details(handle, pointer("cbvh_hit *", hits[begin:end]), end - begin,
-                                   pointer("float *", normal[begin:end]), pointer("uint32_t *", material[begin:end]))
+            code = lib.cbvhpy_raycast(handle, rays, begin, end, pointer("cbvh_hit *", records),
+                                      pointer("float *", normal), pointer("uint32_t *", material), scratch,
+                                      scratch_size)
+            raise_for(code, None, "%d rays" % (end - begin))
 
         _run_parts(count, threads, run)
-        miss = hits["tri"] == NO_HIT
-        t = hits["t"].copy()
-        u = hits["u"].copy()
-        v = hits["v"].copy()
-        t[miss] = np.inf
-        u[miss] = 0
-        v[miss] = 0
-        return Hits(hits["tri"].copy(), t, u, v, normal, material)
+        return Hits(records["tri"], records["t"], records["u"], records["v"], normal, material)
 
     def occluded(self, origins: ArrayLike, directions: ArrayLike, tmin: ArrayLike = 0.0,
                  tmax: ArrayLike = np.inf, *, threads: int = 1) -> np.ndarray:
         """Whether each ray hits any triangle in [tmin, tmax] (bool array; cbvh_occluded's answers)."""
-        rays = self._rays(origins, directions, tmin, tmax)
-        out = np.empty(len(rays), np.uint8)
+        rays, keep_alive, count = self._rays(origins, directions, tmin, tmax)
+        out = np.empty(count, np.uint8)
         handle = self._handle()
         scratch_size = lib.cbvh_stream_scratch_size(_STREAM_BATCH)
 
         def run(begin: int, end: int) -> None:
             scratch = ffi.new("char[]", scratch_size)
-            lib.cbvh_occluded_stream_scratch(handle, pointer("cbvh_ray *", rays[begin:end]), end - begin,
-                                             pointer("uint8_t *", out[begin:end]), ffi.NULL, scratch,
-                                             scratch_size)
+            raise_for(lib.cbvhpy_occluded(handle, rays, begin, end, pointer("uint8_t *", out), scratch, scratch_size),
+                      None, "%d rays" % (end - begin))
 
-        _run_parts(len(rays), threads, run)
-        return out.astype(bool)
+        _run_parts(count, threads, run)
+        return out.view(bool)
 
     # -- shapes -----------------------------------------------------------------------------------------
 
