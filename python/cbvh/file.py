@@ -160,7 +160,8 @@ class File:
     # -- the file ---------------------------------------------------------------------------------------
 
     def close(self) -> None:
-        """Releases the file now (else when it is garbage collected). Queries after close raise."""
+        """Releases the file now (else when it is garbage collected). Queries after close raise; close must
+        not run while another thread is querying the file."""
         if self._file is not None:
             ffi.release(self._file)
             self._file = None
