@@ -69,8 +69,10 @@ def compile_args() -> dict:
     except (OSError, subprocess.CalledProcessError) as e:
         raise SystemExit("cbvh: outside the cbvh repository the package links an installed libcbvh, "
                          "but pkg-config does not find cbvh.pc: %s" % e)
+    library_dirs = [f[2:] for f in libs if f.startswith("-L")]
     return {
         "include_dirs": [f[2:] for f in cflags if f.startswith("-I")],
-        "library_dirs": [f[2:] for f in libs if f.startswith("-L")],
+        "library_dirs": library_dirs,
+        "runtime_library_dirs": library_dirs,  # a libcbvh.so outside the loader's paths is still found
         "libraries": [f[2:] for f in libs if f.startswith("-l")],
     }

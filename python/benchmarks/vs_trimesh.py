@@ -78,8 +78,8 @@ def compare(path, count, repeats, pure_rays):
     n = min(pure_rays, count)
     pure = trimesh.ray.ray_triangle.RayMeshIntersector(mesh)
     seconds, tri = best_time(lambda: pure.intersects_first(origins[:n], directions[:n]), 1)
-    print("  trimesh ray_triangle (%d rays):    %8.3f s  %7.4f MRays/s  same triangle %.4f" % (
-        n, seconds, n / seconds / 1e6, agreement(hits.tri[:n], tri)))
+    print("  trimesh ray_triangle (%d rays):    %8.3f s  %7.0f rays/s   same triangle %.4f" % (
+        n, seconds, n / seconds, agreement(hits.tri[:n], tri)))
 
 
 def main():
