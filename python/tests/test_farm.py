@@ -1,6 +1,7 @@
 """test_farm.py: cbvh.farm on a LocalCluster of two worker processes over assimp's test models: every output
 byte for byte as `cbvh cook` writes it, depfiles as the command writes them, failed assets reported while
 the rest cook, and a worker killed in the middle of the run survived."""
+import json
 import os
 import signal
 import subprocess
@@ -122,3 +123,20 @@ def test_manifest_and_folder_naming(tmp_path):
     manifest.write_text("a/x.obj\n")
     with pytest.raises(ValueError, match="line 1"):
         farm.assets_from_manifest(str(manifest))
+
+
+def test_command_line(tmp_path, capsys):
+    """python -m cbvh.farm: one JSON line per asset, exit status 1 when one failed."""
+    corpus()  # skips without the models
+    good = os.path.join(MODELS, "PLY", "Wuson.ply")
+    bad = tmp_path / "bad.obj"
+    bad.write_text("f 1 2 3\n")
+    manifest = tmp_path / "m.txt"
+    manifest.write_text("%s\n%s\t%s\n" % (good, bad, tmp_path / "out" / "bad.cbvh"))
+    status = farm.main(["--manifest", str(manifest), "--output-dir", str(tmp_path / "out"), "--workers", "1"])
+    lines = [json.loads(line) for line in capsys.readouterr().out.splitlines()]
+    assert status == 1 and len(lines) == 2
+    by_input = {line["input"]: line for line in lines}
+    assert by_input[good]["ok"] and os.path.exists(tmp_path / "out" / "Wuson.cbvh")
+    assert not by_input[str(bad)]["ok"] and by_input[str(bad)]["status"] == 1
+    assert os.path.exists(tmp_path / "out" / "Wuson.cbvh.d")
