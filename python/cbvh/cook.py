@@ -111,9 +111,9 @@ def cbvh_command() -> str:
         if candidate and os.access(candidate, os.X_OK):
             return candidate
     raise CbvhError(lib.CBVH_ERROR_INVALID_ARGUMENT,
-                    "cook_file needs the cbvh command, which this package was built without (it needs assimp: "
-                    "install libassimp-dev and reinstall the package, or set CBVH_COMMAND to a cbvh command); "
-                    "cbvh.cook cooks numpy arrays without it")
+                    "cook_file runs the cbvh command, and there is none: this package was built without it (its "
+                    "build needs libassimp-dev), no cbvh is on PATH and CBVH_COMMAND names none; cbvh.cook "
+                    "cooks numpy arrays without it")
 
 
 def cook_arguments(depfile: Optional[PathLike] = None, material_map: Optional[PathLike] = None,
