@@ -29,6 +29,9 @@ packages="build-essential autoconf automake libtool pkg-config zlib1g-dev libass
 [ "$mode" = test ] && packages="$packages assimp-testmodels valgrind python3 clang libclang-rt-14-dev npm chromium"
 # The formatting check of tests/test_source.sh (tools/check_format.sh).
 [ "$mode" = test ] && packages="$packages clang-format"
+# The Python package's tests (python/): a venv (Debian's pip refuses the system Python, PEP 668) and the
+# headers its C extension compiles against.
+[ "$mode" = test ] && packages="$packages python3-venv python3-dev"
 # The Windows test build (tests/mingw_wine.sh): MinGW-w64, its zlib, wine; dpkg-dev unpacks cmocka's source package.
 [ "$mode" = test ] && packages="$packages gcc-mingw-w64-x86-64 libz-mingw-w64-dev wine wine64 dpkg-dev"
 # The CMake consumer test (tests/test_cmake.sh).
@@ -167,6 +170,33 @@ distcheck() {
     fi
 }
 
+# The Python package (python/): built from a copy of python/ (pip builds in the folder it is given, which
+# must not be the source tree) against this tree's sources, into a venv in the build folder with pytest,
+# numpy and dask from PyPI; then its tests. No PyPI (offline): skipped.
+python_package() {
+    [ "${CBVH_SKIP_PYTHON:-0}" != 1 ] || return 0
+    t0=$(date +%s)
+    venv=$build/python-venv
+    log=$build/python.log
+    if ! { [ -x "$venv/bin/pip" ] || python3 -m venv "$venv"; } >"$log" 2>&1 ||
+        ! "$venv/bin/pip" install -q --disable-pip-version-check pytest numpy cffi 'dask[distributed]' >>"$log" 2>&1; then
+        tail -n 5 "$log"
+        echo "python: no venv with pytest, numpy and dask from PyPI (see $log): skipped"
+        echo "skip python" >>"$results"
+        return 0
+    fi
+    rm -rf "$build/python-src" && cp -R "$top/python" "$build/python-src" && rm -rf "$build/python-src/build"
+    if CBVH_SOURCE_DIR=$top "$venv/bin/pip" install -q --disable-pip-version-check "$build/python-src" >>"$log" 2>&1 &&
+        (cd "$build" && "$venv/bin/pytest" -q "$build/python-src/tests") >>"$log" 2>&1; then
+        echo "python: the package built, pytest: $(tail -n 1 "$log" | sed 's/^=* *//; s/ *=*$//') ($(($(date +%s) - t0)) s in all)"
+        echo "pass python" >>"$results"
+    else
+        tail -n 40 "$log"
+        echo "python: FAILED (see $log)"
+        echo "fail python" >>"$results"
+    fi
+}
+
 # The second lane starts now, beside the main build.
 lane=
 if [ "${CBVH_CI_LANES:-2}" -ge 2 ]; then
@@ -195,6 +225,8 @@ if [ "$status" != 0 ]; then
     cat "$suite" >&2 || true
 fi
 echo "make check: $pass test programs passed in $(($(date +%s) - t0)) s"
+
+python_package
 
 distcheck
 if [ -n "$lane" ]; then

@@ -1,0 +1,164 @@
+"""test_file.py: the binding against the C tool (`cbvh raycast` on the same file), threads, corrupt and
+truncated files, and errors."""
+import os
+import subprocess
+
+import numpy as np
+import pytest
+
+import cbvh
+import reference
+from cbvh.cook import cbvh_command
+
+
+def wuson_rays(f, count, seed):
+    rng = np.random.default_rng(seed)
+    low, high = np.array(f.info["bounds_min"]), np.array(f.info["bounds_max"])
+    middle, size = (low + high) / 2, float(np.max(high - low))
+    directions = rng.normal(size=(count, 3))
+    origins = middle - directions / np.linalg.norm(directions, axis=1, keepdims=True) * size
+    targets = rng.uniform(low, high, (count, 3))
+    return origins.astype(np.float32), (targets - origins).astype(np.float32)
+
+
+def test_same_answers_as_cbvh_raycast(wuson):
+    """Bit for bit: the package's raycast and occluded against `cbvh raycast --binary` on the same file."""
+    f = cbvh.open(wuson)
+    origins, directions = wuson_rays(f, 5000, 1)
+    tmax = np.where(np.arange(5000) % 3 == 0, np.float32(0.9), np.float32(np.inf)).astype(np.float32)
+    records = np.zeros(5000, cbvh.RAY)
+    records["org"], records["dir"], records["tmax"] = origins, directions, tmax
+    run = subprocess.run([cbvh_command(), "raycast", "--binary", wuson], input=records.tobytes(),
+                         capture_output=True, check=True)
+    tool = np.frombuffer(run.stdout, cbvh.HIT)
+    hits = f.raycast(origins, directions, 0, tmax)
+    assert np.count_nonzero(hits.hit) > 1000
+    assert np.array_equal(hits.tri, tool["tri"])
+    hit = hits.hit
+    for field in ("t", "u", "v"):
+        assert np.array_equal(getattr(hits, field)[hit], tool[field][hit])
+    run = subprocess.run([cbvh_command(), "raycast", "--binary", "--any", wuson], input=records.tobytes(),
+                         capture_output=True, check=True)
+    assert np.array_equal(f.occluded(origins, directions, 0, tmax), np.frombuffer(run.stdout, np.uint8) == 1)
+
+
+def test_path_and_bytes_and_expanded_give_the_same_answers(wuson):
+    with open(wuson, "rb") as source:
+        data = source.read()
+    files = [cbvh.open(wuson), cbvh.open(data), cbvh.open(wuson, expand_triangles=True)]
+    assert files[2].info["expanded_bytes"] > 0 or files[0].info["expanded_bytes"] == 0
+    origins, directions = wuson_rays(files[0], 2000, 2)
+    answers = [f.raycast(origins, directions) for f in files]
+    for other in answers[1:]:
+        assert np.array_equal(answers[0].tri, other.tri) and np.array_equal(answers[0].t, other.t)
+
+
+def test_threads_give_identical_answers(wuson):
+    f = cbvh.open(wuson)
+    origins, directions = wuson_rays(f, 20000, 3)
+    one = f.raycast(origins, directions)
+    rng = np.random.default_rng(4)
+    low, high = np.array(f.info["bounds_min"]), np.array(f.info["bounds_max"])
+    centers = rng.uniform(low, high, (3000, 3)).astype(np.float32)
+    radius = np.float32(0.03 * np.max(high - low))
+    deltas = rng.normal(0, 0.2 * np.max(high - low), (3000, 3)).astype(np.float32)
+    queries = {
+        "occluded": lambda n: f.occluded(origins, directions, threads=n),
+        "sweep": lambda n: f.sweep_box(centers, [radius] * 3, deltas, threads=n),
+        "overlap": lambda n: f.overlap_capsule(centers, centers + deltas, radius, threads=n),
+        "contacts": lambda n: f.contacts_sphere(centers, 3 * radius, threads=n),
+    }
+    for threads in (2, 3, 8):
+        many = f.raycast(origins, directions, threads=threads)
+        for field in ("tri", "t", "u", "v", "normal", "material"):
+            assert np.array_equal(getattr(one, field), getattr(many, field)), field
+        for name, query in queries.items():
+            a, b = query(1), query(threads)
+            for field in (a.__dict__ if hasattr(a, "__dict__") else ["array"]):
+                x, y = (getattr(a, field), getattr(b, field)) if field != "array" else (a, b)
+                assert np.array_equal(x, y), "%s.%s with %d threads" % (name, field, threads)
+    assert len(queries["overlap"](1).tri) > 3000  # ragged results that grow the buffer
+
+
+def small_file():
+    vertices, triangles, materials = reference.triangle_soup(40, seed=9)
+    return cbvh.cook(vertices, triangles, materials=materials, material_names={1: "stone"})
+
+
+def test_truncated_and_damaged_files_raise(tmp_path):
+    data = small_file()
+    good = cbvh.open(data)
+    origins = np.zeros((8, 3), np.float32) - 3
+    directions = np.ones((8, 3), np.float32) + np.arange(24, dtype=np.float32).reshape(8, 3) / 50
+    for size in list(range(0, 300)) + list(range(300, len(data), 7)):
+        with pytest.raises(cbvh.CbvhError) as error:
+            cbvh.open(data[:size])
+        assert error.value.code == cbvh.lib.CBVH_ERROR_CORRUPT, size
+    with pytest.raises(cbvh.CbvhError) as error:
+        cbvh.open(data + b"\0" * 64)
+    assert error.value.code == cbvh.lib.CBVH_ERROR_CORRUPT
+    truncated = tmp_path / "truncated.cbvh"
+    truncated.write_bytes(data[: len(data) // 2])
+    with pytest.raises(cbvh.CbvhError, match="truncated.cbvh"):
+        cbvh.open(str(truncated))
+    opened = 0
+    for offset in range(len(data)):
+        damaged = bytearray(data)
+        damaged[offset] ^= 0x5A
+        try:
+            f = cbvh.open(bytes(damaged))
+        except cbvh.CbvhError as e:
+            assert e.code in (cbvh.lib.CBVH_ERROR_CORRUPT, cbvh.lib.CBVH_ERROR_UNSUPPORTED), (offset, e)
+            continue
+        opened += 1  # a byte no check covers (padding): the file must still answer as the original
+        assert np.array_equal(f.raycast(origins, directions).tri, good.raycast(origins, directions).tri)
+    assert opened < len(data) // 4
+
+
+def test_errors_carry_code_and_message(tmp_path):
+    with pytest.raises(cbvh.CbvhError) as error:
+        cbvh.open(str(tmp_path / "missing.cbvh"))
+    assert error.value.code == cbvh.lib.CBVH_ERROR_IO and "missing.cbvh" in str(error.value)
+    with pytest.raises(cbvh.CbvhError) as error:
+        cbvh.cook([[0, 0, 0], [1, 0, 0], [np.nan, 1, 0]], [[0, 1, 2]])
+    assert error.value.code == cbvh.lib.CBVH_ERROR_BAD_MESH and "vertex 2" in error.value.message
+    with pytest.raises(cbvh.CbvhError) as error:
+        cbvh.cook([[0, 0, 0], [1, 0, 0]], [[0, 1, 1]])
+    assert error.value.code == cbvh.lib.CBVH_ERROR_EMPTY_MESH
+    with pytest.raises(cbvh.CbvhError) as error:
+        cbvh.cook([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]], max_leaf_size=99)
+    assert error.value.code == cbvh.lib.CBVH_ERROR_INVALID_ARGUMENT
+    with pytest.raises(TypeError):
+        cbvh.cook([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]], leaf=4)
+    f = cbvh.open(small_file())
+    with pytest.raises(cbvh.CbvhError, match="sweep 1"):
+        f.sweep_sphere([[0, 0, 0], [0, 0, 0]], [0.1, -1], [1, 0, 0])
+    with pytest.raises(cbvh.CbvhError, match="shape 2"):
+        f.overlap_sphere([[0, 0, 0], [1, 1, 1], [0, np.inf, 0]], 0.5)
+    with pytest.raises(ValueError):
+        f.raycast(np.zeros((3, 3)), np.ones((4, 3)))
+    with pytest.raises(ValueError):
+        f.raycast(np.zeros((3, 2)), np.ones((3, 2)))
+    with pytest.raises(ValueError):
+        f.raycast(np.zeros((3, 3)), np.ones((3, 3)), threads=0)
+    assert not f.raycast([[0, 0, 0]], [[0, 0, 0]]).hit[0]  # an invalid ray (zero direction) is a miss
+    assert f.material_names == {1: ["stone"]}
+    f.close()
+    with pytest.raises(cbvh.CbvhError, match="closed"):
+        f.raycast([[0, 0, 0]], [[1, 0, 0]])
+
+
+def test_cook_file_matches_cook_and_reports_failures(tmp_path):
+    """cook_file's options reach the command; a mesh that does not cook raises CookError with its message."""
+    out = tmp_path / "a.cbvh"
+    stats = cbvh.cook_file("gen:sphere:500", out, layout="binary", max_leaf_size=2, compress_level=5,
+                           depfile=tmp_path / "a.d")
+    f = cbvh.open(str(out))
+    assert f.info["layout"] == "binary" and f.info["max_leaf_size"] <= 2 and stats["file_size"] == os.path.getsize(out)
+    assert (tmp_path / "a.d").read_text().startswith(str(out) + ":")
+    bad = tmp_path / "bad.obj"
+    bad.write_text("v 0 0 0\nv 1 0 0\nf 1 2 7\n")
+    with pytest.raises(cbvh.CookError) as error:
+        cbvh.cook_file(bad, tmp_path / "bad.cbvh")
+    assert error.value.status == 1 and "bad.obj" in str(error.value)
+    assert not (tmp_path / "bad.cbvh").exists()
