@@ -10,6 +10,7 @@
 #include <cstdlib>
 #include <ctime>
 #include <new>
+#include <vector>
 
 #define TINYBVH_IMPLEMENTATION
 #include "tiny_bvh.h"
@@ -76,6 +77,10 @@ void make_ray(tinybvh::Ray &r, const cbvh_ray *in)
 
 struct tinybvh_peer {
     std::atomic<int64_t> hooked{0};
+    // The vertices as tinybvh takes them, 16-byte aligned bvhvec4s: it reads each as one (a 12-byte stride
+    // would misalign them). Kept while the tree lives, which holds a view of them, though its queries read
+    // only its blocks.
+    std::vector<tinybvh::bvhvec4> vertices;
     tinybvh::BVH8_CPU *bvh8 = nullptr;
     tinybvh::BVH4_CPU *bvh4 = nullptr;
 };
@@ -99,10 +104,12 @@ template <class Tree> static void build(tinybvh_peer *p, Tree *&tree, const peer
     context.free = counted_free;
     context.userdata = &p->hooked;
     tree = new Tree(context);
-    // Vertices as tinybvh reads them: 16 bytes at a stride of 12 (peer_mesh keeps 4 bytes past the last
-    // readable).
-    tinybvh::bvhvec4slice vertices(reinterpret_cast<const tinybvh::bvhvec4 *>(mesh->positions),
-                                   static_cast<uint32_t>(mesh->vertex_count), 3 * sizeof(float));
+    const float *xyz = mesh->positions;
+    p->vertices.resize(mesh->vertex_count);
+    for (size_t i = 0; i < mesh->vertex_count; i++)
+        p->vertices[i] = tinybvh::bvhvec4(xyz[3 * i], xyz[3 * i + 1], xyz[3 * i + 2], 0.0f);
+    tinybvh::bvhvec4slice vertices(p->vertices.data(), static_cast<uint32_t>(mesh->vertex_count),
+                                   sizeof(tinybvh::bvhvec4));
     tree->BuildHQ(vertices, mesh->indices, static_cast<uint32_t>(mesh->triangle_count));
 }
 
