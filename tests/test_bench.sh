@@ -2,7 +2,8 @@
 # test_bench.sh: `cbvh bench` and `cbvh report` on tiny generated scenes: exit codes, help, tables, JSON, SVG, peer agreement.
 #
 # Environment (set by `make check` through AM_TESTS_ENVIRONMENT):
-#   CBVH_TOOL   the built tools/cbvh
+#   CBVH_TOOL     the built tools/cbvh
+#   CBVH_TINYBVH  yes when configure was given tinybvh (--with-tinybvh=DIR): its rows are then expected
 # Writes only into a mktemp folder, removed at exit. JSON and SVG checks need python3 (skipped without it).
 
 name=test_bench.sh
@@ -46,6 +47,23 @@ run 0 "bench --gen sphere:2000" "$CBVH" bench --gen sphere:2000 --rays 2000 --sh
         test "$(grep -c '^| \(sphere\|capsule\|box\) | \(sweep\|overlap\) | cbvh | [12] | ' "$tmp/bench.md")" -eq 12 &&
     check "... progress stays off stdout" test "$(grep -c '%' "$tmp/bench.md")" -eq 0
 
+# tinybvh is a peer only when configure was given it; without it (or on a CPU without AVX2 and FMA, which its
+# kernels were compiled for) the bench says so once and runs on.
+tinybvh_rows=$(grep -c '^| [a-z]* | \(closest\|any\) | tinybvh-bvh[48] | single | ' "$tmp/bench.md")
+if [ "${CBVH_TINYBVH:-no}" = yes ] && grep -q '^tinybvh was built for AVX2 and FMA, which this CPU lacks' "$tmp/bench.md"; then
+    check "bench: without AVX2 and FMA, no tinybvh rows" test "$tinybvh_rows" -eq 0
+    skip "bench: tinybvh rows: this CPU lacks AVX2 or FMA"
+elif [ "${CBVH_TINYBVH:-no}" = yes ]; then
+    # 4 ray sets x 2 queries: BVH8_CPU and BVH4_CPU at 1 thread, BVH8_CPU (the main variant) again at 2
+    check "bench: tinybvh BVH8_CPU and BVH4_CPU rows beside the others" test "$tinybvh_rows" -eq 24
+    check "... and no note that tinybvh is missing" test "$(grep -c '^tinybvh was' "$tmp/bench.md")" -eq 0
+else
+    check "bench: says once that tinybvh was not given at configure time" \
+        test "$(grep -c '^tinybvh was not given at configure time (--with-tinybvh=DIR): no tinybvh figures' "$tmp/bench.md")" -eq 1
+    check "... and runs on without tinybvh rows" test "$tinybvh_rows" -eq 0
+    skip "bench: tinybvh rows and agreement: the build has no tinybvh (configure --with-tinybvh=DIR, DIR holding tiny_bvh.h)"
+fi
+
 if [ "$has_python" = 1 ] && [ -f "$tmp/bench.json" ]; then
     check "bench --json is valid JSON" python3 -m json.tool "$tmp/bench.json" /dev/null
     # Every traversal and every peer agrees with cbvh sorted on a closed sphere, ray by ray.
@@ -66,6 +84,15 @@ assert "cbvh expanded" in engines, engines
 assert any(r["engine"] == "cbvh" and r["variant"] == "expanded" for r in rows), rows
 for e in engines - {"cbvh", "cbvh expanded"}:
     assert any(r["engine"] == e for r in rows), e
+# tinybvh, when configure was given it and the CPU runs it: both layouts on every ray set (their agreement is
+# checked above with every peer's), the blocks its queries read a part of what it keeps
+tinybvh = {b["engine"]: b for b in d["builds"] if b["engine"].startswith("tinybvh")}
+if tinybvh:
+    assert set(tinybvh) == {"tinybvh-bvh8", "tinybvh-bvh4"}, tinybvh
+    for e, b in tinybvh.items():
+        assert 0 < b["traversed_bytes"] <= b["structure_bytes"] == b["bytes"], b
+        assert len([r for r in rows if r["engine"] == e]) == 4, e
+        assert len([r for r in d["results"] if r["engine"] == e and r["threads"] == 1]) == 8, e
 for r in d["results"]:
     assert r["mrays_per_s"] > 0 and r["threads"] in (1, 2), r
     if r["engine"] == "cbvh":
@@ -107,7 +134,7 @@ fi
 run 0 "bench --threads 2 --no-peers --cpu-time" "$CBVH" bench --gen terrain:3000 --rays 3000 --shapes 500 --reps 2 --threads 2 \
     --no-peers --cpu-time &&
     check "... says it used CPU time" grep -q "CPU time" "$tmp/out" &&
-    check "... measures cbvh only" test "$(grep -c '| embree\|| bullet' "$tmp/out")" -eq 0 &&
+    check "... measures cbvh only" test "$(grep -c '| embree\|| bullet\|| tinybvh' "$tmp/out")" -eq 0 &&
     check "... all traversals agree" sh -c "grep '^| [a-z]* | cbvh | ' '$tmp/out' | awk -F'|' '\$8 != 0 || \$9 != 0 { bad = 1 } END { exit bad }'"
 
 if run 0 "cook a file to bench" "$CBVH" cook gen:sphere:1000 "$tmp/sphere.cbvh"; then

@@ -1,5 +1,5 @@
-/* cmd_bench.c: `cbvh bench`: cook, open and query speed of cbvh against Embree and Bullet on the same
- * triangles and rays. */
+/* cmd_bench.c: `cbvh bench`: cbvh's cook, open and query speed beside Embree, Bullet and tinybvh on the same
+ * rays. */
 #include "config.h"
 
 #include <errno.h>
@@ -14,6 +14,9 @@
 #include "bench_run.h"
 #include "cli.h"
 #include "commands.h"
+#ifdef HAVE_TINYBVH
+#include "common/cpu.h"
+#endif
 #include "json.h"
 #include "peers/peers.h"
 #include "progress.h"
@@ -40,8 +43,10 @@ static const char usage[] =
     "than one thread, whole sets in turns), so a slow spell of a shared machine moves them all\n"
     "and their ratios hold. The peers\n"
     "found at configure time (Embree 3 single rays and 16-ray packets, default and robust;\n"
-    "Bullet 3 quantized BVH) run on the same triangles and rays: build time, memory per\n"
-    "triangle, MRays/s, the ratio cbvh/peer, and ray-by-ray agreement with cbvh's answers.\n"
+    "Bullet 3 quantized BVH; tinybvh's BVH8_CPU and BVH4_CPU single rays, built with BuildHQ,\n"
+    "with configure --with-tinybvh=DIR, on CPUs with AVX2 and FMA) run on the same triangles\n"
+    "and rays: build time, memory per triangle, MRays/s, the ratio cbvh/peer, and ray-by-ray\n"
+    "agreement with cbvh's answers. A peer the build or the CPU lacks gets one line saying so.\n"
     "Then shape queries as games ask them near a surface (shapes about 1% of the diagonal\n"
     "across, capsules along random directions): sphere, capsule and box sweeps moving 1.5% of\n"
     "the diagonal, and sphere, capsule and box overlaps, beside Bullet (convex casts and its\n"
@@ -148,6 +153,17 @@ static void embree16_kernel(const void *engine, const cbvh_ray *rays, size_t cou
 }
 #endif
 
+#ifdef HAVE_TINYBVH
+static void tinybvh_kernel(const void *engine, const cbvh_ray *rays, size_t count, cbvh_hit *hits,
+                           uint8_t *occluded, cbvh_query_stats *stats)
+{
+    if (hits)
+        tinybvh_peer_raycast(engine, rays, count, hits);
+    else
+        tinybvh_peer_occluded(engine, rays, count, occluded);
+}
+#endif
+
 #ifdef HAVE_BULLET
 static void bullet_kernel(const void *engine, const cbvh_ray *rays, size_t count, cbvh_hit *hits,
                           uint8_t *occluded, cbvh_query_stats *stats)
@@ -161,7 +177,7 @@ static void bullet_kernel(const void *engine, const cbvh_ray *rays, size_t count
 
 /* One way to answer the queries: a cbvh traversal or a peer configuration. */
 typedef struct method {
-    const char *engine;  /* "cbvh", "embree", "embree-robust", "bullet" */
+    const char *engine;  /* "cbvh", "embree", "embree-robust", "bullet", "tinybvh-bvh8", "tinybvh-bvh4" */
     const char *variant; /* "sorted", "stream", "single", "packet16", "quantized" ... */
     bench_kernel kernel;
     const void *state;
@@ -296,6 +312,7 @@ typedef struct build_row {
     double open_seconds; /* cbvh only, else negative */
     uint64_t bytes;      /* file size, or acceleration structure + shared mesh arrays */
     uint64_t structure_bytes;
+    uint64_t traversed_bytes; /* tinybvh: the blocks its queries read; else 0 */
 } build_row;
 
 typedef struct result_row {
@@ -346,7 +363,7 @@ typedef struct shape_agree_row {
 } shape_agree_row;
 
 #define MAX_METHODS 16
-#define MAX_BUILDS 5
+#define MAX_BUILDS 7
 #define MAX_SHAPE_METHODS 2
 
 typedef struct bench_state {
@@ -392,6 +409,10 @@ typedef struct bench_state {
 #endif
 #ifdef HAVE_BULLET
     bullet_peer *bullet;
+#endif
+#ifdef HAVE_TINYBVH
+    tinybvh_peer *tinybvh[2];
+    int tinybvh_cpu_lacks; /* the CPU has no AVX2 or FMA: tinybvh not run */
 #endif
 } bench_state;
 
@@ -495,6 +516,18 @@ static void add_cbvh_methods(bench_state *s)
     add_shape_method(s, "cbvh", cbvh_shape_kernel, cbvh_shape_mark, s->file);
 }
 
+/* The build row of a peer just built. */
+static void add_peer_build(bench_state *s, const char *engine, const peer_build_info *info)
+{
+    build_row *b = &s->builds[s->build_count++];
+    b->engine = engine;
+    b->seconds = s->cpu_clock ? info->cpu_seconds : info->seconds;
+    b->open_seconds = -1.0;
+    b->bytes = info->memory_bytes + info->mesh_bytes;
+    b->structure_bytes = info->memory_bytes;
+    b->traversed_bytes = info->traversed_bytes;
+}
+
 /* Builds every peer configure found; a peer that fails to build is reported and skipped. */
 static void build_peers(bench_state *s)
 {
@@ -508,35 +541,45 @@ static void build_peers(bench_state *s)
     static const char *const names[2] = {"embree", "embree-robust"};
     for (int robust = 0; robust < 2; robust++) {
         progress_update(&s->prog, robust ? "building embree (robust)" : "building embree", -1.0);
+        memset(&info, 0, sizeof info);
         s->embree[robust] = embree_peer_create(&pm, robust, (int)max_threads(s), &info, err, sizeof err);
         progress_done(&s->prog);
         if (!s->embree[robust]) {
             cli_error(s->command, NULL, "%s", err);
             continue;
         }
-        build_row *b = &s->builds[s->build_count++];
-        b->engine = names[robust];
-        b->seconds = s->cpu_clock ? info.cpu_seconds : info.seconds;
-        b->open_seconds = -1.0;
-        b->bytes = info.memory_bytes + info.mesh_bytes;
-        b->structure_bytes = info.memory_bytes;
+        add_peer_build(s, names[robust], &info);
         add_method(s, names[robust], "single", embree_kernel, s->embree[robust], 0, !robust);
         add_method(s, names[robust], "packet16", embree16_kernel, s->embree[robust], 0, 0);
     }
 #endif
+#ifdef HAVE_TINYBVH
+    static const char *const tinybvh_names[2] = {"tinybvh-bvh8", "tinybvh-bvh4"};
+    const unsigned needed = CBVH_CPU_AVX2 | CBVH_CPU_FMA;
+    s->tinybvh_cpu_lacks = (cbvh_cpu_features() & needed) != needed;
+    for (int k = 0; k < 2 && !s->tinybvh_cpu_lacks; k++) {
+        progress_update(&s->prog, k ? "building tinybvh BVH4_CPU" : "building tinybvh BVH8_CPU", -1.0);
+        memset(&info, 0, sizeof info);
+        s->tinybvh[k] =
+            tinybvh_peer_create(&pm, k ? TINYBVH_BVH4_CPU : TINYBVH_BVH8_CPU, &info, err, sizeof err);
+        progress_done(&s->prog);
+        if (!s->tinybvh[k]) {
+            cli_error(s->command, NULL, "%s", err);
+            continue;
+        }
+        add_peer_build(s, tinybvh_names[k], &info);
+        add_method(s, tinybvh_names[k], "single", tinybvh_kernel, s->tinybvh[k], 0, k == 0);
+    }
+#endif
 #ifdef HAVE_BULLET
     progress_update(&s->prog, "building bullet", -1.0);
+    memset(&info, 0, sizeof info);
     s->bullet = bullet_peer_create(&pm, &info, err, sizeof err);
     progress_done(&s->prog);
     if (!s->bullet) {
         cli_error(s->command, NULL, "%s", err);
     } else {
-        build_row *b = &s->builds[s->build_count++];
-        b->engine = "bullet";
-        b->seconds = s->cpu_clock ? info.cpu_seconds : info.seconds;
-        b->open_seconds = -1.0;
-        b->bytes = info.memory_bytes + info.mesh_bytes;
-        b->structure_bytes = info.memory_bytes;
+        add_peer_build(s, "bullet", &info);
         add_method(s, "bullet", "quantized", bullet_kernel, s->bullet, 0, 1);
         add_shape_method(s, "bullet", bullet_shape_kernel, bullet_shape_mark, s->bullet);
     }
@@ -551,6 +594,10 @@ static void destroy_peers(bench_state *s)
 #endif
 #ifdef HAVE_BULLET
     bullet_peer_destroy(s->bullet);
+#endif
+#ifdef HAVE_TINYBVH
+    tinybvh_peer_destroy(s->tinybvh[0]);
+    tinybvh_peer_destroy(s->tinybvh[1]);
 #endif
     (void)s;
 }
@@ -1024,12 +1071,24 @@ static void print_tables(const bench_state *s)
     printf("\nbytes/tri: the cbvh file (cbvh expanded: in memory, with the copy of "
            "cbvh_file_expand_triangles); for the peers their acceleration structure plus the shared vertex "
            "and index arrays they need.\n");
+    for (int i = 0; i < s->build_count; i++)
+        if (s->builds[i].traversed_bytes)
+            printf(
+                "%s keeps its build data (the trees it converted from): its queries read %.2f bytes/tri of "
+                "its blocks, which hold their own copies of the triangles.\n",
+                s->builds[i].engine, (double)s->builds[i].traversed_bytes / tris);
     if (!s->no_peers) {
 #if !defined(HAVE_EMBREE)
         printf("Embree 3 was not found at configure time: no Embree figures.\n");
 #endif
 #if !defined(HAVE_BULLET)
         printf("Bullet 3 was not found at configure time: no Bullet figures.\n");
+#endif
+#if !defined(HAVE_TINYBVH)
+        printf("tinybvh was not given at configure time (--with-tinybvh=DIR): no tinybvh figures.\n");
+#else
+        if (s->tinybvh_cpu_lacks)
+            printf("tinybvh was built for AVX2 and FMA, which this CPU lacks: no tinybvh figures.\n");
 #endif
     }
     printf("\n");
@@ -1124,6 +1183,8 @@ static int write_json(const bench_state *s)
             json_double(&w, "open_seconds", b->open_seconds);
         json_uint(&w, "bytes", b->bytes);
         json_uint(&w, "structure_bytes", b->structure_bytes);
+        if (b->traversed_bytes)
+            json_uint(&w, "traversed_bytes", b->traversed_bytes);
         json_double(&w, "bytes_per_triangle", (double)b->bytes / tris);
         json_double(&w, "cbvh_over_this_bytes", (double)s->builds[0].bytes / (double)b->bytes);
         if (i > 0 && b->seconds > 0.0)

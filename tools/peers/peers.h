@@ -1,5 +1,5 @@
-/* peers.h: a C interface to the libraries cbvh is benchmarked against (Embree 3, Bullet 3), when configure
- * found them. */
+/* peers.h: a C interface to the libraries cbvh is benchmarked against (Embree 3, Bullet 3, tinybvh), when
+ * configure found them. */
 #ifndef CBVH_PEERS_H
 #define CBVH_PEERS_H
 
@@ -32,9 +32,10 @@ typedef struct peer_build_info {
     double cpu_seconds; /* CPU time of the whole process (every build thread) */
     uint64_t memory_bytes;
     uint64_t mesh_bytes;
+    uint64_t traversed_bytes; /* tinybvh: the blocks its queries read, within memory_bytes; other peers: 0 */
 } peer_build_info;
 
-/* Include config.h before this header: HAVE_EMBREE and HAVE_BULLET come from configure.
+/* Include config.h before this header: HAVE_EMBREE, HAVE_BULLET and HAVE_TINYBVH come from configure.
  *
  * Query results use cbvh's types: hits[i].tri is the triangle index in the mesh,
  * or CBVH_NO_HIT; t is in units of the ray's dir. Every ray must have a finite tmax.
@@ -88,6 +89,27 @@ void bullet_peer_overlap(const bullet_peer *peer, shape_kind kind, const shape_q
  * counts, for checking its answers one triangle at a time. */
 void bullet_peer_overlap_each(const bullet_peer *peer, shape_kind kind, const shape_query *query,
                               void (*add)(void *user, uint32_t tri), void *user);
+#endif
+
+#if defined(HAVE_TINYBVH)
+typedef struct tinybvh_peer tinybvh_peer;
+
+typedef enum tinybvh_layout { TINYBVH_BVH8_CPU, TINYBVH_BVH4_CPU } tinybvh_layout;
+
+/* tinybvh was compiled for AVX2 and FMA: call none of these functions unless the CPU has both
+ * (cbvh_cpu_features() has CBVH_CPU_AVX2 and CBVH_CPU_FMA).
+ *
+ * Builds tinybvh's BVH8_CPU or BVH4_CPU with BuildHQ (spatial splits), as tinybvh's own speed test does.
+ * info->memory_bytes counts all it keeps (its traversal blocks and the trees it converted them from);
+ * info->traversed_bytes the blocks alone; mesh_bytes is 0, its leaves hold copies of the triangles.
+ * Returns NULL and writes a message into err on failure. */
+tinybvh_peer *tinybvh_peer_create(const peer_mesh *mesh, tinybvh_layout layout, peer_build_info *info,
+                                  char *err, size_t err_size);
+void tinybvh_peer_destroy(tinybvh_peer *peer);
+
+/* Single rays (Intersect / IsOccluded). tinybvh has no tmin: a ray starts at org + tmin * dir instead. */
+void tinybvh_peer_raycast(const tinybvh_peer *peer, const cbvh_ray *rays, size_t count, cbvh_hit *hits);
+void tinybvh_peer_occluded(const tinybvh_peer *peer, const cbvh_ray *rays, size_t count, uint8_t *occluded);
 #endif
 
 #ifdef __cplusplus
