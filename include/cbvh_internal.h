@@ -95,4 +95,8 @@ int cbvh_has_magic(const void *bytes, size_t size);
 /* Bytes cbvh_has_magic reads. */
 #define CBVH_MAGIC_BYTES 8u
 
+/* 1 when the running CPU has AVX2 and FMA and the operating system saves the AVX registers (the library's
+ * own detection), else 0: what the bench's tinybvh peer needs. */
+int cbvh_cpu_has_avx2_fma(void);
+
 #endif

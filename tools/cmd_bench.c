@@ -12,11 +12,9 @@
 #include "bench_input.h"
 #include "bench_judge.h"
 #include "bench_run.h"
+#include "cbvh_internal.h"
 #include "cli.h"
 #include "commands.h"
-#ifdef HAVE_TINYBVH
-#include "common/cpu.h"
-#endif
 #include "json.h"
 #include "peers/peers.h"
 #include "progress.h"
@@ -555,8 +553,7 @@ static void build_peers(bench_state *s)
 #endif
 #ifdef HAVE_TINYBVH
     static const char *const tinybvh_names[2] = {"tinybvh-bvh8", "tinybvh-bvh4"};
-    const unsigned needed = CBVH_CPU_AVX2 | CBVH_CPU_FMA;
-    s->tinybvh_cpu_lacks = (cbvh_cpu_features() & needed) != needed;
+    s->tinybvh_cpu_lacks = !cbvh_cpu_has_avx2_fma();
     for (int k = 0; k < 2 && !s->tinybvh_cpu_lacks; k++) {
         progress_update(&s->prog, k ? "building tinybvh BVH4_CPU" : "building tinybvh BVH8_CPU", -1.0);
         memset(&info, 0, sizeof info);

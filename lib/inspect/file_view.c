@@ -1,9 +1,10 @@
-/* file_view.c: an opened file's stored mesh, material storage and the names of its format values, for the
- * tools. */
+/* file_view.c: an opened file's stored mesh, material storage and the names of its format values, and the CPU's
+ * features, for the tools. */
 #include <string.h>
 
 #include "cbvh_internal.h"
 #include "layout/encodings.h"
+#include "common/cpu.h"
 #include "common/endian.h"
 #include "common/file.h"
 #include "common/format.h"
@@ -44,4 +45,10 @@ const char *cbvh_codec_name(uint32_t codec)
 int cbvh_has_magic(const void *bytes, size_t size)
 {
     return size >= CBVH_MAGIC_SIZE && memcmp(bytes, CBVH_MAGIC, CBVH_MAGIC_SIZE) == 0;
+}
+
+int cbvh_cpu_has_avx2_fma(void)
+{
+    const unsigned needed = CBVH_CPU_AVX2 | CBVH_CPU_FMA;
+    return (cbvh_cpu_features() & needed) == needed;
 }
