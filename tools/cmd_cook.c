@@ -13,6 +13,7 @@
 #include "common/format.h"
 #include "commands.h"
 #include "import_assimp.h"
+#include "import_child.h"
 #include "json.h"
 #include "material_map.h"
 #include "progress.h"
@@ -77,6 +78,8 @@ static const char usage[] =
     "  --max-memory MB         stop an import or cook that would hold more than MB megabytes\n"
     "                          of address space (exit status 1); default 1024 + 64 x the\n"
     "                          input file's size in MB; 0: no limit\n"
+    "  --import-timeout S      stop an import that runs longer than S seconds (exit status\n"
+    "                          1); default 120 + 1 per MB of the input file; 0: no limit\n"
     "  -h, --help              show this help\n"
     "\n"
     "OUT must not be IN itself (also through a link): that is refused, exit status 2. An OUT\n"
@@ -84,6 +87,11 @@ static const char usage[] =
     "is replaced by the new file, and the file it pointed to stays as it was. A new OUT gets\n"
     "mode 0666 less the umask; a replaced one keeps its mode. Interrupted (SIGINT, SIGTERM,\n"
     "SIGHUP), a cook leaves no temporary file behind.\n"
+    "\n"
+    "An asset is untrusted input: assimp reads it in a child process, and whatever happens\n"
+    "there (a crash, an abort, a hang, a reader looping at the end of a truncated file) ends\n"
+    "as exit status 1 with a message naming the file and the reason; in a batch, as that\n"
+    "asset's failure while the others cook.\n"
     "\n"
     "Exit status: 0 cooked, 1 the input is not a usable mesh, 2 usage or I/O error.\n";
 
@@ -107,7 +115,8 @@ enum {
     OPT_SCALE,
     OPT_UP_AXIS,
     OPT_DEPFILE,
-    OPT_MATERIAL_MAP
+    OPT_MATERIAL_MAP,
+    OPT_IMPORT_TIMEOUT
 };
 
 static const cli_option options[] = {
@@ -131,6 +140,7 @@ static const cli_option options[] = {
     { "up-axis", CLI_ARG_REQUIRED, OPT_UP_AXIS },
     { "depfile", CLI_ARG_REQUIRED, OPT_DEPFILE },
     { "material-map", CLI_ARG_REQUIRED, OPT_MATERIAL_MAP },
+    { "import-timeout", CLI_ARG_REQUIRED, OPT_IMPORT_TIMEOUT },
     { NULL, 0, 0 },
 };
 
@@ -141,7 +151,8 @@ typedef struct cook_input {
 } cook_input;
 
 /* Returns an exit status; on success `in` holds the mesh, else `message` says why. */
-static int load_input(const char *path, import_options *io, cook_input *in, char *message, size_t message_size)
+static int load_input(const char *path, import_options *io, unsigned timeout_seconds, cook_input *in, char *message,
+                      size_t message_size)
 {
     memset(in, 0, sizeof *in);
     if (!strncmp(path, "gen:", 4)) {
@@ -160,7 +171,7 @@ static int load_input(const char *path, import_options *io, cook_input *in, char
         in->mesh.mesh_instances = 1;
         return CLI_EXIT_OK;
     }
-    return import_assimp(path, io, &in->mesh, message, message_size);
+    return import_contained(path, io, timeout_seconds, &in->mesh, message, message_size);
 }
 
 /* A failed cook as JSON: input, output, error {status (the exit status), file (the one at fault), message}. */
@@ -329,13 +340,23 @@ static void print_summary(const char *in, const char *out, const cook_input *inp
 /* How every asset of a run is cooked. */
 typedef struct cook_settings {
     cbvh_cook_options opt;
-    int quiet, json, memory_given;
+    int quiet, json, memory_given, timeout_given;
     uint32_t max_memory;
+    uint32_t import_timeout; /* seconds, 0: none; when not given, import_timeout_for picks one */
     const char *select, *depfile, *material_map_path;
     material_map map; /* read from material_map_path (when given) before anything cooks */
     double scale;
     char up_axis; /* 'x', 'y' or 'z' */
 } cook_settings;
+
+/* The import's time limit: as given, or 120 s plus a second per MB of the input file. */
+static unsigned import_timeout_for(const cook_settings *c, const char *in)
+{
+    struct stat st;
+    if (c->timeout_given)
+        return c->import_timeout;
+    return 120u + (stat(in, &st) == 0 ? (unsigned)((uint64_t)st.st_size >> 20) : 0u);
+}
 
 /* --scale and --up-axis on the imported positions, in double, rounded once. */
 static void transform_positions(const cook_settings *c, imported_mesh *m)
@@ -396,7 +417,7 @@ static int cook_one(const cook_settings *c, const char *in, const char *out)
     import_options io;
     memset(&io, 0, sizeof io);
     io.select = c->select;
-    int rc = load_input(in, &io, &input, message, sizeof message);
+    int rc = load_input(in, &io, import_timeout_for(c, in), &input, message, sizeof message);
     progress_done(&prog);
     if (rc) {
         import_options_free(&io);
@@ -794,6 +815,10 @@ int cmd_cook(int argc, char **argv)
         case OPT_SELECT: c.select = value; break;
         case OPT_DEPFILE: c.depfile = value; break;
         case OPT_MATERIAL_MAP: c.material_map_path = value; break;
+        case OPT_IMPORT_TIMEOUT:
+            ok = cli_parse_u32("cook", "import-timeout", value, 0, 1000000, &c.import_timeout);
+            c.timeout_given = 1;
+            break;
         case OPT_SCALE: {
             char *end = NULL;
             c.scale = strtod(value, &end);
