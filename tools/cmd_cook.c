@@ -12,6 +12,7 @@
 #include "cli.h"
 #include "common/format.h"
 #include "commands.h"
+#include "depfile.h"
 #include "import_assimp.h"
 #include "import_child.h"
 #include "json.h"
@@ -65,8 +66,11 @@ static const char usage[] =
     "                          +Y as assimp imports every format, becomes +AXIS (z for\n"
     "                          Z-up engines), by a right-handed rotation\n"
     "  --depfile FILE          write a Makefile rule 'OUT: IN SIDE-FILES...' naming every\n"
-    "                          file the import opened (.mtl, .bin ...) and the material map,\n"
-    "                          for make and ninja\n"
+    "                          file the import opened or looked for (.mtl, .bin ...) and the\n"
+    "                          material map, with an empty rule for each (as gcc -MP), for\n"
+    "                          make and ninja; written before OUT is replaced, and neither\n"
+    "                          changes when either fails; FILE must not be IN or OUT\n"
+    "  --depfiles              write the rule to OUT.d (for each asset of a batch)\n"
     "  --output-dir DIR        batch: cook each IN into DIR/STEM.cbvh (STEM: IN's file name\n"
     "                          without its extension)\n"
     "  --manifest FILE         batch: the assets of FILE (- for standard input), one a line:\n"
@@ -116,7 +120,8 @@ enum {
     OPT_UP_AXIS,
     OPT_DEPFILE,
     OPT_MATERIAL_MAP,
-    OPT_IMPORT_TIMEOUT
+    OPT_IMPORT_TIMEOUT,
+    OPT_DEPFILES
 };
 
 static const cli_option options[] = {
@@ -141,6 +146,7 @@ static const cli_option options[] = {
     { "depfile", CLI_ARG_REQUIRED, OPT_DEPFILE },
     { "material-map", CLI_ARG_REQUIRED, OPT_MATERIAL_MAP },
     { "import-timeout", CLI_ARG_REQUIRED, OPT_IMPORT_TIMEOUT },
+    { "depfiles", CLI_ARG_NONE, OPT_DEPFILES },
     { NULL, 0, 0 },
 };
 
@@ -341,6 +347,7 @@ static void print_summary(const char *in, const char *out, const cook_input *inp
 typedef struct cook_settings {
     cbvh_cook_options opt;
     int quiet, json, memory_given, timeout_given;
+    int depfiles; /* --depfiles: OUT.d for each output */
     uint32_t max_memory;
     uint32_t import_timeout; /* seconds, 0: none; when not given, import_timeout_for picks one */
     const char *select, *depfile, *material_map_path;
@@ -374,38 +381,11 @@ static void transform_positions(const cook_settings *c, imported_mesh *m)
     }
 }
 
-/* Writes `target: dep dep ... [extra]` (Makefile syntax; spaces, # and $ escaped) to `path`; `extra` may be
- * NULL. Returns 0 or -1. */
-static int write_depfile(const char *path, const char *target, char *const *deps, size_t deps_count,
-                         const char *extra)
-{
-    FILE *f = fopen(path, "w");
-    if (!f)
-        return -1;
-    const size_t count = deps_count + (extra != NULL);
-    for (size_t k = 0; k <= count; k++) {
-        const char *s = k == 0 ? target : k <= deps_count ? deps[k - 1] : extra;
-        for (; *s; s++) {
-            if (*s == ' ' || *s == '#' || *s == '\\')
-                fputc('\\', f);
-            if (*s == '$')
-                fputc('$', f);
-            fputc(*s, f);
-        }
-        fputs(k == 0 ? ":" : "", f);
-        fputs(k < count ? " " : "\n", f);
-    }
-    return fclose(f) == 0 ? 0 : -1;
-}
-
-/* Cooks one asset; returns its exit status. */
-static int cook_one(const cook_settings *c, const char *in, const char *out)
+/* Cooks one asset whose paths were checked, writing `depfile` (NULL: none) too; returns its exit status. */
+static int cook_checked(const cook_settings *c, const char *in, const char *out, const char *depfile)
 {
     cbvh_cook_options opt = c->opt;
     const int json = c->json;
-    if (same_file(in, out))
-        return report_failure(json, in, out, out, CLI_EXIT_USAGE,
-                              "is the input file itself: cooking would replace the asset (choose another output)");
     limit_memory(in, c->max_memory, c->memory_given);
 
     progress prog;
@@ -451,7 +431,19 @@ static int cook_one(const cook_settings *c, const char *in, const char *out)
     cbvh_cook_stats stats;
     cbvh_error err;
     cbvh_cook_stats_init(&stats, sizeof stats);
+    /* The depfile goes in place first: a new OUT never stands beside an old list of its dependencies. */
+    depfile_commit dc;
+    memset(&dc, 0, sizeof dc);
+    if (depfile && depfile_put(&dc, depfile, out, in, &io.opened, &io.missing, c->material_map_path) != 0) {
+        snprintf(message, sizeof message, "cannot write the depfile: %s (nothing was changed)", strerror(errno));
+        rc = report_failure(json, in, out, depfile, CLI_EXIT_USAGE, message);
+        free(names);
+        import_options_free(&io);
+        imported_mesh_free(&input.mesh);
+        return rc;
+    }
     cbvh_result res = cbvh_cook_to_path(&mesh, &opt, NULL, out, &stats, &err);
+    depfile_finish(&dc, res == CBVH_OK);
     progress_done(&prog);
     double total_seconds = cli_now() - t0;
     if (res != CBVH_OK) {
@@ -459,10 +451,6 @@ static int cook_one(const cook_settings *c, const char *in, const char *out)
         const char *culprit = (res == CBVH_ERROR_IO || res == CBVH_ERROR_INVALID_ARGUMENT) ? out : in;
         snprintf(message, sizeof message, "%s: %s", cbvh_result_string(err.code), err.message);
         rc = report_failure(json, in, out, culprit, cli_exit_for(err.code), message);
-    } else if (c->depfile &&
-               write_depfile(c->depfile, out, io.opened.paths, io.opened.count, c->material_map_path) != 0) {
-        snprintf(message, sizeof message, "cannot write the depfile: %s", strerror(errno));
-        rc = report_failure(json, in, out, c->depfile, CLI_EXIT_USAGE, message);
     } else if (json) {
         print_json(in, out, &input, &stats, &notes, import_seconds, total_seconds);
     } else {
@@ -471,6 +459,47 @@ static int cook_one(const cook_settings *c, const char *in, const char *out)
     free(names);
     import_options_free(&io);
     imported_mesh_free(&input.mesh);
+    return rc;
+}
+
+/* Refuses a depfile that would overwrite the asset or the output, or that is not a plain file; returns an
+ * exit status. */
+static int check_depfile(const cook_settings *c, const char *depfile, const char *in, const char *out)
+{
+    struct stat st;
+    const char *what = NULL;
+    if (paths_same_file(depfile, in))
+        what = "is the input file itself: writing it would replace the asset";
+    else if (paths_same_file(depfile, out))
+        what = "is the output file itself: the depfile and the cooked file cannot share a name";
+    else if (stat(depfile, &st) == 0 && !S_ISREG(st.st_mode))
+        what = "is not a regular file (a device, a FIFO or a folder): refused as a depfile";
+    return what ? report_failure(c->json, in, out, depfile, CLI_EXIT_USAGE, what) : CLI_EXIT_OK;
+}
+
+/* Cooks one asset; returns its exit status. */
+static int cook_one(const cook_settings *c, const char *in, const char *out)
+{
+    const int json = c->json;
+    if (same_file(in, out))
+        return report_failure(json, in, out, out, CLI_EXIT_USAGE,
+                              "is the input file itself: cooking would replace the asset (choose another output)");
+    char *own_depfile = NULL;
+    const char *depfile = c->depfile;
+    if (c->depfiles) {
+        size_t size = strlen(out) + 3;
+        if ((own_depfile = malloc(size)) == NULL)
+            return report_failure(json, in, out, out, CLI_EXIT_USAGE, "out of memory");
+        snprintf(own_depfile, size, "%s.d", out);
+        depfile = own_depfile;
+    }
+    int refused = depfile ? check_depfile(c, depfile, in, out) : CLI_EXIT_OK;
+    if (refused) {
+        free(own_depfile);
+        return refused;
+    }
+    int rc = cook_checked(c, in, out, depfile);
+    free(own_depfile);
     return rc;
 }
 
@@ -814,6 +843,7 @@ int cmd_cook(int argc, char **argv)
         case OPT_JOBS: ok = cli_parse_u32("cook", "jobs", value, 1, 256, &jobs); break;
         case OPT_SELECT: c.select = value; break;
         case OPT_DEPFILE: c.depfile = value; break;
+        case OPT_DEPFILES: c.depfiles = 1; break;
         case OPT_MATERIAL_MAP: c.material_map_path = value; break;
         case OPT_IMPORT_TIMEOUT:
             ok = cli_parse_u32("cook", "import-timeout", value, 0, 1000000, &c.import_timeout);
@@ -857,8 +887,8 @@ int cmd_cook(int argc, char **argv)
     /* A batch: the inputs named on the command line and in the manifest. */
     if (c.depfile) {
         free(paths);
-        return cli_usage_error("cook", "--depfile names one file: use it with single cooks (one per asset, as "
-                                       "make and ninja run them)");
+        return cli_usage_error("cook", "--depfile names one file: a batch writes one per asset with --depfiles "
+                                       "(OUT.d)");
     }
     struct stat st;
     if (out_dir && (stat(out_dir, &st) != 0 || !S_ISDIR(st.st_mode)))
