@@ -1,5 +1,6 @@
 /* cmd_cook.c: `cbvh cook`: import a mesh file (or generate a scene), cook it, write the .cbvh file atomically. */
 #include <errno.h>
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -55,7 +56,11 @@ static const char usage[] =
     "  --material-map FILE     material ids by name: lines NAME<TAB>ID (ID 0..4294967295),\n"
     "                          '*<TAB>ID' for every other name, # comments; a material the\n"
     "                          map does not name fails the cook (exit status 1)\n"
-    "  --quiet                 no progress display (it is shown only on a terminal anyway)\n"
+    "  --quiet                 nothing on success: no progress display (shown only on a\n"
+    "                          terminal anyway) and no summary; warnings and errors still go\n"
+    "                          to standard error\n"
+    "  --force                 replace an OUT that is read-only (in a Perforce workspace: a\n"
+    "                          file not checked out), which is refused otherwise\n"
     "  --json                  print statistics (and warnings) as JSON on stdout; a failed\n"
     "                          cook prints\n"
     "                          {\"input\", \"output\", \"error\": {\"status\", \"message\"}}\n"
@@ -74,8 +79,9 @@ static const char usage[] =
     "  --output-dir DIR        batch: cook each IN into DIR/STEM.cbvh (STEM: IN's file name\n"
     "                          without its extension)\n"
     "  --manifest FILE         batch: the assets of FILE (- for standard input), one a line:\n"
-    "                          IN (into --output-dir) or IN<TAB>OUT; # starts a comment line\n"
-    "  --jobs N                batch: cook N assets at once (default 1), each in a process of\n"
+    "                          IN (into --output-dir) or IN<TAB>OUT; # starts a comment line;\n"
+    "                          relative paths are relative to the current folder\n"
+    "  -j, --jobs N            batch: cook N assets at once (default 1), each in a process of\n"
     "                          its own; one JSON line per asset on stdout (as --json, on one\n"
     "                          line, in the order they finish), messages on stderr; exit\n"
     "                          status 0 when every asset cooked, else 1\n"
@@ -121,7 +127,8 @@ enum {
     OPT_DEPFILE,
     OPT_MATERIAL_MAP,
     OPT_IMPORT_TIMEOUT,
-    OPT_DEPFILES
+    OPT_DEPFILES,
+    OPT_FORCE
 };
 
 static const cli_option options[] = {
@@ -147,6 +154,7 @@ static const cli_option options[] = {
     { "material-map", CLI_ARG_REQUIRED, OPT_MATERIAL_MAP },
     { "import-timeout", CLI_ARG_REQUIRED, OPT_IMPORT_TIMEOUT },
     { "depfiles", CLI_ARG_NONE, OPT_DEPFILES },
+    { "force", CLI_ARG_NONE, OPT_FORCE },
     { NULL, 0, 0 },
 };
 
@@ -348,6 +356,7 @@ typedef struct cook_settings {
     cbvh_cook_options opt;
     int quiet, json, memory_given, timeout_given;
     int depfiles; /* --depfiles: OUT.d for each output */
+    int force;    /* --force: replace a read-only OUT */
     uint32_t max_memory;
     uint32_t import_timeout; /* seconds, 0: none; when not given, import_timeout_for picks one */
     const char *select, *depfile, *material_map_path;
@@ -372,6 +381,8 @@ static void transform_positions(const cook_settings *c, imported_mesh *m)
         return;
     for (size_t v = 0; v < m->vertex_count; v++) {
         float *p = m->positions + 3 * v;
+        if (!isfinite(p[0]) || !isfinite(p[1]) || !isfinite(p[2]))
+            continue; /* refused by the cook, which names the file's axis */
         const double x = c->scale * p[0], y = c->scale * p[1], z = c->scale * p[2];
         /* +Y to +Z: a quarter turn about +X; +Y to +X: a quarter turn about -Z */
         const double out[3][3] = { { x, y, z }, { y, -x, z }, { x, -z, y } };
@@ -449,11 +460,15 @@ static int cook_checked(const cook_settings *c, const char *in, const char *out,
     if (res != CBVH_OK) {
         /* Mesh problems belong to the input, I/O problems to the output. */
         const char *culprit = (res == CBVH_ERROR_IO || res == CBVH_ERROR_INVALID_ARGUMENT) ? out : in;
-        snprintf(message, sizeof message, "%s: %s", cbvh_result_string(err.code), err.message);
+        snprintf(message, sizeof message, "%s: %s%s", cbvh_result_string(err.code), err.message,
+                 !strncmp(err.message, "vertex ", 7) && !input.generated
+                     ? " (vertices counted from 0 in the imported mesh, after assimp joined identical ones: not "
+                       "the file's numbering)"
+                     : "");
         rc = report_failure(json, in, out, culprit, cli_exit_for(err.code), message);
     } else if (json) {
         print_json(in, out, &input, &stats, &notes, import_seconds, total_seconds);
-    } else {
+    } else if (!c->quiet) {
         print_summary(in, out, &input, &stats, &notes, import_seconds, total_seconds);
     }
     free(names);
@@ -484,6 +499,11 @@ static int cook_one(const cook_settings *c, const char *in, const char *out)
     if (same_file(in, out))
         return report_failure(json, in, out, out, CLI_EXIT_USAGE,
                               "is the input file itself: cooking would replace the asset (choose another output)");
+    struct stat st;
+    if (!c->force && stat(out, &st) == 0 && S_ISREG(st.st_mode) &&
+        (st.st_uid == geteuid() ? !(st.st_mode & S_IWUSR) : access(out, W_OK) != 0))
+        return report_failure(json, in, out, out, CLI_EXIT_USAGE,
+                              "is read-only (in a Perforce workspace: not checked out); --force replaces it");
     char *own_depfile = NULL;
     const char *depfile = c->depfile;
     if (c->depfiles) {
@@ -776,7 +796,7 @@ static int run_batch(const cook_settings *c, const batch *b, uint32_t jobs)
     return failed ? CLI_EXIT_BAD_INPUT : CLI_EXIT_OK;
 }
 
-int cmd_cook(int argc, char **argv)
+static int cook_main(int argc, char **argv)
 {
     cook_settings c;
     memset(&c, 0, sizeof c);
@@ -786,6 +806,7 @@ int cmd_cook(int argc, char **argv)
     c.up_axis = 'y';
     const char *out_dir = NULL, *manifest = NULL;
     uint32_t jobs = 1;
+    int jobs_given = 0, compress_bare = 0;
     batch b;
     memset(&b, 0, sizeof b);
     const char **paths = calloc((size_t)argc + 1, sizeof *paths);
@@ -825,6 +846,7 @@ int cmd_cook(int argc, char **argv)
             ok = cli_parse_float("cook", "intersection-cost", value, 1e-6f, 1e6f, &o->intersection_cost);
             break;
         case OPT_COMPRESS:
+            compress_bare = !value;
             level = 6;
             ok = !value || cli_parse_u32("cook", "compress", value, 1, 9, &level);
             o->compress_level = (int)level;
@@ -840,10 +862,14 @@ int cmd_cook(int argc, char **argv)
             break;
         case OPT_OUTPUT_DIR: out_dir = value; break;
         case OPT_MANIFEST: manifest = value; break;
-        case OPT_JOBS: ok = cli_parse_u32("cook", "jobs", value, 1, 256, &jobs); break;
+        case OPT_JOBS:
+            ok = cli_parse_u32("cook", "jobs", value, 1, 256, &jobs);
+            jobs_given = 1;
+            break;
         case OPT_SELECT: c.select = value; break;
         case OPT_DEPFILE: c.depfile = value; break;
         case OPT_DEPFILES: c.depfiles = 1; break;
+        case OPT_FORCE: c.force = 1; break;
         case OPT_MATERIAL_MAP: c.material_map_path = value; break;
         case OPT_IMPORT_TIMEOUT:
             ok = cli_parse_u32("cook", "import-timeout", value, 0, 1000000, &c.import_timeout);
@@ -875,10 +901,20 @@ int cmd_cook(int argc, char **argv)
         return rc;
     }
     if (!out_dir && !manifest) {
-        if (npaths != 2)
-            rc = cli_usage_error("cook", "expected an input and an output file (or --output-dir DIR with inputs, "
-                                         "or --manifest FILE)");
-        else
+        /* --compress takes its level only as --compress=LEVEL: a bare level is taken for a file name */
+        const int level_as_path = compress_bare && npaths > 0 && paths[0][0] >= '1' && paths[0][0] <= '9' &&
+                                  !paths[0][1];
+        if (npaths != 2 && level_as_path)
+            rc = cli_usage_error("cook", "'%s' was taken for the input file: the level attaches with '=', "
+                                         "--compress=%s", paths[0], paths[0]);
+        else if (npaths != 2)
+            rc = cli_usage_error("cook", "expected an input and an output file, got %d file name%s (or "
+                                         "--output-dir DIR with inputs, or --manifest FILE)",
+                                 npaths, npaths == 1 ? "" : "s");
+        else if (jobs_given && !c.quiet)
+            cli_error("cook", NULL, "warning: --jobs cooks a batch (--output-dir or --manifest); one cook (IN "
+                                    "OUT) runs alone");
+        if (npaths == 2)
             rc = cook_one(&c, paths[0], paths[1]);
         free(paths);
         material_map_free(&c.map);
@@ -906,5 +942,32 @@ int cmd_cook(int argc, char **argv)
     batch_free(&b);
     free(paths);
     material_map_free(&c.map);
+    return rc;
+}
+
+/* make and ninja users type -j N (or -jN) for parallel jobs: it means --jobs N. */
+int cmd_cook(int argc, char **argv)
+{
+    static char jobs_option[] = "--jobs";
+    char **args = malloc((2 * (size_t)argc + 1) * sizeof *args);
+    if (!args) {
+        cli_error("cook", NULL, "out of memory");
+        return CLI_EXIT_USAGE;
+    }
+    int count = 0, options_end = 0;
+    for (int k = 0; k < argc; k++) {
+        const char *arg = argv[k];
+        options_end |= k > 0 && !strcmp(arg, "--");
+        if (k > 0 && !options_end && arg[0] == '-' && arg[1] == 'j') {
+            args[count++] = jobs_option;
+            if (arg[2])
+                args[count++] = argv[k] + 2;
+        } else {
+            args[count++] = argv[k];
+        }
+    }
+    args[count] = NULL;
+    int rc = cook_main(count, args);
+    free(args);
     return rc;
 }

@@ -17,7 +17,8 @@ static const char usage[] =
     "\n"
     "Text input: one ray per line, 6 or 8 numbers separated by blanks:\n"
     "    ox oy oz dx dy dz [tmin tmax]\n"
-    "  tmin defaults to 0 and tmax to inf. A line with another number of fields or a field that\n"
+    "  tmin defaults to 0 and tmax to inf. Blank lines are skipped (they get no result). A line\n"
+    "  with another number of fields or a field that\n"
     "  is not a number is an error (\"line N: ...\", exit status 1); the results of the lines\n"
     "  before it have been written. A ray the library calls invalid (NaN, zero direction,\n"
     "  tmin > tmax, ...) is a miss.\n"
@@ -192,6 +193,8 @@ static int raycast_text(raycast_job *job)
         }
         line_no++;
         char why[128];
+        if (strspn(line, " \t\r\n") == (size_t)len)
+            continue; /* a blank line holds no ray (a trailing empty line, a separator) */
         if ((size_t)len != strlen(line)) {
             snprintf(why, sizeof why, "contains a NUL byte");
         } else if (parse_ray_line(line, &job->rays[count], why, sizeof why)) {

@@ -911,22 +911,22 @@ int cmd_report(int argc, char **argv)
             inputs[count++] = value;
             break;
         case OPT_RAYS:
-            if (!cli_parse_u32(s.command, "--rays", value, 1, 100000000u, &u))
+            if (!cli_parse_u32(s.command, "rays", value, 1, 100000000u, &u))
                 status = CLI_EXIT_USAGE;
             s.rays = u;
             break;
         case OPT_SAMPLE:
-            if (!cli_parse_u32(s.command, "--sample", value, 0, 10000000u, &u))
+            if (!cli_parse_u32(s.command, "sample", value, 1, 10000000u, &u))
                 status = CLI_EXIT_USAGE;
             s.sample = u;
             break;
         case OPT_SEED:
-            if (!cli_parse_u32(s.command, "--seed", value, 0, UINT32_MAX, &u))
+            if (!cli_parse_u32(s.command, "seed", value, 0, UINT32_MAX, &u))
                 status = CLI_EXIT_USAGE;
             s.seed = u;
             break;
         case OPT_REPS:
-            if (!cli_parse_u32(s.command, "--reps", value, 1, 1000, &s.reps))
+            if (!cli_parse_u32(s.command, "reps", value, 1, 1000, &s.reps))
                 status = CLI_EXIT_USAGE;
             break;
         case OPT_CPU: s.cpu_clock = 1; break;

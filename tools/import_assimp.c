@@ -2,6 +2,7 @@
 #include <errno.h>
 #include <fnmatch.h>
 #include <limits.h>
+#include <math.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -69,8 +70,12 @@ static int import_mesh_instance(import_state *s, const struct aiMesh *mesh, cons
         float *p = out->positions + 3 * base;
         for (unsigned v = 0; v < mesh->mNumVertices; v++) {
             double x = mesh->mVertices[v].x, y = mesh->mVertices[v].y, z = mesh->mVertices[v].z;
+            /* A NaN or infinite coordinate would spread to every axis through the transform (inf * 0): kept
+             * as the file has it, so the cook's refusal names the axis and the kind the file holds. */
+            const int finite = isfinite(x) && isfinite(y) && isfinite(z);
             for (int r = 0; r < 3; r++)
-                p[3 * v + r] = (float)(xf->m[r][0] * x + xf->m[r][1] * y + xf->m[r][2] * z + xf->m[r][3]);
+                p[3 * v + r] = finite ? (float)(xf->m[r][0] * x + xf->m[r][1] * y + xf->m[r][2] * z + xf->m[r][3])
+                                      : (float)(r == 0 ? x : r == 1 ? y : z);
         }
     }
     s->vertex_total += mesh->mNumVertices;
@@ -457,8 +462,9 @@ static int check_faces(const struct aiScene *scene, char *message, size_t messag
         const struct aiMesh *mesh = scene->mMeshes[m];
         if (!mesh)
             continue;
-        if (mesh->mNumFaces && !mesh->mFaces) {
-            snprintf(message, message_size, "mesh %u lists %u faces but lacks them", m, mesh->mNumFaces);
+        if ((mesh->mNumFaces && !mesh->mFaces) || (mesh->mNumVertices && !mesh->mVertices)) {
+            snprintf(message, message_size, "mesh %u lists %u vertices and %u faces but lacks them", m,
+                     mesh->mNumVertices, mesh->mNumFaces);
             return 1;
         }
         unsigned types = 0;
@@ -469,12 +475,24 @@ static int check_faces(const struct aiScene *scene, char *message, size_t messag
                          f);
                 return 1;
             }
-            for (unsigned k = 0; k < face->mNumIndices; k++)
-                if (face->mIndices[k] >= mesh->mNumVertices) {
-                    snprintf(message, message_size, "mesh %u: face %u uses vertex %u of %u", m, f,
-                             face->mIndices[k], mesh->mNumVertices);
+            for (unsigned k = 0; k < face->mNumIndices; k++) {
+                const unsigned v = face->mIndices[k];
+                if (v >= mesh->mNumVertices) {
+                    snprintf(message, message_size, "mesh %u: face %u uses vertex %u of %u", m, f, v,
+                             mesh->mNumVertices);
                     return 1;
                 }
+                /* here, before assimp joins identical vertices (which merges a NaN one into another) */
+                const float xyz[3] = { mesh->mVertices[v].x, mesh->mVertices[v].y, mesh->mVertices[v].z };
+                for (int a = 0; a < 3; a++)
+                    if (!isfinite(xyz[a])) {
+                        snprintf(message, message_size,
+                                 "mesh %u: vertex %u (as assimp numbers them from 0; for OBJ one per face corner, "
+                                 "here face %u, corner %u): %c coordinate is %s",
+                                 m, v, f, k, "xyz"[a], isnan(xyz[a]) ? "NaN" : "infinite");
+                        return 1;
+                    }
+            }
             types |= face->mNumIndices == 1   ? aiPrimitiveType_POINT
                      : face->mNumIndices == 2 ? aiPrimitiveType_LINE
                      : face->mNumIndices == 3 ? aiPrimitiveType_TRIANGLE

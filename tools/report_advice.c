@@ -156,7 +156,7 @@ const report_row *report_recommend(const report_row *rows, size_t count, char *b
     for (size_t i = 0; i < count && def; i++)
         if (rows[i].reference) {
             say(&t, "The 16-bit node boxes are %.1f %% larger in area than exact float boxes on average and cost "
-                    "%+.2f nodes per ray (%.1f against %.1f on the default's tree), the price of 16-byte nodes.",
+                    "%+.2f nodes per ray (%.1f against %.1f on the default's tree), the price of compact 16-bit boxes.",
                 100.0 * def->inflation_mean, def->extra_nodes, def->nodes_per_ray, rows[i].nodes_per_ray);
             break;
         }

@@ -383,8 +383,13 @@ cbvh_result cbvh_os_write_file_replacing(const char *path, const uint8_t *data, 
     if (failed) {
         if (named)
             unlink(temp);
-        r = cbvh_fail(err, CBVH_ERROR_IO, "cannot %s the temporary file '%s' for '%s': %s", failed, temp, path,
-                      strerror(saved_errno));
+        /* an unnamed (O_TMPFILE) file has no name to show: its template's XXXXXX would only mislead */
+        if (named)
+            r = cbvh_fail(err, CBVH_ERROR_IO, "cannot %s the temporary file '%s' for '%s': %s", failed, temp, path,
+                          strerror(saved_errno));
+        else
+            r = cbvh_fail(err, CBVH_ERROR_IO, "cannot %s the (unnamed) temporary file for '%s': %s", failed, path,
+                          strerror(saved_errno));
     } else {
         sync_folder(temp, path);
     }

@@ -1,0 +1,101 @@
+#!/bin/sh
+# test_pipeline_messages.sh: what a build pipeline reads from the cbvh command: --quiet says nothing on
+# success; a read-only OUT is refused unless --force; coordinate errors name the file's axis and kind; -j N
+# is --jobs N; usage errors name options with two dashes; JSON numbers in plain notation; hints for
+# --jobs on one cook and for a bare --compress level; blank raycast lines; report --sample 0 refused; a full
+# disk's message names no XXXXXX template; info's section table aligned; manifest paths from the current
+# folder.
+#
+# Environment: as tests/test_tool.sh (CBVH_TOOL).
+
+name=test_pipeline_messages.sh
+. "$(dirname "$0")/tool_test_lib.sh"
+
+printf 'v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n' >"$tmp/tri.obj"
+
+# Item 15: --quiet prints nothing on success.
+run 0 "cook --quiet" "$CBVH" cook --quiet "$tmp/tri.obj" "$tmp/tri.cbvh"
+check "... prints nothing on stdout" test ! -s "$tmp/out"
+check "... nor on stderr" test ! -s "$tmp/err"
+
+# Item 12: a read-only OUT is refused unless --force.
+cp "$tmp/tri.cbvh" "$tmp/before.cbvh"
+chmod a-w "$tmp/tri.cbvh"
+run 2 "cook over a read-only OUT" "$CBVH" cook --quiet --layout binary "$tmp/tri.obj" "$tmp/tri.cbvh"
+check "... says it is read-only and what --force does" grep -q "read-only.*--force" "$tmp/err"
+check "... leaves it unchanged" cmp -s "$tmp/tri.cbvh" "$tmp/before.cbvh"
+run 0 "... --force replaces it" "$CBVH" cook --quiet --force --layout binary "$tmp/tri.obj" "$tmp/tri.cbvh"
+check "... with the new content" sh -c "! cmp -s '$tmp/tri.cbvh' '$tmp/before.cbvh'"
+chmod u+w "$tmp/tri.cbvh"
+
+# Item 14: a NaN or infinite z is named as such, whatever --up-axis does to the axes.
+printf 'v 0 0 0\nv 1 0 0\nv 2 3 nan\nf 1 2 3\n' >"$tmp/nan.obj"
+printf 'v 0 0 0\nv 1 0 0\nv 2 3 1e39\nf 1 2 3\n' >"$tmp/inf.obj"
+for axis in y z; do
+    run 1 "a NaN z, --up-axis $axis" "$CBVH" cook --quiet --up-axis $axis "$tmp/nan.obj" "$tmp/o.cbvh"
+    check "... 'z coordinate is NaN'" grep -q "z coordinate is NaN" "$tmp/err"
+    run 1 "an infinite z (1e39), --up-axis $axis" "$CBVH" cook --quiet --up-axis $axis "$tmp/inf.obj" "$tmp/o.cbvh"
+    check "... 'z coordinate is infinite'" grep -q "z coordinate is infinite" "$tmp/err"
+done
+check "... and says what the vertex number counts" grep -q "as assimp numbers them" "$tmp/err"
+
+# Item 18: -j N and -jN mean --jobs N.
+mkdir "$tmp/batch"
+run 0 "cook -j 2" "$CBVH" cook -j 2 --output-dir "$tmp/batch" "$tmp/tri.obj"
+check "... cooks" test -s "$tmp/batch/tri.cbvh"
+run 0 "cook -j2" "$CBVH" cook -j2 --output-dir "$tmp/batch" "$tmp/tri.obj"
+run 2 "cook -j (no value)" "$CBVH" cook --output-dir "$tmp/batch" "$tmp/tri.obj" -j
+run 0 "--jobs on a single cook" "$CBVH" cook --jobs 2 "$tmp/tri.obj" "$tmp/o.cbvh"
+check "... warns that it does nothing there" grep -q "warning: --jobs" "$tmp/err"
+run 2 "--compress 9 IN OUT" "$CBVH" cook --compress 9 "$tmp/tri.obj" "$tmp/o.cbvh"
+check "... points to --compress=9" grep -q -- "--compress=9" "$tmp/err"
+run 2 "bench --rays x" "$CBVH" bench --rays x gen:cube
+check "... names --rays with two dashes" sh -c "grep -q -- '--rays' '$tmp/err' && ! grep -q -- '---' '$tmp/err'"
+run 2 "report --seed x" "$CBVH" report --gen cube --seed x
+check "... names --seed with two dashes" sh -c "grep -q -- '--seed' '$tmp/err' && ! grep -q -- '---' '$tmp/err'"
+run 0 "cook --json of a 12-triangle cube" "$CBVH" cook --json gen:cube "$tmp/cube.cbvh"
+check "... bytes_per_triangle in plain notation" sh -c \
+    "grep -q '\"bytes_per_triangle\": [0-9.]*,\$' '$tmp/out' && ! grep -q 'e+' '$tmp/out'"
+
+# A blank line in raycast input is skipped.
+printf '0.2 0.2 5 0 0 -1\n\n   \n0.2 0.2 5 0 0 -1\n' >"$tmp/rays.txt"
+"$CBVH" raycast "$tmp/tri.cbvh" <"$tmp/rays.txt" >"$tmp/hits" 2>"$tmp/err"
+check "raycast skips blank lines (exit 0)" test $? -eq 0
+check "... two results" test "$(wc -l <"$tmp/hits")" -eq 2
+
+# Item 17: report --sample 0 would claim exactness on no rays.
+run 2 "report --sample 0" "$CBVH" report --gen cube --sample 0
+
+# A write that fails (file size limit, as a full disk) names no XXXXXX template.
+if (trap '' XFSZ; ulimit -f 1) 2>/dev/null; then
+    (
+        trap '' XFSZ
+        ulimit -f 1
+        "$CBVH" cook --quiet gen:sphere:2000 "$tmp/big.cbvh"
+    ) >"$tmp/out" 2>"$tmp/err"
+    check "a write past the size limit fails (exit 2)" test $? -eq 2
+    check "... with a message naming no template" sh -c "grep -q big.cbvh '$tmp/err' && ! grep -q XXXXXX '$tmp/err'"
+    check "... and no output" test ! -e "$tmp/big.cbvh"
+else
+    skip "write failure: ulimit -f unavailable"
+fi
+
+# info's section table: every row's columns line up with the header's.
+printf 'mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl red\nf 1 2 3\n' >"$tmp/named.obj"
+printf 'newmtl red\nKd 1 0 0\n' >"$tmp/m.mtl"
+"$CBVH" cook --quiet "$tmp/named.obj" "$tmp/named.cbvh"
+"$CBVH" info "$tmp/named.cbvh" >"$tmp/info"
+check "info lists a material-names section" grep -q "^  material-names " "$tmp/info"
+check "... its table columns line up (crc32 column at one place)" awk '
+    /^sections:/ { on = 1; next }
+    on && /^$/ { exit }
+    on && /type/ { col = index($0, "crc32"); next }
+    on { n++; if (substr($0, col - 1, 1) != " " || substr($0, col, 1) == " ") bad = 1 }
+    END { exit (n >= 3 && !bad) ? 0 : 1 }' "$tmp/info"
+
+# Manifest paths are relative to the current folder, not to the manifest's.
+mkdir "$tmp/lists" "$tmp/out-m"
+printf 'tri.obj\tout-m/tri.cbvh\n' >"$tmp/lists/manifest.txt"
+(cd "$tmp" && "$CBVH" cook --manifest lists/manifest.txt) >"$tmp/out" 2>"$tmp/err"
+check "manifest paths resolve from the current folder" test -s "$tmp/out-m/tri.cbvh"
+finish
