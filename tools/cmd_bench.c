@@ -1367,7 +1367,7 @@ int cmd_bench(int argc, char **argv)
     cbvh_close(s.file);
     cbvh_close(s.expanded);
     if (s.temp_path[0])
-        unlink(s.temp_path);
+        bench_remove_temp(s.temp_path);
     free(s.results);
     free(s.agreements);
     free(s.shape_results);

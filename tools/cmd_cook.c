@@ -1,6 +1,8 @@
 /* cmd_cook.c: `cbvh cook`: import a mesh file (or generate a scene), cook it, write the .cbvh file atomically. */
 #include <errno.h>
+#include <fcntl.h>
 #include <math.h>
+#include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -84,7 +86,9 @@ static const char usage[] =
     "  -j, --jobs N            batch: cook N assets at once (default 1), each in a process of\n"
     "                          its own; one JSON line per asset on stdout (as --json, on one\n"
     "                          line, in the order they finish), messages on stderr; exit\n"
-    "                          status 0 when every asset cooked, else 1\n"
+    "                          status 0 when every asset cooked, else 1; stopped by SIGINT,\n"
+    "                          SIGTERM or SIGHUP, it passes the signal to the running cooks\n"
+    "                          and waits for them (no unfinished output is written)\n"
     "  --max-memory MB         stop an import or cook that would hold more than MB megabytes\n"
     "                          of address space (exit status 1); default 1024 + 64 x the\n"
     "                          input file's size in MB; 0: no limit\n"
@@ -681,6 +685,45 @@ static void child_drain(batch_child *c)
         c->text[c->size] = '\0';
 }
 
+/* The signal that stops a batch (a build system ending the job), or 0. */
+static volatile sig_atomic_t batch_stop;
+
+static void batch_on_signal(int sig)
+{
+    batch_stop = sig;
+}
+
+static const int batch_signals[] = { SIGINT, SIGTERM, SIGHUP };
+
+/* Catches (`on` 1) or restores (0) the signals that stop a batch; one the caller ignores stays ignored. */
+static void batch_catch_signals(int on)
+{
+    for (int k = 0; k < 3; k++) {
+        struct sigaction sa, old;
+        memset(&sa, 0, sizeof sa);
+        sa.sa_handler = on ? batch_on_signal : SIG_DFL;
+        sigemptyset(&sa.sa_mask);
+        if (sigaction(batch_signals[k], NULL, &old) == 0 && old.sa_handler != SIG_IGN)
+            sigaction(batch_signals[k], &sa, NULL);
+    }
+}
+
+/* Stopped by `sig`: passes it to every running cook, waits for them (a cook interrupted writes no output),
+ * then ends the process by the same signal. */
+static void batch_stop_children(batch_child *running, uint32_t jobs, int sig)
+{
+    for (uint32_t k = 0; k < jobs; k++)
+        if (running[k].pid)
+            kill(running[k].pid, sig);
+    for (uint32_t k = 0; k < jobs; k++)
+        if (running[k].pid)
+            while (waitpid(running[k].pid, NULL, 0) < 0 && errno == EINTR)
+                continue;
+    fflush(stdout);
+    batch_catch_signals(0);
+    raise(sig);
+}
+
 /* Cooks every asset of b, `jobs` at a time, each in a child process of its own (an importer that
  * crashes or exhausts its memory limit takes only its asset down). Prints one JSON line per asset, in
  * the order they finish; returns 0 when every asset cooked, else 1. */
@@ -703,10 +746,12 @@ static int run_batch(const cook_settings *c, const batch *b, uint32_t jobs)
     child_settings.json = 1;
     child_settings.quiet = 1;
     fflush(stdout);
+    batch_stop = 0;
+    batch_catch_signals(1);
     size_t next = 0, failed = 0, done = 0;
     uint32_t active = 0;
     while (done < b->count) {
-        while (active < jobs && next < b->count) {
+        while (active < jobs && next < b->count && !batch_stop) {
             int fds[2];
             batch_child *slot = NULL;
             for (uint32_t k = 0; k < jobs && !slot; k++)
@@ -718,6 +763,7 @@ static int run_batch(const cook_settings *c, const batch *b, uint32_t jobs)
             }
             pid_t pid = fork();
             if (pid == 0) {
+                batch_catch_signals(0);
                 close(fds[0]);
                 dup2(fds[1], STDOUT_FILENO);
                 close(fds[1]);
@@ -731,12 +777,16 @@ static int run_batch(const cook_settings *c, const batch *b, uint32_t jobs)
                 cli_error("cook", NULL, "cannot start a cook: %s", strerror(errno));
                 break;
             }
+            /* drained while other cooks run, and while a stop signal is checked: never block on it */
+            fcntl(fds[0], F_SETFL, fcntl(fds[0], F_GETFL) | O_NONBLOCK);
             memset(slot, 0, sizeof *slot);
             slot->pid = pid;
             slot->item = next++;
             slot->fd = fds[0];
             active++;
         }
+        if (batch_stop)
+            batch_stop_children(running, jobs, batch_stop);
         if (active == 0) { /* nothing could start: the rest fail */
             failed += b->count - done;
             break;
@@ -745,6 +795,8 @@ static int run_batch(const cook_settings *c, const batch *b, uint32_t jobs)
         int status;
         pid_t pid;
         for (;;) {
+            if (batch_stop)
+                batch_stop_children(running, jobs, batch_stop);
             pid = waitpid(-1, &status, WNOHANG);
             if (pid != 0)
                 break;
@@ -792,6 +844,7 @@ static int run_batch(const cook_settings *c, const batch *b, uint32_t jobs)
         active--;
         done++;
     }
+    batch_catch_signals(0);
     free(running);
     return failed ? CLI_EXIT_BAD_INPUT : CLI_EXIT_OK;
 }

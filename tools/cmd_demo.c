@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include "cli.h"
+#include "temp_cleanup.h"
 #include "commands.h"
 #include "common/file.h"
 #include "support/reference.h"
@@ -830,6 +831,8 @@ int cmd_demo(int argc, char **argv)
         return CLI_EXIT_USAGE;
     }
     snprintf(path, sizeof path, "%s/demo.cbvh", dir);
+    temp_cleanup_add(dir, NULL);
+    temp_cleanup_add(path, NULL);
 
     cbvh_mesh mesh = { s.positions, s.vertex_count, 0, s.indices, s.triangle_count, s.material_ids };
     cbvh_cook_options opt;
@@ -886,5 +889,7 @@ out:
     free(d.valid);
     unlink(path);
     rmdir(dir);
+    temp_cleanup_done(path);
+    temp_cleanup_done(dir);
     return rc;
 }

@@ -540,7 +540,7 @@ static int measure_cook(report_state *s, mesh_ctx *c, size_t k, int *step, int s
     if (!status)
         expand_seconds = bench_open_expanded(s->command, path, s->cpu_clock, &expanded, &status);
     if (!s->out_dir)
-        unlink(path);
+        bench_remove_temp(path);
     if (status) {
         cbvh_close(file);
         return status;
@@ -690,7 +690,7 @@ static int report_mesh(report_state *s, const char *source, int generated)
     status = cook_into(s, &c, &opt, 0, path, sizeof path, &stats);
     if (!status) {
         status = cli_open(s->command, path, &c.reference);
-        unlink(path);
+        bench_remove_temp(path);
     }
     if (!status)
         bench_cbvh_variant(&c.reference_engine, c.reference, c.reference, 0);

@@ -9,6 +9,7 @@
 #include <unistd.h>
 
 #include "depfile.h"
+#include "temp_cleanup.h"
 
 /* The folder part of `path` resolved (realpath) and its last name, as "resolved/name"; NULL on failure. */
 static char *resolved_name(const char *path)
@@ -113,12 +114,15 @@ int depfile_put(depfile_commit *d, const char *path, const char *target, const c
         return -1;
     }
     int fd = mkstemp(temp);
+    if (fd >= 0)
+        temp_cleanup_add(temp, NULL);
     FILE *f = fd >= 0 ? fdopen(fd, "w") : NULL;
     if (!f) {
         int saved = errno;
         if (fd >= 0) {
             close(fd);
             unlink(temp);
+            temp_cleanup_done(temp);
         }
         free(temp);
         free(d->path);
@@ -153,6 +157,10 @@ int depfile_put(depfile_commit *d, const char *path, const char *target, const c
             if (unlink(d->backup) != 0 || link(path, d->backup) != 0) {
                 free(d->backup);
                 d->backup = NULL;
+            } else {
+                /* Interrupted during the cook, the new depfile stays with the old OUT (make cooks again);
+                 * the old one put back beside a new OUT would hide dependencies. */
+                temp_cleanup_add(d->backup, NULL);
             }
         } else {
             free(d->backup);
@@ -162,8 +170,11 @@ int depfile_put(depfile_commit *d, const char *path, const char *target, const c
     if (failed || rename(temp, path) != 0) {
         saved = failed ? (saved ? saved : EIO) : errno;
         unlink(temp);
-        if (d->backup)
+        temp_cleanup_done(temp);
+        if (d->backup) {
             unlink(d->backup);
+            temp_cleanup_done(d->backup);
+        }
         free(d->backup);
         free(temp);
         free(d->path);
@@ -171,6 +182,7 @@ int depfile_put(depfile_commit *d, const char *path, const char *target, const c
         errno = saved;
         return -1;
     }
+    temp_cleanup_done(temp);
     free(temp);
     return 0;
 }
@@ -187,6 +199,8 @@ void depfile_finish(depfile_commit *d, int keep)
     } else if (!d->existed) {
         unlink(d->path);
     }
+    if (d->backup)
+        temp_cleanup_done(d->backup);
     free(d->backup);
     free(d->path);
     memset(d, 0, sizeof *d);
