@@ -63,7 +63,9 @@ CBVH_API uint32_t cbvh_version(void);
 CBVH_API const char *cbvh_version_string(void);
 
 /* Detailed error: the code plus a message saying what is wrong and where
- * (for files: section, node or byte offset; for meshes: triangle or vertex).
+ * (for files: section, node or byte offset; for meshes: triangle or vertex). A message too long for its 256
+ * bytes (a long path) is cut and ends in "..."; cbvh_cook_to_path's messages name the path last, so the cut
+ * falls on the path, never on the reason.
  * Every function that takes a cbvh_error* accepts NULL there. */
 typedef struct cbvh_error {
     cbvh_result code;

@@ -4,7 +4,7 @@
 # is --jobs N; usage errors name options with two dashes; JSON numbers in plain notation; hints for
 # --jobs on one cook and for a bare --compress level; blank raycast lines; report --sample 0 refused; a full
 # disk's message names no XXXXXX template; info's section table aligned; manifest paths from the current
-# folder.
+# folder; output names of 255 bytes.
 #
 # Environment: as tests/test_tool.sh (CBVH_TOOL).
 
@@ -92,6 +92,14 @@ check "... its table columns line up (crc32 column at one place)" awk '
     on && /type/ { col = index($0, "crc32"); next }
     on { n++; if (substr($0, col - 1, 1) != " " || substr($0, col, 1) == " ") bad = 1 }
     END { exit (n >= 3 && !bad) ? 0 : 1 }' "$tmp/info"
+
+# Item 11: output names up to 255 bytes cook (the temporary name fits too); a message about a long path keeps
+# its reason (the path comes last and is what gets cut).
+long=$(printf '%0250d' 0)
+run 0 "an output name of 255 bytes" "$CBVH" cook --quiet "$tmp/tri.obj" "$tmp/$long.cbvh"
+check "... is written" test -s "$tmp/$long.cbvh"
+run 2 "an output of 255 bytes in a missing folder" "$CBVH" cook --quiet "$tmp/tri.obj" "$tmp/missing/$long.cbvh"
+check "... the message keeps its reason" grep -q "No such file or directory" "$tmp/err"
 
 # Manifest paths are relative to the current folder, not to the manifest's.
 mkdir "$tmp/lists" "$tmp/out-m"
