@@ -4,7 +4,7 @@
 # is --jobs N; usage errors name options with two dashes; JSON numbers in plain notation; hints for
 # --jobs on one cook and for a bare --compress level; blank raycast lines; report --sample 0 refused; a full
 # disk's message names no XXXXXX template; info's section table aligned; manifest paths from the current
-# folder; output names of 255 bytes.
+# folder; output names of 255 bytes; --json on every command and failure.
 #
 # Environment: as tests/test_tool.sh (CBVH_TOOL).
 
@@ -100,6 +100,40 @@ run 0 "an output name of 255 bytes" "$CBVH" cook --quiet "$tmp/tri.obj" "$tmp/$l
 check "... is written" test -s "$tmp/$long.cbvh"
 run 2 "an output of 255 bytes in a missing folder" "$CBVH" cook --quiet "$tmp/tri.obj" "$tmp/missing/$long.cbvh"
 check "... the message keeps its reason" grep -q "No such file or directory" "$tmp/err"
+
+# Item 16: --json on every command, failures included.
+if [ "$has_python" = 1 ]; then
+    # json_error STATUS NAME CMD...: the command exits STATUS and prints one JSON object with error.status.
+    json_error() {
+        expect=$1 label=$2
+        shift 2
+        run "$expect" "$label" "$@" &&
+            check "... prints a JSON error with status $expect" python3 -c "
+import json, sys
+d = json.load(open(sys.argv[1]))
+assert d['error']['status'] == $expect and d['error']['message'], d" "$tmp/out"
+    }
+    json_error 2 "cook --json, usage error" "$CBVH" cook --json --bogus
+    json_error 2 "cook --json, a missing input" "$CBVH" cook --json "$tmp/none.obj" "$tmp/o.cbvh"
+    json_error 2 "info --json, a missing file" "$CBVH" info --json "$tmp/none.cbvh"
+    json_error 2 "verify --json, a missing file" "$CBVH" verify --json "$tmp/none.cbvh"
+    json_error 2 "raycast --json, usage error" "$CBVH" raycast --json
+    json_error 2 "demo --json, usage error" "$CBVH" demo --json extra
+    run 0 "verify --json" "$CBVH" verify --json "$tmp/tri.cbvh" &&
+        check "... {file, ok: true}" python3 -c "
+import json, sys
+d = json.load(open(sys.argv[1]))
+assert d['ok'] is True and d['file'].endswith('tri.cbvh'), d" "$tmp/out"
+    printf '0.2 0.2 5 0 0 -1\n5 5 5 0 0 1\n' >"$tmp/rays2.txt"
+    "$CBVH" raycast --json "$tmp/tri.cbvh" <"$tmp/rays2.txt" >"$tmp/out" 2>"$tmp/err"
+    check "raycast --json: a JSON object per ray, a hit and a miss" python3 -c "
+import json, sys
+rows = [json.loads(l) for l in open(sys.argv[1])]
+assert rows[0]['hit'] is True and rows[0]['triangle'] == 0 and abs(rows[0]['t'] - 5) < 1e-6, rows
+assert rows[1] == {'hit': False}, rows" "$tmp/out"
+else
+    skip "--json: no python3"
+fi
 
 # Manifest paths are relative to the current folder, not to the manifest's.
 mkdir "$tmp/lists" "$tmp/out-m"

@@ -214,8 +214,10 @@ static int report_failure(int json, const char *in, const char *out, const char 
                           const char *message)
 {
     cli_error("cook", file, "%s", message);
-    if (json)
+    if (json) {
         report_json(stdout, in, out, file, status, message);
+        cli_json_error_printed();
+    }
     return status;
 }
 
@@ -737,6 +739,7 @@ static int run_batch(const cook_settings *c, const batch *b, uint32_t jobs)
                           b->items[k].in);
                 return CLI_EXIT_USAGE;
             }
+    cli_json_error_printed(); /* each asset gets its JSON line, success or failure */
     batch_child *running = calloc(jobs, sizeof *running);
     if (!running) {
         cli_error("cook", NULL, "out of memory");

@@ -9,12 +9,13 @@
 #include "cli.h"
 #include "temp_cleanup.h"
 #include "commands.h"
+#include "json.h"
 #include "common/file.h"
 #include "support/reference.h"
 #include "support/scene_gen.h"
 
 static const char usage[] =
-    "Usage: cbvh demo [--quiet]\n"
+    "Usage: cbvh demo [--quiet] [--json]\n"
     "\n"
     "Runs the whole pipeline on the built-in scene (a terrain with spheres, several materials),\n"
     "with no input files: generates it, cooks it into a temporary file (removed afterwards),\n"
@@ -28,6 +29,8 @@ static const char usage[] =
     "\n"
     "Options:\n"
     "  --quiet      print only the final line\n"
+    "  --json       print only {\"ok\", \"failed_checks\", \"triangles\"} (a failure to run:\n"
+    "               {\"command\", \"error\": {\"status\", \"file\", \"message\"}})\n"
     "  -h, --help   show this help\n"
     "\n"
     "Exit status: 0 when everything worked and agreed, 1 when an answer disagreed, 2 on an\n"
@@ -794,7 +797,9 @@ static int demo_load(demo *d, const cbvh_file *f)
 
 int cmd_demo(int argc, char **argv)
 {
-    static const cli_option options[] = { { "quiet", CLI_ARG_NONE, 1 }, { NULL, 0, 0 } };
+    static const cli_option options[] = { { "quiet", CLI_ARG_NONE, 1 }, { "json", CLI_ARG_NONE, 2 },
+                                          { NULL, 0, 0 } };
+    int json = 0;
     demo d;
     memset(&d, 0, sizeof d);
     d.rng = 20240601;
@@ -809,6 +814,7 @@ int cmd_demo(int argc, char **argv)
             return CLI_EXIT_USAGE;
         if (id == CLI_POSITIONAL)
             return cli_usage_error("demo", "unexpected argument '%s'", value);
+        json |= id == 2;
         d.quiet = 1;
     }
 
@@ -877,7 +883,18 @@ int cmd_demo(int argc, char **argv)
     demo_oriented_boxes(&d);
     demo_overlaps(&d);
     demo_contacts(&d);
-    if (d.failures) {
+    if (json) {
+        json_writer w;
+        json_init(&w, stdout);
+        json_begin_object(&w, NULL);
+        json_bool(&w, "ok", d.failures == 0);
+        json_uint(&w, "failed_checks", (uint64_t)d.failures);
+        json_uint(&w, "triangles", st.triangles);
+        json_end_object(&w);
+        json_finish(&w);
+        cli_json_error_printed();
+        rc = d.failures ? CLI_EXIT_BAD_INPUT : CLI_EXIT_OK;
+    } else if (d.failures) {
         printf("cbvh demo: FAILED: %d check%s disagreed (details on stderr)\n", d.failures, d.failures == 1 ? "" : "s");
         rc = CLI_EXIT_BAD_INPUT;
     } else {

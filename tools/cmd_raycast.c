@@ -38,6 +38,10 @@ static const char usage[] =
     "                          box distance at run time), stream (each 4096 rays read\n"
     "                          go to cbvh_raycast_stream_scratch, batches of up to 1024)\n"
     "  --binary                binary records in and out, see above\n"
+    "  --json                  text output as one JSON object a line: {\"hit\": true,\n"
+    "                          \"triangle\", \"t\", \"u\", \"v\"} or {\"hit\": false}; with --any\n"
+    "                          {\"occluded\": true|false}; a failure prints {\"command\",\n"
+    "                          \"error\": {\"status\", \"file\", \"message\"}}\n"
     "  --expand-triangles      copy the triangles into the form the ray test reads first\n"
     "                          (cbvh_file_expand_triangles: 36 bytes a triangle; same answers)\n"
     "  -h, --help              show this help\n"
@@ -53,6 +57,7 @@ typedef struct raycast_job {
     int traversal; /* cbvh_traversal, or TRAVERSAL_STREAM */
     int any;
     int binary;
+    int json; /* text output as one JSON object per ray */
     cbvh_ray rays[RAYCAST_BATCH];
     cbvh_hit hits[RAYCAST_BATCH];
     uint8_t occluded[RAYCAST_BATCH];
@@ -120,6 +125,13 @@ static void raycast_batch(raycast_job *job, size_t count)
             put_f32le(rec + 8, h->u);
             put_f32le(rec + 12, h->v);
             fwrite(rec, 1, sizeof rec, stdout);
+        } else if (job->json && job->any) {
+            puts(job->occluded[i] ? "{\"occluded\": true}" : "{\"occluded\": false}");
+        } else if (job->json && h->tri == CBVH_NO_HIT) {
+            puts("{\"hit\": false}");
+        } else if (job->json) {
+            printf("{\"hit\": true, \"triangle\": %u, \"t\": %.9g, \"u\": %.9g, \"v\": %.9g}\n", (unsigned)h->tri,
+                   h->t, h->u, h->v);
         } else if (job->any) {
             puts(job->occluded[i] ? "1" : "0");
         } else if (h->tri == CBVH_NO_HIT) {
@@ -271,12 +283,13 @@ static int parse_traversal(const char *name, int *out)
 
 int cmd_raycast(int argc, char **argv)
 {
-    enum { OPT_ANY = 1, OPT_TRAVERSAL, OPT_BINARY, OPT_EXPAND };
+    enum { OPT_ANY = 1, OPT_TRAVERSAL, OPT_BINARY, OPT_EXPAND, OPT_JSON };
     static const cli_option options[] = {
         { "any", CLI_ARG_NONE, OPT_ANY },
         { "traversal", CLI_ARG_REQUIRED, OPT_TRAVERSAL },
         { "binary", CLI_ARG_NONE, OPT_BINARY },
         { "expand-triangles", CLI_ARG_NONE, OPT_EXPAND },
+        { "json", CLI_ARG_NONE, OPT_JSON },
         { NULL, 0, 0 },
     };
     static raycast_job job; /* large: keep it off the stack */
@@ -292,6 +305,7 @@ int cmd_raycast(int argc, char **argv)
         case OPT_ANY: job.any = 1; break;
         case OPT_BINARY: job.binary = 1; break;
         case OPT_EXPAND: expand = 1; break;
+        case OPT_JSON: job.json = 1; break;
         case OPT_TRAVERSAL:
             if (!parse_traversal(value, &job.traversal))
                 return cli_usage_error("raycast", "--traversal: '%s' is not one of sorted, stackless, unsorted, "
@@ -305,6 +319,8 @@ int cmd_raycast(int argc, char **argv)
     }
     if (!path)
         return cli_usage_error("raycast", "expected a file");
+    if (job.json && job.binary)
+        return cli_usage_error("raycast", "--json and --binary exclude each other");
     cbvh_file *file;
     int rc = cli_open("raycast", path, &file);
     if (rc)
