@@ -135,6 +135,15 @@ else
     skip "--json: no python3"
 fi
 
+# On a terminal the import shows how much of the asset it has read, as the later phases show theirs
+# (script(1) gives the cook a terminal).
+if command -v script >/dev/null 2>&1 &&
+    script -qec "'$CBVH' cook '$tmp/tri.obj' '$tmp/tty.cbvh'" "$tmp/typescript" >/dev/null 2>&1; then
+    check "the import shows a percentage on a terminal" sh -c "tr '\\r' '\\n' <'$tmp/typescript' | grep -a -q 'import *[0-9][0-9]*%'"
+else
+    skip "import progress: no util-linux script(1)"
+fi
+
 # Manifest paths are relative to the current folder, not to the manifest's.
 mkdir "$tmp/lists" "$tmp/out-m"
 printf 'tri.obj\tout-m/tri.cbvh\n' >"$tmp/lists/manifest.txt"

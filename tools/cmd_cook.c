@@ -168,6 +168,12 @@ typedef struct cook_input {
     int generated;
 } cook_input;
 
+/* The share of the asset the import has read, on the progress display. */
+static void import_progress(void *user, int percent)
+{
+    progress_update((progress *)user, "import", percent / 100.0);
+}
+
 /* Returns an exit status; on success `in` holds the mesh, else `message` says why. */
 static int load_input(const char *path, import_options *io, unsigned timeout_seconds, cook_input *in, char *message,
                       size_t message_size)
@@ -409,12 +415,15 @@ static int cook_checked(const cook_settings *c, const char *in, const char *out,
     progress_init(&prog, c->quiet);
     double t0 = cli_now();
     progress_update(&prog, "import", -1);
+    if (prog.enabled)
+        import_contained_progress(import_progress, &prog);
     cook_input input;
     char message[640];
     import_options io;
     memset(&io, 0, sizeof io);
     io.select = c->select;
     int rc = load_input(in, &io, import_timeout_for(c, in), &input, message, sizeof message);
+    import_contained_progress(NULL, NULL);
     progress_done(&prog);
     if (rc) {
         import_options_free(&io);

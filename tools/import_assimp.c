@@ -244,6 +244,8 @@ typedef struct io_file {
     FILE *file;
     size_t size;
     unsigned long reads_at_end; /* reads that returned nothing */
+    int is_input;               /* the asset itself (not a side file): its reads are the import's progress */
+    int percent;                /* the last progress reported */
     import_options *o;
     char path[];
 } io_file;
@@ -262,6 +264,14 @@ static size_t io_read(struct aiFile *f, char *buffer, size_t size, size_t count)
     size_t n = size && count ? fread(buffer, size, count, io->file) : 0;
     if (n == 0 && size && count && ++io->reads_at_end > IO_MAX_READS_AT_END && io->o->on_runaway_read)
         io->o->on_runaway_read(io->o->hook_user, io->path);
+    if (io->is_input && io->size && io->o->on_read_progress) {
+        long at = ftell(io->file);
+        int percent = at < 0 ? io->percent : (int)(100.0 * (double)at / (double)io->size);
+        if (percent != io->percent) {
+            io->percent = percent;
+            io->o->on_read_progress(io->o->hook_user, percent);
+        }
+    }
     return n;
 }
 
@@ -335,6 +345,7 @@ typedef struct memory_file {
 typedef struct io_system {
     import_options *o;
     const memory_file *memory; /* NULL when the input is read from disk */
+    const char *input;         /* the name the asset is read under */
 } io_system;
 
 static struct aiFile *io_open(struct aiFileIO *fio, const char *path, const char *mode)
@@ -376,6 +387,8 @@ static struct aiFile *io_open(struct aiFileIO *fio, const char *path, const char
     io->file = file;
     io->size = size;
     io->reads_at_end = 0;
+    io->is_input = sys->input && !strcmp(path, sys->input);
+    io->percent = -1;
     io->o = o;
     strcpy(io->path, recorded);
     path_list_add(&o->opened, recorded);
@@ -529,6 +542,7 @@ static void drop_empty_children(struct aiNode *node, int depth)
 static int import_through(const char *name, io_system *sys, imported_mesh *out, char *message, size_t message_size)
 {
     struct aiFileIO io = { io_open, io_close, (aiUserData)(void *)sys };
+    sys->input = name;
     const struct aiScene *scene = aiImportFileEx(name, aiProcess_ValidateDataStructure, &io);
     if (!scene && strstr(aiGetErrorString(), "node of the scene-graph is nullptr")) {
         /* the one defect validation refuses that cbvh repairs: read again unvalidated, then repair */
@@ -569,7 +583,7 @@ int import_assimp_memory(const void *data, size_t size, const char *name, import
     import_options none;
     memset(&none, 0, sizeof none);
     memory_file mem = { name, name, (char *)(uintptr_t)data, size };
-    io_system sys = { o ? o : &none, &mem };
+    io_system sys = { o ? o : &none, &mem, NULL };
     int rc = import_through(name, &sys, out, message, message_size);
     import_options_free(&none);
     return rc;
@@ -580,7 +594,7 @@ int import_assimp(const char *path, import_options *o, imported_mesh *out, char 
     memset(out, 0, sizeof *out);
     import_options none;
     memset(&none, 0, sizeof none);
-    io_system sys = { o ? o : &none, NULL };
+    io_system sys = { o ? o : &none, NULL, NULL };
     /* assimp reports "file not found" and "unknown format" alike; tell I/O errors apart first. */
     FILE *probe = fopen(path, "rb");
     if (!probe) {

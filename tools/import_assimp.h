@@ -41,6 +41,8 @@ typedef struct import_options {
     /* Called (when set) once assimp has asked a file for more bytes at its end many thousand times: its
      * reader is looping on a truncated file and will not stop; the hook may end the process. */
     void (*on_runaway_read)(void *hook_user, const char *path);
+    /* Called (when set) as assimp reads through the input file: the fraction read, in whole percents. */
+    void (*on_read_progress)(void *hook_user, int percent);
     void *hook_user;
 } import_options;
 

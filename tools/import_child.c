@@ -1,5 +1,6 @@
 /* import_child.c: runs an import in a child process and reads the merged mesh back through a pipe. */
 #include <errno.h>
+#include <fcntl.h>
 #include <poll.h>
 #include <signal.h>
 #include <stdint.h>
@@ -80,8 +81,28 @@ static int write_report(int fd, int status, const char *message, const imported_
     return write_paths(fd, &o->opened) || write_paths(fd, &o->missing);
 }
 
-/* The child's end of the pipe and its options, for the runaway-read hook. */
-static int child_fd = -1;
+/* The child's end of the pipe and its options, for the runaway-read hook; its end of the progress pipe. */
+static int child_fd = -1, child_progress_fd = -1;
+
+/* The parent's progress callback. */
+static import_progress_fn progress_fn;
+static void *progress_user;
+
+void import_contained_progress(import_progress_fn fn, void *user)
+{
+    progress_fn = fn;
+    progress_user = user;
+}
+
+/* One byte per new percent, dropped when the pipe is full (the display only needs the latest). */
+static void child_progress(void *user, int percent)
+{
+    (void)user;
+    unsigned char b = (unsigned char)(percent < 0 ? 0 : percent > 100 ? 100 : percent);
+    if (write(child_progress_fd, &b, 1) < 0) {
+        /* full or closed: the display skips a step */
+    }
+}
 
 static void child_runaway(void *user, const char *path)
 {
@@ -94,7 +115,7 @@ static void child_runaway(void *user, const char *path)
 
 /* The parent's side: reads the report against a deadline and collects the child's standard error. */
 typedef struct reader {
-    int fd, err_fd;
+    int fd, err_fd, progress_fd;
     pid_t pid;
     struct timespec deadline; /* tv_sec 0: none */
     int timed_out;
@@ -133,17 +154,28 @@ static int read_all(reader *r, void *data, size_t size)
 {
     char *p = data;
     while (size > 0) {
-        struct pollfd fds[2] = { { r->fd, POLLIN, 0 }, { r->err_fd, POLLIN, 0 } };
+        struct pollfd fds[3] = { { r->fd, POLLIN, 0 }, { r->err_fd, POLLIN, 0 }, { r->progress_fd, POLLIN, 0 } };
         long ms = ms_left(r);
         if (ms == 0) {
             r->timed_out = 1;
             return -1;
         }
-        int ready = poll(fds, r->err_fd >= 0 ? 2 : 1, ms > INT32_MAX ? INT32_MAX : (int)ms);
+        /* a closed descriptor (-1) is skipped by poll */
+        int ready = poll(fds, 3, ms > INT32_MAX ? INT32_MAX : (int)ms);
         if (ready < 0 && errno == EINTR)
             continue;
         if (ready < 0)
             return -1;
+        if (r->progress_fd >= 0 && fds[2].revents) {
+            unsigned char b[256];
+            ssize_t n = read(r->progress_fd, b, sizeof b);
+            if (n > 0 && progress_fn)
+                progress_fn(progress_user, b[n - 1]);
+            else if (n == 0 || (n < 0 && errno != EINTR && errno != EAGAIN)) {
+                close(r->progress_fd);
+                r->progress_fd = -1;
+            }
+        }
         if (r->err_fd >= 0 && fds[1].revents) {
             char buf[4096];
             ssize_t n = read(r->err_fd, buf, sizeof buf);
@@ -275,7 +307,12 @@ int import_contained(const char *path, import_options *o, unsigned timeout_secon
                      char *message, size_t message_size)
 {
     memset(out, 0, sizeof *out);
-    int fds[2], errs[2];
+    int fds[2], errs[2], progress[2] = { -1, -1 };
+    if (progress_fn && pipe(progress) == 0) {
+        /* neither end blocks: the child drops a step when the pipe is full */
+        fcntl(progress[0], F_SETFL, fcntl(progress[0], F_GETFL) | O_NONBLOCK);
+        fcntl(progress[1], F_SETFL, fcntl(progress[1], F_GETFL) | O_NONBLOCK);
+    }
     if (pipe(fds) != 0) {
         snprintf(message, message_size, "cannot create a pipe: %s", strerror(errno));
         return 2;
@@ -295,6 +332,8 @@ int import_contained(const char *path, import_options *o, unsigned timeout_secon
 #endif
         close(fds[0]);
         close(errs[0]);
+        if (progress[0] >= 0)
+            close(progress[0]);
         dup2(errs[1], STDERR_FILENO);
         close(errs[1]);
         signal(SIGPIPE, SIG_DFL);
@@ -302,6 +341,8 @@ int import_contained(const char *path, import_options *o, unsigned timeout_secon
             alarm(timeout_seconds + 1); /* ends the child even if the parent is gone */
         child_fd = fds[1];
         o->on_runaway_read = child_runaway;
+        child_progress_fd = progress[1];
+        o->on_read_progress = progress[1] >= 0 ? child_progress : NULL;
         o->hook_user = o;
         imported_mesh m;
         char child_message[1024];
@@ -311,9 +352,13 @@ int import_contained(const char *path, import_options *o, unsigned timeout_secon
     }
     close(fds[1]);
     close(errs[1]);
+    if (progress[1] >= 0)
+        close(progress[1]);
     if (pid < 0) {
         close(fds[0]);
         close(errs[0]);
+        if (progress[0] >= 0)
+            close(progress[0]);
         snprintf(message, message_size, "cannot start the import: %s", strerror(errno));
         return 2;
     }
@@ -321,6 +366,7 @@ int import_contained(const char *path, import_options *o, unsigned timeout_secon
     memset(&r, 0, sizeof r);
     r.fd = fds[0];
     r.err_fd = errs[0];
+    r.progress_fd = progress[0];
     r.pid = pid;
     if (timeout_seconds) {
         clock_gettime(CLOCK_MONOTONIC, &r.deadline);
@@ -350,6 +396,8 @@ int import_contained(const char *path, import_options *o, unsigned timeout_secon
         close(r.err_fd);
     }
     close(r.fd);
+    if (r.progress_fd >= 0)
+        close(r.progress_fd);
     int rc;
     if (!ok) {
         imported_mesh_free(out);

@@ -13,4 +13,9 @@
 int import_contained(const char *path, import_options *o, unsigned timeout_seconds, imported_mesh *out,
                      char *message, size_t message_size);
 
+/* Called by import_contained (when set) with the percent of the input the child has read, for a progress
+ * display. */
+typedef void (*import_progress_fn)(void *user, int percent);
+void import_contained_progress(import_progress_fn fn, void *user);
+
 #endif
