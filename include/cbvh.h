@@ -63,7 +63,9 @@ CBVH_API uint32_t cbvh_version(void);
 CBVH_API const char *cbvh_version_string(void);
 
 /* Detailed error: the code plus a message saying what is wrong and where
- * (for files: section, node or byte offset; for meshes: triangle or vertex).
+ * (for files: section, node or byte offset; for meshes: triangle or vertex). A message too long for its 256
+ * bytes (a long path) is cut and ends in "..."; cbvh_cook_to_path's messages name the path last, so the cut
+ * falls on the path, never on the reason.
  * Every function that takes a cbvh_error* accepts NULL there. */
 typedef struct cbvh_error {
     cbvh_result code;
@@ -245,7 +247,9 @@ typedef struct cbvh_cook_stats {
  * caller sees it. Returns as cbvh_cook_options_init does. */
 CBVH_API cbvh_result cbvh_cook_stats_init(cbvh_cook_stats *stats, size_t struct_size);
 
-/* Cooks `mesh` into a complete cbvh file in memory. On success *out_data (allocated
+/* Threads: cooks share no state, so any number of threads may cook at once (each with its own mesh,
+ * options, allocator and outputs); a cook itself may use one more thread (see cbvh_allocator).
+ * Cooks `mesh` into a complete cbvh file in memory. On success *out_data (allocated
  * with `allocator`, free it with cbvh_buffer_free) and *out_size hold the file.
  * Deterministic: the same mesh and options give the same bytes. `options` (NULL for
  * the defaults) comes from cbvh_cook_options_init; `stats` (may be NULL) from
@@ -265,7 +269,10 @@ CBVH_API cbvh_result cbvh_cook(const cbvh_mesh *mesh, const cbvh_cook_options *o
  * points to stays as it was). A new file gets mode 0666 less the umask, a
  * replaced one keeps its mode (POSIX). On Linux the temporary file has no name
  * until the instant before the rename, during which this thread holds SIGINT,
- * SIGTERM, SIGHUP and SIGQUIT, so no signal leaves it behind. */
+ * SIGTERM, SIGHUP and SIGQUIT, so no signal leaves it behind. That is the only
+ * change to the calling thread's signal mask, and it is restored before the
+ * call returns (a signal that came meanwhile is delivered then); no handler is
+ * installed. */
 CBVH_API cbvh_result cbvh_cook_to_path(const cbvh_mesh *mesh, const cbvh_cook_options *options,
                                        const cbvh_allocator *allocator, const char *path,
                                        cbvh_cook_stats *stats, cbvh_error *err);
@@ -302,6 +309,8 @@ typedef struct cbvh_file cbvh_file;
  * just written, not yet evicted) is mapped with those. */
 CBVH_API cbvh_result cbvh_open_path(const char *path, const cbvh_allocator *allocator, cbvh_file **out_file,
                                     cbvh_error *err);
+/* Every open sets *out_file to NULL first: after a failed open it is NULL (cbvh_close(NULL) does nothing),
+ * after a successful one the caller owns the file until cbvh_close. */
 
 /* As cbvh_open_path, but reads the whole file into memory from `allocator`
  * (64-byte aligned, freed by cbvh_close) instead of mapping it: once it
@@ -400,7 +409,8 @@ CBVH_API int cbvh_file_get_section(const cbvh_file *file, uint32_t index, cbvh_s
 CBVH_API int cbvh_file_get_triangle(const cbvh_file *file, uint32_t tri, float v0[3], float v1[3],
                                     float v2[3]);
 
-/* Material id of triangle `tri` (original id); 0 when the file stores none. */
+/* Material id of triangle `tri` (original id); 0 when the file stores none. 0 is also a valid id: a
+ * file with materials has cbvh_file_info.has_materials 1, one without 0 (check that to tell them apart). */
 CBVH_API uint32_t cbvh_file_get_material(const cbvh_file *file, uint32_t tri);
 
 /* Material name `index` (0 <= index < info.material_name_count, in increasing id order) and its id in
@@ -413,6 +423,15 @@ CBVH_API const char *cbvh_file_find_material_name(const cbvh_file *file, uint32_
 /* ------------------------------------------------------------------ */
 /* Queries (runtime). None allocates memory; all are thread-safe.      */
 /* ------------------------------------------------------------------ */
+
+/* One rule for what a query returns, by the form of its name:
+ * - The plain forms (cbvh_raycast, cbvh_occluded, cbvh_sweep_*, the streams) answer the question: int 1
+ *   for a hit, 0 for a miss (streams fill their outputs). Invalid input (a NaN, a zero direction,
+ *   tmin > tmax, a negative radius ...) is a miss, never an error: a game loop needs no error path.
+ * - The counting forms (cbvh_overlap_*, cbvh_contacts_*) return a size_t count; invalid input counts 0.
+ * - The _with forms take cbvh_query_options and return cbvh_result: CBVH_OK with the answer in their
+ *   outputs, or CBVH_ERROR_INVALID_ARGUMENT for the same invalid input the plain forms call a miss (and
+ *   for bad options), so a tool can tell "no hit" from "not a valid query". */
 
 /* A ray: points org + t*dir for t in [tmin, tmax]. dir need not be normalized;
  * components may be 0, -0 or denormal. A ray is invalid, and every query

@@ -36,8 +36,22 @@ check_output() { # what, got, expected
     echo "test_cmake.sh: $1: ok"
 }
 
-# 1. find_package(cbvh CONFIG) against a cbvh installed by its CMake build.
-run cmake -S "$top/cmake" -B "$work/cbvh" -DCMAKE_INSTALL_PREFIX="$work/prefix"
+# optimised WHAT COMPILE_COMMANDS FLAG: every library source is compiled with FLAG (CMake adds no -O by itself).
+optimised() {
+    if grep '"command"' "$2" | grep '/lib/' | grep -v -q -e " $3 "; then
+        echo "test_cmake.sh: FAILED: $1 compiles library sources without $3 ($2)"
+        exit 1
+    fi
+    grep -q '/lib/' "$2" || { echo "test_cmake.sh: FAILED: $1: no library source in $2"; exit 1; }
+    echo "test_cmake.sh: $1 compiles with $3: ok"
+}
+
+# 1. find_package(cbvh CONFIG) against a cbvh installed by its CMake build (the README's commands: no build
+# type given, which means Release).
+run cmake -S "$top/cmake" -B "$work/cbvh" -DCMAKE_INSTALL_PREFIX="$work/prefix" -DCMAKE_EXPORT_COMPILE_COMMANDS=ON
+grep -q '^CMAKE_BUILD_TYPE:STRING=Release$' "$work/cbvh/CMakeCache.txt" ||
+    { echo "test_cmake.sh: FAILED: the standalone build's default build type is not Release"; exit 1; }
+optimised "the standalone build" "$work/cbvh/compile_commands.json" -O3
 run cmake --build "$work/cbvh" -j 2
 run cmake --install "$work/cbvh"
 run cmake -S "$top/tests/cmake_consumer" -B "$work/installed" -DCMAKE_PREFIX_PATH="$work/prefix"
@@ -47,7 +61,9 @@ check_output "find_package consumer" "$got" "cooker: yes
 $expect_hit"
 
 # 2. add_subdirectory of the source tree, runtime only.
-run cmake -S "$top/tests/cmake_consumer" -B "$work/subdir" -DCBVH_SOURCE_DIR="$top" -DCBVH_COOKER=OFF
+run cmake -S "$top/tests/cmake_consumer" -B "$work/subdir" -DCBVH_SOURCE_DIR="$top" -DCBVH_COOKER=OFF \
+    -DCMAKE_EXPORT_COMPILE_COMMANDS=ON
+optimised "add_subdirectory into a project with no build type" "$work/subdir/compile_commands.json" -O2
 run cmake --build "$work/subdir" -j 2
 got=$("$work/subdir/consumer" "$top/fileformat/good-quad-flat.cbvh")
 check_output "add_subdirectory runtime-only consumer" "$got" "cooker: no

@@ -974,9 +974,70 @@ static void test_cooked_files_need_the_cooker(void **state)
 }
 #endif
 
+/* cbvh.h's contracts: a failed open leaves *out_file NULL (whatever it held), and has_materials tells a
+ * file without materials (cbvh_file_get_material answers 0) from one whose ids include 0. */
+static void test_open_and_material_contracts(void **state)
+{
+    (void)state;
+    static int sentinel;
+    cbvh_file *f = (cbvh_file *)(void *)&sentinel;
+    cbvh_error err;
+    assert_int_not_equal(cbvh_open_path(vector_path("bad-magic"), NULL, &f, &err), CBVH_OK);
+    assert_null(f);
+    input bad = load_vector("bad-magic");
+    f = (cbvh_file *)(void *)&sentinel;
+    assert_int_not_equal(cbvh_open_memory(bad.data, bad.size, NULL, &f, &err), CBVH_OK);
+    assert_null(f);
+    test_aligned_free(bad.data);
+
+    cbvh_file_info info;
+    assert_int_equal(cbvh_open_path(vector_path("good-box-raw"), NULL, &f, &err), CBVH_OK);
+    assert_int_equal(cbvh_file_get_info(f, &info, sizeof info), CBVH_OK);
+    assert_int_equal(info.has_materials, 0);
+    assert_int_equal(cbvh_file_get_material(f, 0), 0);
+    cbvh_close(f);
+    assert_int_equal(cbvh_open_path(vector_path("good-remap-materials"), NULL, &f, &err), CBVH_OK);
+    assert_int_equal(cbvh_file_get_info(f, &info, sizeof info), CBVH_OK);
+    assert_int_equal(info.has_materials, 1);
+    cbvh_close(f);
+    cbvh_close(NULL);
+}
+
+/* cbvh.h's one rule for returns: an invalid query is a miss (or a count of 0) for the plain forms and
+ * CBVH_ERROR_INVALID_ARGUMENT for the _with forms; a valid one agrees between them. */
+static void test_invalid_query_rule(void **state)
+{
+    (void)state;
+    cbvh_file *f;
+    cbvh_error err;
+    assert_int_equal(cbvh_open_path(vector_path("good-box-raw"), NULL, &f, &err), CBVH_OK);
+    const float nan = (float)NAN;
+    const cbvh_ray invalid[] = {
+        { { 0, 0, -5 }, 0, { 0, 0, nan }, INFINITY }, /* NaN direction */
+        { { 0, 0, -5 }, 0, { 0, 0, 0 }, INFINITY },   /* zero direction */
+        { { 0, 0, -5 }, 2, { 0, 0, 1 }, 1 },          /* tmin > tmax */
+    };
+    for (size_t k = 0; k < sizeof invalid / sizeof *invalid; k++) {
+        cbvh_hit hit;
+        assert_int_equal(cbvh_raycast(f, &invalid[k], CBVH_TRAVERSAL_SORTED, &hit, NULL), 0);
+        assert_int_equal(hit.tri, CBVH_NO_HIT);
+        assert_int_equal(cbvh_occluded(f, &invalid[k], CBVH_TRAVERSAL_SORTED, NULL), 0);
+        cbvh_hit_record with_hit;
+        assert_int_equal(cbvh_raycast_with(f, &invalid[k], NULL, &with_hit, NULL), CBVH_ERROR_INVALID_ARGUMENT);
+        assert_int_equal(with_hit.tri, CBVH_NO_HIT);
+        int occluded = 1;
+        assert_int_equal(cbvh_occluded_with(f, &invalid[k], NULL, &occluded, NULL), CBVH_ERROR_INVALID_ARGUMENT);
+    }
+    const float center[3] = { 0, 0, 0 };
+    assert_int_equal(cbvh_overlap_sphere(f, center, nan, NULL, NULL, NULL, 0), 0);
+    cbvh_close(f);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_open_and_material_contracts),
+        cmocka_unit_test(test_invalid_query_rule),
         cmocka_unit_test(test_path_and_memory_agree),
         cmocka_unit_test(test_unaligned_buffer),
         cmocka_unit_test(test_truncations),

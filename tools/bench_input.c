@@ -8,6 +8,7 @@
 #include <unistd.h>
 
 #include "bench_input.h"
+#include "temp_cleanup.h"
 #include "cli.h"
 #include "cbvh_internal.h"
 #include "import_assimp.h"
@@ -170,6 +171,7 @@ int bench_write_temp(const char *command, const void *data, size_t size, char *p
         cli_error(command, path, "cannot create a temporary file: %s", strerror(errno));
         return CLI_EXIT_USAGE;
     }
+    temp_cleanup_add(path, NULL);
     const char *p = data;
     size_t left = size;
     while (left > 0) {
@@ -179,7 +181,7 @@ int bench_write_temp(const char *command, const void *data, size_t size, char *p
         if (n <= 0) {
             cli_error(command, path, "cannot write the temporary file: %s", strerror(errno));
             close(fd);
-            unlink(path);
+            bench_remove_temp(path);
             return CLI_EXIT_USAGE;
         }
         p += n;
@@ -188,8 +190,14 @@ int bench_write_temp(const char *command, const void *data, size_t size, char *p
     drop_cached_pages(fd);
     if (close(fd) != 0) {
         cli_error(command, path, "cannot write the temporary file: %s", strerror(errno));
-        unlink(path);
+        bench_remove_temp(path);
         return CLI_EXIT_USAGE;
     }
     return 0;
+}
+
+void bench_remove_temp(const char *path)
+{
+    unlink(path);
+    temp_cleanup_done(path);
 }

@@ -36,7 +36,11 @@ cbvh_mesh bench_mesh_view(const bench_mesh *mesh);
 
 /* Writes `size` bytes to a new temporary file (in $TMPDIR or /tmp) and stores its
  * path in path[path_size], its pages dropped from the system's cache (read from disk at the first open,
- * as a game loading the file does). Returns 0 on success, else reports and returns an exit status. */
+ * as a game loading the file does). Returns 0 on success, else reports and returns an exit status. The file
+ * is removed if SIGINT, SIGTERM or SIGHUP ends the command before bench_remove_temp does. */
 int bench_write_temp(const char *command, const void *data, size_t size, char *path, size_t path_size);
+
+/* Removes a file bench_write_temp made. */
+void bench_remove_temp(const char *path);
 
 #endif

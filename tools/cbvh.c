@@ -3,6 +3,7 @@
 #include <string.h>
 
 #include "cli.h"
+#include "json.h"
 #include "commands.h"
 
 typedef struct command {
@@ -38,6 +39,34 @@ static void print_usage(FILE *out)
           "Exit status: 0 success, 1 invalid or corrupt input, 2 usage or I/O error.\n"
           "See cbvh(1) for details.\n",
           out);
+}
+
+/* Whether the command was asked for JSON on stdout: --json as a flag (bench and report take --json FILE). */
+static int wants_json(const char *name, int argc, char **argv)
+{
+    if (!strcmp(name, "bench") || !strcmp(name, "report"))
+        return 0;
+    for (int k = 1; k < argc && strcmp(argv[k], "--"); k++)
+        if (!strcmp(argv[k], "--json"))
+            return 1;
+    return 0;
+}
+
+/* A failed command's JSON when it printed none itself (usage errors, files that do not open):
+ * {"command", "error": {"status", "file", "message"}}, as the stderr message says. */
+static void print_json_error(const char *name, int status)
+{
+    json_writer w;
+    json_init(&w, stdout);
+    json_begin_object(&w, NULL);
+    json_string(&w, "command", name);
+    json_begin_object(&w, "error");
+    json_uint(&w, "status", (uint64_t)status);
+    json_string(&w, "file", cli_last_file());
+    json_string(&w, "message", cli_last_message());
+    json_end_object(&w);
+    json_end_object(&w);
+    json_finish(&w);
 }
 
 static const command *find_command(const char *name)
@@ -84,6 +113,8 @@ int main(int argc, char **argv)
         return CLI_EXIT_USAGE;
     }
     int status = c->run(argc - 1, argv + 1);
+    if (status != CLI_EXIT_OK && wants_json(name, argc - 1, argv + 1) && !cli_json_error_was_printed())
+        print_json_error(name, status);
     /* A full disk or a closed pipe shows up only when stdout is flushed. */
     if (fflush(stdout) != 0 || ferror(stdout)) {
         fprintf(stderr, "cbvh %s: error writing to standard output\n", name);

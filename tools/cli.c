@@ -76,13 +76,41 @@ void cli_print_version(void)
            CBVH_FORMAT_VERSION);
 }
 
+static char last_message[1024], last_file[1024];
+static int json_error_printed;
+
 static void cli_vmessage(const char *command, const char *file, const char *fmt, va_list ap)
 {
+    va_list copy;
+    va_copy(copy, ap);
+    vsnprintf(last_message, sizeof last_message, fmt, copy);
+    va_end(copy);
+    snprintf(last_file, sizeof last_file, "%s", file ? file : "");
     fprintf(stderr, "cbvh %s: ", command);
     if (file)
         fprintf(stderr, "%s: ", file);
     vfprintf(stderr, fmt, ap);
     fputc('\n', stderr);
+}
+
+const char *cli_last_message(void)
+{
+    return last_message;
+}
+
+const char *cli_last_file(void)
+{
+    return last_file;
+}
+
+void cli_json_error_printed(void)
+{
+    json_error_printed = 1;
+}
+
+int cli_json_error_was_printed(void)
+{
+    return json_error_printed;
 }
 
 void cli_error(const char *command, const char *file, const char *fmt, ...)

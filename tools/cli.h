@@ -81,6 +81,16 @@ int cli_report(const char *command, const char *file, const cbvh_error *err);
 /* Opens and validates a .cbvh file; on failure reports it and returns the exit status (else 0). */
 int cli_open(const char *command, const char *path, cbvh_file **out);
 
+/* The last message cli_error, cli_usage_error or cli_report printed ("" when none) and the file it named
+ * ("" when none): the JSON error object of a failed command (main prints it for --json). */
+const char *cli_last_message(void);
+const char *cli_last_file(void);
+
+/* A command that printed its own JSON for a failure (or one line per asset of a batch) says so, and main
+ * prints no other. */
+void cli_json_error_printed(void);
+int cli_json_error_was_printed(void);
+
 /* Lower-case name of a section type ("nodes", "triangles", ...; "ancillary" or "unknown" otherwise). */
 const char *cli_section_name(uint32_t type);
 

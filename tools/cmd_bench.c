@@ -1372,7 +1372,7 @@ static int parse_thread_counts(bench_state *s, const char *list)
         }
         memcpy(token, p, n);
         token[n] = '\0';
-        if (!cli_parse_u32(s->command, "--threads", token, 1, 256, &s->thread_counts[s->thread_count_n++]))
+        if (!cli_parse_u32(s->command, "threads", token, 1, 256, &s->thread_counts[s->thread_count_n++]))
             return 0;
         p += n;
         if (!*p)
@@ -1416,12 +1416,12 @@ int cmd_bench(int argc, char **argv)
             gen = value;
             break;
         case OPT_RAYS:
-            if (!cli_parse_u32(s.command, "--rays", value, 1, 100000000u, &u))
+            if (!cli_parse_u32(s.command, "rays", value, 1, 100000000u, &u))
                 return CLI_EXIT_USAGE;
             s.rays = u;
             break;
         case OPT_SEED:
-            if (!cli_parse_u32(s.command, "--seed", value, 0, UINT32_MAX, &u))
+            if (!cli_parse_u32(s.command, "seed", value, 0, UINT32_MAX, &u))
                 return CLI_EXIT_USAGE;
             s.seed = u;
             break;
@@ -1430,16 +1430,16 @@ int cmd_bench(int argc, char **argv)
                 return CLI_EXIT_USAGE;
             break;
         case OPT_SHAPES:
-            if (!cli_parse_u32(s.command, "--shapes", value, 0, 100000000u, &u))
+            if (!cli_parse_u32(s.command, "shapes", value, 0, 100000000u, &u))
                 return CLI_EXIT_USAGE;
             s.shapes = u;
             break;
         case OPT_REPS:
-            if (!cli_parse_u32(s.command, "--reps", value, 1, 1000, &s.reps))
+            if (!cli_parse_u32(s.command, "reps", value, 1, 1000, &s.reps))
                 return CLI_EXIT_USAGE;
             break;
         case OPT_BUDGET:
-            if (!cli_parse_float(s.command, "--budget", value, 0.0f, 1e6f, &s.budget))
+            if (!cli_parse_float(s.command, "budget", value, 0.0f, 1e6f, &s.budget))
                 return CLI_EXIT_USAGE;
             break;
         case OPT_CPU:
@@ -1467,7 +1467,7 @@ int cmd_bench(int argc, char **argv)
     cbvh_close(s.file);
     cbvh_close(s.expanded);
     if (s.temp_path[0])
-        unlink(s.temp_path);
+        bench_remove_temp(s.temp_path);
     free(s.results);
     free(s.agreements);
     free(s.shape_results);

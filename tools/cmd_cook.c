@@ -1,5 +1,8 @@
 /* cmd_cook.c: `cbvh cook`: import a mesh file (or generate a scene), cook it, write the .cbvh file atomically. */
 #include <errno.h>
+#include <fcntl.h>
+#include <math.h>
+#include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -11,7 +14,9 @@
 
 #include "cli.h"
 #include "commands.h"
+#include "depfile.h"
 #include "import_assimp.h"
+#include "import_child.h"
 #include "json.h"
 #include "material_map.h"
 #include "progress.h"
@@ -52,7 +57,11 @@ static const char usage[] =
     "  --material-map FILE     material ids by name: lines NAME<TAB>ID (ID 0..4294967295),\n"
     "                          '*<TAB>ID' for every other name, # comments; a material the\n"
     "                          map does not name fails the cook (exit status 1)\n"
-    "  --quiet                 no progress display (it is shown only on a terminal anyway)\n"
+    "  --quiet                 nothing on success: no progress display (shown only on a\n"
+    "                          terminal anyway) and no summary; warnings and errors still go\n"
+    "                          to standard error\n"
+    "  --force                 replace an OUT that is read-only (in a Perforce workspace: a\n"
+    "                          file not checked out), which is refused otherwise\n"
     "  --json                  print statistics (and warnings) as JSON on stdout; a failed\n"
     "                          cook prints\n"
     "                          {\"input\", \"output\", \"error\": {\"status\", \"message\"}}\n"
@@ -63,19 +72,27 @@ static const char usage[] =
     "                          +Y as assimp imports every format, becomes +AXIS (z for\n"
     "                          Z-up engines), by a right-handed rotation\n"
     "  --depfile FILE          write a Makefile rule 'OUT: IN SIDE-FILES...' naming every\n"
-    "                          file the import opened (.mtl, .bin ...) and the material map,\n"
-    "                          for make and ninja\n"
+    "                          file the import opened or looked for (.mtl, .bin ...) and the\n"
+    "                          material map, with an empty rule for each (as gcc -MP), for\n"
+    "                          make and ninja; written before OUT is replaced, and neither\n"
+    "                          changes when either fails; FILE must not be IN or OUT\n"
+    "  --depfiles              write the rule to OUT.d (for each asset of a batch)\n"
     "  --output-dir DIR        batch: cook each IN into DIR/STEM.cbvh (STEM: IN's file name\n"
     "                          without its extension)\n"
     "  --manifest FILE         batch: the assets of FILE (- for standard input), one a line:\n"
-    "                          IN (into --output-dir) or IN<TAB>OUT; # starts a comment line\n"
-    "  --jobs N                batch: cook N assets at once (default 1), each in a process of\n"
+    "                          IN (into --output-dir) or IN<TAB>OUT; # starts a comment line;\n"
+    "                          relative paths are relative to the current folder\n"
+    "  -j, --jobs N            batch: cook N assets at once (default 1), each in a process of\n"
     "                          its own; one JSON line per asset on stdout (as --json, on one\n"
     "                          line, in the order they finish), messages on stderr; exit\n"
-    "                          status 0 when every asset cooked, else 1\n"
+    "                          status 0 when every asset cooked, else 1; stopped by SIGINT,\n"
+    "                          SIGTERM or SIGHUP, it passes the signal to the running cooks\n"
+    "                          and waits for them (no unfinished output is written)\n"
     "  --max-memory MB         stop an import or cook that would hold more than MB megabytes\n"
     "                          of address space (exit status 1); default 1024 + 64 x the\n"
     "                          input file's size in MB; 0: no limit\n"
+    "  --import-timeout S      stop an import that runs longer than S seconds (exit status\n"
+    "                          1); default 120 + 1 per MB of the input file; 0: no limit\n"
     "  -h, --help              show this help\n"
     "\n"
     "OUT must not be IN itself (also through a link): that is refused, exit status 2. An OUT\n"
@@ -83,6 +100,11 @@ static const char usage[] =
     "is replaced by the new file, and the file it pointed to stays as it was. A new OUT gets\n"
     "mode 0666 less the umask; a replaced one keeps its mode. Interrupted (SIGINT, SIGTERM,\n"
     "SIGHUP), a cook leaves no temporary file behind.\n"
+    "\n"
+    "An asset is untrusted input: assimp reads it in a child process, and whatever happens\n"
+    "there (a crash, an abort, a hang, a reader looping at the end of a truncated file) ends\n"
+    "as exit status 1 with a message naming the file and the reason; in a batch, as that\n"
+    "asset's failure while the others cook.\n"
     "\n"
     "Exit status: 0 cooked, 1 the input is not a usable mesh, 2 usage or I/O error.\n";
 
@@ -106,7 +128,10 @@ enum {
     OPT_SCALE,
     OPT_UP_AXIS,
     OPT_DEPFILE,
-    OPT_MATERIAL_MAP
+    OPT_MATERIAL_MAP,
+    OPT_IMPORT_TIMEOUT,
+    OPT_DEPFILES,
+    OPT_FORCE
 };
 
 static const cli_option options[] = {
@@ -130,6 +155,9 @@ static const cli_option options[] = {
     { "up-axis", CLI_ARG_REQUIRED, OPT_UP_AXIS },
     { "depfile", CLI_ARG_REQUIRED, OPT_DEPFILE },
     { "material-map", CLI_ARG_REQUIRED, OPT_MATERIAL_MAP },
+    { "import-timeout", CLI_ARG_REQUIRED, OPT_IMPORT_TIMEOUT },
+    { "depfiles", CLI_ARG_NONE, OPT_DEPFILES },
+    { "force", CLI_ARG_NONE, OPT_FORCE },
     { NULL, 0, 0 },
 };
 
@@ -139,8 +167,15 @@ typedef struct cook_input {
     int generated;
 } cook_input;
 
+/* The share of the asset the import has read, on the progress display. */
+static void import_progress(void *user, int percent)
+{
+    progress_update((progress *)user, "import", percent / 100.0);
+}
+
 /* Returns an exit status; on success `in` holds the mesh, else `message` says why. */
-static int load_input(const char *path, import_options *io, cook_input *in, char *message, size_t message_size)
+static int load_input(const char *path, import_options *io, unsigned timeout_seconds, cook_input *in, char *message,
+                      size_t message_size)
 {
     memset(in, 0, sizeof *in);
     if (!strncmp(path, "gen:", 4)) {
@@ -159,7 +194,7 @@ static int load_input(const char *path, import_options *io, cook_input *in, char
         in->mesh.mesh_instances = 1;
         return CLI_EXIT_OK;
     }
-    return import_assimp(path, io, &in->mesh, message, message_size);
+    return import_contained(path, io, timeout_seconds, &in->mesh, message, message_size);
 }
 
 /* A failed cook as JSON: input, output, error {status (the exit status), file (the one at fault), message}. */
@@ -184,8 +219,10 @@ static int report_failure(int json, const char *in, const char *out, const char 
                           const char *message)
 {
     cli_error("cook", file, "%s", message);
-    if (json)
+    if (json) {
         report_json(stdout, in, out, file, status, message);
+        cli_json_error_printed();
+    }
     return status;
 }
 
@@ -328,13 +365,25 @@ static void print_summary(const char *in, const char *out, const cook_input *inp
 /* How every asset of a run is cooked. */
 typedef struct cook_settings {
     cbvh_cook_options opt;
-    int quiet, json, memory_given;
+    int quiet, json, memory_given, timeout_given;
+    int depfiles; /* --depfiles: OUT.d for each output */
+    int force;    /* --force: replace a read-only OUT */
     uint32_t max_memory;
+    uint32_t import_timeout; /* seconds, 0: none; when not given, import_timeout_for picks one */
     const char *select, *depfile, *material_map_path;
     material_map map; /* read from material_map_path (when given) before anything cooks */
     double scale;
     char up_axis; /* 'x', 'y' or 'z' */
 } cook_settings;
+
+/* The import's time limit: as given, or 120 s plus a second per MB of the input file. */
+static unsigned import_timeout_for(const cook_settings *c, const char *in)
+{
+    struct stat st;
+    if (c->timeout_given)
+        return c->import_timeout;
+    return 120u + (stat(in, &st) == 0 ? (unsigned)((uint64_t)st.st_size >> 20) : 0u);
+}
 
 /* --scale and --up-axis on the imported positions, in double, rounded once. */
 static void transform_positions(const cook_settings *c, imported_mesh *m)
@@ -343,6 +392,8 @@ static void transform_positions(const cook_settings *c, imported_mesh *m)
         return;
     for (size_t v = 0; v < m->vertex_count; v++) {
         float *p = m->positions + 3 * v;
+        if (!isfinite(p[0]) || !isfinite(p[1]) || !isfinite(p[2]))
+            continue; /* refused by the cook, which names the file's axis */
         const double x = c->scale * p[0], y = c->scale * p[1], z = c->scale * p[2];
         /* +Y to +Z: a quarter turn about +X; +Y to +X: a quarter turn about -Z */
         const double out[3][3] = { { x, y, z }, { y, -x, z }, { x, -z, y } };
@@ -352,50 +403,26 @@ static void transform_positions(const cook_settings *c, imported_mesh *m)
     }
 }
 
-/* Writes `target: dep dep ... [extra]` (Makefile syntax; spaces, # and $ escaped) to `path`; `extra` may be
- * NULL. Returns 0 or -1. */
-static int write_depfile(const char *path, const char *target, char *const *deps, size_t deps_count,
-                         const char *extra)
-{
-    FILE *f = fopen(path, "w");
-    if (!f)
-        return -1;
-    const size_t count = deps_count + (extra != NULL);
-    for (size_t k = 0; k <= count; k++) {
-        const char *s = k == 0 ? target : k <= deps_count ? deps[k - 1] : extra;
-        for (; *s; s++) {
-            if (*s == ' ' || *s == '#' || *s == '\\')
-                fputc('\\', f);
-            if (*s == '$')
-                fputc('$', f);
-            fputc(*s, f);
-        }
-        fputs(k == 0 ? ":" : "", f);
-        fputs(k < count ? " " : "\n", f);
-    }
-    return fclose(f) == 0 ? 0 : -1;
-}
-
-/* Cooks one asset; returns its exit status. */
-static int cook_one(const cook_settings *c, const char *in, const char *out)
+/* Cooks one asset whose paths were checked, writing `depfile` (NULL: none) too; returns its exit status. */
+static int cook_checked(const cook_settings *c, const char *in, const char *out, const char *depfile)
 {
     cbvh_cook_options opt = c->opt;
     const int json = c->json;
-    if (same_file(in, out))
-        return report_failure(json, in, out, out, CLI_EXIT_USAGE,
-                              "is the input file itself: cooking would replace the asset (choose another output)");
     limit_memory(in, c->max_memory, c->memory_given);
 
     progress prog;
     progress_init(&prog, c->quiet);
     double t0 = cli_now();
     progress_update(&prog, "import", -1);
+    if (prog.enabled)
+        import_contained_progress(import_progress, &prog);
     cook_input input;
     char message[640];
     import_options io;
     memset(&io, 0, sizeof io);
     io.select = c->select;
-    int rc = load_input(in, &io, &input, message, sizeof message);
+    int rc = load_input(in, &io, import_timeout_for(c, in), &input, message, sizeof message);
+    import_contained_progress(NULL, NULL);
     progress_done(&prog);
     if (rc) {
         import_options_free(&io);
@@ -429,26 +456,84 @@ static int cook_one(const cook_settings *c, const char *in, const char *out)
     cbvh_cook_stats stats;
     cbvh_error err;
     cbvh_cook_stats_init(&stats, sizeof stats);
+    /* The depfile goes in place first: a new OUT never stands beside an old list of its dependencies. */
+    depfile_commit dc;
+    memset(&dc, 0, sizeof dc);
+    if (depfile && depfile_put(&dc, depfile, out, in, &io.opened, &io.missing, c->material_map_path) != 0) {
+        snprintf(message, sizeof message, "cannot write the depfile: %s (nothing was changed)", strerror(errno));
+        rc = report_failure(json, in, out, depfile, CLI_EXIT_USAGE, message);
+        free(names);
+        import_options_free(&io);
+        imported_mesh_free(&input.mesh);
+        return rc;
+    }
     cbvh_result res = cbvh_cook_to_path(&mesh, &opt, NULL, out, &stats, &err);
+    depfile_finish(&dc, res == CBVH_OK);
     progress_done(&prog);
     double total_seconds = cli_now() - t0;
     if (res != CBVH_OK) {
         /* Mesh problems belong to the input, I/O problems to the output. */
         const char *culprit = (res == CBVH_ERROR_IO || res == CBVH_ERROR_INVALID_ARGUMENT) ? out : in;
-        snprintf(message, sizeof message, "%s: %s", cbvh_result_string(err.code), err.message);
+        snprintf(message, sizeof message, "%s: %s%s", cbvh_result_string(err.code), err.message,
+                 !strncmp(err.message, "vertex ", 7) && !input.generated
+                     ? " (vertices counted from 0 in the imported mesh, after assimp joined identical ones: not "
+                       "the file's numbering)"
+                     : "");
         rc = report_failure(json, in, out, culprit, cli_exit_for(err.code), message);
-    } else if (c->depfile &&
-               write_depfile(c->depfile, out, io.opened.paths, io.opened.count, c->material_map_path) != 0) {
-        snprintf(message, sizeof message, "cannot write the depfile: %s", strerror(errno));
-        rc = report_failure(json, in, out, c->depfile, CLI_EXIT_USAGE, message);
     } else if (json) {
         print_json(in, out, &input, &stats, &notes, import_seconds, total_seconds);
-    } else {
+    } else if (!c->quiet) {
         print_summary(in, out, &input, &stats, &notes, import_seconds, total_seconds);
     }
     free(names);
     import_options_free(&io);
     imported_mesh_free(&input.mesh);
+    return rc;
+}
+
+/* Refuses a depfile that would overwrite the asset or the output, or that is not a plain file; returns an
+ * exit status. */
+static int check_depfile(const cook_settings *c, const char *depfile, const char *in, const char *out)
+{
+    struct stat st;
+    const char *what = NULL;
+    if (paths_same_file(depfile, in))
+        what = "is the input file itself: writing it would replace the asset";
+    else if (paths_same_file(depfile, out))
+        what = "is the output file itself: the depfile and the cooked file cannot share a name";
+    else if (stat(depfile, &st) == 0 && !S_ISREG(st.st_mode))
+        what = "is not a regular file (a device, a FIFO or a folder): refused as a depfile";
+    return what ? report_failure(c->json, in, out, depfile, CLI_EXIT_USAGE, what) : CLI_EXIT_OK;
+}
+
+/* Cooks one asset; returns its exit status. */
+static int cook_one(const cook_settings *c, const char *in, const char *out)
+{
+    const int json = c->json;
+    if (same_file(in, out))
+        return report_failure(json, in, out, out, CLI_EXIT_USAGE,
+                              "is the input file itself: cooking would replace the asset (choose another output)");
+    struct stat st;
+    if (!c->force && stat(out, &st) == 0 && S_ISREG(st.st_mode) &&
+        (st.st_uid == geteuid() ? !(st.st_mode & S_IWUSR) : access(out, W_OK) != 0))
+        return report_failure(json, in, out, out, CLI_EXIT_USAGE,
+                              "is read-only (in a Perforce workspace: not checked out); --force replaces it");
+    char *own_depfile = NULL;
+    const char *depfile = c->depfile;
+    if (c->depfiles) {
+        size_t size = strlen(out) + 3;
+        if ((own_depfile = malloc(size)) == NULL)
+            return report_failure(json, in, out, out, CLI_EXIT_USAGE, "out of memory");
+        snprintf(own_depfile, size, "%s.d", out);
+        depfile = own_depfile;
+    }
+    int refused = depfile ? check_depfile(c, depfile, in, out) : CLI_EXIT_OK;
+    if (refused) {
+        free(own_depfile);
+        return refused;
+    }
+    int rc = cook_checked(c, in, out, depfile);
+    free(own_depfile);
     return rc;
 }
 
@@ -610,6 +695,45 @@ static void child_drain(batch_child *c)
         c->text[c->size] = '\0';
 }
 
+/* The signal that stops a batch (a build system ending the job), or 0. */
+static volatile sig_atomic_t batch_stop;
+
+static void batch_on_signal(int sig)
+{
+    batch_stop = sig;
+}
+
+static const int batch_signals[] = { SIGINT, SIGTERM, SIGHUP };
+
+/* Catches (`on` 1) or restores (0) the signals that stop a batch; one the caller ignores stays ignored. */
+static void batch_catch_signals(int on)
+{
+    for (int k = 0; k < 3; k++) {
+        struct sigaction sa, old;
+        memset(&sa, 0, sizeof sa);
+        sa.sa_handler = on ? batch_on_signal : SIG_DFL;
+        sigemptyset(&sa.sa_mask);
+        if (sigaction(batch_signals[k], NULL, &old) == 0 && old.sa_handler != SIG_IGN)
+            sigaction(batch_signals[k], &sa, NULL);
+    }
+}
+
+/* Stopped by `sig`: passes it to every running cook, waits for them (a cook interrupted writes no output),
+ * then ends the process by the same signal. */
+static void batch_stop_children(batch_child *running, uint32_t jobs, int sig)
+{
+    for (uint32_t k = 0; k < jobs; k++)
+        if (running[k].pid)
+            kill(running[k].pid, sig);
+    for (uint32_t k = 0; k < jobs; k++)
+        if (running[k].pid)
+            while (waitpid(running[k].pid, NULL, 0) < 0 && errno == EINTR)
+                continue;
+    fflush(stdout);
+    batch_catch_signals(0);
+    raise(sig);
+}
+
 /* Cooks every asset of b, `jobs` at a time, each in a child process of its own (an importer that
  * crashes or exhausts its memory limit takes only its asset down). Prints one JSON line per asset, in
  * the order they finish; returns 0 when every asset cooked, else 1. */
@@ -623,6 +747,7 @@ static int run_batch(const cook_settings *c, const batch *b, uint32_t jobs)
                           b->items[k].in);
                 return CLI_EXIT_USAGE;
             }
+    cli_json_error_printed(); /* each asset gets its JSON line, success or failure */
     batch_child *running = calloc(jobs, sizeof *running);
     if (!running) {
         cli_error("cook", NULL, "out of memory");
@@ -632,10 +757,12 @@ static int run_batch(const cook_settings *c, const batch *b, uint32_t jobs)
     child_settings.json = 1;
     child_settings.quiet = 1;
     fflush(stdout);
+    batch_stop = 0;
+    batch_catch_signals(1);
     size_t next = 0, failed = 0, done = 0;
     uint32_t active = 0;
     while (done < b->count) {
-        while (active < jobs && next < b->count) {
+        while (active < jobs && next < b->count && !batch_stop) {
             int fds[2];
             batch_child *slot = NULL;
             for (uint32_t k = 0; k < jobs && !slot; k++)
@@ -647,6 +774,7 @@ static int run_batch(const cook_settings *c, const batch *b, uint32_t jobs)
             }
             pid_t pid = fork();
             if (pid == 0) {
+                batch_catch_signals(0);
                 close(fds[0]);
                 dup2(fds[1], STDOUT_FILENO);
                 close(fds[1]);
@@ -660,12 +788,16 @@ static int run_batch(const cook_settings *c, const batch *b, uint32_t jobs)
                 cli_error("cook", NULL, "cannot start a cook: %s", strerror(errno));
                 break;
             }
+            /* drained while other cooks run, and while a stop signal is checked: never block on it */
+            fcntl(fds[0], F_SETFL, fcntl(fds[0], F_GETFL) | O_NONBLOCK);
             memset(slot, 0, sizeof *slot);
             slot->pid = pid;
             slot->item = next++;
             slot->fd = fds[0];
             active++;
         }
+        if (batch_stop)
+            batch_stop_children(running, jobs, batch_stop);
         if (active == 0) { /* nothing could start: the rest fail */
             failed += b->count - done;
             break;
@@ -674,6 +806,8 @@ static int run_batch(const cook_settings *c, const batch *b, uint32_t jobs)
         int status;
         pid_t pid;
         for (;;) {
+            if (batch_stop)
+                batch_stop_children(running, jobs, batch_stop);
             pid = waitpid(-1, &status, WNOHANG);
             if (pid != 0)
                 break;
@@ -721,11 +855,12 @@ static int run_batch(const cook_settings *c, const batch *b, uint32_t jobs)
         active--;
         done++;
     }
+    batch_catch_signals(0);
     free(running);
     return failed ? CLI_EXIT_BAD_INPUT : CLI_EXIT_OK;
 }
 
-int cmd_cook(int argc, char **argv)
+static int cook_main(int argc, char **argv)
 {
     cook_settings c;
     memset(&c, 0, sizeof c);
@@ -735,6 +870,7 @@ int cmd_cook(int argc, char **argv)
     c.up_axis = 'y';
     const char *out_dir = NULL, *manifest = NULL;
     uint32_t jobs = 1;
+    int jobs_given = 0, compress_bare = 0;
     batch b;
     memset(&b, 0, sizeof b);
     const char **paths = calloc((size_t)argc + 1, sizeof *paths);
@@ -774,6 +910,7 @@ int cmd_cook(int argc, char **argv)
             ok = cli_parse_float("cook", "intersection-cost", value, 1e-6f, 1e6f, &o->intersection_cost);
             break;
         case OPT_COMPRESS:
+            compress_bare = !value;
             level = 6;
             ok = !value || cli_parse_u32("cook", "compress", value, 1, 9, &level);
             o->compress_level = (int)level;
@@ -789,10 +926,19 @@ int cmd_cook(int argc, char **argv)
             break;
         case OPT_OUTPUT_DIR: out_dir = value; break;
         case OPT_MANIFEST: manifest = value; break;
-        case OPT_JOBS: ok = cli_parse_u32("cook", "jobs", value, 1, 256, &jobs); break;
+        case OPT_JOBS:
+            ok = cli_parse_u32("cook", "jobs", value, 1, 256, &jobs);
+            jobs_given = 1;
+            break;
         case OPT_SELECT: c.select = value; break;
         case OPT_DEPFILE: c.depfile = value; break;
+        case OPT_DEPFILES: c.depfiles = 1; break;
+        case OPT_FORCE: c.force = 1; break;
         case OPT_MATERIAL_MAP: c.material_map_path = value; break;
+        case OPT_IMPORT_TIMEOUT:
+            ok = cli_parse_u32("cook", "import-timeout", value, 0, 1000000, &c.import_timeout);
+            c.timeout_given = 1;
+            break;
         case OPT_SCALE: {
             char *end = NULL;
             c.scale = strtod(value, &end);
@@ -819,10 +965,20 @@ int cmd_cook(int argc, char **argv)
         return rc;
     }
     if (!out_dir && !manifest) {
-        if (npaths != 2)
-            rc = cli_usage_error("cook", "expected an input and an output file (or --output-dir DIR with inputs, "
-                                         "or --manifest FILE)");
-        else
+        /* --compress takes its level only as --compress=LEVEL: a bare level is taken for a file name */
+        const int level_as_path = compress_bare && npaths > 0 && paths[0][0] >= '1' && paths[0][0] <= '9' &&
+                                  !paths[0][1];
+        if (npaths != 2 && level_as_path)
+            rc = cli_usage_error("cook", "'%s' was taken for the input file: the level attaches with '=', "
+                                         "--compress=%s", paths[0], paths[0]);
+        else if (npaths != 2)
+            rc = cli_usage_error("cook", "expected an input and an output file, got %d file name%s (or "
+                                         "--output-dir DIR with inputs, or --manifest FILE)",
+                                 npaths, npaths == 1 ? "" : "s");
+        else if (jobs_given && !c.quiet)
+            cli_error("cook", NULL, "warning: --jobs cooks a batch (--output-dir or --manifest); one cook (IN "
+                                    "OUT) runs alone");
+        if (npaths == 2)
             rc = cook_one(&c, paths[0], paths[1]);
         free(paths);
         material_map_free(&c.map);
@@ -831,8 +987,8 @@ int cmd_cook(int argc, char **argv)
     /* A batch: the inputs named on the command line and in the manifest. */
     if (c.depfile) {
         free(paths);
-        return cli_usage_error("cook", "--depfile names one file: use it with single cooks (one per asset, as "
-                                       "make and ninja run them)");
+        return cli_usage_error("cook", "--depfile names one file: a batch writes one per asset with --depfiles "
+                                       "(OUT.d)");
     }
     struct stat st;
     if (out_dir && (stat(out_dir, &st) != 0 || !S_ISDIR(st.st_mode)))
@@ -850,5 +1006,32 @@ int cmd_cook(int argc, char **argv)
     batch_free(&b);
     free(paths);
     material_map_free(&c.map);
+    return rc;
+}
+
+/* make and ninja users type -j N (or -jN) for parallel jobs: it means --jobs N. */
+int cmd_cook(int argc, char **argv)
+{
+    static char jobs_option[] = "--jobs";
+    char **args = malloc((2 * (size_t)argc + 1) * sizeof *args);
+    if (!args) {
+        cli_error("cook", NULL, "out of memory");
+        return CLI_EXIT_USAGE;
+    }
+    int count = 0, options_end = 0;
+    for (int k = 0; k < argc; k++) {
+        const char *arg = argv[k];
+        options_end |= k > 0 && !strcmp(arg, "--");
+        if (k > 0 && !options_end && arg[0] == '-' && arg[1] == 'j') {
+            args[count++] = jobs_option;
+            if (arg[2])
+                args[count++] = argv[k] + 2;
+        } else {
+            args[count++] = argv[k];
+        }
+    }
+    args[count] = NULL;
+    int rc = cook_main(count, args);
+    free(args);
     return rc;
 }

@@ -8,12 +8,14 @@
 #include <unistd.h>
 
 #include "cli.h"
+#include "temp_cleanup.h"
 #include "commands.h"
+#include "json.h"
 #include "support/reference.h"
 #include "support/scene_gen.h"
 
 static const char usage[] =
-    "Usage: cbvh demo [--quiet]\n"
+    "Usage: cbvh demo [--quiet] [--json]\n"
     "\n"
     "Runs the whole pipeline on the built-in scene (a terrain with spheres, several materials),\n"
     "with no input files: generates it, cooks it into a temporary file (removed afterwards),\n"
@@ -27,6 +29,8 @@ static const char usage[] =
     "\n"
     "Options:\n"
     "  --quiet      print only the final line\n"
+    "  --json       print only {\"ok\", \"failed_checks\", \"triangles\"} (a failure to run:\n"
+    "               {\"command\", \"error\": {\"status\", \"file\", \"message\"}})\n"
     "  -h, --help   show this help\n"
     "\n"
     "Exit status: 0 when everything worked and agreed, 1 when an answer disagreed, 2 on an\n"
@@ -812,7 +816,8 @@ static int demo_load(demo *d, const cbvh_file *f)
 
 int cmd_demo(int argc, char **argv)
 {
-    static const cli_option options[] = {{"quiet", CLI_ARG_NONE, 1}, {NULL, 0, 0}};
+    static const cli_option options[] = {{"quiet", CLI_ARG_NONE, 1}, {"json", CLI_ARG_NONE, 2}, {NULL, 0, 0}};
+    int json = 0;
     demo d;
     memset(&d, 0, sizeof d);
     d.rng = 20240601;
@@ -827,6 +832,7 @@ int cmd_demo(int argc, char **argv)
             return CLI_EXIT_USAGE;
         if (id == CLI_POSITIONAL)
             return cli_usage_error("demo", "unexpected argument '%s'", value);
+        json |= id == 2;
         d.quiet = 1;
     }
 
@@ -849,6 +855,8 @@ int cmd_demo(int argc, char **argv)
         return CLI_EXIT_USAGE;
     }
     snprintf(path, sizeof path, "%s/demo.cbvh", dir);
+    temp_cleanup_add(dir, NULL);
+    temp_cleanup_add(path, NULL);
 
     cbvh_mesh mesh = {s.positions, s.vertex_count, 0, s.indices, s.triangle_count, s.material_ids};
     cbvh_cook_options opt;
@@ -894,7 +902,18 @@ int cmd_demo(int argc, char **argv)
     demo_oriented_boxes(&d);
     demo_overlaps(&d);
     demo_contacts(&d);
-    if (d.failures) {
+    if (json) {
+        json_writer w;
+        json_init(&w, stdout);
+        json_begin_object(&w, NULL);
+        json_bool(&w, "ok", d.failures == 0);
+        json_uint(&w, "failed_checks", (uint64_t)d.failures);
+        json_uint(&w, "triangles", st.triangles);
+        json_end_object(&w);
+        json_finish(&w);
+        cli_json_error_printed();
+        rc = d.failures ? CLI_EXIT_BAD_INPUT : CLI_EXIT_OK;
+    } else if (d.failures) {
         printf("cbvh demo: FAILED: %d check%s disagreed (details on stderr)\n", d.failures,
                d.failures == 1 ? "" : "s");
         rc = CLI_EXIT_BAD_INPUT;
@@ -907,5 +926,7 @@ out:
     free(d.valid);
     unlink(path);
     rmdir(dir);
+    temp_cleanup_done(path);
+    temp_cleanup_done(dir);
     return rc;
 }

@@ -179,13 +179,14 @@ static void print_text(const char *path, const cbvh_file *f, const cbvh_tree_sta
            in->bounds_max[0], in->bounds_max[1], in->bounds_max[2]);
     printf("grid: origin [%g %g %g], scale [%g %g %g]\n", in->grid_origin[0], in->grid_origin[1],
            in->grid_origin[2], in->grid_scale[0], in->grid_scale[1], in->grid_scale[2]);
-    printf("\nsections:\n  %-10s %10s %12s %12s %-5s %-9s %-8s %9s\n", "type", "offset", "size", "stored",
+    /* columns as wide as the longest names: material-names (14), id-name-table (13) */
+    printf("\nsections:\n  %-14s %10s %12s %12s %-5s %-13s %-8s %9s\n", "type", "offset", "size", "stored",
            "codec", "encoding", "crc32", "bytes/tri");
     for (uint32_t i = 0; i < in->section_count; i++) {
         cbvh_section_info s;
         if (!cbvh_file_get_section(f, i, &s))
             break;
-        printf("  %-10s %10llu %12llu %12llu %-5s %-9s %08x %9.2f\n", cli_section_name(s.type),
+        printf("  %-14s %10llu %12llu %12llu %-5s %-13s %08x %9.2f\n", cli_section_name(s.type),
                (unsigned long long)s.offset, (unsigned long long)s.size, (unsigned long long)s.stored_size,
                cbvh_codec_name(s.codec), cbvh_encoding_name(s.type, s.encoding), (unsigned)s.crc32,
                (double)s.stored_size * per_tri);

@@ -17,7 +17,8 @@ static const char usage[] =
     "\n"
     "Text input: one ray per line, 6 or 8 numbers separated by blanks:\n"
     "    ox oy oz dx dy dz [tmin tmax]\n"
-    "  tmin defaults to 0 and tmax to inf. A line with another number of fields or a field that\n"
+    "  tmin defaults to 0 and tmax to inf. Blank lines are skipped (they get no result). A line\n"
+    "  with another number of fields or a field that\n"
     "  is not a number is an error (\"line N: ...\", exit status 1); the results of the lines\n"
     "  before it have been written. A ray the library calls invalid (NaN, zero direction,\n"
     "  tmin > tmax, ...) is a miss.\n"
@@ -37,6 +38,10 @@ static const char usage[] =
     "                          box distance at run time), stream (each 4096 rays read\n"
     "                          go to cbvh_raycast_stream_scratch, batches of up to 1024)\n"
     "  --binary                binary records in and out, see above\n"
+    "  --json                  text output as one JSON object a line: {\"hit\": true,\n"
+    "                          \"triangle\", \"t\", \"u\", \"v\"} or {\"hit\": false}; with --any\n"
+    "                          {\"occluded\": true|false}; a failure prints {\"command\",\n"
+    "                          \"error\": {\"status\", \"file\", \"message\"}}\n"
     "  --expand-triangles      copy the triangles into the form the ray test reads first\n"
     "                          (cbvh_file_expand_triangles: 36 bytes a triangle; same answers)\n"
     "  -h, --help              show this help\n"
@@ -52,6 +57,7 @@ typedef struct raycast_job {
     int traversal; /* cbvh_traversal, or TRAVERSAL_STREAM */
     int any;
     int binary;
+    int json; /* text output as one JSON object per ray */
     cbvh_ray rays[RAYCAST_BATCH];
     cbvh_hit hits[RAYCAST_BATCH];
     uint8_t occluded[RAYCAST_BATCH];
@@ -119,6 +125,13 @@ static void raycast_batch(raycast_job *job, size_t count)
             put_f32le(rec + 8, h->u);
             put_f32le(rec + 12, h->v);
             fwrite(rec, 1, sizeof rec, stdout);
+        } else if (job->json && job->any) {
+            puts(job->occluded[i] ? "{\"occluded\": true}" : "{\"occluded\": false}");
+        } else if (job->json && h->tri == CBVH_NO_HIT) {
+            puts("{\"hit\": false}");
+        } else if (job->json) {
+            printf("{\"hit\": true, \"triangle\": %u, \"t\": %.9g, \"u\": %.9g, \"v\": %.9g}\n",
+                   (unsigned)h->tri, h->t, h->u, h->v);
         } else if (job->any) {
             puts(job->occluded[i] ? "1" : "0");
         } else if (h->tri == CBVH_NO_HIT) {
@@ -192,6 +205,8 @@ static int raycast_text(raycast_job *job)
         }
         line_no++;
         char why[128];
+        if (strspn(line, " \t\r\n") == (size_t)len)
+            continue; /* a blank line holds no ray (a trailing empty line, a separator) */
         if ((size_t)len != strlen(line)) {
             snprintf(why, sizeof why, "contains a NUL byte");
         } else if (parse_ray_line(line, &job->rays[count], why, sizeof why)) {
@@ -270,13 +285,11 @@ static int parse_traversal(const char *name, int *out)
 
 int cmd_raycast(int argc, char **argv)
 {
-    enum { OPT_ANY = 1, OPT_TRAVERSAL, OPT_BINARY, OPT_EXPAND };
+    enum { OPT_ANY = 1, OPT_TRAVERSAL, OPT_BINARY, OPT_EXPAND, OPT_JSON };
     static const cli_option options[] = {
-        {"any", CLI_ARG_NONE, OPT_ANY},
-        {"traversal", CLI_ARG_REQUIRED, OPT_TRAVERSAL},
-        {"binary", CLI_ARG_NONE, OPT_BINARY},
-        {"expand-triangles", CLI_ARG_NONE, OPT_EXPAND},
-        {NULL, 0, 0},
+        {"any", CLI_ARG_NONE, OPT_ANY},       {"traversal", CLI_ARG_REQUIRED, OPT_TRAVERSAL},
+        {"binary", CLI_ARG_NONE, OPT_BINARY}, {"expand-triangles", CLI_ARG_NONE, OPT_EXPAND},
+        {"json", CLI_ARG_NONE, OPT_JSON},     {NULL, 0, 0},
     };
     static raycast_job job; /* large: keep it off the stack */
     job.traversal = CBVH_TRAVERSAL_SORTED;
@@ -299,6 +312,9 @@ int cmd_raycast(int argc, char **argv)
         case OPT_EXPAND:
             expand = 1;
             break;
+        case OPT_JSON:
+            job.json = 1;
+            break;
         case OPT_TRAVERSAL:
             if (!parse_traversal(value, &job.traversal))
                 return cli_usage_error("raycast",
@@ -314,6 +330,8 @@ int cmd_raycast(int argc, char **argv)
     }
     if (!path)
         return cli_usage_error("raycast", "expected a file");
+    if (job.json && job.binary)
+        return cli_usage_error("raycast", "--json and --binary exclude each other");
     cbvh_file *file;
     int rc = cli_open("raycast", path, &file);
     if (rc)

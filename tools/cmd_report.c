@@ -559,7 +559,7 @@ static int measure_cook(report_state *s, mesh_ctx *c, size_t k, int *step, int s
     if (!status)
         expand_seconds = bench_open_expanded(s->command, path, s->cpu_clock, &expanded, &status);
     if (!s->out_dir)
-        unlink(path);
+        bench_remove_temp(path);
     if (status) {
         cbvh_close(file);
         return status;
@@ -711,7 +711,7 @@ static int report_mesh(report_state *s, const char *source, int generated)
     status = cook_into(s, &c, &opt, 0, path, sizeof path, &stats);
     if (!status) {
         status = cli_open(s->command, path, &c.reference);
-        unlink(path);
+        bench_remove_temp(path);
     }
     if (!status)
         bench_cbvh_variant(&c.reference_engine, c.reference, c.reference, 0);
@@ -936,22 +936,22 @@ int cmd_report(int argc, char **argv)
             inputs[count++] = value;
             break;
         case OPT_RAYS:
-            if (!cli_parse_u32(s.command, "--rays", value, 1, 100000000u, &u))
+            if (!cli_parse_u32(s.command, "rays", value, 1, 100000000u, &u))
                 status = CLI_EXIT_USAGE;
             s.rays = u;
             break;
         case OPT_SAMPLE:
-            if (!cli_parse_u32(s.command, "--sample", value, 0, 10000000u, &u))
+            if (!cli_parse_u32(s.command, "sample", value, 1, 10000000u, &u))
                 status = CLI_EXIT_USAGE;
             s.sample = u;
             break;
         case OPT_SEED:
-            if (!cli_parse_u32(s.command, "--seed", value, 0, UINT32_MAX, &u))
+            if (!cli_parse_u32(s.command, "seed", value, 0, UINT32_MAX, &u))
                 status = CLI_EXIT_USAGE;
             s.seed = u;
             break;
         case OPT_REPS:
-            if (!cli_parse_u32(s.command, "--reps", value, 1, 1000, &s.reps))
+            if (!cli_parse_u32(s.command, "reps", value, 1, 1000, &s.reps))
                 status = CLI_EXIT_USAGE;
             break;
         case OPT_CPU:

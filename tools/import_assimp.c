@@ -2,6 +2,8 @@
 #include <errno.h>
 #include <fnmatch.h>
 #include <limits.h>
+#include <math.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -68,8 +70,12 @@ static int import_mesh_instance(import_state *s, const struct aiMesh *mesh, cons
         float *p = out->positions + 3 * base;
         for (unsigned v = 0; v < mesh->mNumVertices; v++) {
             double x = mesh->mVertices[v].x, y = mesh->mVertices[v].y, z = mesh->mVertices[v].z;
+            /* A NaN or infinite coordinate would spread to every axis through the transform (inf * 0): kept
+             * as the file has it, so the cook's refusal names the axis and the kind the file holds. */
+            const int finite = isfinite(x) && isfinite(y) && isfinite(z);
             for (int r = 0; r < 3; r++)
-                p[3 * v + r] = (float)(xf->m[r][0] * x + xf->m[r][1] * y + xf->m[r][2] * z + xf->m[r][3]);
+                p[3 * v + r] = finite ? (float)(xf->m[r][0] * x + xf->m[r][1] * y + xf->m[r][2] * z + xf->m[r][3])
+                                      : (float)(r == 0 ? x : r == 1 ? y : z);
         }
     }
     s->vertex_total += mesh->mNumVertices;
@@ -229,46 +235,80 @@ static int import_scene(const struct aiScene *scene, const char *select, importe
 }
 
 
-/* assimp's file system, recording every file an import opens (for --depfile): a stdio file behind each
- * aiFile, the import_options behind the aiFileIO. */
+/* assimp's file system, recording every file an import opens (for --depfile): a stdio file (on disk, or over
+ * the inflated bytes of a .gz input) behind each aiFile, the import_options behind the aiFileIO. Reads are
+ * bounded: a seek past the end fails, and a reader that keeps asking for bytes at the end of the file
+ * (assimp's PLY header parser does, on a file cut inside its header) is reported through
+ * o->on_runaway_read, since assimp cannot be made to stop from here. */
+typedef struct io_file {
+    FILE *file;
+    size_t size;
+    unsigned long reads_at_end; /* reads that returned nothing */
+    int is_input;               /* the asset itself (not a side file): its reads are the import's progress */
+    int percent;                /* the last progress reported */
+    import_options *o;
+    char path[];
+} io_file;
+
+/* Reads that return nothing before the file counts as read in a loop: loaders probe the end a few times. */
+#define IO_MAX_READS_AT_END 65536ul
+
+static io_file *io_of(struct aiFile *f)
+{
+    return (io_file *)(void *)f->UserData;
+}
+
 static size_t io_read(struct aiFile *f, char *buffer, size_t size, size_t count)
 {
-    return fread(buffer, size, count, (FILE *)(void *)f->UserData);
+    io_file *io = io_of(f);
+    size_t n = size && count ? fread(buffer, size, count, io->file) : 0;
+    if (n == 0 && size && count && ++io->reads_at_end > IO_MAX_READS_AT_END && io->o->on_runaway_read)
+        io->o->on_runaway_read(io->o->hook_user, io->path);
+    if (io->is_input && io->size && io->o->on_read_progress) {
+        long at = ftell(io->file);
+        int percent = at < 0 ? io->percent : (int)(100.0 * (double)at / (double)io->size);
+        if (percent != io->percent) {
+            io->percent = percent;
+            io->o->on_read_progress(io->o->hook_user, percent);
+        }
+    }
+    return n;
 }
 
 static size_t io_write(struct aiFile *f, const char *buffer, size_t size, size_t count)
 {
-    return fwrite(buffer, size, count, (FILE *)(void *)f->UserData);
+    (void)f;
+    (void)buffer;
+    (void)size;
+    (void)count;
+    return 0; /* an import only reads */
 }
 
 static size_t io_tell(struct aiFile *f)
 {
-    long at = ftell((FILE *)(void *)f->UserData);
+    long at = ftell(io_of(f)->file);
     return at < 0 ? 0 : (size_t)at;
 }
 
 static size_t io_size(struct aiFile *f)
 {
-    FILE *file = (FILE *)(void *)f->UserData;
-    long at = ftell(file);
-    if (at < 0 || fseek(file, 0, SEEK_END) != 0)
-        return 0;
-    long end = ftell(file);
-    fseek(file, at, SEEK_SET);
-    return end < 0 ? 0 : (size_t)end;
+    return io_of(f)->size;
 }
 
 static enum aiReturn io_seek(struct aiFile *f, size_t offset, enum aiOrigin origin)
 {
-    int whence = origin == aiOrigin_SET ? SEEK_SET : origin == aiOrigin_CUR ? SEEK_CUR : SEEK_END;
-    if (offset > LONG_MAX)
+    io_file *io = io_of(f);
+    size_t base = origin == aiOrigin_SET ? 0 : origin == aiOrigin_CUR ? io_tell(f) : io->size;
+    /* assimp passes a backward seek from the current position as a wrapped size_t */
+    size_t target = base + offset;
+    if (target > io->size || target > LONG_MAX)
         return aiReturn_FAILURE;
-    return fseek((FILE *)(void *)f->UserData, (long)offset, whence) == 0 ? aiReturn_SUCCESS : aiReturn_FAILURE;
+    return fseek(io->file, (long)target, SEEK_SET) == 0 ? aiReturn_SUCCESS : aiReturn_FAILURE;
 }
 
 static void io_flush(struct aiFile *f)
 {
-    fflush((FILE *)(void *)f->UserData);
+    (void)f;
 }
 
 static void path_list_add(path_list *l, const char *path)
@@ -293,39 +333,82 @@ static void path_list_free(path_list *l)
     l->count = 0;
 }
 
-static struct aiFile *io_open(struct aiFileIO *io, const char *path, const char *mode)
+/* The bytes of an inflated .gz input, served under its name without ".gz". */
+typedef struct memory_file {
+    const char *name;     /* the name assimp asks for */
+    const char *recorded; /* the name the depfile lists (the .gz file) */
+    char *data;
+    size_t size;
+} memory_file;
+
+/* What the aiFileIO's user data points to. */
+typedef struct io_system {
+    import_options *o;
+    const memory_file *memory; /* NULL when the input is read from disk */
+    const char *input;         /* the name the asset is read under */
+} io_system;
+
+static struct aiFile *io_open(struct aiFileIO *fio, const char *path, const char *mode)
 {
-    import_options *o = (import_options *)(void *)io->UserData;
-    FILE *file = fopen(path, mode);
+    io_system *sys = (io_system *)(void *)fio->UserData;
+    import_options *o = sys->o;
+    const memory_file *mem = sys->memory;
+    const int in_memory = mem && !strcmp(path, mem->name);
+    if (strchr(mode, 'w') || strchr(mode, 'a') || strchr(mode, '+'))
+        return NULL;
+    /* fmemopen refuses an empty buffer: an empty input is an empty file on disk no more than in memory */
+    FILE *file = in_memory ? (mem->size ? fmemopen(mem->data, mem->size, "rb") : NULL) : fopen(path, "rb");
     if (!file) {
         /* assimp looks for a side file as named, as "./" + name, and when that fails under names it pastes
          * together from the folder and the path (they hold "//"): the first name is the one to report */
-        if (errno == ENOENT && !strstr(path, "//"))
+        if (!in_memory && errno == ENOENT && !strstr(path, "//"))
             path_list_add(&o->missing, strncmp(path, "./", 2) ? path : path + 2);
         return NULL;
     }
+    size_t size = mem && in_memory ? mem->size : 0;
+    if (!in_memory) {
+        if (fseek(file, 0, SEEK_END) != 0 || ftell(file) < 0 || fseek(file, 0, SEEK_SET) != 0) {
+            fclose(file); /* not a seekable file (a folder, a FIFO): nothing assimp can read */
+            return NULL;
+        }
+        fseek(file, 0, SEEK_END);
+        size = (size_t)ftell(file);
+        fseek(file, 0, SEEK_SET);
+    }
+    const char *recorded = in_memory ? mem->recorded : path;
     struct aiFile *f = calloc(1, sizeof *f);
-    if (!f) {
+    io_file *io = malloc(sizeof *io + strlen(recorded) + 1);
+    if (!f || !io) {
+        free(f);
+        free(io);
         fclose(file);
         return NULL;
     }
-    path_list_add(&o->opened, path);
+    io->file = file;
+    io->size = size;
+    io->reads_at_end = 0;
+    io->is_input = sys->input && !strcmp(path, sys->input);
+    io->percent = -1;
+    io->o = o;
+    strcpy(io->path, recorded);
+    path_list_add(&o->opened, recorded);
     f->ReadProc = io_read;
     f->WriteProc = io_write;
     f->TellProc = io_tell;
     f->FileSizeProc = io_size;
     f->SeekProc = io_seek;
     f->FlushProc = io_flush;
-    f->UserData = (aiUserData)(void *)file;
+    f->UserData = (aiUserData)(void *)io;
     return f;
 }
 
-static void io_close(struct aiFileIO *io, struct aiFile *f)
+static void io_close(struct aiFileIO *fio, struct aiFile *f)
 {
-    (void)io;
+    (void)fio;
     if (!f)
         return;
-    fclose((FILE *)(void *)f->UserData);
+    fclose(io_of(f)->file);
+    free(io_of(f));
     free(f);
 }
 
@@ -383,13 +466,135 @@ static int read_gzip(const char *path, char **out_data, size_t *out_size, char *
     return 0;
 }
 
+/* cbvh's own checks of the scene assimp built, before its post-processing steps run on it: those trust the
+ * importers, and on a truncated file an importer leaves faces with no indices or declares polygons it never
+ * filled in (an ai_assert in TriangulateProcess aborts then). Returns 0 or 1 with a message. */
+static int check_faces(const struct aiScene *scene, char *message, size_t message_size)
+{
+    for (unsigned m = 0; scene->mMeshes && m < scene->mNumMeshes; m++) {
+        const struct aiMesh *mesh = scene->mMeshes[m];
+        if (!mesh)
+            continue;
+        if ((mesh->mNumFaces && !mesh->mFaces) || (mesh->mNumVertices && !mesh->mVertices)) {
+            snprintf(message, message_size, "mesh %u lists %u vertices and %u faces but lacks them", m,
+                     mesh->mNumVertices, mesh->mNumFaces);
+            return 1;
+        }
+        unsigned types = 0;
+        for (unsigned f = 0; f < mesh->mNumFaces; f++) {
+            const struct aiFace *face = &mesh->mFaces[f];
+            if (face->mNumIndices == 0 || !face->mIndices) {
+                snprintf(message, message_size, "mesh %u: face %u has no vertex indices (a truncated file?)", m,
+                         f);
+                return 1;
+            }
+            for (unsigned k = 0; k < face->mNumIndices; k++) {
+                const unsigned v = face->mIndices[k];
+                if (v >= mesh->mNumVertices) {
+                    snprintf(message, message_size, "mesh %u: face %u uses vertex %u of %u", m, f, v,
+                             mesh->mNumVertices);
+                    return 1;
+                }
+                /* here, before assimp joins identical vertices (which merges a NaN one into another) */
+                const float xyz[3] = { mesh->mVertices[v].x, mesh->mVertices[v].y, mesh->mVertices[v].z };
+                for (int a = 0; a < 3; a++)
+                    if (!isfinite(xyz[a])) {
+                        snprintf(message, message_size,
+                                 "mesh %u: vertex %u (as assimp numbers them from 0; for OBJ one per face corner, "
+                                 "here face %u, corner %u): %c coordinate is %s",
+                                 m, v, f, k, "xyz"[a], isnan(xyz[a]) ? "NaN" : "infinite");
+                        return 1;
+                    }
+            }
+            types |= face->mNumIndices == 1   ? aiPrimitiveType_POINT
+                     : face->mNumIndices == 2 ? aiPrimitiveType_LINE
+                     : face->mNumIndices == 3 ? aiPrimitiveType_TRIANGLE
+                                              : aiPrimitiveType_POLYGON;
+        }
+        if ((types & ~mesh->mPrimitiveTypes & 15u) || ((mesh->mPrimitiveTypes & aiPrimitiveType_POLYGON) &&
+                                                       !(types & aiPrimitiveType_POLYGON) && mesh->mNumFaces)) {
+            snprintf(message, message_size,
+                     "mesh %u: its faces are not of the kinds it declares (0x%x, faces 0x%x; a truncated file?)",
+                     m, mesh->mPrimitiveTypes, types);
+            return 1;
+        }
+    }
+    return 0;
+}
+
+/* Drops the empty slots some importers (RAW) leave among a node's children, which assimp's validation
+ * refuses; the scene is ours until released, and aiNode frees only the children it counts. */
+static void drop_empty_children(struct aiNode *node, int depth)
+{
+    if (!node || !node->mChildren || depth > IMPORT_MAX_NODE_DEPTH)
+        return;
+    unsigned kept = 0;
+    for (unsigned c = 0; c < node->mNumChildren; c++)
+        if (node->mChildren[c])
+            node->mChildren[kept++] = node->mChildren[c];
+    node->mNumChildren = kept;
+    for (unsigned c = 0; c < kept; c++)
+        drop_empty_children(node->mChildren[c], depth + 1);
+}
+
+/* Reads `name` through `sys`: assimp's parse and validation (aiProcess_ValidateDataStructure, run inside the
+ * read, whose failure path is clean), cbvh's checks, then assimp's post-processing steps, then the merge. */
+static int import_through(const char *name, io_system *sys, imported_mesh *out, char *message, size_t message_size)
+{
+    struct aiFileIO io = { io_open, io_close, (aiUserData)(void *)sys };
+    sys->input = name;
+    const struct aiScene *scene = aiImportFileEx(name, aiProcess_ValidateDataStructure, &io);
+    if (!scene && strstr(aiGetErrorString(), "node of the scene-graph is nullptr")) {
+        /* the one defect validation refuses that cbvh repairs: read again unvalidated, then repair */
+        scene = aiImportFileEx(name, 0, &io);
+        if (scene)
+            drop_empty_children(scene->mRootNode, 0);
+    }
+    if (!scene) {
+        /* a point cloud fails validation before cbvh can count what it drops */
+        const char *error = aiGetErrorString();
+        snprintf(message, message_size, "%s: %s",
+                 strstr(error, "contains no faces") ? "no triangles (a point cloud?)" : "assimp cannot read it", error);
+        return 1;
+    }
+    if (check_faces(scene, message, message_size)) {
+        aiReleaseImport(scene);
+        return 1;
+    }
+    /* On failure assimp releases the scene itself (and assimp 5.2 then reads the freed scene: one more
+     * reason the tool imports in a child process). */
+    scene = aiApplyPostProcessing(scene, aiProcess_Triangulate | aiProcess_JoinIdenticalVertices |
+                                             aiProcess_SortByPType);
+    if (!scene) {
+        snprintf(message, message_size, "assimp's post-processing failed: %s", aiGetErrorString());
+        return 1;
+    }
+    int rc = import_scene(scene, sys->o->select, out, message, message_size);
+    aiReleaseImport(scene);
+    if (rc)
+        imported_mesh_free(out);
+    return rc;
+}
+
+int import_assimp_memory(const void *data, size_t size, const char *name, import_options *o, imported_mesh *out,
+                         char *message, size_t message_size)
+{
+    memset(out, 0, sizeof *out);
+    import_options none;
+    memset(&none, 0, sizeof none);
+    memory_file mem = { name, name, (char *)(uintptr_t)data, size };
+    io_system sys = { o ? o : &none, &mem, NULL };
+    int rc = import_through(name, &sys, out, message, message_size);
+    import_options_free(&none);
+    return rc;
+}
+
 int import_assimp(const char *path, import_options *o, imported_mesh *out, char *message, size_t message_size)
 {
     memset(out, 0, sizeof *out);
     import_options none;
     memset(&none, 0, sizeof none);
-    if (!o)
-        o = &none;
+    io_system sys = { o ? o : &none, NULL, NULL };
     /* assimp reports "file not found" and "unknown format" alike; tell I/O errors apart first. */
     FILE *probe = fopen(path, "rb");
     if (!probe) {
@@ -398,39 +603,26 @@ int import_assimp(const char *path, import_options *o, imported_mesh *out, char 
     }
     fclose(probe);
 
-    const unsigned flags = aiProcess_Triangulate | aiProcess_JoinIdenticalVertices | aiProcess_SortByPType;
-    const struct aiScene *scene;
+    int rc;
     size_t len = strlen(path);
     if (len > 3 && !strcmp(path + len - 3, ".gz")) {
-        char *data = NULL;
-        size_t size = 0;
-        int rc = read_gzip(path, &data, &size, message, message_size);
-        if (rc)
-            return rc;
-        /* The format hint is the extension before ".gz". */
-        char hint[16] = "";
-        const char *dot = NULL;
-        for (const char *c = path; c < path + len - 3; c++)
-            if (*c == '.')
-                dot = c;
-        if (dot && (size_t)(path + len - 3 - dot - 1) < sizeof hint)
-            memcpy(hint, dot + 1, (size_t)(path + len - 3 - dot - 1));
-        scene = aiImportFileFromMemory(data, (unsigned)size, flags, hint);
-        free(data);
-        path_list_add(&o->opened, path);
+        /* Read under the name without ".gz": its extension picks the format, its folder the side files. */
+        memory_file mem = { NULL, path, NULL, 0 };
+        char *name = strdup(path);
+        rc = name ? read_gzip(path, &mem.data, &mem.size, message, message_size) : 2;
+        if (!name)
+            snprintf(message, message_size, "out of memory");
+        if (rc == 0) {
+            name[len - 3] = '\0';
+            mem.name = name;
+            sys.memory = &mem;
+            rc = import_through(name, &sys, out, message, message_size);
+            free(mem.data);
+        }
+        free(name);
     } else {
-        struct aiFileIO io = { io_open, io_close, (aiUserData)(void *)o };
-        scene = aiImportFileEx(path, flags, &io);
+        rc = import_through(path, &sys, out, message, message_size);
     }
-    if (!scene) {
-        snprintf(message, message_size, "assimp cannot read it: %s", aiGetErrorString());
-        import_options_free(&none);
-        return 1;
-    }
-    int rc = import_scene(scene, o->select, out, message, message_size);
-    aiReleaseImport(scene);
-    if (rc)
-        imported_mesh_free(out);
     import_options_free(&none);
     return rc;
 }

@@ -3,6 +3,7 @@
 #include <inttypes.h>
 #include <math.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include "json.h"
 
@@ -163,11 +164,20 @@ static void json_number(json_writer *w, const char *key, double v, int single)
         fputs("null", w->out);
         return;
     }
-    char buf[40];
+    char buf[64];
     for (int prec = 1; prec <= 17; prec++) {
         snprintf(buf, sizeof buf, "%.*g", prec, v);
         if (single ? strtof(buf, NULL) == (float)v : strtod(buf, NULL) == v)
             break;
+    }
+    /* %g writes 50 as "5e+01": numbers a reader expects in plain notation get the fewest decimals that
+     * read back exactly */
+    if (strchr(buf, 'e') && fabs(v) >= 1e-4 && fabs(v) < 1e15) {
+        for (int decimals = 0; decimals <= 20; decimals++) {
+            snprintf(buf, sizeof buf, "%.*f", decimals, v);
+            if (single ? strtof(buf, NULL) == (float)v : strtod(buf, NULL) == v)
+                break;
+        }
     }
     fputs(buf, w->out);
 }

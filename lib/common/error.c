@@ -1,6 +1,7 @@
 /* error.c: result strings and error messages. */
 #include <stdarg.h>
 #include <stdio.h>
+#include <string.h>
 
 #include "common/error.h"
 
@@ -35,8 +36,11 @@ cbvh_result cbvh_fail(cbvh_error *err, cbvh_result code, const char *fmt, ...)
         va_list ap;
         va_start(ap, fmt);
         err->code = code;
-        vsnprintf(err->message, sizeof err->message, fmt, ap);
+        int n = vsnprintf(err->message, sizeof err->message, fmt, ap);
         va_end(ap);
+        /* a message cut to fit (a long path at its end) says so */
+        if (n >= (int)sizeof err->message)
+            memcpy(err->message + sizeof err->message - 4, "...", 4);
     }
     return code;
 }

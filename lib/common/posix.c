@@ -166,19 +166,28 @@ void cbvh_os_unmap(const uint8_t *bytes, size_t size)
 
 static const char temp_suffix[] = ".tmp-XXXXXX";
 
-/* "dir/name" -> "dir/.name.tmp-XXXXXX": the same folder, so rename() stays on one file system. */
+/* The longest file name the temporary name may have: a name the system takes (NAME_MAX, 255 on the common
+ * file systems) must not fail only because its temporary name is longer. */
+#define TEMP_NAME_MAX 255
+
+/* "dir/name" -> "dir/.name.tmp-XXXXXX": the same folder, so rename() stays on one file system. The name part
+ * is cut so the temporary name fits whenever the output's name does. */
 static char *temp_template(const cbvh_allocator *a, const char *path)
 {
     const char *slash = strrchr(path, '/');
     size_t dir_len = slash ? (size_t)(slash - path) + 1 : 0;
     size_t len = strlen(path);
-    char *t = cbvh_alloc(a, len + 1 + sizeof temp_suffix, 1);
+    size_t name_len = len - dir_len;
+    const size_t room = TEMP_NAME_MAX - 1 - (sizeof temp_suffix - 1);
+    if (name_len > room)
+        name_len = room;
+    char *t = cbvh_alloc(a, dir_len + 1 + name_len + sizeof temp_suffix, 1);
     if (!t)
         return NULL;
     memcpy(t, path, dir_len);
     t[dir_len] = '.';
-    memcpy(t + dir_len + 1, path + dir_len, len - dir_len);
-    memcpy(t + len + 1, temp_suffix, sizeof temp_suffix);
+    memcpy(t + dir_len + 1, path + dir_len, name_len);
+    memcpy(t + dir_len + 1 + name_len, temp_suffix, sizeof temp_suffix);
     return t;
 }
 
@@ -227,7 +236,8 @@ static cbvh_result check_target(const char *path, mode_t *mode, int *keep_mode, 
     if (lstat(path, &st) != 0) {
         if (errno == ENOENT)
             return CBVH_OK;
-        return cbvh_fail(err, CBVH_ERROR_IO, "%s: cannot inspect the output path: %s", path, strerror(errno));
+        return cbvh_fail(err, CBVH_ERROR_IO, "cannot inspect the output path (%s): %s", strerror(errno),
+                         path);
     }
     if (S_ISLNK(st.st_mode))
         return CBVH_OK;
@@ -238,9 +248,10 @@ static cbvh_result check_target(const char *path, mode_t *mode, int *keep_mode, 
                            : S_ISFIFO(st.st_mode) ? "a FIFO"
                            : S_ISSOCK(st.st_mode) ? "a socket"
                                                   : "not a regular file";
-        return cbvh_fail(err, CBVH_ERROR_IO,
-                         "%s is %s: a cooked file replaces only a regular file (or a symbolic link)", path,
-                         what);
+        return cbvh_fail(
+            err, CBVH_ERROR_IO,
+            "the output is %s: a cooked file replaces only a regular file (or a symbolic link): %s", what,
+            path);
     }
     *mode = st.st_mode & 07777;
     *keep_mode = 1;
@@ -341,8 +352,8 @@ cbvh_result cbvh_os_write_file_replacing(const char *path, const uint8_t *data, 
     int named;
     int fd = create_temp(temp, path, &named, &saved);
     if (fd < 0) {
-        r = cbvh_fail(err, CBVH_ERROR_IO, "cannot create a temporary file beside '%s': %s", path,
-                      strerror(errno));
+        r = cbvh_fail(err, CBVH_ERROR_IO, "cannot create a temporary file (%s) beside %s", strerror(errno),
+                      path);
         cbvh_free(a, temp);
         return r;
     }
@@ -384,8 +395,13 @@ cbvh_result cbvh_os_write_file_replacing(const char *path, const uint8_t *data, 
     if (failed) {
         if (named)
             unlink(temp);
-        r = cbvh_fail(err, CBVH_ERROR_IO, "cannot %s the temporary file '%s' for '%s': %s", failed, temp,
-                      path, strerror(saved_errno));
+        /* an unnamed (O_TMPFILE) file has no name to show: its template's XXXXXX would only mislead */
+        if (named)
+            r = cbvh_fail(err, CBVH_ERROR_IO, "cannot %s the temporary file (%s): %s", failed,
+                          strerror(saved_errno), temp);
+        else
+            r = cbvh_fail(err, CBVH_ERROR_IO, "cannot %s the (unnamed) temporary file (%s) for %s", failed,
+                          strerror(saved_errno), path);
     } else {
         sync_folder(temp, path);
     }

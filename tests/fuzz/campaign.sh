@@ -1,7 +1,7 @@
 #!/bin/sh
 # campaign.sh: a timed libFuzzer campaign for one cbvh fuzz target, from a fuzzing build.
 # Usage: tests/fuzz/campaign.sh [--keep-going] TARGET SECONDS [BUILD_DIR]
-#   TARGET is open or cook; BUILD_DIR (default .) was configured with
+#   TARGET is open, cook or import (import needs a build with the tool: no --disable-tools); BUILD_DIR (default .) was configured with
 #   `configure --enable-fuzzing CC=clang --disable-tools` and built with `make tests/fuzz/fuzz_TARGET`.
 #   --keep-going: libFuzzer's fork mode with -ignore_crashes, so the campaign runs for all of
 #   SECONDS and collects every crash instead of stopping at the first one.
@@ -9,7 +9,7 @@
 # committed corpus); crashes land in BUILD_DIR/fuzz-artifacts/TARGET and the
 # log in BUILD_DIR/fuzz-TARGET.log, whose last lines give executions and cov/ft.
 set -eu
-usage="usage: campaign.sh [--keep-going] open|cook SECONDS [BUILD_DIR]"
+usage="usage: campaign.sh [--keep-going] open|cook|import SECONDS [BUILD_DIR]"
 mode=
 if [ "${1:-}" = --keep-going ]; then
     mode="-fork=1 -ignore_crashes=1"
@@ -18,7 +18,7 @@ fi
 target=${1:?$usage}
 seconds=${2:?$usage}
 build=${3:-.}
-case "$target" in open|cook) ;; *) echo "campaign.sh: unknown target '$target'; $usage" >&2; exit 2 ;; esac
+case "$target" in open|cook|import) ;; *) echo "campaign.sh: unknown target '$target'; $usage" >&2; exit 2 ;; esac
 case "$seconds" in ''|*[!0-9]*) echo "campaign.sh: SECONDS must be a whole number, not '$seconds'" >&2; exit 2 ;; esac
 here=$(cd "$(dirname "$0")" && pwd)
 bin="$build/tests/fuzz/fuzz_$target"
@@ -28,6 +28,19 @@ artifacts="$build/fuzz-artifacts/$target"
 mkdir -p "$corpus" "$artifacts"
 dict=
 [ "$target" = open ] && dict="-dict=$here/cbvh.dict"
+# import: the small PLY, OBJ, STL, OFF and glTF/GLB files of Debian's assimp-testmodels join the seeds, each
+# behind the byte that picks its format (fuzz_import.c).
+models=/usr/share/assimp/models
+if [ "$target" = import ] && [ -d "$models" ]; then
+    for pair in PLY:ply:0 OBJ:obj:1 STL:stl:2 OFF:off:3 glTF2:gltf:4 glTF2:glb:5; do
+        folder=${pair%%:*} rest=${pair#*:}
+        ext=${rest%%:*} byte=${rest#*:}
+        find "$models/$folder" -type f -name "*.$ext" -size -8k | while read -r f; do
+            seed="$corpus/testmodels-$(echo "$f" | tr '/' '_')"
+            [ -e "$seed" ] || { printf "\\$(printf %o "$byte")"; cat "$f"; } >"$seed"
+        done
+    done
+fi
 # -max_len: small files reach every section; -timeout: a query that takes a
 # second on a tiny file is a hang; -rss_limit_mb: the loader must not balloon.
 "$bin" $mode $dict -max_total_time="$seconds" -max_len=8192 -timeout=5 -rss_limit_mb=1024 \
