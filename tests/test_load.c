@@ -1013,9 +1013,9 @@ static void test_invalid_query_rule(void **state)
     assert_int_equal(cbvh_open_path(vector_path("good-box-raw"), NULL, &f, &err), CBVH_OK);
     const float nan = (float)NAN;
     const cbvh_ray invalid[] = {
-        { { 0, 0, -5 }, 0, { 0, 0, nan }, INFINITY }, /* NaN direction */
-        { { 0, 0, -5 }, 0, { 0, 0, 0 }, INFINITY },   /* zero direction */
-        { { 0, 0, -5 }, 2, { 0, 0, 1 }, 1 },          /* tmin > tmax */
+        {{0, 0, -5}, 0, {0, 0, nan}, INFINITY}, /* NaN direction */
+        {{0, 0, -5}, 0, {0, 0, 0}, INFINITY},   /* zero direction */
+        {{0, 0, -5}, 2, {0, 0, 1}, 1},          /* tmin > tmax */
     };
     for (size_t k = 0; k < sizeof invalid / sizeof *invalid; k++) {
         cbvh_hit hit;
@@ -1023,12 +1023,14 @@ static void test_invalid_query_rule(void **state)
         assert_int_equal(hit.tri, CBVH_NO_HIT);
         assert_int_equal(cbvh_occluded(f, &invalid[k], CBVH_TRAVERSAL_SORTED, NULL), 0);
         cbvh_hit_record with_hit;
-        assert_int_equal(cbvh_raycast_with(f, &invalid[k], NULL, &with_hit, NULL), CBVH_ERROR_INVALID_ARGUMENT);
+        assert_int_equal(cbvh_raycast_with(f, &invalid[k], NULL, &with_hit, NULL),
+                         CBVH_ERROR_INVALID_ARGUMENT);
         assert_int_equal(with_hit.tri, CBVH_NO_HIT);
         int occluded = 1;
-        assert_int_equal(cbvh_occluded_with(f, &invalid[k], NULL, &occluded, NULL), CBVH_ERROR_INVALID_ARGUMENT);
+        assert_int_equal(cbvh_occluded_with(f, &invalid[k], NULL, &occluded, NULL),
+                         CBVH_ERROR_INVALID_ARGUMENT);
     }
-    const float center[3] = { 0, 0, 0 };
+    const float center[3] = {0, 0, 0};
     assert_int_equal(cbvh_overlap_sphere(f, center, nan, NULL, NULL, NULL, 0), 0);
     cbvh_close(f);
 }

@@ -431,8 +431,9 @@ static void test_recommendation(void **state)
     assert_non_null(strstr(text, "differ by 5 %, so differences under 10 %"));
     assert_non_null(strstr(text, "\"zlib 6\" gives 13.0 bytes per triangle instead of 24.0"));
     /* the same tree stored otherwise: its run time is noise, not a cost */
-    assert_non_null(strstr(text, "the same tree, so the same speed once open (its 1050 ns per ray against 1000 is "
-                                 "timing noise)"));
+    assert_non_null(strstr(text,
+                           "the same tree, so the same speed once open (its 1050 ns per ray against 1000 is "
+                           "timing noise)"));
     assert_non_null(strstr(text, "\"q16 vertices\" is not exact")); /* same size: no saving claimed */
 
     /* beyond the noise, the faster exact configuration wins */
@@ -442,7 +443,8 @@ static void test_recommendation(void **state)
     assert_non_null(
         strstr(text, "Recommended: \"leaf 8\" (binary layout, q16 boxes, float vertices, leaf 8,"));
     assert_non_null(strstr(text, "25 % faster than the default"));
-    assert_non_null(strstr(text, "with the same answers, at 1050 ns per ray")); /* another tree than the pick's */
+    assert_non_null(
+        strstr(text, "with the same answers, at 1050 ns per ray")); /* another tree than the pick's */
 
     /* nothing exact: no recommendation */
     for (int i = 0; i < 6; i++)

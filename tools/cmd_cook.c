@@ -1,4 +1,5 @@
-/* cmd_cook.c: `cbvh cook`: import a mesh file (or generate a scene), cook it, write the .cbvh file atomically. */
+/* cmd_cook.c: `cbvh cook`: import a mesh file (or generate a scene), cook it, write the .cbvh file
+ * atomically. */
 #include <errno.h>
 #include <fcntl.h>
 #include <math.h>
@@ -135,30 +136,30 @@ enum {
 };
 
 static const cli_option options[] = {
-    { "leaf-size", CLI_ARG_REQUIRED, OPT_LEAF },
-    { "layout", CLI_ARG_REQUIRED, OPT_LAYOUT },
-    { "bins", CLI_ARG_REQUIRED, OPT_BINS },
-    { "traversal-cost", CLI_ARG_REQUIRED, OPT_TCOST },
-    { "intersection-cost", CLI_ARG_REQUIRED, OPT_ICOST },
-    { "compress", CLI_ARG_OPTIONAL, OPT_COMPRESS },
-    { "quantize-vertices", CLI_ARG_NONE, OPT_QUANTIZE },
-    { "no-remap", CLI_ARG_NONE, OPT_NO_REMAP },
-    { "no-materials", CLI_ARG_NONE, OPT_NO_MATERIALS },
-    { "quiet", CLI_ARG_NONE, OPT_QUIET },
-    { "json", CLI_ARG_NONE, OPT_JSON },
-    { "max-memory", CLI_ARG_REQUIRED, OPT_MAX_MEMORY },
-    { "output-dir", CLI_ARG_REQUIRED, OPT_OUTPUT_DIR },
-    { "manifest", CLI_ARG_REQUIRED, OPT_MANIFEST },
-    { "jobs", CLI_ARG_REQUIRED, OPT_JOBS },
-    { "select", CLI_ARG_REQUIRED, OPT_SELECT },
-    { "scale", CLI_ARG_REQUIRED, OPT_SCALE },
-    { "up-axis", CLI_ARG_REQUIRED, OPT_UP_AXIS },
-    { "depfile", CLI_ARG_REQUIRED, OPT_DEPFILE },
-    { "material-map", CLI_ARG_REQUIRED, OPT_MATERIAL_MAP },
-    { "import-timeout", CLI_ARG_REQUIRED, OPT_IMPORT_TIMEOUT },
-    { "depfiles", CLI_ARG_NONE, OPT_DEPFILES },
-    { "force", CLI_ARG_NONE, OPT_FORCE },
-    { NULL, 0, 0 },
+    {"leaf-size", CLI_ARG_REQUIRED, OPT_LEAF},
+    {"layout", CLI_ARG_REQUIRED, OPT_LAYOUT},
+    {"bins", CLI_ARG_REQUIRED, OPT_BINS},
+    {"traversal-cost", CLI_ARG_REQUIRED, OPT_TCOST},
+    {"intersection-cost", CLI_ARG_REQUIRED, OPT_ICOST},
+    {"compress", CLI_ARG_OPTIONAL, OPT_COMPRESS},
+    {"quantize-vertices", CLI_ARG_NONE, OPT_QUANTIZE},
+    {"no-remap", CLI_ARG_NONE, OPT_NO_REMAP},
+    {"no-materials", CLI_ARG_NONE, OPT_NO_MATERIALS},
+    {"quiet", CLI_ARG_NONE, OPT_QUIET},
+    {"json", CLI_ARG_NONE, OPT_JSON},
+    {"max-memory", CLI_ARG_REQUIRED, OPT_MAX_MEMORY},
+    {"output-dir", CLI_ARG_REQUIRED, OPT_OUTPUT_DIR},
+    {"manifest", CLI_ARG_REQUIRED, OPT_MANIFEST},
+    {"jobs", CLI_ARG_REQUIRED, OPT_JOBS},
+    {"select", CLI_ARG_REQUIRED, OPT_SELECT},
+    {"scale", CLI_ARG_REQUIRED, OPT_SCALE},
+    {"up-axis", CLI_ARG_REQUIRED, OPT_UP_AXIS},
+    {"depfile", CLI_ARG_REQUIRED, OPT_DEPFILE},
+    {"material-map", CLI_ARG_REQUIRED, OPT_MATERIAL_MAP},
+    {"import-timeout", CLI_ARG_REQUIRED, OPT_IMPORT_TIMEOUT},
+    {"depfiles", CLI_ARG_NONE, OPT_DEPFILES},
+    {"force", CLI_ARG_NONE, OPT_FORCE},
+    {NULL, 0, 0},
 };
 
 /* The mesh to cook, whichever way it was obtained. */
@@ -174,15 +175,16 @@ static void import_progress(void *user, int percent)
 }
 
 /* Returns an exit status; on success `in` holds the mesh, else `message` says why. */
-static int load_input(const char *path, import_options *io, unsigned timeout_seconds, cook_input *in, char *message,
-                      size_t message_size)
+static int load_input(const char *path, import_options *io, unsigned timeout_seconds, cook_input *in,
+                      char *message, size_t message_size)
 {
     memset(in, 0, sizeof *in);
     if (!strncmp(path, "gen:", 4)) {
         scene s;
         if (!scene_from_spec(&s, path + 4)) {
-            snprintf(message, message_size, "not a generated scene (gen:sphere:N, gen:terrain:N, gen:soup:N, "
-                                            "gen:cube, gen:demo)");
+            snprintf(message, message_size,
+                     "not a generated scene (gen:sphere:N, gen:terrain:N, gen:soup:N, "
+                     "gen:cube, gen:demo)");
             return CLI_EXIT_USAGE;
         }
         in->generated = 1;
@@ -197,8 +199,10 @@ static int load_input(const char *path, import_options *io, unsigned timeout_sec
     return import_contained(path, io, timeout_seconds, &in->mesh, message, message_size);
 }
 
-/* A failed cook as JSON: input, output, error {status (the exit status), file (the one at fault), message}. */
-static void report_json(FILE *to, const char *in, const char *out, const char *file, int status, const char *message)
+/* A failed cook as JSON: input, output, error {status (the exit status), file (the one at fault), message}.
+ */
+static void report_json(FILE *to, const char *in, const char *out, const char *file, int status,
+                        const char *message)
 {
     json_writer w;
     json_init(&w, to);
@@ -263,7 +267,7 @@ typedef struct cook_notes {
 static void print_json(const char *in, const char *out, const cook_input *input, const cbvh_cook_stats *st,
                        const cook_notes *notes, double import_seconds, double total_seconds)
 {
-    static const char *const phase_names[] = { "prepare", "build", "layout", "write" };
+    static const char *const phase_names[] = {"prepare", "build", "layout", "write"};
     double per_tri = st->triangles ? 1.0 / (double)st->triangles : 0;
     json_writer w;
     json_init(&w, stdout);
@@ -333,8 +337,9 @@ static void print_summary(const char *in, const char *out, const cook_input *inp
     printf("%s -> %s: %llu triangles", in, out, (unsigned long long)st->triangles);
     uint64_t dropped = st->dropped_degenerate + input->mesh.dropped_points + input->mesh.dropped_lines;
     if (dropped)
-        printf(" (dropped %llu degenerate, %llu points, %llu lines)", (unsigned long long)st->dropped_degenerate,
-               (unsigned long long)input->mesh.dropped_points, (unsigned long long)input->mesh.dropped_lines);
+        printf(" (dropped %llu degenerate, %llu points, %llu lines)",
+               (unsigned long long)st->dropped_degenerate, (unsigned long long)input->mesh.dropped_points,
+               (unsigned long long)input->mesh.dropped_lines);
     printf(", %llu vertices\n", (unsigned long long)st->vertices);
     printf("  tree: %llu nodes, %llu leaves, depth %u, SAH cost %.2f\n", (unsigned long long)st->nodes,
            (unsigned long long)st->leaves, (unsigned)st->depth, st->sah_cost);
@@ -396,7 +401,7 @@ static void transform_positions(const cook_settings *c, imported_mesh *m)
             continue; /* refused by the cook, which names the file's axis */
         const double x = c->scale * p[0], y = c->scale * p[1], z = c->scale * p[2];
         /* +Y to +Z: a quarter turn about +X; +Y to +X: a quarter turn about -Z */
-        const double out[3][3] = { { x, y, z }, { y, -x, z }, { x, -z, y } };
+        const double out[3][3] = {{x, y, z}, {y, -x, z}, {x, -z, y}};
         const int k = c->up_axis == 'y' ? 0 : c->up_axis == 'x' ? 1 : 2;
         for (int a = 0; a < 3; a++)
             p[a] = (float)out[k][a];
@@ -434,12 +439,14 @@ static int cook_checked(const cook_settings *c, const char *in, const char *out,
     double import_seconds = cli_now() - t0;
     transform_positions(c, &input.mesh);
     for (size_t k = 0; k < io.missing.count; k++)
-        cli_error("cook", in, "warning: the asset refers to '%s', which was not found: its materials may be "
-                  "missing or numbered differently", io.missing.paths[k]);
+        cli_error("cook", in,
+                  "warning: the asset refers to '%s', which was not found: its materials may be "
+                  "missing or numbered differently",
+                  io.missing.paths[k]);
     cbvh_material_name *names = NULL;
     uint32_t name_count = 0;
-    rc = material_names_prepare(&input.mesh, c->material_map_path ? &c->map : NULL, c->material_map_path, &names,
-                                &name_count, message, sizeof message);
+    rc = material_names_prepare(&input.mesh, c->material_map_path ? &c->map : NULL, c->material_map_path,
+                                &names, &name_count, message, sizeof message);
     if (rc) {
         import_options_free(&io);
         imported_mesh_free(&input.mesh);
@@ -447,10 +454,10 @@ static int cook_checked(const cook_settings *c, const char *in, const char *out,
     }
     opt.material_names = names;
     opt.material_name_count = name_count;
-    const cook_notes notes = { names, name_count, &io.missing };
+    const cook_notes notes = {names, name_count, &io.missing};
 
-    cbvh_mesh mesh = { input.mesh.positions, input.mesh.vertex_count, 0, input.mesh.indices,
-                       input.mesh.triangle_count, input.mesh.material_ids };
+    cbvh_mesh mesh = {input.mesh.positions, input.mesh.vertex_count,   0,
+                      input.mesh.indices,   input.mesh.triangle_count, input.mesh.material_ids};
     opt.progress = progress_cook_callback;
     opt.progress_user = &prog;
     cbvh_cook_stats stats;
@@ -460,7 +467,8 @@ static int cook_checked(const cook_settings *c, const char *in, const char *out,
     depfile_commit dc;
     memset(&dc, 0, sizeof dc);
     if (depfile && depfile_put(&dc, depfile, out, in, &io.opened, &io.missing, c->material_map_path) != 0) {
-        snprintf(message, sizeof message, "cannot write the depfile: %s (nothing was changed)", strerror(errno));
+        snprintf(message, sizeof message, "cannot write the depfile: %s (nothing was changed)",
+                 strerror(errno));
         rc = report_failure(json, in, out, depfile, CLI_EXIT_USAGE, message);
         free(names);
         import_options_free(&io);
@@ -474,11 +482,12 @@ static int cook_checked(const cook_settings *c, const char *in, const char *out,
     if (res != CBVH_OK) {
         /* Mesh problems belong to the input, I/O problems to the output. */
         const char *culprit = (res == CBVH_ERROR_IO || res == CBVH_ERROR_INVALID_ARGUMENT) ? out : in;
-        snprintf(message, sizeof message, "%s: %s%s", cbvh_result_string(err.code), err.message,
-                 !strncmp(err.message, "vertex ", 7) && !input.generated
-                     ? " (vertices counted from 0 in the imported mesh, after assimp joined identical ones: not "
-                       "the file's numbering)"
-                     : "");
+        snprintf(
+            message, sizeof message, "%s: %s%s", cbvh_result_string(err.code), err.message,
+            !strncmp(err.message, "vertex ", 7) && !input.generated
+                ? " (vertices counted from 0 in the imported mesh, after assimp joined identical ones: not "
+                  "the file's numbering)"
+                : "");
         rc = report_failure(json, in, out, culprit, cli_exit_for(err.code), message);
     } else if (json) {
         print_json(in, out, &input, &stats, &notes, import_seconds, total_seconds);
@@ -511,8 +520,9 @@ static int cook_one(const cook_settings *c, const char *in, const char *out)
 {
     const int json = c->json;
     if (same_file(in, out))
-        return report_failure(json, in, out, out, CLI_EXIT_USAGE,
-                              "is the input file itself: cooking would replace the asset (choose another output)");
+        return report_failure(
+            json, in, out, out, CLI_EXIT_USAGE,
+            "is the input file itself: cooking would replace the asset (choose another output)");
     struct stat st;
     if (!c->force && stat(out, &st) == 0 && S_ISREG(st.st_mode) &&
         (st.st_uid == geteuid() ? !(st.st_mode & S_IWUSR) : access(out, W_OK) != 0))
@@ -625,8 +635,9 @@ static int read_manifest(const char *path, const char *out_dir, batch *b)
         if (tab)
             *tab = '\0';
         if (!tab && !out_dir) {
-            cli_error("cook", path, "line %u: '%s' names no output (IN<TAB>OUT) and no --output-dir was given",
-                      number, line);
+            cli_error("cook", path,
+                      "line %u: '%s' names no output (IN<TAB>OUT) and no --output-dir was given", number,
+                      line);
             rc = CLI_EXIT_USAGE;
         } else if (!*line || (tab && !tab[1])) {
             cli_error("cook", path, "line %u: an empty input or output path", number);
@@ -703,7 +714,7 @@ static void batch_on_signal(int sig)
     batch_stop = sig;
 }
 
-static const int batch_signals[] = { SIGINT, SIGTERM, SIGHUP };
+static const int batch_signals[] = {SIGINT, SIGTERM, SIGHUP};
 
 /* Catches (`on` 1) or restores (0) the signals that stop a batch; one the caller ignores stays ignored. */
 static void batch_catch_signals(int on)
@@ -814,7 +825,7 @@ static int run_batch(const cook_settings *c, const batch *b, uint32_t jobs)
             for (uint32_t k = 0; k < jobs; k++)
                 if (running[k].pid)
                     child_drain(&running[k]);
-            struct timespec pause = { 0, 2000000 };
+            struct timespec pause = {0, 2000000};
             nanosleep(&pause, NULL);
         }
         if (pid < 0)
@@ -888,9 +899,15 @@ static int cook_main(int argc, char **argv)
         int ok = 1;
         uint32_t level;
         switch (id) {
-        case CLI_DONE: free(paths); return CLI_EXIT_OK;
-        case CLI_ERROR: free(paths); return CLI_EXIT_USAGE;
-        case CLI_POSITIONAL: paths[npaths++] = value; break;
+        case CLI_DONE:
+            free(paths);
+            return CLI_EXIT_OK;
+        case CLI_ERROR:
+            free(paths);
+            return CLI_EXIT_USAGE;
+        case CLI_POSITIONAL:
+            paths[npaths++] = value;
+            break;
         case OPT_LEAF:
             ok = cli_parse_u32("cook", "leaf-size", value, 1, CBVH_MAX_LEAF_SIZE, &o->max_leaf_size);
             break;
@@ -902,7 +919,9 @@ static int cook_main(int argc, char **argv)
             else
                 rc = cli_usage_error("cook", "--layout '%s': expected binary or wide4", value);
             break;
-        case OPT_BINS: ok = cli_parse_u32("cook", "bins", value, 4, 256, &o->sah_bins); break;
+        case OPT_BINS:
+            ok = cli_parse_u32("cook", "bins", value, 4, 256, &o->sah_bins);
+            break;
         case OPT_TCOST:
             ok = cli_parse_float("cook", "traversal-cost", value, 0.0f, 1e6f, &o->traversal_cost);
             break;
@@ -915,26 +934,50 @@ static int cook_main(int argc, char **argv)
             ok = !value || cli_parse_u32("cook", "compress", value, 1, 9, &level);
             o->compress_level = (int)level;
             break;
-        case OPT_QUANTIZE: o->vertex_format = CBVH_VERTEX_QUANTIZED16; break;
-        case OPT_NO_REMAP: o->keep_remap = 0; break;
-        case OPT_NO_MATERIALS: o->keep_materials = 0; break;
-        case OPT_QUIET: c.quiet = 1; break;
-        case OPT_JSON: c.json = 1; break;
+        case OPT_QUANTIZE:
+            o->vertex_format = CBVH_VERTEX_QUANTIZED16;
+            break;
+        case OPT_NO_REMAP:
+            o->keep_remap = 0;
+            break;
+        case OPT_NO_MATERIALS:
+            o->keep_materials = 0;
+            break;
+        case OPT_QUIET:
+            c.quiet = 1;
+            break;
+        case OPT_JSON:
+            c.json = 1;
+            break;
         case OPT_MAX_MEMORY:
             ok = cli_parse_u32("cook", "max-memory", value, 0, UINT32_MAX, &c.max_memory);
             c.memory_given = 1;
             break;
-        case OPT_OUTPUT_DIR: out_dir = value; break;
-        case OPT_MANIFEST: manifest = value; break;
+        case OPT_OUTPUT_DIR:
+            out_dir = value;
+            break;
+        case OPT_MANIFEST:
+            manifest = value;
+            break;
         case OPT_JOBS:
             ok = cli_parse_u32("cook", "jobs", value, 1, 256, &jobs);
             jobs_given = 1;
             break;
-        case OPT_SELECT: c.select = value; break;
-        case OPT_DEPFILE: c.depfile = value; break;
-        case OPT_DEPFILES: c.depfiles = 1; break;
-        case OPT_FORCE: c.force = 1; break;
-        case OPT_MATERIAL_MAP: c.material_map_path = value; break;
+        case OPT_SELECT:
+            c.select = value;
+            break;
+        case OPT_DEPFILE:
+            c.depfile = value;
+            break;
+        case OPT_DEPFILES:
+            c.depfiles = 1;
+            break;
+        case OPT_FORCE:
+            c.force = 1;
+            break;
+        case OPT_MATERIAL_MAP:
+            c.material_map_path = value;
+            break;
         case OPT_IMPORT_TIMEOUT:
             ok = cli_parse_u32("cook", "import-timeout", value, 0, 1000000, &c.import_timeout);
             c.timeout_given = 1;
@@ -966,18 +1009,22 @@ static int cook_main(int argc, char **argv)
     }
     if (!out_dir && !manifest) {
         /* --compress takes its level only as --compress=LEVEL: a bare level is taken for a file name */
-        const int level_as_path = compress_bare && npaths > 0 && paths[0][0] >= '1' && paths[0][0] <= '9' &&
-                                  !paths[0][1];
+        const int level_as_path =
+            compress_bare && npaths > 0 && paths[0][0] >= '1' && paths[0][0] <= '9' && !paths[0][1];
         if (npaths != 2 && level_as_path)
-            rc = cli_usage_error("cook", "'%s' was taken for the input file: the level attaches with '=', "
-                                         "--compress=%s", paths[0], paths[0]);
+            rc = cli_usage_error("cook",
+                                 "'%s' was taken for the input file: the level attaches with '=', "
+                                 "--compress=%s",
+                                 paths[0], paths[0]);
         else if (npaths != 2)
-            rc = cli_usage_error("cook", "expected an input and an output file, got %d file name%s (or "
-                                         "--output-dir DIR with inputs, or --manifest FILE)",
+            rc = cli_usage_error("cook",
+                                 "expected an input and an output file, got %d file name%s (or "
+                                 "--output-dir DIR with inputs, or --manifest FILE)",
                                  npaths, npaths == 1 ? "" : "s");
         else if (jobs_given && !c.quiet)
-            cli_error("cook", NULL, "warning: --jobs cooks a batch (--output-dir or --manifest); one cook (IN "
-                                    "OUT) runs alone");
+            cli_error("cook", NULL,
+                      "warning: --jobs cooks a batch (--output-dir or --manifest); one cook (IN "
+                      "OUT) runs alone");
         if (npaths == 2)
             rc = cook_one(&c, paths[0], paths[1]);
         free(paths);
@@ -987,8 +1034,9 @@ static int cook_main(int argc, char **argv)
     /* A batch: the inputs named on the command line and in the manifest. */
     if (c.depfile) {
         free(paths);
-        return cli_usage_error("cook", "--depfile names one file: a batch writes one per asset with --depfiles "
-                                       "(OUT.d)");
+        return cli_usage_error("cook",
+                               "--depfile names one file: a batch writes one per asset with --depfiles "
+                               "(OUT.d)");
     }
     struct stat st;
     if (out_dir && (stat(out_dir, &st) != 0 || !S_ISDIR(st.st_mode)))
@@ -996,7 +1044,8 @@ static int cook_main(int argc, char **argv)
     for (int k = 0; rc == CLI_EXIT_OK && k < npaths; k++)
         if (!strncmp(paths[k], "gen:", 4) || !batch_add(&b, paths[k], out_dir, NULL))
             rc = cli_usage_error("cook", "%s: %s", paths[k],
-                                 strncmp(paths[k], "gen:", 4) ? "out of memory" : "a batch cooks files, not generated scenes");
+                                 strncmp(paths[k], "gen:", 4) ? "out of memory"
+                                                              : "a batch cooks files, not generated scenes");
     if (rc == CLI_EXIT_OK && manifest)
         rc = read_manifest(manifest, out_dir, &b);
     if (rc == CLI_EXIT_OK && b.count == 0)

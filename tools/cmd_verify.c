@@ -24,7 +24,7 @@ int cmd_verify(int argc, char **argv)
 {
     cli_parser p;
     cli_init(&p, "verify", usage, argc, argv);
-    static const cli_option options[] = { { "json", CLI_ARG_NONE, 1 }, { NULL, 0, 0 } };
+    static const cli_option options[] = {{"json", CLI_ARG_NONE, 1}, {NULL, 0, 0}};
     const char *path = NULL, *value;
     int id, json = 0;
     while ((id = cli_next(&p, options, &value)) != CLI_END) {

@@ -96,12 +96,13 @@ static char *sibling(const char *path, const char *kind)
     size_t size = strlen(path) + strlen(kind) + 16;
     char *s = malloc(size);
     if (s)
-        snprintf(s, size, "%.*s.%.*s%s", (int)dir_len, path, (int)(NAME_MAX > 200 ? 200 : NAME_MAX), name, kind);
+        snprintf(s, size, "%.*s.%.*s%s", (int)dir_len, path, (int)(NAME_MAX > 200 ? 200 : NAME_MAX), name,
+                 kind);
     return s;
 }
 
-int depfile_put(depfile_commit *d, const char *path, const char *target, const char *in, const path_list *found,
-                const path_list *missing, const char *extra)
+int depfile_put(depfile_commit *d, const char *path, const char *target, const char *in,
+                const path_list *found, const path_list *missing, const char *extra)
 {
     memset(d, 0, sizeof *d);
     char *temp = sibling(path, ".tmp-XXXXXX");

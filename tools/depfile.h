@@ -23,8 +23,8 @@ typedef struct depfile_commit {
  * dependency but `in` (as gcc -MP: make and ninja then cope with a deleted side file, and a missing one
  * makes the target out of date until it appears). The text goes to a temporary file in the depfile's folder,
  * which is then renamed over `path`. Returns 0, or -1 with errno and nothing changed. */
-int depfile_put(depfile_commit *d, const char *path, const char *target, const char *in, const path_list *found,
-                const path_list *missing, const char *extra);
+int depfile_put(depfile_commit *d, const char *path, const char *target, const char *in,
+                const path_list *found, const path_list *missing, const char *extra);
 
 /* After the cook: `keep` 1 drops the backup; 0 puts the previous depfile back (or removes the new one when
  * there was none). */

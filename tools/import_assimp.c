@@ -23,8 +23,8 @@
 typedef struct import_state {
     const struct aiScene *scene;
     imported_mesh *out;
-    int counting;           /* first pass: count only; second pass: fill */
-    uint64_t vertex_total;  /* vertices counted or written so far */
+    int counting;          /* first pass: count only; second pass: fill */
+    uint64_t vertex_total; /* vertices counted or written so far */
     uint64_t triangle_total;
     unsigned char *instanced; /* per scene mesh: a node refers to it */
     const char *select;       /* only nodes matching this pattern, with their subtrees (NULL: all) */
@@ -39,10 +39,10 @@ typedef struct dmat4 {
 
 static dmat4 dmat4_from_ai(const struct aiMatrix4x4 *a)
 {
-    dmat4 r = { { { a->a1, a->a2, a->a3, a->a4 },
-                  { a->b1, a->b2, a->b3, a->b4 },
-                  { a->c1, a->c2, a->c3, a->c4 },
-                  { a->d1, a->d2, a->d3, a->d4 } } };
+    dmat4 r = {{{a->a1, a->a2, a->a3, a->a4},
+                {a->b1, a->b2, a->b3, a->b4},
+                {a->c1, a->c2, a->c3, a->c4},
+                {a->d1, a->d2, a->d3, a->d4}}};
     return r;
 }
 
@@ -62,8 +62,9 @@ static int import_mesh_instance(import_state *s, const struct aiMesh *mesh, cons
     imported_mesh *out = s->out;
     uint64_t base = s->vertex_total;
     if ((mesh->mNumVertices && !mesh->mVertices) || (mesh->mNumFaces && !mesh->mFaces)) {
-        snprintf(s->message, s->message_size, "mesh '%s' lists %u vertices and %u faces but lacks their arrays",
-                 mesh->mName.data, mesh->mNumVertices, mesh->mNumFaces);
+        snprintf(s->message, s->message_size,
+                 "mesh '%s' lists %u vertices and %u faces but lacks their arrays", mesh->mName.data,
+                 mesh->mNumVertices, mesh->mNumFaces);
         return 1;
     }
     if (!s->counting) {
@@ -74,8 +75,11 @@ static int import_mesh_instance(import_state *s, const struct aiMesh *mesh, cons
              * as the file has it, so the cook's refusal names the axis and the kind the file holds. */
             const int finite = isfinite(x) && isfinite(y) && isfinite(z);
             for (int r = 0; r < 3; r++)
-                p[3 * v + r] = finite ? (float)(xf->m[r][0] * x + xf->m[r][1] * y + xf->m[r][2] * z + xf->m[r][3])
-                                      : (float)(r == 0 ? x : r == 1 ? y : z);
+                p[3 * v + r] =
+                    finite ? (float)(xf->m[r][0] * x + xf->m[r][1] * y + xf->m[r][2] * z + xf->m[r][3])
+                           : (float)(r == 0   ? x
+                                     : r == 1 ? y
+                                              : z);
         }
     }
     s->vertex_total += mesh->mNumVertices;
@@ -90,17 +94,15 @@ static int import_mesh_instance(import_state *s, const struct aiMesh *mesh, cons
             continue;
         }
         if (face->mNumIndices != 3) {
-            snprintf(s->message, s->message_size,
-                     "mesh '%s': face %u has %u indices after triangulation", mesh->mName.data, f,
-                     face->mNumIndices);
+            snprintf(s->message, s->message_size, "mesh '%s': face %u has %u indices after triangulation",
+                     mesh->mName.data, f, face->mNumIndices);
             return 1;
         }
         if (s->counting) {
             for (int k = 0; k < 3; k++) {
                 if (face->mIndices[k] >= mesh->mNumVertices) {
-                    snprintf(s->message, s->message_size,
-                             "mesh '%s': face %u uses vertex %u of %u", mesh->mName.data, f,
-                             face->mIndices[k], mesh->mNumVertices);
+                    snprintf(s->message, s->message_size, "mesh '%s': face %u uses vertex %u of %u",
+                             mesh->mName.data, f, face->mIndices[k], mesh->mNumVertices);
                     return 1;
                 }
             }
@@ -116,7 +118,8 @@ static int import_mesh_instance(import_state *s, const struct aiMesh *mesh, cons
     return 0;
 }
 
-static int import_node(import_state *s, const struct aiNode *node, const dmat4 *parent, int depth, int selected)
+static int import_node(import_state *s, const struct aiNode *node, const dmat4 *parent, int depth,
+                       int selected)
 {
     if (depth > IMPORT_MAX_NODE_DEPTH) {
         snprintf(s->message, s->message_size, "node hierarchy deeper than %d levels", IMPORT_MAX_NODE_DEPTH);
@@ -148,7 +151,7 @@ static int import_node(import_state *s, const struct aiNode *node, const dmat4 *
     return 0;
 }
 
-static const dmat4 identity = { { { 1, 0, 0, 0 }, { 0, 1, 0, 0 }, { 0, 0, 1, 0 }, { 0, 0, 0, 1 } } };
+static const dmat4 identity = {{{1, 0, 0, 0}, {0, 1, 0, 0}, {0, 0, 1, 0}, {0, 0, 0, 1}}};
 
 /* The hierarchy depth first, then each mesh that no node refers to, once and untransformed (an importer
  * that loses a node must not lose its triangles). */
@@ -169,7 +172,8 @@ static int import_counted(import_state *s)
 {
     imported_mesh *out = s->out;
     if (s->triangle_total == 0 && s->select) {
-        snprintf(s->message, s->message_size, "no triangles in the nodes that --select '%s' matches", s->select);
+        snprintf(s->message, s->message_size, "no triangles in the nodes that --select '%s' matches",
+                 s->select);
         return 1;
     }
     if (s->triangle_total == 0) {
@@ -179,7 +183,8 @@ static int import_counted(import_state *s)
     }
     /* Indices are 32-bit in cbvh_mesh. */
     if (s->vertex_total > UINT32_MAX || s->triangle_total > UINT32_MAX) {
-        snprintf(s->message, s->message_size, "too large: %llu vertices, %llu triangles (at most 2^32-1 each)",
+        snprintf(s->message, s->message_size,
+                 "too large: %llu vertices, %llu triangles (at most 2^32-1 each)",
                  (unsigned long long)s->vertex_total, (unsigned long long)s->triangle_total);
         return 1;
     }
@@ -189,8 +194,8 @@ static int import_counted(import_state *s)
     out->indices = malloc(out->triangle_count * 3 * sizeof(uint32_t));
     out->material_ids = malloc(out->triangle_count * sizeof(uint32_t));
     if (!out->positions || !out->indices || !out->material_ids) {
-        snprintf(s->message, s->message_size, "out of memory for %zu vertices and %zu triangles", out->vertex_count,
-                 out->triangle_count);
+        snprintf(s->message, s->message_size, "out of memory for %zu vertices and %zu triangles",
+                 out->vertex_count, out->triangle_count);
         return 2;
     }
     s->counting = 0;
@@ -217,7 +222,7 @@ static int import_counted(import_state *s)
 static int import_scene(const struct aiScene *scene, const char *select, imported_mesh *out, char *message,
                         size_t message_size)
 {
-    import_state s = { scene, out, 1, 0, 0, NULL, select, message, message_size };
+    import_state s = {scene, out, 1, 0, 0, NULL, select, message, message_size};
     if (!scene->mRootNode) {
         snprintf(message, message_size, "the scene has no node hierarchy");
         return 1;
@@ -233,7 +238,6 @@ static int import_scene(const struct aiScene *scene, const char *select, importe
     free(s.instanced);
     return rc;
 }
-
 
 /* assimp's file system, recording every file an import opens (for --depfile): a stdio file (on disk, or over
  * the inflated bytes of a .gz input) behind each aiFile, the import_options behind the aiFileIO. Reads are
@@ -484,8 +488,8 @@ static int check_faces(const struct aiScene *scene, char *message, size_t messag
         for (unsigned f = 0; f < mesh->mNumFaces; f++) {
             const struct aiFace *face = &mesh->mFaces[f];
             if (face->mNumIndices == 0 || !face->mIndices) {
-                snprintf(message, message_size, "mesh %u: face %u has no vertex indices (a truncated file?)", m,
-                         f);
+                snprintf(message, message_size, "mesh %u: face %u has no vertex indices (a truncated file?)",
+                         m, f);
                 return 1;
             }
             for (unsigned k = 0; k < face->mNumIndices; k++) {
@@ -496,13 +500,14 @@ static int check_faces(const struct aiScene *scene, char *message, size_t messag
                     return 1;
                 }
                 /* here, before assimp joins identical vertices (which merges a NaN one into another) */
-                const float xyz[3] = { mesh->mVertices[v].x, mesh->mVertices[v].y, mesh->mVertices[v].z };
+                const float xyz[3] = {mesh->mVertices[v].x, mesh->mVertices[v].y, mesh->mVertices[v].z};
                 for (int a = 0; a < 3; a++)
                     if (!isfinite(xyz[a])) {
-                        snprintf(message, message_size,
-                                 "mesh %u: vertex %u (as assimp numbers them from 0; for OBJ one per face corner, "
-                                 "here face %u, corner %u): %c coordinate is %s",
-                                 m, v, f, k, "xyz"[a], isnan(xyz[a]) ? "NaN" : "infinite");
+                        snprintf(
+                            message, message_size,
+                            "mesh %u: vertex %u (as assimp numbers them from 0; for OBJ one per face corner, "
+                            "here face %u, corner %u): %c coordinate is %s",
+                            m, v, f, k, "xyz"[a], isnan(xyz[a]) ? "NaN" : "infinite");
                         return 1;
                     }
             }
@@ -511,11 +516,13 @@ static int check_faces(const struct aiScene *scene, char *message, size_t messag
                      : face->mNumIndices == 3 ? aiPrimitiveType_TRIANGLE
                                               : aiPrimitiveType_POLYGON;
         }
-        if ((types & ~mesh->mPrimitiveTypes & 15u) || ((mesh->mPrimitiveTypes & aiPrimitiveType_POLYGON) &&
-                                                       !(types & aiPrimitiveType_POLYGON) && mesh->mNumFaces)) {
-            snprintf(message, message_size,
-                     "mesh %u: its faces are not of the kinds it declares (0x%x, faces 0x%x; a truncated file?)",
-                     m, mesh->mPrimitiveTypes, types);
+        if ((types & ~mesh->mPrimitiveTypes & 15u) ||
+            ((mesh->mPrimitiveTypes & aiPrimitiveType_POLYGON) && !(types & aiPrimitiveType_POLYGON) &&
+             mesh->mNumFaces)) {
+            snprintf(
+                message, message_size,
+                "mesh %u: its faces are not of the kinds it declares (0x%x, faces 0x%x; a truncated file?)",
+                m, mesh->mPrimitiveTypes, types);
             return 1;
         }
     }
@@ -539,9 +546,10 @@ static void drop_empty_children(struct aiNode *node, int depth)
 
 /* Reads `name` through `sys`: assimp's parse and validation (aiProcess_ValidateDataStructure, run inside the
  * read, whose failure path is clean), cbvh's checks, then assimp's post-processing steps, then the merge. */
-static int import_through(const char *name, io_system *sys, imported_mesh *out, char *message, size_t message_size)
+static int import_through(const char *name, io_system *sys, imported_mesh *out, char *message,
+                          size_t message_size)
 {
-    struct aiFileIO io = { io_open, io_close, (aiUserData)(void *)sys };
+    struct aiFileIO io = {io_open, io_close, (aiUserData)(void *)sys};
     sys->input = name;
     const struct aiScene *scene = aiImportFileEx(name, aiProcess_ValidateDataStructure, &io);
     if (!scene && strstr(aiGetErrorString(), "node of the scene-graph is nullptr")) {
@@ -554,7 +562,9 @@ static int import_through(const char *name, io_system *sys, imported_mesh *out, 
         /* a point cloud fails validation before cbvh can count what it drops */
         const char *error = aiGetErrorString();
         snprintf(message, message_size, "%s: %s",
-                 strstr(error, "contains no faces") ? "no triangles (a point cloud?)" : "assimp cannot read it", error);
+                 strstr(error, "contains no faces") ? "no triangles (a point cloud?)"
+                                                    : "assimp cannot read it",
+                 error);
         return 1;
     }
     if (check_faces(scene, message, message_size)) {
@@ -576,14 +586,14 @@ static int import_through(const char *name, io_system *sys, imported_mesh *out, 
     return rc;
 }
 
-int import_assimp_memory(const void *data, size_t size, const char *name, import_options *o, imported_mesh *out,
-                         char *message, size_t message_size)
+int import_assimp_memory(const void *data, size_t size, const char *name, import_options *o,
+                         imported_mesh *out, char *message, size_t message_size)
 {
     memset(out, 0, sizeof *out);
     import_options none;
     memset(&none, 0, sizeof none);
-    memory_file mem = { name, name, (char *)(uintptr_t)data, size };
-    io_system sys = { o ? o : &none, &mem, NULL };
+    memory_file mem = {name, name, (char *)(uintptr_t)data, size};
+    io_system sys = {o ? o : &none, &mem, NULL};
     int rc = import_through(name, &sys, out, message, message_size);
     import_options_free(&none);
     return rc;
@@ -594,7 +604,7 @@ int import_assimp(const char *path, import_options *o, imported_mesh *out, char 
     memset(out, 0, sizeof *out);
     import_options none;
     memset(&none, 0, sizeof none);
-    io_system sys = { o ? o : &none, NULL, NULL };
+    io_system sys = {o ? o : &none, NULL, NULL};
     /* assimp reports "file not found" and "unknown format" alike; tell I/O errors apart first. */
     FILE *probe = fopen(path, "rb");
     if (!probe) {
@@ -607,7 +617,7 @@ int import_assimp(const char *path, import_options *o, imported_mesh *out, char 
     size_t len = strlen(path);
     if (len > 3 && !strcmp(path + len - 3, ".gz")) {
         /* Read under the name without ".gz": its extension picks the format, its folder the side files. */
-        memory_file mem = { NULL, path, NULL, 0 };
+        memory_file mem = {NULL, path, NULL, 0};
         char *name = strdup(path);
         rc = name ? read_gzip(path, &mem.data, &mem.size, message, message_size) : 2;
         if (!name)

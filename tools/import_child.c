@@ -63,13 +63,15 @@ static int write_paths(int fd, const path_list *l)
     return 0;
 }
 
-static int write_report(int fd, int status, const char *message, const imported_mesh *m, const import_options *o)
+static int write_report(int fd, int status, const char *message, const imported_mesh *m,
+                        const import_options *o)
 {
     if (write_u32(fd, (uint32_t)status) || write_string(fd, status ? message : ""))
         return -1;
     if (status == 0) {
-        if (write_u64(fd, m->vertex_count) || write_u64(fd, m->triangle_count) || write_u64(fd, m->dropped_points) ||
-            write_u64(fd, m->dropped_lines) || write_u32(fd, m->mesh_instances) || write_u32(fd, m->material_count) ||
+        if (write_u64(fd, m->vertex_count) || write_u64(fd, m->triangle_count) ||
+            write_u64(fd, m->dropped_points) || write_u64(fd, m->dropped_lines) ||
+            write_u32(fd, m->mesh_instances) || write_u32(fd, m->material_count) ||
             write_all(fd, m->positions, m->vertex_count * 3 * sizeof *m->positions) ||
             write_all(fd, m->indices, m->triangle_count * 3 * sizeof *m->indices) ||
             write_all(fd, m->material_ids, m->triangle_count * sizeof *m->material_ids))
@@ -154,7 +156,7 @@ static int read_all(reader *r, void *data, size_t size)
 {
     char *p = data;
     while (size > 0) {
-        struct pollfd fds[3] = { { r->fd, POLLIN, 0 }, { r->err_fd, POLLIN, 0 }, { r->progress_fd, POLLIN, 0 } };
+        struct pollfd fds[3] = {{r->fd, POLLIN, 0}, {r->err_fd, POLLIN, 0}, {r->progress_fd, POLLIN, 0}};
         long ms = ms_left(r);
         if (ms == 0) {
             r->timed_out = 1;
@@ -250,8 +252,8 @@ static int read_mesh(reader *r, imported_mesh *m)
 {
     uint64_t vertices, triangles;
     if (read_u64(r, &vertices) || read_u64(r, &triangles) || read_u64(r, &m->dropped_points) ||
-        read_u64(r, &m->dropped_lines) || read_u32(r, &m->mesh_instances) || read_u32(r, &m->material_count) ||
-        vertices > UINT32_MAX || triangles > UINT32_MAX)
+        read_u64(r, &m->dropped_lines) || read_u32(r, &m->mesh_instances) ||
+        read_u32(r, &m->material_count) || vertices > UINT32_MAX || triangles > UINT32_MAX)
         return -1;
     m->vertex_count = (size_t)vertices;
     m->triangle_count = (size_t)triangles;
@@ -275,19 +277,22 @@ static int read_mesh(reader *r, imported_mesh *m)
 }
 
 /* Says why a child that sent no complete report ended; `status` from waitpid. */
-static void describe_end(const reader *r, int status, unsigned timeout_seconds, char *message, size_t message_size)
+static void describe_end(const reader *r, int status, unsigned timeout_seconds, char *message,
+                         size_t message_size)
 {
     if (r->timed_out)
-        snprintf(message, message_size,
-                 "the import took longer than %u s and was stopped (--import-timeout SECONDS raises the limit, "
-                 "0 removes it)",
-                 timeout_seconds);
+        snprintf(
+            message, message_size,
+            "the import took longer than %u s and was stopped (--import-timeout SECONDS raises the limit, "
+            "0 removes it)",
+            timeout_seconds);
     else if (WIFSIGNALED(status) && WTERMSIG(status) == SIGKILL)
-        snprintf(message, message_size, "the import was killed (signal %d: %s; out of memory?)", WTERMSIG(status),
-                 strsignal(WTERMSIG(status)));
+        snprintf(message, message_size, "the import was killed (signal %d: %s; out of memory?)",
+                 WTERMSIG(status), strsignal(WTERMSIG(status)));
     else if (WIFSIGNALED(status))
         snprintf(message, message_size, "assimp %s on this file (signal %d: %s)",
-                 WTERMSIG(status) == SIGABRT ? "aborted" : "crashed", WTERMSIG(status), strsignal(WTERMSIG(status)));
+                 WTERMSIG(status) == SIGABRT ? "aborted" : "crashed", WTERMSIG(status),
+                 strsignal(WTERMSIG(status)));
     else
         snprintf(message, message_size, "the import ended with status %d and no report",
                  WIFEXITED(status) ? WEXITSTATUS(status) : -1);
@@ -307,7 +312,7 @@ int import_contained(const char *path, import_options *o, unsigned timeout_secon
                      char *message, size_t message_size)
 {
     memset(out, 0, sizeof *out);
-    int fds[2], errs[2], progress[2] = { -1, -1 };
+    int fds[2], errs[2], progress[2] = {-1, -1};
     if (progress_fn && pipe(progress) == 0) {
         /* neither end blocks: the child drops a step when the pipe is full */
         fcntl(progress[0], F_SETFL, fcntl(progress[0], F_GETFL) | O_NONBLOCK);
@@ -377,7 +382,7 @@ int import_contained(const char *path, import_options *o, unsigned timeout_secon
     char *child_message = ok ? read_string(&r, &ok) : NULL;
     if (ok && status == 0)
         ok = read_mesh(&r, out) == 0;
-    path_list opened = { NULL, 0 }, missing = { NULL, 0 };
+    path_list opened = {NULL, 0}, missing = {NULL, 0};
     ok = ok && read_paths(&r, &opened) == 0 && read_paths(&r, &missing) == 0;
     /* The import's side files, whatever its outcome: the depfile lists them. */
     o->opened = opened;

@@ -9,7 +9,8 @@
  * through a pipe. The child inherits the process's limits (the cook's RLIMIT_AS); it is stopped after
  * `timeout_seconds` (0: no limit). A child that crashes, aborts, runs out of time or keeps reading past the
  * end of a file makes this return 1 with a message saying so (and what assimp last wrote on standard
- * error); 2 when no child can be started. The child sets o->on_runaway_read (the parent's o keeps its own). */
+ * error); 2 when no child can be started. The child sets o->on_runaway_read (the parent's o keeps its own).
+ */
 int import_contained(const char *path, import_options *o, unsigned timeout_seconds, imported_mesh *out,
                      char *message, size_t message_size);
 

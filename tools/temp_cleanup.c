@@ -40,7 +40,7 @@ int temp_cleanup_add(const char *path, const char *restore_from)
     if (strlen(path) >= CLEANUP_PATH || (restore_from && strlen(restore_from) >= CLEANUP_PATH))
         return -1;
     if (!installed) {
-        static const int signals[] = { SIGINT, SIGTERM, SIGHUP };
+        static const int signals[] = {SIGINT, SIGTERM, SIGHUP};
         for (int k = 0; k < 3; k++) {
             struct sigaction sa, old;
             memset(&sa, 0, sizeof sa);

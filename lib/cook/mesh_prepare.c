@@ -94,10 +94,11 @@ static cbvh_result into_range(float p[3], size_t v, uint64_t *flushed, cbvh_erro
             return cbvh_fail(err, CBVH_ERROR_BAD_MESH, "vertex %zu: %c coordinate is %s", v, axis_name[k],
                              isnan(p[k]) ? "NaN" : "infinite");
         if (fabsf(p[k]) > CBVH_COORDINATE_MAX)
-            return cbvh_fail(err, CBVH_ERROR_BAD_MESH,
-                             "vertex %zu: %c coordinate %g is beyond the exact range of +-2^40 (%g): move the mesh "
-                             "nearer its origin or scale it down",
-                             v, axis_name[k], (double)p[k], (double)CBVH_COORDINATE_MAX);
+            return cbvh_fail(
+                err, CBVH_ERROR_BAD_MESH,
+                "vertex %zu: %c coordinate %g is beyond the exact range of +-2^40 (%g): move the mesh "
+                "nearer its origin or scale it down",
+                v, axis_name[k], (double)p[k], (double)CBVH_COORDINATE_MAX);
         if (p[k] != 0.0f && fabsf(p[k]) < CBVH_COORDINATE_MIN) {
             p[k] = 0.0f;
             ++*flushed;
@@ -376,7 +377,8 @@ cbvh_result cbvh_cook_prepare(const cbvh_mesh *mesh, const cbvh_allocator *a, co
     if (r == CBVH_OK) {
         cook_report(progress, 0.25);
         out->positions = cbvh_alloc_array(a, used, 3 * sizeof(float), 64);
-        r = out->positions ? weld(mesh, stride, map, map_count, used, out->positions, &welded, &out->flushed_coordinates, a, err)
+        r = out->positions ? weld(mesh, stride, map, map_count, used, out->positions, &welded,
+                                  &out->flushed_coordinates, a, err)
                            : out_of_memory(err, "positions");
     }
     if (r == CBVH_OK && welded < used)

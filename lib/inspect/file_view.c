@@ -1,5 +1,5 @@
-/* file_view.c: an opened file's stored mesh, material storage and the names of its format values, and the CPU's
- * features, for the tools. */
+/* file_view.c: an opened file's stored mesh, material storage and the names of its format values, and the
+ * CPU's features, for the tools. */
 #include <string.h>
 
 #include "cbvh_internal.h"

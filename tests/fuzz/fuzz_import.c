@@ -1,6 +1,6 @@
 /* fuzz_import.c: libFuzzer target: bytes -> an asset file assimp reads (PLY, OBJ, STL, OFF, glTF, GLB) -> the
- * tool's import (validation, cbvh's face checks, triangulation, the merge); a clean error or a mesh whose every
- * index and material id is in range. */
+ * tool's import (validation, cbvh's face checks, triangulation, the merge); a clean error or a mesh whose
+ * every index and material id is in range. */
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -10,15 +10,18 @@
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 
 /* Byte 0 picks the format (its file name's extension) modulo the table; the rest is the file. */
-static const char *const formats[] = { "fuzz.ply", "fuzz.obj", "fuzz.stl", "fuzz.off", "fuzz.gltf", "fuzz.glb" };
+static const char *const formats[] = {"fuzz.ply", "fuzz.obj",  "fuzz.stl",
+                                      "fuzz.off", "fuzz.gltf", "fuzz.glb"};
 
 /* assimp's PLY reader loops for ever at the end of a file cut inside its header; the tool ends that import in
  * its child process. In process, the only way out is to stop. */
 static void runaway(void *user, const char *path)
 {
     (void)user;
-    fprintf(stderr, "fuzz_import: assimp keeps reading past the end of %s (contained by the tool's child "
-                    "process, not here)\n", path);
+    fprintf(stderr,
+            "fuzz_import: assimp keeps reading past the end of %s (contained by the tool's child "
+            "process, not here)\n",
+            path);
     abort();
 }
 
@@ -26,7 +29,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
     if (size < 1)
         return 0;
-    import_options o = { 0 };
+    import_options o = {0};
     o.on_runaway_read = runaway;
     imported_mesh m;
     char message[1024];
