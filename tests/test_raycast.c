@@ -456,8 +456,10 @@ static void test_wide4_affine_box_test(void **state)
             }
             if (t0 <= t1) {
                 entered++;
-                /* the exact form's entry may round late, by less than the pad of ray_box.h */
-                const double late = w.exact ? fabs(t0) * 0x1p-21 : 0.0;
+                /* the exact form's entry may round late, by less than the pad of ray_box.h, or by a few
+                 * subnormal steps on the extreme grids with subnormal scales (outside the exact range of
+                 * docs/EXACTNESS.md: no cooked file has them) */
+                const double late = w.exact ? fabs(t0) * 0x1p-21 + 0x1p-146 : 0.0;
                 if (!(hits >> s & 1u) || !((double)entry[s] <= t0 + late))
                     fail_msg(
                         "%s test: box %u missed or entered late (entry %.9g, exact %.9g): org %g %g %g dir "

@@ -24,13 +24,14 @@
 #define CBVH_T_LIMIT 0x1.fffffep126f
 
 /* The query side of the exact range (docs/EXACTNESS.md): the kernels walk a ray whose direction has its
- * largest component in [2^CBVH_DIR_EXPONENT, 2^(CBVH_DIR_EXPONENT + 1)) (a power-of-two scaling: exact),
- * whose other direction components are 0 or at least CBVH_DIR_FLUSH times the largest, and whose origin
- * coordinates are 0 or at least CBVH_ORIGIN_FLUSH in magnitude. With the cooker's range (cbvh.h,
+ * largest component in [2^-20, 2^20] (as given) or else in [2^CBVH_DIR_EXPONENT, 2^(CBVH_DIR_EXPONENT + 1))
+ * (a power-of-two scaling: exact), whose other direction components are 0 or at least CBVH_DIR_FLUSH times
+ * the largest, and whose origin coordinates are 0 or at least CBVH_ORIGIN_FLUSH in magnitude. With the cooker's range (cbvh.h,
  * CBVH_COORDINATE_MIN and _MAX) no float step of a box or triangle test then rounds in the subnormal range,
  * where rounding errors are absolute rather than relative to the operands and no relative padding covers
- * them, and no t overflows: the distances a walk divides by the direction run from 2^-103 (the smallest
- * non-zero plane - origin difference) to 2^129 (an origin at FLT_MAX), so t from 2^-112 to 2^121. */
+ * them, and no t overflows where it could be a hit: the distances a walk divides by the direction run from
+ * 2^-103 (the smallest non-zero plane - origin difference) to 2^129 (an origin at FLT_MAX), so t from 2^-123
+ * up (as given; t past CBVH_T_LIMIT is no hit) or from 2^-112 to 2^121 (scaled). */
 #define CBVH_DIR_EXPONENT 8
 #define CBVH_DIR_FLUSH 0x1p-60f
 #define CBVH_ORIGIN_FLUSH 0x1p-64f
@@ -200,32 +201,60 @@ static inline uint32_t cbvh_ray_octant(const cbvh_ray *ray)
            (uint32_t)(signbit(ray->dir[2]) != 0) << 2;
 }
 
-/* The ray the kernels walk (see CBVH_DIR_FLUSH) from a valid ray, in *clean; t on the caller's ray is the
+/* The ray the kernels walk (see CBVH_DIR_EXPONENT) from a valid ray, in *clean; t on the caller's ray is the
  * kernels' t times *scale, and clean's [tmin, tmax] is the caller's range in the kernels' t, rounded inwards
- * and clamped to CBVH_T_LIMIT on the caller's ray and on the kernels'. */
+ * and clamped to CBVH_T_LIMIT on the caller's ray and on the kernels'. A direction whose largest component
+ * lies in [2^-CBVH_DIR_KEEP, 2^CBVH_DIR_KEEP] (any ray a game casts) keeps its scale: every t of its walk is
+ * 0, at least 2^-123 or beyond CBVH_T_LIMIT (no hit) already. */
+#define CBVH_DIR_KEEP 20
 static inline void cbvh_ray_sanitize(const cbvh_ray *ray, cbvh_ray *clean, double *scale)
 {
     const float *d = ray->dir;
+    /* flush: big times 2^-60, rounded only where big is below 2^-66; a component below it becomes 0 of
+     * its sign */
+#ifdef CBVH_HAVE_SIMD
+    /* the same on three lanes: the largest |d| in every lane, the kept components by one compare */
+    const __m128 sign = _mm_set1_ps(-0.0f), dv = cbvh_load3(d), mag = _mm_andnot_ps(sign, dv);
+    const __m128 most = _mm_max_ps(_mm_max_ps(mag, _mm_shuffle_ps(mag, mag, _MM_SHUFFLE(3, 0, 2, 1))),
+                                   _mm_shuffle_ps(mag, mag, _MM_SHUFFLE(3, 1, 0, 2)));
+    const float big = _mm_cvtss_f32(most);
+    const __m128 keep = _mm_cmpge_ps(mag, _mm_mul_ps(most, _mm_set1_ps(CBVH_DIR_FLUSH)));
+    cbvh_store3(clean->dir, _mm_or_ps(_mm_and_ps(dv, keep), _mm_and_ps(dv, sign)));
+    const __m128 ov = cbvh_load3(ray->org);
+    cbvh_store3(clean->org,
+                _mm_and_ps(ov, _mm_cmpge_ps(_mm_andnot_ps(sign, ov), _mm_set1_ps(CBVH_ORIGIN_FLUSH))));
+#else
     float big = fabsf(d[0]);
     big = fabsf(d[1]) > big ? fabsf(d[1]) : big;
     big = fabsf(d[2]) > big ? fabsf(d[2]) : big;
-    /* 2^(CBVH_DIR_EXPONENT - floor(log2 big)) from the exponent of big as a double (a float > 0 is a
-     * normal double, its biased exponent 874 to 1150) */
-    const double wide = (double)big;
-    uint64_t bits;
-    memcpy(&bits, &wide, sizeof bits);
-    bits = (uint64_t)(2046u + CBVH_DIR_EXPONENT - (bits >> 52 & 0x7FFu)) << 52;
-    double up;
-    memcpy(&up, &bits, sizeof up);
+    const float flush = big * CBVH_DIR_FLUSH;
     for (int a = 0; a < 3; a++) {
-        const float s = (float)((double)d[a] * up);
-        clean->dir[a] = fabsf(s) < CBVH_DIR_FLUSH ? copysignf(0.0f, s) : s;
+        clean->dir[a] = fabsf(d[a]) < flush ? copysignf(0.0f, d[a]) : d[a];
         clean->org[a] = ray->org[a];
     }
     cbvh_origin_flush(clean->org);
+#endif
+    clean->tmin = ray->tmin;
+    clean->tmax = ray->tmax < CBVH_T_LIMIT ? ray->tmax : CBVH_T_LIMIT;
+    *scale = 1.0;
+    if (CBVH_LIKELY(big >= 0x1p-20f && big <= 0x1p20f))
+        return;
+    /* 2^(CBVH_DIR_EXPONENT - floor(log2 big)) and its inverse from the exponent of big as a double (a float
+     * > 0 is a normal double, its biased exponent 874 to 1150) */
+    const double wide = (double)big;
+    uint64_t bits, up_bits, down_bits;
+    memcpy(&bits, &wide, sizeof bits);
+    bits = bits >> 52 & 0x7FFu;
+    up_bits = (uint64_t)(2046u + CBVH_DIR_EXPONENT - bits) << 52;
+    down_bits = (uint64_t)(bits - CBVH_DIR_EXPONENT) << 52;
+    double up, down;
+    memcpy(&up, &up_bits, sizeof up);
+    memcpy(&down, &down_bits, sizeof down);
+    for (int a = 0; a < 3; a++) /* exact: the flushed components are 0, the others at least 2^-60 big */
+        clean->dir[a] = (float)((double)clean->dir[a] * up);
     const double tmax = ray->tmax < CBVH_T_LIMIT ? (double)ray->tmax : (double)CBVH_T_LIMIT;
-    clean->tmin = cbvh_float_rounded((double)ray->tmin / up, 1);
-    clean->tmax = cbvh_float_rounded(tmax / up < CBVH_T_LIMIT ? tmax / up : CBVH_T_LIMIT, 0);
+    clean->tmin = cbvh_float_rounded((double)ray->tmin * down, 1);
+    clean->tmax = cbvh_float_rounded(tmax * down < CBVH_T_LIMIT ? tmax * down : CBVH_T_LIMIT, 0);
     *scale = up;
 }
 
