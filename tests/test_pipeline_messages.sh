@@ -4,7 +4,7 @@
 # is --jobs N; usage errors name options with two dashes; JSON numbers in plain notation; hints for
 # --jobs on one cook and for a bare --compress level; blank raycast lines; report --sample 0 refused; a full
 # disk's message names no XXXXXX template; info's section table aligned; manifest paths from the current
-# folder; output names of 255 bytes; --json on every command and failure.
+# folder; output names of 255 bytes; --json on every command and failure; the exact range's refusal and flush.
 #
 # Environment: as tests/test_tool.sh (CBVH_TOOL).
 
@@ -38,6 +38,17 @@ for axis in y z; do
     check "... 'z coordinate is infinite'" grep -q "z coordinate is infinite" "$tmp/err"
 done
 check "... and says what the vertex number counts" grep -q "as assimp numbers them" "$tmp/err"
+
+# The exact range (docs/EXACTNESS.md): a coordinate past 2^40 is refused naming the limit; one below 2^-40
+# is stored as 0 and counted.
+printf 'v 0 0 0\nv 1 0 0\nv 2 3 2e12\nf 1 2 3\n' >"$tmp/far.obj"
+run 1 "a coordinate of 2e12" "$CBVH" cook --quiet "$tmp/far.obj" "$tmp/o.cbvh"
+check "... 'beyond the exact range of +-2^40'" grep -q "z coordinate 2e+12 is beyond the exact range of +-2^40" "$tmp/err"
+printf 'v 0 0 0\nv 1 0 1e-20\nv 0 1 0\nf 1 2 3\n' >"$tmp/tiny.obj"
+run 0 "a coordinate of 1e-20" "$CBVH" cook --json "$tmp/tiny.obj" "$tmp/o.cbvh"
+check "... counted as flushed" grep -q '"flushed_coordinates": 1' "$tmp/out"
+run 0 "... and in the summary" "$CBVH" cook "$tmp/tiny.obj" "$tmp/o.cbvh"
+check "... '1 coordinates below 2^-40 stored as 0'" grep -q "1 coordinates below 2^-40 stored as 0" "$tmp/out"
 
 # Item 18: -j N and -jN mean --jobs N.
 mkdir "$tmp/batch"

@@ -283,6 +283,7 @@ static void print_json(const char *in, const char *out, const cook_input *input,
     json_end_object(&w);
     json_begin_object(&w, "vertices");
     json_uint(&w, "input", st->input_vertices);
+    json_uint(&w, "flushed_coordinates", st->flushed_coordinates);
     json_uint(&w, "kept", st->vertices);
     json_double(&w, "max_error", st->vertex_max_error);
     json_end_object(&w);
@@ -340,7 +341,10 @@ static void print_summary(const char *in, const char *out, const cook_input *inp
         printf(" (dropped %llu degenerate, %llu points, %llu lines)",
                (unsigned long long)st->dropped_degenerate, (unsigned long long)input->mesh.dropped_points,
                (unsigned long long)input->mesh.dropped_lines);
-    printf(", %llu vertices\n", (unsigned long long)st->vertices);
+    printf(", %llu vertices", (unsigned long long)st->vertices);
+    if (st->flushed_coordinates)
+        printf(" (%llu coordinates below 2^-40 stored as 0)", (unsigned long long)st->flushed_coordinates);
+    printf("\n");
     printf("  tree: %llu nodes, %llu leaves, depth %u, SAH cost %.2f\n", (unsigned long long)st->nodes,
            (unsigned long long)st->leaves, (unsigned)st->depth, st->sah_cost);
     printf("  file: %llu bytes, %.2f bytes/triangle (", (unsigned long long)st->file_size,
