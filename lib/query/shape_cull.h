@@ -85,7 +85,7 @@ static inline enum cbvh_cull_verdict cbvh_cull_triangle(const struct cbvh_local_
     if (!still || s->kind == CBVH_SHAPE_BOX)
         return CBVH_CULL_MAY_TOUCH;
     const double nn = v3_len2(n), span2 = span * span, margin = 0x1p-28 * span2 * span * size;
-    if (!(nn >= 0x1p-20 * span2 * span2))
+    if (!(nn > 0.0 && nn >= 0x1p-20 * span2 * span2)) /* a triangle of no area passes the second on span 0 */
         return CBVH_CULL_MAY_TOUCH;
     const double r = s->radius, reach = r - 0x1p-20 * size, reach2 = reach > 0.0 ? reach * reach : -1.0;
     const cbvh_v3 edge[3] = {v3_sub(b, a), v3_sub(c, b), v3_sub(a, c)};
