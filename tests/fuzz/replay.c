@@ -73,7 +73,8 @@ static int run_path(const char *path, const char *prefix)
         count++;
     }
     closedir(d);
-    qsort(names, count, sizeof *names, cmp_names); /* same order on every machine */
+    if (count)
+        qsort(names, count, sizeof *names, cmp_names); /* same order on every machine */
     int bad = 0;
     for (size_t i = 0; i < count; i++) {
         bad |= run_path(names[i], prefix);
