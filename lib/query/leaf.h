@@ -441,9 +441,9 @@ CBVH_KERNEL void leaf_group_rows(const struct cbvh_ray_shear *restrict s, const 
  * so answers are the same with or without this filter. *within: when ranged, the lanes the exact test
  * would accept for sure (leaf_outside_lanes), else 0; an occlusion query without a hit filter needs no
  * more of them. Callers range the leaves whose box holds the ray's start (its entry is tmin), where the
- * line crosses triangles behind the start or, from a surface, the start's own (elsewhere it costs more
- * than it saves: Wuson incoherent rays -4%, shadow rays from the surface +5%), and every leaf of an
- * occlusion query, where a lane it accepts saves the exact test and ends the walk. */
+ * line crosses triangles behind the start or, from a surface, the start's own (elsewhere the range test
+ * rarely rules a lane out), and every leaf of an occlusion query, where a lane it accepts saves the exact
+ * test and ends the walk. */
 CBVH_KERNEL uint32_t leaf_reject_rows(const struct cbvh_ray_shear *restrict s,
                                       const struct leaf_rows *restrict rows, const int ranged, float tmin,
                                       float tmax, float edge[3][CBVH_LANES], uint32_t *restrict within)

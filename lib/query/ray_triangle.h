@@ -177,8 +177,8 @@ CBVH_NOINLINE void cbvh_plane_barycentrics(const struct cbvh_ray_shear *restrict
  * vectors (x, y, z, 0): lane for lane the same double operations in the same order, each dot product
  * summed as (x + y) + z as v3_dot does, and MINPD / MAXPD where cbvh_dmin / cbvh_dmax stand (a < b ? a :
  * b, a > b ? a : b), so every result is the scalar code's bit for bit (the build contracts no
- * multiply-add; test_raycast compares the kernels' t, u and v for equality). About half the instructions
- * of the scalar code, which GCC keeps scalar: 224 fewer an exact test (callgrind, Wuson). */
+ * multiply-add; test_raycast compares the kernels' t, u and v for equality), in about half the instructions
+ * of the scalar code, which GCC keeps scalar. */
 typedef __m256d cbvh_v4d;
 
 static inline cbvh_v4d v4d_of(cbvh_v3 a)

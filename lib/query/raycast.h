@@ -127,8 +127,7 @@ static inline int cbvh_ray_prepare(struct cbvh_ray_ctx *ctx, const cbvh_ray *cal
      * one outside it (or any, when a huge mesh has no such box) keeps any_flip 0: nearest first */
     if (CBVH_LIKELY(cbvh_origin_in(ray, f->origin_near_lo, f->origin_near_hi))) {
         /* from outside the bounds, the top box first; an origin inside them is in it, and a ray from there
-         * rarely misses it (its range would have to start past the box): walked without the test, the cost
-         * of other rays (incoherent, shadow and short rays: about 2%) */
+         * rarely misses it (its range would have to start past the box): walked without the test */
         const int among_triangles = cbvh_origin_in(ray, f->bounds_lo, f->bounds_hi);
         if (!among_triangles) {
             if (boxes_tested)

@@ -320,7 +320,7 @@ CBVH_FORCE_INLINE uint32_t cbvh_cull4_keep(const struct cbvh_cull4 *w, const flo
         in = _mm_and_ps(in, _mm_and_ps(_mm_cmple_ps(lo, w->hi[a]), _mm_cmpge_ps(hi, w->lo[a])));
     }
     *touch = 0;
-    if (!_mm_movemask_ps(in)) /* a quarter of the groups on the bench's Wuson overlaps */
+    if (!_mm_movemask_ps(in)) /* no lane's box meets the shape's: nothing to decide */
         return 0;
     struct cull4_frame f;
     cull4_frame_of(c, &f);

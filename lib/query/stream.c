@@ -234,9 +234,8 @@ static void stream_single_rays(const struct cbvh_file *f, const cbvh_ray *rays, 
 
 /* Splits the stream into windows, each window into same-octant batches of the batch's capacity. A window
  * of incoherent rays skips the batch by the way cbvh_stream_way_for chooses: on a wide-layout mesh that does
- * not stay in the caches it walks interleaved (stream_interleave: cbvh.h says what it measured; on the
- * binary layout's dragon it lost: shadow rays -10%, incoherent -3%), on a mesh in the caches with a batch
- * small for the mesh one ray at a time. Exactly one of hits / occluded is given. Invalid rays are misses. */
+ * not stay in the caches it walks interleaved (stream_interleave; the binary layout batches instead, where
+ * interleaving did not pay), on a mesh in the caches with a batch small for the mesh one ray at a time. Exactly one of hits / occluded is given. Invalid rays are misses. */
 static void stream_run(const struct cbvh_file *f, const cbvh_ray *rays, size_t count, cbvh_hit *hits,
                        uint8_t *occluded, cbvh_query_stats *stats, struct cbvh_stream_batch *restrict batch,
                        uint8_t *restrict octant)

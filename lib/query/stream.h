@@ -25,15 +25,12 @@ enum { CBVH_LANE_OX, CBVH_LANE_OY, CBVH_LANE_OZ, CBVH_LANE_TMIN, CBVH_LANE_RX, C
 
 /* Rays that finish a subtree alone (stream_walk.h: a batch node with few live rays) run this many at a
  * time, one walk step each in turn: each ray's walk is a chain of dependent loads and tests, and the CPU
- * overlaps the chains of different rays where one ray at a time leaves it waiting (on the 871K-triangle
- * dragon's incoherent rays, a cache miss a node). */
+ * overlaps the chains of different rays where one ray at a time leaves it waiting (on a mesh that does not
+ * stay in the caches, a miss a node). */
 #define CBVH_STREAM_TAILS 4u /* at most 4: the tails' bit masks go through cbvh_lowest_lane */
 
-/* Rays an interleaved stream walks at once (stream_walk.h's stream_interleave), in the tails' slots. On the
- * 871K-triangle dragon, the 1M-triangle sphere and the 500K-triangle terrain (incoherent, shadow and short
- * rays, closest and any hit; each width timed against the single-ray walk in one process, 30 chunks of
- * 20,000 rays alternated), eight gained 0-7% more than four, but for the dragon's short rays (3% less).
- * Eight tails in the batch walk rather than four gained nothing (closest hit: -3% to +1%). */
+/* Rays an interleaved stream walks at once (stream_walk.h's stream_interleave), in the tails' slots: more
+ * than a batch walk's tails (CBVH_STREAM_TAILS), since every ray of an interleaved stream walks this way. */
 #define CBVH_STREAM_WALKS 8u
 
 /* A ray walking a subtree alone: the single-ray walk's state, and the ray's best hit as this walk knows
@@ -112,9 +109,7 @@ void cbvh_stream_node_sse2(const struct cbvh_stream_batch *restrict batch, const
 
 /* Test hook, not exported: 0 = best kernel for this build (default), 1 = scalar,
  * 2 = SSE2 (falls back to scalar when not built; with the AVX2 walks chosen, raycast.h, the streams run
- * its copy in AVX2's encoding). An AVX2 kernel (two rays a vector) measured no faster
- * on the dragon's incoherent rays (2.03 / 1.95 / 1.94 against SSE2's 2.11 / 1.89 / 2.06 MRays/s).
- * Meant to be set before queries run; reads are atomic so concurrent queries stay defined. */
+ * its copy in AVX2's encoding). Meant to be set before queries run; reads are atomic so concurrent queries stay defined. */
 void cbvh_stream_set_kernel(int which);
 /* The kernel chosen by the current setting. */
 cbvh_stream_node_fn cbvh_stream_node_kernel(void);
@@ -137,7 +132,7 @@ enum cbvh_stream_way {
 };
 
 /* A mesh in the caches has its incoherent rays batched (wide layout) when it has at most this many triangles
- * a ray of the batch (stream_box.c's cbvh_stream_way_for says what was measured). */
+ * a ray of the batch (stream_box.c's cbvh_stream_way_for). */
 #define CBVH_STREAM_SHARED_TRIANGLES_PER_RAY 8u
 
 /* Test hook, not exported: the streams' way. 0 = by the mesh and the batch (the default, stream_box.c): on a

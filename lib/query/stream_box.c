@@ -79,11 +79,10 @@ enum cbvh_stream_way cbvh_stream_way_for(const struct cbvh_file *f, uint32_t bat
     }
     if (f->vertices_far) /* interleaved walks overlap the misses of incoherent rays (wide layout) */
         return wide ? CBVH_STREAM_BY_WINDOW : CBVH_STREAM_BATCHED;
-    /* A mesh in the caches has no misses to overlap. Its incoherent rays share a batch's node visits when
-     * the batch is large for the mesh: so they do in batches of 1024 on Wuson's 3.7K triangles (1.0-1.5x the
-     * single-ray walk, both layouts), not in the stack's batches of 24 (0.63-0.74x wide, 0.76-0.88x
-     * binary), nor in batches of 1024 on the wide layout of a 46K-triangle scene (0.79-0.91x; binary
-     * 0.94-1.16x): those walk their incoherent windows one ray at a time. */
+    /* A mesh in the caches has no misses to overlap. Its incoherent rays share a batch's node visits only
+     * when the batch is large for the mesh (at least CBVH_STREAM_SHARED_TRIANGLES_PER_RAY triangles a ray on
+     * the wide layout, and more than the stack's batch): otherwise they walk their windows one ray at a
+     * time, which is then faster (docs/PERFORMANCE.md). */
     if (batch_capacity <= CBVH_STREAM_STACK_BATCH ||
         (wide && f->info.triangle_count / CBVH_STREAM_SHARED_TRIANGLES_PER_RAY > batch_capacity))
         return CBVH_STREAM_BY_WINDOW_SINGLE;

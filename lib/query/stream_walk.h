@@ -464,13 +464,9 @@ CBVH_KERNEL int stream_interleave_start(const struct cbvh_file *restrict f, cons
  * a leaf) each in turn, in the slots of the batch's tails (their walk states and best hits, with b->ctx[k]
  * and b->ray_index[k] for slot k); a ray that ends hands its slot to the next. Each ray's walk is a chain of
  * dependent fetches and tests that mostly waits on memory there, and the CPU overlaps the chains of the
- * slots' rays. A closest-hit walk requests a leaf's vertices a turn before its test, as the tails do: in
- * one process against the walks without it, 20 chunks of 20,000 rays alternated, two runs, incoherent
- * rays -1% to +4% on the dragon, +3% to +4% on the sphere, +1% on the terrain, short rays +1% to +5% (one
- * run); in a driver with windows of 8,192 rays, +3% to +6% on the dragon and the sphere (four runs): a
- * small gain, within one run's noise, but in 9 of 10 runs. Occlusion walks lost by it (shadow rays -6% to
- * -8%). Closest hit (`any` clear) into hits, any hit into occluded (hits NULL); the single-ray walk's
- * answers. */
+ * slots' rays. A closest-hit walk requests a leaf's vertices a turn before its test, as the tails do
+ * (occlusion walks do not: they stop at their first hit and do not pay for it). Closest hit (`any` clear)
+ * into hits, any hit into occluded (hits NULL); the single-ray walk's answers. */
 CBVH_KERNEL void stream_interleave(const struct cbvh_file *restrict f, const uint32_t layout,
                                    struct cbvh_stream_batch *restrict b, const cbvh_ray *restrict rays,
                                    size_t count, const int any, cbvh_hit *restrict hits,

@@ -59,8 +59,8 @@ CBVH_KERNEL uint32_t walk_order_pair(const enum cbvh_walk_order order, int secon
     return 2;
 }
 
-/* The ray as the wide layout's SIMD box test reads it, set up once per walk (rebroadcasting a dozen
- * scalars at every node cost about a tenth of a walk's instructions). Without SIMD it is empty and unused.
+/* The ray as the wide layout's SIMD box test reads it, set up once per walk rather than rebroadcast at
+ * every node. Without SIMD it is empty and unused.
  *
  * Plane k of a node at grid coordinate q is, along the ray, T = (P - org) / dir with P =
  * cbvh_dequantize(q): the box test of ray_box.h computes ((origin + q * scale) - org) * rcp, four
@@ -230,13 +230,10 @@ CBVH_KERNEL uint32_t walk_w4_test_sse2(const uint8_t *restrict node, const struc
  * arrive while the node's boxes are tested, not after: the walk goes down one of them next, mostly, and
  * pops another soon. Whatever the node holds (lines past its inner children or its leaves, or past the
  * arrays, are requested and not read: a prefetch never faults), and not the child popped next once the
- * test chose it: no instruction waits for the test, and the line is there whichever child comes next. On
- * the 871K-triangle dragon, whose nodes and triangles do not fit in the caches (driver, best and median
- * of 6-10 runs): the first child and the first triangles, 8-14% faster incoherent and coherent rays; four
- * child lines rather than the first and the second in visit order, another 12% (incoherent closest) and
- * 17% (shadow any); three lines of triangle entries rather than one, another 6% and 9%. A node's leaves
- * hold at most 4 x 8 triangles, whose LOCAL8 blocks (28 bytes for 8) take at most 140 bytes: three lines
- * from the first entry hold them but for the tail of the largest. */
+ * test chose it: no instruction waits for the test, and the line is there whichever child comes next.
+ * This pays on meshes whose nodes and triangles do not stay in the caches (docs/PERFORMANCE.md). A node's
+ * leaves hold at most 4 x 8 triangles, whose LOCAL8 blocks (28 bytes for 8) take at most 140 bytes: three
+ * lines from the first entry hold them but for the tail of the largest. */
 #define CBVH_W4_LEAF_ENTRY_LINES 3u
 CBVH_KERNEL void walk_w4_prefetch_children(const struct cbvh_file *restrict f, const uint8_t *restrict node)
 {
@@ -256,9 +253,7 @@ CBVH_KERNEL void walk_w4_prefetch_children(const struct cbvh_file *restrict f, c
  * goes to next has three lines of vertices requested as soon as the node chose it, from its first
  * triangle's entry (cbvh_vertex_hint: a LOCAL8 block's base), which the node's own request
  * (walk_w4_prefetch_children) has mostly brought by then: the leaf's decode and its vertex loads then
- * wait less. A node next (no leaf) requests the lines of triangle 0's, without a branch on which it is.
- * On the 871K-triangle dragon and the 1M-triangle sphere (driver, builds alternated, medians of 8-10
- * runs): about 3% faster incoherent closest, shadow any and coherent rays. */
+ * wait less. A node next (no leaf) requests the lines of triangle 0's, without a branch on which it is. */
 CBVH_KERNEL void walk_w4_prefetch_leaf_vertices(const struct cbvh_file *restrict f, cbvh_ref next)
 {
     const uint32_t k = next & CBVH_W4_FIRST_MASK & (0u - (next >> 31));
@@ -516,9 +511,7 @@ CBVH_KERNEL int cbvh_walk_begin(const struct cbvh_file *restrict f, const uint32
      * it might read it unset */
     walk_w4_simd_ray_init(&st->w, &st->box, f->grid_origin, f->grid_scale, ray->shear.org, ray->rcp,
                           ray->octant, float_boxes ? 0u : ray->box_halve, ray->tmin);
-    /* only where it is read (the root box's test reads it too): its 18 stores were a tenth of the time of
-     * a ray that misses the mesh (the set-up of a ray is bound by its stores), and 8% of a Wuson camera
-     * ray's */
+    /* only where it is read (the root box's test reads it too): a ray's set-up is bound by its stores */
     if (root_box != CBVH_NO_BOX || walk_reads_box_ray(layout, mode, float_boxes, &st->w)) {
         cbvh_box_ray_init(&st->box, f->grid_origin, f->grid_scale, ray->shear.org, ray->rcp, ray->octant);
         if (ray->box_halve && !float_boxes)
@@ -556,7 +549,7 @@ cbvh_walk_step(const struct cbvh_file *restrict f, const uint32_t layout,
     (void)count; /* read by the SIMD step only */
     /* the children's order: nearest first, but an any-hit walk from among the triangles goes farthest
      * first (ray->any_flip), where most occluders are, not around its start, where a ray leaving a surface
-     * passes the surface's neighbours: Wuson shadow rays test 12 triangles a ray rather than 21 */
+     * passes the surface's neighbours, which it would test first */
     const uint32_t octant = ray->octant ^ (mode.any ? ray->any_flip : 0u);
     if (!cbvh_tree_is_leaf(f, layout, r)) {
 #ifdef CBVH_HAVE_SIMD
