@@ -8,7 +8,7 @@
 #include "query/closest.h"
 #include "query/leaf.h"
 #include "query/sweep_walk.h"
-#include "query/shape_walk.h"
+#include "query/walk.h"
 #include "query/raycast.h"
 #include "query/shape.h"
 #include "query/shape_cull.h"

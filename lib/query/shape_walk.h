@@ -1,4 +1,4 @@
-/* shape_walk.h: the tree walk of sweeps and overlaps: boxes tested by the query's own rule, leaves handed to it. */
+/* shape_walk.h: sweeps' and overlaps' node and leaf tests for the walk skeleton (walk.h). */
 #ifndef CBVH_QUERY_SHAPE_WALK_H
 #define CBVH_QUERY_SHAPE_WALK_H
 
@@ -172,80 +172,6 @@ CBVH_KERNEL uint32_t cbvh_shape_children(const struct cbvh_file *f, const uint32
         m += enter(query, q, &in_entry[m]) != 0;
     }
     return m;
-}
-
-/* Walks the subtrees whose boxes `enter` accepts, children in the
- * precomputed order of `octant` (CBVH_NO_OCTANT: stored order, which for the
- * binary layout is the file's depth-first order). A node's children are
- * tested at the node, so a missed child is never pushed; the others wait on
- * the stack with their entry keys, and one popped once *limit times
- * CBVH_BOX_PAD has fallen below its key is dropped without a second test:
- * for a sweep, whose best contact so far is *limit and whose keys are slab
- * entry distances, that is its box test again with the shorter motion; with
- * limit NULL (an overlap's walk) nothing is dropped, and no key kept.
- * `grid`, when not NULL, is the same test as `enter` as a grid range, which
- * wide nodes test four slots at once (cbvh_shape_children).
- * Force-inlined so each query's callbacks are direct calls; `layout` is read
- * at run time (a sweep's cost is in its triangle tests). The loader checked
- * depth <= CBVH_MAX_DEPTH, and a node pushes at most CBVH_TREE_WIDTH - 1
- * references, so the stack cannot overflow. */
-CBVH_KERNEL void cbvh_shape_walk(const struct cbvh_file *f, const uint32_t layout, uint32_t octant,
-                                 cbvh_shape_enter_fn enter, cbvh_shape_leaf_fn leaf, void *query,
-                                 const float *limit, const struct cbvh_grid_range *grid)
-{
-    struct {
-        cbvh_ref ref;
-        float entry;
-    } stack[(CBVH_TREE_WIDTH - 1u) * CBVH_MAX_DEPTH];
-    uint32_t sp = 0, q[6];
-    cbvh_ref r = cbvh_tree_root(f, layout);
-    const uint32_t root_box = cbvh_tree_root_box(f, layout);
-    float entry;
-    const void *grid4 = NULL;
-#ifdef CBVH_HAVE_SIMD
-    struct cbvh_grid_range4 w;
-    if (grid) {
-        if (cbvh_grid_range_empty(grid))
-            return;
-        cbvh_grid_range4_of(grid, &w);
-        grid4 = &w;
-    }
-#else
-    (void)grid;
-#endif
-    if (root_box != CBVH_NO_BOX) {
-        cbvh_shape_box_coords(f, layout, root_box, q);
-        if (!enter(query, q, &entry))
-            return;
-    }
-    for (;;) {
-        if (!cbvh_tree_is_leaf(f, layout, r)) {
-            cbvh_ref in[CBVH_TREE_WIDTH];
-            float in_entry[CBVH_TREE_WIDTH];
-            const uint32_t m = cbvh_shape_children(f, layout, r, octant, enter, query, grid4, in, in_entry);
-            if (m > 0) {
-                for (uint32_t k = m; k-- > 1;) {
-                    stack[sp].ref = in[k];
-                    if (limit)
-                        stack[sp].entry = in_entry[k];
-                    sp++;
-                }
-                r = in[0];
-                continue;
-            }
-        } else {
-            uint32_t first, count;
-            cbvh_tree_leaf(f, layout, r, &first, &count);
-            if (leaf(query, first, count))
-                return;
-        }
-        do {
-            if (sp == 0)
-                return;
-            sp--;
-        } while (limit && !(stack[sp].entry <= *limit * CBVH_BOX_PAD));
-        r = stack[sp].ref;
-    }
 }
 
 #endif

@@ -90,7 +90,7 @@ CBVH_KERNEL void stream_tails_run(const struct cbvh_file *restrict f, const uint
             if (request_vertices && stream_tail_request_leaf(f, t))
                 continue;
             const enum cbvh_walk_step_result step =
-                cbvh_walk_step(f, layout, &b->ctx[t->ray], mode, NULL, counting, &t->walk, &t->best);
+                cbvh_walk_step(f, layout, &b->ctx[t->ray], mode, NULL, counting, NULL, &t->walk, &t->best);
             if (step == CBVH_WALK_MORE) {
                 /* the tail's next node or leaf is fetched while the other tails step */
                 if (layout == CBVH_LAYOUT_WIDE4 && !cbvh_w4_ref_is_leaf(t->walk.r))
@@ -489,7 +489,7 @@ CBVH_KERNEL void stream_interleave(const struct cbvh_file *restrict f, const uin
                 continue;
             struct cbvh_walk_state *restrict walk = &slot[k].walk;
             const enum cbvh_walk_step_result step =
-                cbvh_walk_step(f, layout, &b->ctx[k], mode, NULL, counting, walk, &slot[k].best);
+                cbvh_walk_step(f, layout, &b->ctx[k], mode, NULL, counting, NULL, walk, &slot[k].best);
             if (step == CBVH_WALK_MORE)
                 continue;
             if (any)

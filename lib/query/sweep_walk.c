@@ -9,7 +9,7 @@
 #include "query/sweep_walk.h"
 #include "query/shape.h"
 #include "query/shape_cull.h"
-#include "query/shape_walk.h"
+#include "query/walk.h"
 #include "query/triangle_frame.h"
 
 /* x moved away from zero by 2^-22 of itself: more than the half ulp a float

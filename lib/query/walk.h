@@ -1,4 +1,4 @@
-/* walk.h: the one single-ray traversal core: closest or any hit, children ordered by the precomputed sort, by distance, or not. */
+/* walk.h: the walk skeleton every tree query takes (single rays, the streams' tails, sweeps, overlaps). */
 #ifndef CBVH_QUERY_WALK_H
 #define CBVH_QUERY_WALK_H
 
@@ -10,6 +10,7 @@
 #include "query/leaf.h"
 #include "query/ray_box.h"
 #include "query/ray_setup.h"
+#include "query/shape_walk.h"
 
 /* How a walk orders the children a ray enters. */
 enum cbvh_walk_order {
@@ -34,8 +35,8 @@ struct cbvh_walk_mode {
 
 /* Box `box` against the ray: quantized from the file, or float_boxes[6 box ...]. */
 CBVH_KERNEL int walk_box_test(const struct cbvh_box_ray *restrict box, const struct cbvh_file *restrict f,
-                              const uint32_t layout, const float *restrict float_boxes, uint32_t id, float tmin,
-                              float tmax, float *entry)
+                              const uint32_t layout, const float *restrict float_boxes, uint32_t id,
+                              float tmin, float tmax, float *entry)
 {
     if (!float_boxes)
         return cbvh_box_ray_test(box, f, layout, id, tmin, tmax, entry);
@@ -82,8 +83,8 @@ CBVH_KERNEL uint32_t walk_order_pair(const enum cbvh_walk_order order, int secon
  * wide4.h's plane index k). */
 struct cbvh_w4_simd_ray {
 #ifdef CBVH_HAVE_SIMD
-    __m128 a[3], near_b[3], far_b[3];           /* the affine test's, per axis, in all four lanes */
-    const struct cbvh_box_ray *box;             /* the exact test's origin, scale, org and rcp */
+    __m128 a[3], near_b[3], far_b[3]; /* the affine test's, per axis, in all four lanes */
+    const struct cbvh_box_ray *box;   /* the exact test's origin, scale, org and rcp */
     __m128 tmin;
     const uint8_t *offset; /* walk_w4_plane_offsets of the ray's octant */
     int exact;
@@ -179,8 +180,8 @@ CBVH_KERNEL __m128 walk_w4_plane_q(const uint8_t *restrict node, const struct cb
 
 /* Plane j of the four slots as a distance along the ray with the normative arithmetic of ray_box.h:
  * ((origin + (float)q * scale) - org) * rcp. j is a constant at every call. */
-CBVH_KERNEL __m128 walk_w4_plane_distance(const uint8_t *restrict node, const struct cbvh_w4_simd_ray *restrict w,
-                                          uint32_t j)
+CBVH_KERNEL __m128 walk_w4_plane_distance(const uint8_t *restrict node,
+                                          const struct cbvh_w4_simd_ray *restrict w, uint32_t j)
 {
     const uint32_t a = j % 3u;
     const struct cbvh_box_ray *b = w->box;
@@ -195,8 +196,9 @@ CBVH_KERNEL __m128 walk_w4_plane_distance(const uint8_t *restrict node, const st
  * when either is NaN), so a NaN distance is ignored as in the scalar test. The affine form (struct
  * cbvh_w4_simd_ray), which every ray that can takes: every quantity finite, no padding of tfar. Returns
  * the hit bits (bit s: slot s) and each slot's entry distance. */
-CBVH_KERNEL uint32_t walk_w4_test_sse2(const uint8_t *restrict node, const struct cbvh_w4_simd_ray *restrict w,
-                                       float tmax, float entry[CBVH_W4_WIDTH])
+CBVH_KERNEL uint32_t walk_w4_test_sse2(const uint8_t *restrict node,
+                                       const struct cbvh_w4_simd_ray *restrict w, float tmax,
+                                       float entry[CBVH_W4_WIDTH])
 {
     __m128 tnear, tfar;
     if (CBVH_LIKELY(!w->exact)) {
@@ -375,10 +377,11 @@ CBVH_KERNEL int walk_w4_descend(const struct cbvh_file *restrict f, cbvh_ref r,
  * take walk_w4_descend instead. */
 CBVH_KERNEL uint32_t walk_w4_children_hit(const struct cbvh_file *restrict f, cbvh_ref r,
                                           const struct cbvh_box_ray *restrict box,
-                                          const struct cbvh_w4_simd_ray *restrict w, const float *restrict float_boxes,
-                                          const enum cbvh_walk_order order, const int scalar, uint32_t octant,
-                                          float tmin, float tmax, cbvh_ref out[CBVH_TREE_WIDTH],
-                                          float entry[CBVH_TREE_WIDTH], uint64_t *restrict boxes_tested)
+                                          const struct cbvh_w4_simd_ray *restrict w,
+                                          const float *restrict float_boxes, const enum cbvh_walk_order order,
+                                          const int scalar, uint32_t octant, float tmin, float tmax,
+                                          cbvh_ref out[CBVH_TREE_WIDTH], float entry[CBVH_TREE_WIDTH],
+                                          uint64_t *restrict boxes_tested)
 {
     const uint8_t *restrict node = cbvh_w4_node(f->nodes, r);
     const uint64_t meta = cbvh_w4_meta(node);
@@ -396,8 +399,8 @@ CBVH_KERNEL uint32_t walk_w4_children_hit(const struct cbvh_file *restrict f, cb
         (void)scalar;
         (void)w;
         for (uint32_t s = 0; s < CBVH_W4_WIDTH; s++)
-            if ((used >> s & 1u) &&
-                walk_box_test(box, f, CBVH_LAYOUT_WIDE4, float_boxes, CBVH_W4_WIDTH * r + s, tmin, tmax, &e[s]))
+            if ((used >> s & 1u) && walk_box_test(box, f, CBVH_LAYOUT_WIDE4, float_boxes,
+                                                  CBVH_W4_WIDTH * r + s, tmin, tmax, &e[s]))
                 hits |= 1u << s;
     }
     if (!hits)
@@ -442,10 +445,11 @@ CBVH_KERNEL uint32_t walk_w4_children_hit(const struct cbvh_file *restrict f, cb
  * and the sort byte is read only when both are hit. Wide layout: above. */
 CBVH_KERNEL uint32_t walk_children_hit(const struct cbvh_file *restrict f, const uint32_t layout, cbvh_ref r,
                                        const struct cbvh_box_ray *restrict box,
-                                       const struct cbvh_w4_simd_ray *restrict w, const float *restrict float_boxes,
-                                       const enum cbvh_walk_order order, uint32_t octant, float tmin, float tmax,
-                                       cbvh_ref out[CBVH_TREE_WIDTH], float entry[CBVH_TREE_WIDTH],
-                                       uint64_t *restrict boxes_tested, const int scalar)
+                                       const struct cbvh_w4_simd_ray *restrict w,
+                                       const float *restrict float_boxes, const enum cbvh_walk_order order,
+                                       uint32_t octant, float tmin, float tmax, cbvh_ref out[CBVH_TREE_WIDTH],
+                                       float entry[CBVH_TREE_WIDTH], uint64_t *restrict boxes_tested,
+                                       const int scalar)
 {
     if (layout == CBVH_LAYOUT_WIDE4)
         return walk_w4_children_hit(f, r, box, w, float_boxes, order, scalar, octant, tmin, tmax, out, entry,
@@ -457,8 +461,8 @@ CBVH_KERNEL uint32_t walk_children_hit(const struct cbvh_file *restrict f, const
     const int h1 = walk_box_test(box, f, layout, float_boxes, c[1].box, tmin, tmax, &e1);
     *boxes_tested += 2;
     if (h0 && h1)
-        return walk_order_pair(order, cbvh_tree_second_first(f, layout, r, octant), c[0].ref, e0, c[1].ref, e1, out,
-                               entry);
+        return walk_order_pair(order, cbvh_tree_second_first(f, layout, r, octant), c[0].ref, e0, c[1].ref,
+                               e1, out, entry);
     out[0] = h0 ? c[0].ref : c[1].ref;
     entry[0] = h0 ? e0 : e1;
     return (uint32_t)(h0 | h1);
@@ -530,76 +534,147 @@ CBVH_KERNEL int cbvh_walk_begin(const struct cbvh_file *restrict f, const uint32
     return walk_box_test(&st->box, f, layout, float_boxes, root_box, ray->tmin, tmax, &entry);
 }
 
-/* One step of the walk: the node st->r's children against the ray (the nearest entered is the next step's,
- * the others go onto the stack, the farthest deepest), or the leaf st->r's triangles, then the next
- * reference off the stack still in reach. A node's children are tested at the node, so a missed child is
- * never pushed, and the farther ones are pushed with their entry distances: one popped after the ray became
- * shorter than that is dropped without a second box test. The loader checked depth <= CBVH_MAX_DEPTH, and
- * a walk pushes at most CBVH_TREE_WIDTH - 1 references per level, so the stack cannot overflow
- * (walk_w4_descend's dead stores above the top included). Closest hit: best and st->tmax follow each closer
- * hit. `count`: whether st->visited counts the boxes tested (statistics; st->tested always counts). */
-CBVH_KERNEL enum cbvh_walk_step_result
-cbvh_walk_step(const struct cbvh_file *restrict f, const uint32_t layout,
-               const struct cbvh_ray_ctx *restrict ray, const struct cbvh_walk_mode mode,
-               const float *restrict float_boxes, int count, struct cbvh_walk_state *restrict st,
-               struct cbvh_best_hit *restrict best)
+/* A shape query's policies for the walk (sweeps and overlaps, shape_walk.h): its node test, `enter` for
+ * each child box or `grid4` for four wide slots at once, children in the order of `octant`; its leaf test,
+ * `leaf`, with `query` the callbacks' state; `limit`, when not NULL, its best contact so far, which the walk
+ * reads after each leaf as its reach (a sweep's keys are slab entry distances); NULL (an overlap) drops
+ * nothing. */
+struct cbvh_shape_policy {
+    cbvh_shape_enter_fn enter;
+    cbvh_shape_leaf_fn leaf;
+    void *query;
+    const void *grid4;
+    uint32_t octant;
+    const float *limit;
+};
+
+/* Pushes the entered children c[1..n) (n >= 1) in visit order, the farthest deepest, and makes c[0] the
+ * walk's next. */
+CBVH_KERNEL void walk_enter_children(struct cbvh_walk_state *restrict st, const cbvh_ref *c, const float *e,
+                                     uint32_t n)
 {
-    const float tmin = ray->tmin;
-    const cbvh_ref r = st->r;
+    for (uint32_t k = n; k-- > 1;) {
+        st->stack[st->sp].ref = c[k];
+        st->stack[st->sp].entry = e[k];
+        st->sp++;
+    }
+    st->r = c[0];
+    st->r_entry = e[0];
+}
+
+/* A wide node is one cache line: the farther children a walk pushed start arriving now, and a leaf's
+ * triangle entries (its vertices need those first). */
+CBVH_KERNEL void walk_prefetch_pushed(const struct cbvh_file *restrict f, const uint32_t layout,
+                                      const cbvh_ref *c, uint32_t n)
+{
+    if (layout != CBVH_LAYOUT_WIDE4)
+        return;
+    for (uint32_t k = n; k-- > 1;) {
+        if (!cbvh_w4_ref_is_leaf(c[k]))
+            CBVH_PREFETCH(cbvh_w4_node(f->nodes, c[k]));
+        else
+            CBVH_PREFETCH(
+                cbvh_indices_entry(f->triangles, (int)f->triangle_encoding, cbvh_w4_ref_first(c[k])));
+    }
+}
+
+/* The ray's node test: node st->r's children it enters go onto the stack, the nearest next. Returns 0 when
+ * it enters none. */
+CBVH_KERNEL int walk_ray_node(const struct cbvh_file *restrict f, const uint32_t layout,
+                              const struct cbvh_ray_ctx *restrict ray, const struct cbvh_walk_mode mode,
+                              const float *restrict float_boxes, int count,
+                              struct cbvh_walk_state *restrict st)
+{
     (void)count; /* read by the SIMD step only */
     /* the children's order: nearest first, but an any-hit walk from among the triangles goes farthest
      * first (ray->any_flip), where most occluders are, not around its start, where a ray leaving a surface
      * passes the surface's neighbours, which it would test first */
     const uint32_t octant = ray->octant ^ (mode.any ? ray->any_flip : 0u);
-    if (!cbvh_tree_is_leaf(f, layout, r)) {
 #ifdef CBVH_HAVE_SIMD
-        if (layout == CBVH_LAYOUT_WIDE4 && !float_boxes && !mode.scalar && mode.order != CBVH_WALK_DISTANCE) {
-            if (walk_w4_descend(f, r, &st->w, mode.order == CBVH_WALK_SORTED, octant, st->tmax, st->stack,
-                                &st->sp, &st->r, &st->r_entry, count ? &st->visited : NULL))
-                return CBVH_WALK_MORE;
-        } else
+    if (layout == CBVH_LAYOUT_WIDE4 && !float_boxes && !mode.scalar && mode.order != CBVH_WALK_DISTANCE)
+        return walk_w4_descend(f, st->r, &st->w, mode.order == CBVH_WALK_SORTED, octant, st->tmax, st->stack,
+                               &st->sp, &st->r, &st->r_entry, count ? &st->visited : NULL);
 #endif
-        {
-            cbvh_ref c[CBVH_TREE_WIDTH];
-            float e[CBVH_TREE_WIDTH];
-            const uint32_t n = walk_children_hit(f, layout, r, &st->box, &st->w, float_boxes, mode.order,
-                                                 octant, tmin, st->tmax, c, e, &st->visited, mode.scalar);
-            if (n > 0) {
-                for (uint32_t k = n; k-- > 1;) {
-                    st->stack[st->sp].ref = c[k];
-                    st->stack[st->sp].entry = e[k];
-                    st->sp++;
-                    /* a wide node is one cache line: start fetching the farther children now, and a
-                     * leaf's triangle entries (its vertices need those first) */
-                    if (layout == CBVH_LAYOUT_WIDE4 && !cbvh_w4_ref_is_leaf(c[k]))
-                        CBVH_PREFETCH(cbvh_w4_node(f->nodes, c[k]));
-                    else if (layout == CBVH_LAYOUT_WIDE4)
-                        CBVH_PREFETCH(cbvh_indices_entry(f->triangles, (int)f->triangle_encoding,
-                                                         cbvh_w4_ref_first(c[k])));
-                }
-                st->r = c[0];
-                st->r_entry = e[0];
-                return CBVH_WALK_MORE;
-            }
-        }
-    } else {
-        uint32_t first, n;
-        cbvh_tree_leaf(f, layout, r, &first, &n);
-        st->tested += n;
-        if (cbvh_leaf_visit(f, first, n, ray, mode.any, mode.scalar, st->r_entry <= tmin, &st->tmax, best))
-            return CBVH_WALK_HIT;
-    }
-    /* Pop the next reference still in reach: the padded test of ray_box.h with the current tmax. */
+    cbvh_ref c[CBVH_TREE_WIDTH];
+    float e[CBVH_TREE_WIDTH];
+    const uint32_t n = walk_children_hit(f, layout, st->r, &st->box, &st->w, float_boxes, mode.order, octant,
+                                         ray->tmin, st->tmax, c, e, &st->visited, mode.scalar);
+    if (n == 0)
+        return 0;
+    walk_prefetch_pushed(f, layout, c, n);
+    walk_enter_children(st, c, e, n);
+    return 1;
+}
+
+/* The shape's node test (struct cbvh_shape_policy): as walk_ray_node. */
+CBVH_KERNEL int walk_shape_node(const struct cbvh_file *restrict f, const uint32_t layout,
+                                const struct cbvh_shape_policy *shape, struct cbvh_walk_state *restrict st)
+{
+    cbvh_ref c[CBVH_TREE_WIDTH];
+    float e[CBVH_TREE_WIDTH];
+    const uint32_t n =
+        cbvh_shape_children(f, layout, st->r, shape->octant, shape->enter, shape->query, shape->grid4, c, e);
+    if (n == 0)
+        return 0;
+    walk_enter_children(st, c, e, n);
+    return 1;
+}
+
+/* Pops the next reference still in reach: the padded test of ray_box.h against st->tmax. Returns 0 when the
+ * stack is empty. */
+CBVH_KERNEL int walk_pop(struct cbvh_walk_state *restrict st)
+{
     uint32_t sp = st->sp;
     do {
         if (sp == 0)
-            return CBVH_WALK_DONE;
+            return 0;
         sp--;
     } while (!(st->stack[sp].entry <= st->tmax * CBVH_BOX_PAD));
     st->sp = sp;
     st->r = st->stack[sp].ref;
     st->r_entry = st->stack[sp].entry;
-    return CBVH_WALK_MORE;
+    return 1;
+}
+
+/* One step of the walk skeleton, which every query over the tree takes but the binary layout's stackless
+ * walk (raycast_stackless.c) and the streams' batch walk (stream_walk.h): the node st->r's children
+ * against the query (the nearest entered is the next step's, the others go onto the stack, the farthest
+ * deepest), or the leaf st->r's triangles, then the next reference off the stack still in reach. The
+ * query is a ray (`ray`, in `mode`, with float_boxes as cbvh_walk's), or a shape (`shape` not NULL: ray,
+ * mode, float_boxes, count and best are not read), a constant at every call, so each instance keeps only
+ * its own tests. A node's children are tested at the node, so a missed child is never pushed, and the
+ * farther ones are pushed with their entry distances: one popped after the query's reach (st->tmax)
+ * became shorter than that is dropped without a second box test. The loader checked depth <=
+ * CBVH_MAX_DEPTH, and a walk pushes at most CBVH_TREE_WIDTH - 1 references per level, so the stack cannot
+ * overflow (walk_w4_descend's dead stores above the top included). Closest hit: best and st->tmax follow
+ * each closer hit. `count`: whether st->visited counts the boxes tested (statistics; st->tested always
+ * counts). */
+CBVH_KERNEL enum cbvh_walk_step_result
+cbvh_walk_step(const struct cbvh_file *restrict f, const uint32_t layout,
+               const struct cbvh_ray_ctx *restrict ray, const struct cbvh_walk_mode mode,
+               const float *restrict float_boxes, int count, const struct cbvh_shape_policy *shape,
+               struct cbvh_walk_state *restrict st, struct cbvh_best_hit *restrict best)
+{
+    const cbvh_ref r = st->r;
+    if (!cbvh_tree_is_leaf(f, layout, r)) {
+        if (shape ? walk_shape_node(f, layout, shape, st)
+                  : walk_ray_node(f, layout, ray, mode, float_boxes, count, st))
+            return CBVH_WALK_MORE;
+    } else {
+        uint32_t first, n;
+        cbvh_tree_leaf(f, layout, r, &first, &n);
+        st->tested += n;
+        if (shape) {
+            if (shape->leaf(shape->query, first, n))
+                return CBVH_WALK_HIT;
+            if (shape->limit)
+                st->tmax = *shape->limit;
+        } else if (cbvh_leaf_visit(f, first, n, ray, mode.any, mode.scalar, st->r_entry <= ray->tmin,
+                                   &st->tmax, best)) {
+            return CBVH_WALK_HIT;
+        }
+    }
+    return walk_pop(st) ? CBVH_WALK_MORE : CBVH_WALK_DONE;
 }
 
 /* The walk: cbvh_walk_step until the walk is over. It covers the subtree of `root`, whose box the caller
@@ -617,11 +692,54 @@ CBVH_KERNEL int cbvh_walk(const struct cbvh_file *restrict f, const uint32_t lay
     enum cbvh_walk_step_result step = CBVH_WALK_DONE;
     if (cbvh_walk_begin(f, layout, ray, mode, root, root_box, float_boxes, ray->tmax, &st))
         do
-            step = cbvh_walk_step(f, layout, ray, mode, float_boxes, stats != NULL, &st, best);
+            step = cbvh_walk_step(f, layout, ray, mode, float_boxes, stats != NULL, NULL, &st, best);
         while (step == CBVH_WALK_MORE);
     if (stats)
         cbvh_stats_add(stats, st.visited, st.tested);
     return step == CBVH_WALK_HIT;
+}
+
+/* A shape query's walk (sweeps and overlaps) on the skeleton: the subtrees whose boxes `enter` accepts,
+ * children in the precomputed order of `octant` (CBVH_NO_OCTANT: stored order, which for the binary layout
+ * is the file's depth-first order), leaves to `leaf`; `limit` and the keys as struct cbvh_shape_policy's.
+ * `grid`, when not NULL, is the same test as `enter` as a grid range, which wide nodes test four slots at
+ * once (cbvh_shape_children). Force-inlined so each query's callbacks are direct calls; `layout` is read
+ * at run time (a sweep's cost is in its triangle tests). */
+CBVH_KERNEL void cbvh_shape_walk(const struct cbvh_file *f, const uint32_t layout, uint32_t octant,
+                                 cbvh_shape_enter_fn enter, cbvh_shape_leaf_fn leaf, void *query,
+                                 const float *limit, const struct cbvh_grid_range *grid)
+{
+    struct cbvh_walk_state st;
+    const void *grid4 = NULL;
+#ifdef CBVH_HAVE_SIMD
+    struct cbvh_grid_range4 w;
+    if (grid) {
+        if (cbvh_grid_range_empty(grid))
+            return;
+        cbvh_grid_range4_of(grid, &w);
+        grid4 = &w;
+    }
+#else
+    (void)grid;
+#endif
+    const uint32_t root_box = cbvh_tree_root_box(f, layout);
+    if (root_box != CBVH_NO_BOX) {
+        uint32_t q[6];
+        float entry;
+        cbvh_shape_box_coords(f, layout, root_box, q);
+        if (!enter(query, q, &entry))
+            return;
+    }
+    const struct cbvh_shape_policy shape = {enter, leaf, query, grid4, octant, limit};
+    const struct cbvh_walk_mode unread = {CBVH_WALK_SORTED, 0, 0};
+    st.sp = 0;
+    st.r = cbvh_tree_root(f, layout);
+    st.r_entry = 0.0f;
+    st.tmax = limit ? *limit : INFINITY;
+    st.visited = 0;
+    st.tested = 0;
+    while (cbvh_walk_step(f, layout, NULL, unread, NULL, 0, &shape, &st, NULL) == CBVH_WALK_MORE)
+        ;
 }
 
 #endif
