@@ -156,6 +156,7 @@ struct overlap_query {
     struct overlap_sink *sink;
     struct cbvh_grid_range grid;
 #ifdef CBVH_HAVE_SIMD
+    struct cbvh_grid_range4 grid4; /* grid, as four wide slots at once test it */
     struct cbvh_cull4 cull4;
 #endif
 };
@@ -259,6 +260,18 @@ static int overlap_enter(void *query, const uint32_t q[6], float *entry)
     return cbvh_grid_range_meets(&((const struct overlap_query *)query)->grid, q);
 }
 
+#ifdef CBVH_HAVE_SIMD
+/* overlap_enter on the four slots of a wide node at once (cbvh_grid_range4_hits). */
+static uint32_t overlap_enter4(void *query, const uint8_t *node, float entry[4])
+{
+    _mm_storeu_ps(entry, _mm_setzero_ps());
+    return cbvh_grid_range4_hits(node, &((const struct overlap_query *)query)->grid4);
+}
+#define OVERLAP_ENTER4 overlap_enter4
+#else
+#define OVERLAP_ENTER4 NULL
+#endif
+
 /* What a triangle past the walk's box test has left to pass: the cheap tests in double, then the exact test
  * (OVERLAP_CULL); the exact test alone (OVERLAP_EXACT: the float tests left nothing the cheap tests would
  * decide); or nothing (OVERLAP_SURE: the region surely touches it). */
@@ -346,10 +359,13 @@ static size_t overlap_walk(const struct cbvh_file *f, const struct overlap_regio
     if ((sink->out || sink->contacts) && sink->capacity == 0 && !sink->find_more)
         return 0; /* out is full before the first report */
     grid_range(f, region, &q.grid);
+    if (cbvh_grid_range_empty(&q.grid))
+        return sink->reported; /* no node box can meet it */
 #ifdef CBVH_HAVE_SIMD
+    cbvh_grid_range4_of(&q.grid, &q.grid4);
     cbvh_cull4_init(&q.cull4, &region->shape, region->lo, region->hi, NULL);
 #endif
-    cbvh_shape_walk(f, f->layout, CBVH_NO_OCTANT, overlap_enter, overlap_leaf, &q, NULL, &q.grid);
+    cbvh_shape_walk(f, f->layout, CBVH_NO_OCTANT, overlap_enter, OVERLAP_ENTER4, overlap_leaf, &q, NULL);
     return sink->reported;
 }
 

@@ -16,6 +16,9 @@
 typedef int (*cbvh_shape_enter_fn)(void *query, const uint32_t q[6], float *entry);
 /* The leaf's cooked triangles [first, first + count). Returns 1 to end the walk. */
 typedef int (*cbvh_shape_leaf_fn)(void *query, uint32_t first, uint32_t count);
+/* `enter` on the four slots of wide node `node` at once: bit s when the walk enters slot s's box (used or
+ * not: the walk masks the unused), with entry[s] its key. */
+typedef uint32_t (*cbvh_shape_enter4_fn)(void *query, const uint8_t *node, float entry[4]);
 
 /* A box as ranges of grid coordinates, lo <= q <= hi per axis (an overlap's region: overlap.c): a node box
  * meets it when on every axis its min coordinate is at most hi and its max at least lo. The walk tests it
@@ -127,27 +130,29 @@ CBVH_KERNEL int cbvh_shape_leaf_quads(const struct cbvh_file *f, uint32_t first,
 }
 #endif
 
-/* The children of non-leaf r the walk enters, in the order of `octant`, with their entry keys: by the
- * grid range, four at once, for a wide node when the query has one (and SIMD is built), else box by box
- * through `enter`, without branching on the outcome (hard to predict). Returns how many. */
+/* The children of non-leaf r the walk enters, in the order of `octant`, with their entry keys: four at once
+ * through `enter4` for a wide node when the query has it (and SIMD is built), else box by box through
+ * `enter`, without branching on the outcome (hard to predict). Returns how many. */
 CBVH_KERNEL uint32_t cbvh_shape_children(const struct cbvh_file *f, const uint32_t layout, cbvh_ref r,
-                                         uint32_t octant, cbvh_shape_enter_fn enter, void *query,
-                                         const void *grid4, cbvh_ref in[CBVH_TREE_WIDTH],
-                                         float in_entry[CBVH_TREE_WIDTH])
+                                         uint32_t octant, cbvh_shape_enter_fn enter,
+                                         cbvh_shape_enter4_fn enter4, void *query,
+                                         cbvh_ref in[CBVH_TREE_WIDTH], float in_entry[CBVH_TREE_WIDTH])
 {
     uint32_t m = 0;
 #ifdef CBVH_HAVE_SIMD
-    if (grid4 && layout == CBVH_LAYOUT_WIDE4) {
+    if (enter4 && layout == CBVH_LAYOUT_WIDE4) {
         const uint8_t *node = cbvh_w4_node(f->nodes, r);
         const uint64_t meta = cbvh_w4_meta(node);
-        const uint32_t hits = cbvh_grid_range4_hits(node, grid4) & cbvh_w4_used(meta);
+        float e[CBVH_W4_WIDTH];
+        const uint32_t hits = enter4(query, node, e) & cbvh_w4_used(meta);
         if (octant == CBVH_NO_OCTANT) { /* slot order: the references of the slots entered alone */
             /* counted by the table: GCC would count the turns of a loop to h = 0 with a libgcc call */
             m = cbvh_w4_popcount(hits);
             uint32_t h = hits;
             for (uint32_t k = 0; k < m; k++, h &= h - 1u) {
-                in[k] = cbvh_w4_child_ref(node, meta, cbvh_lowest_lane(h));
-                in_entry[k] = 0.0f;
+                const uint32_t s = cbvh_lowest_lane(h);
+                in[k] = cbvh_w4_child_ref(node, meta, s);
+                in_entry[k] = e[s];
             }
             return m;
         }
@@ -155,13 +160,13 @@ CBVH_KERNEL uint32_t cbvh_shape_children(const struct cbvh_file *f, const uint32
         for (uint32_t k = 0; k < CBVH_W4_WIDTH; k++) {
             const uint32_t s = order[k];
             in[m] = cbvh_w4_child_ref(node, meta, s);
-            in_entry[m] = 0.0f;
+            in_entry[m] = e[s];
             m += hits >> s & 1u;
         }
         return m;
     }
 #else
-    (void)grid4;
+    (void)enter4;
 #endif
     struct cbvh_child children[CBVH_TREE_WIDTH];
     const uint32_t n = cbvh_tree_children(f, layout, r, octant, children);

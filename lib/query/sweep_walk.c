@@ -33,6 +33,7 @@ struct sweep_query {
 #ifdef CBVH_HAVE_SIMD
     struct cbvh_cull4 cull4;
     __m128 center4[3], extent4[3], rcp4[3]; /* sweep_box's, in every lane */
+    __m128 origin4[3], scale4[3];           /* the file's grid, in every lane */
 #endif
 };
 
@@ -156,6 +157,36 @@ static uint32_t sweep_box4(const struct sweep_query *q, const struct leaf_quad *
     return (uint32_t)_mm_movemask_ps(_mm_cmple_ps(tnear, _mm_mul_ps(tfar, _mm_set1_ps(CBVH_BOX_PAD))));
 }
 
+/* sweep_enter on the four slots of wide node `node` at once: each plane dequantized as cbvh_dequantize does
+ * it, the box grown and crossed as sweep_box does, lane for lane the same float operations in the same order
+ * (_mm_max_ps(a, b) is a > b ? a : b, as the slab test's selections), so the walk enters the same boxes with
+ * the same keys. */
+static uint32_t sweep_enter4(void *query, const uint8_t *node, float entry[4])
+{
+    const struct sweep_query *q = query;
+    __m128 tnear = _mm_setzero_ps(), tfar = _mm_set1_ps(q->limit);
+    for (uint32_t a = 0; a < 3; a++) {
+        const __m128i zero = _mm_setzero_si128();
+        const __m128i qlo = _mm_loadl_epi64((const __m128i *)(const void *)(node + cbvh_w4_plane_offset(a, 0)));
+        const __m128i qhi =
+            _mm_loadl_epi64((const __m128i *)(const void *)(node + cbvh_w4_plane_offset(a + 3u, 0)));
+        const __m128 plane_lo =
+            _mm_add_ps(q->origin4[a], _mm_mul_ps(_mm_cvtepi32_ps(_mm_unpacklo_epi16(qlo, zero)), q->scale4[a]));
+        const __m128 plane_hi =
+            _mm_add_ps(q->origin4[a], _mm_mul_ps(_mm_cvtepi32_ps(_mm_unpacklo_epi16(qhi, zero)), q->scale4[a]));
+        const __m128 lo = outward4(_mm_sub_ps(plane_lo, q->extent4[a]), -1.0f);
+        const __m128 hi = outward4(_mm_add_ps(plane_hi, q->extent4[a]), 1.0f);
+        const int back = q->octant >> a & 1u;
+        const __m128 tn = _mm_mul_ps(_mm_sub_ps(back ? hi : lo, q->center4[a]), q->rcp4[a]);
+        const __m128 tf = _mm_mul_ps(_mm_sub_ps(back ? lo : hi, q->center4[a]), q->rcp4[a]);
+        tnear = _mm_max_ps(tn, tnear);
+        tfar = _mm_min_ps(tf, tfar);
+    }
+    _mm_storeu_ps(entry, tnear);
+    return (uint32_t)_mm_movemask_ps(_mm_cmple_ps(tnear, _mm_mul_ps(tfar, _mm_set1_ps(CBVH_BOX_PAD))));
+}
+#define SWEEP_ENTER4 sweep_enter4
+
 /* Four triangles through their box test (sweep_box4: exactly the triangles sweep_box keeps with the limit
  * at the time, so sweep_triangle tests a kept one's box again only once the limit shrank) and the float
  * cull (cbvh_cull4_sweep, over the motion up to the best contact so far: limit, rounded from best.t, times
@@ -178,6 +209,8 @@ static int sweep_quad(void *query, uint32_t k, const struct leaf_quad *t, uint32
     }
     return 0;
 }
+#else
+#define SWEEP_ENTER4 NULL
 #endif
 
 /* With SIMD, four triangles at a time (sweep_quad); else one at a time. */
@@ -224,9 +257,11 @@ int cbvh_sweep_walk(const struct cbvh_file *f, const struct cbvh_local_shape *bo
         q.center4[a] = _mm_set1_ps(center[a]);
         q.extent4[a] = _mm_set1_ps(extent[a]);
         q.rcp4[a] = _mm_set1_ps(q.rcp[a]);
+        q.origin4[a] = _mm_set1_ps(f->grid_origin[a]);
+        q.scale4[a] = _mm_set1_ps(f->grid_scale[a]);
     }
 #endif
-    cbvh_shape_walk(f, f->layout, q.octant, sweep_enter, sweep_leaf, &q, &q.limit, NULL);
+    cbvh_shape_walk(f, f->layout, q.octant, sweep_enter, SWEEP_ENTER4, sweep_leaf, &q, &q.limit);
     found->tri = q.best_tri;
     found->contact = q.best;
     found->contact.normal = v3_normalize(q.best.normal);

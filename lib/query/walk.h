@@ -535,15 +535,15 @@ CBVH_KERNEL int cbvh_walk_begin(const struct cbvh_file *restrict f, const uint32
 }
 
 /* A shape query's policies for the walk (sweeps and overlaps, shape_walk.h): its node test, `enter` for
- * each child box or `grid4` for four wide slots at once, children in the order of `octant`; its leaf test,
- * `leaf`, with `query` the callbacks' state; `limit`, when not NULL, its best contact so far, which the walk
- * reads after each leaf as its reach (a sweep's keys are slab entry distances); NULL (an overlap) drops
- * nothing. */
+ * each child box or, when not NULL, `enter4` for four wide slots at once, children in the order of
+ * `octant`; its leaf test, `leaf`, with `query` the callbacks' state; `limit`, when not NULL, its best
+ * contact so far, which the walk reads after each leaf as its reach (a sweep's keys are slab entry
+ * distances); NULL (an overlap) drops nothing. */
 struct cbvh_shape_policy {
     cbvh_shape_enter_fn enter;
+    cbvh_shape_enter4_fn enter4;
     cbvh_shape_leaf_fn leaf;
     void *query;
-    const void *grid4;
     uint32_t octant;
     const float *limit;
 };
@@ -613,7 +613,7 @@ CBVH_KERNEL int walk_shape_node(const struct cbvh_file *restrict f, const uint32
     cbvh_ref c[CBVH_TREE_WIDTH];
     float e[CBVH_TREE_WIDTH];
     const uint32_t n =
-        cbvh_shape_children(f, layout, st->r, shape->octant, shape->enter, shape->query, shape->grid4, c, e);
+        cbvh_shape_children(f, layout, st->r, shape->octant, shape->enter, shape->enter4, shape->query, c, e);
     if (n == 0)
         return 0;
     walk_enter_children(st, c, e, n);
@@ -699,29 +699,15 @@ CBVH_KERNEL int cbvh_walk(const struct cbvh_file *restrict f, const uint32_t lay
     return step == CBVH_WALK_HIT;
 }
 
-/* A shape query's walk (sweeps and overlaps) on the skeleton: the subtrees whose boxes `enter` accepts,
- * children in the precomputed order of `octant` (CBVH_NO_OCTANT: stored order, which for the binary layout
- * is the file's depth-first order), leaves to `leaf`; `limit` and the keys as struct cbvh_shape_policy's.
- * `grid`, when not NULL, is the same test as `enter` as a grid range, which wide nodes test four slots at
- * once (cbvh_shape_children). Force-inlined so each query's callbacks are direct calls; `layout` is read
- * at run time (a sweep's cost is in its triangle tests). */
+/* A shape query's walk (sweeps and overlaps) on the skeleton: the subtrees whose boxes `enter` accepts (or
+ * `enter4`, when not NULL, four wide slots at once: the same test), children in the precomputed order of
+ * `octant` (CBVH_NO_OCTANT: stored order, which for the binary layout is the file's depth-first order),
+ * leaves to `leaf`; `limit` and the keys as struct cbvh_shape_policy's. Force-inlined so each query's
+ * callbacks are direct calls; `layout` is read at run time (a sweep's cost is in its triangle tests). */
 CBVH_KERNEL void cbvh_shape_walk(const struct cbvh_file *f, const uint32_t layout, uint32_t octant,
-                                 cbvh_shape_enter_fn enter, cbvh_shape_leaf_fn leaf, void *query,
-                                 const float *limit, const struct cbvh_grid_range *grid)
+                                 cbvh_shape_enter_fn enter, cbvh_shape_enter4_fn enter4,
+                                 cbvh_shape_leaf_fn leaf, void *query, const float *limit)
 {
-    struct cbvh_walk_state st;
-    const void *grid4 = NULL;
-#ifdef CBVH_HAVE_SIMD
-    struct cbvh_grid_range4 w;
-    if (grid) {
-        if (cbvh_grid_range_empty(grid))
-            return;
-        cbvh_grid_range4_of(grid, &w);
-        grid4 = &w;
-    }
-#else
-    (void)grid;
-#endif
     const uint32_t root_box = cbvh_tree_root_box(f, layout);
     if (root_box != CBVH_NO_BOX) {
         uint32_t q[6];
@@ -730,8 +716,9 @@ CBVH_KERNEL void cbvh_shape_walk(const struct cbvh_file *f, const uint32_t layou
         if (!enter(query, q, &entry))
             return;
     }
-    const struct cbvh_shape_policy shape = {enter, leaf, query, grid4, octant, limit};
+    const struct cbvh_shape_policy shape = {enter, enter4, leaf, query, octant, limit};
     const struct cbvh_walk_mode unread = {CBVH_WALK_SORTED, 0, 0};
+    struct cbvh_walk_state st;
     st.sp = 0;
     st.r = cbvh_tree_root(f, layout);
     st.r_entry = 0.0f;
