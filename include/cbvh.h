@@ -748,8 +748,10 @@ CBVH_API size_t cbvh_overlap_capsule(const cbvh_file *file, const float p0[3], c
  * triangle follows the last one written (out filled), else 0: a caller continues with first + the return
  * value until *more is 0. With out NULL nothing is written and *more says whether any overlapping triangle
  * lies past `first`. Each call walks the tree again, so reading n triangles in pages of p costs about n / p
- * walks; cbvh_overlap_box's callback reads any number in one. Invalid input (as for cbvh_overlap_box)
- * writes none and sets *more to 0. Safe on any opened file, from any number of threads. */
+ * walks; cbvh_overlap_box's callback reads any number in one. Finding *more costs the walk on to the next
+ * overlapping triangle; with more NULL (and out given) the query stops as soon as out is full, so capacity
+ * 1 and more NULL is a first-hit query: is anything there, and which triangle. Invalid input (as for
+ * cbvh_overlap_box) writes none and sets *more to 0. Safe on any opened file, from any number of threads. */
 CBVH_API size_t cbvh_overlap_box_from(const cbvh_file *file, const float box_min[3], const float box_max[3],
                                       size_t first, uint32_t *out, size_t capacity, int *more);
 CBVH_API size_t cbvh_overlap_sphere_from(const cbvh_file *file, const float center[3], float radius,

@@ -152,6 +152,16 @@ static void run_overlaps(const ref_fixture *fx, int count, uint64_t seed)
             }
             assert_int_equal(got, n);
         }
+        /* Without *more, a page is the same and the query stops once out is full: capacity 1 is a first-hit
+         * query, giving the first triangle of the whole query's order. */
+        for (size_t page = 1; page <= 3; page++) {
+            uint32_t buf[4] = {CBVH_NO_HIT, CBVH_NO_HIT, CBVH_NO_HIT, CBVH_NO_HIT};
+            const size_t k = overlap_from(fx, &g, 0, buf, page, NULL);
+            assert_int_equal(k, n < page ? n : page);
+            for (size_t j = 0; j < k; j++)
+                assert_int_equal(buf[j], ids[j]);
+            assert_int_equal(buf[k], CBVH_NO_HIT);
+        }
         /* Without an output array: whether any overlapping triangle lies past `first`. */
         int more = -1;
         assert_int_equal(overlap_from(fx, &g, 0, NULL, 5, &more), 0);
@@ -359,6 +369,13 @@ static void check_contacts(const ref_fixture *fx, int count, uint64_t seed)
             got += k;
         }
         assert_int_equal(got, m);
+        /* first hit: capacity 1 without *more, the first contact of the whole query */
+        cbvh_contact one;
+        const size_t k = capsule ? cbvh_contacts_capsule(fx->file, p0, p1, radius, 0, &one, 1, NULL)
+                                 : cbvh_contacts_sphere(fx->file, p0, radius, 0, &one, 1, NULL);
+        assert_int_equal(k, m > 0);
+        if (k)
+            assert_memory_equal(&one, &contacts[0], sizeof one);
     }
     printf("contacts: %zu, %zu of them with the core reaching the triangle\n", total, touching);
     assert_true(total > (size_t)count);

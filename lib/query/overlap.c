@@ -448,11 +448,13 @@ CBVH_API size_t cbvh_overlap_sphere(const cbvh_file *file, const float center[3]
     return overlap_walk(file, &region, &sink);
 }
 
-/* The paged queries (_from, contacts): the sink skips `first`, fills ids or contacts, and looks for one more. */
+/* The paged queries (_from, contacts): the sink skips `first` and fills ids or contacts; it looks for one more
+ * when the caller asks (more not NULL) or has no output (the call then says only whether one is there). */
 static size_t paged_walk(const struct cbvh_file *file, const struct overlap_region *region, int valid, size_t first,
                          uint32_t *ids, cbvh_contact *contacts, size_t capacity, int *more)
 {
-    struct overlap_sink sink = {NULL, NULL, ids, contacts, ids || contacts ? capacity : 0, 0, first, 1, 0};
+    const int output = ids || contacts;
+    struct overlap_sink sink = {NULL, NULL, ids, contacts, output ? capacity : 0, 0, first, more || !output, 0};
     const size_t n = file && valid ? overlap_walk(file, region, &sink) : 0;
     if (more)
         *more = sink.more;
