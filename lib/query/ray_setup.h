@@ -1,4 +1,5 @@
-/* ray_setup.h: per-ray validation and precomputation (reciprocal, octant, watertight shear), done once per ray. */
+/* ray_setup.h: per-ray validation and precomputation (reciprocal, octant, watertight shear), done once per
+ * ray. */
 #ifndef CBVH_QUERY_RAY_SETUP_H
 #define CBVH_QUERY_RAY_SETUP_H
 
@@ -26,12 +27,13 @@
 /* The query side of the exact range (docs/EXACTNESS.md): the kernels walk a ray whose direction has its
  * largest component in [2^-20, 2^20] (as given) or else in [2^CBVH_DIR_EXPONENT, 2^(CBVH_DIR_EXPONENT + 1))
  * (a power-of-two scaling: exact), whose other direction components are 0 or at least CBVH_DIR_FLUSH times
- * the largest, and whose origin coordinates are 0 or at least CBVH_ORIGIN_FLUSH in magnitude. With the cooker's range (cbvh.h,
- * CBVH_COORDINATE_MIN and _MAX) no float step of a box or triangle test then rounds in the subnormal range,
- * where rounding errors are absolute rather than relative to the operands and no relative padding covers
- * them, and no t overflows where it could be a hit: the distances a walk divides by the direction run from
- * 2^-103 (the smallest non-zero plane - origin difference) to 2^129 (an origin at FLT_MAX), so t from 2^-123
- * up (as given; t past CBVH_T_LIMIT is no hit) or from 2^-112 to 2^121 (scaled). */
+ * the largest, and whose origin coordinates are 0 or at least CBVH_ORIGIN_FLUSH in magnitude. With the
+ * cooker's range (cbvh.h, CBVH_COORDINATE_MIN and _MAX) no float step of a box or triangle test then rounds
+ * in the subnormal range, where rounding errors are absolute rather than relative to the operands and no
+ * relative padding covers them, and no t overflows where it could be a hit: the distances a walk divides by
+ * the direction run from 2^-103 (the smallest non-zero plane - origin difference) to 2^129 (an origin at
+ * FLT_MAX), so t from 2^-123 up (as given; t past CBVH_T_LIMIT is no hit) or from 2^-112 to 2^121 (scaled).
+ */
 #define CBVH_DIR_EXPONENT 8
 #define CBVH_DIR_FLUSH 0x1p-60f
 #define CBVH_ORIGIN_FLUSH 0x1p-64f
@@ -42,9 +44,12 @@ struct cbvh_t_frame {
     double base, scale;
 };
 
-/* A kernel's t on the caller's ray. */
+/* A kernel's t on the caller's ray: t itself for the rays a game casts (base 0, scale 1: a predictable
+ * branch, and the same float as the double form gives). */
 static inline float cbvh_t_frame_out(const struct cbvh_t_frame *frame, float t)
 {
+    if (CBVH_LIKELY(frame->base == 0.0 && frame->scale == 1.0))
+        return t;
     return (float)((frame->base + (double)t) * frame->scale);
 }
 
@@ -70,25 +75,25 @@ static inline void cbvh_origin_flush(float org[3])
  * Woop, Benthin & Wald 2013 ("Watertight ray/triangle intersection"). */
 struct cbvh_ray_shear {
     float org[3];
-    float dir[3];      /* for t from the triangle's plane (ray_triangle.h) */
-    float sx, sy, sz;  /* dir[kx]/dir[kz], dir[ky]/dir[kz], 1/dir[kz] */
+    float dir[3];        /* for t from the triangle's plane (ray_triangle.h) */
+    float sx, sy, sz;    /* dir[kx]/dir[kz], dir[ky]/dir[kz], 1/dir[kz] */
     uint32_t kx, ky, kz; /* kz: dominant axis of dir; kx, ky keep the winding */
 };
 
 /* A validated ray, ready for traversal. */
 struct cbvh_ray_ctx {
     struct cbvh_ray_shear shear;
-    float rcp[3];         /* 1/dir: 0 and -0 give +inf and -inf, which the box test handles */
-    float tmin, tmax;     /* tmax clamped to CBVH_T_LIMIT: an overflowed t never counts as a hit, and the
-                           * box test's padded tmax stays finite, so a box at infinity is never entered */
+    float rcp[3];     /* 1/dir: 0 and -0 give +inf and -inf, which the box test handles */
+    float tmin, tmax; /* tmax clamped to CBVH_T_LIMIT: an overflowed t never counts as a hit, and the
+                       * box test's padded tmax stays finite, so a box at infinity is never entered */
     struct cbvh_t_frame t_frame; /* the kernels' t and [tmin, tmax] on the caller's ray */
-    uint32_t box_halve;   /* bit a: a plane - org difference on axis a can overflow (coordinates past
-                           * FLT_MAX / 2), so the box test runs on that axis at half scale (ray_box.h) */
-    uint32_t octant;      /* bit a set when rcp[a] has its sign bit set (so -0 counts as negative): selects
-                           * the precomputed child order (layout/tree.h) */
-    uint32_t any_flip;    /* 7 when the origin lies inside the mesh's bounds, else 0 (set by
-                           * cbvh_ray_prepare): an any-hit walk takes the child order of octant ^ any_flip,
-                           * farthest child first from among the triangles (query/walk.h) */
+    uint32_t box_halve;          /* bit a: a plane - org difference on axis a can overflow (coordinates past
+                                  * FLT_MAX / 2), so the box test runs on that axis at half scale (ray_box.h) */
+    uint32_t octant;   /* bit a set when rcp[a] has its sign bit set (so -0 counts as negative): selects
+                        * the precomputed child order (layout/tree.h) */
+    uint32_t any_flip; /* 7 when the origin lies inside the mesh's bounds, else 0 (set by
+                        * cbvh_ray_prepare): an any-hit walk takes the child order of octant ^ any_flip,
+                        * farthest child first from among the triangles (query/walk.h) */
     const struct cbvh_hit_gate *gate; /* NULL, or the culling and hit filter of a query with options
                                        * (raycast.c), asked about each candidate hit (leaf.h) */
 };
@@ -201,15 +206,19 @@ static inline uint32_t cbvh_ray_octant(const cbvh_ray *ray)
            (uint32_t)(signbit(ray->dir[2]) != 0) << 2;
 }
 
-/* The ray the kernels walk (see CBVH_DIR_EXPONENT) from a valid ray, in *clean; t on the caller's ray is the
- * kernels' t times *scale, and clean's [tmin, tmax] is the caller's range in the kernels' t, rounded inwards
- * and clamped to CBVH_T_LIMIT on the caller's ray and on the kernels'. A direction whose largest component
- * lies in [2^-CBVH_DIR_KEEP, 2^CBVH_DIR_KEEP] (any ray a game casts) keeps its scale: every t of its walk is
+/* The ray the kernels walk (see CBVH_DIR_EXPONENT) from a valid ray: returns the ray whose org and dir they
+ * walk, the caller's own when sanitizing changes neither (any ray a game casts), else *clean; clean's [tmin,
+ * tmax] is always set: the caller's range in the kernels' t, rounded inwards and clamped to CBVH_T_LIMIT on
+ * the caller's ray and on the kernels'. t on the caller's ray is the kernels' t times *scale. A direction
+ * whose largest component lies in [2^-CBVH_DIR_KEEP, 2^CBVH_DIR_KEEP] keeps its scale: every t of its walk is
  * 0, at least 2^-123 or beyond CBVH_T_LIMIT (no hit) already. */
 #define CBVH_DIR_KEEP 20
-static inline void cbvh_ray_sanitize(const cbvh_ray *ray, cbvh_ray *clean, double *scale)
+static inline const cbvh_ray *cbvh_ray_sanitize(const cbvh_ray *ray, cbvh_ray *clean, double *scale)
 {
     const float *d = ray->dir;
+    clean->tmin = ray->tmin;
+    clean->tmax = ray->tmax < CBVH_T_LIMIT ? ray->tmax : CBVH_T_LIMIT;
+    *scale = 1.0;
     /* flush: big times 2^-60, rounded only where big is below 2^-66; a component below it becomes 0 of
      * its sign */
 #ifdef CBVH_HAVE_SIMD
@@ -219,10 +228,20 @@ static inline void cbvh_ray_sanitize(const cbvh_ray *ray, cbvh_ray *clean, doubl
                                    _mm_shuffle_ps(mag, mag, _MM_SHUFFLE(3, 1, 0, 2)));
     const float big = _mm_cvtss_f32(most);
     const __m128 keep = _mm_cmpge_ps(mag, _mm_mul_ps(most, _mm_set1_ps(CBVH_DIR_FLUSH)));
-    cbvh_store3(clean->dir, _mm_or_ps(_mm_and_ps(dv, keep), _mm_and_ps(dv, sign)));
     const __m128 ov = cbvh_load3(ray->org);
-    cbvh_store3(clean->org,
-                _mm_and_ps(ov, _mm_cmpge_ps(_mm_andnot_ps(sign, ov), _mm_set1_ps(CBVH_ORIGIN_FLUSH))));
+    const __m128 org_keep = _mm_cmpge_ps(_mm_andnot_ps(sign, ov), _mm_set1_ps(CBVH_ORIGIN_FLUSH));
+    /* unchanged: every direction component kept or zero, every origin coordinate kept or +0 (a -0 becomes
+     * +0), and the scale kept: a predictable branch, off the chain of the ray's set-up */
+    const __m128 zero = _mm_setzero_ps();
+    const int dir_same = _mm_movemask_ps(_mm_or_ps(keep, _mm_cmpeq_ps(mag, zero))) & 7;
+    const int org_same =
+        _mm_movemask_ps(_mm_or_ps(
+            org_keep, _mm_castsi128_ps(_mm_cmpeq_epi32(_mm_castps_si128(ov), _mm_setzero_si128())))) &
+        7;
+    if (CBVH_LIKELY((dir_same & org_same) == 7 && big >= 0x1p-20f && big <= 0x1p20f))
+        return ray;
+    cbvh_store3(clean->dir, _mm_or_ps(_mm_and_ps(dv, keep), _mm_and_ps(dv, sign)));
+    cbvh_store3(clean->org, _mm_and_ps(ov, org_keep));
 #else
     float big = fabsf(d[0]);
     big = fabsf(d[1]) > big ? fabsf(d[1]) : big;
@@ -234,11 +253,8 @@ static inline void cbvh_ray_sanitize(const cbvh_ray *ray, cbvh_ray *clean, doubl
     }
     cbvh_origin_flush(clean->org);
 #endif
-    clean->tmin = ray->tmin;
-    clean->tmax = ray->tmax < CBVH_T_LIMIT ? ray->tmax : CBVH_T_LIMIT;
-    *scale = 1.0;
     if (CBVH_LIKELY(big >= 0x1p-20f && big <= 0x1p20f))
-        return;
+        return clean;
     /* 2^(CBVH_DIR_EXPONENT - floor(log2 big)) and its inverse from the exponent of big as a double (a float
      * > 0 is a normal double, its biased exponent 874 to 1150) */
     const double wide = (double)big;
@@ -256,39 +272,42 @@ static inline void cbvh_ray_sanitize(const cbvh_ray *ray, cbvh_ray *clean, doubl
     clean->tmin = cbvh_float_rounded((double)ray->tmin * down, 1);
     clean->tmax = cbvh_float_rounded(tmax * down < CBVH_T_LIMIT ? tmax * down : CBVH_T_LIMIT, 0);
     *scale = up;
+    return clean;
 }
 
-/* Returns 1, fills ctx but for its shear (what a box test reads) and writes the ray the kernels walk to
- * *clean (cbvh_ray_sanitize) when the ray is valid (cbvh_ray_valid), else 0. */
-static inline int cbvh_ray_setup_boxes(struct cbvh_ray_ctx *ctx, const cbvh_ray *ray, cbvh_ray *clean)
+/* Returns the ray the kernels walk (cbvh_ray_sanitize: the caller's, or *clean; its range is clean's) and
+ * fills ctx but for its shear (what a box test reads) when the ray is valid (cbvh_ray_valid), else NULL. */
+static inline const cbvh_ray *cbvh_ray_setup_boxes(struct cbvh_ray_ctx *ctx, const cbvh_ray *ray,
+                                                   cbvh_ray *clean)
 {
     if (!cbvh_ray_valid(ray))
-        return 0;
-    cbvh_ray_sanitize(ray, clean, &ctx->t_frame.scale);
-    const float *d = clean->dir;
+        return NULL;
+    const cbvh_ray *walked = cbvh_ray_sanitize(ray, clean, &ctx->t_frame.scale);
+    const float *d = walked->dir;
 #ifdef CBVH_HAVE_SIMD
     cbvh_store3(ctx->rcp, _mm_div_ps(_mm_set1_ps(1.0f), cbvh_load3(d)));
 #else
     for (int a = 0; a < 3; a++)
         ctx->rcp[a] = 1.0f / d[a];
 #endif
-    ctx->octant = cbvh_ray_octant(clean);
+    ctx->octant = cbvh_ray_octant(walked);
     ctx->any_flip = 0;
     ctx->t_frame.base = 0.0;
     ctx->box_halve = 0;
     ctx->gate = NULL;
     ctx->tmin = clean->tmin;
     ctx->tmax = clean->tmax;
-    return 1;
+    return walked;
 }
 
 /* Returns 1 and fills ctx when the ray is valid (cbvh_ray_valid), else 0. */
 static inline int cbvh_ray_setup(struct cbvh_ray_ctx *ctx, const cbvh_ray *ray)
 {
     cbvh_ray clean;
-    if (!cbvh_ray_setup_boxes(ctx, ray, &clean))
+    const cbvh_ray *walked = cbvh_ray_setup_boxes(ctx, ray, &clean);
+    if (!walked)
         return 0;
-    cbvh_shear_setup(&ctx->shear, clean.org, clean.dir);
+    cbvh_shear_setup(&ctx->shear, walked->org, walked->dir);
     return 1;
 }
 

@@ -42,8 +42,8 @@ int cbvh_walk_set_kernel(int kernel);
 int cbvh_walk_kernel(void);
 
 /* Stackless walk over escape links (binary layout). */
-void cbvh_closest_stackless(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray, struct cbvh_best_hit *best,
-                            cbvh_query_stats *stats);
+void cbvh_closest_stackless(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray,
+                            struct cbvh_best_hit *best, cbvh_query_stats *stats);
 int cbvh_any_stackless(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray, cbvh_query_stats *stats);
 
 /* An origin farther than this many times the mesh's extent from its bounds
@@ -116,12 +116,12 @@ static inline int cbvh_ray_enters_top_box(const struct cbvh_ray_ctx *ctx, const 
  * mesh that misses its top box (cbvh_ray_enters_top_box: it hits nothing), for which the shear is left
  * unset (a camera's rays past the mesh's silhouette box: half to two thirds of the bench's coherent rays).
  * *boxes_tested, unless NULL, counts the top box when it was tested. Inline: it runs once per ray. */
-static inline int cbvh_ray_prepare(struct cbvh_ray_ctx *ctx, const cbvh_ray *caller_ray, const struct cbvh_file *f,
-                                   uint64_t *boxes_tested)
+static inline int cbvh_ray_prepare(struct cbvh_ray_ctx *ctx, const cbvh_ray *caller_ray,
+                                   const struct cbvh_file *f, uint64_t *boxes_tested)
 {
     cbvh_ray clean;
-    const cbvh_ray *ray = &clean;
-    if (!cbvh_ray_setup_boxes(ctx, caller_ray, &clean))
+    const cbvh_ray *ray = cbvh_ray_setup_boxes(ctx, caller_ray, &clean);
+    if (!ray)
         return 0;
     /* Most origins lie next to the mesh (struct cbvh_file's origin_near box), where there is nothing to do;
      * one outside it (or any, when a huge mesh has no such box) keeps any_flip 0: nearest first */
@@ -146,8 +146,8 @@ static inline int cbvh_ray_prepare(struct cbvh_ray_ctx *ctx, const cbvh_ray *cal
 
 /* Converts a kernel's best hit into the public form (original id, t on the
  * caller's ray: cbvh_t_frame_out). Returns 1 on a hit. */
-int cbvh_hit_output(const struct cbvh_file *f, const struct cbvh_best_hit *best, const struct cbvh_t_frame *frame,
-                    cbvh_hit *hit);
+int cbvh_hit_output(const struct cbvh_file *f, const struct cbvh_best_hit *best,
+                    const struct cbvh_t_frame *frame, cbvh_hit *hit);
 
 /* Reads the caller's options (NULL: the defaults) into *o: CBVH_ERROR_INVALID_ARGUMENT when struct_size is
  * out of range or traversal or cull is not one of its enum's values. */
@@ -155,11 +155,12 @@ cbvh_result cbvh_query_options_read(const cbvh_query_options *options, cbvh_quer
 
 /* The hit record of cooked triangle k hit at the kernels' t (on the caller's ray: cbvh_t_frame_out) with
  * barycentrics u, v by a ray of direction dir (the mesh's frame): unit face normal, front, material. */
-void cbvh_hit_record_fill(const struct cbvh_file *f, uint32_t k, const struct cbvh_t_frame *frame, float t, float u, float v,
-                          const float dir[3], cbvh_hit_record *r);
+void cbvh_hit_record_fill(const struct cbvh_file *f, uint32_t k, const struct cbvh_t_frame *frame, float t,
+                          float u, float v, const float dir[3], cbvh_hit_record *r);
 
 /* Fills a gate (leaf.h) for culling `cull` and `filter` (NULL: none), records rotated into the world by
- * `rotation` when it is not NULL, for a ray of direction dir whose kernels' t maps to the caller's by frame. */
+ * `rotation` when it is not NULL, for a ray of direction dir whose kernels' t maps to the caller's by frame.
+ */
 void cbvh_hit_gate_init(struct cbvh_hit_gate *gate, cbvh_cull cull, cbvh_hit_filter_fn filter, void *user,
                         const double (*rotation)[3], const float dir[3], const struct cbvh_t_frame *frame);
 
