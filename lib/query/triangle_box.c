@@ -1,10 +1,14 @@
-/* triangle_box.c: the separating-axis test of a triangle and a box, static or moving (13 axes), and the contact point. */
+/* triangle_box.c: the separating-axis test of a triangle and a box, static or moving (13 axes), and the
+ * contact point. */
 #include <math.h>
 
 #include "query/triangle_box.h"
 
-int cbvh_triangle_box_sweep(cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, cbvh_v3 center, cbvh_v3 half, cbvh_v3 delta, double tmax,
-                            double *t, cbvh_v3 *normal, double *depth)
+/* Every value below is finite (or, t_enter, t_exit and least_depth, infinite before their first axis): the
+ * plain compares of cbvh_dmin and cbvh_dmax (MINSD and MAXSD) give what fmin and fmax (calls into libm) give.
+ */
+int cbvh_triangle_box_sweep(cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, cbvh_v3 center, cbvh_v3 half, cbvh_v3 delta,
+                            double tmax, double *t, cbvh_v3 *normal, double *depth)
 {
     const cbvh_v3 v[3] = {v3_sub(a, center), v3_sub(b, center), v3_sub(c, center)};
     const cbvh_v3 f[3] = {v3_sub(v[1], v[0]), v3_sub(v[2], v[1]), v3_sub(v[0], v[2])};
@@ -36,7 +40,8 @@ int cbvh_triangle_box_sweep(cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, cbvh_v3 center, cbv
         const double p0 = v3_dot(v[0], l), p1 = v3_dot(v[1], l), p2 = v3_dot(v[2], l);
         const double radius = half.x * fabs(l.x) + half.y * fabs(l.y) + half.z * fabs(l.z);
         /* The box center's projection s*t must lie in [lo, hi] for the projections to meet. */
-        const double lo = fmin(p0, fmin(p1, p2)) - radius, hi = fmax(p0, fmax(p1, p2)) + radius;
+        const double lo = cbvh_dmin(p0, cbvh_dmin(p1, p2)) - radius,
+                     hi = cbvh_dmax(p0, cbvh_dmax(p1, p2)) + radius;
         const double s = v3_dot(delta, l);
         if (s == 0.0) {
             if (lo > 0.0 || hi < 0.0)
@@ -50,7 +55,8 @@ int cbvh_triangle_box_sweep(cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, cbvh_v3 center, cbv
             }
             if (ta > t_enter) {
                 t_enter = ta;
-                enter_normal = s > 0.0 ? v3_scale(l, -1.0) : l; /* the box arrives from the side it moves away from */
+                enter_normal =
+                    s > 0.0 ? v3_scale(l, -1.0) : l; /* the box arrives from the side it moves away from */
             }
             if (tb < t_exit)
                 t_exit = tb;
@@ -65,13 +71,13 @@ int cbvh_triangle_box_sweep(cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, cbvh_v3 center, cbv
             depth_normal = v3_scale(l, -1.0);
         }
     }
-    if (fmax(t_enter, 0.0) > fmin(t_exit, tmax))
+    if (cbvh_dmax(t_enter, 0.0) > cbvh_dmin(t_exit, tmax))
         return 0;
     if (t_enter <= 0.0) {
         *t = 0.0;
         *normal = depth_normal;
         if (depth)
-            *depth = fmax(least_depth, 0.0);
+            *depth = cbvh_dmax(least_depth, 0.0);
     } else {
         *t = t_enter;
         *normal = enter_normal;
@@ -94,15 +100,15 @@ static cbvh_v3 out_of_box(const struct cbvh_box *box, cbvh_v3 p)
               m[2][0] * p.x + m[2][1] * p.y + m[2][2] * p.z);
 }
 
-int cbvh_triangle_oriented_box_sweep(cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, const struct cbvh_box *box, cbvh_v3 delta,
-                                     double tmax, double *t, cbvh_v3 *normal, double *depth)
+int cbvh_triangle_oriented_box_sweep(cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, const struct cbvh_box *box,
+                                     cbvh_v3 delta, double tmax, double *t, cbvh_v3 *normal, double *depth)
 {
     if (!box->rotated)
         return cbvh_triangle_box_sweep(a, b, c, box->center, box->half, delta, tmax, t, normal, depth);
     const cbvh_v3 o = box->center;
     if (!cbvh_triangle_box_sweep(into_box(box, v3_sub(a, o)), into_box(box, v3_sub(b, o)),
-                                 into_box(box, v3_sub(c, o)), v3(0, 0, 0), box->half, into_box(box, delta), tmax, t,
-                                 normal, depth))
+                                 into_box(box, v3_sub(c, o)), v3(0, 0, 0), box->half, into_box(box, delta),
+                                 tmax, t, normal, depth))
         return 0;
     *normal = out_of_box(box, *normal);
     return 1;
