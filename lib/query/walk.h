@@ -620,16 +620,16 @@ CBVH_KERNEL int walk_shape_node(const struct cbvh_file *restrict f, const uint32
     return 1;
 }
 
-/* Pops the next reference still in reach: the padded test of ray_box.h against st->tmax. Returns 0 when the
- * stack is empty. */
-CBVH_KERNEL int walk_pop(struct cbvh_walk_state *restrict st)
+/* Pops the next reference still in reach: the padded test of ray_box.h against st->tmax, or any when the
+ * query has no reach (`bounded` clear: an overlap). Returns 0 when the stack is empty. */
+CBVH_KERNEL int walk_pop(struct cbvh_walk_state *restrict st, const int bounded)
 {
     uint32_t sp = st->sp;
     do {
         if (sp == 0)
             return 0;
         sp--;
-    } while (!(st->stack[sp].entry <= st->tmax * CBVH_BOX_PAD));
+    } while (bounded && !(st->stack[sp].entry <= st->tmax * CBVH_BOX_PAD));
     st->sp = sp;
     st->r = st->stack[sp].ref;
     st->r_entry = st->stack[sp].entry;
@@ -674,7 +674,7 @@ cbvh_walk_step(const struct cbvh_file *restrict f, const uint32_t layout,
             return CBVH_WALK_HIT;
         }
     }
-    return walk_pop(st) ? CBVH_WALK_MORE : CBVH_WALK_DONE;
+    return walk_pop(st, !shape || shape->limit) ? CBVH_WALK_MORE : CBVH_WALK_DONE;
 }
 
 /* The walk: cbvh_walk_step until the walk is over. It covers the subtree of `root`, whose box the caller
