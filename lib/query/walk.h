@@ -28,7 +28,7 @@ struct cbvh_walk_mode {
     int any;    /* any hit: stop at the first triangle hit */
     int scalar; /* no SIMD: the children one box at a time, and each leaf triangle without the
                  * filter (the fallback, and its test); the wide layout's SSE2 instances read it at run
-                 * time (raycast_walks.c's kernel choice), a predictable branch, rather than doubling their
+                 * time (kernel_choice.c), a predictable branch, rather than doubling their
                  * code */
 };
 
