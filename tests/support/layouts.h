@@ -99,9 +99,9 @@ static inline const char *test_layout_name(void)
     return test_layout == CBVH_LAYOUT_WIDE4 ? "wide4" : "binary";
 }
 
-/* Runs `tests` on the binary layout, then on wide4 with the best walk kernel, then (when `kernels` is set
- * on wide4 with the SSE2 kernel when the best one is AVX2, and with
- * the scalar kernel when the best one is not already scalar, then on wide4 with the files ref_cook_open
+/* Runs `tests` on the binary layout, then on wide4 with the best walk kernel, then, when `kernels` is set,
+ * on wide4 with the SSE2 kernel when the best one is AVX2, and with the scalar kernel when the best one is
+ * not already scalar, then on wide4 with the files ref_cook_open
  * opens expanded (cbvh_file_expand_triangles) in builds with SIMD kernels (without them the expansion
  * copies nothing, and that run would repeat the wide4 one query for query). Returns the number of failed
  * tests over all runs. A function, so the runs happen in this order. */
