@@ -1,8 +1,10 @@
 #!/bin/sh
 # test_source.sh: rules of the source tree that a compiler does not check: the tools see the library only
 # through include/cbvh.h and include/cbvh_internal.h (no other lib/ header, no field of struct cbvh_file),
-# and every C file is formatted as .clang-format says (tools/check_format.sh). Skips the format check when
-# clang-format is missing.
+# the library's includes and calls between its objects make no circle (tools/check_circles.py, on the
+# objects of the build folder it runs in), and every C file is formatted as .clang-format says
+# (tools/check_format.sh). Skips the circle check without python3 and nm, the format check without
+# clang-format.
 top=${CBVH_TOP_SRCDIR:-$(cd "$(dirname "$0")/.." && pwd)}
 failed=0
 skipped=0
@@ -22,6 +24,13 @@ if [ -n "$fields" ]; then
     failed=1
 else
     echo "ok   tools name no private struct"
+fi
+
+if command -v python3 >/dev/null 2>&1 && command -v nm >/dev/null 2>&1; then
+    python3 "$top/tools/check_circles.py" "$top" "$PWD" || failed=1
+else
+    echo "skip circle check: python3 or nm not found"
+    skipped=1
 fi
 
 status=0

@@ -13,6 +13,7 @@
 
 #include "cbvh.h"
 #include "common/file.h"
+#include "layout/triangle_encodings.h"
 #include "layout/tree.h"
 #include "support/reference.h"
 #include "support/scene_gen.h"

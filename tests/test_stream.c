@@ -17,6 +17,7 @@
 #include "cbvh.h"
 #include "query/ray_box.h"
 #include "query/stream.h"
+#include "query/test_hooks.h"
 #include "support/reference.h"
 #include "support/scene_gen.h"
 #include "support/layouts.h"
@@ -459,7 +460,7 @@ static void test_window_coherence(void **state)
     free(rays);
 }
 
-/* The streams' way (stream_box.c's cbvh_stream_way_for) for each kind of mesh and batch, and under each
+/* The streams' way (kernel_choice.c's cbvh_stream_way_for) for each kind of mesh and batch, and under each
  * setting of the test hook. */
 static void test_stream_way(void **state)
 {

@@ -10,6 +10,7 @@
 #include "bench_input.h"
 #include "temp_cleanup.h"
 #include "cli.h"
+#include "fd_io.h"
 #include "cbvh_internal.h"
 #include "import_assimp.h"
 #include "support/scene_gen.h"
@@ -172,20 +173,11 @@ int bench_write_temp(const char *command, const void *data, size_t size, char *p
         return CLI_EXIT_USAGE;
     }
     temp_cleanup_add(path, NULL);
-    const char *p = data;
-    size_t left = size;
-    while (left > 0) {
-        ssize_t n = write(fd, p, left);
-        if (n < 0 && errno == EINTR)
-            continue;
-        if (n <= 0) {
-            cli_error(command, path, "cannot write the temporary file: %s", strerror(errno));
-            close(fd);
-            bench_remove_temp(path);
-            return CLI_EXIT_USAGE;
-        }
-        p += n;
-        left -= (size_t)n;
+    if (fd_write_all(fd, data, size) != 0) {
+        cli_error(command, path, "cannot write the temporary file: %s", strerror(errno));
+        close(fd);
+        bench_remove_temp(path);
+        return CLI_EXIT_USAGE;
     }
     drop_cached_pages(fd);
     if (close(fd) != 0) {

@@ -14,35 +14,21 @@
 #include <sys/prctl.h>
 #endif
 
+#include "fd_io.h"
 #include "import_child.h"
 
 /* The child's report, in this order: int32 status, string message; with status 0 the mesh (counts, the
  * positions, indices and material ids, the material names as strings with UINT32_MAX for "no name"); then
  * the opened and the missing path lists (uint64 count, strings). A string is uint32 length + bytes. */
 
-static int write_all(int fd, const void *data, size_t size)
-{
-    const char *p = data;
-    while (size > 0) {
-        ssize_t n = write(fd, p, size);
-        if (n < 0 && errno == EINTR)
-            continue;
-        if (n <= 0)
-            return -1;
-        p += n;
-        size -= (size_t)n;
-    }
-    return 0;
-}
-
 static int write_u32(int fd, uint32_t v)
 {
-    return write_all(fd, &v, sizeof v);
+    return fd_write_all(fd, &v, sizeof v);
 }
 
 static int write_u64(int fd, uint64_t v)
 {
-    return write_all(fd, &v, sizeof v);
+    return fd_write_all(fd, &v, sizeof v);
 }
 
 static int write_string(int fd, const char *s)
@@ -50,7 +36,7 @@ static int write_string(int fd, const char *s)
     if (!s)
         return write_u32(fd, UINT32_MAX);
     size_t n = strlen(s);
-    return write_u32(fd, (uint32_t)n) || write_all(fd, s, n);
+    return write_u32(fd, (uint32_t)n) || fd_write_all(fd, s, n);
 }
 
 static int write_paths(int fd, const path_list *l)
@@ -72,9 +58,9 @@ static int write_report(int fd, int status, const char *message, const imported_
         if (write_u64(fd, m->vertex_count) || write_u64(fd, m->triangle_count) ||
             write_u64(fd, m->dropped_points) || write_u64(fd, m->dropped_lines) ||
             write_u32(fd, m->mesh_instances) || write_u32(fd, m->material_count) ||
-            write_all(fd, m->positions, m->vertex_count * 3 * sizeof *m->positions) ||
-            write_all(fd, m->indices, m->triangle_count * 3 * sizeof *m->indices) ||
-            write_all(fd, m->material_ids, m->triangle_count * sizeof *m->material_ids))
+            fd_write_all(fd, m->positions, m->vertex_count * 3 * sizeof *m->positions) ||
+            fd_write_all(fd, m->indices, m->triangle_count * 3 * sizeof *m->indices) ||
+            fd_write_all(fd, m->material_ids, m->triangle_count * sizeof *m->material_ids))
             return -1;
         for (uint32_t k = 0; k < m->material_count; k++)
             if (write_string(fd, m->material_names ? m->material_names[k] : NULL))

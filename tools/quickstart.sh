@@ -154,7 +154,7 @@ distcheck() {
     # The tarball's own check needs its programs and scripts, not the same long runs again: the corpus, the
     # browser and the npm meshes ran in the main check above.
     # The shared library too (the main build is static only; the tests link the static one, whose internal
-    # hooks the shared one hides), and a quarter of the property tests' random queries
+    # names the shared one hides), and a quarter of the property tests' random queries
     # (tests/support/layouts.h: every layout, shape and scene still runs, on the scalar kernels; the main
     # build ran the full counts on every kernel, the scalar one included).
     # The CMake consumer test builds the library twice with CMake: the main check ran it.

@@ -3,7 +3,7 @@
 #include <string.h>
 
 #include "common/alloc.h"
-#include "common/os.h"
+#include "common/os_memory.h"
 
 static void *default_alloc(void *user, size_t size, size_t align)
 {

@@ -5,7 +5,7 @@
 #include <stddef.h>
 #include "cbvh.h"
 
-/* Resolves NULL to the default allocator (posix_memalign or _aligned_malloc, in common/os.h). */
+/* Resolves NULL to the default allocator (posix_memalign or _aligned_malloc, in common/os_memory.h). */
 cbvh_allocator cbvh_allocator_resolve(const cbvh_allocator *allocator);
 
 /* Allocates `size` bytes for the query kernels to walk at random (a file read into memory, its expanded

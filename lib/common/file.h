@@ -90,64 +90,6 @@ static inline void cbvh_file_own(struct cbvh_file *f, void *p)
     f->owned[f->owned_count++] = p;
 }
 
-/* Where triangle k's entry starts in a TRIANGLES section of encoding `enc`: a LOCAL8 triangle's block
- * (its base and offsets are in the block's first 28 bytes). For prefetching a leaf before its visit. */
-static inline const void *cbvh_indices_entry(const void *tris, int enc, uint32_t k)
-{
-    const uint8_t *t = (const uint8_t *)tris;
-    if (enc == CBVH_TRIS_LOCAL8)
-        return t + (size_t)CBVH_LOCAL8_BLOCK_SIZE * (k / CBVH_LOCAL8_BLOCK);
-    const uint32_t size = enc == CBVH_TRIS_DELTA16 ? CBVH_TRIS_DELTA16_SIZE
-                          : enc == CBVH_TRIS_U16   ? CBVH_TRIS_U16_SIZE
-                                                   : CBVH_TRIS_U32_SIZE;
-    return t + size * (size_t)k;
-}
-
-/* A vertex index next to triangle k's vertices, from its entry alone: a LOCAL8 triangle's block base (its
- * vertices lie at most 255 past it), else its first vertex. For requesting a leaf's vertices early. */
-static inline uint32_t cbvh_vertex_hint(const void *tris, int enc, uint32_t k)
-{
-    const uint8_t *t = (const uint8_t *)cbvh_indices_entry(tris, enc, k);
-    return enc == CBVH_TRIS_U16 ? (uint32_t) * (const uint16_t *)(const void *)t
-                                : *(const uint32_t *)(const void *)t;
-}
-
-/* Triangle k's three vertex indices from a TRIANGLES section of encoding `enc` (CBVH_TRIS_*). Inlined
- * with a constant encoding, the switch folds away (the query kernels' leaf loops). */
-static inline void cbvh_indices_decode(const void *tris, int enc, uint32_t k, uint32_t idx[3])
-{
-    if (enc == CBVH_TRIS_LOCAL8) { /* blocks of a u32 base and 3 u8 offsets a triangle */
-        const uint8_t *b = (const uint8_t *)tris + (size_t)CBVH_LOCAL8_BLOCK_SIZE * (k / CBVH_LOCAL8_BLOCK);
-        const uint8_t *o = b + 4u + 3u * (k % CBVH_LOCAL8_BLOCK);
-        const uint32_t base = *(const uint32_t *)(const void *)b;
-        idx[0] = base + o[0];
-        idx[1] = base + o[1];
-        idx[2] = base + o[2];
-    } else if (enc == CBVH_TRIS_DELTA16) { /* u32 base, i16 d1, i16 d2 */
-        const uint8_t *t = (const uint8_t *)tris + CBVH_TRIS_DELTA16_SIZE * (size_t)k;
-        const int16_t *d = (const int16_t *)(const void *)(t + 4);
-        idx[0] = *(const uint32_t *)(const void *)t;
-        idx[1] = idx[0] + (uint32_t)(int32_t)d[0];
-        idx[2] = idx[0] + (uint32_t)(int32_t)d[1];
-    } else if (enc == CBVH_TRIS_U16) {
-        const uint16_t *t = (const uint16_t *)tris + 3u * (size_t)k;
-        idx[0] = t[0];
-        idx[1] = t[1];
-        idx[2] = t[2];
-    } else {
-        const uint32_t *t = (const uint32_t *)tris + 3u * (size_t)k;
-        idx[0] = t[0];
-        idx[1] = t[1];
-        idx[2] = t[2];
-    }
-}
-
-/* Cooked triangle index -> its three vertex indices. */
-static inline void cbvh_triangle_indices(const struct cbvh_file *f, uint32_t tri, uint32_t idx[3])
-{
-    cbvh_indices_decode(f->triangles, (int)f->triangle_encoding, tri, idx);
-}
-
 /* Where vertex v's three coordinates start: three floats, or three grid coordinates (u16). */
 static inline const void *cbvh_vertex_address(const struct cbvh_file *f, uint32_t v)
 {
@@ -170,16 +112,6 @@ static inline void cbvh_vertex_position(const struct cbvh_file *f, uint32_t v, f
         p[1] = cbvh_dequantize(q[1], f->grid_origin[1], f->grid_scale[1]);
         p[2] = cbvh_dequantize(q[2], f->grid_origin[2], f->grid_scale[2]);
     }
-}
-
-static inline void cbvh_triangle_vertices(const struct cbvh_file *f, uint32_t tri, float v0[3], float v1[3],
-                                          float v2[3])
-{
-    uint32_t idx[3];
-    cbvh_triangle_indices(f, tri, idx);
-    cbvh_vertex_position(f, idx[0], v0);
-    cbvh_vertex_position(f, idx[1], v1);
-    cbvh_vertex_position(f, idx[2], v2);
 }
 
 /* Cooked triangle index -> its material id (0 without a MATERIALS section). */

@@ -64,18 +64,9 @@ enum { CBVH_CODEC_RAW = 0, CBVH_CODEC_ZLIB = 1 };
 
 /* Element encodings per section (element sizes, names and limits: layout/encodings.h). */
 enum { CBVH_NODES_Q16 = 0, CBVH_NODES_W4 = 1 }; /* binary, wide4 layout */
-/* TRIANGLES encoding 3 is reserved: the vector fileformat/unsupported-encoding stands for an unknown one. */
+/* TRIANGLES encoding 3 is reserved: the vector fileformat/unsupported-encoding stands for an unknown one.
+ * Each encoding's bytes: layout/triangle_encodings.h. */
 enum { CBVH_TRIS_U16 = 0, CBVH_TRIS_U32 = 1, CBVH_TRIS_DELTA16 = 2, CBVH_TRIS_LOCAL8 = 4 };
-/* Bytes a triangle of the per-triangle encodings: three u16 or u32 indices; DELTA16's u32 base and two i16.
- */
-#define CBVH_TRIS_U16_SIZE 6u
-#define CBVH_TRIS_U32_SIZE 12u
-#define CBVH_TRIS_DELTA16_SIZE 8u
-/* LOCAL8 (spec section 4): blocks of CBVH_LOCAL8_BLOCK triangles, each a u32 base vertex index and then
- * 3 u8 offsets a triangle (index = base + offset), so a block's vertices lie within 256 indices. */
-#define CBVH_LOCAL8_BLOCK 8u
-#define CBVH_LOCAL8_BLOCK_SIZE (4u + 3u * CBVH_LOCAL8_BLOCK)
-#define CBVH_LOCAL8_WINDOW 256u
 enum { CBVH_VERTS_F32 = 0, CBVH_VERTS_Q16 = 1 };
 enum { CBVH_REMAP_U16 = 0, CBVH_REMAP_U32 = 1, CBVH_REMAP_U24 = 2 };
 enum { CBVH_MATS_U8 = 0, CBVH_MATS_U16 = 1, CBVH_MATS_U32 = 2, CBVH_MATS_UNIFORM = 3 };

@@ -1,5 +1,5 @@
-/* os.h: the operating-system calls cbvh makes, implemented once for POSIX (posix.c) and once for Windows
- * (win32.c). */
+/* os.h: the operating-system calls cbvh makes above the allocator (files, threads, clock), implemented once
+ * for POSIX (posix.c) and once for Windows (win32.c); the memory calls below it are in os_memory.h. */
 #ifndef CBVH_COMMON_OS_H
 #define CBVH_COMMON_OS_H
 
@@ -14,15 +14,6 @@ typedef void *cbvh_os_thread_id; /* a HANDLE */
 #include <pthread.h>
 typedef pthread_t cbvh_os_thread_id;
 #endif
-
-/* `size` bytes aligned to `align` (a power of two), or NULL; freed by cbvh_os_aligned_free. */
-void *cbvh_os_aligned_alloc(size_t size, size_t align);
-void cbvh_os_aligned_free(void *ptr);
-
-/* Advises the system to back the whole 2 MiB pages within [p, p + size) with 2 MiB pages (Linux's
- * transparent huge pages, madvise MADV_HUGEPAGE; no effect where the system has no such advice or the
- * pages are already there). For memory not yet written, from the default allocator only. */
-void cbvh_os_advise_large_pages(void *p, size_t size);
 
 /* The whole content of a regular file. */
 struct cbvh_os_file_bytes {

@@ -1,4 +1,5 @@
-/* posix.c: the operating-system calls of os.h on POSIX systems (mmap, posix_memalign, pthreads, rename). */
+/* posix.c: the operating-system calls of os.h on POSIX systems (mmap, pthreads, rename), above the
+ * allocator. */
 #define _GNU_SOURCE /* MAP_POPULATE and O_TMPFILE where the system has them (Linux) */
 #include <errno.h>
 #include <fcntl.h>
@@ -16,35 +17,6 @@
 #include "common/alloc.h"
 #include "common/error.h"
 #include "common/os.h"
-
-void *cbvh_os_aligned_alloc(size_t size, size_t align)
-{
-    if (align < sizeof(void *))
-        align = sizeof(void *);
-    void *p = NULL;
-    if (posix_memalign(&p, align, size) != 0)
-        return NULL;
-    return p;
-}
-
-void cbvh_os_aligned_free(void *ptr)
-{
-    free(ptr);
-}
-
-void cbvh_os_advise_large_pages(void *p, size_t size)
-{
-#ifdef MADV_HUGEPAGE
-    const uintptr_t page = (uintptr_t)2 << 20;
-    const uintptr_t begin = ((uintptr_t)p + page - 1u) & ~(page - 1u),
-                    end = ((uintptr_t)p + size) & ~(page - 1u);
-    if (begin < end)
-        (void)madvise((void *)begin, end - begin, MADV_HUGEPAGE); /* advice: a refusal changes nothing */
-#else
-    (void)p;
-    (void)size;
-#endif
-}
 
 /* The whole file into a 64-byte aligned buffer from `a`. */
 static cbvh_result read_all(int fd, const char *path, const cbvh_allocator *a, struct cbvh_os_file_bytes *out,

@@ -1,8 +1,7 @@
-/* win32.c: the operating-system calls of os.h on Windows (file mapping, _aligned_malloc, threads,
- * MoveFileEx). */
+/* win32.c: the operating-system calls of os.h on Windows (file mapping, threads, MoveFileEx), above the
+ * allocator. */
 #define WIN32_LEAN_AND_MEAN
 #include <windows.h>
-#include <malloc.h>
 #include <process.h>
 #include <stdio.h>
 #include <string.h>
@@ -10,24 +9,6 @@
 #include "common/alloc.h"
 #include "common/error.h"
 #include "common/os.h"
-
-void *cbvh_os_aligned_alloc(size_t size, size_t align)
-{
-    return _aligned_malloc(size, align < sizeof(void *) ? sizeof(void *) : align);
-}
-
-void cbvh_os_aligned_free(void *ptr)
-{
-    _aligned_free(ptr);
-}
-
-/* Windows backs memory with large pages only when it is allocated so (VirtualAlloc with MEM_LARGE_PAGES,
- * which needs a privilege a game rarely has): no advice to give. */
-void cbvh_os_advise_large_pages(void *p, size_t size)
-{
-    (void)p;
-    (void)size;
-}
 
 /* The system's text for an error code, without its trailing period and line break. */
 static const char *system_message(DWORD code, char *buf, size_t size)

@@ -4,6 +4,7 @@
 
 #include "common/alloc.h"
 #include "layout/encodings.h"
+#include "layout/triangle_encodings.h"
 #include "common/error.h"
 #include "common/format.h"
 #include "cook/cook_internal.h"
@@ -98,12 +99,6 @@ static void place(const cook_tree *t, const cook_grid *g, node_info *restrict in
     l->max_leaf_count = max_leaf;
 }
 
-static int delta16_fits(uint32_t base, uint32_t v)
-{
-    int64_t d = (int64_t)v - (int64_t)base;
-    return d >= INT16_MIN && d <= INT16_MAX;
-}
-
 /* Which rule makes copies of vertices in order_vertices. */
 enum vertex_copies {
     COPIES_NONE,    /* u16 or u32 indices: every vertex once */
@@ -142,7 +137,8 @@ static cbvh_result order_vertices(const cook_mesh *m, cook_layout *l, enum verte
                 latest[v[c]] = count++;
             id[c] = latest[v[c]];
         }
-        if (copies == COPIES_DELTA16 && (!delta16_fits(id[0], id[1]) || !delta16_fits(id[0], id[2]))) {
+        if (copies == COPIES_DELTA16 &&
+            (!cbvh_delta16_fits(id[0], id[1]) || !cbvh_delta16_fits(id[0], id[2]))) {
             /* Afterwards every id lies in [count - 32000, count + 3): deltas fit. */
             for (int c = 0; c < 3; c++)
                 if (id[c] + 32000 < count)
@@ -173,7 +169,7 @@ static uint32_t wide_index_encoding(const cook_layout *l)
         return CBVH_TRIS_U16;
     const uint32_t *t = l->triangles;
     for (size_t i = 0; i < (size_t)l->triangle_count; i++, t += 3)
-        if (!delta16_fits(t[0], t[1]) || !delta16_fits(t[0], t[2]))
+        if (!cbvh_delta16_fits(t[0], t[1]) || !cbvh_delta16_fits(t[0], t[2]))
             return CBVH_TRIS_U32;
     return CBVH_TRIS_DELTA16;
 }

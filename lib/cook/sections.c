@@ -4,6 +4,7 @@
 
 #include "common/alloc.h"
 #include "layout/encodings.h"
+#include "layout/triangle_encodings.h"
 #include "common/endian.h"
 #include "common/error.h"
 #include "common/format.h"
@@ -69,36 +70,21 @@ static int encode_triangles(const cook_layout *l, const cbvh_allocator *a, cook_
     if (!p)
         return 0;
     const uint32_t *t = l->triangles;
-    if (enc == CBVH_TRIS_LOCAL8) {
-        /* each block: the smallest id of its triangles, then each index less it (the numbering keeps a
-         * block's ids within CBVH_LOCAL8_WINDOW); slots past the last triangle stay 0 */
-        memset(p, 0, cbvh_elements_for(e, l->triangle_count) * elem);
+    if (enc == CBVH_TRIS_LOCAL8) { /* the numbering keeps a block's ids within CBVH_LOCAL8_WINDOW */
         for (uint32_t b = 0; b < l->triangle_count; b += CBVH_LOCAL8_BLOCK, p += elem) {
             const uint32_t n =
                 l->triangle_count - b < CBVH_LOCAL8_BLOCK ? l->triangle_count - b : CBVH_LOCAL8_BLOCK;
-            uint32_t base = UINT32_MAX;
-            for (uint32_t j = 0; j < 3 * n; j++)
-                base = t[3 * (size_t)b + j] < base ? t[3 * (size_t)b + j] : base;
-            cbvh_write_u32(p, base);
-            for (uint32_t j = 0; j < 3 * n; j++)
-                p[4 + j] = (uint8_t)(t[3 * (size_t)b + j] - base);
+            cbvh_local8_encode_block(p, t + 3 * (size_t)b, n);
         }
         return 1;
     }
     for (uint32_t i = 0; i < l->triangle_count; i++, t += 3, p += elem) {
-        if (enc == CBVH_TRIS_U16) {
-            put_u16(p, t[0]);
-            put_u16(p + 2, t[1]);
-            put_u16(p + 4, t[2]);
-        } else if (enc == CBVH_TRIS_U32) {
-            cbvh_write_u32(p, t[0]);
-            cbvh_write_u32(p + 4, t[1]);
-            cbvh_write_u32(p + 8, t[2]);
-        } else {
-            cbvh_write_u32(p, t[0]);
-            put_u16(p + 4, (uint32_t)(t[1] - t[0]));
-            put_u16(p + 6, (uint32_t)(t[2] - t[0]));
-        }
+        if (enc == CBVH_TRIS_U16)
+            cbvh_u16_encode(p, t);
+        else if (enc == CBVH_TRIS_U32)
+            cbvh_u32_encode(p, t);
+        else /* the numbering's copies make every triangle's deltas fit */
+            cbvh_delta16_encode(p, t);
     }
     return 1;
 }

@@ -4,6 +4,7 @@
 
 #include "cbvh_internal.h"
 #include "layout/encodings.h"
+#include "layout/triangle_encodings.h"
 #include "common/cpu.h"
 #include "common/endian.h"
 #include "common/file.h"

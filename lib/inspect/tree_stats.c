@@ -8,6 +8,7 @@
 #include "cbvh_internal.h"
 #include "inspect/inspect.h"
 #include "layout/tree.h"
+#include "layout/triangle_encodings.h"
 
 /* Surface area of the box b (min xyz, max xyz) in double. */
 static double box_area(const double b[6])

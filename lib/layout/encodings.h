@@ -8,6 +8,7 @@
 #include "cbvh.h"
 #include "common/format.h"
 #include "layout/binary.h"
+#include "layout/triangle_encodings.h"
 #include "layout/wide4.h"
 
 /* The writer, the validator, the readers and the tools all read sizes, names and limits from here. The

@@ -113,10 +113,12 @@ static inline const uint8_t *cbvh_w4_node(const void *nodes, uint32_t n)
     return (const uint8_t *)nodes + (size_t)n * CBVH_W4_NODE_SIZE;
 }
 
-/* Where plane k of slot s lies in a node: the planes' one addressing, for readers and the cooker. */
+/* Where plane k of slot s lies in a node: the planes' one addressing, for readers and the cooker (the macro
+ * for tables, which need a constant expression). Plane k of the four slots is one run of 8 bytes. */
+#define CBVH_W4_PLANE_OFFSET(k, s) (CBVH_W4_Q + 8u * (k) + 2u * (s))
 static inline uint32_t cbvh_w4_plane_offset(uint32_t k, uint32_t s)
 {
-    return CBVH_W4_Q + 8u * k + 2u * s;
+    return CBVH_W4_PLANE_OFFSET(k, s);
 }
 
 /* Plane k of slot s. The file is little-endian, and so is every host the library builds for (configure

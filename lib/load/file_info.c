@@ -3,6 +3,7 @@
 
 #include "common/endian.h"
 #include "common/struct_size.h"
+#include "layout/triangle_encodings.h"
 #include "load/load.h"
 
 cbvh_result cbvh_file_get_info(const cbvh_file *file, cbvh_file_info *info, size_t struct_size)

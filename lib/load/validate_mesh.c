@@ -3,7 +3,9 @@
 #include <float.h>
 #include <math.h>
 
+#include "common/endian.h"
 #include "common/error.h"
+#include "layout/triangle_encodings.h"
 #include "load/load.h"
 
 #define CORRUPT(...) cbvh_fail(err, CBVH_ERROR_CORRUPT, __VA_ARGS__)
@@ -39,47 +41,34 @@ static cbvh_result find_bad_index(const struct cbvh_file *f, uint32_t begin, uin
     return CBVH_OK;
 }
 
-/* DELTA16: base + d computed in 64 bits, so a negative or wrapped index is caught. */
+/* DELTA16 triangles [begin, end) by their rule (layout/triangle_encodings.h). */
 static cbvh_result check_delta16(const struct cbvh_file *f, uint32_t begin, uint32_t end, cbvh_error *err)
 {
-    const uint8_t *restrict t = (const uint8_t *)f->triangles + 8u * (size_t)begin;
-    const int64_t vc = f->info.vertex_count;
-    for (uint32_t i = begin; i < end; i++, t += 8) {
-        const int64_t base = (int64_t) * (const uint32_t *)t;
-        const int16_t *d = (const int16_t *)(t + 4);
-        const int64_t a = base + d[0], b = base + d[1];
-        if (base >= vc || a < 0 || a >= vc || b < 0 || b >= vc)
-            return CORRUPT(
-                "triangle %u (cooked order): DELTA16 base %lld with deltas %d, %d gives indices outside "
-                "0..%lld",
-                i, (long long)base, d[0], d[1], (long long)vc - 1);
-    }
+    const uint8_t *restrict t = (const uint8_t *)f->triangles + CBVH_TRIS_DELTA16_SIZE * (size_t)begin;
+    for (uint32_t i = begin; i < end; i++, t += CBVH_TRIS_DELTA16_SIZE)
+        if (!cbvh_delta16_valid(t, f->info.vertex_count)) {
+            const int16_t *d = cbvh_delta16_deltas(t);
+            return CORRUPT("triangle %u (cooked order): DELTA16 base %u with deltas %d, %d gives indices "
+                           "outside 0..%lld",
+                           i, cbvh_delta16_base(t), d[0], d[1], (long long)f->info.vertex_count - 1);
+        }
     return CBVH_OK;
 }
 
-/* LOCAL8: blocks [begin, end); each block's base plus its largest offset is below vertex_count (in 64 bits),
- * and the offsets of the last block's slots past triangle_count are 0, so its bytes are canonical. */
+/* LOCAL8 blocks [begin, end) by their rule (layout/triangle_encodings.h). */
 static cbvh_result check_local8(const struct cbvh_file *f, uint32_t begin, uint32_t end, cbvh_error *err)
 {
     const uint8_t *restrict b = (const uint8_t *)f->triangles + (size_t)CBVH_LOCAL8_BLOCK_SIZE * begin;
     const uint64_t vc = f->info.vertex_count, tc = f->info.triangle_count;
     for (uint32_t i = begin; i < end; i++, b += CBVH_LOCAL8_BLOCK_SIZE) {
-        const uint64_t base = *(const uint32_t *)(const void *)b, first = (uint64_t)i * CBVH_LOCAL8_BLOCK;
-        /* a full block: the largest of its offsets, a fixed-length loop the compiler vectorizes; the last
-         * one slot by slot */
+        const uint64_t base = cbvh_read_u32(b), first = (uint64_t)i * CBVH_LOCAL8_BLOCK;
         const uint32_t used = tc - first < CBVH_LOCAL8_BLOCK ? (uint32_t)(tc - first) : CBVH_LOCAL8_BLOCK;
-        uint8_t largest = 0;
-        if (used == CBVH_LOCAL8_BLOCK) {
-            for (uint32_t j = 0; j < 3u * CBVH_LOCAL8_BLOCK; j++)
-                largest = b[4 + j] > largest ? b[4 + j] : largest;
-        } else {
-            for (uint32_t j = 0; j < 3u * used; j++)
-                largest = b[4 + j] > largest ? b[4 + j] : largest;
-        }
-        for (uint32_t j = 3u * used; j < 3u * CBVH_LOCAL8_BLOCK; j++)
-            if (b[4 + j] != 0)
-                return CORRUPT("triangle block %u: offset %u of slot %u, past triangle_count %llu, must be 0",
-                               i, b[4 + j], j / 3u, (unsigned long long)tc);
+        const uint32_t largest = cbvh_local8_largest_offset(b, used),
+                       loose = cbvh_local8_first_loose_offset(b, used);
+        if (loose < CBVH_LOCAL8_TRIANGLE_BYTES * CBVH_LOCAL8_BLOCK)
+            return CORRUPT("triangle block %u: offset %u of slot %u, past triangle_count %llu, must be 0", i,
+                           b[CBVH_LOCAL8_OFFSETS_AT + loose], loose / CBVH_LOCAL8_TRIANGLE_BYTES,
+                           (unsigned long long)tc);
         if (base + largest >= vc)
             return CORRUPT(
                 "triangle block %u (triangles from %llu): LOCAL8 base %llu plus offset %u is not below "

@@ -5,6 +5,7 @@
 #include <float.h>
 
 #include "common/file.h"
+#include "layout/triangle_encodings.h"
 #include "query/lanes.h"
 #include "query/ray_setup.h"
 #include "query/ray_triangle.h"
@@ -157,7 +158,8 @@ CBVH_KERNEL void leaf_gather4(const void *restrict tris, const int tri_enc, cons
 }
 
 #if defined(__AVX2__)
-/* The LOCAL8 indices (format.h: blocks of 8 triangles, a u32 base and 3 offset bytes a triangle) of eight
+/* The LOCAL8 indices (layout/triangle_encodings.h: blocks of 8 triangles, a u32 base and 3 offset bytes a
+ * triangle) of eight
  * triangles from k at once, by byte shuffles. Triangle k + j sits at slot r + j (r = k % 8), past slot 7 in
  * the next block, whose 4-byte base then lies between: its offset bytes are at 4 + 3 (r + j) + v from the
  * block, 4 more past slot 7. Two 16-byte windows hold them all, `src` bytes 4 + 3 r on in its low half
@@ -167,8 +169,11 @@ CBVH_KERNEL void leaf_gather4(const void *restrict tris, const int tri_enc, cons
  * makes sure the next block exists (leaf_local8_window_fits). Lanes past the file's triangles, or past a
  * leaf's, decode other bytes: every index is clamped below the vertex count, so that each lane's vertex
  * load stays in the array, and the caller masks those lanes. */
-#define L8W_NEXT(r, j) ((r) + (j) >= 8)
-#define L8W_LANE(r, j, v) 3 * ((j) % 4) + (v) + 4 * L8W_NEXT(r, j), 0x80, 0x80, 0x80
+_Static_assert(CBVH_LOCAL8_BLOCK == 8u && CBVH_LOCAL8_TRIANGLE_BYTES == 3u && CBVH_LOCAL8_OFFSETS_AT == 4u,
+               "the windows below are laid out for 8 triangles of 3 offset bytes after a 4-byte base");
+#define L8W_NEXT(r, j) ((r) + (j) >= CBVH_LOCAL8_BLOCK)
+#define L8W_LANE(r, j, v)                                                                                    \
+    CBVH_LOCAL8_TRIANGLE_BYTES * ((j) % 4) + (v) + CBVH_LOCAL8_OFFSETS_AT * L8W_NEXT(r, j), 0x80, 0x80, 0x80
 #define L8W_SHUFFLE(r, v)                                                                                    \
     {                                                                                                        \
         L8W_LANE(r, 0, v), L8W_LANE(r, 1, v), L8W_LANE(r, 2, v), L8W_LANE(r, 3, v), L8W_LANE(r, 4, v),       \
@@ -201,19 +206,20 @@ static const struct leaf_local8_window leaf_local8_windows[CBVH_LOCAL8_BLOCK] = 
  * k's exists. */
 static inline int leaf_local8_window_fits(uint32_t triangles, uint32_t k)
 {
-    return k / CBVH_LOCAL8_BLOCK + 1u < (triangles + CBVH_LOCAL8_BLOCK - 1u) / CBVH_LOCAL8_BLOCK;
+    return k / CBVH_LOCAL8_BLOCK + 1u < cbvh_local8_blocks(triangles);
 }
 
 /* idx[v], lane j: vertex v of triangle k + j (see above); last_vertex: the vertex count - 1 in each lane. */
 CBVH_KERNEL void leaf_local8_indices8(const void *restrict tris, uint32_t k, __m256i last_vertex,
                                       __m256i idx[3])
 {
-    const uint8_t *block = (const uint8_t *)tris + (size_t)CBVH_LOCAL8_BLOCK_SIZE * (k / CBVH_LOCAL8_BLOCK);
-    const uint8_t *p = block + 4u + 3u * (k % CBVH_LOCAL8_BLOCK);
+    const uint8_t *block = cbvh_local8_block(tris, k);
+    const uint8_t *p = cbvh_local8_offsets(block, k % CBVH_LOCAL8_BLOCK);
     const struct leaf_local8_window *w = &leaf_local8_windows[k % CBVH_LOCAL8_BLOCK];
+    const uint8_t *high = p + 4u * CBVH_LOCAL8_TRIANGLE_BYTES; /* lanes 4-7's triangles */
     const __m256i src =
         _mm256_inserti128_si256(_mm256_castsi128_si256(_mm_loadu_si128((const __m128i *)(const void *)p)),
-                                _mm_loadu_si128((const __m128i *)(const void *)(p + 12)), 1);
+                                _mm_loadu_si128((const __m128i *)(const void *)high), 1);
     const __m256i base =
         _mm256_blendv_epi8(_mm256_set1_epi32((int)cbvh_read_u32(block)),
                            _mm256_set1_epi32((int)cbvh_read_u32(block + CBVH_LOCAL8_BLOCK_SIZE)),

@@ -169,6 +169,15 @@ static inline void cbvh_shear_setup(struct cbvh_ray_shear *s, const float org[3]
 #endif
 }
 
+/* 1 when all n floats are finite: the check of a query's points and vectors (rays, sweeps, boxes). */
+static inline int cbvh_all_finite(const float *v, int n)
+{
+    for (int k = 0; k < n; k++)
+        if (!isfinite(v[k]))
+            return 0;
+    return 1;
+}
+
 /* 1 when the ray is valid (cbvh.h: finite org and dir, dir not all zero,
  * 0 <= tmin <= tmax, tmax finite or +inf), else 0. */
 static inline int cbvh_ray_valid(const cbvh_ray *ray)

@@ -9,7 +9,6 @@
 #include "common/struct_size.h"
 #include "query/placement.h"
 #include "query/raycast.h"
-#include "query/sweep_walk.h"
 
 int cbvh_hit_output(const struct cbvh_file *f, const struct cbvh_best_hit *best, const struct cbvh_t_frame *frame,
                     cbvh_hit *hit)

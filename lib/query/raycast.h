@@ -2,6 +2,8 @@
 #ifndef CBVH_QUERY_RAYCAST_H
 #define CBVH_QUERY_RAYCAST_H
 
+#include <stdatomic.h>
+
 #include "common/file.h"
 #include "layout/tree.h"
 #include "query/leaf.h"
@@ -32,14 +34,20 @@ enum cbvh_walk_kernel {
                               * CPUs with AVX2, BMI1, BMI2 and FMA) */
 };
 
-/* Test hook, not exported: the kernel the wide layout's walks take from now on (an enum cbvh_walk_kernel;
- * one the build or the CPU lacks falls back to the best below it). Every kernel gives the same answers
- * bit for bit, so tests compare them. Returns the kernel the walks now take (never BEST). Meant to be set
- * between queries; reads are atomic, so concurrent queries stay defined. */
-int cbvh_walk_set_kernel(int kernel);
+/* The wide layout's walk kernel (enum cbvh_walk_kernel) once chosen (kernel_choice.c): 0 (BEST) until the
+ * first walk chooses it; in the tests' build, also what a test hook (test_hooks.h) set. */
+extern atomic_int cbvh_walk_kernel_chosen;
 
-/* The kernel the wide layout's walks take now (never BEST): the streams follow it. */
-int cbvh_walk_kernel(void);
+/* Chooses the best kernel the build and the CPU have for the wide layout's walks, and returns it. */
+int cbvh_walk_kernel_choose_best(void);
+
+/* The kernel the wide layout's walks take now (never BEST); the streams follow it. Read once per ray: a
+ * relaxed load and a predictable branch. Threads racing through the first walk choose the same kernel. */
+static inline int cbvh_walk_kernel(void)
+{
+    const int chosen = atomic_load_explicit(&cbvh_walk_kernel_chosen, memory_order_relaxed);
+    return CBVH_LIKELY(chosen != CBVH_WALK_KERNEL_BEST) ? chosen : cbvh_walk_kernel_choose_best();
+}
 
 /* Stackless walk over escape links (binary layout). */
 void cbvh_closest_stackless(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray,

@@ -4,54 +4,9 @@
 #include "config.h"
 #endif
 
-#include <stdatomic.h>
-
-#include "common/cpu.h"
 #include "query/raycast.h"
 #include "query/walk.h"
 #include "query/walk_instances.h"
-
-/* The kernel the wide layout's walks take (enum cbvh_walk_kernel), chosen at the first walk, or by the
- * test hook; 0 (BEST) until then. */
-static atomic_int walk_kernel_chosen;
-
-/* The best kernel this build and CPU have at or below `kernel`. */
-static int walk_kernel_available(int kernel)
-{
-#ifdef CBVH_HAVE_SIMD
-#ifdef CBVH_HAVE_AVX2
-    const unsigned avx2 = CBVH_CPU_AVX2 | CBVH_CPU_BMI | CBVH_CPU_FMA;
-    if (kernel >= CBVH_WALK_KERNEL_AVX2 && (cbvh_cpu_features() & avx2) == avx2)
-        return CBVH_WALK_KERNEL_AVX2;
-#endif
-    return kernel >= CBVH_WALK_KERNEL_SSE2 ? CBVH_WALK_KERNEL_SSE2 : CBVH_WALK_KERNEL_SCALAR;
-#else
-    (void)kernel;
-    return CBVH_WALK_KERNEL_SCALAR;
-#endif
-}
-
-int cbvh_walk_set_kernel(int kernel)
-{
-    const int chosen =
-        walk_kernel_available(kernel == CBVH_WALK_KERNEL_BEST ? CBVH_WALK_KERNEL_AVX2 : kernel);
-    atomic_store_explicit(&walk_kernel_chosen, chosen, memory_order_relaxed);
-    return chosen;
-}
-
-/* Read once per ray: a relaxed load and a predictable branch. Threads racing through the first walk
- * choose the same kernel. */
-static inline int walk_kernel(void)
-{
-    const int chosen = atomic_load_explicit(&walk_kernel_chosen, memory_order_relaxed);
-    return CBVH_LIKELY(chosen != CBVH_WALK_KERNEL_BEST) ? chosen
-                                                        : cbvh_walk_set_kernel(CBVH_WALK_KERNEL_BEST);
-}
-
-int cbvh_walk_kernel(void)
-{
-    return walk_kernel();
-}
 
 #ifdef CBVH_HAVE_AVX2
 #define WALK_AVX2_CALL(name)                                                                                 \
@@ -90,7 +45,7 @@ int cbvh_walk_kernel(void)
         const uint32_t layout = f->layout;                                                                   \
         const cbvh_ref start = cbvh_tree_root(f, layout);                                                    \
         if (layout == CBVH_LAYOUT_WIDE4) {                                                                   \
-            const int kernel = walk_kernel();                                                                \
+            const int kernel = cbvh_walk_kernel();                                                           \
             WALK_AVX2_CALL(name)                                                                             \
             return walk_##name##_wide4(f, ray, start, kernel == CBVH_WALK_KERNEL_SCALAR, best, stats);       \
         }                                                                                                    \

@@ -77,9 +77,10 @@ static inline uint32_t cbvh_grid_range4_hits(const uint8_t *node, const struct c
     const __m128i zero = _mm_setzero_si128();
     __m128i in = _mm_set1_epi16(-1);
     for (uint32_t a = 0; a < 3; a++) {
-        const uint8_t *planes = node + CBVH_W4_Q + 8u * a; /* qmin on axis a; qmax three planes on */
-        const __m128i qmin = _mm_loadl_epi64((const __m128i *)(const void *)planes);
-        const __m128i qmax = _mm_loadl_epi64((const __m128i *)(const void *)(planes + 24));
+        const __m128i qmin =
+            _mm_loadl_epi64((const __m128i *)(const void *)(node + cbvh_w4_plane_offset(a, 0)));
+        const __m128i qmax =
+            _mm_loadl_epi64((const __m128i *)(const void *)(node + cbvh_w4_plane_offset(3u + a, 0)));
         in = _mm_and_si128(in, _mm_cmpeq_epi16(_mm_subs_epu16(qmin, w->hi[a]), zero));
         in = _mm_and_si128(in, _mm_cmpeq_epi16(_mm_subs_epu16(w->lo[a], qmax), zero));
     }

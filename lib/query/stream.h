@@ -107,18 +107,10 @@ void cbvh_stream_node_sse2(const struct cbvh_stream_batch *restrict batch, const
                            const struct cbvh_stream_lists *restrict out, uint32_t count[CBVH_STREAM_LANES]);
 #endif
 
-/* Test hook, not exported: 0 = best kernel for this build (default), 1 = scalar,
- * 2 = SSE2 (falls back to scalar when not built; with the AVX2 walks chosen, raycast.h, the streams run
- * its copy in AVX2's encoding). Meant to be set before queries run; reads are atomic so concurrent queries stay defined. */
-void cbvh_stream_set_kernel(int which);
-/* The kernel chosen by the current setting. */
+/* The streams' node kernel: the best this build has (kernel_choice.c), or a test hook's (test_hooks.h). */
 cbvh_stream_node_fn cbvh_stream_node_kernel(void);
 
-/* Test hook, not exported: how many tails run at once. 0 = by the mesh (default: 1 for a mesh whose
- * vertices stay in the caches (struct cbvh_file's vertices_far clear), else CBVH_STREAM_TAILS), 1 = one, else
- * CBVH_STREAM_TAILS, so the tests run both on their small meshes. Set like cbvh_stream_set_kernel. */
-void cbvh_stream_set_tails(int tails);
-/* The tails that run at once on f's streams by the current setting. */
+/* The tails that run at once on f's streams: by the mesh (kernel_choice.c), or by a test hook's setting. */
 uint32_t cbvh_stream_tails_for(const struct cbvh_file *f);
 
 /* How the streams walk a window of rays: in batches, window by window by the rays' coherence
@@ -132,17 +124,11 @@ enum cbvh_stream_way {
 };
 
 /* A mesh in the caches has its incoherent rays batched (wide layout) when it has at most this many triangles
- * a ray of the batch (stream_box.c's cbvh_stream_way_for). */
+ * a ray of the batch (kernel_choice.c's cbvh_stream_way_for). */
 #define CBVH_STREAM_SHARED_TRIANGLES_PER_RAY 8u
 
-/* Test hook, not exported: the streams' way. 0 = by the mesh and the batch (the default, stream_box.c): on a
- * mesh whose vertices do not stay in the caches (struct cbvh_file's vertices_far set), by window (wide
- * layout) or batched (binary); on one whose vertices do, batched when the batch is large for the mesh, else
- * by window with single rays; 1 = batched, 2 = interleaved, 3 = by window, 4 = by window with single rays
- * (2 and 3: batched on the binary layout, which has no interleaved walks), so that the tests run each on
- * their small meshes. Set like cbvh_stream_set_kernel. */
-void cbvh_stream_set_interleave(int setting);
-/* The way of f's streams in batches of batch_capacity rays by the current setting. */
+/* The way of f's streams in batches of batch_capacity rays: by the mesh and the batch (kernel_choice.c),
+ * or by a test hook's setting. */
 enum cbvh_stream_way cbvh_stream_way_for(const struct cbvh_file *f, uint32_t batch_capacity);
 
 /* Whether the n rays of a window look coherent (stream.c: then they are batched). */

@@ -9,11 +9,16 @@
 #error "stream_avx2.c is compiled with AVX2, BMI1, BMI2 and FMA enabled (configure and CMake add the flags)"
 #endif
 
+#include "query/stream_node_simd.h"
 #include "query/stream_walk.h"
 
-/* The streams' node test (stream_simd.c) in this file's encoding: cbvh_stream_node_avx2. */
-#define CBVH_STREAM_NODE_SIMD cbvh_stream_node_avx2
-#include "query/stream_simd.c"
+/* The streams' node test (stream_node_simd.h) in this file's encoding. */
+void cbvh_stream_node_avx2(const struct cbvh_stream_batch *restrict batch, const uint16_t *restrict rays,
+                           uint32_t n, const struct cbvh_stream_boxes *restrict boxes,
+                           const struct cbvh_stream_lists *restrict out, uint32_t count[CBVH_STREAM_LANES])
+{
+    stream_node_simd(batch, rays, n, boxes, out, count);
+}
 
 /* stream.c's instances, this file's instruction set: only the leaves' filter width differs (lanes.h), and
  * the answers are the same bit for bit. node_test: the SSE2 or AVX2 node kernel (stream.c passes the

@@ -281,14 +281,6 @@ void cbvh_sweep_bounds(cbvh_v3 lo, cbvh_v3 hi, float center[3], float extent[3])
     }
 }
 
-int cbvh_all_finite(const float *v, int n)
-{
-    for (int k = 0; k < n; k++)
-        if (!isfinite(v[k]))
-            return 0;
-    return 1;
-}
-
 int cbvh_sweep_as_ray(const struct cbvh_file *f, const float center[3], const float delta[3],
                       const struct cbvh_sweep_rules *rules, struct cbvh_sweep_found *found)
 {

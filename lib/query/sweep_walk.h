@@ -44,9 +44,6 @@ int cbvh_sweep_walk(const struct cbvh_file *f, const struct cbvh_local_shape *bo
 /* The float box center +- extent that surely holds the double box [lo, hi]. */
 void cbvh_sweep_bounds(cbvh_v3 lo, cbvh_v3 hi, float center[3], float extent[3]);
 
-/* 1 when all n floats are finite. */
-int cbvh_all_finite(const float *v, int n);
-
 /* A zero-size shape: the sweep is the ray center + t * delta, t in [0, 1],
  * answered by the ray kernel so that it agrees with cbvh_raycast exactly
  * (same triangle, same t), under the rules' culling and filter; the normal is

@@ -29,7 +29,7 @@ struct cbvh_walk_mode {
     int any;    /* any hit: stop at the first triangle hit */
     int scalar; /* no SIMD: the children one box at a time, and each leaf triangle without the
                  * filter (the fallback, and its test); the wide layout's SSE2 instances read it at run
-                 * time (raycast_walks.c's kernel choice), a predictable branch, rather than doubling their
+                 * time (kernel_choice.c), a predictable branch, rather than doubling their
                  * code */
 };
 
@@ -101,9 +101,11 @@ struct cbvh_w4_simd_ray {
  * table read by pointer rather than six offsets stored per ray (a ray's set-up is bound by its stores). */
 #define W4_PLANE_OFFSETS(o)                                                                                  \
     {                                                                                                        \
-        CBVH_W4_Q + 8u * CBVH_SLAB_NEAR(o, 0), CBVH_W4_Q + 8u * CBVH_SLAB_NEAR(o, 1),                        \
-            CBVH_W4_Q + 8u * CBVH_SLAB_NEAR(o, 2), CBVH_W4_Q + 8u * (3u - CBVH_SLAB_NEAR(o, 0)),             \
-            CBVH_W4_Q + 8u * (5u - CBVH_SLAB_NEAR(o, 1)), CBVH_W4_Q + 8u * (7u - CBVH_SLAB_NEAR(o, 2))       \
+        CBVH_W4_PLANE_OFFSET(CBVH_SLAB_NEAR(o, 0), 0), CBVH_W4_PLANE_OFFSET(CBVH_SLAB_NEAR(o, 1), 0),        \
+            CBVH_W4_PLANE_OFFSET(CBVH_SLAB_NEAR(o, 2), 0),                                                   \
+            CBVH_W4_PLANE_OFFSET(3u - CBVH_SLAB_NEAR(o, 0), 0),                                              \
+            CBVH_W4_PLANE_OFFSET(5u - CBVH_SLAB_NEAR(o, 1), 0),                                              \
+            CBVH_W4_PLANE_OFFSET(7u - CBVH_SLAB_NEAR(o, 2), 0)                                               \
     }
 static const uint8_t walk_w4_plane_offsets[8][6] = {
     W4_PLANE_OFFSETS(0u), W4_PLANE_OFFSETS(1u), W4_PLANE_OFFSETS(2u), W4_PLANE_OFFSETS(3u),

@@ -11,13 +11,8 @@
 #endif
 
 #include "cbvh.h"
+#include "query/test_hooks.h" /* cbvh_walk_set_kernel: programs link lib/libcbvh_test_hooks.la */
 #include "support/reference.h"
-
-/* Test hook of the library (lib/query/raycast.h), hidden in the shared
- * library: programs linked statically can choose the wide layout's walk
- * kernel; for the others the weak reference is NULL and those runs are
- * skipped. */
-int cbvh_walk_set_kernel(int kernel) __attribute__((weak));
 
 /* The kernels of lib/query/raycast.h's enum cbvh_walk_kernel. */
 enum { TEST_KERNEL_BEST, TEST_KERNEL_SCALAR, TEST_KERNEL_SSE2, TEST_KERNEL_AVX2 };
@@ -25,16 +20,13 @@ enum { TEST_KERNEL_BEST, TEST_KERNEL_SCALAR, TEST_KERNEL_SSE2, TEST_KERNEL_AVX2 
 /* What test_set_kernel last set: a test that switches the kernel restores it. */
 static int test_kernel_now;
 
-/* The kernel the walks took when test_set_kernel last asked for the best one (TEST_KERNEL_BEST while the
- * hook is out of reach). */
+/* The kernel the walks took when test_set_kernel last asked for the best one. */
 static int test_kernel_best = TEST_KERNEL_BEST;
 
-/* Makes the walks take `kernel`; returns 1 when they now do (0: the hook is out of reach, or the build
- * or the CPU lacks the kernel, and the walks took the best below it). */
+/* Makes the walks take `kernel`; returns 1 when they now do (0: the build or the CPU lacks the kernel, and
+ * the walks took the best below it). */
 static inline int test_set_kernel(int kernel)
 {
-    if (!cbvh_walk_set_kernel)
-        return 0;
     const int chosen = cbvh_walk_set_kernel(kernel);
     test_kernel_now = kernel;
     if (kernel == TEST_KERNEL_BEST)
@@ -107,9 +99,9 @@ static inline const char *test_layout_name(void)
     return test_layout == CBVH_LAYOUT_WIDE4 ? "wide4" : "binary";
 }
 
-/* Runs `tests` on the binary layout, then on wide4 with the best walk kernel, then (when `kernels` is set
- * and the program can reach the hook) on wide4 with the SSE2 kernel when the best one is AVX2, and with
- * the scalar kernel when the best one is not already scalar, then on wide4 with the files ref_cook_open
+/* Runs `tests` on the binary layout, then on wide4 with the best walk kernel, then, when `kernels` is set,
+ * on wide4 with the SSE2 kernel when the best one is AVX2, and with the scalar kernel when the best one is
+ * not already scalar, then on wide4 with the files ref_cook_open
  * opens expanded (cbvh_file_expand_triangles) in builds with SIMD kernels (without them the expansion
  * copies nothing, and that run would repeat the wide4 one query for query). Returns the number of failed
  * tests over all runs. A function, so the runs happen in this order. */
