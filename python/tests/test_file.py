@@ -80,6 +80,44 @@ def test_threads_give_identical_answers(wuson):
     assert len(queries["overlap"](1).tri) > 3000  # ragged results that grow the buffer
 
 
+def test_large_batches_details_against_the_tool_and_the_triangles(tmp_path):
+    """A batch of many pieces of the stream (not a whole number of them), on a mesh with dropped degenerate
+    triangles: tri, t, u, v bit for bit as `cbvh raycast --binary`; each hit's normal the unit normal of its
+    triangle as the file decodes it, its material the mesh's; misses all zeros. Without a MATERIALS section
+    every material is 0."""
+    vertices, triangles, materials = reference.triangle_soup(300, seed=11)
+    materials = np.arange(len(triangles), dtype=np.uint32) * 7 + 3
+    triangles = np.concatenate([triangles, [[0, 0, 1], [2, 2, 2]]])  # no area: dropped by the cook
+    materials = np.concatenate([materials, [1, 2]]).astype(np.uint32)
+    count = 150_003
+    rng = np.random.default_rng(12)
+    origins = rng.uniform(-2, 2, (count, 3)).astype(np.float32)
+    directions = (rng.uniform(-1, 1, (count, 3)) - origins).astype(np.float32)
+    records = np.zeros(count, cbvh.RAY)
+    records["org"], records["dir"], records["tmax"] = origins, directions, np.inf
+    for keep_materials in (True, False):
+        path = tmp_path / "soup.cbvh"
+        path.write_bytes(cbvh.cook(vertices, triangles, materials=materials, keep_materials=keep_materials))
+        f = cbvh.open(str(path))
+        assert f.info["original_triangle_count"] == len(triangles) == f.info["triangle_count"] + 2
+        run = subprocess.run([cbvh_command(), "raycast", "--binary", str(path)], input=records.tobytes(),
+                             capture_output=True, check=True)
+        tool = np.frombuffer(run.stdout, cbvh.HIT)
+        for threads in (1, 3):
+            hits = f.raycast(origins, directions, threads=threads)
+            hit = hits.hit
+            assert 0.2 * count < np.count_nonzero(hit) < 0.9 * count
+            assert np.array_equal(hits.tri, tool["tri"])
+            for field in ("t", "u", "v"):
+                assert np.array_equal(getattr(hits, field)[hit], tool[field][hit])
+            normals = reference.face_normals(f.triangles[hits.tri[hit]].astype(np.float64))
+            assert np.allclose(hits.normal[hit], normals, rtol=0, atol=1e-6)
+            expected = materials[hits.tri[hit]] if keep_materials else 0
+            assert np.array_equal(hits.material[hit], np.broadcast_to(expected, hits.material[hit].shape))
+            assert not hits.normal[~hit].any() and not hits.material[~hit].any()
+            assert np.all(hits.t[~hit] == np.inf) and not hits.u[~hit].any() and not hits.v[~hit].any()
+
+
 def small_file():
     vertices, triangles, materials = reference.triangle_soup(40, seed=9)
     return cbvh.cook(vertices, triangles, materials=materials, material_names={1: "stone"})
