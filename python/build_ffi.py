@@ -25,7 +25,18 @@ typedef struct cbvh_cook_options {
     uint32_t material_name_count; ...; } cbvh_cook_options;
 cbvh_result cbvh_cook_options_init(cbvh_cook_options *options, size_t struct_size);
 typedef struct cbvh_allocator cbvh_allocator;
-typedef struct cbvh_cook_stats cbvh_cook_stats;
+typedef enum cbvh_phase { CBVH_PHASE_PREPARE, CBVH_PHASE_BUILD, CBVH_PHASE_LAYOUT, CBVH_PHASE_WRITE, ... } cbvh_phase;
+typedef enum cbvh_section_type { CBVH_SECTION_NODES, CBVH_SECTION_TRIANGLES, CBVH_SECTION_VERTICES,
+    CBVH_SECTION_REMAP, CBVH_SECTION_MATERIALS, ... } cbvh_section_type;
+#define CBVH_SECTION_MATERIAL_NAMES ...
+#define CBVH_STATS_SECTION_TYPES ...
+#define CBVH_STATS_PHASES ...
+typedef struct cbvh_cook_stats {
+    size_t struct_size; uint64_t input_triangles; uint64_t input_vertices; uint64_t dropped_degenerate;
+    uint64_t triangles; uint64_t vertices; uint64_t nodes; uint64_t leaves; uint32_t depth; double sah_cost;
+    double vertex_max_error; uint64_t file_size; uint64_t section_stored_size[...]; uint64_t section_size[...];
+    double seconds[...]; uint64_t peak_memory; uint64_t flushed_coordinates; ...; } cbvh_cook_stats;
+cbvh_result cbvh_cook_stats_init(cbvh_cook_stats *stats, size_t struct_size);
 cbvh_result cbvh_cook(const cbvh_mesh *mesh, const cbvh_cook_options *options, const cbvh_allocator *allocator,
                       void **out_data, size_t *out_size, cbvh_cook_stats *stats, cbvh_error *err);
 void cbvh_buffer_free(const cbvh_allocator *allocator, void *data);

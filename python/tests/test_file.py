@@ -186,6 +186,42 @@ def test_errors_carry_code_and_message(tmp_path):
         f.raycast([[0, 0, 0]], [[1, 0, 0]])
 
 
+def test_cook_statistics_are_the_commands(tmp_path):
+    """cook(stats=True) on a mesh written as OBJ and cooked by `cbvh cook --json` (cook_file) too: the same
+    bytes, and the same statistics as the command's report, key for key (the phases' seconds aside); the
+    mesh has one triangle of no area and one coordinate below CBVH_COORDINATE_MIN, which both count."""
+    rng = np.random.default_rng(5)
+    count = 300
+    centers = np.round(rng.uniform(-4, 4, (count, 1, 3)) * 64) / 64  # exact in float32 and in the OBJ text
+    corners = centers + np.round(rng.uniform(-0.5, 0.5, (count, 3, 3)) * 64) / 64
+    corners[7] = [[0, 0, 0], [1, 1, 1], [2, 2, 2]]
+    corners[8, 0, 2] = 1e-13
+    vertices = corners.reshape(-1, 3).astype(np.float32)
+    triangles = np.arange(3 * count).reshape(count, 3)
+    obj = tmp_path / "soup.obj"
+    obj.write_text("".join("v %r %r %r\n" % tuple(float(x) for x in p) for p in vertices) +
+                   "".join("f %d %d %d\n" % tuple(t) for t in triangles + 1))
+    for options in ({}, {"quantize_vertices": True, "compress_level": 6, "layout": "binary"}):
+        report = cbvh.cook_file(obj, tmp_path / "soup.cbvh", **options)
+        # assimp gives every triangle its default material (id 0, named), which the command stores
+        names = {m["id"]: m["name"] for m in report["material_names"]}
+        data, stats = cbvh.cook(vertices, triangles, materials=np.zeros(count, np.uint32), material_names=names,
+                                stats=True, **options)
+        assert data == (tmp_path / "soup.cbvh").read_bytes()
+        assert data == cbvh.cook(vertices, triangles, materials=np.zeros(count, np.uint32), material_names=names,
+                                 **options)
+        assert stats["triangles"]["dropped_degenerate"] == 1 and stats["vertices"]["flushed_coordinates"] == 1
+        assert stats["file_size"] == len(data)
+        for key, value in stats.items():
+            if key == "seconds":
+                assert set(value) == {"prepare", "build", "layout", "write", "total"}
+                assert all(s >= 0 for s in value.values())
+            elif isinstance(value, dict):
+                assert value == {k: report[key][k] for k in value}, key
+            else:
+                assert value == report[key], key
+
+
 def test_cook_file_matches_cook_and_reports_failures(tmp_path):
     """cook_file's options reach the command; a mesh that does not cook raises CookError with its message."""
     out = tmp_path / "a.cbvh"
