@@ -82,7 +82,7 @@ def test_threads_give_identical_answers(wuson):
 
 def test_large_batches_details_against_the_tool_and_the_triangles(tmp_path):
     """A batch of many pieces of the stream (not a whole number of them), on a mesh with dropped degenerate
-    triangles: tri, t, u, v bit for bit as `cbvh raycast --binary`; each hit's normal the unit normal of its
+    triangles: occlusion, and tri, t, u, v, bit for bit as `cbvh raycast --binary`; each hit's normal the unit normal of its
     triangle as the file decodes it, its material the mesh's; misses all zeros. Without a MATERIALS section
     every material is 0."""
     vertices, triangles, materials = reference.triangle_soup(300, seed=11)
@@ -103,7 +103,11 @@ def test_large_batches_details_against_the_tool_and_the_triangles(tmp_path):
         run = subprocess.run([cbvh_command(), "raycast", "--binary", str(path)], input=records.tobytes(),
                              capture_output=True, check=True)
         tool = np.frombuffer(run.stdout, cbvh.HIT)
+        run = subprocess.run([cbvh_command(), "raycast", "--binary", "--any", str(path)], input=records.tobytes(),
+                             capture_output=True, check=True)
+        tool_occluded = np.frombuffer(run.stdout, np.uint8) == 1
         for threads in (1, 3):
+            assert np.array_equal(f.occluded(origins, directions, threads=threads), tool_occluded)
             hits = f.raycast(origins, directions, threads=threads)
             hit = hits.hit
             assert 0.2 * count < np.count_nonzero(hit) < 0.9 * count
