@@ -111,9 +111,7 @@ typedef struct cbvhpy_rays {
  * buffer reused for every piece (in the caches, where a whole batch's records would be a fresh allocation
  * written to memory and read back), and each piece's hits finished while they are still in the caches.
  * A piece holds many of the stream's octant batches, so the stream groups rays as in one call. */
-#ifndef CBVHPY_PIECE_RAYS
 #define CBVHPY_PIECE_RAYS 65536
-#endif
 
 /* The cbvh_ray records of rays first..first+count-1. */
 static void cbvhpy_records(const cbvhpy_rays *r, size_t first, size_t count, cbvh_ray *records)
@@ -176,16 +174,14 @@ static void cbvhpy_finish_hits(const cbvhpy_details *table, cbvh_hit *hits, size
                                float *normals, uint32_t *materials)
 {
     const size_t end = first + count;
-    if (normals || materials)
-        for (size_t i = first; i < first + CBVHPY_AHEAD && i < end; i++)
-            if (hits[i].tri != CBVH_NO_HIT)
-                CBVHPY_PREFETCH(&table[hits[i].tri]);
+    const int details = normals || materials;
+    for (size_t i = first; details && i < first + CBVHPY_AHEAD && i < end; i++)
+        if (hits[i].tri != CBVH_NO_HIT)
+            CBVHPY_PREFETCH(&table[hits[i].tri]);
     for (size_t i = first; i < end; i++) {
         cbvh_hit *h = &hits[i];
-        if (normals || materials) {
-            if (i + CBVHPY_AHEAD < end && hits[i + CBVHPY_AHEAD].tri != CBVH_NO_HIT)
-                CBVHPY_PREFETCH(&table[hits[i + CBVHPY_AHEAD].tri]);
-        }
+        if (details && i + CBVHPY_AHEAD < end && hits[i + CBVHPY_AHEAD].tri != CBVH_NO_HIT)
+            CBVHPY_PREFETCH(&table[hits[i + CBVHPY_AHEAD].tri]);
         if (h->tri == CBVH_NO_HIT) {
             h->t = INFINITY;
             h->u = h->v = 0.0f;
