@@ -198,40 +198,44 @@ static void cbvhpy_finish_hits(const cbvhpy_details *table, cbvh_hit *hits, size
     }
 }
 
-/* Closest hits of rays begin..end-1 into hits[begin..end-1] through cbvh_raycast_stream_scratch, a miss with
+/* Rays begin..end-1 through the streams a piece at a time: their closest hits (hits given: finished by
+ * cbvhpy_finish_hits) or whether they are occluded (occluded given). */
+static cbvh_result cbvhpy_stream(const cbvh_file *file, const cbvhpy_rays *rays, size_t begin, size_t end,
+                                 cbvh_hit *hits, const cbvhpy_details *table, float *normals, uint32_t *materials,
+                                 uint8_t *occluded, void *scratch, size_t scratch_size)
+{
+    cbvh_ray *records = malloc(CBVHPY_PIECE_RAYS * sizeof *records);
+    if (!records)
+        return CBVH_ERROR_OUT_OF_MEMORY;
+    for (size_t first = begin; first < end; first += CBVHPY_PIECE_RAYS) {
+        const size_t count = end - first < CBVHPY_PIECE_RAYS ? end - first : CBVHPY_PIECE_RAYS;
+        cbvhpy_records(rays, first, count, records);
+        if (hits) {
+            cbvh_raycast_stream_scratch(file, records, count, hits + first, NULL, scratch, scratch_size);
+            cbvhpy_finish_hits(table, hits, first, count, normals, materials);
+        } else {
+            cbvh_occluded_stream_scratch(file, records, count, occluded + first, NULL, scratch, scratch_size);
+        }
+    }
+    free(records);
+    return CBVH_OK;
+}
+
+/* Closest hits of rays begin..end-1 into hits[begin..end-1] (cbvh_raycast_stream_scratch's), a miss with
  * t = inf, u = v = 0; normals and materials (when not NULL) get each hit triangle's normal and material
  * from `table`, zeros for a miss. */
 static cbvh_result cbvhpy_raycast(const cbvh_file *file, const cbvhpy_rays *rays, size_t begin, size_t end,
                                   cbvh_hit *hits, const cbvhpy_details *table, float *normals, uint32_t *materials,
                                   void *scratch, size_t scratch_size)
 {
-    cbvh_ray *records = malloc(CBVHPY_PIECE_RAYS * sizeof *records);
-    if (!records)
-        return CBVH_ERROR_OUT_OF_MEMORY;
-    for (size_t first = begin; first < end; first += CBVHPY_PIECE_RAYS) {
-        const size_t count = end - first < CBVHPY_PIECE_RAYS ? end - first : CBVHPY_PIECE_RAYS;
-        cbvhpy_records(rays, first, count, records);
-        cbvh_raycast_stream_scratch(file, records, count, hits + first, NULL, scratch, scratch_size);
-        cbvhpy_finish_hits(table, hits, first, count, normals, materials);
-    }
-    free(records);
-    return CBVH_OK;
+    return cbvhpy_stream(file, rays, begin, end, hits, table, normals, materials, NULL, scratch, scratch_size);
 }
 
-/* Any hits of rays begin..end-1 (cbvh_occluded_stream_scratch), a piece at a time as cbvhpy_raycast. */
+/* Any hits of rays begin..end-1 (cbvh_occluded_stream_scratch's). */
 static cbvh_result cbvhpy_occluded(const cbvh_file *file, const cbvhpy_rays *rays, size_t begin, size_t end,
                                    uint8_t *occluded, void *scratch, size_t scratch_size)
 {
-    cbvh_ray *records = malloc(CBVHPY_PIECE_RAYS * sizeof *records);
-    if (!records)
-        return CBVH_ERROR_OUT_OF_MEMORY;
-    for (size_t first = begin; first < end; first += CBVHPY_PIECE_RAYS) {
-        const size_t count = end - first < CBVHPY_PIECE_RAYS ? end - first : CBVHPY_PIECE_RAYS;
-        cbvhpy_records(rays, first, count, records);
-        cbvh_occluded_stream_scratch(file, records, count, occluded + first, NULL, scratch, scratch_size);
-    }
-    free(records);
-    return CBVH_OK;
+    return cbvhpy_stream(file, rays, begin, end, NULL, NULL, NULL, NULL, occluded, scratch, scratch_size);
 }
 
 /* cbvh_sweep_with for each shape; stops at the first error, its index in *failed. */
