@@ -258,7 +258,9 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         client: Any = args.scheduler
     else:
         from distributed import Client, LocalCluster
-        client = Client(LocalCluster(n_workers=args.workers, threads_per_worker=1, processes=True))
+        cluster = LocalCluster(n_workers=args.workers, threads_per_worker=1, processes=True)
+        client = Client(cluster)
+        client.wait_for_workers(len(cluster.workers))  # the batches are made for the workers there are
     start = time.perf_counter()
     results = cook_assets(assets, client, depfiles=not args.no_depfiles, batch_size=args.batch_size,
                           compress_level=args.compress, on_result=lambda r: print(json.dumps(asdict(r)), flush=True))
