@@ -16,7 +16,8 @@ _LAYOUTS = {"wide4": lib.CBVH_LAYOUT_WIDE4, "binary": lib.CBVH_LAYOUT_BINARY}
 # The names `cbvh cook --json` gives the sections (by type, the ancillary bit left out) and the cook's phases.
 _SECTION_NAMES = {lib.CBVH_SECTION_NODES: "nodes", lib.CBVH_SECTION_TRIANGLES: "triangles",
                   lib.CBVH_SECTION_VERTICES: "vertices", lib.CBVH_SECTION_REMAP: "remap",
-                  lib.CBVH_SECTION_MATERIALS: "materials", lib.CBVH_SECTION_MATERIAL_NAMES & 0x7FFFFFFF: "material-names"}
+                  lib.CBVH_SECTION_MATERIALS: "materials",
+                  lib.CBVH_SECTION_MATERIAL_NAMES & 0x7FFFFFFF: "material-names"}
 _PHASE_NAMES = {lib.CBVH_PHASE_PREPARE: "prepare", lib.CBVH_PHASE_BUILD: "build", lib.CBVH_PHASE_LAYOUT: "layout",
                 lib.CBVH_PHASE_WRITE: "write"}
 

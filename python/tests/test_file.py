@@ -82,9 +82,9 @@ def test_threads_give_identical_answers(wuson):
 
 def test_large_batches_details_against_the_tool_and_the_triangles(tmp_path):
     """A batch of many pieces of the stream (not a whole number of them), on a mesh with dropped degenerate
-    triangles: occlusion, and tri, t, u, v, bit for bit as `cbvh raycast --binary`; each hit's normal the unit normal of its
-    triangle as the file decodes it, its material the mesh's; misses all zeros. Without a MATERIALS section
-    every material is 0."""
+    triangles: occlusion, and tri, t, u, v, bit for bit as `cbvh raycast --binary`; each hit's normal the unit
+    normal of its triangle as the file decodes it, its material the mesh's; misses all zeros. Without a
+    MATERIALS section every material is 0."""
     vertices, triangles, materials = reference.triangle_soup(300, seed=11)
     materials = np.arange(len(triangles), dtype=np.uint32) * 7 + 3
     triangles = np.concatenate([triangles, [[0, 0, 1], [2, 2, 2]]])  # no area: dropped by the cook
