@@ -78,7 +78,7 @@ typedef struct cbvh_contact { uint32_t tri; float depth; float normal[3]; float 
 typedef struct cbvhpy_rays { const float *org, *dir, *tmin, *tmax; size_t org_step, dir_step, tmin_step, tmax_step;
     } cbvhpy_rays;
 typedef struct cbvhpy_details { float normal[3]; uint32_t material; } cbvhpy_details;
-void cbvhpy_details_table(const cbvh_file *file, uint32_t count, cbvhpy_details *table);
+void cbvhpy_details_table(const cbvh_file *file, uint32_t first, uint32_t end, cbvhpy_details *table);
 cbvh_result cbvhpy_raycast(const cbvh_file *file, const cbvhpy_rays *rays, size_t begin, size_t end,
                            cbvh_hit *hits, const cbvhpy_details *table, float *normals, uint32_t *materials,
                            void *scratch, size_t scratch_size);
@@ -147,10 +147,10 @@ typedef struct cbvhpy_details {
     uint32_t material;
 } cbvhpy_details;
 
-/* The details of triangles 0..count-1 (original ids; zeros for an id the file lacks). */
-static void cbvhpy_details_table(const cbvh_file *file, uint32_t count, cbvhpy_details *table)
+/* The details of triangles first..end-1 (original ids; zeros for an id the file lacks) into table[first..]. */
+static void cbvhpy_details_table(const cbvh_file *file, uint32_t first, uint32_t end, cbvhpy_details *table)
 {
-    for (uint32_t t = 0; t < count; t++) {
+    for (uint32_t t = first; t < end; t++) {
         float v[9];
         if (!cbvh_file_get_triangle(file, t, v, v + 3, v + 6))
             memset(v, 0, sizeof v);

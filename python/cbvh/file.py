@@ -207,15 +207,16 @@ class File:
 
     # -- rays -------------------------------------------------------------------------------------------
 
-    def _details_table(self) -> np.ndarray:
+    def _details_table(self, threads: int) -> np.ndarray:
         """Each triangle's unit normal and material (cbvhpy_details, 16 bytes a triangle by original id), which
-        raycast copies to its hits: computed once, on the first raycast that asks for them, so that a hit
-        costs one read of a table instead of decoding its triangle again."""
+        raycast copies to its hits: computed once (by `threads` threads), on the first raycast that asks for
+        them, so that a hit costs one read of a table instead of decoding its triangle again."""
         with self._details_lock:
             if self._details is None:
-                count = self._info["original_triangle_count"]
-                table = np.empty((count, 4), np.float32)
-                lib.cbvhpy_details_table(self._handle(), count, pointer("cbvhpy_details *", table))
+                table = np.empty((self._info["original_triangle_count"], 4), np.float32)
+                handle = self._handle()
+                _run_parts(len(table), threads, lambda first, end: lib.cbvhpy_details_table(
+                    handle, first, end, pointer("cbvhpy_details *", table)))
                 self._details = table
             return self._details
 
@@ -243,7 +244,7 @@ class File:
         rays, keep_alive, count = self._rays(origins, directions, tmin, tmax)
         records = np.empty(count, HIT)
         handle = self._handle()
-        table = self._details_table() if details else None
+        table = self._details_table(threads) if details else None
         normal = np.empty((count, 3), np.float32) if details else None
         # Without a MATERIALS section every id is 0: np.zeros, whose pages stay the system's zero page
         with_materials = details and self._info["has_materials"]
