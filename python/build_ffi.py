@@ -25,7 +25,18 @@ typedef struct cbvh_cook_options {
     uint32_t material_name_count; ...; } cbvh_cook_options;
 cbvh_result cbvh_cook_options_init(cbvh_cook_options *options, size_t struct_size);
 typedef struct cbvh_allocator cbvh_allocator;
-typedef struct cbvh_cook_stats cbvh_cook_stats;
+typedef enum cbvh_phase { CBVH_PHASE_PREPARE, CBVH_PHASE_BUILD, CBVH_PHASE_LAYOUT, CBVH_PHASE_WRITE, ... } cbvh_phase;
+typedef enum cbvh_section_type { CBVH_SECTION_NODES, CBVH_SECTION_TRIANGLES, CBVH_SECTION_VERTICES,
+    CBVH_SECTION_REMAP, CBVH_SECTION_MATERIALS, ... } cbvh_section_type;
+#define CBVH_SECTION_MATERIAL_NAMES ...
+#define CBVH_STATS_SECTION_TYPES ...
+#define CBVH_STATS_PHASES ...
+typedef struct cbvh_cook_stats {
+    size_t struct_size; uint64_t input_triangles; uint64_t input_vertices; uint64_t dropped_degenerate;
+    uint64_t triangles; uint64_t vertices; uint64_t nodes; uint64_t leaves; uint32_t depth; double sah_cost;
+    double vertex_max_error; uint64_t file_size; uint64_t section_stored_size[...]; uint64_t section_size[...];
+    double seconds[...]; uint64_t peak_memory; uint64_t flushed_coordinates; ...; } cbvh_cook_stats;
+cbvh_result cbvh_cook_stats_init(cbvh_cook_stats *stats, size_t struct_size);
 cbvh_result cbvh_cook(const cbvh_mesh *mesh, const cbvh_cook_options *options, const cbvh_allocator *allocator,
                       void **out_data, size_t *out_size, cbvh_cook_stats *stats, cbvh_error *err);
 void cbvh_buffer_free(const cbvh_allocator *allocator, void *data);
@@ -66,8 +77,11 @@ typedef struct cbvh_contact { uint32_t tri; float depth; float normal[3]; float 
 
 typedef struct cbvhpy_rays { const float *org, *dir, *tmin, *tmax; size_t org_step, dir_step, tmin_step, tmax_step;
     } cbvhpy_rays;
+typedef struct cbvhpy_details { float normal[3]; uint32_t material; } cbvhpy_details;
+void cbvhpy_details_table(const cbvh_file *file, uint32_t first, uint32_t end, cbvhpy_details *table);
 cbvh_result cbvhpy_raycast(const cbvh_file *file, const cbvhpy_rays *rays, size_t begin, size_t end,
-                           cbvh_hit *hits, float *normals, uint32_t *materials, void *scratch, size_t scratch_size);
+                           cbvh_hit *hits, const cbvhpy_details *table, float *normals, uint32_t *materials,
+                           void *scratch, size_t scratch_size);
 cbvh_result cbvhpy_occluded(const cbvh_file *file, const cbvhpy_rays *rays, size_t begin, size_t end,
                             uint8_t *occluded, void *scratch, size_t scratch_size);
 cbvh_result cbvhpy_sweeps(const cbvh_file *file, const cbvh_shape *shapes, const float *deltas, size_t count,
@@ -93,83 +107,135 @@ typedef struct cbvhpy_rays {
     size_t org_step, dir_step, tmin_step, tmax_step;
 } cbvhpy_rays;
 
-/* The cbvh_ray records of rays begin..end-1 (malloc'ed; NULL when out of memory), for the streams to take in
- * one call, which runs faster than many small calls over the same rays. */
-static cbvh_ray *cbvhpy_records(const cbvhpy_rays *r, size_t begin, size_t end)
+/* Rays a piece: the rays go to the stream a piece at a time, each piece's cbvh_ray records built into one
+ * buffer reused for every piece (in the caches, where a whole batch's records would be a fresh allocation
+ * written to memory and read back), and each piece's hits finished while they are still in the caches.
+ * A piece holds many of the stream's octant batches, so the stream groups rays as in one call. */
+#define CBVHPY_PIECE_RAYS 65536
+
+/* The cbvh_ray records of rays first..first+count-1. */
+static void cbvhpy_records(const cbvhpy_rays *r, size_t first, size_t count, cbvh_ray *records)
 {
-    cbvh_ray *rays = malloc((end - begin) * sizeof *rays + 1);
-    if (!rays)
-        return NULL;
-    for (size_t i = begin; i < end; i++) {
-        cbvh_ray *ray = &rays[i - begin];
+    for (size_t k = 0; k < count; k++) {
+        const size_t i = first + k;
+        cbvh_ray *ray = &records[k];
         memcpy(ray->org, r->org + i * r->org_step, sizeof ray->org);
         memcpy(ray->dir, r->dir + i * r->dir_step, sizeof ray->dir);
         ray->tmin = r->tmin[i * r->tmin_step];
         ray->tmax = r->tmax[i * r->tmax_step];
     }
-    return rays;
 }
 
-/* The unit geometric normal (v1 - v0) x (v2 - v0), in double, as cbvh_hit_record reports it. */
-static void cbvhpy_normal(const cbvh_file *file, uint32_t tri, float *n)
+/* The unit geometric normal (v1 - v0) x (v2 - v0) of the triangle with vertices v, in double, as
+ * cbvh_hit_record reports it (zeros for a triangle of no area). */
+static void cbvhpy_normal(const float v[9], float *n)
 {
-    float v[3][3];
-    n[0] = n[1] = n[2] = 0.0f;
-    if (!cbvh_file_get_triangle(file, tri, v[0], v[1], v[2]))
-        return;
     double e1[3], e2[3];
     for (int a = 0; a < 3; a++) {
-        e1[a] = (double)v[1][a] - v[0][a];
-        e2[a] = (double)v[2][a] - v[0][a];
+        e1[a] = (double)v[3 + a] - v[a];
+        e2[a] = (double)v[6 + a] - v[a];
     }
     const double c[3] = { e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0] };
     const double length = sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
-    if (length > 0)
-        for (int a = 0; a < 3; a++)
-            n[a] = (float)(c[a] / length);
+    for (int a = 0; a < 3; a++)
+        n[a] = length > 0 ? (float)(c[a] / length) : 0.0f;
 }
 
-/* Closest hits of rays begin..end-1 into hits[begin..end-1] through cbvh_raycast_stream_scratch, a miss with
- * t = inf, u = v = 0; normals and materials (when not NULL) get each hit triangle's normal and material,
- * zeros for a miss. */
-static cbvh_result cbvhpy_raycast(const cbvh_file *file, const cbvhpy_rays *rays, size_t begin, size_t end,
-                                  cbvh_hit *hits, float *normals, uint32_t *materials, void *scratch,
-                                  size_t scratch_size)
+/* A triangle's details as raycast returns them with each hit: its unit normal and its material id. */
+typedef struct cbvhpy_details {
+    float normal[3];
+    uint32_t material;
+} cbvhpy_details;
+
+/* The details of triangles first..end-1 (original ids; zeros for an id the file lacks) into table[first..]. */
+static void cbvhpy_details_table(const cbvh_file *file, uint32_t first, uint32_t end, cbvhpy_details *table)
 {
-    cbvh_ray *records = cbvhpy_records(rays, begin, end);
-    if (!records)
-        return CBVH_ERROR_OUT_OF_MEMORY;
-    cbvh_raycast_stream_scratch(file, records, end - begin, hits + begin, NULL, scratch, scratch_size);
-    free(records);
-    for (size_t i = begin; i < end; i++) {
+    for (uint32_t t = first; t < end; t++) {
+        float v[9];
+        if (!cbvh_file_get_triangle(file, t, v, v + 3, v + 6))
+            memset(v, 0, sizeof v);
+        cbvhpy_normal(v, table[t].normal);
+        table[t].material = cbvh_file_get_material(file, t);
+    }
+}
+
+#if defined(__GNUC__) || defined(__clang__)
+#define CBVHPY_PREFETCH(p) __builtin_prefetch(p)
+#else
+#define CBVHPY_PREFETCH(p) ((void)(p))
+#endif
+/* How many hits ahead the details of a hit's triangle are fetched: on a mesh larger than the caches each
+ * fetch is a miss, and these overlap. */
+#define CBVHPY_AHEAD 16
+
+/* Finishes hits first..first+count-1: a miss gets t = inf, u = v = 0; normals and materials (when not NULL)
+ * each hit triangle's normal and material from `table` (cbvhpy_details_table), zeros for a miss. */
+static void cbvhpy_finish_hits(const cbvhpy_details *table, cbvh_hit *hits, size_t first, size_t count,
+                               float *normals, uint32_t *materials)
+{
+    const size_t end = first + count;
+    const int details = normals || materials;
+    for (size_t i = first; details && i < first + CBVHPY_AHEAD && i < end; i++)
+        if (hits[i].tri != CBVH_NO_HIT)
+            CBVHPY_PREFETCH(&table[hits[i].tri]);
+    for (size_t i = first; i < end; i++) {
         cbvh_hit *h = &hits[i];
-        const int hit = h->tri != CBVH_NO_HIT;
-        if (!hit) {
+        if (details && i + CBVHPY_AHEAD < end && hits[i + CBVHPY_AHEAD].tri != CBVH_NO_HIT)
+            CBVHPY_PREFETCH(&table[hits[i + CBVHPY_AHEAD].tri]);
+        if (h->tri == CBVH_NO_HIT) {
             h->t = INFINITY;
             h->u = h->v = 0.0f;
-        }
-        if (normals) {
-            if (hit)
-                cbvhpy_normal(file, h->tri, normals + 3 * i);
-            else
+            if (normals)
                 normals[3 * i] = normals[3 * i + 1] = normals[3 * i + 2] = 0.0f;
+            if (materials)
+                materials[i] = 0;
+            continue;
         }
+        if (normals)
+            memcpy(normals + 3 * i, table[h->tri].normal, 3 * sizeof *normals);
         if (materials)
-            materials[i] = hit ? cbvh_file_get_material(file, h->tri) : 0;
+            materials[i] = table[h->tri].material;
     }
+}
+
+/* Rays begin..end-1 through the streams a piece at a time: their closest hits (hits given: finished by
+ * cbvhpy_finish_hits) or whether they are occluded (occluded given). */
+static cbvh_result cbvhpy_stream(const cbvh_file *file, const cbvhpy_rays *rays, size_t begin, size_t end,
+                                 cbvh_hit *hits, const cbvhpy_details *table, float *normals, uint32_t *materials,
+                                 uint8_t *occluded, void *scratch, size_t scratch_size)
+{
+    cbvh_ray *records = malloc(CBVHPY_PIECE_RAYS * sizeof *records);
+    if (!records)
+        return CBVH_ERROR_OUT_OF_MEMORY;
+    for (size_t first = begin; first < end; first += CBVHPY_PIECE_RAYS) {
+        const size_t count = end - first < CBVHPY_PIECE_RAYS ? end - first : CBVHPY_PIECE_RAYS;
+        cbvhpy_records(rays, first, count, records);
+        if (hits) {
+            cbvh_raycast_stream_scratch(file, records, count, hits + first, NULL, scratch, scratch_size);
+            cbvhpy_finish_hits(table, hits, first, count, normals, materials);
+        } else {
+            cbvh_occluded_stream_scratch(file, records, count, occluded + first, NULL, scratch, scratch_size);
+        }
+    }
+    free(records);
     return CBVH_OK;
 }
 
-/* Any hits of rays begin..end-1 (cbvh_occluded_stream_scratch). */
+/* Closest hits of rays begin..end-1 into hits[begin..end-1] (cbvh_raycast_stream_scratch's), a miss with
+ * t = inf, u = v = 0; normals and materials (when not NULL) get each hit triangle's normal and material
+ * from `table`, zeros for a miss. */
+static cbvh_result cbvhpy_raycast(const cbvh_file *file, const cbvhpy_rays *rays, size_t begin, size_t end,
+                                  cbvh_hit *hits, const cbvhpy_details *table, float *normals, uint32_t *materials,
+                                  void *scratch, size_t scratch_size)
+{
+    return cbvhpy_stream(file, rays, begin, end, hits, table, normals, materials, NULL, scratch, scratch_size);
+}
+
+/* Any hits of rays begin..end-1 (cbvh_occluded_stream_scratch's). */
 static cbvh_result cbvhpy_occluded(const cbvh_file *file, const cbvhpy_rays *rays, size_t begin, size_t end,
                                    uint8_t *occluded, void *scratch, size_t scratch_size)
 {
-    cbvh_ray *records = cbvhpy_records(rays, begin, end);
-    if (!records)
-        return CBVH_ERROR_OUT_OF_MEMORY;
-    cbvh_occluded_stream_scratch(file, records, end - begin, occluded + begin, NULL, scratch, scratch_size);
-    free(records);
-    return CBVH_OK;
+    return cbvhpy_stream(file, rays, begin, end, NULL, NULL, NULL, NULL, occluded, scratch, scratch_size);
 }
 
 /* cbvh_sweep_with for each shape; stops at the first error, its index in *failed. */

@@ -4,7 +4,8 @@ import json
 import os
 import shutil
 import subprocess
-from typing import Any, Dict, List, Mapping, Optional, Sequence, Union
+import time
+from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
@@ -12,6 +13,13 @@ from ._lib import CbvhError, ffi, lib, pointer, raise_for
 
 PathLike = Union[str, "os.PathLike[str]"]
 _LAYOUTS = {"wide4": lib.CBVH_LAYOUT_WIDE4, "binary": lib.CBVH_LAYOUT_BINARY}
+# The names `cbvh cook --json` gives the sections (by type, the ancillary bit left out) and the cook's phases.
+_SECTION_NAMES = {lib.CBVH_SECTION_NODES: "nodes", lib.CBVH_SECTION_TRIANGLES: "triangles",
+                  lib.CBVH_SECTION_VERTICES: "vertices", lib.CBVH_SECTION_REMAP: "remap",
+                  lib.CBVH_SECTION_MATERIALS: "materials",
+                  lib.CBVH_SECTION_MATERIAL_NAMES & 0x7FFFFFFF: "material-names"}
+_PHASE_NAMES = {lib.CBVH_PHASE_PREPARE: "prepare", lib.CBVH_PHASE_BUILD: "build", lib.CBVH_PHASE_LAYOUT: "layout",
+                lib.CBVH_PHASE_WRITE: "write"}
 
 
 class CookError(CbvhError):
@@ -45,10 +53,39 @@ def _apply_options(options, layout: str = "wide4", max_leaf_size: Optional[int] 
     options.keep_materials = int(bool(keep_materials))
 
 
+def _stats_report(st, total_seconds: float) -> Dict[str, Any]:
+    """cbvh_cook_stats as a dict laid out as `cbvh cook --json`'s report, less what only the command knows
+    (its input and output paths, the importer's dropped points and lines, material names, missing files,
+    the import's seconds)."""
+    per_triangle = 1.0 / st.triangles if st.triangles else 0.0
+    sections = []
+    for kind in range(lib.CBVH_SECTION_NODES, lib.CBVH_STATS_SECTION_TYPES):
+        if st.section_size[kind]:
+            sections.append({"name": _SECTION_NAMES.get(kind, "ancillary"),
+                             "stored_bytes": st.section_stored_size[kind], "raw_bytes": st.section_size[kind],
+                             "stored_bytes_per_triangle": st.section_stored_size[kind] * per_triangle,
+                             "raw_bytes_per_triangle": st.section_size[kind] * per_triangle})
+    return {
+        "triangles": {"input": st.input_triangles, "kept": st.triangles, "dropped_degenerate": st.dropped_degenerate},
+        "vertices": {"input": st.input_vertices, "flushed_coordinates": st.flushed_coordinates,
+                     "kept": st.vertices, "max_error": st.vertex_max_error},
+        "tree": {"nodes": st.nodes, "leaves": st.leaves, "depth": st.depth, "sah_cost": st.sah_cost},
+        "file_size": st.file_size,
+        "peak_memory": st.peak_memory,
+        "bytes_per_triangle": st.file_size * per_triangle,
+        "sections": sections,
+        "seconds": dict({name: st.seconds[phase] for phase, name in _PHASE_NAMES.items()}, total=total_seconds),
+    }
+
+
 def cook(vertices: np.ndarray, triangles: np.ndarray, *, materials: Optional[np.ndarray] = None,
-         material_names: Optional[Mapping[int, Union[str, Sequence[str]]]] = None, **options: Any) -> bytes:
+         material_names: Optional[Mapping[int, Union[str, Sequence[str]]]] = None, stats: bool = False,
+         **options: Any) -> Union[bytes, Tuple[bytes, Dict[str, Any]]]:
     """Cooks a triangle mesh into a cbvh file held in bytes (deterministic: the same mesh and options give
-    the same bytes).
+    the same bytes). With stats=True returns (bytes, statistics): what the cook did (cbvh_cook_stats) as a
+    dict laid out as cook_file's report (`cbvh cook --json`): triangles (input, kept, dropped_degenerate),
+    vertices (input, flushed_coordinates, kept, max_error), tree (nodes, leaves, depth, sah_cost),
+    file_size, peak_memory, bytes_per_triangle, sections and seconds (per phase, and total).
 
     vertices: (V, 3) positions (converted to float32); triangles: (T, 3) vertex indices; materials: (T,)
     material ids or None; material_names: {id: name or [names]}. Options (the library's defaults when
@@ -96,11 +133,16 @@ def cook(vertices: np.ndarray, triangles: np.ndarray, *, materials: Optional[np.
     data = ffi.new("void **")
     size = ffi.new("size_t *")
     err = ffi.new("cbvh_error *")
-    raise_for(lib.cbvh_cook(mesh, cook_options, ffi.NULL, data, size, ffi.NULL, err), err)
+    cook_stats = ffi.new("cbvh_cook_stats *")
+    raise_for(lib.cbvh_cook_stats_init(cook_stats, ffi.sizeof("cbvh_cook_stats")))
+    start = time.perf_counter()
+    raise_for(lib.cbvh_cook(mesh, cook_options, ffi.NULL, data, size, cook_stats, err), err)
+    seconds = time.perf_counter() - start
     try:
-        return bytes(ffi.buffer(data[0], size[0]))
+        cooked = bytes(ffi.buffer(data[0], size[0]))
     finally:
         lib.cbvh_buffer_free(ffi.NULL, data[0])
+    return (cooked, _stats_report(cook_stats, seconds)) if stats else cooked
 
 
 def cbvh_command() -> str:

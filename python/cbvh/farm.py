@@ -1,21 +1,24 @@
-"""farm.py: cooks a library of assets on a dask.distributed cluster, one task per asset.
+"""farm.py: cooks a library of assets on a dask.distributed cluster, a batch of assets per task.
 
-Each task runs cbvh.cook_file on a worker (the `cbvh cook` command: the same importer, options and bytes as
-on one machine), reading its input from and writing its output (and depfile, OUT.d) to a file system the
-workers share. A task whose worker dies is run again on another one by the scheduler; an asset that does
-not cook is reported with its error while the others go on.
+Each task runs `cbvh cook --manifest` over its batch on a worker (the same importer, options and bytes as on
+one machine; the command starts once a batch, not once an asset), reading inputs from and writing outputs
+(and depfiles, OUT.d) to a file system the workers share. A task whose worker dies is run again on another
+one by the scheduler; an asset that does not cook is reported with its error while the others go on.
 
     python -m cbvh.farm --scheduler tcp://host:8786 --manifest assets.txt --output-dir cooked
 """
 import argparse
 import json
+import math
 import os
+import subprocess
 import sys
+import tempfile
 import time
 from dataclasses import asdict, dataclass
 from typing import Any, Callable, Dict, Iterable, List, Optional, Sequence
 
-from .cook import CookError, cook_file
+from .cook import CookError, cbvh_command, cook_arguments, cook_file
 
 
 @dataclass
@@ -87,16 +90,18 @@ def assets_from_folder(folder: str, output_dir: str, extensions: Optional[Sequen
     return assets
 
 
-def cook_asset(asset: Asset, options: Dict[str, Any], depfiles: bool = True) -> AssetResult:
-    """Cooks one asset (the task each worker runs); a cook failure is returned, not raised."""
-    start = time.perf_counter()
-    worker = None
+def _worker_address() -> Optional[str]:
     try:
         from distributed import get_worker
-        worker = get_worker().address
+        return get_worker().address
     except (ImportError, ValueError):
-        pass
-    result = AssetResult(asset.input, asset.output, ok=False, worker=worker)
+        return None
+
+
+def cook_asset(asset: Asset, options: Dict[str, Any], depfiles: bool = True) -> AssetResult:
+    """Cooks one asset with cook_file; a cook failure is returned, not raised."""
+    start = time.perf_counter()
+    result = AssetResult(asset.input, asset.output, ok=False, worker=_worker_address())
     try:
         os.makedirs(os.path.dirname(asset.output) or ".", exist_ok=True)
         result.stats = cook_file(asset.input, asset.output,
@@ -108,33 +113,122 @@ def cook_asset(asset: Asset, options: Dict[str, Any], depfiles: bool = True) -> 
     return result
 
 
+def _manifest_line(asset: Asset) -> Optional[str]:
+    """The line of a `cbvh cook --manifest` naming the asset, or None when its paths cannot be written in one
+    (a tab or line break in a path, an input starting with #, a line longer than the command reads)."""
+    paths = (asset.input, asset.output)
+    if any(not p or any(c in p for c in "\t\r\n") for p in paths) or asset.input.startswith("#"):
+        return None
+    line = "%s\t%s\n" % paths
+    return line if len(os.fsencode(line)) < 8000 else None
+
+
+def cook_batch(assets: Sequence[Asset], options: Dict[str, Any], depfiles: bool = True) -> List[AssetResult]:
+    """Cooks a batch of assets (the task each worker runs) with one `cbvh cook --manifest - --json` run: the
+    command imports, cooks and writes each as it would alone, and reports each on a line of its own. Assets
+    whose paths a manifest cannot hold are cooked one by one (cook_asset). A failed cook is returned as its
+    asset's result; the command stopping before it reported every asset raises RuntimeError (the task is then
+    run again)."""
+    worker = _worker_address()
+    lines = [_manifest_line(a) for a in assets]
+    results: List[Optional[AssetResult]] = [None] * len(assets)
+    batch = [k for k, line in enumerate(lines) if line is not None]
+    if batch:
+        command = [cbvh_command(), "cook", "--quiet", "--json", "--manifest", "-"] + cook_arguments(**options)
+        if depfiles:
+            command.append("--depfiles")
+        for k in batch:
+            os.makedirs(os.path.dirname(assets[k].output) or ".", exist_ok=True)
+        with tempfile.TemporaryFile() as errors:
+            start = time.perf_counter()
+            run = subprocess.Popen(command, stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=errors)
+            try:  # the command reads the whole manifest before it cooks
+                run.stdin.write(os.fsencode("".join(lines[k] for k in batch)))  # type: ignore[union-attr]
+                run.stdin.close()  # type: ignore[union-attr]
+            except BrokenPipeError:  # it stopped at once: its message is on its standard error
+                pass
+            reports, rest = [], []
+            for line in run.stdout:  # type: ignore[union-attr]
+                finished = time.perf_counter()
+                text = line.decode("utf-8", "surrogateescape")
+                if text.startswith('{"input"'):  # an asset's report, on one line
+                    reports.append((json.loads(text), finished - start))
+                    start = finished
+                else:  # the report of the command as a whole (it could not run the batch), over lines
+                    rest.append(text)
+            status = run.wait()
+            if len(reports) < len(batch):
+                try:
+                    error = json.loads("".join(rest))["error"]
+                except (ValueError, KeyError, TypeError):
+                    errors.seek(0)
+                    detail = errors.read().decode("utf-8", "replace").strip()
+                    raise RuntimeError("cbvh cook --manifest reported %d of its %d assets (exit status %d)%s" % (
+                        len(reports), len(batch), status, ": " + detail[-2000:] if detail else ""))
+                reports += [({"error": error}, 0.0)] * (len(batch) - len(reports))
+        for k, (report, seconds) in zip(batch, reports):  # one line an asset, in the manifest's order
+            result = AssetResult(assets[k].input, assets[k].output, ok="error" not in report, worker=worker,
+                                 seconds=seconds)
+            if result.ok:
+                result.stats = report
+            else:
+                error = report["error"]
+                result.error, result.status = str(error.get("message", "")), int(error.get("status", 1))
+            results[k] = result
+    for k, line in enumerate(lines):
+        if line is None:
+            results[k] = cook_asset(assets[k], options, depfiles)
+    return results  # type: ignore[return-value]
+
+
+def batch_count(asset_count: int, worker_count: int, batch_size: Optional[int] = None) -> int:
+    """How many tasks cook_assets makes of asset_count assets: batch_size assets each, or by default about 8
+    tasks a worker (so that the workers stay equally busy to the end, and a task lost with a worker costs
+    little), of at most 64 assets."""
+    if batch_size is not None:
+        if not isinstance(batch_size, int) or batch_size < 1:
+            raise ValueError("batch_size must be a positive integer, not %r" % (batch_size,))
+        return math.ceil(asset_count / batch_size)
+    return min(asset_count, max(8 * max(worker_count, 1), math.ceil(asset_count / 64)))
+
+
 def cook_assets(assets: Iterable[Asset], client: Any = None, *, retries: int = 2, depfiles: bool = True,
-                on_result: Optional[Callable[[AssetResult], None]] = None, **options: Any) -> List[AssetResult]:
+                batch_size: Optional[int] = None, on_result: Optional[Callable[[AssetResult], None]] = None,
+                **options: Any) -> List[AssetResult]:
     """Cooks every asset on the cluster of `client` (a dask.distributed Client, or a scheduler address such
-    as "tcp://host:8786"), one task each, and returns their results in the assets' order. Options are
-    cook_file's (layout, compress_level, scale, material_map ...). A task is run again `retries` times when it
-    raises (a file system error on a worker), and by the scheduler when its worker dies (up to the
-    scheduler's allowed-failures); a task that still fails is reported as a failed asset, the others go on.
-    on_result(result) is called as each asset finishes."""
+    as "tcp://host:8786") and returns their results in the assets' order. The assets go to the workers in
+    batches, one task each (cook_batch), batch_size assets a batch (default: see batch_count), a batch taking
+    every n-th asset so that a run of large assets is spread over the batches. Options are cook_file's
+    (layout, compress_level, scale, material_map ...; depfiles=True writes OUT.d beside each output). A task
+    is run again `retries` times when it raises (a file system error on a worker), and by the scheduler when
+    its worker dies (up to the scheduler's allowed-failures); the assets of a task that still fails are
+    reported as failed, the others go on. on_result(result) is called for each asset as its batch finishes."""
     from distributed import Client, as_completed
 
+    if "depfile" in options:
+        raise ValueError("cook_assets writes each asset's depfile to OUT.d with depfiles=True, not depfile=")
     assets = list(assets)
     own_client = None
     if client is None or isinstance(client, str):
         client = own_client = Client(client) if client else Client()
     try:
-        futures = client.map(cook_asset, assets, options=options, depfiles=depfiles, retries=retries, pure=False)
-        index = {future.key: k for k, future in enumerate(futures)}
+        count = batch_count(len(assets), len(client.scheduler_info().get("workers", {})), batch_size)
+        batches = [list(range(first, len(assets), count)) for first in range(count)]
+        futures = client.map(cook_batch, [[assets[k] for k in batch] for batch in batches], options=options,
+                             depfiles=depfiles, retries=retries, pure=False)
+        index = {future.key: b for b, future in enumerate(futures)}
         results: List[Optional[AssetResult]] = [None] * len(assets)
         for future in as_completed(futures):
-            k = index[future.key]
+            batch = batches[index[future.key]]
             try:
-                results[k] = future.result()
+                done = future.result()
             except Exception as e:  # the task itself failed (after its retries), or its workers kept dying
-                results[k] = AssetResult(assets[k].input, assets[k].output, ok=False,
-                                         error="%s: %s" % (type(e).__name__, e))
-            if on_result:
-                on_result(results[k])
+                done = [AssetResult(assets[k].input, assets[k].output, ok=False,
+                                    error="%s: %s" % (type(e).__name__, e)) for k in batch]
+            for k, result in zip(batch, done):
+                results[k] = result
+                if on_result:
+                    on_result(result)
         return results  # type: ignore[return-value]
     finally:
         if own_client is not None:
@@ -152,6 +246,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     parser.add_argument("--output-dir", help="where IN-only assets go (DIR/STEM.cbvh)")
     parser.add_argument("--no-depfiles", action="store_true", help="write no OUT.d")
     parser.add_argument("--compress", type=int, default=0, metavar="LEVEL", help="zlib level 1..9")
+    parser.add_argument("--batch-size", type=int, metavar="N", help="assets a task (default: about 8 tasks a worker)")
     args = parser.parse_args(argv)
     if bool(args.manifest) == bool(args.folder):
         parser.error("give --manifest or --folder")
@@ -163,10 +258,12 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         client: Any = args.scheduler
     else:
         from distributed import Client, LocalCluster
-        client = Client(LocalCluster(n_workers=args.workers, threads_per_worker=1, processes=True))
+        cluster = LocalCluster(n_workers=args.workers, threads_per_worker=1, processes=True)
+        client = Client(cluster)
+        client.wait_for_workers(len(cluster.workers))  # the batches are made for the workers there are
     start = time.perf_counter()
-    results = cook_assets(assets, client, depfiles=not args.no_depfiles, compress_level=args.compress,
-                          on_result=lambda r: print(json.dumps(asdict(r)), flush=True))
+    results = cook_assets(assets, client, depfiles=not args.no_depfiles, batch_size=args.batch_size,
+                          compress_level=args.compress, on_result=lambda r: print(json.dumps(asdict(r)), flush=True))
     failed = sum(not r.ok for r in results)
     print("%d assets cooked, %d failed in %.1f s" % (len(results) - failed, failed, time.perf_counter() - start),
           file=sys.stderr)

@@ -5,6 +5,7 @@ parts run at once on one opened file, which cbvh allows: an opened file is immut
 depend on N.
 """
 import os
+import threading
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from typing import Any, Callable, Dict, List, Optional, Tuple, Union
@@ -156,6 +157,8 @@ class File:
                       for name, _ in ffi.typeof("cbvh_file_info").fields if name != "struct_size"}
         self._info["layout"] = {lib.CBVH_LAYOUT_WIDE4: "wide4", lib.CBVH_LAYOUT_BINARY: "binary"}.get(
             self._info["layout"], self._info["layout"])
+        self._details: Optional[np.ndarray] = None  # cbvhpy_details of every triangle, made on first use
+        self._details_lock = threading.Lock()
 
     # -- the file ---------------------------------------------------------------------------------------
 
@@ -165,6 +168,7 @@ class File:
         if self._file is not None:
             ffi.release(self._file)
             self._file = None
+            self._details = None
 
     def __enter__(self) -> "File":
         return self
@@ -203,6 +207,19 @@ class File:
 
     # -- rays -------------------------------------------------------------------------------------------
 
+    def _details_table(self, threads: int) -> np.ndarray:
+        """Each triangle's unit normal and material (cbvhpy_details, 16 bytes a triangle by original id), which
+        raycast copies to its hits: computed once (by `threads` threads), on the first raycast that asks for
+        them, so that a hit costs one read of a table instead of decoding its triangle again."""
+        with self._details_lock:
+            if self._details is None:
+                table = np.empty((self._info["original_triangle_count"], 4), np.float32)
+                handle = self._handle()
+                _run_parts(len(table), threads, lambda first, end: lib.cbvhpy_details_table(
+                    handle, first, end, pointer("cbvhpy_details *", table)))
+                self._details = table
+            return self._details
+
     @staticmethod
     def _rays(origins: ArrayLike, directions: ArrayLike, tmin: ArrayLike, tmax: ArrayLike):
         """The rays as cbvhpy_rays over contiguous float32 arrays (kept alive in the returned list) and
@@ -226,15 +243,19 @@ class File:
         normal and material out (None)."""
         rays, keep_alive, count = self._rays(origins, directions, tmin, tmax)
         records = np.empty(count, HIT)
-        normal = np.empty((count, 3), np.float32) if details else None
-        material = np.empty(count, np.uint32) if details else None
         handle = self._handle()
+        table = self._details_table(threads) if details else None
+        normal = np.empty((count, 3), np.float32) if details else None
+        # Without a MATERIALS section every id is 0: np.zeros, whose pages stay the system's zero page
+        with_materials = details and self._info["has_materials"]
+        material = np.empty(count, np.uint32) if with_materials else np.zeros(count, np.uint32) if details else None
         scratch_size = lib.cbvh_stream_scratch_size(_STREAM_BATCH)
 
         def run(begin: int, end: int) -> None:
             scratch = ffi.new("char[]", scratch_size)
             code = lib.cbvhpy_raycast(handle, rays, begin, end, pointer("cbvh_hit *", records),
-                                      pointer("float *", normal), pointer("uint32_t *", material), scratch,
+                                      pointer("cbvhpy_details *", table), pointer("float *", normal),
+                                      pointer("uint32_t *", material if with_materials else None), scratch,
                                       scratch_size)
             raise_for(code, None, "%d rays" % (end - begin))
 

@@ -108,6 +108,46 @@ def test_farm_depfiles_are_the_commands(tmp_path):
     assert sum(r.ok for r in results) >= 6 and side_files >= 1
 
 
+def test_farm_batches_of_any_size_and_paths_a_manifest_cannot_hold(tmp_path):
+    """Any batch size gives the command's bytes; an asset whose path holds a tab (which a manifest line
+    cannot) is cooked alone, as the others; a batch the command refuses as a whole (a material map that is
+    not there) comes back as every asset of it failed, with the command's message."""
+    corpus()  # skips without the models
+    folder = os.path.join(MODELS, "PLY")
+    inputs = sorted(os.path.join(folder, p) for p in os.listdir(folder) if p.endswith(".ply"))[:6]
+    odd = tmp_path / "in" / "tab\there.ply"
+    odd.parent.mkdir()
+    odd.write_bytes(open(inputs[0], "rb").read())
+    inputs.append(str(odd))
+    expected = {}
+    for k, path in enumerate(inputs):
+        out = str(tmp_path / "cli" / ("%d.cbvh" % k))
+        os.makedirs(os.path.dirname(out), exist_ok=True)
+        status = subprocess.run([cbvh_command(), "cook", "--quiet", path, out], stdout=subprocess.DEVNULL,
+                                stderr=subprocess.DEVNULL).returncode
+        expected[k] = open(out, "rb").read() if status == 0 else None
+    assert sum(v is not None for v in expected.values()) >= 4 and expected[len(inputs) - 1] is not None
+    with distributed.Client(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as client:
+        for batch_size in (1, 3, None):
+            out = tmp_path / ("farm%s" % batch_size)
+            assets = [farm.Asset(p, str(out / ("%d.cbvh" % k))) for k, p in enumerate(inputs)]
+            results = farm.cook_assets(assets, client, batch_size=batch_size)
+            assert [r.input for r in results] == inputs
+            for k, result in enumerate(results):
+                assert result.ok == (expected[k] is not None), (result.input, result.error)
+                if result.ok:
+                    assert open(assets[k].output, "rb").read() == expected[k]
+                    assert open(assets[k].output + ".d").read().startswith(assets[k].output + ":")
+                    assert result.stats["file_size"] == len(expected[k])
+        assets = [farm.Asset(p, str(tmp_path / "unmapped" / ("%d.cbvh" % k))) for k, p in enumerate(inputs[:4])]
+        results = farm.cook_assets(assets, client, batch_size=4, retries=0,
+                                   material_map=str(tmp_path / "missing.map"))
+        assert all(not r.ok and "missing.map" in r.error for r in results), [r.error for r in results]
+        assert not any(os.path.exists(a.output) or os.path.exists(a.output + ".d") for a in assets)
+        with pytest.raises(ValueError, match="batch_size"):
+            farm.cook_assets(assets, client, batch_size=0)
+
+
 def test_manifest_and_folder_naming(tmp_path):
     (tmp_path / "a" / "b").mkdir(parents=True)
     for name in ("a/x.obj", "a/x.ply", "a/b/y.obj.gz", "a/b/.hidden"):

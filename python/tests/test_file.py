@@ -80,6 +80,48 @@ def test_threads_give_identical_answers(wuson):
     assert len(queries["overlap"](1).tri) > 3000  # ragged results that grow the buffer
 
 
+def test_large_batches_details_against_the_tool_and_the_triangles(tmp_path):
+    """A batch of many pieces of the stream (not a whole number of them), on a mesh with dropped degenerate
+    triangles: occlusion, and tri, t, u, v, bit for bit as `cbvh raycast --binary`; each hit's normal the unit
+    normal of its triangle as the file decodes it, its material the mesh's; misses all zeros. Without a
+    MATERIALS section every material is 0."""
+    vertices, triangles, materials = reference.triangle_soup(300, seed=11)
+    materials = np.arange(len(triangles), dtype=np.uint32) * 7 + 3
+    triangles = np.concatenate([triangles, [[0, 0, 1], [2, 2, 2]]])  # no area: dropped by the cook
+    materials = np.concatenate([materials, [1, 2]]).astype(np.uint32)
+    count = 150_003
+    rng = np.random.default_rng(12)
+    origins = rng.uniform(-2, 2, (count, 3)).astype(np.float32)
+    directions = (rng.uniform(-1, 1, (count, 3)) - origins).astype(np.float32)
+    records = np.zeros(count, cbvh.RAY)
+    records["org"], records["dir"], records["tmax"] = origins, directions, np.inf
+    for keep_materials in (True, False):
+        path = tmp_path / "soup.cbvh"
+        path.write_bytes(cbvh.cook(vertices, triangles, materials=materials, keep_materials=keep_materials))
+        f = cbvh.open(str(path))
+        assert f.info["original_triangle_count"] == len(triangles) == f.info["triangle_count"] + 2
+        run = subprocess.run([cbvh_command(), "raycast", "--binary", str(path)], input=records.tobytes(),
+                             capture_output=True, check=True)
+        tool = np.frombuffer(run.stdout, cbvh.HIT)
+        run = subprocess.run([cbvh_command(), "raycast", "--binary", "--any", str(path)], input=records.tobytes(),
+                             capture_output=True, check=True)
+        tool_occluded = np.frombuffer(run.stdout, np.uint8) == 1
+        for threads in (3, 1):  # the first raycast makes the table of normals (here in 3 threads)
+            assert np.array_equal(f.occluded(origins, directions, threads=threads), tool_occluded)
+            hits = f.raycast(origins, directions, threads=threads)
+            hit = hits.hit
+            assert 0.2 * count < np.count_nonzero(hit) < 0.9 * count
+            assert np.array_equal(hits.tri, tool["tri"])
+            for field in ("t", "u", "v"):
+                assert np.array_equal(getattr(hits, field)[hit], tool[field][hit])
+            normals = reference.face_normals(f.triangles[hits.tri[hit]].astype(np.float64))
+            assert np.allclose(hits.normal[hit], normals, rtol=0, atol=1e-6)
+            expected = materials[hits.tri[hit]] if keep_materials else 0
+            assert np.array_equal(hits.material[hit], np.broadcast_to(expected, hits.material[hit].shape))
+            assert not hits.normal[~hit].any() and not hits.material[~hit].any()
+            assert np.all(hits.t[~hit] == np.inf) and not hits.u[~hit].any() and not hits.v[~hit].any()
+
+
 def small_file():
     vertices, triangles, materials = reference.triangle_soup(40, seed=9)
     return cbvh.cook(vertices, triangles, materials=materials, material_names={1: "stone"})
@@ -146,6 +188,42 @@ def test_errors_carry_code_and_message(tmp_path):
     f.close()
     with pytest.raises(cbvh.CbvhError, match="closed"):
         f.raycast([[0, 0, 0]], [[1, 0, 0]])
+
+
+def test_cook_statistics_are_the_commands(tmp_path):
+    """cook(stats=True) on a mesh written as OBJ and cooked by `cbvh cook --json` (cook_file) too: the same
+    bytes, and the same statistics as the command's report, key for key (the phases' seconds aside); the
+    mesh has one triangle of no area and one coordinate below CBVH_COORDINATE_MIN, which both count."""
+    rng = np.random.default_rng(5)
+    count = 300
+    centers = np.round(rng.uniform(-4, 4, (count, 1, 3)) * 64) / 64  # exact in float32 and in the OBJ text
+    corners = centers + np.round(rng.uniform(-0.5, 0.5, (count, 3, 3)) * 64) / 64
+    corners[7] = [[0, 0, 0], [1, 1, 1], [2, 2, 2]]
+    corners[8, 0, 2] = 1e-13
+    vertices = corners.reshape(-1, 3).astype(np.float32)
+    triangles = np.arange(3 * count).reshape(count, 3)
+    obj = tmp_path / "soup.obj"
+    obj.write_text("".join("v %r %r %r\n" % tuple(float(x) for x in p) for p in vertices) +
+                   "".join("f %d %d %d\n" % tuple(t) for t in triangles + 1))
+    for options in ({}, {"quantize_vertices": True, "compress_level": 6, "layout": "binary"}):
+        report = cbvh.cook_file(obj, tmp_path / "soup.cbvh", **options)
+        # assimp gives every triangle its default material (id 0, named), which the command stores
+        names = {m["id"]: m["name"] for m in report["material_names"]}
+        data, stats = cbvh.cook(vertices, triangles, materials=np.zeros(count, np.uint32), material_names=names,
+                                stats=True, **options)
+        assert data == (tmp_path / "soup.cbvh").read_bytes()
+        assert data == cbvh.cook(vertices, triangles, materials=np.zeros(count, np.uint32), material_names=names,
+                                 **options)
+        assert stats["triangles"]["dropped_degenerate"] == 1 and stats["vertices"]["flushed_coordinates"] == 1
+        assert stats["file_size"] == len(data)
+        for key, value in stats.items():
+            if key == "seconds":
+                assert set(value) == {"prepare", "build", "layout", "write", "total"}
+                assert all(s >= 0 for s in value.values())
+            elif isinstance(value, dict):
+                assert value == {k: report[key][k] for k in value}, key
+            else:
+                assert value == report[key], key
 
 
 def test_cook_file_matches_cook_and_reports_failures(tmp_path):
