@@ -4,6 +4,7 @@
 # Environment (set by `make check` through AM_TESTS_ENVIRONMENT):
 #   CBVH_TOOL     the built tools/cbvh
 #   CBVH_TINYBVH  yes when configure was given tinybvh (--with-tinybvh=DIR): its rows are then expected
+#   CBVH_JOLT     yes when configure was given Jolt (--with-jolt=PREFIX): its rows are then expected
 # Writes only into a mktemp folder, removed at exit. JSON and SVG checks need python3 (skipped without it).
 
 name=test_bench.sh
@@ -64,6 +65,24 @@ else
     skip "bench: tinybvh rows and agreement: the build has no tinybvh (configure --with-tinybvh=DIR, DIR holding tiny_bvh.h)"
 fi
 
+# Jolt likewise: a ray method and a shape engine when configure was given it and the CPU runs its build.
+jolt_rows=$(grep -c '^| [a-z]* | \(closest\|any\) | jolt | meshshape | ' "$tmp/bench.md")
+jolt_shape_rows=$(grep -c '^| \(sphere\|capsule\|box\) | \(sweep\|overlap\) | jolt | [12] | ' "$tmp/bench.md")
+if [ "${CBVH_JOLT:-no}" = yes ] && grep -q '^Jolt was built for AVX2 and FMA, which this CPU lacks' "$tmp/bench.md"; then
+    check "bench: without AVX2 and FMA, no Jolt rows" test "$jolt_rows" -eq 0 -a "$jolt_shape_rows" -eq 0
+    skip "bench: Jolt rows: this CPU lacks AVX2 or FMA"
+elif [ "${CBVH_JOLT:-no}" = yes ]; then
+    # 4 ray sets x 2 queries and 6 shape sets, each at 1 and 2 threads
+    check "bench: Jolt rows on every ray set and shape set" test "$jolt_rows" -eq 16 -a "$jolt_shape_rows" -eq 12
+    check "... says its tolerances are absolute" grep -q "^Jolt's tolerances are absolute" "$tmp/bench.md"
+    check "... and no note that Jolt is missing" test "$(grep -c '^Jolt Physics was not given\|^Jolt was built' "$tmp/bench.md")" -eq 0
+else
+    check "bench: says once that Jolt was not given at configure time" \
+        test "$(grep -c '^Jolt Physics was not given at configure time (--with-jolt=PREFIX): no Jolt figures' "$tmp/bench.md")" -eq 1
+    check "... and runs on without Jolt rows" test "$jolt_rows" -eq 0 -a "$jolt_shape_rows" -eq 0
+    skip "bench: Jolt rows and agreement: the build has no Jolt (configure --with-jolt=PREFIX, README.md)"
+fi
+
 if [ "$has_python" = 1 ] && [ -f "$tmp/bench.json" ]; then
     check "bench --json is valid JSON" python3 -m json.tool "$tmp/bench.json" /dev/null
     # Every traversal and every peer agrees with cbvh sorted on a closed sphere, ray by ray.
@@ -107,8 +126,8 @@ for r in shapes:
     # the generated shapes touch the closed sphere now and then, and not always
     found = r["hits_per_query"] if r["query"] == "sweep" else r["triangles_per_query"]
     assert 0.05 < found < (1 if r["query"] == "sweep" else 50), r
-# Bullet, when configure found it, answers every shape set; mostly as cbvh does (its casts stop short of
-# contact and its box tests differ at touching triangles: counted, not required to be zero)
+# Bullet and Jolt, when configure found them, answer every shape set; mostly as cbvh does (Bullet's casts stop
+# short of contact and its box tests differ at touching triangles: counted, not required to be zero)
 peers = {r["engine"] for r in shapes} - {"cbvh"}
 agree = d["shape_agreement"]
 assert {r["engine"] for r in agree} == peers and len(agree) == 6 * len(peers), agree
@@ -125,6 +144,11 @@ for r in agree:
     sides = sum(r["reference_sides_" + k] for k in ("cbvh", "this", "both", "neither"))
     assert sides == r["disagreements_checked"] <= min(r["disagree"], 200), r
     assert r["disagreements_checked"] > 0 or r["disagree"] == 0, r
+# Jolt keeps its own compressed copy of the triangles (no shared mesh arrays) and drops none of the sphere's
+jolt = [b for b in d["builds"] if b["engine"] == "jolt"]
+if jolt:
+    assert jolt[0]["bytes"] == jolt[0]["structure_bytes"] > 0 and "dropped_triangles" not in jolt[0], jolt
+    assert "jolt" in peers, peers
 print("peers:", sorted(engines - {"cbvh"}), "shape peers:", sorted(peers))
 EOF
 else
@@ -134,7 +158,7 @@ fi
 run 0 "bench --threads 2 --no-peers --cpu-time" "$CBVH" bench --gen terrain:3000 --rays 3000 --shapes 500 --reps 2 --threads 2 \
     --no-peers --cpu-time &&
     check "... says it used CPU time" grep -q "CPU time" "$tmp/out" &&
-    check "... measures cbvh only" test "$(grep -c '| embree\|| bullet\|| tinybvh' "$tmp/out")" -eq 0 &&
+    check "... measures cbvh only" test "$(grep -c '| embree\|| bullet\|| tinybvh\|| jolt' "$tmp/out")" -eq 0 &&
     check "... all traversals agree" sh -c "grep '^| [a-z]* | cbvh | ' '$tmp/out' | awk -F'|' '\$8 != 0 || \$9 != 0 { bad = 1 } END { exit bad }'"
 
 if run 0 "cook a file to bench" "$CBVH" cook gen:sphere:1000 "$tmp/sphere.cbvh"; then

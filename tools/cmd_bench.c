@@ -1,5 +1,5 @@
-/* cmd_bench.c: `cbvh bench`: cbvh's cook, open and query speed beside Embree, Bullet and tinybvh on the same
- * rays. */
+/* cmd_bench.c: `cbvh bench`: cbvh's cook, open and query speed beside Embree, Bullet, tinybvh and Jolt on the
+ * same rays and shapes. */
 #include "config.h"
 
 #include <errno.h>
@@ -42,17 +42,19 @@ static const char usage[] =
     "and their ratios hold. The peers\n"
     "found at configure time (Embree 3 single rays and 16-ray packets, default and robust;\n"
     "Bullet 3 quantized BVH; tinybvh's BVH8_CPU and BVH4_CPU single rays, built with BuildHQ,\n"
-    "with configure --with-tinybvh=DIR, on CPUs with AVX2 and FMA) run on the same triangles\n"
+    "with configure --with-tinybvh=DIR, on CPUs with AVX2 and FMA; Jolt Physics's MeshShape, with\n"
+    "configure --with-jolt=PREFIX) run on the same triangles\n"
     "and rays: build time, memory per triangle, MRays/s, the ratio cbvh/peer, and ray-by-ray\n"
     "agreement with cbvh's answers. A peer the build or the CPU lacks gets one line saying so.\n"
     "Then shape queries as games ask them near a surface (shapes about 1% of the diagonal\n"
     "across, capsules along random directions): sphere, capsule and box sweeps moving 1.5% of\n"
     "the diagonal, and sphere, capsule and box overlaps, beside Bullet (convex casts and its\n"
-    "per-triangle narrow phase, margins 0 on boxes and triangles): microseconds per query,\n"
-    "queries per second, the ratio cbvh/Bullet, and agreement query by query (the same first\n"
+    "per-triangle narrow phase, margins 0 on boxes and triangles) and Jolt (CastShape and\n"
+    "CollideShape, back faces colliding, boxes of convex radius 0): microseconds per query,\n"
+    "queries per second, the ratio cbvh/peer, and agreement query by query (the same first\n"
     "triangle or t within 1e-4 of the diagonal for sweeps, the same triangle set for\n"
     "overlaps). Up to 200 disagreements per set (fewer once checking them took the budget)\n"
-    "are decided against a double-precision brute force, which sides with cbvh, with Bullet,\n"
+    "are decided against a double-precision brute force, which sides with cbvh, with the peer,\n"
     "with both or with neither (within 1e-5 of the diagonal).\n"
     "The cooked file is read as a game loading it from disk reads it: its pages are dropped\n"
     "from the system's cache before the first open (where the system has posix_fadvise), so\n"
@@ -173,9 +175,21 @@ static void bullet_kernel(const void *engine, const cbvh_ray *rays, size_t count
 }
 #endif
 
+#ifdef HAVE_JOLT
+static void jolt_kernel(const void *engine, const cbvh_ray *rays, size_t count, cbvh_hit *hits,
+                        uint8_t *occluded, cbvh_query_stats *stats)
+{
+    if (hits)
+        jolt_peer_raycast(engine, rays, count, hits);
+    else
+        jolt_peer_occluded(engine, rays, count, occluded);
+}
+#endif
+
 /* One way to answer the queries: a cbvh traversal or a peer configuration. */
 typedef struct method {
-    const char *engine;  /* "cbvh", "embree", "embree-robust", "bullet", "tinybvh-bvh8", "tinybvh-bvh4" */
+    const char *engine;  /* "cbvh", "embree", "embree-robust", "bullet", "tinybvh-bvh8", "tinybvh-bvh4",
+                          * "jolt" */
     const char *variant; /* "sorted", "stream", "single", "packet16", "quantized" ... */
     bench_kernel kernel;
     const void *state;
@@ -192,7 +206,7 @@ typedef void (*shape_kernel)(const void *engine, shape_kind kind, int sweep, con
 typedef void (*shape_marker)(const void *engine, shape_kind kind, const shape_query *q, bench_judge *j);
 
 typedef struct shape_method {
-    const char *engine; /* "cbvh", "bullet" */
+    const char *engine; /* "cbvh", "bullet", "jolt" */
     shape_kernel kernel;
     shape_marker mark;
     const void *state;
@@ -274,6 +288,29 @@ static void cbvh_shape_kernel(const void *engine, shape_kind kind, int sweep, co
         cbvh_shape_query(engine, kind, sweep, &queries[i], &out[i]);
 }
 
+#if defined(HAVE_BULLET) || defined(HAVE_JOLT)
+static void mark_peer(void *judge, uint32_t tri)
+{
+    bench_judge_mark(judge, 1, tri);
+}
+#endif
+
+#ifdef HAVE_JOLT
+static void jolt_shape_kernel(const void *engine, shape_kind kind, int sweep, const shape_query *queries,
+                              size_t count, shape_answer *out)
+{
+    if (sweep)
+        jolt_peer_sweep(engine, kind, queries, count, out);
+    else
+        jolt_peer_overlap(engine, kind, queries, count, out);
+}
+
+static void jolt_shape_mark(const void *engine, shape_kind kind, const shape_query *q, bench_judge *j)
+{
+    jolt_peer_overlap_each(engine, kind, q, mark_peer, j);
+}
+#endif
+
 #ifdef HAVE_BULLET
 static void bullet_shape_kernel(const void *engine, shape_kind kind, int sweep, const shape_query *queries,
                                 size_t count, shape_answer *out)
@@ -282,11 +319,6 @@ static void bullet_shape_kernel(const void *engine, shape_kind kind, int sweep, 
         bullet_peer_sweep(engine, kind, queries, count, out);
     else
         bullet_peer_overlap(engine, kind, queries, count, out);
-}
-
-static void mark_peer(void *judge, uint32_t tri)
-{
-    bench_judge_mark(judge, 1, tri);
 }
 
 static void bullet_shape_mark(const void *engine, shape_kind kind, const shape_query *q, bench_judge *j)
@@ -310,7 +342,8 @@ typedef struct build_row {
     double open_seconds; /* cbvh only, else negative */
     uint64_t bytes;      /* file size, or acceleration structure + shared mesh arrays */
     uint64_t structure_bytes;
-    uint64_t traversed_bytes; /* tinybvh: the blocks its queries read; else 0 */
+    uint64_t traversed_bytes;   /* tinybvh: the blocks its queries read; else 0 */
+    uint64_t dropped_triangles; /* Jolt: the triangles it left out of its shape; else 0 */
 } build_row;
 
 typedef struct result_row {
@@ -361,8 +394,8 @@ typedef struct shape_agree_row {
 } shape_agree_row;
 
 #define MAX_METHODS 16
-#define MAX_BUILDS 7
-#define MAX_SHAPE_METHODS 2
+#define MAX_BUILDS 8
+#define MAX_SHAPE_METHODS 3
 
 typedef struct bench_state {
     const char *command;
@@ -411,6 +444,10 @@ typedef struct bench_state {
 #ifdef HAVE_TINYBVH
     tinybvh_peer *tinybvh[2];
     int tinybvh_cpu_lacks; /* the CPU has no AVX2 or FMA: tinybvh not run */
+#endif
+#ifdef HAVE_JOLT
+    jolt_peer *jolt;
+    int jolt_cpu_lacks; /* Jolt was built for AVX2 and FMA, which the CPU lacks: Jolt not run */
 #endif
 } bench_state;
 
@@ -524,6 +561,7 @@ static void add_peer_build(bench_state *s, const char *engine, const peer_build_
     b->bytes = info->memory_bytes + info->mesh_bytes;
     b->structure_bytes = info->memory_bytes;
     b->traversed_bytes = info->traversed_bytes;
+    b->dropped_triangles = info->dropped_triangles;
 }
 
 /* Builds every peer configure found; a peer that fails to build is reported and skipped. */
@@ -581,6 +619,24 @@ static void build_peers(bench_state *s)
         add_shape_method(s, "bullet", bullet_shape_kernel, bullet_shape_mark, s->bullet);
     }
 #endif
+#ifdef HAVE_JOLT
+#ifdef JOLT_NEEDS_AVX2_FMA
+    s->jolt_cpu_lacks = !cbvh_cpu_has_avx2_fma();
+#endif
+    if (!s->jolt_cpu_lacks) {
+        progress_update(&s->prog, "building jolt", -1.0);
+        memset(&info, 0, sizeof info);
+        s->jolt = jolt_peer_create(&pm, &info, err, sizeof err);
+        progress_done(&s->prog);
+        if (!s->jolt) {
+            cli_error(s->command, NULL, "%s", err);
+        } else {
+            add_peer_build(s, "jolt", &info);
+            add_method(s, "jolt", "meshshape", jolt_kernel, s->jolt, 0, 1);
+            add_shape_method(s, "jolt", jolt_shape_kernel, jolt_shape_mark, s->jolt);
+        }
+    }
+#endif
 }
 
 static void destroy_peers(bench_state *s)
@@ -595,6 +651,9 @@ static void destroy_peers(bench_state *s)
 #ifdef HAVE_TINYBVH
     tinybvh_peer_destroy(s->tinybvh[0]);
     tinybvh_peer_destroy(s->tinybvh[1]);
+#endif
+#ifdef HAVE_JOLT
+    jolt_peer_destroy(s->jolt);
 #endif
     (void)s;
 }
@@ -993,6 +1052,14 @@ static void print_shape_tables(const bench_state *s)
     }
     if (s->shape_agree_count == 0)
         return;
+#ifdef HAVE_JOLT
+    if (s->jolt)
+        printf(
+            "\nJolt's tolerances are absolute, in the mesh's units whatever its size (its collision "
+            "tolerance "
+            "is 1e-4: its casts stop and its contacts count within about that distance of a triangle), and "
+            "it answers without the triangles it left out (see above).\n");
+#endif
     printf(
         "\nShape agreement with cbvh, query by query (sweeps: the same first triangle, or another one with t "
         "times the motion's length within %.0e of the scene diagonal; overlaps: the same set of triangles). "
@@ -1074,6 +1141,19 @@ static void print_tables(const bench_state *s)
                 "%s keeps its build data (the trees it converted from): its queries read %.2f bytes/tri of "
                 "its blocks, which hold their own copies of the triangles.\n",
                 s->builds[i].engine, (double)s->builds[i].traversed_bytes / tris);
+#ifdef HAVE_JOLT
+    if (s->jolt)
+        printf(
+            "jolt keeps its own compressed copy of the triangles (no shared arrays), with 4 bytes per "
+            "triangle "
+            "of user data: cbvh's triangle index, which its answers need (Jolt reorders the triangles).\n");
+#endif
+    for (int i = 0; i < s->build_count; i++)
+        if (s->builds[i].dropped_triangles)
+            printf("%s left out %llu of the %zu triangles (area below 5e-7 in the mesh's units, its absolute "
+                   "degenerate test, or degenerate once quantized): it answers without them.\n",
+                   s->builds[i].engine, (unsigned long long)s->builds[i].dropped_triangles,
+                   s->mesh.triangle_count);
     if (!s->no_peers) {
 #if !defined(HAVE_EMBREE)
         printf("Embree 3 was not found at configure time: no Embree figures.\n");
@@ -1086,6 +1166,12 @@ static void print_tables(const bench_state *s)
 #else
         if (s->tinybvh_cpu_lacks)
             printf("tinybvh was built for AVX2 and FMA, which this CPU lacks: no tinybvh figures.\n");
+#endif
+#if !defined(HAVE_JOLT)
+        printf("Jolt Physics was not given at configure time (--with-jolt=PREFIX): no Jolt figures.\n");
+#else
+        if (s->jolt_cpu_lacks)
+            printf("Jolt was built for AVX2 and FMA, which this CPU lacks: no Jolt figures.\n");
 #endif
     }
     printf("\n");
@@ -1182,6 +1268,8 @@ static int write_json(const bench_state *s)
         json_uint(&w, "structure_bytes", b->structure_bytes);
         if (b->traversed_bytes)
             json_uint(&w, "traversed_bytes", b->traversed_bytes);
+        if (b->dropped_triangles)
+            json_uint(&w, "dropped_triangles", b->dropped_triangles);
         json_double(&w, "bytes_per_triangle", (double)b->bytes / tris);
         json_double(&w, "cbvh_over_this_bytes", (double)s->builds[0].bytes / (double)b->bytes);
         if (i > 0 && b->seconds > 0.0)
