@@ -47,13 +47,17 @@ static ref_shape reference_shape(shape_kind kind, const shape_query *q, double s
 {
     ref_shape s;
     memset(&s, 0, sizeof s);
+    const int box = kind == SHAPE_BOX || kind == SHAPE_ORIENTED_BOX;
     s.kind = kind == SHAPE_SPHERE ? REF_SPHERE : kind == SHAPE_CAPSULE ? REF_CAPSULE : REF_BOX;
     for (int a = 0; a < 3; a++) {
         s.p0[a] = q->p0[a];
         s.p1[a] = q->p1[a];
-        s.half[a] = kind == SHAPE_BOX ? fmax(0.0, q->size[a] - shrink) : 0.0;
+        s.half[a] = box ? fmax(0.0, q->size[a] - shrink) : 0.0;
     }
-    s.radius = kind == SHAPE_BOX ? 0.0 : fmax(0.0, q->size[0] - shrink);
+    s.radius = box ? 0.0 : fmax(0.0, q->size[0] - shrink);
+    s.rotated = kind == SHAPE_ORIENTED_BOX;
+    if (s.rotated)
+        shape_query_axes(q, s.axes);
     return s;
 }
 

@@ -47,8 +47,9 @@ static const char usage[] =
     "and rays: build time, memory per triangle, MRays/s, the ratio cbvh/peer, and ray-by-ray\n"
     "agreement with cbvh's answers. A peer the build or the CPU lacks gets one line saying so.\n"
     "Then shape queries as games ask them near a surface (shapes about 1% of the diagonal\n"
-    "across, capsules along random directions): sphere, capsule and box sweeps moving 1.5% of\n"
-    "the diagonal, and sphere, capsule and box overlaps, beside Bullet (convex casts and its\n"
+    "across, capsules along random directions): sphere, capsule, box and oriented box (turned\n"
+    "by a uniform rotation) sweeps moving 1.5% of the diagonal, and sphere, capsule and box\n"
+    "overlaps, beside Bullet (convex casts and its\n"
     "per-triangle narrow phase, margins 0 on boxes and triangles) and Jolt (CastShape and\n"
     "CollideShape, back faces colliding, boxes of convex radius 0): microseconds per query,\n"
     "queries per second, the ratio cbvh/peer, and agreement query by query (the same first\n"
@@ -256,7 +257,19 @@ static void cbvh_shape_query(const cbvh_file *f, shape_kind kind, int sweep, con
     memset(a, 0, sizeof *a);
     a->tri = CBVH_NO_HIT;
     a->t = INFINITY;
-    if (sweep) {
+    if (sweep && kind == SHAPE_ORIENTED_BOX) {
+        cbvh_shape box;
+        memset(&box, 0, sizeof box);
+        box.kind = CBVH_SHAPE_BOX;
+        memcpy(box.center, q->p0, sizeof box.center);
+        memcpy(box.half_extent, q->size, sizeof box.half_extent);
+        memcpy(box.rotation, q->rotation, sizeof box.rotation);
+        cbvh_sweep_record record;
+        if (cbvh_sweep_with(f, &box, q->delta, NULL, &record) == CBVH_OK && record.tri != CBVH_NO_HIT) {
+            a->tri = record.tri;
+            a->t = record.t;
+        }
+    } else if (sweep) {
         cbvh_sweep_hit h;
         int hit = kind == SHAPE_SPHERE ? cbvh_sweep_sphere(f, q->p0, q->size[0], q->delta, &h)
                   : kind == SHAPE_BOX  ? cbvh_sweep_box(f, q->p0, q->size, q->delta, &h)
@@ -1407,9 +1420,9 @@ static int run(bench_state *s)
     int shape_rows = s->shapes ? s->thread_count_n * s->shape_method_count : 0;
     s->results = calloc((size_t)RAYS_KIND_COUNT * 2 * ray_rows, sizeof *s->results);
     s->agreements = calloc((size_t)RAYS_KIND_COUNT * s->method_count, sizeof *s->agreements);
-    s->shape_results = calloc((size_t)SHAPE_KIND_COUNT * 2 * shape_rows + 1, sizeof *s->shape_results);
-    s->shape_agreements =
-        calloc((size_t)SHAPE_KIND_COUNT * 2 * s->shape_method_count, sizeof *s->shape_agreements);
+    const int shape_sets = SHAPE_SWEEP_KIND_COUNT + SHAPE_OVERLAP_KIND_COUNT;
+    s->shape_results = calloc((size_t)shape_sets * shape_rows + 1, sizeof *s->shape_results);
+    s->shape_agreements = calloc((size_t)shape_sets * s->shape_method_count, sizeof *s->shape_agreements);
     shape_query *queries = malloc(s->shapes * sizeof *queries + 1);
     shape_answer *ref = malloc(s->shapes * sizeof *ref + 1), *other = malloc(s->shapes * sizeof *other + 1);
     if (!b.rays || !b.ref_hits || !b.hits || !b.ref_occluded || !b.occluded || !s->results ||
@@ -1417,15 +1430,15 @@ static int run(bench_state *s)
         cli_error(s->command, NULL, "out of memory for %zu rays and %zu shapes", s->rays, s->shapes);
         status = CLI_EXIT_USAGE;
     }
-    int step = 0, steps = RAYS_KIND_COUNT * 2 * ray_rows + SHAPE_KIND_COUNT * 2 * shape_rows;
+    int step = 0, steps = RAYS_KIND_COUNT * 2 * ray_rows + shape_sets * shape_rows;
     for (int set = 0; set < RAYS_KIND_COUNT && !status; set++) {
         rays_generate((ray_kind)set, &rm, s->seed, b.rays, s->rays);
         status = measure_set(s, (ray_kind)set, &b, &step, steps);
     }
-    /* sweeps first, the kinds in order: sphere, capsule, box */
-    for (int set = 0; set < 2 * SHAPE_KIND_COUNT && s->shapes && !status; set++) {
-        shape_kind kind = (shape_kind)(set % SHAPE_KIND_COUNT);
-        int sweep = set < SHAPE_KIND_COUNT;
+    /* sweeps first, the kinds in order: sphere, capsule, box, oriented box; then the overlaps */
+    for (int set = 0; set < shape_sets && s->shapes && !status; set++) {
+        int sweep = set < SHAPE_SWEEP_KIND_COUNT;
+        shape_kind kind = (shape_kind)(sweep ? set : set - SHAPE_SWEEP_KIND_COUNT);
         shapes_generate(kind, sweep, &rm, s->seed, queries, s->shapes);
         status = measure_shapes(s, kind, sweep, queries, ref, other, &step, steps);
     }

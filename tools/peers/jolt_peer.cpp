@@ -120,7 +120,10 @@ struct query_shape {
         box.SetEmbedded();
         const JPH::Vec3 p0(q.p0[0], q.p0[1], q.p0[2]), p1(q.p1[0], q.p1[1], q.p1[2]);
         JPH::Quat rotation = JPH::Quat::sIdentity();
-        shape = kind == SHAPE_BOX ? static_cast<const JPH::Shape *>(&box) : &sphere;
+        shape =
+            kind == SHAPE_BOX || kind == SHAPE_ORIENTED_BOX ? static_cast<const JPH::Shape *>(&box) : &sphere;
+        if (kind == SHAPE_ORIENTED_BOX)
+            rotation = JPH::Quat(q.rotation[0], q.rotation[1], q.rotation[2], q.rotation[3]).Normalized();
         if (kind == SHAPE_CAPSULE && half_length(q) > 0.0f) {
             rotation = JPH::Quat::sFromTo(JPH::Vec3::sAxisY(), (p1 - p0).Normalized());
             shape = &capsule;
