@@ -357,6 +357,7 @@ typedef struct build_row {
     uint64_t structure_bytes;
     uint64_t traversed_bytes;   /* tinybvh: the blocks its queries read; else 0 */
     uint64_t dropped_triangles; /* Jolt: the triangles it left out of its shape; else 0 */
+    uint64_t id_bytes;          /* Jolt: the part of bytes holding each triangle's index; else 0 */
 } build_row;
 
 typedef struct result_row {
@@ -575,6 +576,7 @@ static void add_peer_build(bench_state *s, const char *engine, const peer_build_
     b->structure_bytes = info->memory_bytes;
     b->traversed_bytes = info->traversed_bytes;
     b->dropped_triangles = info->dropped_triangles;
+    b->id_bytes = info->id_bytes;
 }
 
 /* Builds every peer configure found; a peer that fails to build is reported and skipped. */
@@ -1154,13 +1156,15 @@ static void print_tables(const bench_state *s)
                 "%s keeps its build data (the trees it converted from): its queries read %.2f bytes/tri of "
                 "its blocks, which hold their own copies of the triangles.\n",
                 s->builds[i].engine, (double)s->builds[i].traversed_bytes / tris);
-#ifdef HAVE_JOLT
-    if (s->jolt)
-        printf(
-            "jolt keeps its own compressed copy of the triangles (no shared arrays), with 4 bytes per "
-            "triangle "
-            "of user data: cbvh's triangle index, which its answers need (Jolt reorders the triangles).\n");
-#endif
+    for (int i = 0; i < s->build_count; i++)
+        if (s->builds[i].id_bytes)
+            printf("%s keeps its own compressed copy of the triangles (no shared arrays); %.2f bytes/tri of "
+                   "it are "
+                   "each triangle's index, its user data, which its answers need to name the mesh's "
+                   "triangles (it "
+                   "reorders them): %.2f bytes/tri without.\n",
+                   s->builds[i].engine, (double)s->builds[i].id_bytes / tris,
+                   (double)(s->builds[i].bytes - s->builds[i].id_bytes) / tris);
     for (int i = 0; i < s->build_count; i++)
         if (s->builds[i].dropped_triangles)
             printf("%s left out %llu of the %zu triangles (area below 5e-7 in the mesh's units, its absolute "
@@ -1283,6 +1287,8 @@ static int write_json(const bench_state *s)
             json_uint(&w, "traversed_bytes", b->traversed_bytes);
         if (b->dropped_triangles)
             json_uint(&w, "dropped_triangles", b->dropped_triangles);
+        if (b->id_bytes)
+            json_uint(&w, "id_bytes", b->id_bytes);
         json_double(&w, "bytes_per_triangle", (double)b->bytes / tris);
         json_double(&w, "cbvh_over_this_bytes", (double)s->builds[0].bytes / (double)b->bytes);
         if (i > 0 && b->seconds > 0.0)

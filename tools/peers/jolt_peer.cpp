@@ -197,10 +197,16 @@ extern "C" jolt_peer *jolt_peer_create(const peer_mesh *mesh, peer_build_info *i
             return nullptr;
         }
         p->shape = result.Get();
+        info->seconds = now_seconds(CLOCK_MONOTONIC) - start;
+        info->cpu_seconds = now_seconds(CLOCK_PROCESS_CPUTIME_ID) - cpu_start;
+        /* the same shape without the indices, for its size alone (Create caches its result: new settings) */
+        JPH::MeshShapeSettings plain(settings.mTriangleVertices, settings.mIndexedTriangles);
+        JPH::ShapeSettings::ShapeResult plain_result = plain.Create();
+        const size_t plain_bytes = plain_result.HasError() ? 0 : plain_result.Get()->GetStats().mSizeBytes;
+        const size_t bytes = p->shape->GetStats().mSizeBytes;
+        info->id_bytes = plain_bytes > 0 && plain_bytes < bytes ? bytes - plain_bytes : 0;
     }
     p->mesh = static_cast<const JPH::MeshShape *>(p->shape.GetPtr());
-    info->seconds = now_seconds(CLOCK_MONOTONIC) - start;
-    info->cpu_seconds = now_seconds(CLOCK_PROCESS_CPUTIME_ID) - cpu_start;
     const JPH::Shape::Stats stats = p->shape->GetStats();
     info->memory_bytes = stats.mSizeBytes;
     info->mesh_bytes = 0;

@@ -34,6 +34,7 @@ typedef struct peer_build_info {
     uint64_t mesh_bytes;
     uint64_t traversed_bytes; /* tinybvh: the blocks its queries read, within memory_bytes; other peers: 0 */
     uint64_t dropped_triangles; /* Jolt: the mesh's triangles it left out of its shape; other peers: 0 */
+    uint64_t id_bytes;          /* Jolt: the part of memory_bytes holding each triangle's index; others: 0 */
 } peer_build_info;
 
 /* Include config.h before this header: HAVE_EMBREE, HAVE_BULLET, HAVE_TINYBVH and HAVE_JOLT come from
@@ -124,7 +125,8 @@ typedef struct jolt_peer jolt_peer;
  * answers name triangles by it). Jolt leaves out the triangles of area below 5e-7 in the mesh's units (its
  * degenerate test, absolute) and those degenerate once quantized: info->dropped_triangles counts them. It
  * keeps its own compressed copy of the triangles: info->memory_bytes is the shape's size (GetStats),
- * mesh_bytes 0. Sets up Jolt's allocator, factory and types with the first peer and removes them with the
+ * mesh_bytes 0; info->id_bytes how much smaller the same shape is without the indices (built again,
+ * untimed). Sets up Jolt's allocator, factory and types with the first peer and removes them with the
  * last one destroyed (create and destroy on one thread). Returns NULL and writes a message into err on
  * failure, among them a library whose build options differ from the definitions configure read
  * (JPH_VERSION_ID). */
