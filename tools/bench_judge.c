@@ -83,6 +83,18 @@ static int overlap_class(const ref_shape *s, const double tri[9], double tol)
     return ref_box_class(tri, lo, hi, tol);
 }
 
+/* overlap_class, 0 without the test for a triangle outside [lo, hi] (the shape's bounds grown by more than
+ * tol). */
+static int bounded_class(const ref_shape *s, const double tri[9], const double lo[3], const double hi[3],
+                         double tol)
+{
+    for (int a = 0; a < 3; a++)
+        if (fmin(tri[a], fmin(tri[3 + a], tri[6 + a])) > hi[a] ||
+            fmax(tri[a], fmax(tri[3 + a], tri[6 + a])) < lo[a])
+            return 0;
+    return overlap_class(s, tri, tol);
+}
+
 bench_side bench_judge_overlap(bench_judge *j, shape_kind kind, const shape_query *q)
 {
     const double tol = j->overlap_tolerance;
@@ -91,12 +103,7 @@ bench_side bench_judge_overlap(bench_judge *j, shape_kind kind, const shape_quer
     shape_bounds(&s, 2.0 * tol, lo, hi);
     int right[2] = {1, 1};
     for (size_t k = 0; k < j->tris.count; k++) {
-        const double *tri = j->tris.v + 9 * k;
-        int apart = 0;
-        for (int a = 0; a < 3; a++)
-            apart |= fmin(tri[a], fmin(tri[3 + a], tri[6 + a])) > hi[a] ||
-                     fmax(tri[a], fmax(tri[3 + a], tri[6 + a])) < lo[a];
-        const int cls = apart ? 0 : overlap_class(&s, tri, tol);
+        const int cls = bounded_class(&s, j->tris.v + 9 * k, lo, hi, tol);
         const uint32_t id = j->tris.id[k];
         for (int e = 0; e < 2; e++) {
             const int got = j->reported[e][id];
@@ -104,6 +111,28 @@ bench_side bench_judge_overlap(bench_judge *j, shape_kind kind, const shape_quer
             j->reported[e][id] = 0;
         }
     }
+    return side_of(right[0], right[1]);
+}
+
+bench_side bench_judge_first_hit(const bench_judge *j, shape_kind kind, const shape_query *q,
+                                 const shape_answer *cbvh, const shape_answer *peer)
+{
+    const double tol = j->overlap_tolerance;
+    const ref_shape s = reference_shape(kind, q, 0.0);
+    double lo[3], hi[3];
+    shape_bounds(&s, 2.0 * tol, lo, hi);
+    const shape_answer *answers[2] = {cbvh, peer};
+    int any_sure = 0, right[2] = {answers[0]->count == 0, answers[1]->count == 0};
+    for (size_t k = 0; k < j->tris.count; k++) {
+        const int cls = bounded_class(&s, j->tris.v + 9 * k, lo, hi, tol);
+        any_sure |= cls == 2;
+        for (int e = 0; e < 2; e++)
+            if (answers[e]->count > 0 && answers[e]->tri == j->tris.id[k] && cls > 0)
+                right[e] = 1;
+    }
+    for (int e = 0; e < 2; e++)
+        if (answers[e]->count == 0)
+            right[e] = !any_sure;
     return side_of(right[0], right[1]);
 }
 

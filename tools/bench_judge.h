@@ -41,6 +41,13 @@ void bench_judge_mark(bench_judge *j, int side, uint32_t tri);
  * the marks. */
 bench_side bench_judge_overlap(bench_judge *j, shape_kind kind, const shape_query *q);
 
+/* The side the reference takes on first-hit overlap query q (kind as for bench_judge_overlap) between cbvh's
+ * answer and the peer's (count 0: the shape touches nothing; 1: it touches triangle tri): a miss is borne out
+ * when no triangle surely overlaps, a hit when its triangle is not surely apart (ref_*_class with the overlap
+ * tolerance), by brute force over every triangle. */
+bench_side bench_judge_first_hit(const bench_judge *j, shape_kind kind, const shape_query *q,
+                                 const shape_answer *cbvh, const shape_answer *peer);
+
 /* The side the reference takes on sweep query q between the first contacts cbvh and the peer found:
  * ref_sweep's first contact, by brute force. A miss is borne out when the shape shrunk by the overlap
  * tolerance misses too; a hit when it is on the reference's first triangle or within the sweep tolerance

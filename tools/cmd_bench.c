@@ -49,7 +49,8 @@ static const char usage[] =
     "Then shape queries as games ask them near a surface (shapes about 1% of the diagonal\n"
     "across, capsules along random directions): sphere, capsule, box and oriented box (turned\n"
     "by a uniform rotation) sweeps moving 1.5% of the diagonal, and sphere, capsule and box\n"
-    "overlaps, beside Bullet (convex casts and its\n"
+    "overlaps, every triangle and the first hit (whether the shape touches any: each engine\n"
+    "stops at the first triangle; Bullet cannot), beside Bullet (convex casts and its\n"
     "per-triangle narrow phase, margins 0 on boxes and triangles) and Jolt (CastShape and\n"
     "CollideShape, back faces colliding, boxes of convex radius 0): microseconds per query,\n"
     "queries per second, the ratio cbvh/peer, and agreement query by query (the same first\n"
@@ -198,9 +199,15 @@ typedef struct method {
     int main;    /* measured at every thread count, not only the first */
 } method;
 
-/* A shape query engine: answers queries[0..count) of one kind, sweeps or overlaps. */
-typedef void (*shape_kernel)(const void *engine, shape_kind kind, int sweep, const shape_query *queries,
-                             size_t count, shape_answer *out);
+/* What a shape set asks: a sweep's first contact, every triangle an overlap touches, or an overlap's first
+ * hit (whether the shape touches any triangle: the engine stops at the first it finds). */
+typedef enum shape_question { SHAPE_SWEEP, SHAPE_OVERLAP, SHAPE_FIRST_HIT } shape_question;
+#define SHAPE_QUESTION_COUNT 3
+static const char *const shape_question_names[SHAPE_QUESTION_COUNT] = {"sweep", "overlap", "first-hit"};
+
+/* A shape query engine: answers queries[0..count) of one kind and question. */
+typedef void (*shape_kernel)(const void *engine, shape_kind kind, shape_question question,
+                             const shape_query *queries, size_t count, shape_answer *out);
 
 /* Marks in j the triangles an engine reports for overlap query q (bench_judge_mark: side 0 for cbvh, 1 for
  * a peer). */
@@ -211,13 +218,14 @@ typedef struct shape_method {
     shape_kernel kernel;
     shape_marker mark;
     const void *state;
+    const char *no_first_hit; /* why it answers no first-hit overlaps (its rows left out), or NULL */
 } shape_method;
 
 /* A slice of shape queries for bench_run's threads. */
 typedef struct shape_job {
     const shape_method *m;
     shape_kind kind;
-    int sweep;
+    shape_question question;
     const shape_query *queries;
     shape_answer *answers;
 } shape_job;
@@ -250,13 +258,23 @@ static void cbvh_overlap_each(const cbvh_file *f, shape_kind kind, const shape_q
     }
 }
 
+/* Keeps the first triangle an overlap reports and stops the query. */
+static int first_overlap(void *user, uint32_t tri)
+{
+    shape_answer *a = user;
+    a->tri = tri;
+    a->count = 1;
+    return 1;
+}
+
 /* cbvh's answer to one shape query; the engine is the opened file. */
-static void cbvh_shape_query(const cbvh_file *f, shape_kind kind, int sweep, const shape_query *q,
-                             shape_answer *a)
+static void cbvh_shape_query(const cbvh_file *f, shape_kind kind, shape_question question,
+                             const shape_query *q, shape_answer *a)
 {
     memset(a, 0, sizeof *a);
     a->tri = CBVH_NO_HIT;
     a->t = INFINITY;
+    const int sweep = question == SHAPE_SWEEP;
     if (sweep && kind == SHAPE_ORIENTED_BOX) {
         cbvh_shape box;
         memset(&box, 0, sizeof box);
@@ -279,7 +297,7 @@ static void cbvh_shape_query(const cbvh_file *f, shape_kind kind, int sweep, con
             a->t = h.t;
         }
     } else {
-        cbvh_overlap_each(f, kind, q, add_overlap, a);
+        cbvh_overlap_each(f, kind, q, question == SHAPE_FIRST_HIT ? first_overlap : add_overlap, a);
     }
 }
 
@@ -294,11 +312,11 @@ static void cbvh_shape_mark(const void *engine, shape_kind kind, const shape_que
     cbvh_overlap_each(engine, kind, q, mark_cbvh, j);
 }
 
-static void cbvh_shape_kernel(const void *engine, shape_kind kind, int sweep, const shape_query *queries,
-                              size_t count, shape_answer *out)
+static void cbvh_shape_kernel(const void *engine, shape_kind kind, shape_question question,
+                              const shape_query *queries, size_t count, shape_answer *out)
 {
     for (size_t i = 0; i < count; i++)
-        cbvh_shape_query(engine, kind, sweep, &queries[i], &out[i]);
+        cbvh_shape_query(engine, kind, question, &queries[i], &out[i]);
 }
 
 #if defined(HAVE_BULLET) || defined(HAVE_JOLT)
@@ -309,13 +327,15 @@ static void mark_peer(void *judge, uint32_t tri)
 #endif
 
 #ifdef HAVE_JOLT
-static void jolt_shape_kernel(const void *engine, shape_kind kind, int sweep, const shape_query *queries,
-                              size_t count, shape_answer *out)
+static void jolt_shape_kernel(const void *engine, shape_kind kind, shape_question question,
+                              const shape_query *queries, size_t count, shape_answer *out)
 {
-    if (sweep)
+    if (question == SHAPE_SWEEP)
         jolt_peer_sweep(engine, kind, queries, count, out);
-    else
+    else if (question == SHAPE_OVERLAP)
         jolt_peer_overlap(engine, kind, queries, count, out);
+    else
+        jolt_peer_overlap_first(engine, kind, queries, count, out);
 }
 
 static void jolt_shape_mark(const void *engine, shape_kind kind, const shape_query *q, bench_judge *j)
@@ -325,10 +345,10 @@ static void jolt_shape_mark(const void *engine, shape_kind kind, const shape_que
 #endif
 
 #ifdef HAVE_BULLET
-static void bullet_shape_kernel(const void *engine, shape_kind kind, int sweep, const shape_query *queries,
-                                size_t count, shape_answer *out)
+static void bullet_shape_kernel(const void *engine, shape_kind kind, shape_question question,
+                                const shape_query *queries, size_t count, shape_answer *out)
 {
-    if (sweep)
+    if (question == SHAPE_SWEEP)
         bullet_peer_sweep(engine, kind, queries, count, out);
     else
         bullet_peer_overlap(engine, kind, queries, count, out);
@@ -345,7 +365,7 @@ static void shape_range(const void *job, size_t begin, size_t end, cbvh_query_st
 {
     const shape_job *j = job;
     (void)stats;
-    j->m->kernel(j->m->state, j->kind, j->sweep, j->queries + begin, end - begin, j->answers + begin);
+    j->m->kernel(j->m->state, j->kind, j->question, j->queries + begin, end - begin, j->answers + begin);
 }
 
 /* A built engine's cost. */
@@ -382,23 +402,24 @@ typedef struct agree_row {
 /* A shape set's time with one engine and thread count. */
 typedef struct shape_row {
     shape_kind kind;
-    int sweep;
+    shape_question question;
     const shape_method *m;
     unsigned threads;
     double seconds;
     size_t count; /* queries timed */
     unsigned runs;
-    uint64_t found; /* sweeps: queries that hit; overlaps: triangles reported (over the queries timed) */
+    uint64_t
+        found; /* sweeps and first hits: queries that hit; overlaps: triangles reported (queries timed) */
 } shape_row;
 
 /* A peer's answers against cbvh's, query by query. */
 typedef struct shape_agree_row {
     shape_kind kind;
-    int sweep;
+    shape_question question;
     const shape_method *m;
-    bench_agreement sweeps;                            /* sweeps: t compared as a distance along the motion */
-    uint64_t same_set, both_empty, other_set;          /* overlaps */
-    uint64_t ref_triangles, other_triangles;           /* overlaps: triangles reported by each */
+    bench_agreement sweeps;                   /* sweeps: t compared as a distance along the motion */
+    uint64_t same_set, both_empty, other_set; /* overlaps; first hits: both hit, neither, one */
+    uint64_t ref_triangles, other_triangles;  /* overlaps: triangles reported by each; first hits: hits */
     uint64_t ref_start_touching, other_start_touching; /* sweeps: t = 0 answers */
     double t_distance_max; /* sweeps, both hit: the largest |t - t_cbvh| * |delta| */
     double t_distance_sum; /* sweeps, the same triangle: the sum of |t - t_cbvh| * |delta| */
@@ -478,13 +499,14 @@ static void add_method(bench_state *s, const char *engine, const char *variant, 
 }
 
 static void add_shape_method(bench_state *s, const char *engine, shape_kernel kernel, shape_marker mark,
-                             const void *state)
+                             const void *state, const char *no_first_hit)
 {
     shape_method *m = &s->shape_methods[s->shape_method_count++];
     m->engine = engine;
     m->kernel = kernel;
     m->mark = mark;
     m->state = state;
+    m->no_first_hit = no_first_hit;
 }
 
 /* The largest thread count asked for. */
@@ -562,7 +584,7 @@ static void add_cbvh_methods(bench_state *s)
         bench_cbvh_variant(e, s->file, s->expanded, k);
         add_method(s, "cbvh", e->name, bench_cbvh_kernel, e, 1, k == 0);
     }
-    add_shape_method(s, "cbvh", cbvh_shape_kernel, cbvh_shape_mark, s->file);
+    add_shape_method(s, "cbvh", cbvh_shape_kernel, cbvh_shape_mark, s->file, NULL);
 }
 
 /* The build row of a peer just built. */
@@ -631,7 +653,8 @@ static void build_peers(bench_state *s)
     } else {
         add_peer_build(s, "bullet", &info);
         add_method(s, "bullet", "quantized", bullet_kernel, s->bullet, 0, 1);
-        add_shape_method(s, "bullet", bullet_shape_kernel, bullet_shape_mark, s->bullet);
+        add_shape_method(s, "bullet", bullet_shape_kernel, bullet_shape_mark, s->bullet,
+                         "its processAllTriangles cannot stop at the first triangle");
     }
 #endif
 #ifdef HAVE_JOLT
@@ -648,7 +671,7 @@ static void build_peers(bench_state *s)
         } else {
             add_peer_build(s, "jolt", &info);
             add_method(s, "jolt", "meshshape", jolt_kernel, s->jolt, 0, 1);
-            add_shape_method(s, "jolt", jolt_shape_kernel, jolt_shape_mark, s->jolt);
+            add_shape_method(s, "jolt", jolt_shape_kernel, jolt_shape_mark, s->jolt, NULL);
         }
     }
 #endif
@@ -857,8 +880,10 @@ static void judge_shape(bench_state *s, shape_agree_row *a, const shape_query *q
         }
     }
     bench_side side;
-    if (a->sweep) {
+    if (a->question == SHAPE_SWEEP) {
         side = bench_judge_sweep(&s->judge, a->kind, q, x, y);
+    } else if (a->question == SHAPE_FIRST_HIT) {
+        side = bench_judge_first_hit(&s->judge, a->kind, q, x, y);
     } else {
         s->shape_methods[0].mark(s->shape_methods[0].state, a->kind, q, &s->judge);
         a->m->mark(a->m->state, a->kind, q, &s->judge);
@@ -875,7 +900,7 @@ static void agree_shapes(bench_state *s, shape_agree_row *a, const shape_query *
     a->count = count;
     for (size_t i = 0; i < count; i++) {
         const shape_answer *x = &ref[i], *y = &other[i];
-        if (!a->sweep) {
+        if (a->question != SHAPE_SWEEP) { /* a first hit's count is 0 or 1, its set_hash 0 */
             a->ref_triangles += x->count;
             a->other_triangles += y->count;
             if (x->count != y->count || x->set_hash != y->set_hash) {
@@ -925,13 +950,13 @@ static void shapes_answered(void *ctx, int k, const bench_job *job)
     shape_row *r = c->rows[k];
     const shape_answer *answers = k == 0 ? c->ref : c->other;
     for (size_t i = 0; i < job->count; i++)
-        r->found += r->sweep ? answers[i].tri != CBVH_NO_HIT : answers[i].count;
+        r->found += r->question == SHAPE_SWEEP ? answers[i].tri != CBVH_NO_HIT : answers[i].count;
     if (k == 0 || !c->check)
         return;
     shape_agree_row *a = &c->s->shape_agreements[c->s->shape_agree_count++];
     memset(a, 0, sizeof *a);
     a->kind = r->kind;
-    a->sweep = r->sweep;
+    a->question = r->question;
     a->m = r->m;
     agree_shapes(c->s, a, c->queries, c->ref, c->other, job->count, SWEEP_AGREE_TOLERANCE * c->s->diagonal);
 }
@@ -939,8 +964,9 @@ static void shapes_answered(void *ctx, int k, const bench_job *job)
 /* Measures every shape engine on one shape set at every thread count, the engines of a thread count timed
  * together (time_jobs); cbvh (engine 0) first, as the reference, compared with each peer at the first
  * thread count. */
-static int measure_shapes(bench_state *s, shape_kind kind, int sweep, const shape_query *queries,
-                          shape_answer *ref, shape_answer *other, int *step, int steps)
+static int measure_shapes(bench_state *s, shape_kind kind, shape_question question,
+                          const shape_query *queries, shape_answer *ref, shape_answer *other, int *step,
+                          int steps)
 {
     char label[96];
     for (int ti = 0; ti < s->thread_count_n; ti++) {
@@ -948,15 +974,19 @@ static int measure_shapes(bench_state *s, shape_kind kind, int sweep, const shap
         timed_job jobs[MAX_SHAPE_METHODS];
         shape_job sj[MAX_SHAPE_METHODS];
         shape_row *rows[MAX_SHAPE_METHODS];
-        const int n = s->shape_method_count;
-        for (int k = 0; k < n; k++) {
+        int n = 0;
+        for (int e = 0; e < s->shape_method_count; e++) {
             (*step)++;
-            sj[k] = (shape_job){&s->shape_methods[k], kind, sweep, queries, k == 0 ? ref : other};
+            const shape_method *m = &s->shape_methods[e];
+            if (question == SHAPE_FIRST_HIT && m->no_first_hit)
+                continue;
+            const int k = n++;
+            sj[k] = (shape_job){m, kind, question, queries, k == 0 ? ref : other};
             shape_row *r = &s->shape_results[s->shape_result_count++];
             memset(r, 0, sizeof *r);
             r->kind = kind;
-            r->sweep = sweep;
-            r->m = &s->shape_methods[k];
+            r->question = question;
+            r->m = m;
             r->threads = threads;
             rows[k] = r;
             memset(&jobs[k], 0, sizeof jobs[k]);
@@ -965,7 +995,7 @@ static int measure_shapes(bench_state *s, shape_kind kind, int sweep, const shap
             jobs[k].reference = k == 0;
         }
         snprintf(label, sizeof label, "%s %s: %d engines, %u thread(s)", shape_kind_name(kind),
-                 sweep ? "sweep" : "overlap", n, threads);
+                 shape_question_names[question], n, threads);
         progress_update(&s->prog, label, (double)*step / steps);
         shape_context ctx = {s, ti == 0, rows, queries, ref, other};
         double seconds[MAX_SHAPE_METHODS];
@@ -1016,7 +1046,7 @@ static const shape_row *cbvh_shape_row(const bench_state *s, const shape_row *r)
 {
     for (int i = 0; i < s->shape_result_count; i++) {
         const shape_row *x = &s->shape_results[i];
-        if (x->kind == r->kind && x->sweep == r->sweep && x->threads == r->threads &&
+        if (x->kind == r->kind && x->question == r->question && x->threads == r->threads &&
             x->m == &s->shape_methods[0])
             return x;
     }
@@ -1061,10 +1091,17 @@ static void print_shape_tables(const bench_state *s)
         const shape_row *r = &s->shape_results[i];
         double speed = queries_per_second(r);
         printf("| %s | %s | %s | %u | %.3f | %.0f | %.0f | %.3f | %.3f | %u x %zu |\n",
-               shape_kind_name(r->kind), r->sweep ? "sweep" : "overlap", r->m->engine, r->threads,
+               shape_kind_name(r->kind), shape_question_names[r->question], r->m->engine, r->threads,
                micros_per_query(r), speed, speed / r->threads,
                r->count ? (double)r->found / (double)r->count : 0.0, shape_ratio(s, r), r->runs, r->count);
     }
+    printf(
+        "\nfirst-hit: the overlap queries again, each engine stopping at the first triangle it finds (hits: "
+        "queries that touch one).\n");
+    for (int k = 0; k < s->shape_method_count; k++)
+        if (s->shape_methods[k].no_first_hit)
+            printf("%s answers no first-hit overlap (%s): no %s first-hit rows.\n",
+                   s->shape_methods[k].engine, s->shape_methods[k].no_first_hit, s->shape_methods[k].engine);
     if (s->shape_agree_count == 0)
         return;
 #ifdef HAVE_JOLT
@@ -1077,14 +1114,16 @@ static void print_shape_tables(const bench_state *s)
 #endif
     printf(
         "\nShape agreement with cbvh, query by query (sweeps: the same first triangle, or another one with t "
-        "times the motion's length within %.0e of the scene diagonal; overlaps: the same set of triangles). "
+        "times the motion's length within %.0e of the scene diagonal; overlaps: the same set of triangles; "
+        "first hits: both touch or neither, the same set column counting both touch). "
         "Bullet's casts stop 0.001 mesh units short of contact (its constant), so its t come early; the t "
         "apart "
         "columns say by how much, as a fraction of the diagonal. Up to %d disagreements per set (fewer "
         "once checking them took the budget) are decided against a double-precision brute force (the "
         "tests' reference): it sides with an engine whose answer it bears out (sweeps: by the rule "
         "above, a miss when the shape shrunk by %.0e of the diagonal misses too; overlaps: every triangle "
-        "that surely overlaps and none surely apart, within %.0e of the diagonal), with both, or with "
+        "that surely overlaps and none surely apart, within %.0e of the diagonal; first hits: a triangle not "
+        "surely apart, or none when none surely overlaps), with both, or with "
         "neither:\n\n",
         SWEEP_AGREE_TOLERANCE, BENCH_JUDGE_QUERIES, AGREE_TOLERANCE, AGREE_TOLERANCE);
     printf("| shape | query | engine | same triangle or set | both miss or none | t close, other triangle | "
@@ -1093,8 +1132,9 @@ static void print_shape_tables(const bench_state *s)
     printf("|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
     for (int i = 0; i < s->shape_agree_count; i++) {
         const shape_agree_row *a = &s->shape_agreements[i];
-        printf("| %s | %s | %s | ", shape_kind_name(a->kind), a->sweep ? "sweep" : "overlap", a->m->engine);
-        if (a->sweep)
+        printf("| %s | %s | %s | ", shape_kind_name(a->kind), shape_question_names[a->question],
+               a->m->engine);
+        if (a->question == SHAPE_SWEEP)
             printf("%llu | %llu | %llu | %llu | ", (unsigned long long)a->sweeps.same_triangle,
                    (unsigned long long)a->sweeps.both_miss, (unsigned long long)a->sweeps.t_close,
                    (unsigned long long)a->sweeps.disagree);
@@ -1105,7 +1145,7 @@ static void print_shape_tables(const bench_state *s)
                (unsigned long long)a->sides[BENCH_SIDE_CBVH], (unsigned long long)a->sides[BENCH_SIDE_PEER],
                (unsigned long long)a->sides[BENCH_SIDE_BOTH],
                (unsigned long long)a->sides[BENCH_SIDE_NEITHER]);
-        if (a->sweep)
+        if (a->question == SHAPE_SWEEP)
             printf("%llu / %llu | %.2e | %.2e | - | %zu |\n", (unsigned long long)a->ref_start_touching,
                    (unsigned long long)a->other_start_touching, t_apart_mean(s, a),
                    a->t_distance_max / s->diagonal, a->count);
@@ -1346,7 +1386,7 @@ static int write_json(const bench_state *s)
         const shape_row *r = &s->shape_results[i];
         json_begin_object(&w, NULL);
         json_string(&w, "shape", shape_kind_name(r->kind));
-        json_string(&w, "query", r->sweep ? "sweep" : "overlap");
+        json_string(&w, "query", shape_question_names[r->question]);
         json_string(&w, "engine", r->m->engine);
         json_uint(&w, "threads", r->threads);
         json_double(&w, "seconds", r->seconds);
@@ -1355,7 +1395,7 @@ static int write_json(const bench_state *s)
         json_double(&w, "us_per_query", micros_per_query(r));
         json_double(&w, "queries_per_s", queries_per_second(r));
         json_double(&w, "queries_per_s_per_thread", queries_per_second(r) / r->threads);
-        json_double(&w, r->sweep ? "hits_per_query" : "triangles_per_query",
+        json_double(&w, r->question == SHAPE_OVERLAP ? "triangles_per_query" : "hits_per_query",
                     r->count ? (double)r->found / (double)r->count : 0.0);
         json_double(&w, "cbvh_over_this", shape_ratio(s, r));
         json_end_object(&w);
@@ -1366,9 +1406,9 @@ static int write_json(const bench_state *s)
         const shape_agree_row *a = &s->shape_agreements[i];
         json_begin_object(&w, NULL);
         json_string(&w, "shape", shape_kind_name(a->kind));
-        json_string(&w, "query", a->sweep ? "sweep" : "overlap");
+        json_string(&w, "query", shape_question_names[a->question]);
         json_string(&w, "engine", a->m->engine);
-        if (a->sweep) {
+        if (a->question == SHAPE_SWEEP) {
             json_agreement(&w, &a->sweeps);
             json_uint(&w, "cbvh_start_touching", a->ref_start_touching);
             json_uint(&w, "this_start_touching", a->other_start_touching);
@@ -1426,7 +1466,7 @@ static int run(bench_state *s)
     int shape_rows = s->shapes ? s->thread_count_n * s->shape_method_count : 0;
     s->results = calloc((size_t)RAYS_KIND_COUNT * 2 * ray_rows, sizeof *s->results);
     s->agreements = calloc((size_t)RAYS_KIND_COUNT * s->method_count, sizeof *s->agreements);
-    const int shape_sets = SHAPE_SWEEP_KIND_COUNT + SHAPE_OVERLAP_KIND_COUNT;
+    const int shape_sets = SHAPE_SWEEP_KIND_COUNT + 2 * SHAPE_OVERLAP_KIND_COUNT;
     s->shape_results = calloc((size_t)shape_sets * shape_rows + 1, sizeof *s->shape_results);
     s->shape_agreements = calloc((size_t)shape_sets * s->shape_method_count, sizeof *s->shape_agreements);
     shape_query *queries = malloc(s->shapes * sizeof *queries + 1);
@@ -1441,12 +1481,16 @@ static int run(bench_state *s)
         rays_generate((ray_kind)set, &rm, s->seed, b.rays, s->rays);
         status = measure_set(s, (ray_kind)set, &b, &step, steps);
     }
-    /* sweeps first, the kinds in order: sphere, capsule, box, oriented box; then the overlaps */
+    /* sweeps first, the kinds in order: sphere, capsule, box, oriented box; then the overlaps, then their
+     * first hits (the same queries) */
     for (int set = 0; set < shape_sets && s->shapes && !status; set++) {
-        int sweep = set < SHAPE_SWEEP_KIND_COUNT;
-        shape_kind kind = (shape_kind)(sweep ? set : set - SHAPE_SWEEP_KIND_COUNT);
-        shapes_generate(kind, sweep, &rm, s->seed, queries, s->shapes);
-        status = measure_shapes(s, kind, sweep, queries, ref, other, &step, steps);
+        const int overlap = set - SHAPE_SWEEP_KIND_COUNT;
+        const shape_question question = overlap < 0                          ? SHAPE_SWEEP
+                                        : overlap < SHAPE_OVERLAP_KIND_COUNT ? SHAPE_OVERLAP
+                                                                             : SHAPE_FIRST_HIT;
+        const shape_kind kind = (shape_kind)(overlap < 0 ? set : overlap % SHAPE_OVERLAP_KIND_COUNT);
+        shapes_generate(kind, question == SHAPE_SWEEP, &rm, s->seed, queries, s->shapes);
+        status = measure_shapes(s, kind, question, queries, ref, other, &step, steps);
     }
     progress_done(&s->prog);
     free(b.rays);

@@ -272,6 +272,24 @@ extern "C" void jolt_peer_sweep(const jolt_peer *peer, shape_kind kind, const sh
     }
 }
 
+extern "C" void jolt_peer_overlap_first(const jolt_peer *peer, shape_kind kind, const shape_query *queries,
+                                        size_t count, shape_answer *out)
+{
+    const JPH::CollideShapeSettings settings = overlap_settings();
+    for (size_t i = 0; i < count; i++) {
+        query_shape s(kind, queries[i]);
+        JPH::AnyHitCollisionCollector<JPH::CollideShapeCollector> any;
+        JPH::CollisionDispatch::sCollideShapeVsShape(
+            s.shape, peer->shape, JPH::Vec3::sOne(), JPH::Vec3::sOne(), s.place, JPH::Mat44::sIdentity(),
+            JPH::SubShapeIDCreator(), JPH::SubShapeIDCreator(), settings, any);
+        shape_answer &a = out[i];
+        a.t = INFINITY;
+        a.set_hash = 0;
+        a.count = any.HadHit() ? 1 : 0;
+        a.tri = any.HadHit() ? triangle_of(peer, any.mHit.mSubShapeID2) : CBVH_NO_HIT;
+    }
+}
+
 extern "C" void jolt_peer_overlap_each(const jolt_peer *peer, shape_kind kind, const shape_query *query,
                                        void (*add)(void *user, uint32_t tri), void *user)
 {

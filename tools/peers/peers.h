@@ -146,6 +146,10 @@ void jolt_peer_sweep(const jolt_peer *peer, shape_kind kind, const shape_query *
                      shape_answer *out);
 void jolt_peer_overlap(const jolt_peer *peer, shape_kind kind, const shape_query *queries, size_t count,
                        shape_answer *out);
+/* First-hit overlaps: CollideShape with an any-hit collector, which ends the query at the first contact:
+ * count 1 and that triangle in tri, or count 0. */
+void jolt_peer_overlap_first(const jolt_peer *peer, shape_kind kind, const shape_query *queries, size_t count,
+                             shape_answer *out);
 /* One overlap query's triangles, each passed to add(user, tri): what jolt_peer_overlap counts. */
 void jolt_peer_overlap_each(const jolt_peer *peer, shape_kind kind, const shape_query *query,
                             void (*add)(void *user, uint32_t tri), void *user);
