@@ -99,6 +99,10 @@ for r in rows:
     assert total == r["closest_rays_compared"] == 2000 and r["any_rays_compared"] == 2000, r
     assert r["disagree"] == 0 and r["any_disagree"] == 0, r
     assert r["same_triangle"] > 0 and r["both_miss"] > 0, r
+    # disagreements decided against the reference: at most 200 per set and query, each for one side
+    for q, disagree in (("closest", r["disagree"]), ("any", r["any_disagree"])):
+        sides = sum(r[q + "_reference_sides_" + k] for k in ("cbvh", "this", "both", "neither"))
+        assert sides == r[q + "_disagreements_checked"] <= min(disagree, 200), r
 assert "cbvh expanded" in engines, engines
 assert any(r["engine"] == "cbvh" and r["variant"] == "expanded" for r in rows), rows
 for e in engines - {"cbvh", "cbvh expanded"}:

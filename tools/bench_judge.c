@@ -114,6 +114,43 @@ bench_side bench_judge_overlap(bench_judge *j, shape_kind kind, const shape_quer
     return side_of(right[0], right[1]);
 }
 
+/* Whether a closest hit (tri, t) is borne out, given sure: the reference's closest triangle surely crossed.
+ */
+static int ray_hit_right(const bench_judge *j, const cbvh_ray *ray, const cbvh_hit *h,
+                         const ref_ray_hit *sure)
+{
+    const double tol = j->overlap_tolerance;
+    if (h->tri == CBVH_NO_HIT)
+        return sure->index == (size_t)-1;
+    const double len = sqrt((double)ray->dir[0] * ray->dir[0] + (double)ray->dir[1] * ray->dir[1] +
+                            (double)ray->dir[2] * ray->dir[2]);
+    if (sure->index != (size_t)-1 && (h->t - sure->t) * len > tol)
+        return 0;
+    for (size_t k = 0; k < j->tris.count; k++)
+        if (j->tris.id[k] == h->tri) {
+            double t, u, v, margin;
+            return ref_ray_triangle(j->tris.v + 9 * k, ray, &t, &u, &v, &margin) && margin >= -tol &&
+                   fabs(t - (double)h->t) * len <= tol;
+        }
+    return 0;
+}
+
+bench_side bench_judge_ray(const bench_judge *j, const cbvh_ray *ray, const cbvh_hit *cbvh,
+                           const cbvh_hit *peer)
+{
+    ref_ray_hit sure;
+    ref_ray_closest(&j->tris, ray, -j->overlap_tolerance, &sure);
+    return side_of(ray_hit_right(j, ray, cbvh, &sure), ray_hit_right(j, ray, peer, &sure));
+}
+
+bench_side bench_judge_occluded(const bench_judge *j, const cbvh_ray *ray, int cbvh, int peer)
+{
+    ref_ray_hit sure, loose;
+    const int surely = ref_ray_closest(&j->tris, ray, -j->overlap_tolerance, &sure),
+              maybe = ref_ray_closest(&j->tris, ray, j->overlap_tolerance, &loose);
+    return side_of(cbvh ? maybe : !surely, peer ? maybe : !surely);
+}
+
 bench_side bench_judge_first_hit(const bench_judge *j, shape_kind kind, const shape_query *q,
                                  const shape_answer *cbvh, const shape_answer *peer)
 {
