@@ -411,8 +411,7 @@ typedef struct shape_row {
     double seconds;
     size_t count; /* queries timed */
     unsigned runs;
-    uint64_t
-        found; /* sweeps and first hits: queries that hit; overlaps: triangles reported (queries timed) */
+    uint64_t found; /* over the queries timed: sweeps, first hits: queries that hit; overlaps: triangles */
 } shape_row;
 
 /* A peer's answers against cbvh's, query by query. */
