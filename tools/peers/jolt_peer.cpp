@@ -293,7 +293,7 @@ extern "C" void jolt_peer_overlap_first(const jolt_peer *peer, shape_kind kind, 
 extern "C" void jolt_peer_overlap_each(const jolt_peer *peer, shape_kind kind, const shape_query *query,
                                        void (*add)(void *user, uint32_t tri), void *user)
 {
-    static const JPH::CollideShapeSettings settings = overlap_settings();
+    const JPH::CollideShapeSettings settings = overlap_settings();
     query_shape s(kind, *query);
     each_collector each(peer, add, user);
     JPH::CollisionDispatch::sCollideShapeVsShape(s.shape, peer->shape, JPH::Vec3::sOne(), JPH::Vec3::sOne(),
