@@ -140,8 +140,10 @@ void jolt_peer_occluded(const jolt_peer *peer, const cbvh_ray *rays, size_t coun
 
 /* Sweeps: CastShape with a closest-hit collector; overlaps: CollideShape, every triangle it reports a
  * contact with. Both with back faces colliding and every edge active; SphereShape, CapsuleShape and a
- * BoxShape of convex radius 0 (the exact box). Jolt's tolerances are absolute (its collision tolerance
- * 1e-4 in the mesh's units): on a mesh of small units they are a large share of the shapes. */
+ * BoxShape of convex radius 0 (the exact box), whose every contact takes Jolt's EPA step (no core shrunk by a
+ * radius for GJK), and a contact whose EPA step fails Jolt drops (its CollideConvexVsTriangles). Jolt's
+ * tolerances are absolute (its collision tolerance 1e-4 in the mesh's units): on a mesh of small units they
+ * are a larger share of the shapes. */
 void jolt_peer_sweep(const jolt_peer *peer, shape_kind kind, const shape_query *queries, size_t count,
                      shape_answer *out);
 void jolt_peer_overlap(const jolt_peer *peer, shape_kind kind, const shape_query *queries, size_t count,
