@@ -4,6 +4,7 @@
 # Environment (set by `make check` through AM_TESTS_ENVIRONMENT):
 #   CBVH_TOOL     the built tools/cbvh
 #   CBVH_TINYBVH  yes when configure was given tinybvh (--with-tinybvh=DIR): its rows are then expected
+#   CBVH_JOLT     yes when configure was given Jolt (--with-jolt=PREFIX): its rows are then expected
 # Writes only into a mktemp folder, removed at exit. JSON and SVG checks need python3 (skipped without it).
 
 name=test_bench.sh
@@ -44,7 +45,7 @@ run 0 "bench --gen sphere:2000" "$CBVH" bench --gen sphere:2000 --rays 2000 --sh
     check "... prints the shape table" \
         grep -q '^| shape | query | engine | threads | µs/query | queries/s | queries/s/thread |' "$tmp/bench.md" &&
     check "... a cbvh row per shape set and thread count" \
-        test "$(grep -c '^| \(sphere\|capsule\|box\) | \(sweep\|overlap\) | cbvh | [12] | ' "$tmp/bench.md")" -eq 12 &&
+        test "$(grep -c '^| \(sphere\|capsule\|box\|oriented box\) | \(sweep\|overlap\|first-hit\) | cbvh | [12] | ' "$tmp/bench.md")" -eq 20 &&
     check "... progress stays off stdout" test "$(grep -c '%' "$tmp/bench.md")" -eq 0
 
 # tinybvh is a peer only when configure was given it; without it (or on a CPU without AVX2 and FMA, which its
@@ -64,6 +65,24 @@ else
     skip "bench: tinybvh rows and agreement: the build has no tinybvh (configure --with-tinybvh=DIR, DIR holding tiny_bvh.h)"
 fi
 
+# Jolt likewise: a ray method and a shape engine when configure was given it and the CPU runs its build.
+jolt_rows=$(grep -c '^| [a-z]* | \(closest\|any\) | jolt | meshshape | ' "$tmp/bench.md")
+jolt_shape_rows=$(grep -c '^| \(sphere\|capsule\|box\|oriented box\) | \(sweep\|overlap\|first-hit\) | jolt | [12] | ' "$tmp/bench.md")
+if [ "${CBVH_JOLT:-no}" = yes ] && grep -q '^Jolt was built for AVX2 and FMA, which this CPU lacks' "$tmp/bench.md"; then
+    check "bench: without AVX2 and FMA, no Jolt rows" test "$jolt_rows" -eq 0 -a "$jolt_shape_rows" -eq 0
+    skip "bench: Jolt rows: this CPU lacks AVX2 or FMA"
+elif [ "${CBVH_JOLT:-no}" = yes ]; then
+    # 4 ray sets x 2 queries and 10 shape sets, each at 1 and 2 threads
+    check "bench: Jolt rows on every ray set and shape set" test "$jolt_rows" -eq 16 -a "$jolt_shape_rows" -eq 20
+    check "... says its tolerances are absolute" grep -q "^Jolt's tolerances are absolute" "$tmp/bench.md"
+    check "... and no note that Jolt is missing" test "$(grep -c '^Jolt Physics was not given\|^Jolt was built' "$tmp/bench.md")" -eq 0
+else
+    check "bench: says once that Jolt was not given at configure time" \
+        test "$(grep -c '^Jolt Physics was not given at configure time (--with-jolt=PREFIX): no Jolt figures' "$tmp/bench.md")" -eq 1
+    check "... and runs on without Jolt rows" test "$jolt_rows" -eq 0 -a "$jolt_shape_rows" -eq 0
+    skip "bench: Jolt rows and agreement: the build has no Jolt (configure --with-jolt=PREFIX, README.md)"
+fi
+
 if [ "$has_python" = 1 ] && [ -f "$tmp/bench.json" ]; then
     check "bench --json is valid JSON" python3 -m json.tool "$tmp/bench.json" /dev/null
     # Every traversal and every peer agrees with cbvh sorted on a closed sphere, ray by ray.
@@ -80,6 +99,10 @@ for r in rows:
     assert total == r["closest_rays_compared"] == 2000 and r["any_rays_compared"] == 2000, r
     assert r["disagree"] == 0 and r["any_disagree"] == 0, r
     assert r["same_triangle"] > 0 and r["both_miss"] > 0, r
+    # disagreements decided against the reference: at most 200 per set and query, each for one side
+    for q, disagree in (("closest", r["disagree"]), ("any", r["any_disagree"])):
+        sides = sum(r[q + "_reference_sides_" + k] for k in ("cbvh", "this", "both", "neither"))
+        assert sides == r[q + "_disagreements_checked"] <= min(disagree, 200), r
 assert "cbvh expanded" in engines, engines
 assert any(r["engine"] == "cbvh" and r["variant"] == "expanded" for r in rows), rows
 for e in engines - {"cbvh", "cbvh expanded"}:
@@ -100,18 +123,27 @@ for r in d["results"]:
 assert d["threads"] == [1, 2] and d["shapes"] == 2000, d
 shapes = d["shape_results"]
 kinds = {(r["shape"], r["query"]) for r in shapes}
-assert kinds == {(k, q) for k in ("sphere", "capsule", "box") for q in ("sweep", "overlap")}, kinds
+assert kinds == {(k, q) for k in ("sphere", "capsule", "box") for q in ("sweep", "overlap", "first-hit")} | \
+    {("oriented box", "sweep")}, kinds
 for r in shapes:
     assert r["us_per_query"] > 0 and r["queries_per_s"] > 0 and r["threads"] in (1, 2), r
     assert r["queries_timed"] == 2000 or r["engine"] != "cbvh", r
     # the generated shapes touch the closed sphere now and then, and not always
-    found = r["hits_per_query"] if r["query"] == "sweep" else r["triangles_per_query"]
-    assert 0.05 < found < (1 if r["query"] == "sweep" else 50), r
-# Bullet, when configure found it, answers every shape set; mostly as cbvh does (its casts stop short of
-# contact and its box tests differ at touching triangles: counted, not required to be zero)
+    found = r["triangles_per_query"] if r["query"] == "overlap" else r["hits_per_query"]
+    assert 0.05 < found < (50 if r["query"] == "overlap" else 1), r
+# Bullet and Jolt, when configure found them, answer every shape set; mostly as cbvh does (Bullet's casts stop
+# short of contact and its box tests differ at touching triangles: counted, not required to be zero)
 peers = {r["engine"] for r in shapes} - {"cbvh"}
 agree = d["shape_agreement"]
-assert {r["engine"] for r in agree} == peers and len(agree) == 6 * len(peers), agree
+assert {r["engine"] for r in agree} == peers, agree
+# every set, but Bullet answers no first-hit overlap (it cannot stop at the first triangle)
+for p in peers:
+    assert len([r for r in agree if r["engine"] == p]) == (7 if p == "bullet" else 10), (p, agree)
+# cbvh's first hits, on the same queries as its overlaps, touch at most one triangle each, so no more than those
+for k in ("sphere", "capsule", "box"):
+    first = [r for r in shapes if (r["shape"], r["query"], r["engine"]) == (k, "first-hit", "cbvh")]
+    every = [r for r in shapes if (r["shape"], r["query"], r["engine"]) == (k, "overlap", "cbvh")]
+    assert first and every and 0 < first[0]["hits_per_query"] <= min(1, every[0]["triangles_per_query"]), (first, every)
 for r in agree:
     if r["query"] == "sweep":
         same = r["same_triangle"] + r["both_miss"] + r["t_close_other_triangle"]
@@ -125,6 +157,12 @@ for r in agree:
     sides = sum(r["reference_sides_" + k] for k in ("cbvh", "this", "both", "neither"))
     assert sides == r["disagreements_checked"] <= min(r["disagree"], 200), r
     assert r["disagreements_checked"] > 0 or r["disagree"] == 0, r
+# Jolt keeps its own compressed copy of the triangles (no shared mesh arrays) and drops none of the sphere's
+jolt = [b for b in d["builds"] if b["engine"] == "jolt"]
+if jolt:
+    assert jolt[0]["bytes"] == jolt[0]["structure_bytes"] > jolt[0]["id_bytes"] > 0, jolt
+    assert "dropped_triangles" not in jolt[0], jolt
+    assert "jolt" in peers, peers
 print("peers:", sorted(engines - {"cbvh"}), "shape peers:", sorted(peers))
 EOF
 else
@@ -134,7 +172,7 @@ fi
 run 0 "bench --threads 2 --no-peers --cpu-time" "$CBVH" bench --gen terrain:3000 --rays 3000 --shapes 500 --reps 2 --threads 2 \
     --no-peers --cpu-time &&
     check "... says it used CPU time" grep -q "CPU time" "$tmp/out" &&
-    check "... measures cbvh only" test "$(grep -c '| embree\|| bullet\|| tinybvh' "$tmp/out")" -eq 0 &&
+    check "... measures cbvh only" test "$(grep -c '| embree\|| bullet\|| tinybvh\|| jolt' "$tmp/out")" -eq 0 &&
     check "... all traversals agree" sh -c "grep '^| [a-z]* | cbvh | ' '$tmp/out' | awk -F'|' '\$8 != 0 || \$9 != 0 { bad = 1 } END { exit bad }'"
 
 if run 0 "cook a file to bench" "$CBVH" cook gen:sphere:1000 "$tmp/sphere.cbvh"; then

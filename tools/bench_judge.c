@@ -47,13 +47,17 @@ static ref_shape reference_shape(shape_kind kind, const shape_query *q, double s
 {
     ref_shape s;
     memset(&s, 0, sizeof s);
+    const int box = kind == SHAPE_BOX || kind == SHAPE_ORIENTED_BOX;
     s.kind = kind == SHAPE_SPHERE ? REF_SPHERE : kind == SHAPE_CAPSULE ? REF_CAPSULE : REF_BOX;
     for (int a = 0; a < 3; a++) {
         s.p0[a] = q->p0[a];
         s.p1[a] = q->p1[a];
-        s.half[a] = kind == SHAPE_BOX ? fmax(0.0, q->size[a] - shrink) : 0.0;
+        s.half[a] = box ? fmax(0.0, q->size[a] - shrink) : 0.0;
     }
-    s.radius = kind == SHAPE_BOX ? 0.0 : fmax(0.0, q->size[0] - shrink);
+    s.radius = box ? 0.0 : fmax(0.0, q->size[0] - shrink);
+    s.rotated = kind == SHAPE_ORIENTED_BOX;
+    if (s.rotated)
+        shape_query_axes(q, s.axes);
     return s;
 }
 
@@ -79,6 +83,18 @@ static int overlap_class(const ref_shape *s, const double tri[9], double tol)
     return ref_box_class(tri, lo, hi, tol);
 }
 
+/* overlap_class, 0 without the test for a triangle outside [lo, hi] (the shape's bounds grown by more than
+ * tol). */
+static int bounded_class(const ref_shape *s, const double tri[9], const double lo[3], const double hi[3],
+                         double tol)
+{
+    for (int a = 0; a < 3; a++)
+        if (fmin(tri[a], fmin(tri[3 + a], tri[6 + a])) > hi[a] ||
+            fmax(tri[a], fmax(tri[3 + a], tri[6 + a])) < lo[a])
+            return 0;
+    return overlap_class(s, tri, tol);
+}
+
 bench_side bench_judge_overlap(bench_judge *j, shape_kind kind, const shape_query *q)
 {
     const double tol = j->overlap_tolerance;
@@ -87,12 +103,7 @@ bench_side bench_judge_overlap(bench_judge *j, shape_kind kind, const shape_quer
     shape_bounds(&s, 2.0 * tol, lo, hi);
     int right[2] = {1, 1};
     for (size_t k = 0; k < j->tris.count; k++) {
-        const double *tri = j->tris.v + 9 * k;
-        int apart = 0;
-        for (int a = 0; a < 3; a++)
-            apart |= fmin(tri[a], fmin(tri[3 + a], tri[6 + a])) > hi[a] ||
-                     fmax(tri[a], fmax(tri[3 + a], tri[6 + a])) < lo[a];
-        const int cls = apart ? 0 : overlap_class(&s, tri, tol);
+        const int cls = bounded_class(&s, j->tris.v + 9 * k, lo, hi, tol);
         const uint32_t id = j->tris.id[k];
         for (int e = 0; e < 2; e++) {
             const int got = j->reported[e][id];
@@ -100,6 +111,65 @@ bench_side bench_judge_overlap(bench_judge *j, shape_kind kind, const shape_quer
             j->reported[e][id] = 0;
         }
     }
+    return side_of(right[0], right[1]);
+}
+
+/* Whether a closest hit (tri, t) is borne out, given sure: the reference's closest triangle surely crossed.
+ */
+static int ray_hit_right(const bench_judge *j, const cbvh_ray *ray, const cbvh_hit *h,
+                         const ref_ray_hit *sure)
+{
+    const double tol = j->overlap_tolerance;
+    if (h->tri == CBVH_NO_HIT)
+        return sure->index == (size_t)-1;
+    const double len = sqrt((double)ray->dir[0] * ray->dir[0] + (double)ray->dir[1] * ray->dir[1] +
+                            (double)ray->dir[2] * ray->dir[2]);
+    if (sure->index != (size_t)-1 && (h->t - sure->t) * len > tol)
+        return 0;
+    for (size_t k = 0; k < j->tris.count; k++)
+        if (j->tris.id[k] == h->tri) {
+            double t, u, v, margin;
+            return ref_ray_triangle(j->tris.v + 9 * k, ray, &t, &u, &v, &margin) && margin >= -tol &&
+                   fabs(t - (double)h->t) * len <= tol;
+        }
+    return 0;
+}
+
+bench_side bench_judge_ray(const bench_judge *j, const cbvh_ray *ray, const cbvh_hit *cbvh,
+                           const cbvh_hit *peer)
+{
+    ref_ray_hit sure;
+    ref_ray_closest(&j->tris, ray, -j->overlap_tolerance, &sure);
+    return side_of(ray_hit_right(j, ray, cbvh, &sure), ray_hit_right(j, ray, peer, &sure));
+}
+
+bench_side bench_judge_occluded(const bench_judge *j, const cbvh_ray *ray, int cbvh, int peer)
+{
+    ref_ray_hit sure, loose;
+    const int surely = ref_ray_closest(&j->tris, ray, -j->overlap_tolerance, &sure),
+              maybe = ref_ray_closest(&j->tris, ray, j->overlap_tolerance, &loose);
+    return side_of(cbvh ? maybe : !surely, peer ? maybe : !surely);
+}
+
+bench_side bench_judge_first_hit(const bench_judge *j, shape_kind kind, const shape_query *q,
+                                 const shape_answer *cbvh, const shape_answer *peer)
+{
+    const double tol = j->overlap_tolerance;
+    const ref_shape s = reference_shape(kind, q, 0.0);
+    double lo[3], hi[3];
+    shape_bounds(&s, 2.0 * tol, lo, hi);
+    const shape_answer *answers[2] = {cbvh, peer};
+    int any_sure = 0, right[2] = {answers[0]->count == 0, answers[1]->count == 0};
+    for (size_t k = 0; k < j->tris.count; k++) {
+        const int cls = bounded_class(&s, j->tris.v + 9 * k, lo, hi, tol);
+        any_sure |= cls == 2;
+        for (int e = 0; e < 2; e++)
+            if (answers[e]->count > 0 && answers[e]->tri == j->tris.id[k] && cls > 0)
+                right[e] = 1;
+    }
+    for (int e = 0; e < 2; e++)
+        if (answers[e]->count == 0)
+            right[e] = !any_sure;
     return side_of(right[0], right[1]);
 }
 

@@ -41,6 +41,25 @@ void bench_judge_mark(bench_judge *j, int side, uint32_t tri);
  * the marks. */
 bench_side bench_judge_overlap(bench_judge *j, shape_kind kind, const shape_query *q);
 
+/* The side the reference takes on a ray's closest hit between cbvh's answer and the peer's (tri CBVH_NO_HIT
+ * for a miss), with the overlap tolerance as the length that decides (ref_ray_closest's margin, and |t - t'|
+ * times |dir|): a miss is borne out when no triangle is surely crossed (margin >= tolerance); a hit when its
+ * triangle is crossed (margin >= -tolerance) at its t within the tolerance and no triangle is surely crossed
+ * before it by more than the tolerance. By brute force over every triangle. */
+bench_side bench_judge_ray(const bench_judge *j, const cbvh_ray *ray, const cbvh_hit *cbvh,
+                           const cbvh_hit *peer);
+
+/* The same for a ray's any-hit flags: occluded is borne out when some triangle is crossed within the
+ * tolerance (margin >= -tolerance), not occluded when none is surely crossed. */
+bench_side bench_judge_occluded(const bench_judge *j, const cbvh_ray *ray, int cbvh, int peer);
+
+/* The side the reference takes on first-hit overlap query q (kind as for bench_judge_overlap) between cbvh's
+ * answer and the peer's (count 0: the shape touches nothing; 1: it touches triangle tri): a miss is borne out
+ * when no triangle surely overlaps, a hit when its triangle is not surely apart (ref_*_class with the overlap
+ * tolerance), by brute force over every triangle. */
+bench_side bench_judge_first_hit(const bench_judge *j, shape_kind kind, const shape_query *q,
+                                 const shape_answer *cbvh, const shape_answer *peer);
+
 /* The side the reference takes on sweep query q between the first contacts cbvh and the peer found:
  * ref_sweep's first contact, by brute force. A miss is borne out when the shape shrunk by the overlap
  * tolerance misses too; a hit when it is on the reference's first triangle or within the sweep tolerance

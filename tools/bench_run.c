@@ -238,17 +238,6 @@ void bench_cbvh_kernel(const void *engine, const cbvh_ray *rays, size_t count, c
             occluded[i] = (uint8_t)cbvh_occluded(e->file, &rays[i], e->traversal, stats);
 }
 
-void bench_agree_closest(bench_agreement *a, const cbvh_ray *rays, const cbvh_hit *ref, const cbvh_hit *other,
-                         size_t count, double tolerance)
-{
-    for (size_t i = 0; i < count; i++) {
-        const float *d = rays[i].dir;
-        double len = sqrt((double)d[0] * d[0] + (double)d[1] * d[1] + (double)d[2] * d[2]);
-        bench_agree_one(a, ref[i].tri, other[i].tri, fabs((double)ref[i].t - (double)other[i].t) * len,
-                        tolerance);
-    }
-}
-
 void bench_agree_one(bench_agreement *a, uint32_t tri_ref, uint32_t tri_other, double distance,
                      double tolerance)
 {
@@ -261,12 +250,4 @@ void bench_agree_one(bench_agreement *a, uint32_t tri_ref, uint32_t tri_other, d
         a->same_triangle++;
     else
         a->t_close++;
-}
-
-uint64_t bench_disagree_any(const uint8_t *ref, const uint8_t *other, size_t count)
-{
-    uint64_t n = 0;
-    for (size_t i = 0; i < count; i++)
-        n += (ref[i] != 0) != (other[i] != 0);
-    return n;
 }

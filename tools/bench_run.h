@@ -99,16 +99,9 @@ typedef struct bench_agreement {
     uint64_t disagree; /* hit against miss, or t apart by more than the tolerance */
 } bench_agreement;
 
-/* Adds the comparison of count answers; tolerance is a distance (|t - t_ref| * |dir|). */
-void bench_agree_closest(bench_agreement *a, const cbvh_ray *rays, const cbvh_hit *ref, const cbvh_hit *other,
-                         size_t count, double tolerance);
-
 /* Adds one comparison: whether each answer hit, the triangles, and how far apart the two hits' t lie as a
  * distance (ignored unless both hit). */
 void bench_agree_one(bench_agreement *a, uint32_t tri_ref, uint32_t tri_other, double distance,
                      double tolerance);
-
-/* Rays whose any-hit flags differ. */
-uint64_t bench_disagree_any(const uint8_t *ref, const uint8_t *other, size_t count);
 
 #endif

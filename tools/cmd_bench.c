@@ -1,5 +1,5 @@
-/* cmd_bench.c: `cbvh bench`: cbvh's cook, open and query speed beside Embree, Bullet and tinybvh on the same
- * rays. */
+/* cmd_bench.c: `cbvh bench`: cbvh's cook, open and query speed beside Embree, Bullet, tinybvh and Jolt on the
+ * same rays and shapes. */
 #include "config.h"
 
 #include <errno.h>
@@ -42,17 +42,22 @@ static const char usage[] =
     "and their ratios hold. The peers\n"
     "found at configure time (Embree 3 single rays and 16-ray packets, default and robust;\n"
     "Bullet 3 quantized BVH; tinybvh's BVH8_CPU and BVH4_CPU single rays, built with BuildHQ,\n"
-    "with configure --with-tinybvh=DIR, on CPUs with AVX2 and FMA) run on the same triangles\n"
+    "with configure --with-tinybvh=DIR, on CPUs with AVX2 and FMA; Jolt Physics's MeshShape, with\n"
+    "configure --with-jolt=PREFIX) run on the same triangles\n"
     "and rays: build time, memory per triangle, MRays/s, the ratio cbvh/peer, and ray-by-ray\n"
-    "agreement with cbvh's answers. A peer the build or the CPU lacks gets one line saying so.\n"
+    "agreement with cbvh's answers (disagreements decided against the reference, as below).\n"
+    "A peer the build or the CPU lacks gets one line saying so.\n"
     "Then shape queries as games ask them near a surface (shapes about 1% of the diagonal\n"
-    "across, capsules along random directions): sphere, capsule and box sweeps moving 1.5% of\n"
-    "the diagonal, and sphere, capsule and box overlaps, beside Bullet (convex casts and its\n"
-    "per-triangle narrow phase, margins 0 on boxes and triangles): microseconds per query,\n"
-    "queries per second, the ratio cbvh/Bullet, and agreement query by query (the same first\n"
+    "across, capsules along random directions): sphere, capsule, box and oriented box (turned\n"
+    "by a uniform rotation) sweeps moving 1.5% of the diagonal, and sphere, capsule and box\n"
+    "overlaps, every triangle and the first hit (whether the shape touches any: each engine\n"
+    "stops at the first triangle; Bullet cannot), beside Bullet (convex casts and its\n"
+    "per-triangle narrow phase, margins 0 on boxes and triangles) and Jolt (CastShape and\n"
+    "CollideShape, back faces colliding, boxes of convex radius 0): microseconds per query,\n"
+    "queries per second, the ratio cbvh/peer, and agreement query by query (the same first\n"
     "triangle or t within 1e-4 of the diagonal for sweeps, the same triangle set for\n"
     "overlaps). Up to 200 disagreements per set (fewer once checking them took the budget)\n"
-    "are decided against a double-precision brute force, which sides with cbvh, with Bullet,\n"
+    "are decided against a double-precision brute force, which sides with cbvh, with the peer,\n"
     "with both or with neither (within 1e-5 of the diagonal).\n"
     "The cooked file is read as a game loading it from disk reads it: its pages are dropped\n"
     "from the system's cache before the first open (where the system has posix_fadvise), so\n"
@@ -173,9 +178,21 @@ static void bullet_kernel(const void *engine, const cbvh_ray *rays, size_t count
 }
 #endif
 
+#ifdef HAVE_JOLT
+static void jolt_kernel(const void *engine, const cbvh_ray *rays, size_t count, cbvh_hit *hits,
+                        uint8_t *occluded, cbvh_query_stats *stats)
+{
+    if (hits)
+        jolt_peer_raycast(engine, rays, count, hits);
+    else
+        jolt_peer_occluded(engine, rays, count, occluded);
+}
+#endif
+
 /* One way to answer the queries: a cbvh traversal or a peer configuration. */
 typedef struct method {
-    const char *engine;  /* "cbvh", "embree", "embree-robust", "bullet", "tinybvh-bvh8", "tinybvh-bvh4" */
+    const char *engine;  /* "cbvh", "embree", "embree-robust", "bullet", "tinybvh-bvh8", "tinybvh-bvh4",
+                          * "jolt" */
     const char *variant; /* "sorted", "stream", "single", "packet16", "quantized" ... */
     bench_kernel kernel;
     const void *state;
@@ -183,26 +200,33 @@ typedef struct method {
     int main;    /* measured at every thread count, not only the first */
 } method;
 
-/* A shape query engine: answers queries[0..count) of one kind, sweeps or overlaps. */
-typedef void (*shape_kernel)(const void *engine, shape_kind kind, int sweep, const shape_query *queries,
-                             size_t count, shape_answer *out);
+/* What a shape set asks: a sweep's first contact, every triangle an overlap touches, or an overlap's first
+ * hit (whether the shape touches any triangle: the engine stops at the first it finds). */
+typedef enum shape_question { SHAPE_SWEEP, SHAPE_OVERLAP, SHAPE_FIRST_HIT } shape_question;
+#define SHAPE_QUESTION_COUNT 3
+static const char *const shape_question_names[SHAPE_QUESTION_COUNT] = {"sweep", "overlap", "first-hit"};
+
+/* A shape query engine: answers queries[0..count) of one kind and question. */
+typedef void (*shape_kernel)(const void *engine, shape_kind kind, shape_question question,
+                             const shape_query *queries, size_t count, shape_answer *out);
 
 /* Marks in j the triangles an engine reports for overlap query q (bench_judge_mark: side 0 for cbvh, 1 for
  * a peer). */
 typedef void (*shape_marker)(const void *engine, shape_kind kind, const shape_query *q, bench_judge *j);
 
 typedef struct shape_method {
-    const char *engine; /* "cbvh", "bullet" */
+    const char *engine; /* "cbvh", "bullet", "jolt" */
     shape_kernel kernel;
     shape_marker mark;
     const void *state;
+    const char *no_first_hit; /* why it answers no first-hit overlaps (its rows left out), or NULL */
 } shape_method;
 
 /* A slice of shape queries for bench_run's threads. */
 typedef struct shape_job {
     const shape_method *m;
     shape_kind kind;
-    int sweep;
+    shape_question question;
     const shape_query *queries;
     shape_answer *answers;
 } shape_job;
@@ -235,14 +259,36 @@ static void cbvh_overlap_each(const cbvh_file *f, shape_kind kind, const shape_q
     }
 }
 
+/* Keeps the first triangle an overlap reports and stops the query. */
+static int first_overlap(void *user, uint32_t tri)
+{
+    shape_answer *a = user;
+    a->tri = tri;
+    a->count = 1;
+    return 1;
+}
+
 /* cbvh's answer to one shape query; the engine is the opened file. */
-static void cbvh_shape_query(const cbvh_file *f, shape_kind kind, int sweep, const shape_query *q,
-                             shape_answer *a)
+static void cbvh_shape_query(const cbvh_file *f, shape_kind kind, shape_question question,
+                             const shape_query *q, shape_answer *a)
 {
     memset(a, 0, sizeof *a);
     a->tri = CBVH_NO_HIT;
     a->t = INFINITY;
-    if (sweep) {
+    const int sweep = question == SHAPE_SWEEP;
+    if (sweep && kind == SHAPE_ORIENTED_BOX) {
+        cbvh_shape box;
+        memset(&box, 0, sizeof box);
+        box.kind = CBVH_SHAPE_BOX;
+        memcpy(box.center, q->p0, sizeof box.center);
+        memcpy(box.half_extent, q->size, sizeof box.half_extent);
+        memcpy(box.rotation, q->rotation, sizeof box.rotation);
+        cbvh_sweep_record record;
+        if (cbvh_sweep_with(f, &box, q->delta, NULL, &record) == CBVH_OK && record.tri != CBVH_NO_HIT) {
+            a->tri = record.tri;
+            a->t = record.t;
+        }
+    } else if (sweep) {
         cbvh_sweep_hit h;
         int hit = kind == SHAPE_SPHERE ? cbvh_sweep_sphere(f, q->p0, q->size[0], q->delta, &h)
                   : kind == SHAPE_BOX  ? cbvh_sweep_box(f, q->p0, q->size, q->delta, &h)
@@ -252,7 +298,7 @@ static void cbvh_shape_query(const cbvh_file *f, shape_kind kind, int sweep, con
             a->t = h.t;
         }
     } else {
-        cbvh_overlap_each(f, kind, q, add_overlap, a);
+        cbvh_overlap_each(f, kind, q, question == SHAPE_FIRST_HIT ? first_overlap : add_overlap, a);
     }
 }
 
@@ -267,26 +313,46 @@ static void cbvh_shape_mark(const void *engine, shape_kind kind, const shape_que
     cbvh_overlap_each(engine, kind, q, mark_cbvh, j);
 }
 
-static void cbvh_shape_kernel(const void *engine, shape_kind kind, int sweep, const shape_query *queries,
-                              size_t count, shape_answer *out)
+static void cbvh_shape_kernel(const void *engine, shape_kind kind, shape_question question,
+                              const shape_query *queries, size_t count, shape_answer *out)
 {
     for (size_t i = 0; i < count; i++)
-        cbvh_shape_query(engine, kind, sweep, &queries[i], &out[i]);
+        cbvh_shape_query(engine, kind, question, &queries[i], &out[i]);
 }
 
-#ifdef HAVE_BULLET
-static void bullet_shape_kernel(const void *engine, shape_kind kind, int sweep, const shape_query *queries,
-                                size_t count, shape_answer *out)
-{
-    if (sweep)
-        bullet_peer_sweep(engine, kind, queries, count, out);
-    else
-        bullet_peer_overlap(engine, kind, queries, count, out);
-}
-
+#if defined(HAVE_BULLET) || defined(HAVE_JOLT)
 static void mark_peer(void *judge, uint32_t tri)
 {
     bench_judge_mark(judge, 1, tri);
+}
+#endif
+
+#ifdef HAVE_JOLT
+static void jolt_shape_kernel(const void *engine, shape_kind kind, shape_question question,
+                              const shape_query *queries, size_t count, shape_answer *out)
+{
+    if (question == SHAPE_SWEEP)
+        jolt_peer_sweep(engine, kind, queries, count, out);
+    else if (question == SHAPE_OVERLAP)
+        jolt_peer_overlap(engine, kind, queries, count, out);
+    else
+        jolt_peer_overlap_first(engine, kind, queries, count, out);
+}
+
+static void jolt_shape_mark(const void *engine, shape_kind kind, const shape_query *q, bench_judge *j)
+{
+    jolt_peer_overlap_each(engine, kind, q, mark_peer, j);
+}
+#endif
+
+#ifdef HAVE_BULLET
+static void bullet_shape_kernel(const void *engine, shape_kind kind, shape_question question,
+                                const shape_query *queries, size_t count, shape_answer *out)
+{
+    if (question == SHAPE_SWEEP)
+        bullet_peer_sweep(engine, kind, queries, count, out);
+    else
+        bullet_peer_overlap(engine, kind, queries, count, out);
 }
 
 static void bullet_shape_mark(const void *engine, shape_kind kind, const shape_query *q, bench_judge *j)
@@ -300,7 +366,7 @@ static void shape_range(const void *job, size_t begin, size_t end, cbvh_query_st
 {
     const shape_job *j = job;
     (void)stats;
-    j->m->kernel(j->m->state, j->kind, j->sweep, j->queries + begin, end - begin, j->answers + begin);
+    j->m->kernel(j->m->state, j->kind, j->question, j->queries + begin, end - begin, j->answers + begin);
 }
 
 /* A built engine's cost. */
@@ -310,7 +376,9 @@ typedef struct build_row {
     double open_seconds; /* cbvh only, else negative */
     uint64_t bytes;      /* file size, or acceleration structure + shared mesh arrays */
     uint64_t structure_bytes;
-    uint64_t traversed_bytes; /* tinybvh: the blocks its queries read; else 0 */
+    uint64_t traversed_bytes;   /* tinybvh: the blocks its queries read; else 0 */
+    uint64_t dropped_triangles; /* Jolt: the triangles it left out of its shape; else 0 */
+    uint64_t id_bytes;          /* Jolt: the part of bytes holding each triangle's index; else 0 */
 } build_row;
 
 typedef struct result_row {
@@ -330,28 +398,30 @@ typedef struct agree_row {
     bench_agreement closest;
     uint64_t any_disagree;
     size_t closest_count, any_count; /* rays compared */
+    uint64_t checked[2];  /* [0] closest, [1] any hit: disagreements decided against the reference */
+    uint64_t sides[2][4]; /* how many it decided for each bench_side */
 } agree_row;
 
 /* A shape set's time with one engine and thread count. */
 typedef struct shape_row {
     shape_kind kind;
-    int sweep;
+    shape_question question;
     const shape_method *m;
     unsigned threads;
     double seconds;
     size_t count; /* queries timed */
     unsigned runs;
-    uint64_t found; /* sweeps: queries that hit; overlaps: triangles reported (over the queries timed) */
+    uint64_t found; /* over the queries timed: sweeps, first hits: queries that hit; overlaps: triangles */
 } shape_row;
 
 /* A peer's answers against cbvh's, query by query. */
 typedef struct shape_agree_row {
     shape_kind kind;
-    int sweep;
+    shape_question question;
     const shape_method *m;
-    bench_agreement sweeps;                            /* sweeps: t compared as a distance along the motion */
-    uint64_t same_set, both_empty, other_set;          /* overlaps */
-    uint64_t ref_triangles, other_triangles;           /* overlaps: triangles reported by each */
+    bench_agreement sweeps;                   /* sweeps: t compared as a distance along the motion */
+    uint64_t same_set, both_empty, other_set; /* overlaps; first hits: both hit, neither, one */
+    uint64_t ref_triangles, other_triangles;  /* overlaps: triangles reported by each; first hits: hits */
     uint64_t ref_start_touching, other_start_touching; /* sweeps: t = 0 answers */
     double t_distance_max; /* sweeps, both hit: the largest |t - t_cbvh| * |delta| */
     double t_distance_sum; /* sweeps, the same triangle: the sum of |t - t_cbvh| * |delta| */
@@ -361,8 +431,8 @@ typedef struct shape_agree_row {
 } shape_agree_row;
 
 #define MAX_METHODS 16
-#define MAX_BUILDS 7
-#define MAX_SHAPE_METHODS 2
+#define MAX_BUILDS 8
+#define MAX_SHAPE_METHODS 3
 
 typedef struct bench_state {
     const char *command;
@@ -412,6 +482,10 @@ typedef struct bench_state {
     tinybvh_peer *tinybvh[2];
     int tinybvh_cpu_lacks; /* the CPU has no AVX2 or FMA: tinybvh not run */
 #endif
+#ifdef HAVE_JOLT
+    jolt_peer *jolt;
+    int jolt_cpu_lacks; /* Jolt was built for AVX2 and FMA, which the CPU lacks: Jolt not run */
+#endif
 } bench_state;
 
 static void add_method(bench_state *s, const char *engine, const char *variant, bench_kernel kernel,
@@ -427,13 +501,14 @@ static void add_method(bench_state *s, const char *engine, const char *variant, 
 }
 
 static void add_shape_method(bench_state *s, const char *engine, shape_kernel kernel, shape_marker mark,
-                             const void *state)
+                             const void *state, const char *no_first_hit)
 {
     shape_method *m = &s->shape_methods[s->shape_method_count++];
     m->engine = engine;
     m->kernel = kernel;
     m->mark = mark;
     m->state = state;
+    m->no_first_hit = no_first_hit;
 }
 
 /* The largest thread count asked for. */
@@ -511,7 +586,7 @@ static void add_cbvh_methods(bench_state *s)
         bench_cbvh_variant(e, s->file, s->expanded, k);
         add_method(s, "cbvh", e->name, bench_cbvh_kernel, e, 1, k == 0);
     }
-    add_shape_method(s, "cbvh", cbvh_shape_kernel, cbvh_shape_mark, s->file);
+    add_shape_method(s, "cbvh", cbvh_shape_kernel, cbvh_shape_mark, s->file, NULL);
 }
 
 /* The build row of a peer just built. */
@@ -524,6 +599,8 @@ static void add_peer_build(bench_state *s, const char *engine, const peer_build_
     b->bytes = info->memory_bytes + info->mesh_bytes;
     b->structure_bytes = info->memory_bytes;
     b->traversed_bytes = info->traversed_bytes;
+    b->dropped_triangles = info->dropped_triangles;
+    b->id_bytes = info->id_bytes;
 }
 
 /* Builds every peer configure found; a peer that fails to build is reported and skipped. */
@@ -578,7 +655,26 @@ static void build_peers(bench_state *s)
     } else {
         add_peer_build(s, "bullet", &info);
         add_method(s, "bullet", "quantized", bullet_kernel, s->bullet, 0, 1);
-        add_shape_method(s, "bullet", bullet_shape_kernel, bullet_shape_mark, s->bullet);
+        add_shape_method(s, "bullet", bullet_shape_kernel, bullet_shape_mark, s->bullet,
+                         "its processAllTriangles cannot stop at the first triangle");
+    }
+#endif
+#ifdef HAVE_JOLT
+#ifdef JOLT_NEEDS_AVX2_FMA
+    s->jolt_cpu_lacks = !cbvh_cpu_has_avx2_fma();
+#endif
+    if (!s->jolt_cpu_lacks) {
+        progress_update(&s->prog, "building jolt", -1.0);
+        memset(&info, 0, sizeof info);
+        s->jolt = jolt_peer_create(&pm, &info, err, sizeof err);
+        progress_done(&s->prog);
+        if (!s->jolt) {
+            cli_error(s->command, NULL, "%s", err);
+        } else {
+            add_peer_build(s, "jolt", &info);
+            add_method(s, "jolt", "meshshape", jolt_kernel, s->jolt, 0, 1);
+            add_shape_method(s, "jolt", jolt_shape_kernel, jolt_shape_mark, s->jolt, NULL);
+        }
     }
 #endif
 }
@@ -595,6 +691,9 @@ static void destroy_peers(bench_state *s)
 #ifdef HAVE_TINYBVH
     tinybvh_peer_destroy(s->tinybvh[0]);
     tinybvh_peer_destroy(s->tinybvh[1]);
+#endif
+#ifdef HAVE_JOLT
+    jolt_peer_destroy(s->jolt);
 #endif
     (void)s;
 }
@@ -671,6 +770,31 @@ static int time_jobs(bench_state *s, timed_job *jobs, int n, size_t probe, unsig
     return status;
 }
 
+/* Whether one more disagreement of a set may be decided against the reference: `checked` of them were, fewer
+ * than BENCH_JUDGE_QUERIES, and the checks began (at *start, the first check's time, when negative) within
+ * the budget; reads the reference at the first check. */
+static int judge_ready(bench_state *s, uint64_t checked, double *start)
+{
+    if (checked >= BENCH_JUDGE_QUERIES || s->judge_state < 0)
+        return 0;
+    double now = bench_clock(s->cpu_clock);
+    if (*start < 0.0)
+        *start = now;
+    else if (s->budget > 0.0f && now - *start > s->budget)
+        return 0;
+    if (s->judge_state == 0) {
+        s->judge_state = bench_judge_init(&s->judge, s->file, (uint32_t)s->mesh.triangle_count,
+                                          AGREE_TOLERANCE * s->diagonal, SWEEP_AGREE_TOLERANCE * s->diagonal)
+                             ? 1
+                             : -1;
+        if (s->judge_state < 0) {
+            cli_error(s->command, NULL, "out of memory for the reference: disagreements not checked");
+            return 0;
+        }
+    }
+    return 1;
+}
+
 /* What the agreement check of a ray set's methods needs (set_answered). */
 typedef struct set_context {
     bench_state *s;
@@ -690,16 +814,37 @@ static void set_answered(void *ctx, int k, const bench_job *job)
         return;
     agree_row *a =
         &s->agreements[c->any ? s->agree_count - (s->method_count - 1) + (m - 1) : s->agree_count++];
+    const cbvh_ray *rays = c->b->rays;
+    double start = -1.0;
     if (!c->any) {
         memset(a, 0, sizeof *a);
         a->set = c->set;
         a->m = &s->methods[m];
         a->closest_count = job->count;
-        bench_agree_closest(&a->closest, c->b->rays, c->b->ref_hits, c->b->hits, job->count,
+        const cbvh_hit *x = c->b->ref_hits, *y = c->b->hits;
+        for (size_t i = 0; i < job->count; i++) {
+            const float *d = rays[i].dir;
+            const double len = sqrt((double)d[0] * d[0] + (double)d[1] * d[1] + (double)d[2] * d[2]);
+            const uint64_t before = a->closest.disagree;
+            bench_agree_one(&a->closest, x[i].tri, y[i].tri, fabs((double)x[i].t - (double)y[i].t) * len,
                             AGREE_TOLERANCE * s->diagonal);
+            if (a->closest.disagree != before && judge_ready(s, a->checked[0], &start)) {
+                a->sides[0][bench_judge_ray(&s->judge, &rays[i], &x[i], &y[i])]++;
+                a->checked[0]++;
+            }
+        }
     } else {
         a->any_count = job->count;
-        a->any_disagree = bench_disagree_any(c->b->ref_occluded, c->b->occluded, job->count);
+        const uint8_t *x = c->b->ref_occluded, *y = c->b->occluded;
+        for (size_t i = 0; i < job->count; i++) {
+            if ((x[i] != 0) == (y[i] != 0))
+                continue;
+            a->any_disagree++;
+            if (judge_ready(s, a->checked[1], &start)) {
+                a->sides[1][bench_judge_occluded(&s->judge, &rays[i], x[i], y[i])]++;
+                a->checked[1]++;
+            }
+        }
     }
 }
 
@@ -765,26 +910,13 @@ static int measure_set(bench_state *s, ray_kind set, buffers *b, int *step, int 
 static void judge_shape(bench_state *s, shape_agree_row *a, const shape_query *q, const shape_answer *x,
                         const shape_answer *y, double *start)
 {
-    if (a->checked >= BENCH_JUDGE_QUERIES || s->judge_state < 0)
+    if (!judge_ready(s, a->checked, start))
         return;
-    double now = bench_clock(s->cpu_clock);
-    if (*start < 0.0)
-        *start = now;
-    else if (s->budget > 0.0f && now - *start > s->budget)
-        return;
-    if (s->judge_state == 0) {
-        s->judge_state = bench_judge_init(&s->judge, s->file, (uint32_t)s->mesh.triangle_count,
-                                          AGREE_TOLERANCE * s->diagonal, SWEEP_AGREE_TOLERANCE * s->diagonal)
-                             ? 1
-                             : -1;
-        if (s->judge_state < 0) {
-            cli_error(s->command, NULL, "out of memory for the reference: disagreements not checked");
-            return;
-        }
-    }
     bench_side side;
-    if (a->sweep) {
+    if (a->question == SHAPE_SWEEP) {
         side = bench_judge_sweep(&s->judge, a->kind, q, x, y);
+    } else if (a->question == SHAPE_FIRST_HIT) {
+        side = bench_judge_first_hit(&s->judge, a->kind, q, x, y);
     } else {
         s->shape_methods[0].mark(s->shape_methods[0].state, a->kind, q, &s->judge);
         a->m->mark(a->m->state, a->kind, q, &s->judge);
@@ -801,7 +933,7 @@ static void agree_shapes(bench_state *s, shape_agree_row *a, const shape_query *
     a->count = count;
     for (size_t i = 0; i < count; i++) {
         const shape_answer *x = &ref[i], *y = &other[i];
-        if (!a->sweep) {
+        if (a->question != SHAPE_SWEEP) { /* a first hit's count is 0 or 1, its set_hash 0 */
             a->ref_triangles += x->count;
             a->other_triangles += y->count;
             if (x->count != y->count || x->set_hash != y->set_hash) {
@@ -851,13 +983,13 @@ static void shapes_answered(void *ctx, int k, const bench_job *job)
     shape_row *r = c->rows[k];
     const shape_answer *answers = k == 0 ? c->ref : c->other;
     for (size_t i = 0; i < job->count; i++)
-        r->found += r->sweep ? answers[i].tri != CBVH_NO_HIT : answers[i].count;
+        r->found += r->question == SHAPE_SWEEP ? answers[i].tri != CBVH_NO_HIT : answers[i].count;
     if (k == 0 || !c->check)
         return;
     shape_agree_row *a = &c->s->shape_agreements[c->s->shape_agree_count++];
     memset(a, 0, sizeof *a);
     a->kind = r->kind;
-    a->sweep = r->sweep;
+    a->question = r->question;
     a->m = r->m;
     agree_shapes(c->s, a, c->queries, c->ref, c->other, job->count, SWEEP_AGREE_TOLERANCE * c->s->diagonal);
 }
@@ -865,8 +997,9 @@ static void shapes_answered(void *ctx, int k, const bench_job *job)
 /* Measures every shape engine on one shape set at every thread count, the engines of a thread count timed
  * together (time_jobs); cbvh (engine 0) first, as the reference, compared with each peer at the first
  * thread count. */
-static int measure_shapes(bench_state *s, shape_kind kind, int sweep, const shape_query *queries,
-                          shape_answer *ref, shape_answer *other, int *step, int steps)
+static int measure_shapes(bench_state *s, shape_kind kind, shape_question question,
+                          const shape_query *queries, shape_answer *ref, shape_answer *other, int *step,
+                          int steps)
 {
     char label[96];
     for (int ti = 0; ti < s->thread_count_n; ti++) {
@@ -874,15 +1007,19 @@ static int measure_shapes(bench_state *s, shape_kind kind, int sweep, const shap
         timed_job jobs[MAX_SHAPE_METHODS];
         shape_job sj[MAX_SHAPE_METHODS];
         shape_row *rows[MAX_SHAPE_METHODS];
-        const int n = s->shape_method_count;
-        for (int k = 0; k < n; k++) {
+        int n = 0;
+        for (int e = 0; e < s->shape_method_count; e++) {
             (*step)++;
-            sj[k] = (shape_job){&s->shape_methods[k], kind, sweep, queries, k == 0 ? ref : other};
+            const shape_method *m = &s->shape_methods[e];
+            if (question == SHAPE_FIRST_HIT && m->no_first_hit)
+                continue;
+            const int k = n++;
+            sj[k] = (shape_job){m, kind, question, queries, k == 0 ? ref : other};
             shape_row *r = &s->shape_results[s->shape_result_count++];
             memset(r, 0, sizeof *r);
             r->kind = kind;
-            r->sweep = sweep;
-            r->m = &s->shape_methods[k];
+            r->question = question;
+            r->m = m;
             r->threads = threads;
             rows[k] = r;
             memset(&jobs[k], 0, sizeof jobs[k]);
@@ -891,7 +1028,7 @@ static int measure_shapes(bench_state *s, shape_kind kind, int sweep, const shap
             jobs[k].reference = k == 0;
         }
         snprintf(label, sizeof label, "%s %s: %d engines, %u thread(s)", shape_kind_name(kind),
-                 sweep ? "sweep" : "overlap", n, threads);
+                 shape_question_names[question], n, threads);
         progress_update(&s->prog, label, (double)*step / steps);
         shape_context ctx = {s, ti == 0, rows, queries, ref, other};
         double seconds[MAX_SHAPE_METHODS];
@@ -942,7 +1079,7 @@ static const shape_row *cbvh_shape_row(const bench_state *s, const shape_row *r)
 {
     for (int i = 0; i < s->shape_result_count; i++) {
         const shape_row *x = &s->shape_results[i];
-        if (x->kind == r->kind && x->sweep == r->sweep && x->threads == r->threads &&
+        if (x->kind == r->kind && x->question == r->question && x->threads == r->threads &&
             x->m == &s->shape_methods[0])
             return x;
     }
@@ -987,22 +1124,39 @@ static void print_shape_tables(const bench_state *s)
         const shape_row *r = &s->shape_results[i];
         double speed = queries_per_second(r);
         printf("| %s | %s | %s | %u | %.3f | %.0f | %.0f | %.3f | %.3f | %u x %zu |\n",
-               shape_kind_name(r->kind), r->sweep ? "sweep" : "overlap", r->m->engine, r->threads,
+               shape_kind_name(r->kind), shape_question_names[r->question], r->m->engine, r->threads,
                micros_per_query(r), speed, speed / r->threads,
                r->count ? (double)r->found / (double)r->count : 0.0, shape_ratio(s, r), r->runs, r->count);
     }
+    printf(
+        "\nfirst-hit: the overlap queries again, each engine stopping at the first triangle it finds (hits: "
+        "queries that touch one).\n");
+    for (int k = 0; k < s->shape_method_count; k++)
+        if (s->shape_methods[k].no_first_hit)
+            printf("%s answers no first-hit overlap (%s): no %s first-hit rows.\n",
+                   s->shape_methods[k].engine, s->shape_methods[k].no_first_hit, s->shape_methods[k].engine);
     if (s->shape_agree_count == 0)
         return;
+#ifdef HAVE_JOLT
+    if (s->jolt)
+        printf(
+            "\nJolt's tolerances are absolute, in the mesh's units whatever its size (its collision "
+            "tolerance "
+            "is 1e-4: its casts stop and its contacts count within about that distance of a triangle), and "
+            "it answers without the triangles it left out (see above).\n");
+#endif
     printf(
         "\nShape agreement with cbvh, query by query (sweeps: the same first triangle, or another one with t "
-        "times the motion's length within %.0e of the scene diagonal; overlaps: the same set of triangles). "
+        "times the motion's length within %.0e of the scene diagonal; overlaps: the same set of triangles; "
+        "first hits: both touch or neither, the same set column counting both touch). "
         "Bullet's casts stop 0.001 mesh units short of contact (its constant), so its t come early; the t "
         "apart "
         "columns say by how much, as a fraction of the diagonal. Up to %d disagreements per set (fewer "
         "once checking them took the budget) are decided against a double-precision brute force (the "
         "tests' reference): it sides with an engine whose answer it bears out (sweeps: by the rule "
         "above, a miss when the shape shrunk by %.0e of the diagonal misses too; overlaps: every triangle "
-        "that surely overlaps and none surely apart, within %.0e of the diagonal), with both, or with "
+        "that surely overlaps and none surely apart, within %.0e of the diagonal; first hits: a triangle not "
+        "surely apart, or none when none surely overlaps), with both, or with "
         "neither:\n\n",
         SWEEP_AGREE_TOLERANCE, BENCH_JUDGE_QUERIES, AGREE_TOLERANCE, AGREE_TOLERANCE);
     printf("| shape | query | engine | same triangle or set | both miss or none | t close, other triangle | "
@@ -1011,8 +1165,9 @@ static void print_shape_tables(const bench_state *s)
     printf("|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
     for (int i = 0; i < s->shape_agree_count; i++) {
         const shape_agree_row *a = &s->shape_agreements[i];
-        printf("| %s | %s | %s | ", shape_kind_name(a->kind), a->sweep ? "sweep" : "overlap", a->m->engine);
-        if (a->sweep)
+        printf("| %s | %s | %s | ", shape_kind_name(a->kind), shape_question_names[a->question],
+               a->m->engine);
+        if (a->question == SHAPE_SWEEP)
             printf("%llu | %llu | %llu | %llu | ", (unsigned long long)a->sweeps.same_triangle,
                    (unsigned long long)a->sweeps.both_miss, (unsigned long long)a->sweeps.t_close,
                    (unsigned long long)a->sweeps.disagree);
@@ -1023,7 +1178,7 @@ static void print_shape_tables(const bench_state *s)
                (unsigned long long)a->sides[BENCH_SIDE_CBVH], (unsigned long long)a->sides[BENCH_SIDE_PEER],
                (unsigned long long)a->sides[BENCH_SIDE_BOTH],
                (unsigned long long)a->sides[BENCH_SIDE_NEITHER]);
-        if (a->sweep)
+        if (a->question == SHAPE_SWEEP)
             printf("%llu / %llu | %.2e | %.2e | - | %zu |\n", (unsigned long long)a->ref_start_touching,
                    (unsigned long long)a->other_start_touching, t_apart_mean(s, a),
                    a->t_distance_max / s->diagonal, a->count);
@@ -1074,6 +1229,21 @@ static void print_tables(const bench_state *s)
                 "%s keeps its build data (the trees it converted from): its queries read %.2f bytes/tri of "
                 "its blocks, which hold their own copies of the triangles.\n",
                 s->builds[i].engine, (double)s->builds[i].traversed_bytes / tris);
+    for (int i = 0; i < s->build_count; i++)
+        if (s->builds[i].id_bytes)
+            printf("%s keeps its own compressed copy of the triangles (no shared arrays); %.2f bytes/tri of "
+                   "it are "
+                   "each triangle's index, its user data, which its answers need to name the mesh's "
+                   "triangles (it "
+                   "reorders them): %.2f bytes/tri without.\n",
+                   s->builds[i].engine, (double)s->builds[i].id_bytes / tris,
+                   (double)(s->builds[i].bytes - s->builds[i].id_bytes) / tris);
+    for (int i = 0; i < s->build_count; i++)
+        if (s->builds[i].dropped_triangles)
+            printf("%s left out %llu of the %zu triangles (area below 5e-7 in the mesh's units, its absolute "
+                   "degenerate test, or degenerate once quantized): it answers without them.\n",
+                   s->builds[i].engine, (unsigned long long)s->builds[i].dropped_triangles,
+                   s->mesh.triangle_count);
     if (!s->no_peers) {
 #if !defined(HAVE_EMBREE)
         printf("Embree 3 was not found at configure time: no Embree figures.\n");
@@ -1086,6 +1256,12 @@ static void print_tables(const bench_state *s)
 #else
         if (s->tinybvh_cpu_lacks)
             printf("tinybvh was built for AVX2 and FMA, which this CPU lacks: no tinybvh figures.\n");
+#endif
+#if !defined(HAVE_JOLT)
+        printf("Jolt Physics was not given at configure time (--with-jolt=PREFIX): no Jolt figures.\n");
+#else
+        if (s->jolt_cpu_lacks)
+            printf("Jolt was built for AVX2 and FMA, which this CPU lacks: no Jolt figures.\n");
 #endif
     }
     printf("\n");
@@ -1107,11 +1283,17 @@ static void print_tables(const bench_state *s)
         printf("%.3f | %u x %zu |\n", speed > 0.0 ? ref / speed : 0.0, r->runs, r->count);
     }
 
-    printf("\nAgreement with cbvh sorted, ray by ray (t within %.0e of the scene diagonal):\n\n",
-           AGREE_TOLERANCE);
-    printf("| rays | engine | variant | same triangle | both miss | t close, other triangle | disagree | "
-           "any-hit disagree | rays compared |\n");
-    printf("|---|---|---|---:|---:|---:|---:|---:|---:|\n");
+    printf(
+        "\nAgreement with cbvh sorted, ray by ray (t within %.0e of the scene diagonal). Up to %d "
+        "disagreements per set and query (fewer once checking them took the budget) are decided against the "
+        "double-precision brute force: a miss is borne out when no triangle is surely crossed, a hit when "
+        "its triangle is crossed at its t and no triangle surely before it, within %.0e of the diagonal:\n\n",
+        AGREE_TOLERANCE, BENCH_JUDGE_QUERIES, AGREE_TOLERANCE);
+    printf(
+        "| rays | engine | variant | same triangle | both miss | t close, other triangle | disagree | "
+        "any-hit disagree | rays compared | checked: closest + any | reference: cbvh / this / both / neither "
+        "|\n");
+    printf("|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|\n");
     for (int i = 0; i < s->agree_count; i++) {
         const agree_row *a = &s->agreements[i];
         printf("| %s | %s | %s | %llu | %llu | %llu | %llu | %llu | %zu", rays_kind_name(a->set),
@@ -1121,7 +1303,13 @@ static void print_tables(const bench_state *s)
                a->closest_count);
         if (a->any_count != a->closest_count)
             printf(" (any hit: %zu)", a->any_count);
-        printf(" |\n");
+        uint64_t sides[4];
+        for (int k = 0; k < 4; k++)
+            sides[k] = a->sides[0][k] + a->sides[1][k];
+        printf(" | %llu + %llu | %llu / %llu / %llu / %llu |\n", (unsigned long long)a->checked[0],
+               (unsigned long long)a->checked[1], (unsigned long long)sides[BENCH_SIDE_CBVH],
+               (unsigned long long)sides[BENCH_SIDE_PEER], (unsigned long long)sides[BENCH_SIDE_BOTH],
+               (unsigned long long)sides[BENCH_SIDE_NEITHER]);
     }
     print_shape_tables(s);
     fflush(stdout);
@@ -1182,6 +1370,10 @@ static int write_json(const bench_state *s)
         json_uint(&w, "structure_bytes", b->structure_bytes);
         if (b->traversed_bytes)
             json_uint(&w, "traversed_bytes", b->traversed_bytes);
+        if (b->dropped_triangles)
+            json_uint(&w, "dropped_triangles", b->dropped_triangles);
+        if (b->id_bytes)
+            json_uint(&w, "id_bytes", b->id_bytes);
         json_double(&w, "bytes_per_triangle", (double)b->bytes / tris);
         json_double(&w, "cbvh_over_this_bytes", (double)s->builds[0].bytes / (double)b->bytes);
         if (i > 0 && b->seconds > 0.0)
@@ -1231,6 +1423,17 @@ static int write_json(const bench_state *s)
         json_uint(&w, "any_disagree", a->any_disagree);
         json_uint(&w, "closest_rays_compared", a->closest_count);
         json_uint(&w, "any_rays_compared", a->any_count);
+        static const char *const questions[2] = {"closest", "any"};
+        static const char *const side_names[4] = {"neither", "cbvh", "this", "both"};
+        char key[64];
+        for (int q = 0; q < 2; q++) {
+            snprintf(key, sizeof key, "%s_disagreements_checked", questions[q]);
+            json_uint(&w, key, a->checked[q]);
+            for (int k = 0; k < 4; k++) {
+                snprintf(key, sizeof key, "%s_reference_sides_%s", questions[q], side_names[k]);
+                json_uint(&w, key, a->sides[q][k]);
+            }
+        }
         json_end_object(&w);
     }
     json_end_array(&w);
@@ -1239,7 +1442,7 @@ static int write_json(const bench_state *s)
         const shape_row *r = &s->shape_results[i];
         json_begin_object(&w, NULL);
         json_string(&w, "shape", shape_kind_name(r->kind));
-        json_string(&w, "query", r->sweep ? "sweep" : "overlap");
+        json_string(&w, "query", shape_question_names[r->question]);
         json_string(&w, "engine", r->m->engine);
         json_uint(&w, "threads", r->threads);
         json_double(&w, "seconds", r->seconds);
@@ -1248,7 +1451,7 @@ static int write_json(const bench_state *s)
         json_double(&w, "us_per_query", micros_per_query(r));
         json_double(&w, "queries_per_s", queries_per_second(r));
         json_double(&w, "queries_per_s_per_thread", queries_per_second(r) / r->threads);
-        json_double(&w, r->sweep ? "hits_per_query" : "triangles_per_query",
+        json_double(&w, r->question == SHAPE_OVERLAP ? "triangles_per_query" : "hits_per_query",
                     r->count ? (double)r->found / (double)r->count : 0.0);
         json_double(&w, "cbvh_over_this", shape_ratio(s, r));
         json_end_object(&w);
@@ -1259,9 +1462,9 @@ static int write_json(const bench_state *s)
         const shape_agree_row *a = &s->shape_agreements[i];
         json_begin_object(&w, NULL);
         json_string(&w, "shape", shape_kind_name(a->kind));
-        json_string(&w, "query", a->sweep ? "sweep" : "overlap");
+        json_string(&w, "query", shape_question_names[a->question]);
         json_string(&w, "engine", a->m->engine);
-        if (a->sweep) {
+        if (a->question == SHAPE_SWEEP) {
             json_agreement(&w, &a->sweeps);
             json_uint(&w, "cbvh_start_touching", a->ref_start_touching);
             json_uint(&w, "this_start_touching", a->other_start_touching);
@@ -1319,9 +1522,9 @@ static int run(bench_state *s)
     int shape_rows = s->shapes ? s->thread_count_n * s->shape_method_count : 0;
     s->results = calloc((size_t)RAYS_KIND_COUNT * 2 * ray_rows, sizeof *s->results);
     s->agreements = calloc((size_t)RAYS_KIND_COUNT * s->method_count, sizeof *s->agreements);
-    s->shape_results = calloc((size_t)SHAPE_KIND_COUNT * 2 * shape_rows + 1, sizeof *s->shape_results);
-    s->shape_agreements =
-        calloc((size_t)SHAPE_KIND_COUNT * 2 * s->shape_method_count, sizeof *s->shape_agreements);
+    const int shape_sets = SHAPE_SWEEP_KIND_COUNT + 2 * SHAPE_OVERLAP_KIND_COUNT;
+    s->shape_results = calloc((size_t)shape_sets * shape_rows + 1, sizeof *s->shape_results);
+    s->shape_agreements = calloc((size_t)shape_sets * s->shape_method_count, sizeof *s->shape_agreements);
     shape_query *queries = malloc(s->shapes * sizeof *queries + 1);
     shape_answer *ref = malloc(s->shapes * sizeof *ref + 1), *other = malloc(s->shapes * sizeof *other + 1);
     if (!b.rays || !b.ref_hits || !b.hits || !b.ref_occluded || !b.occluded || !s->results ||
@@ -1329,17 +1532,21 @@ static int run(bench_state *s)
         cli_error(s->command, NULL, "out of memory for %zu rays and %zu shapes", s->rays, s->shapes);
         status = CLI_EXIT_USAGE;
     }
-    int step = 0, steps = RAYS_KIND_COUNT * 2 * ray_rows + SHAPE_KIND_COUNT * 2 * shape_rows;
+    int step = 0, steps = RAYS_KIND_COUNT * 2 * ray_rows + shape_sets * shape_rows;
     for (int set = 0; set < RAYS_KIND_COUNT && !status; set++) {
         rays_generate((ray_kind)set, &rm, s->seed, b.rays, s->rays);
         status = measure_set(s, (ray_kind)set, &b, &step, steps);
     }
-    /* sweeps first, the kinds in order: sphere, capsule, box */
-    for (int set = 0; set < 2 * SHAPE_KIND_COUNT && s->shapes && !status; set++) {
-        shape_kind kind = (shape_kind)(set % SHAPE_KIND_COUNT);
-        int sweep = set < SHAPE_KIND_COUNT;
-        shapes_generate(kind, sweep, &rm, s->seed, queries, s->shapes);
-        status = measure_shapes(s, kind, sweep, queries, ref, other, &step, steps);
+    /* sweeps first, the kinds in order: sphere, capsule, box, oriented box; then the overlaps, then their
+     * first hits (the same queries) */
+    for (int set = 0; set < shape_sets && s->shapes && !status; set++) {
+        const int overlap = set - SHAPE_SWEEP_KIND_COUNT;
+        const shape_question question = overlap < 0                          ? SHAPE_SWEEP
+                                        : overlap < SHAPE_OVERLAP_KIND_COUNT ? SHAPE_OVERLAP
+                                                                             : SHAPE_FIRST_HIT;
+        const shape_kind kind = (shape_kind)(overlap < 0 ? set : overlap % SHAPE_OVERLAP_KIND_COUNT);
+        shapes_generate(kind, question == SHAPE_SWEEP, &rm, s->seed, queries, s->shapes);
+        status = measure_shapes(s, kind, question, queries, ref, other, &step, steps);
     }
     progress_done(&s->prog);
     free(b.rays);

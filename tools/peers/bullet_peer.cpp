@@ -83,8 +83,9 @@ struct query_shape {
         place.setOrigin(0.5f * (p0 + p1));
         if (kind == SHAPE_SPHERE) {
             shape = &sphere;
-        } else if (kind == SHAPE_BOX) {
+        } else if (kind == SHAPE_BOX || kind == SHAPE_ORIENTED_BOX) {
             box.setMargin(0.0f);
+            place.setRotation(btQuaternion(q.rotation[0], q.rotation[1], q.rotation[2], q.rotation[3]));
             shape = &box;
         } else {
             btVector3 axis = p1 - p0;

@@ -1,5 +1,5 @@
-/* peers.h: a C interface to the libraries cbvh is benchmarked against (Embree 3, Bullet 3, tinybvh), when
- * configure found them. */
+/* peers.h: a C interface to the libraries cbvh is benchmarked against (Embree 3, Bullet 3, tinybvh, Jolt
+ * Physics), when configure found them. */
 #ifndef CBVH_PEERS_H
 #define CBVH_PEERS_H
 
@@ -33,9 +33,12 @@ typedef struct peer_build_info {
     uint64_t memory_bytes;
     uint64_t mesh_bytes;
     uint64_t traversed_bytes; /* tinybvh: the blocks its queries read, within memory_bytes; other peers: 0 */
+    uint64_t dropped_triangles; /* Jolt: the mesh's triangles it left out of its shape; other peers: 0 */
+    uint64_t id_bytes;          /* Jolt: the part of memory_bytes holding each triangle's index; others: 0 */
 } peer_build_info;
 
-/* Include config.h before this header: HAVE_EMBREE, HAVE_BULLET and HAVE_TINYBVH come from configure.
+/* Include config.h before this header: HAVE_EMBREE, HAVE_BULLET, HAVE_TINYBVH and HAVE_JOLT come from
+ * configure.
  *
  * Query results use cbvh's types: hits[i].tri is the triangle index in the mesh,
  * or CBVH_NO_HIT; t is in units of the ray's dir. Every ray must have a finite tmax.
@@ -110,6 +113,48 @@ void tinybvh_peer_destroy(tinybvh_peer *peer);
 /* Single rays (Intersect / IsOccluded). tinybvh has no tmin: a ray starts at org + tmin * dir instead. */
 void tinybvh_peer_raycast(const tinybvh_peer *peer, const cbvh_ray *rays, size_t count, cbvh_hit *hits);
 void tinybvh_peer_occluded(const tinybvh_peer *peer, const cbvh_ray *rays, size_t count, uint8_t *occluded);
+#endif
+
+#if defined(HAVE_JOLT)
+typedef struct jolt_peer jolt_peer;
+
+/* Jolt was compiled with the options of its own build: where configure defined JOLT_NEEDS_AVX2_FMA, call none
+ * of these functions unless the CPU has AVX2 and FMA (cbvh_cpu_has_avx2_fma).
+ *
+ * Builds a MeshShape (MeshShapeSettings from the indexed triangles, each with its index as user data, as the
+ * answers name triangles by it). Jolt leaves out the triangles of area below 5e-7 in the mesh's units (its
+ * degenerate test, absolute) and those degenerate once quantized: info->dropped_triangles counts them. It
+ * keeps its own compressed copy of the triangles: info->memory_bytes is the shape's size (GetStats),
+ * mesh_bytes 0; info->id_bytes how much smaller the same shape is without the indices (built again,
+ * untimed). Sets up Jolt's allocator, factory and types with the first peer and removes them with the
+ * last one destroyed (create and destroy on one thread). Returns NULL and writes a message into err on
+ * failure, among them a library whose build options differ from the definitions configure read
+ * (JPH_VERSION_ID). */
+jolt_peer *jolt_peer_create(const peer_mesh *mesh, peer_build_info *info, char *err, size_t err_size);
+void jolt_peer_destroy(jolt_peer *peer);
+
+/* Closest hit (MeshShape::CastRay, which reports back faces) and any hit (CastRay with an any-hit collector,
+ * back faces on). Jolt casts the segment from org + tmin * dir to org + tmax * dir. */
+void jolt_peer_raycast(const jolt_peer *peer, const cbvh_ray *rays, size_t count, cbvh_hit *hits);
+void jolt_peer_occluded(const jolt_peer *peer, const cbvh_ray *rays, size_t count, uint8_t *occluded);
+
+/* Sweeps: CastShape with a closest-hit collector; overlaps: CollideShape, every triangle it reports a
+ * contact with. Both with back faces colliding and every edge active; SphereShape, CapsuleShape and a
+ * BoxShape of convex radius 0 (the exact box), whose every contact takes Jolt's EPA step (no core shrunk by a
+ * radius for GJK), and a contact whose EPA step fails Jolt drops (its CollideConvexVsTriangles). Jolt's
+ * tolerances are absolute (its collision tolerance 1e-4 in the mesh's units): on a mesh of small units they
+ * are a larger share of the shapes. */
+void jolt_peer_sweep(const jolt_peer *peer, shape_kind kind, const shape_query *queries, size_t count,
+                     shape_answer *out);
+void jolt_peer_overlap(const jolt_peer *peer, shape_kind kind, const shape_query *queries, size_t count,
+                       shape_answer *out);
+/* First-hit overlaps: CollideShape with an any-hit collector, which ends the query at the first contact:
+ * count 1 and that triangle in tri, or count 0. */
+void jolt_peer_overlap_first(const jolt_peer *peer, shape_kind kind, const shape_query *queries, size_t count,
+                             shape_answer *out);
+/* One overlap query's triangles, each passed to add(user, tri): what jolt_peer_overlap counts. */
+void jolt_peer_overlap_each(const jolt_peer *peer, shape_kind kind, const shape_query *query,
+                            void (*add)(void *user, uint32_t tri), void *user);
 #endif
 
 #ifdef __cplusplus

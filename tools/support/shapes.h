@@ -1,5 +1,5 @@
-/* shapes.h: deterministic benchmark shape queries (sphere, capsule and box sweeps and overlaps near a
- * surface) from a seed. */
+/* shapes.h: deterministic benchmark shape queries (sphere, capsule and box sweeps and overlaps, oriented box
+ * sweeps, near a surface) from a seed. */
 #ifndef CBVH_SHAPES_H
 #define CBVH_SHAPES_H
 
@@ -8,19 +8,31 @@
 
 #include "rays.h"
 
-typedef enum shape_kind { SHAPE_SPHERE = 0, SHAPE_CAPSULE = 1, SHAPE_BOX = 2 } shape_kind;
-#define SHAPE_KIND_COUNT 3
+typedef enum shape_kind {
+    SHAPE_SPHERE = 0,
+    SHAPE_CAPSULE = 1,
+    SHAPE_BOX = 2,
+    SHAPE_ORIENTED_BOX = 3
+} shape_kind;
+/* Sweeps come in every kind, overlaps in the first three (the reference judges axis-aligned boxes only). */
+#define SHAPE_SWEEP_KIND_COUNT 4
+#define SHAPE_OVERLAP_KIND_COUNT 3
 
-/* "sphere", "capsule", "box". */
+/* "sphere", "capsule", "box", "oriented box". */
 const char *shape_kind_name(shape_kind kind);
 
 /* One query: the shape where it starts and, for a sweep, its motion (zero for an overlap). */
 typedef struct shape_query {
-    float p0[3];    /* sphere or box center; the capsule segment's first end */
-    float p1[3];    /* the capsule segment's second end (the center again for sphere and box) */
-    float size[3];  /* sphere and capsule: radius in size[0]; box: half extents */
-    float delta[3]; /* sweeps: from p0 (and p1) to p0 + delta */
+    float p0[3];       /* sphere or box center; the capsule segment's first end */
+    float p1[3];       /* the capsule segment's second end (the center again for sphere and box) */
+    float size[3];     /* sphere and capsule: radius in size[0]; box: half extents along its own axes */
+    float delta[3];    /* sweeps: from p0 (and p1) to p0 + delta */
+    float rotation[4]; /* oriented box: the unit quaternion (x, y, z, w) turning its axes; other kinds 0 0 0 1
+                        */
 } shape_query;
+
+/* The box's unit axes turned by q->rotation: the columns of axes. */
+void shape_query_axes(const shape_query *q, double axes[3][3]);
 
 /* A query's answer, whoever gave it: a sweep's first contact (tri, or CBVH_NO_HIT, and t in [0, 1] of delta),
  * or an overlap's set of triangles (how many, and a sum of their mixed ids that does not depend on order). */
@@ -42,7 +54,8 @@ static inline void shape_answer_add(shape_answer *a, uint32_t tri)
     a->set_hash += x ^ (x >> 31);
 }
 
-/* Fills out[0..count) with sweeps (sweep nonzero) or overlaps of shape `kind` near `mesh`'s surface, the same
+/* Fills out[0..count) with sweeps (sweep nonzero) or overlaps of shape `kind` (an oriented box: sweeps only)
+ * near `mesh`'s surface, the same
  * for the same seed on every platform: shapes about 1% of the bounds' diagonal across, off a surface point
  * along its normal; sweeps start clear of that triangle and move 1.5% of the diagonal in a uniform direction.
  * Precondition: mesh->triangle_count > 0. */
