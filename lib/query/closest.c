@@ -2,7 +2,10 @@
 #include "query/closest.h"
 #include "query/triangle_frame.h"
 
-static double clamp01(double x) { return x < 0.0 ? 0.0 : x > 1.0 ? 1.0 : x; }
+static double clamp01(double x)
+{
+    return x < 0.0 ? 0.0 : x > 1.0 ? 1.0 : x;
+}
 
 /* The point of segment a-b nearest to p: a clamped projection, well conditioned for any length. */
 static cbvh_v3 closest_point_segment(cbvh_v3 p, cbvh_v3 a, cbvh_v3 b)

@@ -44,8 +44,8 @@ struct cbvh_hit_gate {
     cbvh_hit_filter_fn filter;
     void *user;
     struct cbvh_t_frame t_frame; /* the kernels' t on the caller's ray */
-    float dir[3];  /* the ray direction in the mesh's frame */
-    int placed;    /* a query transform: records are rotated into the world by `rotation` */
+    float dir[3];                /* the ray direction in the mesh's frame */
+    int placed;                  /* a query transform: records are rotated into the world by `rotation` */
     double rotation[3][3];
 };
 
@@ -53,8 +53,9 @@ struct cbvh_hit_gate {
  * closest hit: it becomes the best when nearer than the best so far (cbvh_hit_better) and the gate, when
  * there is one, does not reject it; returns 1 when the gate says to stop there. The gate is asked only
  * about hits that would count, so a plain query pays one NULL test per hit. */
-CBVH_KERNEL int leaf_take(const struct cbvh_file *restrict f, const struct cbvh_hit_gate *gate, uint32_t k, float t,
-                          float u, float v, const int any, float *restrict best_t, struct cbvh_best_hit *restrict best)
+CBVH_KERNEL int leaf_take(const struct cbvh_file *restrict f, const struct cbvh_hit_gate *gate, uint32_t k,
+                          float t, float u, float v, const int any, float *restrict best_t,
+                          struct cbvh_best_hit *restrict best)
 {
     if (!any && !cbvh_hit_better(t, k, *best_t, best->tri))
         return 0;
@@ -103,8 +104,9 @@ CBVH_KERNEL void leaf_triangle(const void *restrict tris, const int tri_enc, con
 /* Vertex i as (any, x, y, z): for floats one 16-byte load ending with the vertex's 12 bytes, so starting 4
  * bytes before them, which every placed section has readable (CBVH_SECTION_LEAD) and never past them; or
  * dequantized. */
-CBVH_KERNEL __m128 leaf_vertex4(const void *restrict verts, const int vert_enc, const float *restrict grid_origin,
-                                const float *restrict grid_scale, uint32_t i)
+CBVH_KERNEL __m128 leaf_vertex4(const void *restrict verts, const int vert_enc,
+                                const float *restrict grid_origin, const float *restrict grid_scale,
+                                uint32_t i)
 {
     if (vert_enc == CBVH_VERTS_F32)
         return _mm_loadu_ps((const float *)(const void *)((const uint8_t *)verts + 12u * (size_t)i - 4u));
@@ -173,7 +175,7 @@ _Static_assert(CBVH_LOCAL8_BLOCK == 8u && CBVH_LOCAL8_TRIANGLE_BYTES == 3u && CB
                "the windows below are laid out for 8 triangles of 3 offset bytes after a 4-byte base");
 #define L8W_NEXT(r, j) ((r) + (j) >= CBVH_LOCAL8_BLOCK)
 #define L8W_LANE(r, j, v)                                                                                    \
-    CBVH_LOCAL8_TRIANGLE_BYTES * ((j) % 4) + (v) + CBVH_LOCAL8_OFFSETS_AT * L8W_NEXT(r, j), 0x80, 0x80, 0x80
+    CBVH_LOCAL8_TRIANGLE_BYTES *((j) % 4) + (v) + CBVH_LOCAL8_OFFSETS_AT *L8W_NEXT(r, j), 0x80, 0x80, 0x80
 #define L8W_SHUFFLE(r, v)                                                                                    \
     {                                                                                                        \
         L8W_LANE(r, 0, v), L8W_LANE(r, 1, v), L8W_LANE(r, 2, v), L8W_LANE(r, 3, v), L8W_LANE(r, 4, v),       \

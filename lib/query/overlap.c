@@ -1,4 +1,5 @@
-/* overlap.c: box (axis-aligned or oriented), sphere and capsule overlap and contact queries: the shape walk (shape_walk.h), exact per-triangle tests, callback and/or output array. */
+/* overlap.c: box (axis-aligned or oriented), sphere and capsule overlap and contact queries: the shape walk
+ * (shape_walk.h), exact per-triangle tests, callback and/or output array. */
 #include "config.h"
 
 #include <math.h>
@@ -22,8 +23,8 @@ struct overlap_sink {
     cbvh_contact *contacts; /* the contact queries' output, instead of out */
     size_t capacity;
     size_t reported;
-    size_t skip;    /* overlapping triangles passed over before the first report (the _from queries) */
-    int find_more;  /* a full out stops the query at the next overlapping triangle, which sets more */
+    size_t skip;   /* overlapping triangles passed over before the first report (the _from queries) */
+    int find_more; /* a full out stops the query at the next overlapping triangle, which sets more */
     int more;
 };
 
@@ -68,7 +69,8 @@ static int region_triangle(const struct overlap_region *r, cbvh_v3 a, cbvh_v3 b,
     }
     if (s->kind == CBVH_SHAPE_CAPSULE) {
         cbvh_v3 on_seg, on_tri;
-        return cbvh_closest_segment_triangle(s->p0, s->p1, a, b, c, &on_seg, &on_tri) <= s->radius * s->radius;
+        return cbvh_closest_segment_triangle(s->p0, s->p1, a, b, c, &on_seg, &on_tri) <=
+               s->radius * s->radius;
     }
     double t;
     cbvh_v3 n;
@@ -78,15 +80,15 @@ static int region_triangle(const struct overlap_region *r, cbvh_v3 a, cbvh_v3 b,
 /* The contact of a box region with a triangle it overlaps: the separating-axis test's axis of least
  * penetration and its depth (exact: the axes hold every face normal of the obstacle), and a point of the
  * triangle inside the box. */
-static void box_contact(const struct overlap_region *r, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, cbvh_v3 *n, double *depth,
-                        cbvh_v3 *point)
+static void box_contact(const struct overlap_region *r, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, cbvh_v3 *n,
+                        double *depth, cbvh_v3 *point)
 {
     double t;
     *depth = 0.0;
     cbvh_triangle_oriented_box_sweep(a, b, c, &r->box, v3(0, 0, 0), 0.0, &t, n, depth);
     const cbvh_v3 o = r->box.center, h = r->box.half;
-    const double size = fmax(fmax(h.x, h.y), h.z) + fmax(v3_len(v3_sub(b, a)), v3_len(v3_sub(c, a))) + fabs(o.x) +
-                        fabs(o.y) + fabs(o.z);
+    const double size = fmax(fmax(h.x, h.y), h.z) + fmax(v3_len(v3_sub(b, a)), v3_len(v3_sub(c, a))) +
+                        fabs(o.x) + fabs(o.y) + fabs(o.z);
     *point = cbvh_box_contact_point(a, b, c, &r->box, o, *n, 1e-6 * size);
 }
 
@@ -350,7 +352,8 @@ static int overlap_leaf(void *query, uint32_t first, uint32_t count)
 }
 
 /* Stored order: the order does not matter when every overlap is reported. */
-static size_t overlap_walk(const struct cbvh_file *f, const struct overlap_region *region, struct overlap_sink *sink)
+static size_t overlap_walk(const struct cbvh_file *f, const struct overlap_region *region,
+                           struct overlap_sink *sink)
 {
     struct overlap_query q; /* not cleared: every field is set below */
     q.f = f;
@@ -448,13 +451,15 @@ CBVH_API size_t cbvh_overlap_sphere(const cbvh_file *file, const float center[3]
     return overlap_walk(file, &region, &sink);
 }
 
-/* The paged queries (_from, contacts): the sink skips `first` and fills ids or contacts; it looks for one more
- * when the caller asks (more not NULL) or has no output (the call then says only whether one is there). */
-static size_t paged_walk(const struct cbvh_file *file, const struct overlap_region *region, int valid, size_t first,
-                         uint32_t *ids, cbvh_contact *contacts, size_t capacity, int *more)
+/* The paged queries (_from, contacts): the sink skips `first` and fills ids or contacts; it looks for one
+ * more when the caller asks (more not NULL) or has no output (the call then says only whether one is there).
+ */
+static size_t paged_walk(const struct cbvh_file *file, const struct overlap_region *region, int valid,
+                         size_t first, uint32_t *ids, cbvh_contact *contacts, size_t capacity, int *more)
 {
     const int output = ids || contacts;
-    struct overlap_sink sink = {NULL, NULL, ids, contacts, output ? capacity : 0, 0, first, more || !output, 0};
+    struct overlap_sink sink = {NULL, NULL, ids, contacts, output ? capacity : 0, 0, first, more || !output,
+                                0};
     const size_t n = file && valid ? overlap_walk(file, region, &sink) : 0;
     if (more)
         *more = sink.more;
@@ -469,16 +474,17 @@ CBVH_API size_t cbvh_overlap_box_from(const cbvh_file *file, const float box_min
     return paged_walk(file, &region, valid, first, out, NULL, capacity, more);
 }
 
-CBVH_API size_t cbvh_overlap_sphere_from(const cbvh_file *file, const float center[3], float radius, size_t first,
-                                         uint32_t *out, size_t capacity, int *more)
+CBVH_API size_t cbvh_overlap_sphere_from(const cbvh_file *file, const float center[3], float radius,
+                                         size_t first, uint32_t *out, size_t capacity, int *more)
 {
     struct overlap_region region;
     const int valid = round_region(center, NULL, radius, &region);
     return paged_walk(file, &region, valid, first, out, NULL, capacity, more);
 }
 
-CBVH_API size_t cbvh_overlap_capsule(const cbvh_file *file, const float p0[3], const float p1[3], float radius,
-                                     cbvh_overlap_fn callback, void *user, uint32_t *out, size_t capacity)
+CBVH_API size_t cbvh_overlap_capsule(const cbvh_file *file, const float p0[3], const float p1[3],
+                                     float radius, cbvh_overlap_fn callback, void *user, uint32_t *out,
+                                     size_t capacity)
 {
     struct overlap_sink sink = {callback, user, out, NULL, capacity, 0, 0, 0, 0};
     struct overlap_region region;
@@ -487,8 +493,9 @@ CBVH_API size_t cbvh_overlap_capsule(const cbvh_file *file, const float p0[3], c
     return overlap_walk(file, &region, &sink);
 }
 
-CBVH_API size_t cbvh_overlap_capsule_from(const cbvh_file *file, const float p0[3], const float p1[3], float radius,
-                                          size_t first, uint32_t *out, size_t capacity, int *more)
+CBVH_API size_t cbvh_overlap_capsule_from(const cbvh_file *file, const float p0[3], const float p1[3],
+                                          float radius, size_t first, uint32_t *out, size_t capacity,
+                                          int *more)
 {
     struct overlap_region region;
     const int valid = p1 && round_region(p0, p1, radius, &region);
@@ -503,8 +510,9 @@ CBVH_API size_t cbvh_contacts_sphere(const cbvh_file *file, const float center[3
     return paged_walk(file, &region, valid, first, NULL, out, capacity, more);
 }
 
-CBVH_API size_t cbvh_contacts_capsule(const cbvh_file *file, const float p0[3], const float p1[3], float radius,
-                                      size_t first, cbvh_contact *out, size_t capacity, int *more)
+CBVH_API size_t cbvh_contacts_capsule(const cbvh_file *file, const float p0[3], const float p1[3],
+                                      float radius, size_t first, cbvh_contact *out, size_t capacity,
+                                      int *more)
 {
     struct overlap_region region;
     const int valid = p1 && round_region(p0, p1, radius, &region);
@@ -513,22 +521,24 @@ CBVH_API size_t cbvh_contacts_capsule(const cbvh_file *file, const float p0[3], 
 
 /* The region of a query with options: options checked (overlaps take no culling and no filter), the shape
  * taken into the mesh's frame by the transform, whose placement *placement holds for the contacts. */
-static cbvh_result region_with(const cbvh_file *file, const cbvh_shape *shape, const cbvh_query_options *options,
-                               struct cbvh_placement *placement, struct overlap_region *region)
+static cbvh_result region_with(const cbvh_file *file, const cbvh_shape *shape,
+                               const cbvh_query_options *options, struct cbvh_placement *placement,
+                               struct overlap_region *region)
 {
     cbvh_query_options o;
     const struct cbvh_placement *p;
-    if (!file || !shape || cbvh_query_options_read(options, &o) != CBVH_OK || o.cull != CBVH_CULL_NONE || o.filter ||
-        !cbvh_placement_of_option(o.transform, placement, &p) || !cbvh_shape_to_mesh(shape, p, &region->shape))
+    if (!file || !shape || cbvh_query_options_read(options, &o) != CBVH_OK || o.cull != CBVH_CULL_NONE ||
+        o.filter || !cbvh_placement_of_option(o.transform, placement, &p) ||
+        !cbvh_shape_to_mesh(shape, p, &region->shape))
         return CBVH_ERROR_INVALID_ARGUMENT;
     shape_region(p, region);
     return CBVH_OK;
 }
 
 /* The paged walk of a query with options, into ids or contacts. */
-static cbvh_result paged_with(const cbvh_file *file, const cbvh_shape *shape, const cbvh_query_options *options,
-                              size_t first, uint32_t *ids, cbvh_contact *contacts, size_t capacity, size_t *count,
-                              int *more)
+static cbvh_result paged_with(const cbvh_file *file, const cbvh_shape *shape,
+                              const cbvh_query_options *options, size_t first, uint32_t *ids,
+                              cbvh_contact *contacts, size_t capacity, size_t *count, int *more)
 {
     if (more)
         *more = 0;

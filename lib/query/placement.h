@@ -1,4 +1,5 @@
-/* placement.h: a query transform (cbvh_transform) as a rotation matrix, and points and vectors taken through it. */
+/* placement.h: a query transform (cbvh_transform) as a rotation matrix, and points and vectors taken through
+ * it. */
 #ifndef CBVH_QUERY_PLACEMENT_H
 #define CBVH_QUERY_PLACEMENT_H
 
@@ -7,7 +8,8 @@
 
 /* world = translation + scale * rotation * local, in double. */
 struct cbvh_placement {
-    double rotation[3][3]; /* the normalized quaternion's matrix; its columns are the local axes in the world */
+    double rotation[3]
+                   [3]; /* the normalized quaternion's matrix; its columns are the local axes in the world */
     cbvh_v3 translation;
     double scale;
 };

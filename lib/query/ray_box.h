@@ -43,9 +43,8 @@ static inline struct cbvh_slab_select cbvh_slab_select_of(uint32_t octant)
  * a NaN distance (0 * inf, an origin on a slab plane with a zero direction
  * component) fails both and never decides anything. Returns 1 on overlap of
  * [tmin, tmax] with the box, and the entry distance in *entry. */
-CBVH_KERNEL int cbvh_slab_test(float nx, float ny, float nz, float fx, float fy, float fz,
-                                 const float org[3], const float rcp[3], float tmin, float tmax,
-                                 float *entry)
+CBVH_KERNEL int cbvh_slab_test(float nx, float ny, float nz, float fx, float fy, float fz, const float org[3],
+                               const float rcp[3], float tmin, float tmax, float *entry)
 {
     float tnx = (nx - org[0]) * rcp[0], tny = (ny - org[1]) * rcp[1], tnz = (nz - org[2]) * rcp[2];
     float tfx = (fx - org[0]) * rcp[0], tfy = (fy - org[1]) * rcp[1], tfz = (fz - org[2]) * rcp[2];
@@ -67,8 +66,9 @@ struct cbvh_box_ray {
     struct cbvh_slab_select sel;
 };
 
-static inline void cbvh_box_ray_init(struct cbvh_box_ray *b, const float grid_origin[3], const float grid_scale[3],
-                                     const float org[3], const float rcp[3], uint32_t octant)
+static inline void cbvh_box_ray_init(struct cbvh_box_ray *b, const float grid_origin[3],
+                                     const float grid_scale[3], const float org[3], const float rcp[3],
+                                     uint32_t octant)
 {
     for (int a = 0; a < 3; a++) {
         b->origin[a] = grid_origin[a];
@@ -100,8 +100,8 @@ static inline void cbvh_box_ray_halve(struct cbvh_box_ray *b, uint32_t axes)
 
 /* Ray against box `box` of the file's tree, dequantizing only the six
  * values the test needs with the normative arithmetic. */
-CBVH_KERNEL int cbvh_box_ray_test(const struct cbvh_box_ray *b, const struct cbvh_file *f, const uint32_t layout,
-                                    uint32_t box, float tmin, float tmax, float *entry)
+CBVH_KERNEL int cbvh_box_ray_test(const struct cbvh_box_ray *b, const struct cbvh_file *f,
+                                  const uint32_t layout, uint32_t box, float tmin, float tmax, float *entry)
 {
     const struct cbvh_slab_select s = b->sel;
     const float *o = b->origin, *sc = b->scale;
@@ -110,8 +110,8 @@ CBVH_KERNEL int cbvh_box_ray_test(const struct cbvh_box_ray *b, const struct cbv
                           cbvh_dequantize(cbvh_tree_box_coord(f, layout, box, s.near_z), o[2], sc[2]),
                           cbvh_dequantize(cbvh_tree_box_coord(f, layout, box, s.far_x), o[0], sc[0]),
                           cbvh_dequantize(cbvh_tree_box_coord(f, layout, box, s.far_y), o[1], sc[1]),
-                          cbvh_dequantize(cbvh_tree_box_coord(f, layout, box, s.far_z), o[2], sc[2]), b->org, b->rcp,
-                          tmin, tmax, entry);
+                          cbvh_dequantize(cbvh_tree_box_coord(f, layout, box, s.far_z), o[2], sc[2]), b->org,
+                          b->rcp, tmin, tmax, entry);
 }
 
 #endif

@@ -1,4 +1,5 @@
-/* ray_origin.c: far ray origins: moved next to the file's bounds (triangle test precision), axes whose box test needs half scale. */
+/* ray_origin.c: far ray origins: moved next to the file's bounds (triangle test precision), axes whose box
+ * test needs half scale. */
 #ifdef HAVE_CONFIG_H
 #include "config.h"
 #endif
@@ -25,7 +26,8 @@ static double advance(double org, double t, double dir)
 }
 
 /* Entry t of the line org + t * dir into the box [lo, hi]; 0 when the line misses it. */
-static int line_entry(const double org[3], const float dir[3], const float lo[3], const float hi[3], double *entry)
+static int line_entry(const double org[3], const float dir[3], const float lo[3], const float hi[3],
+                      double *entry)
 {
     double tn = -INFINITY, tf = INFINITY;
     for (int a = 0; a < 3; a++) {
@@ -55,7 +57,8 @@ static int line_entry(const double org[3], const float dir[3], const float lo[3]
  * double precision. The range is rounded inwards, so base + t' always
  * lies in the caller's [tmin, tmax]. A ray whose line misses the bounds, or
  * which points away from them, is left alone: it hits nothing either way. */
-static void move_origin(struct cbvh_ray_ctx *ctx, const cbvh_ray *ray, const float lo[3], const float hi[3], float ext)
+static void move_origin(struct cbvh_ray_ctx *ctx, const cbvh_ray *ray, const float lo[3], const float hi[3],
+                        float ext)
 {
     const float *dir = ray->dir;
     double o[3] = {ray->org[0], ray->org[1], ray->org[2]}, base = 0.0;
@@ -78,7 +81,8 @@ static void move_origin(struct cbvh_ray_ctx *ctx, const cbvh_ray *ray, const flo
     cbvh_origin_flush(org);
     const double tmin = (double)ctx->tmin - base;
     ctx->tmin = tmin > 0.0 ? cbvh_float_rounded(tmin, 1) : 0.0f;
-    ctx->tmax = cbvh_float_rounded((double)ctx->tmax - base, 0); /* below tmin when the ray ends before the mesh */
+    ctx->tmax =
+        cbvh_float_rounded((double)ctx->tmax - base, 0); /* below tmin when the ray ends before the mesh */
     ctx->t_frame.base = base;
     cbvh_shear_setup(&ctx->shear, org, dir);
 }

@@ -1,4 +1,5 @@
-/* ray_triangle.h: the watertight ray/triangle test of Woop, Benthin and Wald (JCGT 2013), t from the plane in double. */
+/* ray_triangle.h: the watertight ray/triangle test of Woop, Benthin and Wald (JCGT 2013), t from the plane in
+ * double. */
 #ifndef CBVH_QUERY_RAY_TRIANGLE_H
 #define CBVH_QUERY_RAY_TRIANGLE_H
 
@@ -122,7 +123,7 @@ CBVH_KERNEL int cbvh_plane_t(const struct cbvh_ray_shear *restrict s, const cbvh
  * the nearest of the three edges' clamped projections, measured in space (a
  * barycentric shift along a long edge of a sliver would move the point far). */
 CBVH_COLD static void cbvh_barycentrics_to_boundary(const struct cbvh_triangle_frame *f, cbvh_v3 w, double *x,
-                                                   double *y)
+                                                    double *y)
 {
     /* edge k runs from start + s * d, s in [0, 1], with barycentrics (x0 + s dx, y0 + s dy) */
     const cbvh_v3 d[3] = {f->e1, f->e2, v3_sub(f->e2, f->e1)};
@@ -151,8 +152,8 @@ CBVH_COLD static void cbvh_barycentrics_to_boundary(const struct cbvh_triangle_f
  * out of line: one copy serves every walk instance. edge: the sheared edge
  * functions (u, v, w scaled). */
 CBVH_NOINLINE void cbvh_plane_barycentrics(const struct cbvh_ray_shear *restrict s,
-                                           const struct cbvh_triangle_frame *restrict f, cbvh_v3 base, double t,
-                                           const double edge[3], float *u, float *v)
+                                           const struct cbvh_triangle_frame *restrict f, cbvh_v3 base,
+                                           double t, const double edge[3], float *u, float *v)
 {
     const cbvh_v3 w = v3_madd(v3_sub(v3_from_f(s->org), base), v3_from_f(s->dir), t);
     double x, y;
@@ -343,8 +344,8 @@ CBVH_KERNEL int cbvh_ray_triangle_decide(const struct cbvh_ray_shear *restrict s
  * edge tests'; t comes from the plane (cbvh_plane_t), rounded to float, and
  * u, v from the hit point (cbvh_plane_barycentrics). */
 CBVH_KERNEL int cbvh_ray_triangle(const struct cbvh_ray_shear *restrict s, const float *restrict a,
-                                    const float *restrict b, const float *restrict c, float tmin, float tmax,
-                                    const int want_uv, float *t_out, float *u_out, float *v_out)
+                                  const float *restrict b, const float *restrict c, float tmin, float tmax,
+                                  const int want_uv, float *t_out, float *u_out, float *v_out)
 {
     const uint32_t kx = s->kx, ky = s->ky, kz = s->kz;
     const float sx = s->sx, sy = s->sy;

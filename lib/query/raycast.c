@@ -10,8 +10,8 @@
 #include "query/placement.h"
 #include "query/raycast.h"
 
-int cbvh_hit_output(const struct cbvh_file *f, const struct cbvh_best_hit *best, const struct cbvh_t_frame *frame,
-                    cbvh_hit *hit)
+int cbvh_hit_output(const struct cbvh_file *f, const struct cbvh_best_hit *best,
+                    const struct cbvh_t_frame *frame, cbvh_hit *hit)
 {
     if (best->tri == UINT32_MAX) {
         if (hit)
@@ -89,14 +89,15 @@ cbvh_result cbvh_query_options_read(const cbvh_query_options *options, cbvh_quer
             return CBVH_ERROR_INVALID_ARGUMENT;
         memcpy(o, options, options->struct_size);
     }
-    const int known_cull = o->cull == CBVH_CULL_NONE || o->cull == CBVH_CULL_BACK || o->cull == CBVH_CULL_FRONT;
+    const int known_cull =
+        o->cull == CBVH_CULL_NONE || o->cull == CBVH_CULL_BACK || o->cull == CBVH_CULL_FRONT;
     return known_traversal(o->traversal) && known_cull ? CBVH_OK : CBVH_ERROR_INVALID_ARGUMENT;
 }
 
 /* The record of cooked triangle k hit at the kernels' t: the normal from the edges in double, scaled by
  * their largest component first so that neither tiny nor huge coordinates underflow or overflow it. */
-void cbvh_hit_record_fill(const struct cbvh_file *f, uint32_t k, const struct cbvh_t_frame *frame, float t, float u, float v,
-                          const float dir[3], cbvh_hit_record *r)
+void cbvh_hit_record_fill(const struct cbvh_file *f, uint32_t k, const struct cbvh_t_frame *frame, float t,
+                          float u, float v, const float dir[3], cbvh_hit_record *r)
 {
     float p[3][3];
     cbvh_triangle_vertices(f, k, p[0], p[1], p[2]);
@@ -143,8 +144,8 @@ static void record_place(const struct cbvh_hit_gate *gate, cbvh_hit_record *r)
 }
 
 /* The gate's check (leaf.h): culling first, then the caller's filter. */
-static int gate_check(const struct cbvh_hit_gate *gate, const struct cbvh_file *f, uint32_t k, float t, float u,
-                      float v)
+static int gate_check(const struct cbvh_hit_gate *gate, const struct cbvh_file *f, uint32_t k, float t,
+                      float u, float v)
 {
     cbvh_hit_record r;
     cbvh_hit_record_fill(f, k, &gate->t_frame, t, u, v, gate->dir, &r);
@@ -197,21 +198,24 @@ static cbvh_result query_prepare(const cbvh_file *file, const cbvh_ray *world,
     const cbvh_ray *ray = world;
     struct cbvh_placement placement;
     const struct cbvh_placement *p; /* NULL by default, and for a caller whose struct ends before transform */
-    if (!cbvh_placement_of_option(o->transform, &placement, &p) || (p && (!world || !place_ray(p, world, &local))))
+    if (!cbvh_placement_of_option(o->transform, &placement, &p) ||
+        (p && (!world || !place_ray(p, world, &local))))
         return CBVH_ERROR_INVALID_ARGUMENT;
     if (p)
         ray = &local;
     if (!file || !ray || !cbvh_ray_valid(ray))
         return CBVH_ERROR_INVALID_ARGUMENT;
     *walk = cbvh_ray_prepare(ctx, ray, file, stats ? &stats->nodes_visited : NULL);
-    cbvh_hit_gate_init(gate, o->cull, o->filter, o->filter_user, p ? p->rotation : NULL, ray->dir, &ctx->t_frame);
+    cbvh_hit_gate_init(gate, o->cull, o->filter, o->filter_user, p ? p->rotation : NULL, ray->dir,
+                       &ctx->t_frame);
     /* without culling or filter every hit counts: the plain walk (a transform only rotates the answer) */
     ctx->gate = o->cull != CBVH_CULL_NONE || o->filter ? gate : NULL;
     return CBVH_OK;
 }
 
-CBVH_API cbvh_result cbvh_raycast_with(const cbvh_file *file, const cbvh_ray *ray, const cbvh_query_options *options,
-                                       cbvh_hit_record *hit, cbvh_query_stats *stats)
+CBVH_API cbvh_result cbvh_raycast_with(const cbvh_file *file, const cbvh_ray *ray,
+                                       const cbvh_query_options *options, cbvh_hit_record *hit,
+                                       cbvh_query_stats *stats)
 {
     if (!hit)
         return CBVH_ERROR_INVALID_ARGUMENT;
@@ -234,8 +238,9 @@ CBVH_API cbvh_result cbvh_raycast_with(const cbvh_file *file, const cbvh_ray *ra
     return CBVH_OK;
 }
 
-CBVH_API cbvh_result cbvh_occluded_with(const cbvh_file *file, const cbvh_ray *ray, const cbvh_query_options *options,
-                                        int *occluded, cbvh_query_stats *stats)
+CBVH_API cbvh_result cbvh_occluded_with(const cbvh_file *file, const cbvh_ray *ray,
+                                        const cbvh_query_options *options, int *occluded,
+                                        cbvh_query_stats *stats)
 {
     if (!occluded)
         return CBVH_ERROR_INVALID_ARGUMENT;

@@ -23,7 +23,8 @@ CBVH_NOINLINE int stackless_leaf(const struct cbvh_file *f, uint32_t word, const
  * the binary layout (layout/binary.h): a wide node's other children live in
  * its parent, so the wide layouts take the stack walk instead. */
 CBVH_KERNEL int stackless_walk(const struct cbvh_file *restrict f, const struct cbvh_ray_ctx *restrict ray,
-                               const int any, struct cbvh_best_hit *restrict best, cbvh_query_stats *restrict stats)
+                               const int any, struct cbvh_best_hit *restrict best,
+                               cbvh_query_stats *restrict stats)
 {
     const cbvh_node *restrict nodes = cbvh_binary_nodes(f);
     const uint32_t end = f->info.node_count;
@@ -57,8 +58,8 @@ CBVH_KERNEL int stackless_walk(const struct cbvh_file *restrict f, const struct 
     return hit;
 }
 
-void cbvh_closest_stackless(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray, struct cbvh_best_hit *best,
-                            cbvh_query_stats *stats)
+void cbvh_closest_stackless(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray,
+                            struct cbvh_best_hit *best, cbvh_query_stats *stats)
 {
     stackless_walk(f, ray, 0, best, stats);
 }

@@ -16,7 +16,10 @@ static int v3_to_float(cbvh_v3 v, cbvh_v3 *out)
     return to_float(v.x, &out->x) && to_float(v.y, &out->y) && to_float(v.z, &out->z);
 }
 
-static int finite3(const float v[3]) { return isfinite(v[0]) && isfinite(v[1]) && isfinite(v[2]); }
+static int finite3(const float v[3])
+{
+    return isfinite(v[0]) && isfinite(v[1]) && isfinite(v[2]);
+}
 
 static void identity(double m[3][3])
 {

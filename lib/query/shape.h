@@ -1,4 +1,5 @@
-/* shape.h: a query shape (ball, capsule, oriented box) in the mesh's frame, as cbvh_shape and a query transform make it. */
+/* shape.h: a query shape (ball, capsule, oriented box) in the mesh's frame, as cbvh_shape and a query
+ * transform make it. */
 #ifndef CBVH_QUERY_SHAPE_H
 #define CBVH_QUERY_SHAPE_H
 
@@ -7,11 +8,11 @@
 /* Every value is a float (rounded once from the caller's frame), held in double for the exact tests. */
 struct cbvh_local_shape {
     cbvh_shape_kind kind;
-    cbvh_v3 p0, p1;        /* sphere and box: p0 is the center (p1 = p0); capsule: the segment */
-    double radius;         /* sphere, capsule */
-    cbvh_v3 half;          /* box */
-    int rotated;           /* box: 0 when its axes are the mesh's */
-    double axes[3][3];     /* box: columns are its unit axes in the mesh's frame (the identity unless rotated) */
+    cbvh_v3 p0, p1;    /* sphere and box: p0 is the center (p1 = p0); capsule: the segment */
+    double radius;     /* sphere, capsule */
+    cbvh_v3 half;      /* box */
+    int rotated;       /* box: 0 when its axes are the mesh's */
+    double axes[3][3]; /* box: columns are its unit axes in the mesh's frame (the identity unless rotated) */
 };
 
 /* The shape `in` (in the world of placement p, or in the mesh's frame when p is NULL) in the mesh's frame.

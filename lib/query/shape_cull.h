@@ -1,4 +1,5 @@
-/* shape_cull.h: cheap tests that a shape, still or swept, cannot touch a triangle or surely does, before the exact ones. */
+/* shape_cull.h: cheap tests that a shape, still or swept, cannot touch a triangle or surely does, before the
+ * exact ones. */
 #ifndef CBVH_QUERY_SHAPE_CULL_H
 #define CBVH_QUERY_SHAPE_CULL_H
 
@@ -10,11 +11,26 @@
 
 /* Plain compares (one instruction each), not fmin/fmax, which GCC leaves as calls into libm; the values are
  * never NaN. */
-static inline double cull_max(double x, double y) { return x > y ? x : y; }
-static inline double cull_min(double x, double y) { return x < y ? x : y; }
-static inline float cull_maxf(float x, float y) { return x > y ? x : y; }
-static inline float cull_minf(float x, float y) { return x < y ? x : y; }
-static inline double cull_max_abs(cbvh_v3 v) { return cull_max(cull_max(fabs(v.x), fabs(v.y)), fabs(v.z)); }
+static inline double cull_max(double x, double y)
+{
+    return x > y ? x : y;
+}
+static inline double cull_min(double x, double y)
+{
+    return x < y ? x : y;
+}
+static inline float cull_maxf(float x, float y)
+{
+    return x > y ? x : y;
+}
+static inline float cull_minf(float x, float y)
+{
+    return x < y ? x : y;
+}
+static inline double cull_max_abs(cbvh_v3 v)
+{
+    return cull_max(cull_max(fabs(v.x), fabs(v.y)), fabs(v.z));
+}
 
 /* The box [lo, hi] of a triangle's float vertices, exact: a walk's node test on it culls the triangle as it
  * would cull a leaf holding that triangle alone. */
@@ -103,8 +119,9 @@ static inline enum cbvh_cull_verdict cbvh_cull_triangle(const struct cbvh_local_
             const cbvh_v3 x = v3_cross(edge[k], w[k]);
             const double e = v3_dot(x, n), t = v3_dot(w[k], edge[k]), out = -e - margin;
             inside &= e >= margin;
-            near |= t <= 0.0 ? w2[k] <= reach2 : t >= edge2[k] ? w2[k == 2 ? 0 : k + 1] <= reach2
-                                                                : v3_len2(x) <= reach2 * edge2[k];
+            near |= t <= 0.0        ? w2[k] <= reach2
+                    : t >= edge2[k] ? w2[k == 2 ? 0 : k + 1] <= reach2
+                                    : v3_len2(x) <= reach2 * edge2[k];
             outside &= ~((!(out > 0.0 && out * out > r * r * nn * edge2[k])) << k);
         }
         if (inside | near)
@@ -119,8 +136,8 @@ struct cbvh_cull4 {
     __m128 lo[3], hi[3]; /* the box around a still shape (cbvh_cull4_keep) */
     __m128 p0[3], p1[3];
     __m128 radius, half[3], axes[3][3]; /* axes[i]: the box's axis i (the identity unless rotated) */
-    __m128 shape_size;                   /* the shape's part of cbvh_cull_triangle's size */
-    __m128 delta[3], delta_size;         /* a swept shape's motion, its largest coordinate (sweeps) */
+    __m128 shape_size;                  /* the shape's part of cbvh_cull_triangle's size */
+    __m128 delta[3], delta_size;        /* a swept shape's motion, its largest coordinate (sweeps) */
     int box, capsule;
 };
 
@@ -155,7 +172,10 @@ static inline void cbvh_cull4_init(struct cbvh_cull4 *w, const struct cbvh_local
     w->capsule = s->kind == CBVH_SHAPE_CAPSULE;
 }
 
-static inline __m128 cull4_abs(__m128 x) { return _mm_andnot_ps(_mm_set1_ps(-0.0f), x); }
+static inline __m128 cull4_abs(__m128 x)
+{
+    return _mm_andnot_ps(_mm_set1_ps(-0.0f), x);
+}
 static inline __m128 cull4_dot(const __m128 a[3], const __m128 b[3])
 {
     return _mm_add_ps(_mm_add_ps(_mm_mul_ps(a[0], b[0]), _mm_mul_ps(a[1], b[1])), _mm_mul_ps(a[2], b[2]));
@@ -391,8 +411,8 @@ CBVH_FORCE_INLINE uint32_t cbvh_cull4_sweep(const struct cbvh_cull4 *w, const fl
         motion[a] = _mm_mul_ps(w->delta[a], t);
     }
     const __m128 *n = f.n, nn = f.nn, span = f.span, zero = _mm_setzero_ps();
-    const __m128 size = _mm_add_ps(_mm_add_ps(_mm_add_ps(f.corner, span), w->shape_size),
-                                   _mm_mul_ps(w->delta_size, t));
+    const __m128 size =
+        _mm_add_ps(_mm_add_ps(_mm_add_ps(f.corner, span), w->shape_size), _mm_mul_ps(w->delta_size, t));
     const __m128 h0 = cull4_dot(n, w0), h1 = cull4_dot(n, w1), m = cull4_dot(n, motion);
     __m128 keep = _mm_andnot_ps(cull4_apart(h0, h1, m, cull4_reach(w, n, nn), span, size),
                                 _mm_castsi128_ps(_mm_set1_epi32(-1)));

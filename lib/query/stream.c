@@ -1,4 +1,5 @@
-/* stream.c: batched ray streams: one traversal per batch of same-octant rays, a ray list per child entered. */
+/* stream.c: batched ray streams: one traversal per batch of same-octant rays, a ray list per child entered.
+ */
 #ifdef HAVE_CONFIG_H
 #include "config.h"
 #endif
@@ -27,8 +28,8 @@ _Static_assert(CBVH_STREAM_STACK_BATCH >= CBVH_STREAM_WALKS && CBVH_STREAM_WALKS
 #define STREAM_LIST_PER_RAY 8u
 
 /* Bytes a batch ray takes in the block (the window's octant bytes included), and the alignment slack. */
-#define STREAM_RAY_BYTES                                                                                         \
-    (8 * sizeof(float) + sizeof(struct cbvh_ray_ctx) + sizeof(struct cbvh_best_hit) + sizeof(size_t) +          \
+#define STREAM_RAY_BYTES                                                                                     \
+    (8 * sizeof(float) + sizeof(struct cbvh_ray_ctx) + sizeof(struct cbvh_best_hit) + sizeof(size_t) +       \
      STREAM_LIST_PER_RAY * (sizeof(float) + sizeof(uint16_t)) + CBVH_STREAM_WINDOW_PER_RAY)
 #define STREAM_SLACK 96u /* two 32-byte alignments (the tails, box_ray), and best_hit's and size_t's */
 /* Bytes of a block before its rays: the tails with `walks` slots (stream.h), whatever the batch's size. */
@@ -235,7 +236,8 @@ static void stream_single_rays(const struct cbvh_file *f, const cbvh_ray *rays, 
 /* Splits the stream into windows, each window into same-octant batches of the batch's capacity. A window
  * of incoherent rays skips the batch by the way cbvh_stream_way_for chooses: on a wide-layout mesh that does
  * not stay in the caches it walks interleaved (stream_interleave; the binary layout batches instead, where
- * interleaving did not pay), on a mesh in the caches with a batch small for the mesh one ray at a time. Exactly one of hits / occluded is given. Invalid rays are misses. */
+ * interleaving did not pay), on a mesh in the caches with a batch small for the mesh one ray at a time.
+ * Exactly one of hits / occluded is given. Invalid rays are misses. */
 static void stream_run(const struct cbvh_file *f, const cbvh_ray *rays, size_t count, cbvh_hit *hits,
                        uint8_t *occluded, cbvh_query_stats *stats, struct cbvh_stream_batch *restrict batch,
                        uint8_t *restrict octant)
@@ -330,12 +332,15 @@ static void stream_query(const struct cbvh_file *f, const cbvh_ray *rays, size_t
 
 CBVH_API size_t cbvh_stream_scratch_size(size_t batch_rays)
 {
-    const size_t n = batch_rays < 1 ? 1 : batch_rays > CBVH_STREAM_MAX_BATCH ? CBVH_STREAM_MAX_BATCH : batch_rays;
+    const size_t n = batch_rays < 1                       ? 1
+                     : batch_rays > CBVH_STREAM_MAX_BATCH ? CBVH_STREAM_MAX_BATCH
+                                                          : batch_rays;
     return STREAM_SLACK + STREAM_TAILS_BYTES(CBVH_STREAM_WALKS) + n * STREAM_RAY_BYTES;
 }
 
-CBVH_API void cbvh_raycast_stream_scratch(const cbvh_file *file, const cbvh_ray *rays, size_t count, cbvh_hit *hits,
-                                          cbvh_query_stats *stats, void *scratch, size_t scratch_size)
+CBVH_API void cbvh_raycast_stream_scratch(const cbvh_file *file, const cbvh_ray *rays, size_t count,
+                                          cbvh_hit *hits, cbvh_query_stats *stats, void *scratch,
+                                          size_t scratch_size)
 {
     if (!hits)
         return;
@@ -366,8 +371,8 @@ CBVH_API void cbvh_raycast_stream(const cbvh_file *file, const cbvh_ray *rays, s
     cbvh_raycast_stream_scratch(file, rays, count, hits, stats, NULL, 0);
 }
 
-CBVH_API void cbvh_occluded_stream(const cbvh_file *file, const cbvh_ray *rays, size_t count, uint8_t *occluded,
-                                   cbvh_query_stats *stats)
+CBVH_API void cbvh_occluded_stream(const cbvh_file *file, const cbvh_ray *rays, size_t count,
+                                   uint8_t *occluded, cbvh_query_stats *stats)
 {
     cbvh_occluded_stream_scratch(file, rays, count, occluded, stats, NULL, 0);
 }

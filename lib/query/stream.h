@@ -11,8 +11,16 @@
 
 /* One ray as the box test reads it: 32 bytes, so SSE2 loads a ray in two
  * vectors, then broadcasts each field to the lanes of the node's children. */
-enum { CBVH_LANE_OX, CBVH_LANE_OY, CBVH_LANE_OZ, CBVH_LANE_TMIN, CBVH_LANE_RX, CBVH_LANE_RY, CBVH_LANE_RZ,
-       CBVH_LANE_TMAX };
+enum {
+    CBVH_LANE_OX,
+    CBVH_LANE_OY,
+    CBVH_LANE_OZ,
+    CBVH_LANE_TMIN,
+    CBVH_LANE_RX,
+    CBVH_LANE_RY,
+    CBVH_LANE_RZ,
+    CBVH_LANE_TMAX
+};
 
 /* Rays per batch when the stream runs on its own stack (cbvh_raycast_stream; cbvh.h gives the stack use).
  * Caller scratch (cbvh_raycast_stream_scratch) takes up to CBVH_STREAM_MAX_BATCH,
@@ -53,15 +61,15 @@ struct cbvh_stream_tails {
 /* Up to `capacity` rays of one octant, so the sort byte orders the whole batch. Its arrays lie in one
  * block (the stream's stack or the caller's scratch), cut by stream.c. */
 struct cbvh_stream_batch {
-    float (*box_ray)[8];          /* CBVH_LANE_*, 32-byte aligned; TMAX shrinks with hits, -1 once occluded */
-    struct cbvh_ray_ctx *ctx;     /* the prepared rays (triangle test, per-ray tails) */
+    float (*box_ray)[8];      /* CBVH_LANE_*, 32-byte aligned; TMAX shrinks with hits, -1 once occluded */
+    struct cbvh_ray_ctx *ctx; /* the prepared rays (triangle test, per-ray tails) */
     struct cbvh_best_hit *best;
-    size_t *ray_index;            /* position in the caller's arrays */
-    uint16_t *list_ray;           /* the walk's ray lists, a stack of them (stream.c): batch positions, */
-    float *list_entry;            /* and where each ray enters the list's box */
+    size_t *ray_index;  /* position in the caller's arrays */
+    uint16_t *list_ray; /* the walk's ray lists, a stack of them (stream.c): batch positions, */
+    float *list_entry;  /* and where each ray enters the list's box */
     struct cbvh_stream_tails *tails;
-    uint32_t list_capacity;       /* entries in list_ray and list_entry */
-    uint32_t shrinks;             /* times a ray's TMAX shrank: a list made since is still exact */
+    uint32_t list_capacity; /* entries in list_ray and list_entry */
+    uint32_t shrinks;       /* times a ray's TMAX shrank: a list made since is still exact */
     uint32_t count, capacity;
 };
 

@@ -1,4 +1,5 @@
-/* sweep.c: the public sweeps: sphere, capsule and box by their own entry points, and any shape with options (cbvh_sweep_with). */
+/* sweep.c: the public sweeps: sphere, capsule and box by their own entry points, and any shape with options
+ * (cbvh_sweep_with). */
 #include <string.h>
 
 #include "query/raycast.h"
@@ -23,7 +24,8 @@ static int sweep_local(const struct cbvh_file *f, const struct cbvh_local_shape 
 }
 
 /* A sweep without options: invalid input (see cbvh.h; shape NULL for a NULL argument) is a miss. */
-static int sweep_plain(const cbvh_file *file, const cbvh_shape *shape, const float delta[3], cbvh_sweep_hit *hit)
+static int sweep_plain(const cbvh_file *file, const cbvh_shape *shape, const float delta[3],
+                       cbvh_sweep_hit *hit)
 {
     struct cbvh_local_shape local;
     struct cbvh_sweep_found found = {UINT32_MAX, {0.0, {0, 0, 0}, {0, 0, 0}, 0.0}};
@@ -40,8 +42,8 @@ static int sweep_plain(const cbvh_file *file, const cbvh_shape *shape, const flo
 
 /* The plain entry points' shape from its parts: a is the center (sphere, box) or p0 (capsule), b is p1
  * (capsule) or the half extents (box). A NULL part the kind needs is invalid input: a miss. */
-static int sweep_parts(const cbvh_file *file, cbvh_shape_kind kind, const float *a, const float *b, float radius,
-                       const float delta[3], cbvh_sweep_hit *hit)
+static int sweep_parts(const cbvh_file *file, cbvh_shape_kind kind, const float *a, const float *b,
+                       float radius, const float delta[3], cbvh_sweep_hit *hit)
 {
     if (!a || (kind != CBVH_SHAPE_SPHERE && !b))
         return sweep_plain(file, NULL, delta, hit);
@@ -55,8 +57,8 @@ static int sweep_parts(const cbvh_file *file, cbvh_shape_kind kind, const float 
     return sweep_plain(file, &s, delta, hit);
 }
 
-CBVH_API int cbvh_sweep_sphere(const cbvh_file *file, const float center[3], float radius, const float delta[3],
-                               cbvh_sweep_hit *hit)
+CBVH_API int cbvh_sweep_sphere(const cbvh_file *file, const float center[3], float radius,
+                               const float delta[3], cbvh_sweep_hit *hit)
 {
     return sweep_parts(file, CBVH_SHAPE_SPHERE, center, NULL, radius, delta, hit);
 }
@@ -83,7 +85,8 @@ CBVH_API cbvh_result cbvh_sweep_with(const cbvh_file *file, const cbvh_shape *sh
     cbvh_query_options o;
     struct cbvh_placement placement;
     const struct cbvh_placement *p;
-    if (!file || !shape || !delta || !cbvh_all_finite(delta, 3) || cbvh_query_options_read(options, &o) != CBVH_OK ||
+    if (!file || !shape || !delta || !cbvh_all_finite(delta, 3) ||
+        cbvh_query_options_read(options, &o) != CBVH_OK ||
         !cbvh_placement_of_option(o.transform, &placement, &p))
         return CBVH_ERROR_INVALID_ARGUMENT;
     struct cbvh_local_shape local;

@@ -1,4 +1,5 @@
-/* sweep_box.c: box sweeps (axis-aligned or oriented): exact separating-axis time of impact per triangle, contact point by clipping. */
+/* sweep_box.c: box sweeps (axis-aligned or oriented): exact separating-axis time of impact per triangle,
+ * contact point by clipping. */
 #include <math.h>
 
 #include "query/shape.h"
@@ -22,7 +23,8 @@ static int box_triangle(const void *shape, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, doub
         return 0;
     const cbvh_v3 at = v3_madd(s->box.center, s->delta, t), half = s->box.half;
     const double size = fmax(fmax(half.x, half.y), half.z) + v3_len(s->delta) +
-                        fmax(v3_len(v3_sub(b, a)), v3_len(v3_sub(c, a))) + fabs(at.x) + fabs(at.y) + fabs(at.z);
+                        fmax(v3_len(v3_sub(b, a)), v3_len(v3_sub(c, a))) + fabs(at.x) + fabs(at.y) +
+                        fabs(at.z);
     out->t = t;
     out->normal = n;
     out->point = cbvh_box_contact_point(a, b, c, &s->box, at, n, 1e-6 * size);
@@ -30,8 +32,9 @@ static int box_triangle(const void *shape, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, doub
     return 1;
 }
 
-int cbvh_sweep_box_shape(const struct cbvh_file *f, const struct cbvh_local_shape *shape, const float delta[3],
-                         const struct cbvh_sweep_rules *rules, struct cbvh_sweep_found *found)
+int cbvh_sweep_box_shape(const struct cbvh_file *f, const struct cbvh_local_shape *shape,
+                         const float delta[3], const struct cbvh_sweep_rules *rules,
+                         struct cbvh_sweep_found *found)
 {
     struct box_shape s = {{shape->p0, shape->half, shape->rotated, {{0}}}, v3_from_f(delta)};
     for (int i = 0; i < 3; i++)

@@ -1,4 +1,5 @@
-/* sweep_capsule.c: capsule sweeps, exact: end balls, triangle vertices against the capsule side, edges against the segment. */
+/* sweep_capsule.c: capsule sweeps, exact: end balls, triangle vertices against the capsule side, edges
+ * against the segment. */
 #include "query/closest.h"
 #include "query/shape.h"
 #include "query/sweep_walk.h"
@@ -29,7 +30,8 @@ static int capsule_triangle(const void *shape, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, 
         if (v3_len2(away) > 0.0) {
             out->normal = v3_normalize(away);
             out->depth = r - v3_len(away);
-        } else { /* the axis reaches the triangle: lift its lower end radius above the plane along the normal */
+        } else { /* the axis reaches the triangle: lift its lower end radius above the plane along the normal
+                  */
             out->normal = cbvh_fallback_normal(a, b, c, s->delta);
             const double h0 = v3_dot(v3_sub(s->p0, on_tri), out->normal);
             out->depth = r - fmin(h0, v3_dot(v3_sub(s->p1, on_tri), out->normal));
@@ -55,8 +57,8 @@ static int capsule_triangle(const void *shape, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, 
     }
     for (int e = 0; e < 3; e++) {
         const cbvh_v3 q0 = v[e], q1 = v[e == 2 ? 0 : e + 1];
-        if (cbvh_enter_face(s->p0, s->delta, q0, v3_sub(q1, q0), v3_scale(axis, -1.0), 1, r, tmax, &t, &n, &alpha,
-                            &beta)) {
+        if (cbvh_enter_face(s->p0, s->delta, q0, v3_sub(q1, q0), v3_scale(axis, -1.0), 1, r, tmax, &t, &n,
+                            &alpha, &beta)) {
             out->t = tmax = t;
             out->point = v3_madd(q0, v3_sub(q1, q0), alpha);
             out->normal = n;
@@ -68,8 +70,9 @@ static int capsule_triangle(const void *shape, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, 
     return found;
 }
 
-int cbvh_sweep_capsule_shape(const struct cbvh_file *f, const struct cbvh_local_shape *shape, const float delta[3],
-                             const struct cbvh_sweep_rules *rules, struct cbvh_sweep_found *found)
+int cbvh_sweep_capsule_shape(const struct cbvh_file *f, const struct cbvh_local_shape *shape,
+                             const float delta[3], const struct cbvh_sweep_rules *rules,
+                             struct cbvh_sweep_found *found)
 {
     const struct capsule_shape s = {shape->p0, shape->p1, v3_from_f(delta), shape->radius};
     return cbvh_sweep_walk(f, shape, delta, capsule_triangle, &s, rules, found);

@@ -1,4 +1,5 @@
-/* sweep_features.c: first entry of a moving point into a ball, a cylinder side or a thickened face; ball/triangle sweep. */
+/* sweep_features.c: first entry of a moving point into a ball, a cylinder side or a thickened face;
+ * ball/triangle sweep. */
 #include "query/sweep_features.h"
 
 /* Smallest root of a t^2 + 2 h t + c = 0 for an approaching point (h < 0)
@@ -26,8 +27,8 @@ int cbvh_enter_ball(cbvh_v3 o, cbvh_v3 d, cbvh_v3 c, double r, double tmax, doub
     return 1;
 }
 
-int cbvh_enter_cylinder(cbvh_v3 o, cbvh_v3 d, cbvh_v3 p, cbvh_v3 q, double r, double tmax, double *t, cbvh_v3 *normal,
-                        double *axis)
+int cbvh_enter_cylinder(cbvh_v3 o, cbvh_v3 d, cbvh_v3 p, cbvh_v3 q, double r, double tmax, double *t,
+                        cbvh_v3 *normal, double *axis)
 {
     const cbvh_v3 ab = v3_sub(q, p);
     const double len2 = v3_len2(ab);

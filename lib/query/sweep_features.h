@@ -1,4 +1,5 @@
-/* sweep_features.h: first entry of a moving point into a ball, a finite cylinder side, or a thickened face. */
+/* sweep_features.h: first entry of a moving point into a ball, a finite cylinder side, or a thickened face.
+ */
 #ifndef CBVH_QUERY_SWEEP_FEATURES_H
 #define CBVH_QUERY_SWEEP_FEATURES_H
 
@@ -27,8 +28,8 @@ int cbvh_enter_ball(cbvh_v3 o, cbvh_v3 d, cbvh_v3 c, double r, double tmax, doub
 /* Side of the cylinder of radius r around segment p-q (caps excluded: the
  * end balls cover them). Writes t, the radial unit normal and the axis
  * parameter in [0, 1] of the entry point. */
-int cbvh_enter_cylinder(cbvh_v3 o, cbvh_v3 d, cbvh_v3 p, cbvh_v3 q, double r, double tmax, double *t, cbvh_v3 *normal,
-                        double *axis);
+int cbvh_enter_cylinder(cbvh_v3 o, cbvh_v3 d, cbvh_v3 p, cbvh_v3 q, double r, double tmax, double *t,
+                        cbvh_v3 *normal, double *axis);
 
 /* One of the two faces at distance r of the flat piece base + a*e1 + b*e2
  * (triangle: a, b >= 0, a + b <= 1; parallelogram: a, b in [0, 1]). Writes t,

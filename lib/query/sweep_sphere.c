@@ -1,4 +1,5 @@
-/* sweep_sphere.c: sphere sweeps: exact first contact with each triangle's face plane, edge cylinders and vertex balls. */
+/* sweep_sphere.c: sphere sweeps: exact first contact with each triangle's face plane, edge cylinders and
+ * vertex balls. */
 #include "query/closest.h"
 #include "query/shape.h"
 #include "query/sweep_walk.h"
@@ -30,8 +31,9 @@ static int sphere_triangle(const void *shape, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, d
     return cbvh_sweep_ball_triangle(s->center, s->delta, s->radius, a, b, c, tmax, out);
 }
 
-int cbvh_sweep_sphere_shape(const struct cbvh_file *f, const struct cbvh_local_shape *shape, const float delta[3],
-                            const struct cbvh_sweep_rules *rules, struct cbvh_sweep_found *found)
+int cbvh_sweep_sphere_shape(const struct cbvh_file *f, const struct cbvh_local_shape *shape,
+                            const float delta[3], const struct cbvh_sweep_rules *rules,
+                            struct cbvh_sweep_found *found)
 {
     const struct sphere_shape s = {shape->p0, v3_from_f(delta), shape->radius};
     return cbvh_sweep_walk(f, shape, delta, sphere_triangle, &s, rules, found);

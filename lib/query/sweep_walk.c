@@ -14,8 +14,14 @@
 
 /* x moved away from zero by 2^-22 of itself: more than the half ulp a float
  * addition may have rounded it inwards by. */
-static float outward_lo(float x) { return x - fabsf(x) * 0x1p-22f - FLT_MIN; }
-static float outward_hi(float x) { return x + fabsf(x) * 0x1p-22f + FLT_MIN; }
+static float outward_lo(float x)
+{
+    return x - fabsf(x) * 0x1p-22f - FLT_MIN;
+}
+static float outward_hi(float x)
+{
+    return x + fabsf(x) * 0x1p-22f + FLT_MIN;
+}
 
 /* A sweep as the shape walk sees it. */
 struct sweep_query {
@@ -50,8 +56,8 @@ static int sweep_box(const struct sweep_query *q, const float box_lo[3], const f
      * accepts exactly the boxes holding the center (NaNs are ignored). */
     const uint32_t o = q->octant;
     return cbvh_slab_test(o & 1u ? hi[0] : lo[0], o & 2u ? hi[1] : lo[1], o & 4u ? hi[2] : lo[2],
-                          o & 1u ? lo[0] : hi[0], o & 2u ? lo[1] : hi[1], o & 4u ? lo[2] : hi[2], q->center, q->rcp,
-                          0.0f, q->limit, entry);
+                          o & 1u ? lo[0] : hi[0], o & 2u ? lo[1] : hi[1], o & 4u ? lo[2] : hi[2], q->center,
+                          q->rcp, 0.0f, q->limit, entry);
 }
 
 /* A node box as sweep_box sees it: dequantized on the file's grid. */
@@ -67,7 +73,8 @@ static int sweep_enter(void *query, const uint32_t grid[6], float *entry)
     return sweep_box(q, lo, hi, entry);
 }
 
-/* Culling by the motion: the sign of delta . n, n the face normal as wound; parallel or no motion keeps it. */
+/* Culling by the motion: the sign of delta . n, n the face normal as wound; parallel or no motion keeps it.
+ */
 static int culled(cbvh_cull cull, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, const float delta[3])
 {
     const double s = v3_dot(v3_cross(v3_sub(b, a), v3_sub(c, a)), v3_from_f(delta));
@@ -76,7 +83,8 @@ static int culled(cbvh_cull cull, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, const float d
 
 /* The filter's verdict on cooked triangle k, whose contact would win: its record with the barycentrics of
  * the contact point (in the triangle's best-conditioned frame, as the hit records' normals). */
-static int ask_filter(const struct sweep_query *q, uint32_t k, const cbvh_v3 v[3], const struct cbvh_sweep_contact *c)
+static int ask_filter(const struct sweep_query *q, uint32_t k, const cbvh_v3 v[3],
+                      const struct cbvh_sweep_contact *c)
 {
     struct cbvh_triangle_frame fr;
     cbvh_triangle_frame_of(v, &fr);
@@ -167,13 +175,14 @@ static uint32_t sweep_enter4(void *query, const uint8_t *node, float entry[4])
     __m128 tnear = _mm_setzero_ps(), tfar = _mm_set1_ps(q->limit);
     for (uint32_t a = 0; a < 3; a++) {
         const __m128i zero = _mm_setzero_si128();
-        const __m128i qlo = _mm_loadl_epi64((const __m128i *)(const void *)(node + cbvh_w4_plane_offset(a, 0)));
+        const __m128i qlo =
+            _mm_loadl_epi64((const __m128i *)(const void *)(node + cbvh_w4_plane_offset(a, 0)));
         const __m128i qhi =
             _mm_loadl_epi64((const __m128i *)(const void *)(node + cbvh_w4_plane_offset(a + 3u, 0)));
-        const __m128 plane_lo =
-            _mm_add_ps(q->origin4[a], _mm_mul_ps(_mm_cvtepi32_ps(_mm_unpacklo_epi16(qlo, zero)), q->scale4[a]));
-        const __m128 plane_hi =
-            _mm_add_ps(q->origin4[a], _mm_mul_ps(_mm_cvtepi32_ps(_mm_unpacklo_epi16(qhi, zero)), q->scale4[a]));
+        const __m128 plane_lo = _mm_add_ps(
+            q->origin4[a], _mm_mul_ps(_mm_cvtepi32_ps(_mm_unpacklo_epi16(qlo, zero)), q->scale4[a]));
+        const __m128 plane_hi = _mm_add_ps(
+            q->origin4[a], _mm_mul_ps(_mm_cvtepi32_ps(_mm_unpacklo_epi16(qhi, zero)), q->scale4[a]));
         const __m128 lo = outward4(_mm_sub_ps(plane_lo, q->extent4[a]), -1.0f);
         const __m128 hi = outward4(_mm_add_ps(plane_hi, q->extent4[a]), 1.0f);
         const int back = q->octant >> a & 1u;

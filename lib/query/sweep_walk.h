@@ -54,8 +54,9 @@ int cbvh_sweep_as_ray(const struct cbvh_file *f, const float center[3], const fl
 /* The sweep of each shape kind, in the mesh's frame (shape.h), by a delta of floats. */
 int cbvh_sweep_sphere_shape(const struct cbvh_file *f, const struct cbvh_local_shape *s, const float delta[3],
                             const struct cbvh_sweep_rules *rules, struct cbvh_sweep_found *found);
-int cbvh_sweep_capsule_shape(const struct cbvh_file *f, const struct cbvh_local_shape *s, const float delta[3],
-                             const struct cbvh_sweep_rules *rules, struct cbvh_sweep_found *found);
+int cbvh_sweep_capsule_shape(const struct cbvh_file *f, const struct cbvh_local_shape *s,
+                             const float delta[3], const struct cbvh_sweep_rules *rules,
+                             struct cbvh_sweep_found *found);
 int cbvh_sweep_box_shape(const struct cbvh_file *f, const struct cbvh_local_shape *s, const float delta[3],
                          const struct cbvh_sweep_rules *rules, struct cbvh_sweep_found *found);
 

@@ -1,4 +1,5 @@
-/* triangle_box.h: the separating-axis test of a triangle and a box (axis-aligned or oriented), static or moving. */
+/* triangle_box.h: the separating-axis test of a triangle and a box (axis-aligned or oriented), static or
+ * moving. */
 #ifndef CBVH_QUERY_TRIANGLE_BOX_H
 #define CBVH_QUERY_TRIANGLE_BOX_H
 
@@ -15,8 +16,8 @@
  * *depth (when depth is not NULL) how far the box reaches along it: the exact
  * penetration depth, since those axes hold every face normal of the
  * obstacle. With delta = 0 and tmax = 0 this is the static overlap test. */
-int cbvh_triangle_box_sweep(cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, cbvh_v3 center, cbvh_v3 half, cbvh_v3 delta, double tmax,
-                            double *t, cbvh_v3 *normal, double *depth);
+int cbvh_triangle_box_sweep(cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, cbvh_v3 center, cbvh_v3 half, cbvh_v3 delta,
+                            double tmax, double *t, cbvh_v3 *normal, double *depth);
 
 /* A box whose axes may be turned: the columns of `axes` are its unit axes (the identity unless rotated). */
 struct cbvh_box {
@@ -27,8 +28,8 @@ struct cbvh_box {
 
 /* cbvh_triangle_box_sweep for any box: an oriented one is tested in its own frame (triangle and motion
  * rotated into it, the normal rotated back), the same 13 axes. */
-int cbvh_triangle_oriented_box_sweep(cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, const struct cbvh_box *box, cbvh_v3 delta,
-                                     double tmax, double *t, cbvh_v3 *normal, double *depth);
+int cbvh_triangle_oriented_box_sweep(cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, const struct cbvh_box *box,
+                                     cbvh_v3 delta, double tmax, double *t, cbvh_v3 *normal, double *depth);
 
 /* A point of triangle (a, b, c) where it touches the box moved to `center`: the mean of the corners of the
  * triangle clipped to the box grown by tol (the contact set is a point, segment or polygon; the mean of a

@@ -1,4 +1,5 @@
-/* triangle_frame.h: a triangle's best-conditioned frame (base vertex, edges, normal) and barycentrics in it, in double. */
+/* triangle_frame.h: a triangle's best-conditioned frame (base vertex, edges, normal) and barycentrics in it,
+ * in double. */
 #ifndef CBVH_QUERY_TRIANGLE_FRAME_H
 #define CBVH_QUERY_TRIANGLE_FRAME_H
 

@@ -13,29 +13,62 @@ static inline cbvh_v3 v3(double x, double y, double z)
     cbvh_v3 r = {x, y, z};
     return r;
 }
-static inline cbvh_v3 v3_from_f(const float *p) { return v3(p[0], p[1], p[2]); }
+static inline cbvh_v3 v3_from_f(const float *p)
+{
+    return v3(p[0], p[1], p[2]);
+}
 static inline void v3_to_f(cbvh_v3 a, float *p)
 {
     p[0] = (float)a.x;
     p[1] = (float)a.y;
     p[2] = (float)a.z;
 }
-static inline cbvh_v3 v3_add(cbvh_v3 a, cbvh_v3 b) { return v3(a.x + b.x, a.y + b.y, a.z + b.z); }
-static inline cbvh_v3 v3_sub(cbvh_v3 a, cbvh_v3 b) { return v3(a.x - b.x, a.y - b.y, a.z - b.z); }
-static inline cbvh_v3 v3_scale(cbvh_v3 a, double s) { return v3(a.x * s, a.y * s, a.z * s); }
+static inline cbvh_v3 v3_add(cbvh_v3 a, cbvh_v3 b)
+{
+    return v3(a.x + b.x, a.y + b.y, a.z + b.z);
+}
+static inline cbvh_v3 v3_sub(cbvh_v3 a, cbvh_v3 b)
+{
+    return v3(a.x - b.x, a.y - b.y, a.z - b.z);
+}
+static inline cbvh_v3 v3_scale(cbvh_v3 a, double s)
+{
+    return v3(a.x * s, a.y * s, a.z * s);
+}
 /* a + s * b */
-static inline cbvh_v3 v3_madd(cbvh_v3 a, cbvh_v3 b, double s) { return v3(a.x + b.x * s, a.y + b.y * s, a.z + b.z * s); }
-static inline double v3_dot(cbvh_v3 a, cbvh_v3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+static inline cbvh_v3 v3_madd(cbvh_v3 a, cbvh_v3 b, double s)
+{
+    return v3(a.x + b.x * s, a.y + b.y * s, a.z + b.z * s);
+}
+static inline double v3_dot(cbvh_v3 a, cbvh_v3 b)
+{
+    return a.x * b.x + a.y * b.y + a.z * b.z;
+}
 static inline cbvh_v3 v3_cross(cbvh_v3 a, cbvh_v3 b)
 {
     return v3(a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x);
 }
-static inline double v3_len2(cbvh_v3 a) { return v3_dot(a, a); }
-static inline double v3_len(cbvh_v3 a) { return sqrt(v3_dot(a, a)); }
+static inline double v3_len2(cbvh_v3 a)
+{
+    return v3_dot(a, a);
+}
+static inline double v3_len(cbvh_v3 a)
+{
+    return sqrt(v3_dot(a, a));
+}
 /* a < b ? a : b and a > b ? a : b: one MINSD or MAXSD each (a nested conditional compiles to branches) */
-static inline double cbvh_dmin(double a, double b) { return a < b ? a : b; }
-static inline double cbvh_dmax(double a, double b) { return a > b ? a : b; }
-static inline double v3_get(cbvh_v3 a, int axis) { return axis == 0 ? a.x : axis == 1 ? a.y : a.z; }
+static inline double cbvh_dmin(double a, double b)
+{
+    return a < b ? a : b;
+}
+static inline double cbvh_dmax(double a, double b)
+{
+    return a > b ? a : b;
+}
+static inline double v3_get(cbvh_v3 a, int axis)
+{
+    return axis == 0 ? a.x : axis == 1 ? a.y : a.z;
+}
 
 /* a / |a|, or (0, 0, 0) when a is zero. */
 static inline cbvh_v3 v3_normalize(cbvh_v3 a)
