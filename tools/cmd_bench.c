@@ -136,58 +136,31 @@ static const cli_option options[] = {
 /* Engines: each runs a slice of rays for bench_run.                   */
 /* ------------------------------------------------------------------ */
 
+/* A peer's slice of rays: closest hits into hits, or any hits into occluded (hits NULL). */
+#define PEER_RAY_KERNEL(name, raycast, occluded_fn)                                                          \
+    static void name(const void *engine, const cbvh_ray *rays, size_t count, cbvh_hit *hits,                 \
+                     uint8_t *occluded, cbvh_query_stats *stats)                                             \
+    {                                                                                                        \
+        (void)stats;                                                                                         \
+        if (hits)                                                                                            \
+            raycast(engine, rays, count, hits);                                                              \
+        else                                                                                                 \
+            occluded_fn(engine, rays, count, occluded);                                                      \
+    }
 #ifdef HAVE_EMBREE
-static void embree_kernel(const void *engine, const cbvh_ray *rays, size_t count, cbvh_hit *hits,
-                          uint8_t *occluded, cbvh_query_stats *stats)
-{
-    if (hits)
-        embree_peer_raycast(engine, rays, count, hits);
-    else
-        embree_peer_occluded(engine, rays, count, occluded);
-}
-
-static void embree16_kernel(const void *engine, const cbvh_ray *rays, size_t count, cbvh_hit *hits,
-                            uint8_t *occluded, cbvh_query_stats *stats)
-{
-    if (hits)
-        embree_peer_raycast16(engine, rays, count, hits);
-    else
-        embree_peer_occluded16(engine, rays, count, occluded);
-}
+PEER_RAY_KERNEL(embree_kernel, embree_peer_raycast, embree_peer_occluded)
+PEER_RAY_KERNEL(embree16_kernel, embree_peer_raycast16, embree_peer_occluded16)
 #endif
-
 #ifdef HAVE_TINYBVH
-static void tinybvh_kernel(const void *engine, const cbvh_ray *rays, size_t count, cbvh_hit *hits,
-                           uint8_t *occluded, cbvh_query_stats *stats)
-{
-    if (hits)
-        tinybvh_peer_raycast(engine, rays, count, hits);
-    else
-        tinybvh_peer_occluded(engine, rays, count, occluded);
-}
+PEER_RAY_KERNEL(tinybvh_kernel, tinybvh_peer_raycast, tinybvh_peer_occluded)
 #endif
-
 #ifdef HAVE_BULLET
-static void bullet_kernel(const void *engine, const cbvh_ray *rays, size_t count, cbvh_hit *hits,
-                          uint8_t *occluded, cbvh_query_stats *stats)
-{
-    if (hits)
-        bullet_peer_raycast(engine, rays, count, hits);
-    else
-        bullet_peer_occluded(engine, rays, count, occluded);
-}
+PEER_RAY_KERNEL(bullet_kernel, bullet_peer_raycast, bullet_peer_occluded)
 #endif
-
 #ifdef HAVE_JOLT
-static void jolt_kernel(const void *engine, const cbvh_ray *rays, size_t count, cbvh_hit *hits,
-                        uint8_t *occluded, cbvh_query_stats *stats)
-{
-    if (hits)
-        jolt_peer_raycast(engine, rays, count, hits);
-    else
-        jolt_peer_occluded(engine, rays, count, occluded);
-}
+PEER_RAY_KERNEL(jolt_kernel, jolt_peer_raycast, jolt_peer_occluded)
 #endif
+#undef PEER_RAY_KERNEL
 
 /* One way to answer the queries: a cbvh traversal or a peer configuration. */
 typedef struct method {

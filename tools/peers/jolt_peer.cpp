@@ -144,11 +144,6 @@ struct each_collector : public JPH::CollideShapeCollector {
     }
 };
 
-void add_to_answer(void *answer, uint32_t tri)
-{
-    shape_answer_add((shape_answer *)answer, tri);
-}
-
 } // namespace
 
 extern "C" jolt_peer *jolt_peer_create(const peer_mesh *mesh, peer_build_info *info, char *err,
@@ -304,12 +299,10 @@ extern "C" void jolt_peer_overlap_each(const jolt_peer *peer, shape_kind kind, c
 extern "C" void jolt_peer_overlap(const jolt_peer *peer, shape_kind kind, const shape_query *queries,
                                   size_t count, shape_answer *out)
 {
-    for (size_t i = 0; i < count; i++) {
-        shape_answer &a = out[i];
-        a.tri = CBVH_NO_HIT;
-        a.t = INFINITY;
-        a.count = 0;
-        a.set_hash = 0;
-        jolt_peer_overlap_each(peer, kind, &queries[i], add_to_answer, &a);
-    }
+    shape_answers_from_each(
+        peer,
+        [](const void *p, shape_kind k, const shape_query *q, void (*add)(void *, uint32_t), void *user) {
+            jolt_peer_overlap_each(static_cast<const jolt_peer *>(p), k, q, add, user);
+        },
+        kind, queries, count, out);
 }

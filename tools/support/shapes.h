@@ -3,9 +3,11 @@
 #ifndef CBVH_SHAPES_H
 #define CBVH_SHAPES_H
 
+#include <math.h>
 #include <stddef.h>
 #include <stdint.h>
 
+#include "cbvh.h"
 #include "rays.h"
 
 typedef enum shape_kind {
@@ -52,6 +54,29 @@ static inline void shape_answer_add(shape_answer *a, uint32_t tri)
     x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
     a->count++;
     a->set_hash += x ^ (x >> 31);
+}
+
+/* shape_answer_add as an engine's per-triangle callback (user: the answer). */
+static inline void shape_answer_add_to(void *answer, uint32_t tri)
+{
+    shape_answer_add((shape_answer *)answer, tri);
+}
+
+/* An engine's triangles of one overlap query, each passed to add(user, tri). */
+typedef void (*shape_overlap_each_fn)(const void *engine, shape_kind kind, const shape_query *query,
+                                      void (*add)(void *user, uint32_t tri), void *user);
+
+/* The answers of count overlap queries from an engine's `each`: every answer's set of its triangles. */
+static inline void shape_answers_from_each(const void *engine, shape_overlap_each_fn each, shape_kind kind,
+                                           const shape_query *queries, size_t count, shape_answer *out)
+{
+    for (size_t i = 0; i < count; i++) {
+        out[i].tri = CBVH_NO_HIT;
+        out[i].t = INFINITY;
+        out[i].count = 0;
+        out[i].set_hash = 0;
+        each(engine, kind, &queries[i], shape_answer_add_to, &out[i]);
+    }
 }
 
 /* Fills out[0..count) with sweeps (sweep nonzero) or overlaps of shape `kind` (an oriented box: sweeps only)
