@@ -106,11 +106,14 @@ static int ask_filter(const struct sweep_query *q, uint32_t k, const cbvh_v3 v[3
 
 /* Cooked triangle k: its box (unless it passed sweep_box at the current limit: box_passed_at, NAN when
  * untested; the limit only shrinks), the motion's culling, the cheap tests, the sweep, and the filter when
- * its contact would win. Returns 1 when the filter stops the walk. */
+ * its contact would win. A contact at t = 0 is beaten by none of a higher index: those are skipped. Returns
+ * 1 when the filter stops the walk. */
 static int sweep_triangle(struct sweep_query *q, uint32_t k, const float a[3], const float b[3],
                           const float cc[3], float box_passed_at)
 {
     const struct cbvh_sweep_rules *rules = q->rules;
+    if (q->best.t == 0.0 && k > q->best_tri)
+        return 0;
     if (!(q->limit == box_passed_at)) {
         float lo[3], hi[3], entry;
         cbvh_triangle_bounds(a, b, cc, lo, hi);
