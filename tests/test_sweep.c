@@ -445,6 +445,130 @@ static void test_needle_capsules(void **state)
     }
 }
 
+static void unit3(double v[3])
+{
+    const double l = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+    for (int a = 0; a < 3; a++)
+        v[a] /= l;
+}
+
+static double dot3d(const double a[3], const double b[3])
+{
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+
+/* Capsules that graze one triangle, built at their moment of contact: a point q of the triangle (a vertex,
+ * an edge or the face), a direction m from q that the triangle lies behind ((x - q).m <= 0 for all its
+ * points x), the segment's end at q + m r (1 + eps) with the segment going no nearer (axis.m >= 0: often
+ * parallel to the plane through q, or along an edge), so the capsule's distance to the triangle is exactly
+ * r eps then; eps = +-1e-4, a miss or a hit far beyond both the reference's tolerance and the rounding of
+ * the floats. The motion reaches that pose at tc and then stays on the triangle's side or slides along it:
+ * tangent to the plane (the distance never falls below r (1 + eps): a hit only for eps < 0), approaching and
+ * ending at tc = 1 (the time limit), or leaving from tc = 0 (a start overlap, or a capsule just clear that
+ * moves away). Every kind against the reference: the capsule sweep's early rejects and its test of
+ * overlap at the start decide hit or miss as it does. Triangles: well shaped, thin (aspect 100), a sliver
+ * (aspect 1e5) and a degenerate one (its vertices on a line) when the cook keeps it. */
+static void test_grazing_capsules(void **state)
+{
+    (void)state;
+    static const float shapes[5][9] = {{0, 0, 0, 1, 0, 0, 0, 1, 0},
+                                       {-0.3f, 0.2f, 0.1f, 0.8f, -0.4f, 0.3f, 0.1f, 0.9f, -0.5f},
+                                       {-1, 0, 0, 1, 0, 0, 0.2f, 0.01f, 0.003f},
+                                       {-1, 0, 0, 1, 0, 0, 0.3f, 1e-5f, 0},
+                                       {-1, 0, 0, 1, 0, 0, 0.25f, 0, 0}};
+    long hits = 0, misses = 0;
+    for (int shape = 0; shape < 5; shape++) {
+        const uint32_t idx[3] = {0, 1, 2};
+        ref_fixture fx;
+        if (ref_fixture_open(&fx, shapes[shape], 3, idx, 1, test_options()) != CBVH_OK ||
+            fx.tris.count != 1) {
+            assert_true(shape == 4); /* only the degenerate triangle may be refused or dropped */
+            if (fx.file)
+                ref_fixture_close(&fx);
+            continue;
+        }
+        const double *v = fx.tris.v;
+        double e1[3], e2[3], n[3];
+        for (int a = 0; a < 3; a++) {
+            e1[a] = v[3 + a] - v[a];
+            e2[a] = v[6 + a] - v[a];
+        }
+        n[0] = e1[1] * e2[2] - e1[2] * e2[1];
+        n[1] = e1[2] * e2[0] - e1[0] * e2[2];
+        n[2] = e1[0] * e2[1] - e1[1] * e2[0];
+        const int flat = dot3d(n, n) == 0.0;
+        if (!flat)
+            unit3(n);
+        uint64_t st = 900 + (uint64_t)shape;
+        for (int i = 0; i < (int)test_reps(600); i++) {
+            const int feature = (int)(scene_rand_next(&st) % 3), k = (int)(scene_rand_next(&st) % 3);
+            const double *p = v + 3 * k, *pn = v + 3 * ((k + 1) % 3);
+            double q[3], m[3], edge[3];
+            const double f = rnd(&st, 0.0, 1.0), g = rnd(&st, 0.0, 1.0 - f);
+            for (int a = 0; a < 3; a++) {
+                edge[a] = pn[a] - p[a];
+                q[a] = feature == 0 ? p[a] : feature == 1 ? p[a] + f * edge[a] : v[a] + f * e1[a] + g * e2[a];
+            }
+            /* m: a random direction, until the triangle lies behind it (the face: +-n) */
+            int tries = 0;
+            do {
+                for (int a = 0; a < 3; a++)
+                    m[a] = feature == 2 && !flat ? n[a] * (f < 0.5 ? 1.0 : -1.0) : rnd(&st, -1.0, 1.0);
+                if (feature == 1) { /* square to the edge */
+                    const double along = dot3d(m, edge) / dot3d(edge, edge);
+                    for (int a = 0; a < 3; a++)
+                        m[a] -= along * edge[a];
+                }
+                unit3(m);
+            } while (++tries < 1000 &&
+                     !(dot3d(m, (double[3]){v[0] - q[0], v[1] - q[1], v[2] - q[2]}) <= 1e-12 &&
+                       dot3d(m, (double[3]){v[3] - q[0], v[4] - q[1], v[5] - q[2]}) <= 1e-12 &&
+                       dot3d(m, (double[3]){v[6] - q[0], v[7] - q[1], v[8] - q[2]}) <= 1e-12));
+            if (tries == 1000)
+                continue;
+            /* the axis (no nearer to the triangle than its end) and the motion (never towards m after tc) */
+            double axis[3], tangent[3], delta[3];
+            const int axis_kind = (int)(scene_rand_next(&st) % 4), motion = (int)(scene_rand_next(&st) % 3);
+            for (int a = 0; a < 3; a++) {
+                axis[a] = axis_kind == 0 ? edge[a] : rnd(&st, -1.0, 1.0);
+                tangent[a] = scene_rand_next(&st) % 4 == 0 ? edge[a] : rnd(&st, -1.0, 1.0);
+            }
+            const double am = dot3d(axis, m), tm = dot3d(tangent, m);
+            for (int a = 0; a < 3; a++) {
+                axis[a] = axis_kind == 1 ? axis[a] - am * m[a] : am < 0.0 ? -axis[a] : axis[a];
+                tangent[a] -= tm * m[a];
+            }
+            unit3(axis);
+            unit3(tangent);
+            const double r = rnd(&st, 0.02, 0.2), len = axis_kind == 3 ? 0.0 : rnd(&st, 0.0, 0.6);
+            const double eps = scene_rand_next(&st) % 2 ? 1e-4 : -1e-4, speed = rnd(&st, 0.3, 1.5);
+            const double tc = motion == 0 ? rnd(&st, 0.0, 1.0) : motion == 1 ? 1.0 : 0.0;
+            const double in = motion == 1 ? -rnd(&st, 0.2, 1.0) : motion == 2 ? rnd(&st, 0.0, 1.0) : 0.0;
+            ref_shape s;
+            memset(&s, 0, sizeof s);
+            s.kind = REF_CAPSULE;
+            s.radius = (float)r;
+            float d[3];
+            for (int a = 0; a < 3; a++) {
+                delta[a] = speed * (tangent[a] + in * m[a]);
+                d[a] = (float)delta[a];
+                const double end = q[a] + m[a] * s.radius * (1.0 + eps) - tc * d[a];
+                s.p0[a] = (float)end;
+                s.p1[a] = (float)(end + len * axis[a]);
+            }
+            const long before = contacts_checked;
+            check_sweep(&fx, &s, d);
+            if (contacts_checked > before)
+                hits++;
+            else
+                misses++;
+        }
+        ref_fixture_close(&fx);
+    }
+    fprintf(stderr, "test_sweep: grazing capsules: %ld hits, %ld misses\n", hits, misses);
+    assert_true(hits > 0 && misses > 0);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -455,6 +579,7 @@ int main(void)
         cmocka_unit_test(test_sliver_sweeps),
         cmocka_unit_test(test_huge_capsules),
         cmocka_unit_test(test_needle_capsules),
+        cmocka_unit_test(test_grazing_capsules),
     };
     return TEST_RUN_LAYOUTS(tests, 0);
 }

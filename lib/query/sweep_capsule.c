@@ -2,12 +2,69 @@
  * against the segment. */
 #include "query/closest.h"
 #include "query/shape.h"
+#include "query/shape_cull.h"
 #include "query/sweep_walk.h"
 
 struct capsule_shape {
     cbvh_v3 p0, p1, delta;
     double radius;
+    cbvh_v3 axis, back; /* p1 - p0 and -delta */
+    double core_size;   /* the largest coordinate of p0 or p1, plus the radius */
 };
+
+/* Where the capsule can first touch triangle (a, b, c), bounded by slabs: the point p0 + t*delta touches
+ * the triangle swept by -axis and grown by r only inside every slab {x : lo <= u.x <= hi} around that
+ * set, for any direction u (lo and hi from u's dot products with the vertices, the axis and r |u|). Seven
+ * directions: the face normal n, the edges' outward normals in the plane (n x e) and the edges crossed
+ * with the axis (the set's faces when it is a prism). Returns 0 when t in [0, tmax] leaves some slab, so
+ * the capsule misses the triangle; else 1, with *t_lo the earliest t the slabs allow (above 0: the capsule
+ * is clear of the triangle at t = 0). The slabs are grown by 2^-30 size |u|_1 (size: the largest
+ * coordinates of a vertex, the core and the motion, the span and the radius), far beyond the rounding of
+ * the dot products (the directions need no accuracy: a slab is a slab for any u) and of the exact
+ * feature tests on a triangle no sliver. On a sliver (|n|^2 < 2^-20 span^4), on a triangle of extreme
+ * size (span below 2^-160 or size beyond 2^160, where the products could underflow or overflow) it
+ * returns 1 with *t_lo 0; a NaN from any product keeps the triangle too. */
+static int capsule_slabs(const struct capsule_shape *s, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, double tmax,
+                         double *t_lo)
+{
+    const cbvh_v3 e[3] = {v3_sub(b, a), v3_sub(c, b), v3_sub(a, c)},
+                  w[3] = {v3_sub(a, s->p0), v3_sub(b, s->p0), v3_sub(c, s->p0)};
+    const cbvh_v3 n = v3_cross(e[0], v3_scale(e[2], -1.0));
+    const double span = cull_max(cull_max_abs(e[0]), cull_max_abs(e[2])), span2 = span * span;
+    const double size = cull_max_abs(a) + span + s->core_size + cull_max_abs(v3_scale(s->delta, tmax));
+    *t_lo = 0.0;
+    if (!(v3_len2(n) >= 0x1p-20 * span2 * span2 && span >= 0x1p-160 && size <= 0x1p160))
+        return 1;
+    const cbvh_v3 u[7] = {n,
+                          v3_cross(n, e[0]),
+                          v3_cross(n, e[1]),
+                          v3_cross(n, e[2]),
+                          v3_cross(e[0], s->axis),
+                          v3_cross(e[1], s->axis),
+                          v3_cross(e[2], s->axis)};
+    double t0 = 0.0, t1 = tmax;
+    for (int i = 0; i < 7; i++) {
+        const double d0 = v3_dot(u[i], w[0]), d1 = v3_dot(u[i], w[1]), d2 = v3_dot(u[i], w[2]);
+        const double along = -v3_dot(u[i], s->axis), speed = v3_dot(u[i], s->delta);
+        const double grow =
+            s->radius * v3_len(u[i]) + 0x1p-30 * size * (fabs(u[i].x) + fabs(u[i].y) + fabs(u[i].z));
+        const double lo = cull_min(cull_min(d0, d1), d2) + cull_min(along, 0.0) - grow;
+        const double hi = cull_max(cull_max(d0, d1), d2) + cull_max(along, 0.0) + grow;
+        if (speed > 0.0) {
+            t0 = cull_max(t0, lo / speed);
+            t1 = cull_min(t1, hi / speed);
+        } else if (speed < 0.0) {
+            t0 = cull_max(t0, hi / speed);
+            t1 = cull_min(t1, lo / speed);
+        } else if (lo > 0.0 || hi < 0.0) {
+            return 0;
+        }
+        if (t0 > t1)
+            return 0;
+    }
+    *t_lo = t0;
+    return 1;
+}
 
 /* A positive distance between segment S and triangle T is attained by an
  * endpoint of S against T, or by S against an edge of T. So the first contact
@@ -23,6 +80,11 @@ static int capsule_triangle(const void *shape, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, 
     const struct capsule_shape *s = shape;
     const double r = s->radius;
     cbvh_v3 on_seg, on_tri, n;
+    double t_lo;
+    if (!capsule_slabs(s, a, b, c, tmax, &t_lo))
+        return 0;
+    if (t_lo > 0.0)
+        clear_at_start = 1;
     if (!clear_at_start && cbvh_closest_segment_triangle(s->p0, s->p1, a, b, c, &on_seg, &on_tri) <= r * r) {
         const cbvh_v3 away = v3_sub(on_seg, on_tri);
         out->t = 0.0;
@@ -38,7 +100,7 @@ static int capsule_triangle(const void *shape, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, 
         }
         return 1;
     }
-    const cbvh_v3 v[3] = {a, b, c}, axis = v3_sub(s->p1, s->p0), back = v3_scale(s->delta, -1.0);
+    const cbvh_v3 v[3] = {a, b, c}, axis = s->axis, back = s->back;
     double t, alpha, beta;
     int found = 0;
     for (int e = 0; e < 2; e++) {
@@ -74,6 +136,14 @@ int cbvh_sweep_capsule_shape(const struct cbvh_file *f, const struct cbvh_local_
                              const float delta[3], const struct cbvh_sweep_rules *rules,
                              struct cbvh_sweep_found *found)
 {
-    const struct capsule_shape s = {shape->p0, shape->p1, v3_from_f(delta), shape->radius};
+    const cbvh_v3 d = v3_from_f(delta);
+    const struct capsule_shape s = {shape->p0,
+                                    shape->p1,
+                                    d,
+                                    shape->radius,
+                                    v3_sub(shape->p1, shape->p0),
+                                    v3_scale(d, -1.0),
+                                    cull_max(cull_max_abs(shape->p0), cull_max_abs(shape->p1)) +
+                                        shape->radius};
     return cbvh_sweep_walk(f, shape, delta, capsule_triangle, &s, rules, found);
 }
