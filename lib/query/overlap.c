@@ -73,8 +73,7 @@ static int region_triangle(const struct overlap_region *r, cbvh_v3 a, cbvh_v3 b,
                s->radius * s->radius;
     }
     double t;
-    cbvh_v3 n;
-    return cbvh_triangle_oriented_box_sweep(a, b, c, &r->box, v3(0, 0, 0), 0.0, &t, &n, NULL);
+    return cbvh_triangle_oriented_box_sweep(a, b, c, &r->box, v3(0, 0, 0), 0.0, &t, NULL, NULL);
 }
 
 /* The contact of a box region with a triangle it overlaps: the separating-axis test's axis of least

@@ -2,66 +2,147 @@
  * contact point. */
 #include <math.h>
 
+#include "common/compiler.h"
 #include "query/triangle_box.h"
+
+/* The 13 axes of the box frame's test, unnormalized, in the order of the search: the 3 box axes, the
+ * triangle's normal, then the cross of box axis k with edge f[j] at 4 + 3k + j (written out:
+ * e_x x f = (0, -f.z, f.y) and so on). min_len2: an axis no longer than that gives nothing (an edge (nearly)
+ * parallel to a box axis: the others cover it). */
+static void box_sweep_axes(const cbvh_v3 f[3], cbvh_v3 axes[13], double min_len2[13])
+{
+    axes[0] = v3(1, 0, 0);
+    axes[1] = v3(0, 1, 0);
+    axes[2] = v3(0, 0, 1);
+    axes[3] = v3_cross(f[0], f[1]);
+    for (int k = 0; k < 4; k++)
+        min_len2[k] = 0.0;
+    for (int j = 0; j < 3; j++) {
+        const double floor = 1e-24 * v3_len2(f[j]);
+        axes[4 + j] = v3(0.0, -f[j].z, f[j].y);
+        axes[7 + j] = v3(f[j].z, 0.0, -f[j].x);
+        axes[10 + j] = v3(-f[j].y, f[j].x, 0.0);
+        min_len2[4 + j] = min_len2[7 + j] = min_len2[10 + j] = floor;
+    }
+}
+
+/* The projections of the triangle v[] grown by the box's on axis l: the box center's s*t must lie in
+ * [*lo, *hi] for them to meet. */
+CBVH_FORCE_INLINE void box_sweep_range(const cbvh_v3 v[3], cbvh_v3 half, cbvh_v3 l, double *lo, double *hi)
+{
+    const double p0 = v3_dot(v[0], l), p1 = v3_dot(v[1], l), p2 = v3_dot(v[2], l);
+    const double radius = half.x * fabs(l.x) + half.y * fabs(l.y) + half.z * fabs(l.z);
+    *lo = cbvh_dmin(p0, cbvh_dmin(p1, p2)) - radius;
+    *hi = cbvh_dmax(p0, cbvh_dmax(p1, p2)) + radius;
+}
+
+/* The times of a sweep so far: the box center's s*t lies in every axis's [lo, hi] for t in
+ * [t_enter, t_exit]; enter_axis is the axis that set t_enter. */
+struct box_sweep_times {
+    double t_enter, t_exit, tmax;
+    int enter_axis, enter_from_below;
+};
+
+/* Narrows the times by axis k's [lo, hi] and s (delta's projection): 0 when no time in [0, tmax] is left
+ * (more axes only narrow the times further). */
+CBVH_FORCE_INLINE int box_sweep_narrow(struct box_sweep_times *w, int k, double lo, double hi, double s)
+{
+    if (s == 0.0)
+        return !(lo > 0.0 || hi < 0.0);
+    double ta = lo / s, tb = hi / s;
+    if (ta > tb) {
+        double tmp = ta;
+        ta = tb;
+        tb = tmp;
+    }
+    if (ta > w->t_enter) {
+        w->t_enter = ta;
+        w->enter_axis = k;
+        w->enter_from_below = s > 0.0; /* the box arrives from the side it moves away from */
+    }
+    if (tb < w->t_exit)
+        w->t_exit = tb;
+    return !(cbvh_dmax(w->t_enter, 0.0) > cbvh_dmin(w->t_exit, w->tmax));
+}
+
+/* Narrows the times by box axis k crossed with each edge f[j] (axis 4 + 3k + j), the axis written out with
+ * the coordinates y, z that follow k: (0, -f.z, f.y) for k = 0. Inlined with k a constant, so the
+ * coordinates are picked at compile time. */
+CBVH_FORCE_INLINE int box_sweep_cross(struct box_sweep_times *w, int k, const cbvh_v3 v[3],
+                                      const cbvh_v3 f[3], cbvh_v3 half, cbvh_v3 delta)
+{
+    const int y = k == 2 ? 0 : k + 1, z = k == 0 ? 2 : k - 1;
+    const double hy = v3_get(half, y), hz = v3_get(half, z), dy = v3_get(delta, y), dz = v3_get(delta, z);
+    for (int j = 0; j < 3; j++) {
+        const double ly = -v3_get(f[j], z), lz = v3_get(f[j], y);
+        if (!(ly * ly + lz * lz > 1e-24 * v3_len2(f[j])))
+            continue;
+        const double p0 = v3_get(v[0], y) * ly + v3_get(v[0], z) * lz,
+                     p1 = v3_get(v[1], y) * ly + v3_get(v[1], z) * lz,
+                     p2 = v3_get(v[2], y) * ly + v3_get(v[2], z) * lz;
+        const double radius = hy * fabs(ly) + hz * fabs(lz);
+        const double lo = cbvh_dmin(p0, cbvh_dmin(p1, p2)) - radius,
+                     hi = cbvh_dmax(p0, cbvh_dmax(p1, p2)) + radius;
+        if (!box_sweep_narrow(w, 4 + 3 * k + j, lo, hi, dy * ly + dz * lz))
+            return 0;
+    }
+    return 1;
+}
 
 /* Every value below is finite (or, t_enter, t_exit and least_depth, infinite before their first axis): the
  * plain compares of cbvh_dmin and cbvh_dmax (MINSD and MAXSD) give what fmin and fmax (calls into libm) give.
- */
+ * The times come from the axes as they are (a time is the same on any multiple of an axis), and the test
+ * stops at the first axis that leaves no time in [0, tmax]. On a box axis a projection is a coordinate and
+ * on a cross one a sum of two products: the terms box_sweep_range's dot products would add as zeros are left
+ * out, which changes no value. The normal of the entering axis is normalized once at the end; the depths,
+ * which compare axes, are measured on unit axes in a second pass, only for a contact at t = 0 whose normal is
+ * asked for. */
 int cbvh_triangle_box_sweep(cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, cbvh_v3 center, cbvh_v3 half, cbvh_v3 delta,
                             double tmax, double *t, cbvh_v3 *normal, double *depth)
 {
     const cbvh_v3 v[3] = {v3_sub(a, center), v3_sub(b, center), v3_sub(c, center)};
     const cbvh_v3 f[3] = {v3_sub(v[1], v[0]), v3_sub(v[2], v[1]), v3_sub(v[0], v[2])};
-    const cbvh_v3 box_axis[3] = {v3(1, 0, 0), v3(0, 1, 0), v3(0, 0, 1)};
+    struct box_sweep_times w = {-INFINITY, INFINITY, tmax, -1, 0};
+    for (int k = 0; k < 3; k++) {
+        const double p0 = v3_get(v[0], k), p1 = v3_get(v[1], k), p2 = v3_get(v[2], k), h = v3_get(half, k);
+        const double lo = cbvh_dmin(p0, cbvh_dmin(p1, p2)) - h, hi = cbvh_dmax(p0, cbvh_dmax(p1, p2)) + h;
+        if (!box_sweep_narrow(&w, k, lo, hi, v3_get(delta, k)))
+            return 0;
+    }
+    const cbvh_v3 n = v3_cross(f[0], f[1]);
+    if (v3_len2(n) > 0.0) {
+        double lo, hi;
+        box_sweep_range(v, half, n, &lo, &hi);
+        if (!box_sweep_narrow(&w, 3, lo, hi, v3_dot(delta, n)))
+            return 0;
+    }
+    if (!box_sweep_cross(&w, 0, v, f, half, delta) || !box_sweep_cross(&w, 1, v, f, half, delta) ||
+        !box_sweep_cross(&w, 2, v, f, half, delta))
+        return 0;
     cbvh_v3 axes[13];
     double min_len2[13];
-    int count = 0;
-    for (int k = 0; k < 3; k++) {
-        axes[count] = box_axis[k];
-        min_len2[count++] = 0.0;
-    }
-    axes[count] = v3_cross(f[0], f[1]);
-    min_len2[count++] = 0.0;
-    for (int k = 0; k < 3; k++) {
-        for (int j = 0; j < 3; j++) {
-            axes[count] = v3_cross(box_axis[k], f[j]);
-            /* An edge (nearly) parallel to a box axis gives no axis: the others cover it. */
-            min_len2[count++] = 1e-24 * v3_len2(f[j]);
+    box_sweep_axes(f, axes, min_len2);
+    if (w.t_enter > 0.0) {
+        *t = w.t_enter;
+        if (normal) {
+            const cbvh_v3 l = v3_normalize(axes[w.enter_axis]);
+            *normal = w.enter_from_below ? v3_scale(l, -1.0) : l;
         }
+        return 1;
     }
-
-    double t_enter = -INFINITY, t_exit = INFINITY, least_depth = INFINITY;
-    cbvh_v3 enter_normal = v3(0, 0, 1), depth_normal = v3(0, 0, 1);
-    for (int k = 0; k < count; k++) {
+    *t = 0.0;
+    if (!normal)
+        return 1;
+    /* Moving the box by hi along l, or by -lo along -l (l a unit axis), would separate it at t = 0. */
+    double least_depth = INFINITY;
+    cbvh_v3 depth_normal = v3(0, 0, 1);
+    for (int k = 0; k < 13; k++) {
         const double len2 = v3_len2(axes[k]);
         if (!(len2 > min_len2[k]))
             continue;
         const cbvh_v3 l = v3_scale(axes[k], 1.0 / sqrt(len2));
-        const double p0 = v3_dot(v[0], l), p1 = v3_dot(v[1], l), p2 = v3_dot(v[2], l);
-        const double radius = half.x * fabs(l.x) + half.y * fabs(l.y) + half.z * fabs(l.z);
-        /* The box center's projection s*t must lie in [lo, hi] for the projections to meet. */
-        const double lo = cbvh_dmin(p0, cbvh_dmin(p1, p2)) - radius,
-                     hi = cbvh_dmax(p0, cbvh_dmax(p1, p2)) + radius;
-        const double s = v3_dot(delta, l);
-        if (s == 0.0) {
-            if (lo > 0.0 || hi < 0.0)
-                return 0;
-        } else {
-            double ta = lo / s, tb = hi / s;
-            if (ta > tb) {
-                double tmp = ta;
-                ta = tb;
-                tb = tmp;
-            }
-            if (ta > t_enter) {
-                t_enter = ta;
-                enter_normal =
-                    s > 0.0 ? v3_scale(l, -1.0) : l; /* the box arrives from the side it moves away from */
-            }
-            if (tb < t_exit)
-                t_exit = tb;
-        }
-        /* Moving the box by hi along l, or by -lo along -l, would separate it at t = 0. */
+        double lo, hi;
+        box_sweep_range(v, half, l, &lo, &hi);
         if (hi < least_depth) {
             least_depth = hi;
             depth_normal = l;
@@ -71,17 +152,9 @@ int cbvh_triangle_box_sweep(cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, cbvh_v3 center, cbv
             depth_normal = v3_scale(l, -1.0);
         }
     }
-    if (cbvh_dmax(t_enter, 0.0) > cbvh_dmin(t_exit, tmax))
-        return 0;
-    if (t_enter <= 0.0) {
-        *t = 0.0;
-        *normal = depth_normal;
-        if (depth)
-            *depth = cbvh_dmax(least_depth, 0.0);
-    } else {
-        *t = t_enter;
-        *normal = enter_normal;
-    }
+    *normal = depth_normal;
+    if (depth)
+        *depth = cbvh_dmax(least_depth, 0.0);
     return 1;
 }
 
@@ -110,7 +183,8 @@ int cbvh_triangle_oriented_box_sweep(cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, const stru
                                  into_box(box, v3_sub(c, o)), v3(0, 0, 0), box->half, into_box(box, delta),
                                  tmax, t, normal, depth))
         return 0;
-    *normal = out_of_box(box, *normal);
+    if (normal)
+        *normal = out_of_box(box, *normal);
     return 1;
 }
 

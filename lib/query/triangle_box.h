@@ -15,7 +15,8 @@
  * separated them last, or at t = 0 the axis of least penetration, with
  * *depth (when depth is not NULL) how far the box reaches along it: the exact
  * penetration depth, since those axes hold every face normal of the
- * obstacle. With delta = 0 and tmax = 0 this is the static overlap test. */
+ * obstacle. With delta = 0 and tmax = 0 this is the static overlap test. normal may be NULL (then depth is
+ * not written either): the yes or no alone. */
 int cbvh_triangle_box_sweep(cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, cbvh_v3 center, cbvh_v3 half, cbvh_v3 delta,
                             double tmax, double *t, cbvh_v3 *normal, double *depth);
 
