@@ -1,5 +1,6 @@
 /* sweep_capsule.c: capsule sweeps, exact: end balls, triangle vertices against the capsule side, edges
  * against the segment. */
+#include "common/compiler.h"
 #include "query/closest.h"
 #include "query/shape.h"
 #include "query/shape_cull.h"
@@ -12,18 +13,39 @@ struct capsule_shape {
     double core_size;   /* the largest coordinate of p0 or p1, plus the radius */
 };
 
+/* Narrows [*t0, *t1] to the times t when the point p0 + t*delta lies in the slab along u around the
+ * triangle (vertices p0 + w[k]) swept by -axis and grown by r and the margin 2^-30 size |u|_1 (see
+ * capsule_slabs). Returns 0 when no time is left. */
+CBVH_FORCE_INLINE int capsule_slab(const struct capsule_shape *s, const cbvh_v3 w[3], cbvh_v3 u, double size,
+                                   double *t0, double *t1)
+{
+    const double d0 = v3_dot(u, w[0]), d1 = v3_dot(u, w[1]), d2 = v3_dot(u, w[2]);
+    const double along = -v3_dot(u, s->axis), speed = v3_dot(u, s->delta);
+    const double grow = s->radius * v3_len(u) + 0x1p-30 * size * (fabs(u.x) + fabs(u.y) + fabs(u.z));
+    const double lo = cull_min(cull_min(d0, d1), d2) + cull_min(along, 0.0) - grow;
+    const double hi = cull_max(cull_max(d0, d1), d2) + cull_max(along, 0.0) + grow;
+    if (speed == 0.0)
+        return !(lo > 0.0 || hi < 0.0);
+    const double inv = 1.0 / speed, enter = (speed > 0.0 ? lo : hi) * inv,
+                 leave = (speed > 0.0 ? hi : lo) * inv;
+    *t0 = cull_max(*t0, enter);
+    *t1 = cull_min(*t1, leave);
+    return !(*t0 > *t1);
+}
+
 /* Where the capsule can first touch triangle (a, b, c), bounded by slabs: the point p0 + t*delta touches
  * the triangle swept by -axis and grown by r only inside every slab {x : lo <= u.x <= hi} around that
  * set, for any direction u (lo and hi from u's dot products with the vertices, the axis and r |u|). Seven
- * directions: the face normal n, the edges' outward normals in the plane (n x e) and the edges crossed
- * with the axis (the set's faces when it is a prism). Returns 0 when t in [0, tmax] leaves some slab, so
- * the capsule misses the triangle; else 1, with *t_lo the earliest t the slabs allow (above 0: the capsule
- * is clear of the triangle at t = 0). The slabs are grown by 2^-30 size |u|_1 (size: the largest
- * coordinates of a vertex, the core and the motion, the span and the radius), far beyond the rounding of
- * the dot products (the directions need no accuracy: a slab is a slab for any u) and of the exact
- * feature tests on a triangle no sliver. On a sliver (|n|^2 < 2^-20 span^4), on a triangle of extreme
- * size (span below 2^-160 or size beyond 2^160, where the products could underflow or overflow) it
- * returns 1 with *t_lo 0; a NaN from any product keeps the triangle too. */
+ * directions, those that reject most often first: the edges crossed with the axis (the set's side faces
+ * when it is a prism), the edges' outward normals in the plane (n x e), and the face normal n. Returns 0
+ * when t in [0, tmax] leaves some slab, so the capsule misses the triangle; else 1, with *t_lo the earliest
+ * t the slabs allow (above 0: the capsule is clear of the triangle at t = 0). The slabs are grown by
+ * 2^-30 size |u|_1 (size: the largest coordinates of a vertex, the core and the motion, the span and the
+ * radius), far beyond the rounding of the dot products and of the times (the directions need no accuracy:
+ * a slab is a slab for any u) and of the exact feature tests on a triangle no sliver. On a sliver
+ * (|n|^2 < 2^-20 span^4), on a triangle of extreme size (span below 2^-160 or size beyond 2^160, where the
+ * products could underflow or overflow) it returns 1 with *t_lo 0; a NaN from any product keeps the
+ * triangle too. */
 static int capsule_slabs(const struct capsule_shape *s, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, double tmax,
                          double *t_lo)
 {
@@ -35,33 +57,15 @@ static int capsule_slabs(const struct capsule_shape *s, cbvh_v3 a, cbvh_v3 b, cb
     *t_lo = 0.0;
     if (!(v3_len2(n) >= 0x1p-20 * span2 * span2 && span >= 0x1p-160 && size <= 0x1p160))
         return 1;
-    const cbvh_v3 u[7] = {n,
-                          v3_cross(n, e[0]),
-                          v3_cross(n, e[1]),
-                          v3_cross(n, e[2]),
-                          v3_cross(e[0], s->axis),
-                          v3_cross(e[1], s->axis),
-                          v3_cross(e[2], s->axis)};
     double t0 = 0.0, t1 = tmax;
-    for (int i = 0; i < 7; i++) {
-        const double d0 = v3_dot(u[i], w[0]), d1 = v3_dot(u[i], w[1]), d2 = v3_dot(u[i], w[2]);
-        const double along = -v3_dot(u[i], s->axis), speed = v3_dot(u[i], s->delta);
-        const double grow =
-            s->radius * v3_len(u[i]) + 0x1p-30 * size * (fabs(u[i].x) + fabs(u[i].y) + fabs(u[i].z));
-        const double lo = cull_min(cull_min(d0, d1), d2) + cull_min(along, 0.0) - grow;
-        const double hi = cull_max(cull_max(d0, d1), d2) + cull_max(along, 0.0) + grow;
-        if (speed > 0.0) {
-            t0 = cull_max(t0, lo / speed);
-            t1 = cull_min(t1, hi / speed);
-        } else if (speed < 0.0) {
-            t0 = cull_max(t0, hi / speed);
-            t1 = cull_min(t1, lo / speed);
-        } else if (lo > 0.0 || hi < 0.0) {
+    for (int k = 0; k < 3; k++)
+        if (!capsule_slab(s, w, v3_cross(e[k], s->axis), size, &t0, &t1))
             return 0;
-        }
-        if (t0 > t1)
+    for (int k = 0; k < 3; k++)
+        if (!capsule_slab(s, w, v3_cross(n, e[k]), size, &t0, &t1))
             return 0;
-    }
+    if (!capsule_slab(s, w, n, size, &t0, &t1))
+        return 0;
     *t_lo = t0;
     return 1;
 }
