@@ -104,9 +104,22 @@ static int capsule_triangle(const void *shape, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, 
         }
         return 1;
     }
-    const cbvh_v3 v[3] = {a, b, c}, axis = s->axis, back = s->back;
+    const cbvh_v3 v[3] = {a, b, c}, axis = s->axis, back = s->back, e1 = v3_sub(b, a), e2 = v3_sub(c, a);
     double t, alpha, beta;
     int found = 0;
+    /* Face first: with both ends on one side of the plane, clear at t = 0, the capsule comes within r of the
+     * plane first where its lower end does (the ends' heights change alike). When that end enters the face
+     * inside the triangle, no contact can come earlier: that is the answer. */
+    const cbvh_v3 normal = v3_cross(e1, e2);
+    const double h0 = v3_dot(normal, v3_sub(s->p0, a)), h1 = v3_dot(normal, v3_sub(s->p1, a));
+    if (((h0 > 0.0 && h1 > 0.0) || (h0 < 0.0 && h1 < 0.0)) &&
+        cbvh_enter_face(fabs(h0) <= fabs(h1) ? s->p0 : s->p1, s->delta, a, e1, e2, 0, r, tmax, &t, &n, &alpha,
+                        &beta)) {
+        out->t = t;
+        out->normal = r > 0.0 ? n : cbvh_fallback_normal(a, b, c, s->delta);
+        out->point = v3_madd(v3_madd(a, e1, alpha), e2, beta);
+        return 1;
+    }
     for (int e = 0; e < 2; e++) {
         if (cbvh_sweep_ball_triangle(e ? s->p1 : s->p0, s->delta, r, a, b, c, tmax, out)) {
             tmax = out->t;
