@@ -83,6 +83,34 @@ else
     skip "bench: Jolt rows and agreement: the build has no Jolt (configure --with-jolt=PREFIX, README.md)"
 fi
 
+# --baseline: another build of libcbvh, loaded at run time, timed on the same file and rays. The build's own
+# shared library (libtool keeps it in lib/.libs) stands in for another build: same answers, ray by ray.
+printf 'not a library\n' >"$tmp/not_a_library.so"
+if [ "${CBVH_DLOPEN:-no}" = yes ]; then
+    run 2 "bench --baseline of a missing library" "$CBVH" bench --gen sphere:200 --rays 100 --shapes 0 --reps 1 \
+        --quiet --no-peers --baseline "$tmp/missing.so" &&
+        check "... names the library" grep -q 'baseline .*missing.so: cannot load it' "$tmp/err" &&
+        check "... and prints no table" test ! -s "$tmp/out"
+    run 2 "bench --baseline of a file that is not a library" "$CBVH" bench --gen sphere:200 --rays 100 \
+        --shapes 0 --reps 1 --quiet --no-peers --baseline "$tmp/not_a_library.so" &&
+        check "... names the file" grep -q 'not_a_library.so: cannot load it' "$tmp/err"
+    shared_lib="$(dirname "$(dirname "$CBVH")")/lib/.libs/libcbvh.so"
+    if [ -f "$shared_lib" ]; then
+        run 0 "bench --baseline (this build's shared library)" "$CBVH" bench --gen sphere:2000 --rays 2000 \
+            --shapes 0 --reps 1 --threads 1,2 --quiet --no-peers --baseline "$shared_lib" &&
+            check "... a baseline row for sorted and stream per ray set and query, sorted again at 2 threads" \
+                test "$(grep -c '^| [a-z]* | \(closest\|any\) | baseline | \(sorted\|stream\) | ' "$tmp/out")" -eq 24 &&
+            check "... which agree with cbvh ray by ray (every agreement row: no disagreement)" \
+                test "$(grep -c '^| [a-z]* | baseline | \(sorted\|stream\) | [0-9]* | [0-9]* | 0 | 0 | 0 | 2000 |' "$tmp/out")" -eq 8
+    else
+        skip "bench --baseline with a real library: this build has no shared libcbvh (configure --disable-shared)"
+    fi
+else
+    run 2 "bench --baseline without dlopen" "$CBVH" bench --gen sphere:200 --rays 100 --shapes 0 --reps 1 \
+        --quiet --no-peers --baseline "$tmp/not_a_library.so" &&
+        check "... says the build cannot load libraries" grep -q 'needs dlopen' "$tmp/err"
+fi
+
 if [ "$has_python" = 1 ] && [ -f "$tmp/bench.json" ]; then
     check "bench --json is valid JSON" python3 -m json.tool "$tmp/bench.json" /dev/null
     # Every traversal and every peer agrees with cbvh sorted on a closed sphere, ray by ray.

@@ -81,7 +81,12 @@ static const char usage[] =
     "                  time for queries, the process's CPU time for cook, build and open): steadier\n"
     "                  on a machine busy with other work\n"
     "  --json FILE     also write every figure as JSON to FILE\n"
-    "  --no-peers      measure cbvh only\n"
+    "  --no-peers      measure cbvh only (and the baseline, when given)\n"
+    "  --baseline LIB  also time LIB, another build of libcbvh (its libcbvh.so: a checkout of an\n"
+    "                  earlier commit, or other configure options), on the same cooked file and\n"
+    "                  rays, in turns with this build: rows 'baseline sorted' and 'baseline\n"
+    "                  stream', whose ratios are this build's speed over the other's; a library\n"
+    "                  that cannot be loaded or refuses the file is an error (exit status 2)\n"
     "  --quiet         no progress display\n"
     "  -h, --help      show this help\n"
     "\n"
@@ -98,16 +103,24 @@ enum {
     OPT_CPU,
     OPT_JSON,
     OPT_NO_PEERS,
+    OPT_BASELINE,
     OPT_QUIET
 };
 
 static const cli_option options[] = {
-    {"gen", CLI_ARG_REQUIRED, OPT_GEN},       {"rays", CLI_ARG_REQUIRED, OPT_RAYS},
-    {"seed", CLI_ARG_REQUIRED, OPT_SEED},     {"threads", CLI_ARG_REQUIRED, OPT_THREADS},
-    {"reps", CLI_ARG_REQUIRED, OPT_REPS},     {"budget", CLI_ARG_REQUIRED, OPT_BUDGET},
-    {"cpu-time", CLI_ARG_NONE, OPT_CPU},      {"json", CLI_ARG_REQUIRED, OPT_JSON},
-    {"no-peers", CLI_ARG_NONE, OPT_NO_PEERS}, {"quiet", CLI_ARG_NONE, OPT_QUIET},
-    {"shapes", CLI_ARG_REQUIRED, OPT_SHAPES}, {NULL, 0, 0},
+    {"gen", CLI_ARG_REQUIRED, OPT_GEN},
+    {"rays", CLI_ARG_REQUIRED, OPT_RAYS},
+    {"seed", CLI_ARG_REQUIRED, OPT_SEED},
+    {"threads", CLI_ARG_REQUIRED, OPT_THREADS},
+    {"reps", CLI_ARG_REQUIRED, OPT_REPS},
+    {"budget", CLI_ARG_REQUIRED, OPT_BUDGET},
+    {"cpu-time", CLI_ARG_NONE, OPT_CPU},
+    {"json", CLI_ARG_REQUIRED, OPT_JSON},
+    {"no-peers", CLI_ARG_NONE, OPT_NO_PEERS},
+    {"quiet", CLI_ARG_NONE, OPT_QUIET},
+    {"shapes", CLI_ARG_REQUIRED, OPT_SHAPES},
+    {"baseline", CLI_ARG_REQUIRED, OPT_BASELINE},
+    {NULL, 0, 0},
 };
 
 /* Rays or shape queries a peer runs first, to see whether all fit in the time budget; a shape query takes
@@ -160,12 +173,16 @@ PEER_RAY_KERNEL(bullet_kernel, bullet_peer_raycast, bullet_peer_occluded)
 #ifdef HAVE_JOLT
 PEER_RAY_KERNEL(jolt_kernel, jolt_peer_raycast, jolt_peer_occluded)
 #endif
+#ifdef HAVE_DLOPEN
+PEER_RAY_KERNEL(baseline_kernel, baseline_peer_raycast, baseline_peer_occluded)
+PEER_RAY_KERNEL(baseline_stream_kernel, baseline_peer_raycast_stream, baseline_peer_occluded_stream)
+#endif
 #undef PEER_RAY_KERNEL
 
 /* One way to answer the queries: a cbvh traversal or a peer configuration. */
 typedef struct method {
     const char *engine;  /* "cbvh", "embree", "embree-robust", "bullet", "tinybvh-bvh8", "tinybvh-bvh4",
-                          * "jolt" */
+                          * "jolt", "baseline" */
     const char *variant; /* "sorted", "stream", "single", "packet16", "quantized" ... */
     bench_kernel kernel;
     const void *state;
@@ -403,7 +420,7 @@ typedef struct shape_agree_row {
     uint64_t sides[4]; /* how many it decided for each bench_side */
 } shape_agree_row;
 
-#define MAX_METHODS 16
+#define MAX_METHODS 20
 #define MAX_BUILDS 8
 #define MAX_SHAPE_METHODS 3
 
@@ -418,6 +435,7 @@ typedef struct bench_state {
     int cpu_clock;
     const char *json_path;
     int no_peers;
+    const char *baseline_path; /* --baseline: another build's libcbvh, or NULL */
     progress prog;
 
     bench_mesh mesh;
@@ -427,6 +445,7 @@ typedef struct bench_state {
     cbvh_cook_stats cook;
     int cooked;
     char temp_path[512];
+    const char *cbvh_path; /* the cooked file the queries run on: INPUT, or temp_path */
 
     bench_cbvh cbvh_engines[BENCH_CBVH_VARIANTS];
     method methods[MAX_METHODS];
@@ -458,6 +477,9 @@ typedef struct bench_state {
 #ifdef HAVE_JOLT
     jolt_peer *jolt;
     int jolt_cpu_lacks; /* Jolt was built for AVX2 and FMA, which the CPU lacks: Jolt not run */
+#endif
+#ifdef HAVE_DLOPEN
+    baseline_peer *baseline;
 #endif
 } bench_state;
 
@@ -524,6 +546,7 @@ static int prepare_cbvh(bench_state *s)
             return status;
         path = s->temp_path;
     }
+    s->cbvh_path = path;
     /* Open time: the median over the repetitions of opening the file on disk. */
     int status = 0;
     build_row *b = &s->builds[0];
@@ -652,6 +675,25 @@ static void build_peers(bench_state *s)
 #endif
 }
 
+/* The other build of --baseline, on the same cooked file: its sorted single rays and its streams. A library
+ * that cannot be loaded or refuses the file is an error the user is told of (it was asked for). */
+static int add_baseline(bench_state *s)
+{
+#ifdef HAVE_DLOPEN
+    char err[512];
+    s->baseline = baseline_peer_open(s->baseline_path, s->cbvh_path, BENCH_STREAM_BATCH, err, sizeof err);
+    if (!s->baseline) {
+        cli_error(s->command, NULL, "%s", err);
+        return CLI_EXIT_USAGE;
+    }
+    add_method(s, "baseline", "sorted", baseline_kernel, s->baseline, 0, 1);
+    add_method(s, "baseline", "stream", baseline_stream_kernel, s->baseline, 0, 0);
+    return 0;
+#else
+    return cli_usage_error(s->command, "--baseline needs dlopen, which this build of cbvh lacks");
+#endif
+}
+
 static void destroy_peers(bench_state *s)
 {
 #ifdef HAVE_EMBREE
@@ -667,6 +709,9 @@ static void destroy_peers(bench_state *s)
 #endif
 #ifdef HAVE_JOLT
     jolt_peer_destroy(s->jolt);
+#endif
+#ifdef HAVE_DLOPEN
+    baseline_peer_destroy(s->baseline);
 #endif
     (void)s;
 }
@@ -1479,6 +1524,8 @@ static int run(bench_state *s)
     rays_mesh rm = {s->mesh.positions, s->mesh.vertex_count, s->mesh.indices, s->mesh.triangle_count};
     s->diagonal = rays_mesh_bounds(&rm, lo, hi);
     add_cbvh_methods(s);
+    if (s->baseline_path && (status = add_baseline(s)) != 0)
+        return status;
     if (!s->no_peers)
         build_peers(s);
 
@@ -1630,6 +1677,9 @@ int cmd_bench(int argc, char **argv)
             break;
         case OPT_NO_PEERS:
             s.no_peers = 1;
+            break;
+        case OPT_BASELINE:
+            s.baseline_path = value;
             break;
         case OPT_QUIET:
             quiet = 1;

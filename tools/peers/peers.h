@@ -1,5 +1,5 @@
 /* peers.h: a C interface to the libraries cbvh is benchmarked against (Embree 3, Bullet 3, tinybvh, Jolt
- * Physics), when configure found them. */
+ * Physics, when configure found them; another build of cbvh, given at run time). */
 #ifndef CBVH_PEERS_H
 #define CBVH_PEERS_H
 
@@ -37,8 +37,8 @@ typedef struct peer_build_info {
     uint64_t id_bytes;          /* Jolt: the part of memory_bytes holding each triangle's index; others: 0 */
 } peer_build_info;
 
-/* Include config.h before this header: HAVE_EMBREE, HAVE_BULLET, HAVE_TINYBVH and HAVE_JOLT come from
- * configure.
+/* Include config.h before this header: HAVE_EMBREE, HAVE_BULLET, HAVE_TINYBVH, HAVE_JOLT and HAVE_DLOPEN come
+ * from configure.
  *
  * Query results use cbvh's types: hits[i].tri is the triangle index in the mesh,
  * or CBVH_NO_HIT; t is in units of the ray's dir. Every ray must have a finite tmax.
@@ -155,6 +155,28 @@ void jolt_peer_overlap_first(const jolt_peer *peer, shape_kind kind, const shape
 /* One overlap query's triangles, each passed to add(user, tri): what jolt_peer_overlap counts. */
 void jolt_peer_overlap_each(const jolt_peer *peer, shape_kind kind, const shape_query *query,
                             void (*add)(void *user, uint32_t tri), void *user);
+#endif
+
+#if defined(HAVE_DLOPEN)
+typedef struct baseline_peer baseline_peer;
+
+/* Loads `library`, another build of libcbvh (its shared library: a build of an earlier commit, or of other
+ * options), and opens the cooked file at cbvh_path with it, so that `cbvh bench --baseline` times the same
+ * queries on both builds in turns; its streams run batches of stream_batch rays. Returns NULL and writes a
+ * message into err when the library cannot be loaded, lacks a function of the public API the peer calls, or
+ * refuses the file (a build that reads an older format). */
+baseline_peer *baseline_peer_open(const char *library, const char *cbvh_path, size_t stream_batch, char *err,
+                                  size_t err_size);
+void baseline_peer_destroy(baseline_peer *peer);
+
+/* The other build's sorted single rays (cbvh_raycast / cbvh_occluded) and streams
+ * (cbvh_raycast_stream_scratch / cbvh_occluded_stream_scratch). */
+void baseline_peer_raycast(const baseline_peer *peer, const cbvh_ray *rays, size_t count, cbvh_hit *hits);
+void baseline_peer_occluded(const baseline_peer *peer, const cbvh_ray *rays, size_t count, uint8_t *occluded);
+void baseline_peer_raycast_stream(const baseline_peer *peer, const cbvh_ray *rays, size_t count,
+                                  cbvh_hit *hits);
+void baseline_peer_occluded_stream(const baseline_peer *peer, const cbvh_ray *rays, size_t count,
+                                   uint8_t *occluded);
 #endif
 
 #ifdef __cplusplus
