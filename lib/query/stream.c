@@ -1,5 +1,5 @@
-/* stream.c: batched ray streams: one traversal per batch of same-octant rays, a ray list per child entered.
- */
+/* stream.c: batched ray streams: one traversal per batch of same-octant rays, a ray list per child entered;
+ * the batch's scalar and SSE2 node tests. */
 #ifdef HAVE_CONFIG_H
 #include "config.h"
 #endif
@@ -9,6 +9,9 @@
 #include "query/ray_box.h"
 #include "query/raycast.h"
 #include "query/stream.h"
+#ifdef CBVH_HAVE_SIMD
+#include "query/stream_node_simd.h"
+#endif
 #include "query/stream_walk.h"
 
 /* Rays are grouped by octant within windows of this many input rays per batch ray (8: one batch an
@@ -34,6 +37,38 @@ _Static_assert(CBVH_STREAM_STACK_BATCH >= CBVH_STREAM_WALKS && CBVH_STREAM_WALKS
 #define STREAM_SLACK 96u /* two 32-byte alignments (the walks, box_ray), and best_hit's and size_t's */
 /* Bytes of a block before its rays: `walks` walk slots (stream.h), whatever the batch's size. */
 #define STREAM_WALKS_BYTES(walks) ((walks) * sizeof(struct cbvh_stream_walk))
+
+void cbvh_stream_node_scalar(const struct cbvh_stream_batch *restrict batch, const uint16_t *restrict rays,
+                             uint32_t n, const struct cbvh_stream_boxes *restrict boxes,
+                             const struct cbvh_stream_lists *restrict out, uint32_t count[CBVH_STREAM_LANES])
+{
+    const float(*p)[CBVH_STREAM_LANES] = boxes->plane;
+    for (uint32_t k = 0; k < CBVH_STREAM_LANES; k++)
+        count[k] = 0;
+    for (uint32_t j = 0; j < n; j++) {
+        const float *r = batch->box_ray[rays[j]];
+        const float org[3] = {r[CBVH_LANE_OX], r[CBVH_LANE_OY], r[CBVH_LANE_OZ]};
+        const float rcp[3] = {r[CBVH_LANE_RX], r[CBVH_LANE_RY], r[CBVH_LANE_RZ]};
+        for (uint32_t k = 0; k < boxes->count; k++) {
+            float entry;
+            if (cbvh_slab_test(p[0][k], p[1][k], p[2][k], p[3][k], p[4][k], p[5][k], org, rcp,
+                               r[CBVH_LANE_TMIN], r[CBVH_LANE_TMAX], &entry)) {
+                out->ray[k][count[k]] = rays[j];
+                out->entry[k][count[k]] = entry;
+                count[k]++;
+            }
+        }
+    }
+}
+
+#ifdef CBVH_HAVE_SIMD
+void cbvh_stream_node_sse2(const struct cbvh_stream_batch *restrict batch, const uint16_t *restrict rays,
+                           uint32_t n, const struct cbvh_stream_boxes *restrict boxes,
+                           const struct cbvh_stream_lists *restrict out, uint32_t count[CBVH_STREAM_LANES])
+{
+    stream_node_simd(batch, rays, n, boxes, out, count);
+}
+#endif
 
 STREAM_BATCH_INSTANCE(stream_wide4_closest, CBVH_LAYOUT_WIDE4, 0)
 STREAM_BATCH_INSTANCE(stream_wide4_any, CBVH_LAYOUT_WIDE4, 1)
@@ -186,14 +221,9 @@ static void stream_single_rays(const struct cbvh_file *f, const cbvh_ray *rays, 
                                uint8_t *occluded, uint64_t *visited, uint64_t *tested)
 {
     struct cbvh_ray_ctx ctx;
-    for (size_t i = 0; i < count; i++) {
-        if (hits)
-            hits[i].tri = CBVH_NO_HIT;
-        else
-            occluded[i] = 0;
-        if (cbvh_ray_valid(&rays[i]) && cbvh_ray_prepare(&ctx, &rays[i], f, visited))
+    for (size_t i = 0; i < count; i++)
+        if (stream_ray_begin(f, rays, i, &ctx, hits, occluded, visited, tested))
             stream_solo_ray(f, &ctx, hits ? &hits[i] : NULL, hits ? NULL : &occluded[i], visited, tested);
-    }
 }
 
 /* Splits the stream into windows, each window into same-octant batches of the batch's capacity. By the way
@@ -225,33 +255,24 @@ static void stream_run(const struct cbvh_file *f, const cbvh_ray *rays, size_t c
         }
         uint32_t present = 0; /* octants that occur in the window */
         for (uint32_t j = 0; j < window; j++) {
+            /* the octant alone here; each ray begins (stream_ray_begin) when its octant's turn comes */
             const size_t r = start + j;
-            if (hits)
-                hits[r].tri = CBVH_NO_HIT;
-            else
-                occluded[r] = 0;
-            /* the octant alone here; each ray is prepared once, when its octant's turn comes */
             octant[j] = cbvh_ray_valid(&rays[r]) ? (uint8_t)cbvh_ray_octant(&rays[r]) : UINT8_MAX;
             if (octant[j] != UINT8_MAX)
                 present |= 1u << octant[j];
+            else if (hits)
+                hits[r].tri = CBVH_NO_HIT;
+            else
+                occluded[r] = 0;
         }
         for (uint32_t o = 0; o < 8; o++) {
             if (!(present >> o & 1u))
                 continue;
             for (uint32_t j = 0; j < window; j++) {
-                if (octant[j] != o)
+                if (octant[j] != o ||
+                    !stream_ray_begin(f, rays, start + j, &ctx, hits, occluded, &visited, &tested))
                     continue;
-                const size_t r = start + j;
-                if (!cbvh_ray_prepare(&ctx, &rays[r], f, &visited))
-                    continue; /* it misses the mesh's top box: a miss */
-                if (ctx.box_halve) {
-                    /* the batch shares one dequantized box between its rays; a ray whose box test needs
-                     * half scale (coordinates past FLT_MAX / 2, ray_box.h) takes the single-ray walk */
-                    stream_solo_ray(f, &ctx, hits ? &hits[r] : NULL, occluded ? &occluded[r] : NULL, &visited,
-                                    &tested);
-                    continue;
-                }
-                batch_add(batch, &ctx, r);
+                batch_add(batch, &ctx, start + j);
                 if (batch->count == batch->capacity)
                     batch_flush(f, batch, o, node_test, stats != NULL, hits, occluded, &visited, &tested);
             }

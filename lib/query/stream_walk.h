@@ -24,34 +24,48 @@ static inline struct cbvh_walk_mode stream_alone_mode(int any, int scalar)
     return mode;
 }
 
+/* Ray r of the batch, whose test of triangle k found `hit` at t (u, v): an occlusion, or a closer best
+ * hit (a hit no better than the ray's best changes nothing). */
+CBVH_KERNEL void stream_take(struct cbvh_stream_batch *restrict b, uint32_t r, uint32_t k, int hit, float t,
+                             float u, float v, int any, uint8_t *restrict occluded)
+{
+    if (!hit)
+        return;
+    float *box_ray = b->box_ray[r];
+    if (any) {
+        /* Occluded: a negative tmax fails every later box and triangle test. */
+        occluded[b->ray_index[r]] = 1;
+        box_ray[CBVH_LANE_TMAX] = -1.0f;
+        b->shrinks++;
+    } else if (cbvh_hit_better(t, k, box_ray[CBVH_LANE_TMAX], b->best[r].tri)) {
+        box_ray[CBVH_LANE_TMAX] = t;
+        b->shrinks++;
+        b->best[r].tri = k;
+        b->best[r].t = t;
+        b->best[r].u = u;
+        b->best[r].v = v;
+    }
+}
+
 /* Ray r of the batch finishes the subtree of node `root` (whose box the batch tested) alone: the single-ray
- * walk (walk.h) in the batch's first walk slot, from the ray's current tmax and best hit. Its closer hit,
- * or its occlusion, goes back to the batch. The single-ray walk has the batch's triangle test and tie rule,
- * so the answer does not depend on where the batch hands a ray over. */
+ * walk (walk.h) in the batch's first walk slot, from the ray's current tmax and best hit, which its hit
+ * then updates. The single-ray walk has the batch's triangle test and tie rule, so the answer does not
+ * depend on where the batch hands a ray over. */
 CBVH_KERNEL void stream_tail_run(const struct cbvh_file *restrict f, const uint32_t layout,
                                  struct cbvh_stream_batch *restrict b, const struct cbvh_walk_mode mode,
                                  int counting, uint32_t r, cbvh_ref root, uint8_t *restrict occluded,
                                  uint64_t *restrict visited, uint64_t *restrict tested)
 {
     struct cbvh_stream_walk *restrict t = b->walks;
-    float *tmax = &b->box_ray[r][CBVH_LANE_TMAX];
     enum cbvh_walk_step_result step;
     t->best = b->best[r];
-    cbvh_walk_begin(f, layout, &b->ctx[r], mode, root, CBVH_NO_BOX, NULL, *tmax, &t->walk);
+    cbvh_walk_begin(f, layout, &b->ctx[r], mode, root, CBVH_NO_BOX, NULL, b->box_ray[r][CBVH_LANE_TMAX],
+                    &t->walk);
     do
         step = cbvh_walk_step(f, layout, &b->ctx[r], mode, NULL, counting, NULL, &t->walk, &t->best);
     while (step == CBVH_WALK_MORE);
-    if (step == CBVH_WALK_HIT) {
-        occluded[b->ray_index[r]] = 1;
-        *tmax = -1.0f; /* fails every later box and triangle test */
-        b->shrinks++;
-    } else if (!mode.any && t->best.tri != UINT32_MAX) {
-        b->best[r] = t->best; /* the batch's best, or a better one (the tie rule) */
-        if (*tmax != t->best.t) {
-            *tmax = t->best.t;
-            b->shrinks++;
-        }
-    }
+    stream_take(b, r, t->best.tri, step == CBVH_WALK_HIT || (!mode.any && t->best.tri != UINT32_MAX),
+                t->best.t, t->best.u, t->best.v, mode.any, occluded);
     *visited += t->walk.visited;
     *tested += t->walk.tested;
 }
@@ -83,29 +97,6 @@ CBVH_KERNEL void stream_tail(const struct cbvh_file *f, const uint32_t layout, s
     else
         (any ? stream_tail_binary_any : stream_tail_binary_closest)(f, b, scalar, counting, r, root, occluded,
                                                                     visited, tested);
-}
-
-/* Ray r of the batch, whose test of triangle k found `hit` at t (u, v): an occlusion, or a closer best
- * hit. */
-CBVH_KERNEL void stream_take(struct cbvh_stream_batch *restrict b, uint32_t r, uint32_t k, int hit, float t,
-                             float u, float v, int any, uint8_t *restrict occluded)
-{
-    if (!hit)
-        return;
-    float *box_ray = b->box_ray[r];
-    if (any) {
-        /* Occluded: a negative tmax fails every later box and triangle test. */
-        occluded[b->ray_index[r]] = 1;
-        box_ray[CBVH_LANE_TMAX] = -1.0f;
-        b->shrinks++;
-    } else if (cbvh_hit_better(t, k, box_ray[CBVH_LANE_TMAX], b->best[r].tri)) {
-        box_ray[CBVH_LANE_TMAX] = t;
-        b->shrinks++;
-        b->best[r].tri = k;
-        b->best[r].t = t;
-        b->best[r].u = u;
-        b->best[r].v = v;
-    }
 }
 
 /* The live rays live[0, m) against the leaf's triangles [tri0, tri0 + count). With SIMD the leaf is
@@ -327,8 +318,7 @@ CBVH_KERNEL void stream_walk(const struct cbvh_file *restrict f, const uint32_t 
     *tested += nt;
 }
 
-/* A whole ray on the single-ray walk (raycast.h), its counters added to the stream's: a ray whose box test
- * needs half scale (box_halve), which the batch's shared boxes do not serve. */
+/* A whole ray on the single-ray walk (raycast.h), its counters added to the stream's. */
 CBVH_KERNEL void stream_solo_ray(const struct cbvh_file *f, const struct cbvh_ray_ctx *ctx, cbvh_hit *hit,
                                  uint8_t *occluded, uint64_t *visited, uint64_t *tested)
 {
@@ -342,6 +332,27 @@ CBVH_KERNEL void stream_solo_ray(const struct cbvh_file *f, const struct cbvh_ra
     }
     *visited += stats.nodes_visited;
     *tested += stats.triangles_tested;
+}
+
+/* Ray i of the stream begins: its answer is set to a miss (hits[i], or occluded[i] when hits is NULL) and
+ * it is prepared into *ctx. Returns 1 when it is to be walked; 0 when it is done already: an invalid ray,
+ * one that misses the mesh's top box, or one walked whole by stream_solo_ray (box_halve: the batch's shared
+ * boxes do not serve it). */
+CBVH_KERNEL int stream_ray_begin(const struct cbvh_file *restrict f, const cbvh_ray *restrict rays, size_t i,
+                                 struct cbvh_ray_ctx *restrict ctx, cbvh_hit *restrict hits,
+                                 uint8_t *restrict occluded, uint64_t *restrict visited,
+                                 uint64_t *restrict tested)
+{
+    if (hits)
+        hits[i].tri = CBVH_NO_HIT;
+    else
+        occluded[i] = 0;
+    if (!cbvh_ray_prepare(ctx, &rays[i], f, visited))
+        return 0;
+    if (!ctx->box_halve)
+        return 1;
+    stream_solo_ray(f, ctx, hits ? &hits[i] : NULL, hits ? NULL : &occluded[i], visited, tested);
+    return 0;
 }
 
 /* Whether slot t's walk goes to a leaf whose vertices it has not requested yet (wide layout). Then they
@@ -361,10 +372,8 @@ CBVH_KERNEL int stream_request_leaf(const struct cbvh_file *restrict f, struct c
     return 1;
 }
 
-/* Input ray i starts in slot k of the interleaved walks (stream_interleave): its answer is set to a miss
- * (hits[i], or occluded[i] when hits is NULL), then it is prepared and its walk begun. Returns 1 when the
- * slot walks it; 0 when it is done already (an invalid ray, one that misses the mesh's top box), or taken
- * by the solo walk (box_halve). */
+/* Ray i of the stream starts in slot k of the interleaved walks (stream_interleave), as stream_ray_begin
+ * says: returns 1 when the slot walks it. */
 CBVH_KERNEL int stream_interleave_start(const struct cbvh_file *restrict f,
                                         struct cbvh_stream_batch *restrict b,
                                         const struct cbvh_walk_mode mode, const cbvh_ray *restrict rays,
@@ -372,23 +381,14 @@ CBVH_KERNEL int stream_interleave_start(const struct cbvh_file *restrict f,
                                         uint8_t *restrict occluded, uint64_t *restrict visited,
                                         uint64_t *restrict tested)
 {
-    struct cbvh_ray_ctx *restrict ctx = &b->ctx[k];
     struct cbvh_stream_walk *restrict slot = &b->walks[k];
-    if (hits)
-        hits[i].tri = CBVH_NO_HIT;
-    else
-        occluded[i] = 0;
-    if (!cbvh_ray_prepare(ctx, &rays[i], f, visited))
+    if (!stream_ray_begin(f, rays, i, &b->ctx[k], hits, occluded, visited, tested))
         return 0;
-    if (ctx->box_halve) {
-        stream_solo_ray(f, ctx, hits ? &hits[i] : NULL, hits ? NULL : &occluded[i], visited, tested);
-        return 0;
-    }
     b->ray_index[k] = i;
     slot->best.tri = UINT32_MAX;
     slot->fetched = CBVH_W4_LEAF_BIT - 1u; /* no leaf */
-    cbvh_walk_begin(f, CBVH_LAYOUT_WIDE4, ctx, mode, cbvh_tree_root(f, CBVH_LAYOUT_WIDE4), CBVH_NO_BOX, NULL,
-                    ctx->tmax, &slot->walk);
+    cbvh_walk_begin(f, CBVH_LAYOUT_WIDE4, &b->ctx[k], mode, cbvh_tree_root(f, CBVH_LAYOUT_WIDE4), CBVH_NO_BOX,
+                    NULL, b->ctx[k].tmax, &slot->walk);
     return 1;
 }
 
