@@ -99,12 +99,9 @@ enum cbvh_stream_way cbvh_stream_way_for(const struct cbvh_file *f, uint32_t bat
 
 cbvh_stream_node_fn cbvh_stream_node_kernel(void)
 {
-    const int which = SETTING(stream_kernel_setting);
 #ifdef CBVH_HAVE_SIMD
-    if (which == 0 || which == 2)
+    if (SETTING(stream_kernel_setting) != 1)
         return cbvh_stream_node_sse2;
-#else
-    (void)which;
 #endif
     return cbvh_stream_node_scalar;
 }

@@ -38,9 +38,7 @@ _Static_assert(CBVH_STREAM_STACK_BATCH >= CBVH_STREAM_WALKS && CBVH_STREAM_WALKS
 /* Bytes of a block before its rays: `walks` walk slots (stream.h), whatever the batch's size. */
 #define STREAM_WALKS_BYTES(walks) ((walks) * sizeof(struct cbvh_stream_walk))
 
-void cbvh_stream_node_scalar(const struct cbvh_stream_batch *restrict batch, const uint16_t *restrict rays,
-                             uint32_t n, const struct cbvh_stream_boxes *restrict boxes,
-                             const struct cbvh_stream_lists *restrict out, uint32_t count[CBVH_STREAM_LANES])
+CBVH_STREAM_NODE_KERNEL(cbvh_stream_node_scalar)
 {
     const float(*p)[CBVH_STREAM_LANES] = boxes->plane;
     for (uint32_t k = 0; k < CBVH_STREAM_LANES; k++)
@@ -62,9 +60,7 @@ void cbvh_stream_node_scalar(const struct cbvh_stream_batch *restrict batch, con
 }
 
 #ifdef CBVH_HAVE_SIMD
-void cbvh_stream_node_sse2(const struct cbvh_stream_batch *restrict batch, const uint16_t *restrict rays,
-                           uint32_t n, const struct cbvh_stream_boxes *restrict boxes,
-                           const struct cbvh_stream_lists *restrict out, uint32_t count[CBVH_STREAM_LANES])
+CBVH_STREAM_NODE_KERNEL(cbvh_stream_node_sse2)
 {
     stream_node_simd(batch, rays, n, boxes, out, count);
 }

@@ -75,31 +75,23 @@ struct cbvh_stream_lists {
     float *entry[CBVH_STREAM_LANES];
 };
 
-/* Tests the rays batch->box_ray[rays[j]], j < n, against every box of `boxes`
- * with the arithmetic of ray_box.h, each ray's current [TMIN, TMAX], and puts
- * the ray, in the order of `rays`, on the list of each box it enters; count[k]
- * receives the length of list k. */
-typedef void (*cbvh_stream_node_fn)(const struct cbvh_stream_batch *restrict batch,
-                                    const uint16_t *restrict rays, uint32_t n,
-                                    const struct cbvh_stream_boxes *restrict boxes,
-                                    const struct cbvh_stream_lists *restrict out,
-                                    uint32_t count[CBVH_STREAM_LANES]);
-
-void cbvh_stream_node_scalar(const struct cbvh_stream_batch *restrict batch, const uint16_t *restrict rays,
-                             uint32_t n, const struct cbvh_stream_boxes *restrict boxes,
-                             const struct cbvh_stream_lists *restrict out, uint32_t count[CBVH_STREAM_LANES]);
-#ifdef CBVH_HAVE_AVX2
-/* The same kernel in AVX2's encoding, for the AVX2 stream walks (stream_avx2.c): called from AVX code, the
- * SSE2-encoded one cost them a fifth to a quarter of their speed on this project's machine (the upper
- * halves of the vector registers, which GCC left dirty there). */
-void cbvh_stream_node_avx2(const struct cbvh_stream_batch *restrict batch, const uint16_t *restrict rays,
-                           uint32_t n, const struct cbvh_stream_boxes *restrict boxes,
-                           const struct cbvh_stream_lists *restrict out, uint32_t count[CBVH_STREAM_LANES]);
-#endif
+/* A node kernel `name`: tests the rays batch->box_ray[rays[j]], j < n, against every box of `boxes` with
+ * the arithmetic of ray_box.h, each ray's current [TMIN, TMAX], and puts the ray, in the order of `rays`,
+ * on the list of each box it enters; count[k] receives the length of list k. */
+#define CBVH_STREAM_NODE_KERNEL(name)                                                                        \
+    void name(const struct cbvh_stream_batch *restrict batch, const uint16_t *restrict rays, uint32_t n,     \
+              const struct cbvh_stream_boxes *restrict boxes, const struct cbvh_stream_lists *restrict out,  \
+              uint32_t count[CBVH_STREAM_LANES])
+typedef CBVH_STREAM_NODE_KERNEL((*cbvh_stream_node_fn));
+CBVH_STREAM_NODE_KERNEL(cbvh_stream_node_scalar);
 #ifdef CBVH_HAVE_SIMD
-void cbvh_stream_node_sse2(const struct cbvh_stream_batch *restrict batch, const uint16_t *restrict rays,
-                           uint32_t n, const struct cbvh_stream_boxes *restrict boxes,
-                           const struct cbvh_stream_lists *restrict out, uint32_t count[CBVH_STREAM_LANES]);
+CBVH_STREAM_NODE_KERNEL(cbvh_stream_node_sse2);
+#endif
+#ifdef CBVH_HAVE_AVX2
+/* The SSE2 kernel in AVX2's encoding, for the AVX2 stream walks (stream_avx2.c): called from AVX code, the
+ * SSE2 encoding would run with the upper halves of the vector registers left dirty (GCC does not clear
+ * them there), which stalls every SSE2 instruction on some CPUs. */
+CBVH_STREAM_NODE_KERNEL(cbvh_stream_node_avx2);
 #endif
 
 /* The streams' node kernel: the best this build has (kernel_choice.c), or a test hook's (test_hooks.h). */

@@ -13,9 +13,7 @@
 #include "query/stream_walk.h"
 
 /* The streams' node test (stream_node_simd.h) in this file's encoding. */
-void cbvh_stream_node_avx2(const struct cbvh_stream_batch *restrict batch, const uint16_t *restrict rays,
-                           uint32_t n, const struct cbvh_stream_boxes *restrict boxes,
-                           const struct cbvh_stream_lists *restrict out, uint32_t count[CBVH_STREAM_LANES])
+CBVH_STREAM_NODE_KERNEL(cbvh_stream_node_avx2)
 {
     stream_node_simd(batch, rays, n, boxes, out, count);
 }

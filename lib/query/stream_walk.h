@@ -51,10 +51,10 @@ CBVH_KERNEL void stream_take(struct cbvh_stream_batch *restrict b, uint32_t r, u
  * walk (walk.h) in the batch's first walk slot, from the ray's current tmax and best hit, which its hit
  * then updates. The single-ray walk has the batch's triangle test and tie rule, so the answer does not
  * depend on where the batch hands a ray over. */
-CBVH_KERNEL void stream_tail_run(const struct cbvh_file *restrict f, const uint32_t layout,
-                                 struct cbvh_stream_batch *restrict b, const struct cbvh_walk_mode mode,
-                                 int counting, uint32_t r, cbvh_ref root, uint8_t *restrict occluded,
-                                 uint64_t *restrict visited, uint64_t *restrict tested)
+CBVH_KERNEL void stream_tail(const struct cbvh_file *restrict f, const uint32_t layout,
+                             struct cbvh_stream_batch *restrict b, const struct cbvh_walk_mode mode,
+                             int counting, uint32_t r, cbvh_ref root, uint8_t *restrict occluded,
+                             uint64_t *restrict visited, uint64_t *restrict tested)
 {
     struct cbvh_stream_walk *restrict t = b->walks;
     enum cbvh_walk_step_result step;
@@ -68,35 +68,6 @@ CBVH_KERNEL void stream_tail_run(const struct cbvh_file *restrict f, const uint3
                 t->best.t, t->best.u, t->best.v, mode.any, occluded);
     *visited += t->walk.visited;
     *tested += t->walk.tested;
-}
-
-/* stream_tail_run as a function of its own per layout and query kind (and per file: each instruction
- * set's): inlined, the single-ray walk would be compiled into the batch walk, and its frame added to it. */
-#define STREAM_TAIL_INSTANCE(name, layout_, any_)                                                            \
-    CBVH_NOINLINE void name(const struct cbvh_file *f, struct cbvh_stream_batch *b, int scalar,              \
-                            int counting, uint32_t r, cbvh_ref root, uint8_t *occluded, uint64_t *visited,   \
-                            uint64_t *tested)                                                                \
-    {                                                                                                        \
-        stream_tail_run(f, layout_, b, stream_alone_mode(any_, scalar), counting, r, root, occluded,         \
-                        visited, tested);                                                                    \
-    }
-STREAM_TAIL_INSTANCE(stream_tail_wide4_closest, CBVH_LAYOUT_WIDE4, 0)
-STREAM_TAIL_INSTANCE(stream_tail_wide4_any, CBVH_LAYOUT_WIDE4, 1)
-STREAM_TAIL_INSTANCE(stream_tail_binary_closest, CBVH_LAYOUT_BINARY, 0)
-STREAM_TAIL_INSTANCE(stream_tail_binary_any, CBVH_LAYOUT_BINARY, 1)
-#undef STREAM_TAIL_INSTANCE
-
-/* The instance of stream_tail_run for `layout` and `any` (constants in every caller). */
-CBVH_KERNEL void stream_tail(const struct cbvh_file *f, const uint32_t layout, struct cbvh_stream_batch *b,
-                             const int any, int scalar, int counting, uint32_t r, cbvh_ref root,
-                             uint8_t *occluded, uint64_t *visited, uint64_t *tested)
-{
-    if (layout == CBVH_LAYOUT_WIDE4)
-        (any ? stream_tail_wide4_any : stream_tail_wide4_closest)(f, b, scalar, counting, r, root, occluded,
-                                                                  visited, tested);
-    else
-        (any ? stream_tail_binary_any : stream_tail_binary_closest)(f, b, scalar, counting, r, root, occluded,
-                                                                    visited, tested);
 }
 
 /* The live rays live[0, m) against the leaf's triangles [tri0, tri0 + count). With SIMD the leaf is
@@ -273,8 +244,8 @@ CBVH_KERNEL void stream_walk(const struct cbvh_file *restrict f, const uint32_t 
             /* Too few rays left to share the nodes below, or no room for their lists: each finishes the
              * subtree on its own, with the single-ray walk and its current tmax. */
             for (uint32_t j = 0; j < n; j++)
-                stream_tail(f, layout, b, any, !simd_leaves, counting, list_ray[start + j], r, occluded, &nv,
-                            &nt);
+                stream_tail(f, layout, b, stream_alone_mode(any, !simd_leaves), counting, list_ray[start + j],
+                            r, occluded, &nv, &nt);
         } else {
             const uint32_t k = cbvh_tree_children(f, layout, r, order, c);
             stream_boxes_of(f, layout, sel, c, k, &boxes);
