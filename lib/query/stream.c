@@ -1,5 +1,5 @@
-/* stream.c: batched ray streams: one traversal per batch of same-octant rays, a ray list per child entered;
- * the batch's scalar and SSE2 node tests. */
+/* stream.c: batched ray streams: one traversal per batch of same-octant rays, a ray list per child entered.
+ */
 #ifdef HAVE_CONFIG_H
 #include "config.h"
 #endif
@@ -9,9 +9,6 @@
 #include "query/ray_box.h"
 #include "query/raycast.h"
 #include "query/stream.h"
-#ifdef CBVH_HAVE_SIMD
-#include "query/stream_node_simd.h"
-#endif
 #include "query/stream_walk.h"
 
 /* Rays are grouped by octant within windows of this many input rays per batch ray (8: one batch an
@@ -37,34 +34,6 @@ _Static_assert(CBVH_STREAM_STACK_BATCH >= CBVH_STREAM_WALKS && CBVH_STREAM_WALKS
 #define STREAM_SLACK 96u /* two 32-byte alignments (the walks, box_ray), and best_hit's and size_t's */
 /* Bytes of a block before its rays: `walks` walk slots (stream.h), whatever the batch's size. */
 #define STREAM_WALKS_BYTES(walks) ((walks) * sizeof(struct cbvh_stream_walk))
-
-CBVH_STREAM_NODE_KERNEL(cbvh_stream_node_scalar)
-{
-    const float(*p)[CBVH_STREAM_LANES] = boxes->plane;
-    for (uint32_t k = 0; k < CBVH_STREAM_LANES; k++)
-        count[k] = 0;
-    for (uint32_t j = 0; j < n; j++) {
-        const float *r = batch->box_ray[rays[j]];
-        const float org[3] = {r[CBVH_LANE_OX], r[CBVH_LANE_OY], r[CBVH_LANE_OZ]};
-        const float rcp[3] = {r[CBVH_LANE_RX], r[CBVH_LANE_RY], r[CBVH_LANE_RZ]};
-        for (uint32_t k = 0; k < boxes->count; k++) {
-            float entry;
-            if (cbvh_slab_test(p[0][k], p[1][k], p[2][k], p[3][k], p[4][k], p[5][k], org, rcp,
-                               r[CBVH_LANE_TMIN], r[CBVH_LANE_TMAX], &entry)) {
-                out->ray[k][count[k]] = rays[j];
-                out->entry[k][count[k]] = entry;
-                count[k]++;
-            }
-        }
-    }
-}
-
-#ifdef CBVH_HAVE_SIMD
-CBVH_STREAM_NODE_KERNEL(cbvh_stream_node_sse2)
-{
-    stream_node_simd(batch, rays, n, boxes, out, count);
-}
-#endif
 
 STREAM_BATCH_INSTANCE(stream_wide4_closest, CBVH_LAYOUT_WIDE4, 0)
 STREAM_BATCH_INSTANCE(stream_wide4_any, CBVH_LAYOUT_WIDE4, 1)
@@ -294,16 +263,27 @@ CBVH_NOINLINE void stream_on_stack(const struct cbvh_file *f, const cbvh_ray *ra
     stream_run(f, rays, count, hits, occluded, stats, &batch, octant);
 }
 
-/* The stream in the caller's scratch when it holds more rays than the stack batch, else on the stack. */
+/* The stream (closest hits into hits, or, hits NULL, occlusion into occluded; neither: nothing to do) in
+ * the caller's scratch when it holds more rays than the stack batch, else on the stack. No file or no rays:
+ * every answer a miss. */
 static void stream_query(const struct cbvh_file *f, const cbvh_ray *rays, size_t count, cbvh_hit *hits,
                          uint8_t *occluded, cbvh_query_stats *stats, void *scratch, size_t scratch_size)
 {
     struct cbvh_stream_batch batch;
     uint8_t *octant;
-    if (batch_carve(&batch, &octant, scratch, scratch_size, CBVH_STREAM_WALKS) > CBVH_STREAM_STACK_BATCH)
+    if (!f || !rays) {
+        for (size_t r = 0; hits && r < count; r++)
+            hits[r].tri = CBVH_NO_HIT;
+        if (occluded)
+            memset(occluded, 0, count);
+    } else if (!hits && !occluded) {
+        return;
+    } else if (batch_carve(&batch, &octant, scratch, scratch_size, CBVH_STREAM_WALKS) >
+               CBVH_STREAM_STACK_BATCH) {
         stream_run(f, rays, count, hits, occluded, stats, &batch, octant);
-    else
+    } else {
         stream_on_stack(f, rays, count, hits, occluded, stats);
+    }
 }
 
 CBVH_API size_t cbvh_stream_scratch_size(size_t batch_rays)
@@ -318,13 +298,6 @@ CBVH_API void cbvh_raycast_stream_scratch(const cbvh_file *file, const cbvh_ray 
                                           cbvh_hit *hits, cbvh_query_stats *stats, void *scratch,
                                           size_t scratch_size)
 {
-    if (!hits)
-        return;
-    if (!file || !rays) {
-        for (size_t r = 0; r < count; r++)
-            hits[r].tri = CBVH_NO_HIT;
-        return;
-    }
     stream_query(file, rays, count, hits, NULL, stats, scratch, scratch_size);
 }
 
@@ -332,23 +305,17 @@ CBVH_API void cbvh_occluded_stream_scratch(const cbvh_file *file, const cbvh_ray
                                            uint8_t *occluded, cbvh_query_stats *stats, void *scratch,
                                            size_t scratch_size)
 {
-    if (!occluded)
-        return;
-    if (!file || !rays) {
-        memset(occluded, 0, count);
-        return;
-    }
     stream_query(file, rays, count, NULL, occluded, stats, scratch, scratch_size);
 }
 
 CBVH_API void cbvh_raycast_stream(const cbvh_file *file, const cbvh_ray *rays, size_t count, cbvh_hit *hits,
                                   cbvh_query_stats *stats)
 {
-    cbvh_raycast_stream_scratch(file, rays, count, hits, stats, NULL, 0);
+    stream_query(file, rays, count, hits, NULL, stats, NULL, 0);
 }
 
 CBVH_API void cbvh_occluded_stream(const cbvh_file *file, const cbvh_ray *rays, size_t count,
                                    uint8_t *occluded, cbvh_query_stats *stats)
 {
-    cbvh_occluded_stream_scratch(file, rays, count, occluded, stats, NULL, 0);
+    stream_query(file, rays, count, NULL, occluded, stats, NULL, 0);
 }

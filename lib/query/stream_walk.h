@@ -12,9 +12,7 @@
 /* A batch node with at most this many live rays hands each of them to the single-ray walk (stream_tail,
  * below): below it the batch would mostly carry one ray per node, paying the partition and stack
  * bookkeeping without sharing any node fetch. */
-#ifndef CBVH_STREAM_SOLO
 #define CBVH_STREAM_SOLO 4
-#endif
 
 /* The walk mode of a ray walked alone (a batch ray's tail, an interleaved walk): sorted, and the stream's
  * query kind and kernel (scalar with the scalar node kernel). */
