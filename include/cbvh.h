@@ -592,12 +592,13 @@ CBVH_API cbvh_result cbvh_occluded_with(const cbvh_file *file, const cbvh_ray *r
  * `count` rays of any coherence. hits[i] (occluded[i]: 0 or 1) receives ray
  * i's result, equal to cbvh_raycast / cbvh_occluded's ray by ray; stats (may be NULL) counts the work.
  * Coherent rays are walked together in batches of one ray octant, each node's boxes dequantized once per
- * batch visit and tested for every live ray; rays that are not coherent, or are left alone in a subtree,
- * finish on single-ray walks (interleaved, several rays a node or leaf each in turn, on a mesh too large
- * for the caches, so that their memory fetches overlap). Each ray costs about one single-ray walk;
+ * batch visit and tested for every live ray; a batch ray left alone in a subtree finishes it on the
+ * single-ray walk. Rays that are not coherent take single-ray walks (interleaved, several rays a node or
+ * leaf each in turn, on a mesh too large for the caches, so that their memory fetches overlap), unless the
+ * batch is large for the mesh. Each ray costs about one single-ray walk;
  * coherent rays share node fetches. Uses no heap memory: batches of 24 rays and the walks'
- * stacks on the call's stack, about 21 KiB (x86-64); the _scratch forms below keep them in the caller's
- * memory instead (about 8 KiB of stack). cbvh_raycast and cbvh_occluded use about 4 KiB. Safe to call
+ * stacks on the call's stack, about 20 KiB (x86-64); the _scratch forms below keep them in the caller's
+ * memory instead (about 7 KiB of stack). cbvh_raycast and cbvh_occluded use about 4 KiB. Safe to call
  * from any number of threads on one file. */
 CBVH_API void cbvh_raycast_stream(const cbvh_file *file, const cbvh_ray *rays, size_t count, cbvh_hit *hits,
                                   cbvh_query_stats *stats);

@@ -771,8 +771,8 @@ static void test_closed_mesh_no_leaks(void **state)
 }
 
 /* A mesh whose vertices do not stay in the caches (past CBVH_CACHED_VERTEX_BYTES: vertices_far) takes the
- * walks' early vertex requests and the streams' four tails: the same answers as brute force, on every
- * traversal. */
+ * walks' early vertex requests and the streams' interleaved walks: the same answers as brute force, on
+ * every traversal. */
 static void test_far_vertices(void **state)
 {
     (void)state;
@@ -788,6 +788,24 @@ static void test_far_vertices(void **state)
                     cbvh_element_size(CBVH_SECTION_VERTICES, fx.file->vertex_encoding) >
                 CBVH_CACHED_VERTEX_BYTES);
     check_fixture(&fx, 150, 31);
+    /* the streams' way there (interleaved walks): each ray's answer is its single-ray walk's */
+    enum { RAYS = 300 };
+    cbvh_ray rays[RAYS];
+    cbvh_hit hits[RAYS];
+    uint8_t occluded[RAYS];
+    uint64_t st = 17;
+    for (int r = 0; r < RAYS; r++)
+        rays[r] = ref_make_ray(&fx, &st, r % REF_RAY_KINDS);
+    cbvh_raycast_stream(fx.file, rays, RAYS, hits, NULL);
+    cbvh_occluded_stream(fx.file, rays, RAYS, occluded, NULL);
+    for (int r = 0; r < RAYS; r++) {
+        cbvh_hit h;
+        const int hit = cbvh_raycast(fx.file, &rays[r], CBVH_TRAVERSAL_SORTED, &h, NULL);
+        assert_int_equal(hits[r].tri, hit ? h.tri : CBVH_NO_HIT);
+        if (hit)
+            assert_true(hits[r].t == h.t && hits[r].u == h.u && hits[r].v == h.v);
+        assert_int_equal(occluded[r], hit);
+    }
     ref_fixture_close(&fx);
     scene_free(&s);
 }

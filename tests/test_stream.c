@@ -23,18 +23,18 @@
 #include "support/layouts.h"
 
 /* The settings each stream check runs with: the node kernel (cbvh_stream_set_kernel: 0 best, 1 scalar, 2
- * SSE2), the tails (cbvh_stream_set_tails: how many run at once in the batch walk, 0 by the mesh) and the
- * streams' way (cbvh_stream_set_interleave: 0 by the mesh and the batch, 1 the batch walk, 2 every window
- * interleaved, 3 window by window as a mesh that does not stay in the caches has it; 2 and 3 batch on the
- * binary layout). The test meshes are small, so their defaults (the third) are one tail and, in the stack's
- * batch, the batch walk for coherent windows and single rays for the others (larger batches of the
- * _scratch forms: the batch walk); the others force the rest: the choice by the rays' coherence (coherent
- * rays in the batch, the others interleaved: on the scalar walk with the scalar kernel), four tails, and
- * every window interleaved (the walk the single rays take, so that the counters can be compared too). */
+ * SSE2) and the streams' way (cbvh_stream_set_way: 0 by the mesh and the batch, 1 the batch walk, 2 every
+ * window interleaved, 3 window by window as a mesh that does not stay in the caches has it, 4 by window with
+ * single rays; 2 and 3 batch on the binary layout). The test meshes are small, so their default (the third)
+ * is, in the stack's batch, the batch walk for coherent windows and single rays for the others (larger
+ * batches of the _scratch forms: the batch walk); the others force the rest: the choice by the rays'
+ * coherence (coherent rays in the batch, the others interleaved), on the best kernel and the scalar one,
+ * the batch walk, and every window interleaved (the walk the single rays take, so that the counters can be
+ * compared too). */
 static const struct {
-    int kernel, tails, interleave;
+    int kernel, way;
 } settings[] = {
-    {0, CBVH_STREAM_TAILS, 3}, {1, 1, 3}, {2, 0, 0}, {0, CBVH_STREAM_TAILS, 1}, {0, 1, 2},
+    {0, 3}, {1, 3}, {2, 0}, {0, 1}, {0, 2},
 };
 #define SETTINGS (sizeof settings / sizeof settings[0])
 
@@ -137,8 +137,7 @@ static void check_stream(const ref_fixture *fx, const cbvh_ray *rays, size_t cou
     }
     for (size_t k = 0; k < SETTINGS; k++) {
         cbvh_stream_set_kernel(settings[k].kernel);
-        cbvh_stream_set_tails(settings[k].tails);
-        cbvh_stream_set_interleave(settings[k].interleave);
+        cbvh_stream_set_way(settings[k].way);
         memset(hits, 0xAB, sizeof(cbvh_hit) * (count + 1));
         memset(occ, 0xAB, count + 1);
         cbvh_query_stats st = {0, 0}, occ_stats = {0, 0};
@@ -162,7 +161,7 @@ static void check_stream(const ref_fixture *fx, const cbvh_ray *rays, size_t cou
         }
         if (count > 0 && ref_ray_valid(&rays[0]))
             assert_true(st.nodes_visited > 0);
-        if (settings[k].interleave == 2 && test_layout == CBVH_LAYOUT_WIDE4) {
+        if (settings[k].way == 2 && test_layout == CBVH_LAYOUT_WIDE4) {
             /* the interleaved walks (the wide layout's) are the single-ray walks: the same boxes and
              * triangles, ray by ray */
             assert_true(st.nodes_visited == single_stats.nodes_visited);
@@ -173,12 +172,11 @@ static void check_stream(const ref_fixture *fx, const cbvh_ray *rays, size_t cou
         /* the scratch sizes (eight interleaved walks there, four on the stack) with the default (whose way
          * depends on the batch's size), the choice by window (batches and interleaved windows) and every
          * window interleaved: the other settings change the walks, not how the scratch is cut */
-        if (settings[k].interleave != 1 && settings[k].kernel != 1)
+        if (settings[k].way != 1 && settings[k].kernel != 1)
             check_scratch(fx, rays, count, hits, occ);
     }
     cbvh_stream_set_kernel(0);
-    cbvh_stream_set_tails(0);
-    cbvh_stream_set_interleave(0);
+    cbvh_stream_set_way(0);
     free(single);
     free(single_occ);
     free(hits);
@@ -495,11 +493,11 @@ static void test_stream_way(void **state)
             CBVH_STREAM_BATCHED, wide ? CBVH_STREAM_INTERLEAVED : CBVH_STREAM_BATCHED,
             wide ? CBVH_STREAM_BY_WINDOW : CBVH_STREAM_BATCHED, CBVH_STREAM_BY_WINDOW_SINGLE};
         for (int setting = 1; setting <= 4; setting++) {
-            cbvh_stream_set_interleave(setting);
+            cbvh_stream_set_way(setting);
             assert_int_equal(cbvh_stream_way_for(&f, 1024), forced[setting - 1]);
             assert_int_equal(cbvh_stream_way_for(&f, CBVH_STREAM_STACK_BATCH), forced[setting - 1]);
         }
-        cbvh_stream_set_interleave(0);
+        cbvh_stream_set_way(0);
     }
 }
 

@@ -1,5 +1,5 @@
 /* kernel_choice.c: which kernels and ways the queries take: the wide layout's walk kernel by the build and
- * the CPU, the streams' node kernel, tails and way by the build, the mesh and the batch. Built twice: into
+ * the CPU, the streams' node kernel and way by the build, the mesh and the batch. Built twice: into
  * the library, and with CBVH_TEST_HOOKS into lib/libcbvh_test_hooks.la, which adds the settings of
  * test_hooks.h so that the tests run every kernel and way; the library has no such settings. */
 #ifdef HAVE_CONFIG_H
@@ -48,7 +48,7 @@ int cbvh_walk_kernel_choose_best(void)
 }
 
 #ifdef CBVH_TEST_HOOKS
-static atomic_int stream_kernel_setting, stream_tails_setting, stream_way_setting;
+static atomic_int stream_kernel_setting, stream_way_setting;
 #define SETTING(name) atomic_load_explicit(&(name), memory_order_relaxed)
 
 int cbvh_walk_set_kernel(int kernel)
@@ -61,12 +61,7 @@ void cbvh_stream_set_kernel(int which)
     atomic_store_explicit(&stream_kernel_setting, which, memory_order_relaxed);
 }
 
-void cbvh_stream_set_tails(int tails)
-{
-    atomic_store_explicit(&stream_tails_setting, tails, memory_order_relaxed);
-}
-
-void cbvh_stream_set_interleave(int setting)
+void cbvh_stream_set_way(int setting)
 {
     atomic_store_explicit(&stream_way_setting, setting, memory_order_relaxed);
 }
@@ -74,15 +69,6 @@ void cbvh_stream_set_interleave(int setting)
 /* The library's settings: 0, by the build, the mesh and the batch. */
 #define SETTING(name) 0
 #endif
-
-uint32_t cbvh_stream_tails_for(const struct cbvh_file *f)
-{
-    const int setting = SETTING(stream_tails_setting);
-    if (setting != 0)
-        return setting == 1 ? 1u : CBVH_STREAM_TAILS;
-    /* a mesh in the caches has no miss to overlap: one tail, without the vertex-request turn */
-    return f->vertices_far ? CBVH_STREAM_TAILS : 1u;
-}
 
 enum cbvh_stream_way cbvh_stream_way_for(const struct cbvh_file *f, uint32_t batch_capacity)
 {
@@ -103,8 +89,8 @@ enum cbvh_stream_way cbvh_stream_way_for(const struct cbvh_file *f, uint32_t bat
         return wide ? CBVH_STREAM_BY_WINDOW : CBVH_STREAM_BATCHED;
     /* A mesh in the caches has no misses to overlap. Its incoherent rays share a batch's node visits only
      * when the batch is large for the mesh (at least CBVH_STREAM_SHARED_TRIANGLES_PER_RAY triangles a ray on
-     * the wide layout, and more than the stack's batch): otherwise they walk their windows one ray at a
-     * time, which is then faster (docs/PERFORMANCE.md). */
+     * the wide layout, and more than the stack's batch): otherwise they walk one at a time, which is then
+     * faster (docs/PERFORMANCE.md). */
     if (batch_capacity <= CBVH_STREAM_STACK_BATCH ||
         (wide && f->info.triangle_count / CBVH_STREAM_SHARED_TRIANGLES_PER_RAY > batch_capacity))
         return CBVH_STREAM_BY_WINDOW_SINGLE;
@@ -113,12 +99,9 @@ enum cbvh_stream_way cbvh_stream_way_for(const struct cbvh_file *f, uint32_t bat
 
 cbvh_stream_node_fn cbvh_stream_node_kernel(void)
 {
-    const int which = SETTING(stream_kernel_setting);
 #ifdef CBVH_HAVE_SIMD
-    if (which == 0 || which == 2)
+    if (SETTING(stream_kernel_setting) != 1)
         return cbvh_stream_node_sse2;
-#else
-    (void)which;
 #endif
     return cbvh_stream_node_scalar;
 }

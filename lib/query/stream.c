@@ -17,7 +17,7 @@
 
 /* The interleaved walks keep slot k's ray in the batch's ctx[k] and ray_index[k]: a batch that runs (the
  * stack's, or the caller's scratch for more) has room for every slot. */
-_Static_assert(CBVH_STREAM_STACK_BATCH >= CBVH_STREAM_WALKS && CBVH_STREAM_WALKS >= CBVH_STREAM_TAILS &&
+_Static_assert(CBVH_STREAM_STACK_BATCH >= CBVH_STREAM_WALKS && CBVH_STREAM_WALKS >= CBVH_STREAM_STACK_WALKS &&
                    CBVH_STREAM_WALKS <= 32u,
                "a batch holds the interleaved walks' rays, and a word their bits");
 
@@ -31,57 +31,27 @@ _Static_assert(CBVH_STREAM_STACK_BATCH >= CBVH_STREAM_WALKS && CBVH_STREAM_WALKS
 #define STREAM_RAY_BYTES                                                                                     \
     (8 * sizeof(float) + sizeof(struct cbvh_ray_ctx) + sizeof(struct cbvh_best_hit) + sizeof(size_t) +       \
      STREAM_LIST_PER_RAY * (sizeof(float) + sizeof(uint16_t)) + CBVH_STREAM_WINDOW_PER_RAY)
-#define STREAM_SLACK 96u /* two 32-byte alignments (the tails, box_ray), and best_hit's and size_t's */
-/* Bytes of a block before its rays: the tails with `walks` slots (stream.h), whatever the batch's size. */
-#define STREAM_TAILS_BYTES(walks)                                                                            \
-    (sizeof(struct cbvh_stream_tails) + (walks) * sizeof(struct cbvh_stream_tail))
+#define STREAM_SLACK 96u /* two 32-byte alignments (the walks, box_ray), and best_hit's and size_t's */
+/* Bytes of a block before its rays: `walks` walk slots (stream.h), whatever the batch's size. */
+#define STREAM_WALKS_BYTES(walks) ((walks) * sizeof(struct cbvh_stream_walk))
 
-/* The stream walk per layout and query kind, each a function of its own so that a frame holds one walk's
- * stack, not the sum of all (-fstack-usage); `counting` (whether the tails count the boxes they test) is
- * read at run time. */
-#define STREAM_INSTANCE(name, layout, any)                                                                   \
-    CBVH_NOINLINE void name(const struct cbvh_file *f, struct cbvh_stream_batch *b, uint32_t octant,         \
-                            cbvh_stream_node_fn node_test, int counting, uint8_t *occluded,                  \
-                            uint64_t *visited, uint64_t *tested)                                             \
-    {                                                                                                        \
-        stream_walk(f, layout, b, octant, node_test, any, counting, occluded, visited, tested);              \
-    }
-STREAM_INSTANCE(stream_wide4_closest, CBVH_LAYOUT_WIDE4, 0)
-STREAM_INSTANCE(stream_wide4_any, CBVH_LAYOUT_WIDE4, 1)
-STREAM_INSTANCE(stream_binary_closest, CBVH_LAYOUT_BINARY, 0)
-STREAM_INSTANCE(stream_binary_any, CBVH_LAYOUT_BINARY, 1)
-#undef STREAM_INSTANCE
+STREAM_BATCH_INSTANCE(stream_wide4_closest, CBVH_LAYOUT_WIDE4, 0)
+STREAM_BATCH_INSTANCE(stream_wide4_any, CBVH_LAYOUT_WIDE4, 1)
+STREAM_BATCH_INSTANCE(stream_binary_closest, CBVH_LAYOUT_BINARY, 0)
+STREAM_BATCH_INSTANCE(stream_binary_any, CBVH_LAYOUT_BINARY, 1)
+STREAM_INTERLEAVE_INSTANCE(stream_interleave_closest, 0)
+STREAM_INTERLEAVE_INSTANCE(stream_interleave_any, 1)
 
-/* The interleaved walks (stream_walk.h) on the wide layout, closest and any hit, the scalar choice at run
- * time (a predictable branch, as in the single-ray walks). */
-CBVH_NOINLINE void stream_interleave_wide4_closest(const struct cbvh_file *f, struct cbvh_stream_batch *b,
-                                                   const cbvh_ray *rays, size_t count, cbvh_hit *hits,
-                                                   int scalar, int counting, uint64_t *visited,
-                                                   uint64_t *tested)
-{
-    stream_interleave(f, CBVH_LAYOUT_WIDE4, b, rays, count, 0, hits, NULL, scalar, counting, visited, tested);
-}
-
-CBVH_NOINLINE void stream_interleave_wide4_any(const struct cbvh_file *f, struct cbvh_stream_batch *b,
-                                               const cbvh_ray *rays, size_t count, uint8_t *occluded,
-                                               int scalar, int counting, uint64_t *visited, uint64_t *tested)
-{
-    stream_interleave(f, CBVH_LAYOUT_WIDE4, b, rays, count, 1, NULL, occluded, scalar, counting, visited,
-                      tested);
-}
-
-/* The stream walk for the file's layout. */
-static void stream_walk_file(const struct cbvh_file *f, struct cbvh_stream_batch *b, uint32_t octant,
-                             cbvh_stream_node_fn node_test, int any, int counting, uint8_t *occluded,
-                             uint64_t *visited, uint64_t *tested)
+/* The batch walk for the file's layout, on the single-ray walks' kernel (raycast.h) with SIMD node tests:
+ * with AVX2, AVX2 leaves and the node test in AVX2's encoding. */
+static void batch_walk(const struct cbvh_file *f, struct cbvh_stream_batch *b, uint32_t octant,
+                       cbvh_stream_node_fn node_test, int any, int counting, uint8_t *occluded,
+                       uint64_t *visited, uint64_t *tested)
 {
 #ifdef CBVH_HAVE_AVX2
-    /* the single-ray walks' kernel choice (raycast.h): with SIMD node tests, AVX2 leaves and the node test
-     * in AVX2's encoding */
     if (f->layout == CBVH_LAYOUT_WIDE4 && node_test != cbvh_stream_node_scalar &&
         cbvh_walk_kernel() == CBVH_WALK_KERNEL_AVX2) {
-        (any ? cbvh_stream_wide4_any_avx2 : cbvh_stream_wide4_closest_avx2)(
-            f, b, octant, cbvh_stream_node_avx2, counting, occluded, visited, tested);
+        cbvh_stream_wide4_avx2(f, b, octant, any, counting, occluded, visited, tested);
         return;
     }
 #endif
@@ -93,28 +63,22 @@ static void stream_walk_file(const struct cbvh_file *f, struct cbvh_stream_batch
                                                           visited, tested);
 }
 
-/* Rays walked interleaved on the wide layout (stream_interleave), closest hit into hits or any hit into
- * occluded, on the single-ray walks' kernel (raycast.h): scalar also with the streams' scalar node kernel,
- * the walks' own fallback and its test. */
-static void interleave_wide4(const struct cbvh_file *f, struct cbvh_stream_batch *b, const cbvh_ray *rays,
-                             size_t count, cbvh_hit *hits, uint8_t *occluded, cbvh_stream_node_fn node_test,
-                             int counting, uint64_t *visited, uint64_t *tested)
+/* Rays walked interleaved (wide layout), closest hit into hits or, hits NULL, any hit into occluded, on
+ * the single-ray walks' kernel (raycast.h): scalar also with the streams' scalar node kernel. */
+static void interleave(const struct cbvh_file *f, struct cbvh_stream_batch *b, const cbvh_ray *rays,
+                       size_t count, cbvh_hit *hits, uint8_t *occluded, cbvh_stream_node_fn node_test,
+                       int counting, uint64_t *visited, uint64_t *tested)
 {
     const int kernel = cbvh_walk_kernel();
     const int scalar = node_test == cbvh_stream_node_scalar || kernel == CBVH_WALK_KERNEL_SCALAR;
 #ifdef CBVH_HAVE_AVX2
     if (!scalar && kernel == CBVH_WALK_KERNEL_AVX2) {
-        if (hits)
-            cbvh_stream_interleave_wide4_closest_avx2(f, b, rays, count, hits, counting, visited, tested);
-        else
-            cbvh_stream_interleave_wide4_any_avx2(f, b, rays, count, occluded, counting, visited, tested);
+        cbvh_stream_interleave_avx2(f, b, rays, count, hits, occluded, counting, visited, tested);
         return;
     }
 #endif
-    if (hits)
-        stream_interleave_wide4_closest(f, b, rays, count, hits, scalar, counting, visited, tested);
-    else
-        stream_interleave_wide4_any(f, b, rays, count, occluded, scalar, counting, visited, tested);
+    (hits ? stream_interleave_closest : stream_interleave_any)(f, b, rays, count, hits, occluded, scalar,
+                                                               counting, visited, tested);
 }
 
 /* Whether the rays of a window are coherent: of up to 64 pairs of consecutive rays spread over it, at least
@@ -164,7 +128,7 @@ static void batch_flush(const struct cbvh_file *f, struct cbvh_stream_batch *b, 
     if (b->count == 0)
         return;
     if (hits) {
-        stream_walk_file(f, b, octant, node_test, 0, counting, NULL, visited, tested);
+        batch_walk(f, b, octant, node_test, 0, counting, NULL, visited, tested);
         /* the hits' REMAP entries (original ids), scattered over a large mesh's table: all requested
          * before the first is read */
         for (uint32_t r = 0; f->remap && r < b->count; r++)
@@ -173,7 +137,7 @@ static void batch_flush(const struct cbvh_file *f, struct cbvh_stream_batch *b, 
         for (uint32_t r = 0; r < b->count; r++)
             cbvh_hit_output(f, &b->best[r], &b->ctx[r].t_frame, &hits[b->ray_index[r]]);
     } else {
-        stream_walk_file(f, b, octant, node_test, 1, counting, occluded, visited, tested);
+        batch_walk(f, b, octant, node_test, 1, counting, occluded, visited, tested);
     }
     b->count = 0;
 }
@@ -184,17 +148,16 @@ static void batch_flush(const struct cbvh_file *f, struct cbvh_stream_batch *b, 
 static uint32_t batch_carve(struct cbvh_stream_batch *b, uint8_t **octant, void *mem, size_t size,
                             uint32_t walks)
 {
-    if (!mem || size < STREAM_SLACK + STREAM_TAILS_BYTES(walks) + STREAM_RAY_BYTES)
+    if (!mem || size < STREAM_SLACK + STREAM_WALKS_BYTES(walks) + STREAM_RAY_BYTES)
         return 0;
-    size_t n = (size - STREAM_SLACK - STREAM_TAILS_BYTES(walks)) / STREAM_RAY_BYTES;
+    size_t n = (size - STREAM_SLACK - STREAM_WALKS_BYTES(walks)) / STREAM_RAY_BYTES;
     n = n < CBVH_STREAM_MAX_BATCH ? n : CBVH_STREAM_MAX_BATCH;
-    /* the tails first (their walk states hold SIMD vectors), then box_ray: 16-byte aligned for SSE2 loads
-     * (32 kept) */
+    /* the walks first (their states hold SIMD vectors), then box_ray: 16-byte aligned for SSE2 loads (32
+     * kept) */
     uintptr_t p = ((uintptr_t)mem + 31u) & ~(uintptr_t)31u;
-    b->tails = (struct cbvh_stream_tails *)p;
-    b->tails->running = 0;
-    b->tails->walks = walks;
-    p = (p + STREAM_TAILS_BYTES(walks) + 31u) & ~(uintptr_t)31u;
+    b->walks = (struct cbvh_stream_walk *)p;
+    b->walk_count = walks;
+    p = (p + STREAM_WALKS_BYTES(walks) + 31u) & ~(uintptr_t)31u;
     b->box_ray = (float(*)[8])p;
     p += n * 8 * sizeof(float);
     b->ctx = (struct cbvh_ray_ctx *)p; /* 8-byte alignment holds: every array before is a multiple of 32 */
@@ -223,27 +186,20 @@ static void stream_single_rays(const struct cbvh_file *f, const cbvh_ray *rays, 
                                uint8_t *occluded, uint64_t *visited, uint64_t *tested)
 {
     struct cbvh_ray_ctx ctx;
-    for (size_t i = 0; i < count; i++) {
-        if (hits)
-            hits[i].tri = CBVH_NO_HIT;
-        else
-            occluded[i] = 0;
-        if (cbvh_ray_valid(&rays[i]) && cbvh_ray_prepare(&ctx, &rays[i], f, visited))
+    for (size_t i = 0; i < count; i++)
+        if (stream_ray_begin(f, rays, i, &ctx, hits, occluded, visited, tested))
             stream_solo_ray(f, &ctx, hits ? &hits[i] : NULL, hits ? NULL : &occluded[i], visited, tested);
-    }
 }
 
-/* Splits the stream into windows, each window into same-octant batches of the batch's capacity. A window
- * of incoherent rays skips the batch by the way cbvh_stream_way_for chooses: on a wide-layout mesh that does
- * not stay in the caches it walks interleaved (stream_interleave; the binary layout batches instead, where
- * interleaving did not pay), on a mesh in the caches with a batch small for the mesh one ray at a time.
- * Exactly one of hits / occluded is given. Invalid rays are misses. */
+/* Splits the stream into windows, each window into same-octant batches of the batch's capacity. By the way
+ * cbvh_stream_way_for chooses, a window of incoherent rays walks them alone instead: interleaved on a
+ * wide-layout mesh that does not stay in the caches, one at a time on a mesh in the caches with a batch
+ * small for the mesh. Exactly one of hits / occluded is given. Invalid rays are misses. */
 static void stream_run(const struct cbvh_file *f, const cbvh_ray *rays, size_t count, cbvh_hit *hits,
                        uint8_t *occluded, cbvh_query_stats *stats, struct cbvh_stream_batch *restrict batch,
                        uint8_t *restrict octant)
 {
     const cbvh_stream_node_fn node_test = cbvh_stream_node_kernel();
-    batch->tails->max = cbvh_stream_tails_for(f);
     const enum cbvh_stream_way way = cbvh_stream_way_for(f, batch->capacity);
     const uint32_t window_size = CBVH_STREAM_WINDOW_PER_RAY * batch->capacity;
     struct cbvh_ray_ctx ctx;
@@ -251,47 +207,37 @@ static void stream_run(const struct cbvh_file *f, const cbvh_ray *rays, size_t c
 
     for (size_t start = 0; start < count; start += window_size) {
         const uint32_t window = (uint32_t)(count - start < window_size ? count - start : window_size);
-        const int by_window = way == CBVH_STREAM_BY_WINDOW || way == CBVH_STREAM_BY_WINDOW_SINGLE;
+        cbvh_hit *window_hits = hits ? hits + start : NULL;
+        uint8_t *window_occluded = hits ? NULL : occluded + start;
         if (way == CBVH_STREAM_INTERLEAVED ||
-            (by_window && !cbvh_stream_window_coherent(rays + start, window))) {
+            (way != CBVH_STREAM_BATCHED && !cbvh_stream_window_coherent(rays + start, window))) {
             if (way == CBVH_STREAM_BY_WINDOW_SINGLE)
-                stream_single_rays(f, rays + start, window, hits ? hits + start : NULL,
-                                   occluded ? occluded + start : NULL, &visited, &tested);
+                stream_single_rays(f, rays + start, window, window_hits, window_occluded, &visited, &tested);
             else
-                interleave_wide4(f, batch, rays + start, window, hits ? hits + start : NULL,
-                                 occluded ? occluded + start : NULL, node_test, stats != NULL, &visited,
-                                 &tested);
+                interleave(f, batch, rays + start, window, window_hits, window_occluded, node_test,
+                           stats != NULL, &visited, &tested);
             continue;
         }
         uint32_t present = 0; /* octants that occur in the window */
         for (uint32_t j = 0; j < window; j++) {
+            /* the octant alone here; each ray begins (stream_ray_begin) when its octant's turn comes */
             const size_t r = start + j;
-            if (hits)
-                hits[r].tri = CBVH_NO_HIT;
-            else
-                occluded[r] = 0;
-            /* the octant alone here; each ray is prepared once, when its octant's turn comes */
             octant[j] = cbvh_ray_valid(&rays[r]) ? (uint8_t)cbvh_ray_octant(&rays[r]) : UINT8_MAX;
             if (octant[j] != UINT8_MAX)
                 present |= 1u << octant[j];
+            else if (hits)
+                hits[r].tri = CBVH_NO_HIT;
+            else
+                occluded[r] = 0;
         }
         for (uint32_t o = 0; o < 8; o++) {
             if (!(present >> o & 1u))
                 continue;
             for (uint32_t j = 0; j < window; j++) {
-                if (octant[j] != o)
+                if (octant[j] != o ||
+                    !stream_ray_begin(f, rays, start + j, &ctx, hits, occluded, &visited, &tested))
                     continue;
-                const size_t r = start + j;
-                if (!cbvh_ray_prepare(&ctx, &rays[r], f, &visited))
-                    continue; /* it misses the mesh's top box: a miss */
-                if (ctx.box_halve) {
-                    /* the batch shares one dequantized box between its rays; a ray whose box test needs
-                     * half scale (coordinates past FLT_MAX / 2, ray_box.h) takes the single-ray walk */
-                    stream_solo_ray(f, &ctx, hits ? &hits[r] : NULL, occluded ? &occluded[r] : NULL, &visited,
-                                    &tested);
-                    continue;
-                }
-                batch_add(batch, &ctx, r);
+                batch_add(batch, &ctx, start + j);
                 if (batch->count == batch->capacity)
                     batch_flush(f, batch, o, node_test, stats != NULL, hits, occluded, &visited, &tested);
             }
@@ -304,30 +250,40 @@ static void stream_run(const struct cbvh_file *f, const cbvh_ray *rays, size_t c
     }
 }
 
-/* The stream in a batch of CBVH_STREAM_STACK_BATCH rays (and the tails, CBVH_STREAM_TAILS walks: eight
- * would take 7.5 KiB more) on this frame: a function of its own, so that a caller with scratch for more
- * does not reserve it too. */
+/* The stream in a batch of CBVH_STREAM_STACK_BATCH rays and CBVH_STREAM_STACK_WALKS walk slots on this
+ * frame: a function of its own, so that a caller with scratch for more does not reserve it too. */
 CBVH_NOINLINE void stream_on_stack(const struct cbvh_file *f, const cbvh_ray *rays, size_t count,
                                    cbvh_hit *hits, uint8_t *occluded, cbvh_query_stats *stats)
 {
-    _Alignas(32) uint8_t own[STREAM_SLACK + STREAM_TAILS_BYTES(CBVH_STREAM_TAILS) +
+    _Alignas(32) uint8_t own[STREAM_SLACK + STREAM_WALKS_BYTES(CBVH_STREAM_STACK_WALKS) +
                              CBVH_STREAM_STACK_BATCH * STREAM_RAY_BYTES];
     struct cbvh_stream_batch batch;
     uint8_t *octant;
-    batch_carve(&batch, &octant, own, sizeof own, CBVH_STREAM_TAILS);
+    batch_carve(&batch, &octant, own, sizeof own, CBVH_STREAM_STACK_WALKS);
     stream_run(f, rays, count, hits, occluded, stats, &batch, octant);
 }
 
-/* The stream in the caller's scratch when it holds more rays than the stack batch, else on the stack. */
+/* The stream (closest hits into hits, or, hits NULL, occlusion into occluded; neither: nothing to do) in
+ * the caller's scratch when it holds more rays than the stack batch, else on the stack. No file or no rays:
+ * every answer a miss. */
 static void stream_query(const struct cbvh_file *f, const cbvh_ray *rays, size_t count, cbvh_hit *hits,
                          uint8_t *occluded, cbvh_query_stats *stats, void *scratch, size_t scratch_size)
 {
     struct cbvh_stream_batch batch;
     uint8_t *octant;
-    if (batch_carve(&batch, &octant, scratch, scratch_size, CBVH_STREAM_WALKS) > CBVH_STREAM_STACK_BATCH)
+    if (!f || !rays) {
+        for (size_t r = 0; hits && r < count; r++)
+            hits[r].tri = CBVH_NO_HIT;
+        if (occluded)
+            memset(occluded, 0, count);
+    } else if (!hits && !occluded) {
+        return;
+    } else if (batch_carve(&batch, &octant, scratch, scratch_size, CBVH_STREAM_WALKS) >
+               CBVH_STREAM_STACK_BATCH) {
         stream_run(f, rays, count, hits, occluded, stats, &batch, octant);
-    else
+    } else {
         stream_on_stack(f, rays, count, hits, occluded, stats);
+    }
 }
 
 CBVH_API size_t cbvh_stream_scratch_size(size_t batch_rays)
@@ -335,20 +291,13 @@ CBVH_API size_t cbvh_stream_scratch_size(size_t batch_rays)
     const size_t n = batch_rays < 1                       ? 1
                      : batch_rays > CBVH_STREAM_MAX_BATCH ? CBVH_STREAM_MAX_BATCH
                                                           : batch_rays;
-    return STREAM_SLACK + STREAM_TAILS_BYTES(CBVH_STREAM_WALKS) + n * STREAM_RAY_BYTES;
+    return STREAM_SLACK + STREAM_WALKS_BYTES(CBVH_STREAM_WALKS) + n * STREAM_RAY_BYTES;
 }
 
 CBVH_API void cbvh_raycast_stream_scratch(const cbvh_file *file, const cbvh_ray *rays, size_t count,
                                           cbvh_hit *hits, cbvh_query_stats *stats, void *scratch,
                                           size_t scratch_size)
 {
-    if (!hits)
-        return;
-    if (!file || !rays) {
-        for (size_t r = 0; r < count; r++)
-            hits[r].tri = CBVH_NO_HIT;
-        return;
-    }
     stream_query(file, rays, count, hits, NULL, stats, scratch, scratch_size);
 }
 
@@ -356,23 +305,17 @@ CBVH_API void cbvh_occluded_stream_scratch(const cbvh_file *file, const cbvh_ray
                                            uint8_t *occluded, cbvh_query_stats *stats, void *scratch,
                                            size_t scratch_size)
 {
-    if (!occluded)
-        return;
-    if (!file || !rays) {
-        memset(occluded, 0, count);
-        return;
-    }
     stream_query(file, rays, count, NULL, occluded, stats, scratch, scratch_size);
 }
 
 CBVH_API void cbvh_raycast_stream(const cbvh_file *file, const cbvh_ray *rays, size_t count, cbvh_hit *hits,
                                   cbvh_query_stats *stats)
 {
-    cbvh_raycast_stream_scratch(file, rays, count, hits, stats, NULL, 0);
+    stream_query(file, rays, count, hits, NULL, stats, NULL, 0);
 }
 
 CBVH_API void cbvh_occluded_stream(const cbvh_file *file, const cbvh_ray *rays, size_t count,
                                    uint8_t *occluded, cbvh_query_stats *stats)
 {
-    cbvh_occluded_stream_scratch(file, rays, count, occluded, stats, NULL, 0);
+    stream_query(file, rays, count, NULL, occluded, stats, NULL, 0);
 }

@@ -31,43 +31,30 @@ enum {
 /* The most children a node test takes (CBVH_TREE_WIDTH): one SSE2 vector of boxes per ray. */
 #define CBVH_STREAM_LANES 4u
 
-/* Rays that finish a subtree alone (stream_walk.h: a batch node with few live rays) run this many at a
- * time, one walk step each in turn: each ray's walk is a chain of dependent loads and tests, and the CPU
- * overlaps the chains of different rays where one ray at a time leaves it waiting (on a mesh that does not
- * stay in the caches, a miss a node). */
-#define CBVH_STREAM_TAILS 4u /* at most 4: the tails' bit masks go through cbvh_lowest_lane */
-
-/* Rays an interleaved stream walks at once (stream_walk.h's stream_interleave), in the tails' slots: more
- * than a batch walk's tails (CBVH_STREAM_TAILS), since every ray of an interleaved stream walks this way. */
+/* Rays an interleaved stream walks at once (stream_walk.h's stream_interleave): in the caller's scratch,
+ * and in the stream's own stack (stream.c), where fewer fit. */
 #define CBVH_STREAM_WALKS 8u
+#define CBVH_STREAM_STACK_WALKS 4u
 
-/* A ray walking a subtree alone: the single-ray walk's state, and the ray's best hit as this walk knows
- * it (synchronised with the batch's at each step, stream_walk.h). */
-struct cbvh_stream_tail {
+/* A ray's single-ray walk in progress (walk.h) and its best hit: a slot of the interleaved walks, or (the
+ * first slot) a batch ray finishing a subtree alone (stream_walk.h). */
+struct cbvh_stream_walk {
     struct cbvh_walk_state walk;
     struct cbvh_best_hit best;
-    uint32_t ray;     /* batch position */
     cbvh_ref fetched; /* the leaf whose vertices were last requested (stream_walk.h) */
-};
-
-struct cbvh_stream_tails {
-    uint32_t running; /* bit k: tail[k] walks */
-    uint32_t max;     /* tails that run at once: 1 or CBVH_STREAM_TAILS (cbvh_stream_tails_for) */
-    uint32_t walks;   /* the interleaved walks' slots: CBVH_STREAM_WALKS, or CBVH_STREAM_TAILS in the
-                       * stream's own stack (stream.c), which holds them all */
-    struct cbvh_stream_tail tail[]; /* `walks` of them; the batch's tails are the first CBVH_STREAM_TAILS */
 };
 
 /* Up to `capacity` rays of one octant, so the sort byte orders the whole batch. Its arrays lie in one
  * block (the stream's stack or the caller's scratch), cut by stream.c. */
 struct cbvh_stream_batch {
     float (*box_ray)[8];      /* CBVH_LANE_*, 32-byte aligned; TMAX shrinks with hits, -1 once occluded */
-    struct cbvh_ray_ctx *ctx; /* the prepared rays (triangle test, per-ray tails) */
+    struct cbvh_ray_ctx *ctx; /* the prepared rays (triangle test, walks alone) */
     struct cbvh_best_hit *best;
-    size_t *ray_index;  /* position in the caller's arrays */
-    uint16_t *list_ray; /* the walk's ray lists, a stack of them (stream.c): batch positions, */
-    float *list_entry;  /* and where each ray enters the list's box */
-    struct cbvh_stream_tails *tails;
+    size_t *ray_index;              /* position in the caller's arrays */
+    uint16_t *list_ray;             /* the walk's ray lists, a stack of them (stream.c): batch positions, */
+    float *list_entry;              /* and where each ray enters the list's box */
+    struct cbvh_stream_walk *walks; /* walk_count slots */
+    uint32_t walk_count;
     uint32_t list_capacity; /* entries in list_ray and list_entry */
     uint32_t shrinks;       /* times a ray's TMAX shrank: a list made since is still exact */
     uint32_t count, capacity;
@@ -88,46 +75,35 @@ struct cbvh_stream_lists {
     float *entry[CBVH_STREAM_LANES];
 };
 
-/* Tests the rays batch->box_ray[rays[j]], j < n, against every box of `boxes`
- * with the arithmetic of ray_box.h, each ray's current [TMIN, TMAX], and puts
- * the ray, in the order of `rays`, on the list of each box it enters; count[k]
- * receives the length of list k. */
-typedef void (*cbvh_stream_node_fn)(const struct cbvh_stream_batch *restrict batch,
-                                    const uint16_t *restrict rays, uint32_t n,
-                                    const struct cbvh_stream_boxes *restrict boxes,
-                                    const struct cbvh_stream_lists *restrict out,
-                                    uint32_t count[CBVH_STREAM_LANES]);
-
-void cbvh_stream_node_scalar(const struct cbvh_stream_batch *restrict batch, const uint16_t *restrict rays,
-                             uint32_t n, const struct cbvh_stream_boxes *restrict boxes,
-                             const struct cbvh_stream_lists *restrict out, uint32_t count[CBVH_STREAM_LANES]);
-#ifdef CBVH_HAVE_AVX2
-/* The same kernel in AVX2's encoding, for the AVX2 stream walks (stream_avx2.c): called from AVX code, the
- * SSE2-encoded one cost them a fifth to a quarter of their speed on this project's machine (the upper
- * halves of the vector registers, which GCC left dirty there). */
-void cbvh_stream_node_avx2(const struct cbvh_stream_batch *restrict batch, const uint16_t *restrict rays,
-                           uint32_t n, const struct cbvh_stream_boxes *restrict boxes,
-                           const struct cbvh_stream_lists *restrict out, uint32_t count[CBVH_STREAM_LANES]);
-#endif
+/* A node kernel `name`: tests the rays batch->box_ray[rays[j]], j < n, against every box of `boxes` with
+ * the arithmetic of ray_box.h, each ray's current [TMIN, TMAX], and puts the ray, in the order of `rays`,
+ * on the list of each box it enters; count[k] receives the length of list k. */
+#define CBVH_STREAM_NODE_KERNEL(name)                                                                        \
+    void name(const struct cbvh_stream_batch *restrict batch, const uint16_t *restrict rays, uint32_t n,     \
+              const struct cbvh_stream_boxes *restrict boxes, const struct cbvh_stream_lists *restrict out,  \
+              uint32_t count[CBVH_STREAM_LANES])
+typedef CBVH_STREAM_NODE_KERNEL((*cbvh_stream_node_fn));
+CBVH_STREAM_NODE_KERNEL(cbvh_stream_node_scalar);
 #ifdef CBVH_HAVE_SIMD
-void cbvh_stream_node_sse2(const struct cbvh_stream_batch *restrict batch, const uint16_t *restrict rays,
-                           uint32_t n, const struct cbvh_stream_boxes *restrict boxes,
-                           const struct cbvh_stream_lists *restrict out, uint32_t count[CBVH_STREAM_LANES]);
+CBVH_STREAM_NODE_KERNEL(cbvh_stream_node_sse2);
+#endif
+#ifdef CBVH_HAVE_AVX2
+/* The SSE2 kernel in AVX2's encoding, for the AVX2 stream walks (stream_avx2.c): called from AVX code, the
+ * SSE2 encoding would run with the upper halves of the vector registers left dirty (GCC does not clear
+ * them there), which stalls every SSE2 instruction on some CPUs. */
+CBVH_STREAM_NODE_KERNEL(cbvh_stream_node_avx2);
 #endif
 
 /* The streams' node kernel: the best this build has (kernel_choice.c), or a test hook's (test_hooks.h). */
 cbvh_stream_node_fn cbvh_stream_node_kernel(void);
 
-/* The tails that run at once on f's streams: by the mesh (kernel_choice.c), or by a test hook's setting. */
-uint32_t cbvh_stream_tails_for(const struct cbvh_file *f);
-
-/* How the streams walk a window of rays: in batches, window by window by the rays' coherence
- * (cbvh_stream_window_coherent: coherent ones in batches, the others interleaved (wide layout), or one ray
- * at a time on the single-ray walk), or interleaved (stream_walk.h's stream_interleave, wide layout). */
+/* How the streams walk a window of rays: in batches; interleaved (stream_walk.h's stream_interleave, wide
+ * layout); or by window, by the rays' coherence (cbvh_stream_window_coherent): coherent ones in batches, the
+ * others interleaved (BY_WINDOW, wide layout) or one at a time on the single-ray walk (BY_WINDOW_SINGLE). */
 enum cbvh_stream_way {
     CBVH_STREAM_BATCHED,
-    CBVH_STREAM_BY_WINDOW,
     CBVH_STREAM_INTERLEAVED,
+    CBVH_STREAM_BY_WINDOW,
     CBVH_STREAM_BY_WINDOW_SINGLE
 };
 

@@ -13,41 +13,30 @@
 #include "query/stream_walk.h"
 
 /* The streams' node test (stream_node_simd.h) in this file's encoding. */
-void cbvh_stream_node_avx2(const struct cbvh_stream_batch *restrict batch, const uint16_t *restrict rays,
-                           uint32_t n, const struct cbvh_stream_boxes *restrict boxes,
-                           const struct cbvh_stream_lists *restrict out, uint32_t count[CBVH_STREAM_LANES])
+CBVH_STREAM_NODE_KERNEL(cbvh_stream_node_avx2)
 {
     stream_node_simd(batch, rays, n, boxes, out, count);
 }
 
-/* stream.c's instances, this file's instruction set: only the leaves' filter width differs (lanes.h), and
- * the answers are the same bit for bit. node_test: the SSE2 or AVX2 node kernel (stream.c passes the
- * latter). */
-void cbvh_stream_wide4_closest_avx2(const struct cbvh_file *f, struct cbvh_stream_batch *b, uint32_t octant,
-                                    cbvh_stream_node_fn node_test, int counting, uint8_t *occluded,
-                                    uint64_t *visited, uint64_t *tested)
+/* stream.c's wide instances in this file's instruction set: only the leaves' filter width differs
+ * (lanes.h), and the answers are the same bit for bit. */
+STREAM_BATCH_INSTANCE(stream_closest, CBVH_LAYOUT_WIDE4, 0)
+STREAM_BATCH_INSTANCE(stream_any, CBVH_LAYOUT_WIDE4, 1)
+STREAM_INTERLEAVE_INSTANCE(interleave_closest, 0)
+STREAM_INTERLEAVE_INSTANCE(interleave_any, 1)
+
+void cbvh_stream_wide4_avx2(const struct cbvh_file *f, struct cbvh_stream_batch *b, uint32_t octant, int any,
+                            int counting, uint8_t *occluded, uint64_t *visited, uint64_t *tested)
 {
-    stream_walk(f, CBVH_LAYOUT_WIDE4, b, octant, node_test, 0, counting, occluded, visited, tested);
+    (any ? stream_any : stream_closest)(f, b, octant, cbvh_stream_node_avx2, counting, occluded, visited,
+                                        tested);
 }
 
-void cbvh_stream_wide4_any_avx2(const struct cbvh_file *f, struct cbvh_stream_batch *b, uint32_t octant,
-                                cbvh_stream_node_fn node_test, int counting, uint8_t *occluded,
-                                uint64_t *visited, uint64_t *tested)
+void cbvh_stream_interleave_avx2(const struct cbvh_file *f, struct cbvh_stream_batch *b, const cbvh_ray *rays,
+                                 size_t count, cbvh_hit *hits, uint8_t *occluded, int counting,
+                                 uint64_t *visited, uint64_t *tested)
 {
-    stream_walk(f, CBVH_LAYOUT_WIDE4, b, octant, node_test, 1, counting, occluded, visited, tested);
-}
-
-void cbvh_stream_interleave_wide4_closest_avx2(const struct cbvh_file *f, struct cbvh_stream_batch *b,
-                                               const cbvh_ray *rays, size_t count, cbvh_hit *hits,
-                                               int counting, uint64_t *visited, uint64_t *tested)
-{
-    stream_interleave(f, CBVH_LAYOUT_WIDE4, b, rays, count, 0, hits, NULL, 0, counting, visited, tested);
-}
-
-void cbvh_stream_interleave_wide4_any_avx2(const struct cbvh_file *f, struct cbvh_stream_batch *b,
-                                           const cbvh_ray *rays, size_t count, uint8_t *occluded,
-                                           int counting, uint64_t *visited, uint64_t *tested)
-{
-    stream_interleave(f, CBVH_LAYOUT_WIDE4, b, rays, count, 1, NULL, occluded, 0, counting, visited, tested);
+    (hits ? interleave_closest : interleave_any)(f, b, rays, count, hits, occluded, 0, counting, visited,
+                                                 tested);
 }
 #endif

@@ -1,5 +1,5 @@
 /* stream_node_simd.h: the batch node test, a ray against four child boxes, in SSE2 intrinsics; compiled in
- * SSE2's encoding by stream_simd.c (cbvh_stream_node_sse2) and in AVX2's by stream_avx2.c
+ * SSE2's encoding by stream_node.c (cbvh_stream_node_sse2) and in AVX2's by stream_avx2.c
  * (cbvh_stream_node_avx2). */
 #ifndef CBVH_QUERY_STREAM_NODE_SIMD_H
 #define CBVH_QUERY_STREAM_NODE_SIMD_H

@@ -9,162 +9,21 @@
 #include "query/raycast.h"
 #include "query/stream.h"
 
-/* A batch node with at most this many live rays hands them to the tails (the single-ray
- * walk's steps, below): below it the batch would mostly carry one ray per node, paying the
- * partition and stack bookkeeping without sharing any node fetch. */
-#ifndef CBVH_STREAM_SOLO
+/* A batch node with at most this many live rays hands each of them to the single-ray walk (stream_tail,
+ * below): below it the batch would mostly carry one ray per node, paying the partition and stack
+ * bookkeeping without sharing any node fetch. */
 #define CBVH_STREAM_SOLO 4
-#endif
 
-/* The tails (stream.h): rays finishing a subtree alone on the single-ray walk's steps (walk.h), a few at
- * a time. A tail starts from the ray's current tmax and best hit; at each step it takes a closer hit the
- * batch (or another tail of the same ray) has found, and gives the batch its own, so both prune with the
- * nearest hit known; when it ends, its best hit goes back to the batch by the tie rule, or its occlusion
- * ends the ray. The single-ray walk uses the same triangle test and tie rule, so the result does not
- * depend on where the batch handed the ray over nor on how the tails' steps interleave. */
-
-/* Tail t's best hit into the batch when it is better (closest hit). */
-CBVH_KERNEL void stream_tail_give(struct cbvh_stream_batch *restrict b,
-                                  const struct cbvh_stream_tail *restrict t)
-{
-    struct cbvh_best_hit *best = &b->best[t->ray];
-    if (t->best.tri != UINT32_MAX &&
-        (best->tri == UINT32_MAX || cbvh_hit_better(t->best.t, t->best.tri, best->t, best->tri))) {
-        *best = t->best;
-        if (b->box_ray[t->ray][CBVH_LANE_TMAX] != t->best.t) {
-            b->box_ray[t->ray][CBVH_LANE_TMAX] = t->best.t;
-            b->shrinks++;
-        }
-    }
-}
-
-/* The walk mode of every tail: sorted, and the batch's query kind and kernel (scalar with the scalar node
- * kernel). */
-static inline struct cbvh_walk_mode stream_tail_mode(int any, int scalar)
+/* The walk mode of a ray walked alone (a batch ray's tail, an interleaved walk): sorted, and the stream's
+ * query kind and kernel (scalar with the scalar node kernel). */
+static inline struct cbvh_walk_mode stream_alone_mode(int any, int scalar)
 {
     const struct cbvh_walk_mode mode = {.order = CBVH_WALK_SORTED, .any = any, .scalar = scalar};
     return mode;
 }
 
-/* Whether tail t's walk goes to a leaf whose vertices it has not requested yet (wide layout). Then they
- * are requested now: a leaf's vertices, numbered in leaf order, lie close together, so the line of its
- * first triangle's first vertex and the next; and the caller tests the leaf at the tail's next turn, after
- * the other tails' steps, rather than wait for them. */
-CBVH_KERNEL int stream_tail_request_leaf(const struct cbvh_file *restrict f,
-                                         struct cbvh_stream_tail *restrict t)
-{
-    if (!cbvh_w4_ref_is_leaf(t->walk.r) || t->fetched == t->walk.r)
-        return 0;
-    uint32_t idx[3];
-    t->fetched = t->walk.r;
-    cbvh_triangle_indices(f, cbvh_w4_ref_first(t->walk.r), idx);
-    const uint8_t *v = (const uint8_t *)cbvh_vertex_address(f, idx[0]);
-    CBVH_PREFETCH(v);
-    CBVH_PREFETCH(v + 64);
-    return 1;
-}
-
-/* Steps the running tails in turn until at most `leave` of them run, each ended tail's result merged into
- * the batch. */
-CBVH_KERNEL void stream_tails_run(const struct cbvh_file *restrict f, const uint32_t layout,
-                                  struct cbvh_stream_batch *restrict b, const struct cbvh_walk_mode mode,
-                                  int counting, uint32_t leave, uint8_t *restrict occluded,
-                                  uint64_t *restrict visited, uint64_t *restrict tested)
-{
-    struct cbvh_stream_tails *restrict tails = b->tails;
-    const int request_vertices = layout == CBVH_LAYOUT_WIDE4 && !f->quads && tails->max > 1u;
-    while ((uint32_t)cbvh_w4_popcount(tails->running) > leave) {
-        for (uint32_t turn = tails->running; turn; turn &= turn - 1u) { /* not unrolled: one step's code */
-            const uint32_t k = cbvh_lowest_lane(turn);
-            struct cbvh_stream_tail *restrict t = &tails->tail[k];
-            float *batch_tmax = &b->box_ray[t->ray][CBVH_LANE_TMAX];
-            if (!CBVH_LIKELY(*batch_tmax == t->walk.tmax)) {
-                if (*batch_tmax < t->walk.tmax) { /* a closer hit elsewhere, or (any hit) the ray occluded */
-                    t->walk.tmax = *batch_tmax;
-                    if (!mode.any)
-                        t->best = b->best[t->ray];
-                } else if (!mode.any) { /* this tail's hit is the nearest */
-                    stream_tail_give(b, t);
-                }
-            }
-            if (request_vertices && stream_tail_request_leaf(f, t))
-                continue;
-            const enum cbvh_walk_step_result step =
-                cbvh_walk_step(f, layout, &b->ctx[t->ray], mode, NULL, counting, NULL, &t->walk, &t->best);
-            if (step == CBVH_WALK_MORE) {
-                /* the tail's next node or leaf is fetched while the other tails step */
-                if (layout == CBVH_LAYOUT_WIDE4 && !cbvh_w4_ref_is_leaf(t->walk.r))
-                    CBVH_PREFETCH(cbvh_w4_node(f->nodes, t->walk.r));
-                else if (layout == CBVH_LAYOUT_WIDE4)
-                    CBVH_PREFETCH(cbvh_indices_entry(f->triangles, (int)f->triangle_encoding,
-                                                     cbvh_w4_ref_first(t->walk.r)));
-                continue;
-            }
-            if (step == CBVH_WALK_HIT) {
-                occluded[b->ray_index[t->ray]] = 1;
-                *batch_tmax = -1.0f;
-                b->shrinks++;
-            } else if (!mode.any) {
-                stream_tail_give(b, t);
-            }
-            *visited += t->walk.visited;
-            *tested += t->walk.tested;
-            tails->running &= ~(1u << k);
-        }
-    }
-}
-
-/* stream_tails_run as a function of its own per layout and query kind (and per file: each instruction
- * set's), which the batch walk calls from two places: inlined, the tails' walk would be compiled into
- * every call (five times the code, four times the compile time). */
-#define STREAM_TAILS_INSTANCE(name, layout_, any_)                                                           \
-    CBVH_NOINLINE void name(const struct cbvh_file *f, struct cbvh_stream_batch *b, int scalar,              \
-                            int counting, uint32_t leave, uint8_t *occluded, uint64_t *visited,              \
-                            uint64_t *tested)                                                                \
-    {                                                                                                        \
-        stream_tails_run(f, layout_, b, stream_tail_mode(any_, scalar), counting, leave, occluded, visited,  \
-                         tested);                                                                            \
-    }
-STREAM_TAILS_INSTANCE(stream_tails_wide4_closest, CBVH_LAYOUT_WIDE4, 0)
-STREAM_TAILS_INSTANCE(stream_tails_wide4_any, CBVH_LAYOUT_WIDE4, 1)
-STREAM_TAILS_INSTANCE(stream_tails_binary_closest, CBVH_LAYOUT_BINARY, 0)
-STREAM_TAILS_INSTANCE(stream_tails_binary_any, CBVH_LAYOUT_BINARY, 1)
-#undef STREAM_TAILS_INSTANCE
-
-/* The instance of stream_tails_run for `layout` and `any` (constants in every caller). */
-CBVH_KERNEL void stream_tails(const struct cbvh_file *f, const uint32_t layout, struct cbvh_stream_batch *b,
-                              const int any, int scalar, int counting, uint32_t leave, uint8_t *occluded,
-                              uint64_t *visited, uint64_t *tested)
-{
-    if (layout == CBVH_LAYOUT_WIDE4)
-        (any ? stream_tails_wide4_any : stream_tails_wide4_closest)(f, b, scalar, counting, leave, occluded,
-                                                                    visited, tested);
-    else
-        (any ? stream_tails_binary_any : stream_tails_binary_closest)(f, b, scalar, counting, leave, occluded,
-                                                                      visited, tested);
-}
-
-/* Ray r of the batch starts a tail in `mode` (stream_tail_mode) on the subtree of node `root` (whose box
- * the batch tested), after the running tails made room for it. */
-CBVH_KERNEL void stream_tail_start(const struct cbvh_file *restrict f, const uint32_t layout,
-                                   struct cbvh_stream_batch *restrict b, const struct cbvh_walk_mode mode,
-                                   uint32_t r, cbvh_ref root)
-{
-    struct cbvh_stream_tails *restrict tails = b->tails;
-    const uint32_t k = cbvh_lowest_lane(~tails->running & ((1u << CBVH_STREAM_TAILS) - 1u));
-    struct cbvh_stream_tail *restrict t = &tails->tail[k];
-    t->ray = r;
-    t->fetched = CBVH_W4_LEAF_BIT - 1u; /* no leaf */
-    t->best = b->best[r];
-    cbvh_walk_begin(f, layout, &b->ctx[r], mode, root, CBVH_NO_BOX, NULL, b->box_ray[r][CBVH_LANE_TMAX],
-                    &t->walk);
-    tails->running |= 1u << k;
-    if (layout == CBVH_LAYOUT_WIDE4) /* the batch tested its box in its parent: not yet fetched */
-        CBVH_PREFETCH(cbvh_w4_node(f->nodes, root));
-}
-
 /* Ray r of the batch, whose test of triangle k found `hit` at t (u, v): an occlusion, or a closer best
- * hit. */
+ * hit (a hit no better than the ray's best changes nothing). */
 CBVH_KERNEL void stream_take(struct cbvh_stream_batch *restrict b, uint32_t r, uint32_t k, int hit, float t,
                              float u, float v, int any, uint8_t *restrict occluded)
 {
@@ -184,6 +43,29 @@ CBVH_KERNEL void stream_take(struct cbvh_stream_batch *restrict b, uint32_t r, u
         b->best[r].u = u;
         b->best[r].v = v;
     }
+}
+
+/* Ray r of the batch finishes the subtree of node `root` (whose box the batch tested) alone: the single-ray
+ * walk (walk.h) in the batch's first walk slot, from the ray's current tmax and best hit, which its hit
+ * then updates. The single-ray walk has the batch's triangle test and tie rule, so the answer does not
+ * depend on where the batch hands a ray over. */
+CBVH_KERNEL void stream_tail(const struct cbvh_file *restrict f, const uint32_t layout,
+                             struct cbvh_stream_batch *restrict b, const struct cbvh_walk_mode mode,
+                             int counting, uint32_t r, cbvh_ref root, uint8_t *restrict occluded,
+                             uint64_t *restrict visited, uint64_t *restrict tested)
+{
+    struct cbvh_stream_walk *restrict t = b->walks;
+    enum cbvh_walk_step_result step;
+    t->best = b->best[r];
+    cbvh_walk_begin(f, layout, &b->ctx[r], mode, root, CBVH_NO_BOX, NULL, b->box_ray[r][CBVH_LANE_TMAX],
+                    &t->walk);
+    do
+        step = cbvh_walk_step(f, layout, &b->ctx[r], mode, NULL, counting, NULL, &t->walk, &t->best);
+    while (step == CBVH_WALK_MORE);
+    stream_take(b, r, t->best.tri, step == CBVH_WALK_HIT || (!mode.any && t->best.tri != UINT32_MAX),
+                t->best.t, t->best.u, t->best.v, mode.any, occluded);
+    *visited += t->walk.visited;
+    *tested += t->walk.tested;
 }
 
 /* The live rays live[0, m) against the leaf's triangles [tri0, tri0 + count). With SIMD the leaf is
@@ -308,7 +190,6 @@ CBVH_KERNEL void stream_walk(const struct cbvh_file *restrict f, const uint32_t 
 {
     /* the scalar node kernel (the fallback, and its test) comes with scalar leaves */
     const int simd_leaves = node_test != cbvh_stream_node_scalar;
-    const struct cbvh_walk_mode tail_mode = stream_tail_mode(any, !simd_leaves);
     const struct cbvh_slab_select sel = cbvh_slab_select_of(octant);
     uint16_t *restrict list_ray = b->list_ray;
     float *restrict list_entry = b->list_entry;
@@ -360,11 +241,9 @@ CBVH_KERNEL void stream_walk(const struct cbvh_file *restrict f, const uint32_t 
         } else if (n <= CBVH_STREAM_SOLO || top + CBVH_TREE_WIDTH * n > b->list_capacity) {
             /* Too few rays left to share the nodes below, or no room for their lists: each finishes the
              * subtree on its own, with the single-ray walk and its current tmax. */
-            for (uint32_t j = 0; j < n; j++) {
-                stream_tails(f, layout, b, any, !simd_leaves, counting, b->tails->max - 1u, occluded, &nv,
-                             &nt);
-                stream_tail_start(f, layout, b, tail_mode, list_ray[start + j], r);
-            }
+            for (uint32_t j = 0; j < n; j++)
+                stream_tail(f, layout, b, stream_alone_mode(any, !simd_leaves), counting, list_ray[start + j],
+                            r, occluded, &nv, &nt);
         } else {
             const uint32_t k = cbvh_tree_children(f, layout, r, order, c);
             stream_boxes_of(f, layout, sel, c, k, &boxes);
@@ -404,13 +283,11 @@ CBVH_KERNEL void stream_walk(const struct cbvh_file *restrict f, const uint32_t 
                 n = stream_still_in_reach(b, list_ray + start, list_entry + start, n);
         }
     }
-    stream_tails(f, layout, b, any, !simd_leaves, counting, 0, occluded, &nv, &nt);
     *visited += nv;
     *tested += nt;
 }
 
-/* A whole ray on the single-ray walk (raycast.h), its counters added to the stream's: a ray whose box test
- * needs half scale (box_halve), which the batch's shared boxes do not serve. */
+/* A whole ray on the single-ray walk (raycast.h), its counters added to the stream's. */
 CBVH_KERNEL void stream_solo_ray(const struct cbvh_file *f, const struct cbvh_ray_ctx *ctx, cbvh_hit *hit,
                                  uint8_t *occluded, uint64_t *visited, uint64_t *tested)
 {
@@ -426,70 +303,93 @@ CBVH_KERNEL void stream_solo_ray(const struct cbvh_file *f, const struct cbvh_ra
     *tested += stats.triangles_tested;
 }
 
-/* Input ray i starts in slot k of the interleaved walks (stream_interleave): its answer is set to a miss
- * (hits[i], or occluded[i] when hits is NULL), then it is prepared and its walk begun. Returns 1 when the
- * slot walks it; 0 when it is done already (an invalid ray, one that misses the mesh's top box or, binary
- * layout, the root box), or taken by the solo walk (box_halve). */
-CBVH_KERNEL int stream_interleave_start(const struct cbvh_file *restrict f, const uint32_t layout,
-                                        struct cbvh_stream_batch *restrict b,
-                                        const struct cbvh_walk_mode mode, const cbvh_ray *restrict rays,
-                                        size_t i, uint32_t k, cbvh_hit *restrict hits,
-                                        uint8_t *restrict occluded, uint64_t *restrict visited,
-                                        uint64_t *restrict tested)
+/* Ray i of the stream begins: its answer is set to a miss (hits[i], or occluded[i] when hits is NULL) and
+ * it is prepared into *ctx. Returns 1 when it is to be walked; 0 when it is done already: an invalid ray,
+ * one that misses the mesh's top box, or one walked whole by stream_solo_ray (box_halve: the batch's shared
+ * boxes do not serve it). */
+CBVH_KERNEL int stream_ray_begin(const struct cbvh_file *restrict f, const cbvh_ray *restrict rays, size_t i,
+                                 struct cbvh_ray_ctx *restrict ctx, cbvh_hit *restrict hits,
+                                 uint8_t *restrict occluded, uint64_t *restrict visited,
+                                 uint64_t *restrict tested)
 {
-    struct cbvh_ray_ctx *restrict ctx = &b->ctx[k];
-    struct cbvh_stream_tail *restrict slot = &b->tails->tail[k];
     if (hits)
         hits[i].tri = CBVH_NO_HIT;
     else
         occluded[i] = 0;
     if (!cbvh_ray_prepare(ctx, &rays[i], f, visited))
         return 0;
-    if (ctx->box_halve) {
-        stream_solo_ray(f, ctx, hits ? &hits[i] : NULL, hits ? NULL : &occluded[i], visited, tested);
-        return 0;
-    }
-    b->ray_index[k] = i;
-    slot->best.tri = UINT32_MAX;
-    slot->fetched = CBVH_W4_LEAF_BIT - 1u; /* no leaf */
-    if (cbvh_walk_begin(f, layout, ctx, mode, cbvh_tree_root(f, layout), cbvh_tree_root_box(f, layout), NULL,
-                        ctx->tmax, &slot->walk))
+    if (!ctx->box_halve)
         return 1;
-    *visited += slot->walk.visited;
+    stream_solo_ray(f, ctx, hits ? &hits[i] : NULL, hits ? NULL : &occluded[i], visited, tested);
     return 0;
 }
 
-/* The streams' other way (stream.c chooses it for incoherent rays on a mesh that does not stay in the
- * caches): no batch, the rays walked b->tails->walks at a time by the single-ray walk, one step (a node or
- * a leaf) each in turn, in the slots of the batch's tails (their walk states and best hits, with b->ctx[k]
- * and b->ray_index[k] for slot k); a ray that ends hands its slot to the next. Each ray's walk is a chain of
- * dependent fetches and tests that mostly waits on memory there, and the CPU overlaps the chains of the
- * slots' rays. A closest-hit walk requests a leaf's vertices a turn before its test, as the tails do
- * (occlusion walks do not: they stop at their first hit and do not pay for it). Closest hit (`any` clear)
- * into hits, any hit into occluded (hits NULL); the single-ray walk's answers. */
-CBVH_KERNEL void stream_interleave(const struct cbvh_file *restrict f, const uint32_t layout,
-                                   struct cbvh_stream_batch *restrict b, const cbvh_ray *restrict rays,
-                                   size_t count, const int any, cbvh_hit *restrict hits,
-                                   uint8_t *restrict occluded, int scalar, int counting,
-                                   uint64_t *restrict visited, uint64_t *restrict tested)
+/* Whether slot t's walk goes to a leaf whose vertices it has not requested yet (wide layout). Then they
+ * are requested now: a leaf's vertices, numbered in leaf order, lie close together, so the line of its
+ * first triangle's first vertex and the next; and the leaf is tested at the slot's next turn, after the
+ * other slots' steps, rather than waiting for them. */
+CBVH_KERNEL int stream_request_leaf(const struct cbvh_file *restrict f, struct cbvh_stream_walk *restrict t)
 {
-    const struct cbvh_walk_mode mode = stream_tail_mode(any, scalar);
-    struct cbvh_stream_tail *restrict slot = b->tails->tail;
-    const uint32_t walks = b->tails->walks;
+    if (!cbvh_w4_ref_is_leaf(t->walk.r) || t->fetched == t->walk.r)
+        return 0;
+    uint32_t idx[3];
+    t->fetched = t->walk.r;
+    cbvh_triangle_indices(f, cbvh_w4_ref_first(t->walk.r), idx);
+    const uint8_t *v = (const uint8_t *)cbvh_vertex_address(f, idx[0]);
+    CBVH_PREFETCH(v);
+    CBVH_PREFETCH(v + 64);
+    return 1;
+}
+
+/* Ray i of the stream starts in slot k of the interleaved walks (stream_interleave), as stream_ray_begin
+ * says: returns 1 when the slot walks it. */
+CBVH_KERNEL int stream_interleave_start(const struct cbvh_file *restrict f,
+                                        struct cbvh_stream_batch *restrict b,
+                                        const struct cbvh_walk_mode mode, const cbvh_ray *restrict rays,
+                                        size_t i, uint32_t k, cbvh_hit *restrict hits,
+                                        uint8_t *restrict occluded, uint64_t *restrict visited,
+                                        uint64_t *restrict tested)
+{
+    struct cbvh_stream_walk *restrict slot = &b->walks[k];
+    if (!stream_ray_begin(f, rays, i, &b->ctx[k], hits, occluded, visited, tested))
+        return 0;
+    b->ray_index[k] = i;
+    slot->best.tri = UINT32_MAX;
+    slot->fetched = CBVH_W4_LEAF_BIT - 1u; /* no leaf */
+    cbvh_walk_begin(f, CBVH_LAYOUT_WIDE4, &b->ctx[k], mode, cbvh_tree_root(f, CBVH_LAYOUT_WIDE4), CBVH_NO_BOX,
+                    NULL, b->ctx[k].tmax, &slot->walk);
+    return 1;
+}
+
+/* The streams' other way, on the wide layout (stream.c chooses it for a mesh that does not stay in the
+ * caches): no batch, the rays walked b->walk_count at a time by the single-ray walk, one step (a node or a
+ * leaf) each in turn, in the batch's walk slots (with b->ctx[k] and b->ray_index[k] for slot k); a ray that
+ * ends hands its slot to the next. Each ray's walk is a chain of dependent fetches and tests that mostly
+ * waits on memory there, and the CPU overlaps the chains of the slots' rays. A closest-hit walk requests a
+ * leaf's vertices a turn before its test (occlusion walks do not: they stop at their first hit and do not
+ * pay for it). Closest hit (`any` clear) into hits, any hit into occluded (hits NULL); the single-ray
+ * walk's answers. */
+CBVH_KERNEL void stream_interleave(const struct cbvh_file *restrict f, struct cbvh_stream_batch *restrict b,
+                                   const cbvh_ray *restrict rays, size_t count, const int any,
+                                   cbvh_hit *restrict hits, uint8_t *restrict occluded, int scalar,
+                                   int counting, uint64_t *restrict visited, uint64_t *restrict tested)
+{
+    const struct cbvh_walk_mode mode = stream_alone_mode(any, scalar);
+    struct cbvh_stream_walk *restrict slot = b->walks;
+    const uint32_t walks = b->walk_count;
     uint32_t running = 0; /* bit k: slot k walks a ray */
     size_t next = 0;
     uint64_t nv = 0, nt = 0;
     do {
         for (uint32_t k = 0; k < walks; k++) {
             while (!(running >> k & 1u) && next < count)
-                if (stream_interleave_start(f, layout, b, mode, rays, next++, k, hits, occluded, &nv, &nt))
+                if (stream_interleave_start(f, b, mode, rays, next++, k, hits, occluded, &nv, &nt))
                     running |= 1u << k;
-            if (!(running >> k & 1u) ||
-                (!any && layout == CBVH_LAYOUT_WIDE4 && !f->quads && stream_tail_request_leaf(f, &slot[k])))
+            if (!(running >> k & 1u) || (!any && !f->quads && stream_request_leaf(f, &slot[k])))
                 continue;
             struct cbvh_walk_state *restrict walk = &slot[k].walk;
-            const enum cbvh_walk_step_result step =
-                cbvh_walk_step(f, layout, &b->ctx[k], mode, NULL, counting, NULL, walk, &slot[k].best);
+            const enum cbvh_walk_step_result step = cbvh_walk_step(f, CBVH_LAYOUT_WIDE4, &b->ctx[k], mode,
+                                                                   NULL, counting, NULL, walk, &slot[k].best);
             if (step == CBVH_WALK_MORE)
                 continue;
             if (any)
@@ -505,22 +405,33 @@ CBVH_KERNEL void stream_interleave(const struct cbvh_file *restrict f, const uin
     *tested += nt;
 }
 
-/* The wide layout's stream walks compiled for AVX2 (stream_avx2.c), for CPUs that have it: eight-lane leaf
- * filters; arguments as stream_walk's. */
+/* The batch walk and the interleaved walks as functions of their own per layout and query kind, in the
+ * instruction set of the file that instantiates them (stream.c, stream_avx2.c): a frame holds one walk's
+ * stack, not the sum of all (-fstack-usage). */
+#define STREAM_BATCH_INSTANCE(name, layout_, any_)                                                           \
+    CBVH_NOINLINE void name(const struct cbvh_file *f, struct cbvh_stream_batch *b, uint32_t octant,         \
+                            cbvh_stream_node_fn node_test, int counting, uint8_t *occluded,                  \
+                            uint64_t *visited, uint64_t *tested)                                             \
+    {                                                                                                        \
+        stream_walk(f, layout_, b, octant, node_test, any_, counting, occluded, visited, tested);            \
+    }
+#define STREAM_INTERLEAVE_INSTANCE(name, any_)                                                               \
+    CBVH_NOINLINE void name(const struct cbvh_file *f, struct cbvh_stream_batch *b, const cbvh_ray *rays,    \
+                            size_t count, cbvh_hit *hits, uint8_t *occluded, int scalar, int counting,       \
+                            uint64_t *visited, uint64_t *tested)                                             \
+    {                                                                                                        \
+        stream_interleave(f, b, rays, count, any_, hits, occluded, scalar, counting, visited, tested);       \
+    }
+
 #ifdef CBVH_HAVE_AVX2
-void cbvh_stream_wide4_closest_avx2(const struct cbvh_file *f, struct cbvh_stream_batch *b, uint32_t octant,
-                                    cbvh_stream_node_fn node_test, int counting, uint8_t *occluded,
-                                    uint64_t *visited, uint64_t *tested);
-void cbvh_stream_wide4_any_avx2(const struct cbvh_file *f, struct cbvh_stream_batch *b, uint32_t octant,
-                                cbvh_stream_node_fn node_test, int counting, uint8_t *occluded,
-                                uint64_t *visited, uint64_t *tested);
-/* stream_interleave on the wide layout, compiled for AVX2, closest and any hit; arguments as its. */
-void cbvh_stream_interleave_wide4_closest_avx2(const struct cbvh_file *f, struct cbvh_stream_batch *b,
-                                               const cbvh_ray *rays, size_t count, cbvh_hit *hits,
-                                               int counting, uint64_t *visited, uint64_t *tested);
-void cbvh_stream_interleave_wide4_any_avx2(const struct cbvh_file *f, struct cbvh_stream_batch *b,
-                                           const cbvh_ray *rays, size_t count, uint8_t *occluded,
-                                           int counting, uint64_t *visited, uint64_t *tested);
+/* The wide layout's batch walk (any: any hit) and interleaved walks (hits NULL: any hit) compiled for AVX2
+ * (stream_avx2.c), for CPUs that have it: eight-lane leaf filters, and the batch's node test in AVX2's
+ * encoding; arguments as stream_walk's and stream_interleave's. */
+void cbvh_stream_wide4_avx2(const struct cbvh_file *f, struct cbvh_stream_batch *b, uint32_t octant, int any,
+                            int counting, uint8_t *occluded, uint64_t *visited, uint64_t *tested);
+void cbvh_stream_interleave_avx2(const struct cbvh_file *f, struct cbvh_stream_batch *b, const cbvh_ray *rays,
+                                 size_t count, cbvh_hit *hits, uint8_t *occluded, int counting,
+                                 uint64_t *visited, uint64_t *tested);
 #endif
 
 #endif

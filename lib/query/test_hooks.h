@@ -14,13 +14,9 @@ int cbvh_walk_set_kernel(int kernel);
  * built; with the AVX2 walks chosen, the streams run its copy in AVX2's encoding). */
 void cbvh_stream_set_kernel(int which);
 
-/* How many tails run at once: 0 = by the mesh (default: 1 for a mesh whose vertices stay in the caches,
- * struct cbvh_file's vertices_far clear, else CBVH_STREAM_TAILS), 1 = one, else CBVH_STREAM_TAILS. */
-void cbvh_stream_set_tails(int tails);
-
 /* The streams' way (enum cbvh_stream_way of stream.h): 0 = by the mesh and the batch (default,
  * kernel_choice.c's cbvh_stream_way_for), 1 = batched, 2 = interleaved, 3 = by window, 4 = by window with
  * single rays (2 and 3: batched on the binary layout, which has no interleaved walks). */
-void cbvh_stream_set_interleave(int setting);
+void cbvh_stream_set_way(int setting);
 
 #endif

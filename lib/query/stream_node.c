@@ -1,14 +1,15 @@
-/* stream_box.c: the scalar batch node test. */
+/* stream_node.c: the batch node tests, scalar and SSE2 (stream_node_simd.h); kernel_choice.c picks one. */
 #ifdef HAVE_CONFIG_H
 #include "config.h"
 #endif
 
 #include "query/ray_box.h"
 #include "query/stream.h"
+#ifdef CBVH_HAVE_SIMD
+#include "query/stream_node_simd.h"
+#endif
 
-void cbvh_stream_node_scalar(const struct cbvh_stream_batch *restrict batch, const uint16_t *restrict rays,
-                             uint32_t n, const struct cbvh_stream_boxes *restrict boxes,
-                             const struct cbvh_stream_lists *restrict out, uint32_t count[CBVH_STREAM_LANES])
+CBVH_STREAM_NODE_KERNEL(cbvh_stream_node_scalar)
 {
     const float(*p)[CBVH_STREAM_LANES] = boxes->plane;
     for (uint32_t k = 0; k < CBVH_STREAM_LANES; k++)
@@ -28,3 +29,10 @@ void cbvh_stream_node_scalar(const struct cbvh_stream_batch *restrict batch, con
         }
     }
 }
+
+#ifdef CBVH_HAVE_SIMD
+CBVH_STREAM_NODE_KERNEL(cbvh_stream_node_sse2)
+{
+    stream_node_simd(batch, rays, n, boxes, out, count);
+}
+#endif
