@@ -213,32 +213,18 @@ def cook_batch(assets: Sequence[Asset], options: Dict[str, Any], depfiles: bool 
 
 def plan_batches(asset_count: int, worker_count: int, batch_size: Optional[int] = None) -> List[List[int]]:
     """The batches (lists of asset indices, one task each, in the order they are submitted) cook_assets makes
-    of asset_count assets for worker_count workers: batch_size assets each, or by default an 8*worker_count-th
-    of the assets (at most 64: a task lost with a worker costs little) a batch, the batches shrinking towards
-    the end when there are several workers, so that they finish together: each then takes a
-    2*worker_count-th of the assets not yet in a batch, at least 4 or the first size if smaller (and the rest
-    when fewer would be left). A batch takes its assets along a golden-ratio walk of the list (the k-th visited
-    is the one at the fractional part of k times 0.618...), so that every batch samples the whole list evenly
-    and a run of large assets is spread over the batches."""
+    of asset_count assets: at most batch_size assets each, or by default about 8 a worker (so that the workers stay
+    equally busy to the end, and a task lost with a worker costs little) of at most 64 assets. The k-th of n
+    batches takes every n-th asset from the k-th: a run of large assets is spread over the batches, and a
+    list sorted from the costliest down puts the costliest first in every batch and the lightest batches
+    last."""
     if batch_size is not None:
         if not isinstance(batch_size, int) or batch_size < 1:
             raise ValueError("batch_size must be a positive integer, not %r" % (batch_size,))
-    workers = max(worker_count, 1)
-    walk = sorted(range(asset_count), key=lambda k: (k * 0.6180339887498949) % 1.0)
-    largest = min(64, math.ceil(asset_count / (8 * workers)))
-    smallest = min(4, largest)
-    batches, first = [], 0
-    while first < asset_count:
-        left = asset_count - first
-        if batch_size:
-            size = batch_size
-        else:
-            size = min(largest, max(smallest, math.ceil(left / (2 * workers)))) if workers > 1 else largest
-            if left - size < smallest:
-                size = left
-        batches.append(sorted(walk[first:first + size]))
-        first += size
-    return batches
+        count = math.ceil(asset_count / batch_size)
+    else:
+        count = min(asset_count, max(8 * max(worker_count, 1), math.ceil(asset_count / 64)))
+    return [list(range(first, asset_count, count)) for first in range(count)]
 
 
 def cook_assets(assets: Iterable[Asset], client: Any = None, *, retries: int = 2, depfiles: bool = True,
@@ -247,7 +233,7 @@ def cook_assets(assets: Iterable[Asset], client: Any = None, *, retries: int = 2
     """Cooks every asset on the cluster of `client` (a dask.distributed Client, a scheduler address such as
     "tcp://host:8786", or None: a local_cluster() for this call) and returns their results in the assets'
     order. The assets go to the workers in batches, one task each (cook_batch), as plan_batches makes them
-    (batch_size assets a batch, or shrinking towards the end). Options are cook_file's
+    (batch_size assets a batch, or about 8 batches a worker). Options are cook_file's
     (layout, compress_level, scale, material_map ...; depfiles=True writes OUT.d beside each output). A task
     is run again `retries` times when it raises (a file system error on a worker), and by the scheduler when
     its worker dies (up to the scheduler's allowed-failures); the assets of a task that still fails are

@@ -148,22 +148,18 @@ def test_farm_batches_of_any_size_and_paths_a_manifest_cannot_hold(tmp_path):
             farm.cook_assets(assets, client, batch_size=0)
 
 
-def test_batches_cover_every_asset_once_shrink_to_the_end_and_sample_the_whole_list():
+def test_batches_cover_every_asset_once_and_each_samples_the_whole_list():
     for count in list(range(0, 300)) + [452, 5000, 100_000]:
         for workers in (1, 2, 3, 8):
             batches = farm.plan_batches(count, workers)
             assert sorted(k for batch in batches for k in batch) == list(range(count)), (count, workers)
             sizes = [len(batch) for batch in batches]
-            largest = min(64, -(-count // (8 * workers)))  # an 8*workers-th of the assets, rounded up
-            assert sizes[:-1] == sorted(sizes[:-1], reverse=True) and max(sizes[:-1] or [0]) <= largest
-            assert sizes[-1:] <= [largest + 3], (count, workers, sizes)  # the last may take up to 3 left over
-            if workers > 1 and len(sizes) >= 2:  # shrunk to 4 assets (or the first size if smaller) at the end
-                assert sizes[-2] == min(4, largest), (count, workers, sizes)
-            for batch in batches:  # no gap between a batch's assets (around the list) above 3 even spacings
-                gaps = [b - a for a, b in zip(batch, batch[1:])] + [batch[0] + count - batch[-1]]
-                assert batch == sorted(batch) and max(gaps) * len(batch) <= 3 * count, (count, workers, batch)
+            assert len(batches) == min(count, max(8 * workers, -(-count // 64))), (count, workers)
+            assert max(sizes or [0]) <= 64 and max(sizes or [0]) - min(sizes or [0]) <= 1, (count, workers)
+            for batch in batches:  # every len(batches)-th asset
+                assert all(b - a == len(batches) for a, b in zip(batch, batch[1:])), (count, workers, batch)
     for workers in (1, 2):
-        assert [len(b) for b in farm.plan_batches(10, workers, batch_size=4)] == [4, 4, 2]
+        assert [len(b) for b in farm.plan_batches(10, workers, batch_size=4)] == [4, 3, 3]
     with pytest.raises(ValueError, match="batch_size"):
         farm.plan_batches(10, 2, batch_size=0)
 
