@@ -213,11 +213,11 @@ def cook_batch(assets: Sequence[Asset], options: Dict[str, Any], depfiles: bool 
 
 def plan_batches(asset_count: int, worker_count: int, batch_size: Optional[int] = None) -> List[List[int]]:
     """The batches (lists of asset indices, one task each, in the order they are submitted) cook_assets makes
-    of asset_count assets: at most batch_size assets each, or by default about 8 a worker (so that the workers stay
-    equally busy to the end, and a task lost with a worker costs little) of at most 64 assets. The k-th of n
-    batches takes every n-th asset from the k-th: a run of large assets is spread over the batches, and a
-    list sorted from the costliest down puts the costliest first in every batch and the lightest batches
-    last."""
+    of asset_count assets: at most batch_size assets each, or by default about 8 a worker (so that the
+    workers stay equally busy to the end, and a task lost with a worker costs little) of at most 64 assets.
+    The k-th of n batches takes every n-th asset from the k-th: a run of large assets is spread over the
+    batches, and a list sorted from the costliest down puts the costliest first in every batch and the
+    lightest batches last."""
     if batch_size is not None:
         if not isinstance(batch_size, int) or batch_size < 1:
             raise ValueError("batch_size must be a positive integer, not %r" % (batch_size,))
@@ -233,7 +233,7 @@ def cook_assets(assets: Iterable[Asset], client: Any = None, *, retries: int = 2
     """Cooks every asset on the cluster of `client` (a dask.distributed Client, a scheduler address such as
     "tcp://host:8786", or None: a local_cluster() for this call) and returns their results in the assets'
     order. The assets go to the workers in batches, one task each (cook_batch), as plan_batches makes them
-    (batch_size assets a batch, or about 8 batches a worker). Options are cook_file's
+    (at most batch_size assets a batch, or about 8 batches a worker). Options are cook_file's
     (layout, compress_level, scale, material_map ...; depfiles=True writes OUT.d beside each output). A task
     is run again `retries` times when it raises (a file system error on a worker), and by the scheduler when
     its worker dies (up to the scheduler's allowed-failures); the assets of a task that still fails are
