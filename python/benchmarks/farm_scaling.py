@@ -1,7 +1,8 @@
-"""farm_scaling.py: assets per second of cbvh.farm on a LocalCluster of 1, 2 ... worker processes (one
-thread each) over a folder of assets, by default every mesh file of assimp-testmodels, beside the `cbvh cook`
-command's own batch (`cbvh cook --manifest M --jobs N`, no Dask) on the same assets: what the machine allows.
-The cluster's start is not counted. Each run cooks into a folder of its own; the outputs must be identical.
+"""farm_scaling.py: assets per second of cbvh.farm on its local cluster (farm.local_cluster) of 1, 2 ...
+worker processes (one thread each) over a folder of assets, by default every mesh file of assimp-testmodels,
+beside the `cbvh cook` command's own batch (`cbvh cook --manifest M --jobs N`, no Dask) on the same assets:
+what the machine allows. The cluster's start is not counted. Each run cooks into a folder of its own; the
+outputs must be identical.
 
     python python/benchmarks/farm_scaling.py [--folder /usr/share/assimp/models] [--workers 1 2] [--repeats 1]
 """
@@ -12,7 +13,7 @@ import subprocess
 import tempfile
 import time
 
-from distributed import Client, LocalCluster
+from distributed import Client
 
 from cbvh import farm
 from cbvh.cook import cbvh_command
@@ -23,8 +24,7 @@ NOT_MESHES = (".png", ".jpg", ".jpeg", ".bmp", ".tga", ".dds", ".gif", ".tif", "
 
 
 def farm_run(assets, workers: int) -> float:
-    with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None) as cluster, \
-            Client(cluster) as client:
+    with farm.local_cluster(workers) as cluster, Client(cluster) as client:
         client.wait_for_workers(workers)
         start = time.perf_counter()
         farm.cook_assets(assets, client, depfiles=True)

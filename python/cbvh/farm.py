@@ -21,6 +21,36 @@ from typing import Any, Callable, Dict, Iterable, List, Optional, Sequence
 from .cook import CookError, cbvh_command, cook_arguments, cook_file
 
 
+# Dask settings of the local cluster the farm starts (local_cluster), each one used only where the Dask
+# configuration (YAML files, DASK_* variables, dask.config.set) holds Dask's own default, so a user's choice
+# wins. A worker of the farm spends its time waiting on a `cbvh` process; these keep Dask's periodic work in
+# the scheduler, the nannies and the workers from taking CPU from the cooks on the same cores.
+LOCAL_CLUSTER_CONFIG: Dict[str, Any] = {
+    "distributed.worker.profile.enabled": False,  # the statistical profiler: each worker's threads every 10 ms
+    "distributed.admin.tick.interval": "1s",  # each process's event-loop health check (20 ms)
+    "distributed.admin.system-monitor.interval": "5s",  # each process's CPU, memory and I/O record (0.5 s)
+    "distributed.worker.memory.monitor-interval": "1s",  # each worker's and nanny's memory limits (0.1 s)
+    # a worker is sent its next task when it is free (1.1: one waits on each worker), so that at the end no
+    # task waits behind a long one while the other workers are idle
+    "distributed.scheduler.worker-saturation": 1.0,
+}
+
+
+def local_cluster(workers: Optional[int] = None, **kwargs: Any) -> Any:
+    """A dask.distributed LocalCluster for the farm: `workers` worker processes (default: one a core) of one
+    thread each (a cook is a process of its own), no dashboard, LOCAL_CLUSTER_CONFIG for the settings the Dask
+    configuration leaves at their defaults. kwargs go to LocalCluster and override these."""
+    import dask
+    from distributed import LocalCluster
+
+    defaults = dask.config.merge(*dask.config.defaults)
+    chosen = {key: value for key, value in LOCAL_CLUSTER_CONFIG.items()
+              if dask.config.get(key) == dask.config.get(key, config=defaults)}
+    with dask.config.set(chosen):  # read as the scheduler, nannies and workers start (and restart)
+        return LocalCluster(**dict(dict(n_workers=workers, threads_per_worker=1, processes=True,
+                                        dashboard_address=None), **kwargs))
+
+
 @dataclass
 class Asset:
     """An input mesh file and the cbvh file to cook it into (absolute paths)."""
@@ -181,24 +211,29 @@ def cook_batch(assets: Sequence[Asset], options: Dict[str, Any], depfiles: bool 
     return results  # type: ignore[return-value]
 
 
-def batch_count(asset_count: int, worker_count: int, batch_size: Optional[int] = None) -> int:
-    """How many tasks cook_assets makes of asset_count assets: batch_size assets each, or by default about 8
-    tasks a worker (so that the workers stay equally busy to the end, and a task lost with a worker costs
-    little), of at most 64 assets."""
+def plan_batches(asset_count: int, worker_count: int, batch_size: Optional[int] = None) -> List[List[int]]:
+    """The batches (lists of asset indices, one task each, in the order they are submitted) cook_assets makes
+    of asset_count assets: at most batch_size assets each, or by default about 8 a worker (so that the
+    workers stay equally busy to the end, and a task lost with a worker costs little) of at most 64 assets.
+    The k-th of n batches takes every n-th asset from the k-th: a run of large assets is spread over the
+    batches, and a list sorted from the costliest down puts the costliest first in every batch and the
+    lightest batches last."""
     if batch_size is not None:
         if not isinstance(batch_size, int) or batch_size < 1:
             raise ValueError("batch_size must be a positive integer, not %r" % (batch_size,))
-        return math.ceil(asset_count / batch_size)
-    return min(asset_count, max(8 * max(worker_count, 1), math.ceil(asset_count / 64)))
+        count = math.ceil(asset_count / batch_size)
+    else:
+        count = min(asset_count, max(8 * max(worker_count, 1), math.ceil(asset_count / 64)))
+    return [list(range(first, asset_count, count)) for first in range(count)]
 
 
 def cook_assets(assets: Iterable[Asset], client: Any = None, *, retries: int = 2, depfiles: bool = True,
                 batch_size: Optional[int] = None, on_result: Optional[Callable[[AssetResult], None]] = None,
                 **options: Any) -> List[AssetResult]:
-    """Cooks every asset on the cluster of `client` (a dask.distributed Client, or a scheduler address such
-    as "tcp://host:8786") and returns their results in the assets' order. The assets go to the workers in
-    batches, one task each (cook_batch), batch_size assets a batch (default: see batch_count), a batch taking
-    every n-th asset so that a run of large assets is spread over the batches. Options are cook_file's
+    """Cooks every asset on the cluster of `client` (a dask.distributed Client, a scheduler address such as
+    "tcp://host:8786", or None: a local_cluster() for this call) and returns their results in the assets'
+    order. The assets go to the workers in batches, one task each (cook_batch), as plan_batches makes them
+    (at most batch_size assets a batch, or about 8 batches a worker). Options are cook_file's
     (layout, compress_level, scale, material_map ...; depfiles=True writes OUT.d beside each output). A task
     is run again `retries` times when it raises (a file system error on a worker), and by the scheduler when
     its worker dies (up to the scheduler's allowed-failures); the assets of a task that still fails are
@@ -208,12 +243,15 @@ def cook_assets(assets: Iterable[Asset], client: Any = None, *, retries: int = 2
     if "depfile" in options:
         raise ValueError("cook_assets writes each asset's depfile to OUT.d with depfiles=True, not depfile=")
     assets = list(assets)
-    own_client = None
-    if client is None or isinstance(client, str):
-        client = own_client = Client(client) if client else Client()
+    own_client = own_cluster = None
     try:
-        count = batch_count(len(assets), len(client.scheduler_info().get("workers", {})), batch_size)
-        batches = [list(range(first, len(assets), count)) for first in range(count)]
+        if client is None:
+            own_cluster = local_cluster()
+            client = own_client = Client(own_cluster)
+            client.wait_for_workers(len(own_cluster.workers))  # the batches are made for the workers there are
+        elif isinstance(client, str):
+            client = own_client = Client(client)
+        batches = plan_batches(len(assets), len(client.scheduler_info().get("workers", {})), batch_size)
         futures = client.map(cook_batch, [[assets[k] for k in batch] for batch in batches], options=options,
                              depfiles=depfiles, retries=retries, pure=False)
         index = {future.key: b for b, future in enumerate(futures)}
@@ -233,6 +271,8 @@ def cook_assets(assets: Iterable[Asset], client: Any = None, *, retries: int = 2
     finally:
         if own_client is not None:
             own_client.close()
+        if own_cluster is not None:
+            own_cluster.close()
 
 
 def main(argv: Optional[Sequence[str]] = None) -> int:
@@ -257,8 +297,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     if args.scheduler:
         client: Any = args.scheduler
     else:
-        from distributed import Client, LocalCluster
-        cluster = LocalCluster(n_workers=args.workers, threads_per_worker=1, processes=True)
+        from distributed import Client
+        cluster = local_cluster(args.workers)
         client = Client(cluster)
         client.wait_for_workers(len(cluster.workers))  # the batches are made for the workers there are
     start = time.perf_counter()

@@ -48,7 +48,7 @@ def test_farm_cooks_as_the_command_and_survives_a_killed_worker(tmp_path):
     assets = farm.assets_from_manifest(str(manifest), str(tmp_path / "farm"))
     assert [a.input for a in assets] == inputs
 
-    cluster = distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None)
+    cluster = farm.local_cluster(2)
     client = distributed.Client(cluster)
     try:
         before = client.run(os.getpid)
@@ -90,7 +90,7 @@ def test_farm_depfiles_are_the_commands(tmp_path):
     folder = os.path.join(MODELS, "OBJ")
     inputs = sorted(os.path.join(folder, p) for p in os.listdir(folder) if p.endswith(".obj"))[:16]
     assets = [farm.Asset(p, str(tmp_path / "farm" / ("%d.cbvh" % k))) for k, p in enumerate(inputs)]
-    with distributed.Client(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as client:
+    with farm.local_cluster(2) as cluster, distributed.Client(cluster) as client:
         results = farm.cook_assets(assets, client, compress_level=3)
     side_files = 0
     for asset, result in zip(assets, results):
@@ -127,7 +127,7 @@ def test_farm_batches_of_any_size_and_paths_a_manifest_cannot_hold(tmp_path):
                                 stderr=subprocess.DEVNULL).returncode
         expected[k] = open(out, "rb").read() if status == 0 else None
     assert sum(v is not None for v in expected.values()) >= 4 and expected[len(inputs) - 1] is not None
-    with distributed.Client(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as client:
+    with farm.local_cluster(2) as cluster, distributed.Client(cluster) as client:
         for batch_size in (1, 3, None):
             out = tmp_path / ("farm%s" % batch_size)
             assets = [farm.Asset(p, str(out / ("%d.cbvh" % k))) for k, p in enumerate(inputs)]
@@ -146,6 +146,38 @@ def test_farm_batches_of_any_size_and_paths_a_manifest_cannot_hold(tmp_path):
         assert not any(os.path.exists(a.output) or os.path.exists(a.output + ".d") for a in assets)
         with pytest.raises(ValueError, match="batch_size"):
             farm.cook_assets(assets, client, batch_size=0)
+
+
+def test_batches_cover_every_asset_once_and_each_samples_the_whole_list():
+    for count in list(range(0, 300)) + [452, 5000, 100_000]:
+        for workers in (1, 2, 3, 8):
+            batches = farm.plan_batches(count, workers)
+            assert sorted(k for batch in batches for k in batch) == list(range(count)), (count, workers)
+            sizes = [len(batch) for batch in batches]
+            assert len(batches) == min(count, max(8 * workers, -(-count // 64))), (count, workers)
+            assert max(sizes or [0]) <= 64 and max(sizes or [0]) - min(sizes or [0]) <= 1, (count, workers)
+            for batch in batches:  # every len(batches)-th asset
+                assert all(b - a == len(batches) for a, b in zip(batch, batch[1:])), (count, workers, batch)
+    for workers in (1, 2):
+        assert [len(b) for b in farm.plan_batches(10, workers, batch_size=4)] == [4, 3, 3]
+    with pytest.raises(ValueError, match="batch_size"):
+        farm.plan_batches(10, 2, batch_size=0)
+
+
+def test_local_cluster_settings_unless_the_user_chose_them():
+    """The farm's Dask settings reach the scheduler and the worker processes; a setting the user's Dask
+    configuration holds (here the event-loop check's interval) is kept."""
+    import dask
+    with dask.config.set({"distributed.admin.tick.interval": "300ms"}):
+        cluster = farm.local_cluster(1)
+    with cluster, distributed.Client(cluster) as client:
+        on_worker = client.run(lambda: [dask.config.get(key) for key in farm.LOCAL_CLUSTER_CONFIG])
+        saturation = client.run_on_scheduler(lambda dask_scheduler: dask_scheduler.WORKER_SATURATION)
+    expected = [value for value in farm.LOCAL_CLUSTER_CONFIG.values()]
+    expected[list(farm.LOCAL_CLUSTER_CONFIG).index("distributed.admin.tick.interval")] = "300ms"
+    assert list(on_worker.values()) == [expected]
+    assert saturation == farm.LOCAL_CLUSTER_CONFIG["distributed.scheduler.worker-saturation"] != \
+        dask.config.get("distributed.scheduler.worker-saturation")
 
 
 def test_manifest_and_folder_naming(tmp_path):
