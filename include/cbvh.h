@@ -597,9 +597,9 @@ CBVH_API cbvh_result cbvh_occluded_with(const cbvh_file *file, const cbvh_ray *r
  * leaf each in turn, on a mesh too large for the caches, so that their memory fetches overlap), unless the
  * batch is large for the mesh. Each ray costs about one single-ray walk;
  * coherent rays share node fetches. Uses no heap memory: batches of 24 rays and the walks'
- * stacks on the call's stack, about 20 KiB (x86-64); the _scratch forms below keep them in the caller's
- * memory instead (about 7 KiB of stack). cbvh_raycast and cbvh_occluded use about 4 KiB. Safe to call
- * from any number of threads on one file. */
+ * stacks on the call's stack; the _scratch forms below keep them in the caller's memory instead, and take
+ * less of the stack (docs/PERFORMANCE.md gives each form's stack use, to size a thread's stack). Safe to
+ * call from any number of threads on one file. */
 CBVH_API void cbvh_raycast_stream(const cbvh_file *file, const cbvh_ray *rays, size_t count, cbvh_hit *hits,
                                   cbvh_query_stats *stats);
 CBVH_API void cbvh_occluded_stream(const cbvh_file *file, const cbvh_ray *rays, size_t count,

@@ -430,13 +430,8 @@ static int keep_facing(const double *t, uint32_t id, const void *ctx)
 {
     (void)id;
     const float *delta = ctx;
-    double e1[3], e2[3];
-    for (int a = 0; a < 3; a++) {
-        e1[a] = t[3 + a] - t[a];
-        e2[a] = t[6 + a] - t[a];
-    }
-    const double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
-                         e1[0] * e2[1] - e1[1] * e2[0]};
+    double n[3];
+    ref_triangle_normal(t, n);
     return n[0] * delta[0] + n[1] * delta[1] + n[2] * delta[2] <= 0.0;
 }
 

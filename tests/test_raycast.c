@@ -1339,14 +1339,8 @@ static void test_leaf_range_filter(void **state)
             }
             if (i % 4 == 0)
                 a = 1e-6 * scene_rand_unit(&st); /* next to the edge v0-v2 */
-            double e1[3], e2[3], n[3], d[3];
-            for (int x = 0; x < 3; x++) {
-                e1[x] = v[3 + x] - v[x];
-                e2[x] = v[6 + x] - v[x];
-            }
-            n[0] = e1[1] * e2[2] - e1[2] * e2[1];
-            n[1] = e1[2] * e2[0] - e1[0] * e2[2];
-            n[2] = e1[0] * e2[1] - e1[1] * e2[0];
+            double n[3], d[3];
+            ref_triangle_normal(v, n);
             const double nl = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
             const double th = PI * scene_rand_unit(&st), ph = 2.0 * PI * scene_rand_unit(&st);
             d[0] = sin(th) * cos(ph);
@@ -1360,7 +1354,7 @@ static void test_leaf_range_filter(void **state)
             }
             cbvh_ray ray = {{0}, 0.0f, {(float)d[0], (float)d[1], (float)d[2]}, INFINITY};
             for (int x = 0; x < 3; x++)
-                ray.org[x] = (float)(v[x] + a * e1[x] + b * e2[x]);
+                ray.org[x] = (float)(v[x] + a * (v[3 + x] - v[x]) + b * (v[6 + x] - v[x]));
             if (!(ray.dir[0] != 0.0f || ray.dir[1] != 0.0f || ray.dir[2] != 0.0f))
                 continue;
             compare_scalar_leaves(fx.file, &ray, &compared);

@@ -256,10 +256,9 @@ static void test_start_overlap_and_no_motion(void **state)
     assert_true(fabsf(h.t - 0.5f) < 1e-6f);
     float v0[3], v1[3], v2[3];
     assert_true(cbvh_file_get_triangle(fx.file, h.tri, v0, v1, v2));
-    const double e1[3] = {v1[0] - v0[0], v1[1] - v0[1], v1[2] - v0[2]},
-                 e2[3] = {v2[0] - v0[0], v2[1] - v0[1], v2[2] - v0[2]};
-    double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
-                   e1[0] * e2[1] - e1[1] * e2[0]};
+    const double tri[9] = {v0[0], v0[1], v0[2], v1[0], v1[1], v1[2], v2[0], v2[1], v2[2]};
+    double n[3];
+    ref_triangle_normal(tri, n);
     const double len = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
     const double along = fabs(n[0] * h.normal[0] + n[1] * h.normal[1] + n[2] * h.normal[2]) / len;
     assert_true(along > 0.999999 && h.normal[2] >= 0.0f); /* the face normal, not pointing along the motion */
@@ -490,14 +489,8 @@ static void test_grazing_capsules(void **state)
             continue;
         }
         const double *v = fx.tris.v;
-        double e1[3], e2[3], n[3];
-        for (int a = 0; a < 3; a++) {
-            e1[a] = v[3 + a] - v[a];
-            e2[a] = v[6 + a] - v[a];
-        }
-        n[0] = e1[1] * e2[2] - e1[2] * e2[1];
-        n[1] = e1[2] * e2[0] - e1[0] * e2[2];
-        n[2] = e1[0] * e2[1] - e1[1] * e2[0];
+        double n[3];
+        ref_triangle_normal(v, n);
         const int flat = dot3d(n, n) == 0.0;
         if (!flat)
             unit3(n);
@@ -509,7 +502,9 @@ static void test_grazing_capsules(void **state)
             const double f = rnd(&st, 0.0, 1.0), g = rnd(&st, 0.0, 1.0 - f);
             for (int a = 0; a < 3; a++) {
                 edge[a] = pn[a] - p[a];
-                q[a] = feature == 0 ? p[a] : feature == 1 ? p[a] + f * edge[a] : v[a] + f * e1[a] + g * e2[a];
+                q[a] = feature == 0   ? p[a]
+                       : feature == 1 ? p[a] + f * edge[a]
+                                      : v[a] + f * (v[3 + a] - v[a]) + g * (v[6 + a] - v[a]);
             }
             /* m: a random direction, until the triangle lies behind it (the face: +-n) */
             int tries = 0;

@@ -146,15 +146,21 @@ int ref_ray_valid(const cbvh_ray *ray)
     return ray->tmin >= 0 && ray->tmin <= ray->tmax;
 }
 
+void ref_triangle_normal(const double tri[9], double n[3])
+{
+    double e1[3], e2[3];
+    sub3(tri + 3, tri, e1);
+    sub3(tri + 6, tri, e2);
+    cross3(e1, e2, n);
+}
+
 int ref_ray_triangle(const double tri[9], const cbvh_ray *ray, double *t, double *u, double *v,
                      double *margin)
 {
     const double o[3] = {ray->org[0], ray->org[1], ray->org[2]},
                  d[3] = {ray->dir[0], ray->dir[1], ray->dir[2]};
-    double e1[3], e2[3], n[3], ao[3];
-    sub3(tri + 3, tri, e1);
-    sub3(tri + 6, tri, e2);
-    cross3(e1, e2, n);
+    double n[3], ao[3];
+    ref_triangle_normal(tri, n);
     const double nn = dot3(n, n), denom = dot3(n, d);
     if (nn == 0.0 || denom == 0.0)
         return 0;
@@ -234,10 +240,8 @@ static double point_segment_dist2(const double *p, const double *a, const double
 
 double ref_point_triangle_dist2(const double tri[9], const double p[3])
 {
-    double e1[3], e2[3], n[3], ap[3];
-    sub3(tri + 3, tri, e1);
-    sub3(tri + 6, tri, e2);
-    cross3(e1, e2, n);
+    double n[3], ap[3];
+    ref_triangle_normal(tri, n);
     const double nn = dot3(n, n);
     if (nn > 0.0) {
         sub3(p, tri, ap);

@@ -60,6 +60,10 @@ cbvh_ray ref_make_ray(const ref_fixture *fx, uint64_t *st, int kind);
 /* The validity rule of cbvh.h, restated: 1 when every query must treat the ray as a ray. */
 int ref_ray_valid(const cbvh_ray *ray);
 
+/* The normal of triangle tri (three xyz vertices) as wound, not normalized: (v1 - v0) x (v2 - v0), in
+ * double; zero for a degenerate triangle. */
+void ref_triangle_normal(const double tri[9], double n[3]);
+
 /* Ray against one triangle's plane: 1 when the plane is crossed at t in
  * [tmin, tmax] (rays parallel to the plane never are), with t, the
  * barycentrics u, v of the crossing point and its margin: the distance across
