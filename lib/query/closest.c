@@ -15,17 +15,9 @@ static cbvh_v3 closest_point_segment(cbvh_v3 p, cbvh_v3 a, cbvh_v3 b)
     return len2 > 0.0 ? v3_madd(a, ab, clamp01(v3_dot(v3_sub(p, a), ab) / len2)) : a;
 }
 
-/* Inside the triangle when the barycentrics of p's projection, in the
- * triangle's frame (triangle_frame.h), are in range: then that point, built
- * from them so it lies on the triangle up to rounding. Otherwise the
- * nearest point lies on the boundary: the nearest of the three edges'
- * clamped projections. Every quantity has errors relative to the lengths
- * involved, not to the area: Ericson's Voronoi-region form (differences of
- * products of dot products, i.e. Gram determinants ~ area^2) loses every
- * digit on a long sliver (finding F4: a sphere 2 from a sliver's long edge
- * of length 3.7e9 was reported clear of it), and inside tests against the
- * edges of a needle (two vertices 1e-28 apart, the third 5e16 away) accepted
- * a projection 2.4e16 beyond its tip (finding F5). */
+/* The projection when its barycentrics in the triangle's frame are in range, else the nearest of the three
+ * edges' clamped projections: errors relative to the lengths, not the area, so slivers and needles keep
+ * their precision (unlike Ericson's Voronoi-region form). */
 cbvh_v3 cbvh_closest_point_triangle(cbvh_v3 p, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c)
 {
     const cbvh_v3 v[3] = {a, b, c};
@@ -64,9 +56,7 @@ double cbvh_closest_segments(cbvh_v3 p0, cbvh_v3 p1, cbvh_v3 q0, cbvh_v3 q1, cbv
             t = 0.0;
             s = clamp01(-c / a);
         } else {
-            /* Ericson's a e - b^2 and b f - c e, written as |d1 x d2|^2 and
-             * (d1 x d2).(d2 x r): the same values without the cancellation
-             * that loses every digit for long, nearly parallel segments. */
+            /* Ericson's a e - b^2 and b f - c e as |d1 x d2|^2 and (d1 x d2).(d2 x r): no cancellation */
             const double b = v3_dot(d1, d2);
             const cbvh_v3 n = v3_cross(d1, d2);
             const double denom = v3_len2(n);

@@ -1,7 +1,5 @@
-/* kernel_choice.c: which kernels and ways the queries take: the wide layout's walk kernel by the build and
- * the CPU, the streams' node kernel and way by the build, the mesh and the batch. Built twice: into
- * the library, and with CBVH_TEST_HOOKS into lib/libcbvh_test_hooks.la, which adds the settings of
- * test_hooks.h so that the tests run every kernel and way; the library has no such settings. */
+/* kernel_choice.c: which walk kernel and stream way the queries take. Built twice: into the library, and
+ * with CBVH_TEST_HOOKS (test_hooks.h's settings, so the tests run every kernel and way) for the tests. */
 #ifdef HAVE_CONFIG_H
 #include "config.h"
 #endif
@@ -87,10 +85,7 @@ enum cbvh_stream_way cbvh_stream_way_for(const struct cbvh_file *f, uint32_t bat
     }
     if (f->vertices_far) /* interleaved walks overlap the misses of incoherent rays (wide layout) */
         return wide ? CBVH_STREAM_BY_WINDOW : CBVH_STREAM_BATCHED;
-    /* A mesh in the caches has no misses to overlap. Its incoherent rays share a batch's node visits only
-     * when the batch is large for the mesh (at least CBVH_STREAM_SHARED_TRIANGLES_PER_RAY triangles a ray on
-     * the wide layout, and more than the stack's batch): otherwise they walk one at a time, which is then
-     * faster (docs/PERFORMANCE.md). */
+    /* a mesh in the caches batches incoherent rays only when the batch is large for it */
     if (batch_capacity <= CBVH_STREAM_STACK_BATCH ||
         (wide && f->info.triangle_count / CBVH_STREAM_SHARED_TRIANGLES_PER_RAY > batch_capacity))
         return CBVH_STREAM_BY_WINDOW_SINGLE;

@@ -5,9 +5,7 @@
 #ifdef CBVH_HAVE_SIMD
 #include <immintrin.h>
 
-/* The filter (leaf.h) is written once on these names; a translation unit compiled with AVX2 (the walks
- * of raycast_walks_avx2.c, chosen at run time) gets eight lanes, every other one four. Comparisons are
- * ordered, as SSE's CMPLTPS and friends: false when either operand is NaN. */
+/* Comparisons are ordered, as SSE's CMPLTPS: false when either operand is NaN. */
 #if defined(__AVX2__)
 #define CBVH_LANES 8u
 typedef __m256 cbvh_lanes;

@@ -10,8 +10,7 @@
 #include "query/ray_setup.h"
 #include "query/ray_triangle.h"
 
-/* The lowest set bit of a non-empty 4-bit mask, as a slot or lane number: 1, 2, 4, 8 -> 0, 1, 2, 3 (the
- * walks' child slots and the leaves' filtered lanes). */
+/* The lowest set bit of a non-empty 4-bit mask as a slot or lane number. */
 static inline uint32_t cbvh_lowest_lane(uint32_t mask4)
 {
     const uint32_t low = mask4 & (0u - mask4);
@@ -24,19 +23,15 @@ struct cbvh_best_hit {
     float t, u, v;
 };
 
-/* The tie rule every ray path shares: a hit replaces the best one when it is
- * nearer, or exactly as near with a lower cooked index. It makes the result
- * independent of the order in which nodes are visited (sorted, stackless,
- * distance, streams), provided no path culls a box holding a hit at t <= tmax. */
+/* The tie rule every ray path shares, which makes the answer independent of the visit order: nearer, or
+ * exactly as near with a lower cooked index. */
 static inline int cbvh_hit_better(float t, uint32_t tri, float best_t, uint32_t best_tri)
 {
     return t < best_t || (t == best_t && tri < best_tri);
 }
 
-/* The culling and hit filter of a query with options (raycast.c fills it in). check says what becomes of
- * cooked triangle k, which the ray hits at t (the kernels' t) with barycentrics u, v: a
- * cbvh_filter_result. It is called through the pointer, so the kernels, which tools and tests also
- * compile, name no library function. */
+/* The culling and hit filter of a query with options (raycast.c fills it in): check returns the
+ * cbvh_filter_result for cooked triangle k hit at the kernels' t with barycentrics u, v. */
 struct cbvh_hit_gate {
     int (*check)(const struct cbvh_hit_gate *gate, const struct cbvh_file *f, uint32_t k, float t, float u,
                  float v);
@@ -49,10 +44,8 @@ struct cbvh_hit_gate {
     double rotation[3][3];
 };
 
-/* Triangle k, hit at t in the ray's current range: any hit: 1 (the walk stops) unless the gate rejects it;
- * closest hit: it becomes the best when nearer than the best so far (cbvh_hit_better) and the gate, when
- * there is one, does not reject it; returns 1 when the gate says to stop there. The gate is asked only
- * about hits that would count, so a plain query pays one NULL test per hit. */
+/* Triangle k, hit at t in the ray's range: any hit: 1 (the walk stops) unless the gate rejects it; closest
+ * hit: the best when better (cbvh_hit_better) and not rejected; 1 when the gate says stop. */
 CBVH_KERNEL int leaf_take(const struct cbvh_file *restrict f, const struct cbvh_hit_gate *gate, uint32_t k,
                           float t, float u, float v, const int any, float *restrict best_t,
                           struct cbvh_best_hit *restrict best)
@@ -64,8 +57,7 @@ CBVH_KERNEL int leaf_take(const struct cbvh_file *restrict f, const struct cbvh_
         return 0;
     if (any)
         return 1;
-    /* the answer reports k's original id: on a large mesh its REMAP entry is likely a cache miss, which
-     * the rest of the walk can hide */
+    /* the answer reads k's REMAP entry: requested now, while the walk goes on */
     if (f->remap)
         CBVH_PREFETCH(cbvh_remap_entry(f, k));
     *best_t = t;
@@ -76,10 +68,7 @@ CBVH_KERNEL int leaf_take(const struct cbvh_file *restrict f, const struct cbvh_
     return verdict == CBVH_FILTER_STOP;
 }
 
-/* Triangle k's vertex indices and positions (p[v]: vertex v) for encodings that are compile-time
- * constants in the specialised leaf loops below (the switch then folds away), or run-time values in the
- * generic one. An array of rows, not three output pointers: the walks inline this, and an array of
- * pointers to the caller's locals was built in every walk's prologue. */
+/* Triangle k's vertex positions (p[v]: vertex v) for the encodings tri_enc and vert_enc. */
 CBVH_KERNEL void leaf_triangle(const void *restrict tris, const int tri_enc, const void *restrict verts,
                                const int vert_enc, const float *restrict grid_origin,
                                const float *restrict grid_scale, uint32_t k, float p[3][3])
@@ -101,9 +90,7 @@ CBVH_KERNEL void leaf_triangle(const void *restrict tris, const int tri_enc, con
 }
 
 #ifdef CBVH_HAVE_SIMD
-/* Vertex i as (any, x, y, z): for floats one 16-byte load ending with the vertex's 12 bytes, so starting 4
- * bytes before them, which every placed section has readable (CBVH_SECTION_LEAD) and never past them; or
- * dequantized. */
+/* Vertex i as (any, x, y, z): floats by one 16-byte load from 4 bytes before them (CBVH_SECTION_LEAD). */
 CBVH_KERNEL __m128 leaf_vertex4(const void *restrict verts, const int vert_enc,
                                 const float *restrict grid_origin, const float *restrict grid_scale,
                                 uint32_t i)
@@ -116,9 +103,7 @@ CBVH_KERNEL __m128 leaf_vertex4(const void *restrict verts, const int vert_enc,
                        cbvh_dequantize(q[2], grid_origin[2], grid_scale[2]));
 }
 
-/* Four triangles gathered for the SIMD filter, a lane per triangle: c[v][a][j] is axis a of vertex v of
- * lane j's triangle. Floats rather than vectors, so that the exact test of a lane the filter keeps reads
- * its vertices back as they are (leaf_group_vertices) instead of decoding the triangle again. */
+/* Four triangles gathered for the SIMD filter: c[v][a][j] is axis a of vertex v of lane j's triangle. */
 struct leaf_quad {
     _Alignas(16) float c[3][3][4];
 };
@@ -160,17 +145,12 @@ CBVH_KERNEL void leaf_gather4(const void *restrict tris, const int tri_enc, cons
 }
 
 #if defined(__AVX2__)
-/* The LOCAL8 indices (layout/triangle_encodings.h: blocks of 8 triangles, a u32 base and 3 offset bytes a
- * triangle) of eight
- * triangles from k at once, by byte shuffles. Triangle k + j sits at slot r + j (r = k % 8), past slot 7 in
- * the next block, whose 4-byte base then lies between: its offset bytes are at 4 + 3 (r + j) + v from the
- * block, 4 more past slot 7. Two 16-byte windows hold them all, `src` bytes 4 + 3 r on in its low half
- * (lanes 0-3) and 12 later in its high half (lanes 4-7); window entry r gives, for each vertex v, the
- * shuffle moving each lane's byte into the low byte of the lane (0x80: zero), and `next`, all ones in the
- * lanes that take the next block's base. The windows reach byte 52 of the two blocks' 56: the caller
- * makes sure the next block exists (leaf_local8_window_fits). Lanes past the file's triangles, or past a
- * leaf's, decode other bytes: every index is clamped below the vertex count, so that each lane's vertex
- * load stays in the array, and the caller masks those lanes. */
+/* The LOCAL8 indices (layout/triangle_encodings.h) of eight triangles from k at once, by byte shuffles:
+ * triangle k + j's offset bytes are at 4 + 3 (r + j) + v from its block (r = k % 8), 4 more past slot 7,
+ * in the next block. Two 16-byte windows hold them (lanes 0-3 and 4-7); entry r has, per vertex v, the
+ * shuffle moving each lane's byte into place, and `next`: the lanes that take the next block's base. The
+ * caller checks that block exists (leaf_local8_window_fits) and masks lanes past the leaf, whose indices
+ * are clamped below the vertex count. */
 _Static_assert(CBVH_LOCAL8_BLOCK == 8u && CBVH_LOCAL8_TRIANGLE_BYTES == 3u && CBVH_LOCAL8_OFFSETS_AT == 4u,
                "the windows below are laid out for 8 triangles of 3 offset bytes after a 4-byte base");
 #define L8W_NEXT(r, j) ((r) + (j) >= CBVH_LOCAL8_BLOCK)
@@ -211,7 +191,7 @@ static inline int leaf_local8_window_fits(uint32_t triangles, uint32_t k)
     return k / CBVH_LOCAL8_BLOCK + 1u < cbvh_local8_blocks(triangles);
 }
 
-/* idx[v], lane j: vertex v of triangle k + j (see above); last_vertex: the vertex count - 1 in each lane. */
+/* idx[v], lane j: vertex v of triangle k + j; last_vertex: the vertex count - 1 in each lane. */
 CBVH_KERNEL void leaf_local8_indices8(const void *restrict tris, uint32_t k, __m256i last_vertex,
                                       __m256i idx[3])
 {
@@ -244,19 +224,15 @@ CBVH_KERNEL void leaf_group(uint32_t n, uint32_t lane[4], uint32_t *kept)
     *kept = (1u << n) - 1u;
 }
 
-/* The groups of four in which a leaf's cooked triangles [first, end) are tested: group k (from
- * leaf_groups_begin, stepping by 4 while k < end) holds triangles k + j in its lanes j of *mask. A file with
- * expanded triangles (cbvh_file_expand_triangles) has them stored four by four from triangle 0, read in
- * place: k is a multiple of 4 and the lanes outside the leaf are masked. Otherwise the groups start at
- * `first` and are gathered into `scratch`. */
-
+/* Where a leaf's groups start: expanded triangles (cbvh_file_expand_triangles) are read in place, four by
+ * four from triangle 0, the lanes outside the leaf masked; else gathered from `first`. */
 static inline uint32_t leaf_groups_begin(const struct leaf_quad *quads, uint32_t first)
 {
     return quads ? first & ~3u : first;
 }
 
-/* Group k of a leaf [first, end) (see above): quads is the file's expanded triangles or NULL; the other
- * arguments are leaf_gather4's, read once per leaf by the caller. */
+/* Group k of a leaf [first, end), triangles k + j in lanes j of *mask: quads is the file's expanded
+ * triangles or NULL (gathered into scratch). */
 CBVH_KERNEL const struct leaf_quad *
 leaf_group_load(const struct leaf_quad *restrict quads, const void *restrict tris, const int tri_enc,
                 const void *restrict verts, const int vert_enc, const float *restrict grid_origin,
@@ -287,19 +263,15 @@ struct leaf_group {
 #define CBVH_LEAF_GROUPS ((CBVH_MAX_LEAF_SIZE + 3u + CBVH_LANES - 1u) / CBVH_LANES)
 
 #if defined(__AVX2__)
-/* Eight lanes of triangle vertices, a corner v at a time: lane j's vertex idx[v] lane j (lanes 4-7 only
- * when `both`: else lanes 0-3 again), as rows axis[v][a] (lane j: axis a).
- * The vertex rows (any, x, y, z) are loaded in pairs, lane j in the low 128 bits and lane j + 4 in the
- * high, so one 4 x 4 transpose per half (four unpacks, three shuffles) serves eight lanes. With `permute`
- * (a constant at each call), each row is first permuted by the ray's `order` (VPERMILPS) to (any, x_kx,
- * y_ky, z_kz): the rows come out in the ray's sheared order. */
+/* Eight lanes of triangle vertices as rows axis[v][a] (lane j: axis a of vertex idx[v] lane j; lanes 4-7
+ * only when `both`), by one 4 x 4 transpose per 128-bit half. With `permute`, each row is first permuted by
+ * `order` so the rows come out in the ray's sheared order. */
 CBVH_KERNEL void leaf_gather8_axes(const void *restrict verts, const __m256i idx[3], const int both,
                                    const int permute, __m256i order, __m256 axis[3][3])
 {
     CBVH_UNROLL(3)
     for (uint32_t v = 0; v < 3; v++) {
-        /* each lane's float offset, 3 i (< 2^32: a wide file holds at most 2^28 triangles and 3 vertices
-         * a triangle), read back as scalars to index the loads */
+        /* each lane's float offset, 3 i (< 2^32), read back to index the loads */
         const __m256i i = idx[v];
         _Alignas(32) uint32_t at[8];
         _mm256_store_si256((__m256i *)(void *)at, _mm256_add_epi32(i, _mm256_add_epi32(i, i)));
@@ -322,11 +294,8 @@ CBVH_KERNEL void leaf_gather8_axes(const void *restrict verts, const __m256i idx
 }
 #endif
 
-/* Group k of a leaf [first, end) in CBVH_LANES lanes, k stepping by CBVH_LANES from leaf_groups_begin:
- * leaf_group_load on each quad of it (scratch: one quad each), the quads past the leaf's end not read
- * (the first stands in for them, its lanes masked). With AVX2, the usual encodings (LOCAL8 triangles,
- * float vertices) but near the section's end gather the eight lanes at once (leaf_local8_indices8,
- * leaf_gather8_axes), lanes past the leaf holding other triangles, masked. */
+/* Group k of a leaf [first, end) in CBVH_LANES lanes: leaf_group_load on each quad (the first stands in for
+ * those past the end, masked); with AVX2, LOCAL8 and float vertices gathered eight at once. */
 CBVH_KERNEL void leaf_group_lanes(const struct cbvh_file *restrict f, const struct leaf_quad *restrict quads,
                                   const int tri_enc, const int vert_enc, const float *restrict grid_origin,
                                   const float *restrict grid_scale, uint32_t first, uint32_t end, uint32_t k,
@@ -369,26 +338,15 @@ CBVH_KERNEL void leaf_group_lanes(const struct cbvh_file *restrict f, const stru
     }
 }
 
-/* Of the lanes of a group, those whose hit t, were the exact test (cbvh_ray_triangle_decide) to
- * accept them, would be outside [tmin, tmax] for sure: the bits of `candidates` (lanes whose float edge
- * functions u, v, w are finite, of one sign, with sum det) that it can rule out. px, py, pz: the sheared
- * vertices (the ray along +z, pz the kz coordinate relative to the origin) as leaf_reject_rows has them.
+/* Of `candidates` (lanes whose float edge functions u, v, w are finite, of one sign, sum det), the bits
+ * whose t the exact test (cbvh_ray_triangle_decide) would find outside [tmin, tmax] for sure; *within: those
+ * it would find inside. px, py, pz: the sheared vertices as leaf_reject_rows has them.
  *
- * The exact test's t is the double plane t clamped into the span of the vertices' projections on the
- * ray and into the line's interval in the triangle's bounding box, then rounded to float. Here t is
- * Woop's interpolation (u z0 + v z1 + w z2) / det / dir[kz] in float. With R the largest |sheared x or
- * y| of the lane's vertices, Zspan and Zabs the span and the largest |z|, first order in the float
- * rounding unit 2^-24: the sheared coordinates are off by at most 2^-23 (R + 2 Zabs), each edge function
- * by at most E = 2^-20 R (R + Zabs). A lane whose |u|, |v|, |w| all exceed 4 E therefore has exact edge
- * functions of the same signs: the line crosses the triangle's plane strictly inside the triangle, at a
- * t* inside both clamping intervals, so the exact test's t is t* up to its double rounding. The float
- * barycentrics u / det... are then off by at most 6 E / |det| together, which moves the interpolated z by
- * half that times Zspan; the rounding of the z values, of the interpolation and of the division by
- * dir[kz] add 9 2^-24 Zabs. The margin is four times that bound, in t (times 1/|dir[kz]|), plus FLT_MIN
- * (a t just below 0 that rounds to -0). A lane nearer an edge, or with a non-finite estimate, is left to
- * the exact test. Returns the ruled-out bits; *within receives those of `candidates` whose t the exact
- * test would find inside [tmin, tmax] for sure (the same bound: t* is then more than 3/4 of the margin
- * inside the range, and so is its rounding to float), the lanes it would accept. */
+ * t here is Woop's float interpolation (u z0 + v z1 + w z2) / det / dir[kz]. With R the largest |sheared x
+ * or y|, Zabs the largest |z| and u = 2^-24, each edge function is off by at most E = 2^-20 R (R + Zabs)
+ * (first order), so a lane with |u|, |v|, |w| > 4 E crosses strictly inside the triangle, where the exact t
+ * is the plane's t* (rounded); the float t is off from t* by 3 E Zspan / |det| + 9 u Zabs (times
+ * 1/|dir[kz]|). The margin is four times that plus FLT_MIN; every other lane is left to the exact test. */
 CBVH_KERNEL uint32_t leaf_outside_lanes(const struct cbvh_ray_shear *restrict s, const cbvh_lanes px[3],
                                         const cbvh_lanes py[3], const cbvh_lanes pz[3], cbvh_lanes u,
                                         cbvh_lanes v, cbvh_lanes w, cbvh_lanes det, uint32_t candidates,
@@ -422,8 +380,7 @@ CBVH_KERNEL uint32_t leaf_outside_lanes(const struct cbvh_ray_shear *restrict s,
     return (uint32_t)lanes_bits(lanes_and(inside, lanes_or(below, above))) & candidates;
 }
 
-/* A group's vertices as the filter reads them: lane j of c[v][a] is axis a of vertex v of the group's
- * triangle j in the ray's sheared order (a = 0, 1, 2: the shear's kx, ky, kz). */
+/* A group's vertices for the filter: lane j of c[v][a] is axis (kx, ky, kz)[a] of vertex v of triangle j. */
 struct leaf_rows {
     cbvh_lanes c[3][3];
 };
@@ -440,18 +397,11 @@ CBVH_KERNEL void leaf_group_rows(const struct cbvh_ray_shear *restrict s, const 
         rows->c[c / 3][c % 3] = lanes_load_halves(lo->c[c / 3][axis[c % 3]], hi->c[c / 3][axis[c % 3]]);
 }
 
-/* The first test of cbvh_ray_triangle (ray_triangle.h) on the CBVH_LANES triangles of rows at once, lane for
- * lane the same float operations in the same order (the build contracts no multiply-add): the vertices
- * relative to the origin, sheared, then the three edge functions, left in edge[e][j] (function e of lane j).
- * Returns the bits of the lanes that test rejects for sure (finite edge functions of both signs) and, when
- * `ranged`, of those it keeps whose t would be outside [tmin, tmax] for sure (leaf_outside_lanes); the
- * exact test of every other lane (leaf_lane_test) then decides it exactly as the scalar test would alone,
- * so answers are the same with or without this filter. *within: when ranged, the lanes the exact test
- * would accept for sure (leaf_outside_lanes), else 0; an occlusion query without a hit filter needs no
- * more of them. Callers range the leaves whose box holds the ray's start (its entry is tmin), where the
- * line crosses triangles behind the start or, from a surface, the start's own (elsewhere the range test
- * rarely rules a lane out), and every leaf of an occlusion query, where a lane it accepts saves the exact
- * test and ends the walk. */
+/* The first test of cbvh_ray_triangle on the CBVH_LANES triangles of rows at once, lane for lane the same
+ * float operations (the build contracts no multiply-add), the edge functions left in edge[e][j]. Returns
+ * the lanes it rejects for sure and, when `ranged`, those outside [tmin, tmax] for sure
+ * (leaf_outside_lanes, which fills *within; else 0); the exact test (leaf_lane_test) decides every other
+ * lane as the scalar test would, so answers do not depend on the filter. */
 CBVH_KERNEL uint32_t leaf_reject_rows(const struct cbvh_ray_shear *restrict s,
                                       const struct leaf_rows *restrict rows, const int ranged, float tmin,
                                       float tmax, float edge[3][CBVH_LANES], uint32_t *restrict within)
@@ -490,6 +440,16 @@ CBVH_KERNEL uint32_t leaf_reject_rows(const struct cbvh_ray_shear *restrict s,
                : mixed;
 }
 
+/* The vertices of lane j of group g, as the filter read them. */
+CBVH_KERNEL void leaf_group_vertices(const struct leaf_group *restrict g, uint32_t j, cbvh_v3 vert[3])
+{
+    const struct leaf_quad *restrict q = g->quad[j / 4u];
+    const uint32_t i = j % 4u;
+    CBVH_UNROLL(3)
+    for (uint32_t c = 0; c < 3; c++)
+        vert[c] = v3(q->c[c][0][i], q->c[c][1][i], q->c[c][2][i]);
+}
+
 /* leaf_reject_rows on group g. */
 CBVH_KERNEL uint32_t leaf_reject_lanes(const struct cbvh_ray_shear *restrict s,
                                        const struct leaf_group *restrict g, const int ranged, float tmin,
@@ -500,9 +460,7 @@ CBVH_KERNEL uint32_t leaf_reject_lanes(const struct cbvh_ray_shear *restrict s,
     return leaf_reject_rows(s, &rows, ranged, tmin, tmax, edge, within);
 }
 
-/* The exact test of lane j, which the filter (leaf_reject_rows) kept: cbvh_ray_triangle_decide
- * (ray_triangle.h) on the lane's vertices vert and edge functions as the filter left them, the floats the
- * scalar test computes. Arguments and result as for cbvh_ray_triangle. */
+/* The exact test of lane j, which the filter kept: cbvh_ray_triangle_decide on its vertices and edges. */
 CBVH_KERNEL int leaf_lane_test(const struct cbvh_ray_shear *restrict s, const cbvh_v3 vert[3],
                                const float edge[3][CBVH_LANES], uint32_t j, float tmin, float tmax,
                                const int want_uv, float *t, float *u, float *v)
@@ -510,24 +468,10 @@ CBVH_KERNEL int leaf_lane_test(const struct cbvh_ray_shear *restrict s, const cb
     return cbvh_ray_triangle_decide(s, vert, edge[0][j], edge[1][j], edge[2][j], tmin, tmax, want_uv, t, u,
                                     v);
 }
-
-/* The vertices of lane j of group g, as the filter read them. */
-CBVH_KERNEL void leaf_group_vertices(const struct leaf_group *restrict g, uint32_t j, cbvh_v3 vert[3])
-{
-    const struct leaf_quad *restrict q = g->quad[j / 4u];
-    const uint32_t i = j % 4u;
-    CBVH_UNROLL(3)
-    for (uint32_t c = 0; c < 3; c++)
-        vert[c] = v3(q->c[c][0][i], q->c[c][1][i], q->c[c][2][i]);
-}
 #endif
 
-/* Tests the leaf's triangles [first, first+count) against the ray. Any-hit:
- * returns 1 at the first hit. Closest-hit: updates best and *tmax (the
- * closest hit so far; hits at t == *tmax still compete by index), returns 0,
- * or 1 when a query's filter stopped the walk (the ray's gate, leaf_take).
- * *tested receives the number of triangles tested. The file's arrays and
- * grid are read into locals once per leaf. */
+/* The leaf's triangles [first, first + count) against the ray, as cbvh_leaf_visit says; `near`: the leaf's
+ * box holds the ray's start (its filter then also tests the range). */
 CBVH_KERNEL int leaf_loop(const struct cbvh_file *restrict f, uint32_t first, uint32_t count,
                           const struct cbvh_ray_shear *restrict s, const struct cbvh_hit_gate *gate,
                           float tmin, float *restrict tmax, struct cbvh_best_hit *restrict best,
@@ -543,14 +487,12 @@ CBVH_KERNEL int leaf_loop(const struct cbvh_file *restrict f, uint32_t first, ui
     /* an occlusion query without a filter never looks at the barycentrics, nor at t once it is in range */
     const int want_uv = !any || gate, occlusion = any && !gate;
 #ifdef CBVH_HAVE_SIMD
-    /* CBVH_LANES triangles at a time through the SIMD filter; the scalar test on the lanes it keeps, in
-     * order. */
+    /* CBVH_LANES triangles at a time through the SIMD filter; the exact test on the lanes it keeps */
     if (!scalar && count > 1) {
         const struct leaf_quad *restrict quads = (const struct leaf_quad *)f->quads;
         const uint32_t end = first + count;
 #if defined(__AVX2__)
-        /* the files' usual encodings: each group's vertices gathered straight into the filter's rows, in the
-         * ray's sheared order (a lane it keeps reads its vertices again by index); else through quads */
+        /* LOCAL8 and float vertices gathered straight into the filter's rows; else through quads */
         const int direct = !quads && tri_enc == CBVH_TRIS_LOCAL8 && vert_enc == CBVH_VERTS_F32 &&
                            leaf_local8_window_fits(f->info.triangle_count, end - 1u);
         const __m256i order = _mm256_setr_epi32(0, 1 + (int)s->kx, 1 + (int)s->ky, 1 + (int)s->kz, 0,
@@ -618,12 +560,9 @@ CBVH_KERNEL int leaf_loop(const struct cbvh_file *restrict f, uint32_t first, ui
     return 0;
 }
 
-/* The leaf step of every single-ray walk: the leaf's cooked triangles
- * [first, first + count). Any-hit: returns 1 when the leaf occludes the ray.
- * Closest-hit: updates best and *tmax, returns 0 (1: a filter stopped the walk). The encodings the cooker
- * writes for lossless files (LOCAL8 or U16 indices, float vertices) get
- * loops of their own (one switch per leaf, not per triangle); the others go
- * through the generic one, which keeps every walk instance small. */
+/* The leaf step of every single-ray walk: the cooked triangles [first, first + count). Any hit: 1 when the
+ * leaf occludes the ray. Closest hit: updates best and *tmax (ties compete by index), returns 0 (1: a
+ * filter stopped the walk). The lossless encodings get loops of their own; the others share one. */
 CBVH_KERNEL int cbvh_leaf_visit(const struct cbvh_file *restrict f, uint32_t first, uint32_t count,
                                 const struct cbvh_ray_ctx *ray, const int any, const int scalar,
                                 const int near, float *restrict tmax, struct cbvh_best_hit *restrict best)

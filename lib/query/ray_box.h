@@ -8,10 +8,8 @@
 #include "layout/tree.h"
 #include "query/ray_setup.h"
 
-/* Ize 2013 ("Robust BVH ray traversal"): scaling the far distance by
- * 1 + 2*gamma(3) (gamma(n) = n*u/(1-n*u), u = 2^-24) covers the rounding of
- * (plane - org) * rcp, so no box that the ray touches is missed. 2*gamma(3) is
- * about 3.6e-7; 2^-21 (4.8e-7) is the next power of two above it. */
+/* Ize 2013: the far distance times 1 + 2^-21 (> 1 + 2 gamma(3)) covers the rounding of (plane - org) *
+ * rcp, so no box the ray touches is missed. */
 #define CBVH_BOX_PAD 0x1.00001p0f
 
 /* For each axis, the grid coordinate index (cbvh_tree_box_coord) of the plane the ray meets first
@@ -20,9 +18,7 @@ struct cbvh_slab_select {
     uint32_t near_x, near_y, near_z, far_x, far_y, far_z;
 };
 
-/* The selection for each octant (bit a set: a negative direction on axis a): near is the maximum (3 +
- * axis) for a negative direction, else the minimum; far the other (3 + axis - near). A table, read once
- * per ray. */
+/* The selection for each octant (bit a: a negative direction on axis a). */
 #define CBVH_SLAB_NEAR(octant, axis) ((axis) + 3u * ((octant) >> (axis)&1u))
 #define CBVH_SLAB_SELECT(o)                                                                                  \
     {                                                                                                        \
@@ -39,10 +35,8 @@ static inline struct cbvh_slab_select cbvh_slab_select_of(uint32_t octant)
     return cbvh_slab_selects[octant & 7u];
 }
 
-/* Slab test on an already dequantized near/far plane set. Ordered compares:
- * a NaN distance (0 * inf, an origin on a slab plane with a zero direction
- * component) fails both and never decides anything. Returns 1 on overlap of
- * [tmin, tmax] with the box, and the entry distance in *entry. */
+/* Slab test on dequantized near/far planes; a NaN distance (0 * inf) fails the ordered compares and decides
+ * nothing. Returns 1 when [tmin, tmax] overlaps the box, and the entry distance in *entry. */
 CBVH_KERNEL int cbvh_slab_test(float nx, float ny, float nz, float fx, float fy, float fz, const float org[3],
                                const float rcp[3], float tmin, float tmax, float *entry)
 {
@@ -79,13 +73,8 @@ static inline void cbvh_box_ray_init(struct cbvh_box_ray *b, const float grid_or
     b->sel = cbvh_slab_select_of(octant);
 }
 
-/* Puts the box test on the axes of `axes` (a ray's box_halve) at half scale:
- * grid origin, grid scale and ray origin halved, reciprocal doubled. Every
- * plane and every (plane - org) * rcp is then exactly what it is at full
- * scale (scaling by a power of two commutes with rounding), but a plane more
- * than FLT_MAX from the origin no longer rounds to inf, which would put a
- * near plane at t = inf and miss a box the ray crosses at a finite t
- * (finding F11: a mesh near 3.4e38 seen from -2e38). */
+/* Puts the box test on the axes of `axes` (a ray's box_halve) at half scale (grid and origin halved,
+ * reciprocal doubled): the same distances exactly, but a plane - org past FLT_MAX no longer overflows. */
 static inline void cbvh_box_ray_halve(struct cbvh_box_ray *b, uint32_t axes)
 {
     for (int a = 0; a < 3; a++) {
@@ -98,8 +87,7 @@ static inline void cbvh_box_ray_halve(struct cbvh_box_ray *b, uint32_t axes)
     }
 }
 
-/* Ray against box `box` of the file's tree, dequantizing only the six
- * values the test needs with the normative arithmetic. */
+/* Ray against box `box` of the file's tree, dequantizing the six planes the test needs. */
 CBVH_KERNEL int cbvh_box_ray_test(const struct cbvh_box_ray *b, const struct cbvh_file *f,
                                   const uint32_t layout, uint32_t box, float tmin, float tmax, float *entry)
 {

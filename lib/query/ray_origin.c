@@ -14,9 +14,7 @@ static double two_sum(double a, double b, double *err)
     return s;
 }
 
-/* org + t * dir with one rounding (the product's error from fma, the sum's
- * from two_sum): the point stays on the ray's line to double precision even
- * when org is 1e20 and the result 1. */
+/* org + t * dir with one rounding (fma and two_sum), on the ray's line to double precision. */
 static double advance(double org, double t, double dir)
 {
     const double p = t * dir, pe = fma(t, dir, -p);
@@ -49,14 +47,9 @@ static int line_entry(const double org[3], const float dir[3], const float lo[3]
     return tn <= tf;
 }
 
-/* Moves the origin along the ray to a point about one extent before the
- * bounds (in double-double, so the new origin is on the ray's line to
- * double precision, then rounded to float once), and makes t and the range
- * relative to it: t' = t - base (ctx's t_frame). The first step's entry is only as exact
- * as the far origin allows; the second, from near the bounds, is exact to
- * double precision. The range is rounded inwards, so base + t' always
- * lies in the caller's [tmin, tmax]. A ray whose line misses the bounds, or
- * which points away from them, is left alone: it hits nothing either way. */
+/* Moves the origin along the ray to about one extent before the bounds (two steps in double-double, then
+ * rounded to float once) and makes t and the range relative to it: t' = t - base, the range rounded
+ * inwards. A ray whose line misses the bounds, or points away from them, is left alone. */
 static void move_origin(struct cbvh_ray_ctx *ctx, const cbvh_ray *ray, const float lo[3], const float hi[3],
                         float ext)
 {
@@ -87,9 +80,7 @@ static void move_origin(struct cbvh_ray_ctx *ctx, const cbvh_ray *ray, const flo
     cbvh_shear_setup(&ctx->shear, org, dir);
 }
 
-/* Every node plane lies in [grid origin, its CBVH_Q_MAX plane] and rounding
- * is monotonic: when both differences to the origin are finite, so is every
- * plane - org on that axis. */
+/* Sets box_halve on the axes where a grid end minus the origin overflows (then some plane - org can). */
 static void mark_box_overflow(struct cbvh_ray_ctx *ctx, const struct cbvh_file *f)
 {
     for (int a = 0; a < 3; a++) {
@@ -103,8 +94,7 @@ static void mark_box_overflow(struct cbvh_ray_ctx *ctx, const struct cbvh_file *
 void cbvh_ray_place_origin(struct cbvh_ray_ctx *ctx, const cbvh_ray *ray, const struct cbvh_file *f)
 {
     const float *lo = f->info.bounds_min, *hi = f->info.bounds_max, ext = f->bounds_extent;
-    float dist = 0.0f; /* how far outside the bounds, on the farthest axis (plain compares: every value is
-                        * finite, and fmaxf is a libm call without -ffast-math) */
+    float dist = 0.0f; /* how far outside the bounds, on the farthest axis */
     for (int a = 0; a < 3; a++) {
         const float below = lo[a] - ray->org[a], above = ray->org[a] - hi[a];
         dist = below > dist ? below : dist;
@@ -113,8 +103,7 @@ void cbvh_ray_place_origin(struct cbvh_ray_ctx *ctx, const cbvh_ray *ray, const 
     /* Ordered compare: an extent near FLT_MAX gives an infinite product and no move. */
     if (dist > CBVH_FAR_FACTOR * ext)
         move_origin(ctx, ray, lo, hi, ext);
-    /* Below FLT_MAX / 4 for both, every plane - org is at most about FLT_MAX / 2
-     * (node planes lie within a grid step of the bounds): no overflow. */
+    /* below FLT_MAX / 4 for both, every plane - org is at most about FLT_MAX / 2 */
     if (dist > 0.25f * FLT_MAX || ext > 0.25f * FLT_MAX)
         mark_box_overflow(ctx, f);
 }

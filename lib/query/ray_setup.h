@@ -16,24 +16,17 @@
 #include "common/compiler.h"
 #include "common/format.h"
 
-/* Kernels are written once with constant flags (any-hit, counting) and
- * instantiated per flag set; forcing inlining makes each instance lose the
- * code its flags switch off. */
+/* Kernels take constant flags and are force-inlined into each instance, which loses what they switch off. */
 #define CBVH_KERNEL CBVH_FORCE_INLINE
 
 /* The largest t a ray reports: FLT_MAX / 2, so tmax * CBVH_BOX_PAD cannot overflow. */
 #define CBVH_T_LIMIT 0x1.fffffep126f
 
-/* The query side of the exact range (docs/EXACTNESS.md): the kernels walk a ray whose direction has its
- * largest component in [2^-20, 2^20] (as given) or else in [2^CBVH_DIR_EXPONENT, 2^(CBVH_DIR_EXPONENT + 1))
- * (a power-of-two scaling: exact), whose other direction components are 0 or at least CBVH_DIR_FLUSH times
- * the largest, and whose origin coordinates are 0 or at least CBVH_ORIGIN_FLUSH in magnitude. With the
- * cooker's range (cbvh.h, CBVH_COORDINATE_MIN and _MAX) no float step of a box or triangle test then rounds
- * in the subnormal range, where rounding errors are absolute rather than relative to the operands and no
- * relative padding covers them, and no t overflows where it could be a hit: the distances a walk divides by
- * the direction run from 2^-103 (the smallest non-zero plane - origin difference) to 2^129 (an origin at
- * FLT_MAX), so t from 2^-123 up (as given; t past CBVH_T_LIMIT is no hit) or from 2^-112 to 2^121 (scaled).
- */
+/* The query side of the exact range (docs/EXACTNESS.md): the kernels walk a ray whose direction's largest
+ * component lies in [2^-20, 2^20] or, scaled by a power of two, in [2^CBVH_DIR_EXPONENT,
+ * 2^(CBVH_DIR_EXPONENT + 1)), whose other components are 0 or at least CBVH_DIR_FLUSH times it, and whose
+ * origin coordinates are 0 or at least CBVH_ORIGIN_FLUSH: with the cooker's range no step of a box or
+ * triangle test then rounds in the subnormal range, and no t that could be a hit overflows. */
 #define CBVH_DIR_EXPONENT 8
 #define CBVH_DIR_FLUSH 0x1p-60f
 #define CBVH_ORIGIN_FLUSH 0x1p-64f
@@ -44,8 +37,7 @@ struct cbvh_t_frame {
     double base, scale;
 };
 
-/* A kernel's t on the caller's ray: t itself for the rays a game casts (base 0, scale 1: a predictable
- * branch, and the same float as the double form gives). */
+/* A kernel's t on the caller's ray. */
 static inline float cbvh_t_frame_out(const struct cbvh_t_frame *frame, float t)
 {
     if (CBVH_LIKELY(frame->base == 0.0 && frame->scale == 1.0))
@@ -91,15 +83,12 @@ struct cbvh_ray_ctx {
                                   * FLT_MAX / 2), so the box test runs on that axis at half scale (ray_box.h) */
     uint32_t octant;   /* bit a set when rcp[a] has its sign bit set (so -0 counts as negative): selects
                         * the precomputed child order (layout/tree.h) */
-    uint32_t any_flip; /* 7 when the origin lies inside the mesh's bounds, else 0 (set by
-                        * cbvh_ray_prepare): an any-hit walk takes the child order of octant ^ any_flip,
-                        * farthest child first from among the triangles (query/walk.h) */
-    const struct cbvh_hit_gate *gate; /* NULL, or the culling and hit filter of a query with options
-                                       * (raycast.c), asked about each candidate hit (leaf.h) */
+    uint32_t any_flip; /* 7 when the origin lies inside the mesh's bounds (cbvh_ray_prepare), else 0: an
+                        * any-hit walk takes the child order of octant ^ any_flip (walk.h) */
+    const struct cbvh_hit_gate *gate; /* NULL, or a query's culling and hit filter (leaf.h) */
 };
 
-/* The octant of a reciprocal direction, from its sign bits. Every kernel
- * takes the octant from here so the sort byte and the box test agree. */
+/* The octant of a reciprocal direction (or of a direction: 1/d has d's sign bit), from its sign bits. */
 static inline uint32_t cbvh_octant_of(const float rcp[3])
 {
     return (uint32_t)(signbit(rcp[0]) != 0) | (uint32_t)(signbit(rcp[1]) != 0) << 1 |
@@ -123,17 +112,12 @@ static inline void cbvh_store3(float *p, __m128 v)
 
 static inline void cbvh_shear_setup(struct cbvh_ray_shear *s, const float org[3], const float dir[3])
 {
-    /* kz = ax > ay ? (ax > az ? 0 : 2) : (ay > az ? 1 : 2), and kx, ky the next axes in cyclic order,
-     * swapped for a negative dir[kz] (which keeps the winding, so the sign test stays the same), read
-     * from tables rather than branched on: which way a ray points is as unpredictable as the ray.
-     * KZ: 2 bits for each outcome of (ax > ay) | (ax > az) << 1 | (ay > az) << 2 (2 2 2 0 1 2 1 0; 5
-     * cannot happen); KXY: kx | ky << 2 in 4 bits at 2 * kz + (dir[kz] < 0) (kz 0: 1 2, 2 1; 1: 2 0,
-     * 0 2; 2: 0 1, 1 0). dir[kz] is the largest component of a direction that is not zero, so it is
-     * not zero either and its sign bit is dir[kz] < 0. */
+    /* kz: the largest |dir| axis, kx and ky the next in cyclic order, swapped for a negative dir[kz] (which
+     * keeps the winding), from tables rather than branches. KZ: 2 bits for each outcome of (ax > ay) |
+     * (ax > az) << 1 | (ay > az) << 2; KXY: kx | ky << 2 in 4 bits at 2 * kz + (dir[kz] < 0). */
     enum { KZ = 0x192A, KXY = 0x148269 };
 #ifdef CBVH_HAVE_SIMD
-    /* the three compares at once: |dir| against itself rotated to (ay, az, ax) and to (az, ax, ay) (lane
-     * 3: 0 > 0, false), and the sign bits from one mask rather than a load of dir[kz] after kz */
+    /* the three compares at once: |dir| against itself rotated to (ay, az, ax) and to (az, ax, ay) */
     const __m128 d = cbvh_load3(dir), mag = _mm_andnot_ps(_mm_set1_ps(-0.0f), d);
     const uint32_t next = (uint32_t)_mm_movemask_ps(
         _mm_cmpgt_ps(mag, _mm_shuffle_ps(mag, mag, _MM_SHUFFLE(3, 0, 2, 1)))); /* ax > ay, ay > az */
@@ -154,7 +138,7 @@ static inline void cbvh_shear_setup(struct cbvh_ray_shear *s, const float org[3]
     s->ky = ky;
     s->kz = kz;
 #ifdef CBVH_HAVE_SIMD
-    /* the same quotients as below, three to an instruction (the dividers are the set-up's bottleneck) */
+    /* the same quotients as below, three to an instruction */
     cbvh_store3(&s->sx, _mm_div_ps(_mm_setr_ps(dir[kx], dir[ky], 1.0f, 1.0f), _mm_set1_ps(dir[kz])));
     cbvh_store3(s->org, cbvh_load3(org));
     cbvh_store3(s->dir, d);
@@ -207,20 +191,16 @@ static inline int cbvh_ray_valid(const cbvh_ray *ray)
     return ray->tmin >= 0.0f && ray->tmin <= ray->tmax;
 }
 
-/* The octant of a valid ray (cbvh_octant_of its reciprocal) without computing the reciprocal: 1/d has
- * d's sign bit for every d that is not NaN, ±0 (±inf) included. */
+/* The octant of a valid ray, without its reciprocal. */
 static inline uint32_t cbvh_ray_octant(const cbvh_ray *ray)
 {
-    return (uint32_t)(signbit(ray->dir[0]) != 0) | (uint32_t)(signbit(ray->dir[1]) != 0) << 1 |
-           (uint32_t)(signbit(ray->dir[2]) != 0) << 2;
+    return cbvh_octant_of(ray->dir);
 }
 
-/* The ray the kernels walk (see CBVH_DIR_EXPONENT) from a valid ray: returns the ray whose org and dir they
- * walk, the caller's own when sanitizing changes neither (any ray a game casts), else *clean; clean's [tmin,
- * tmax] is always set: the caller's range in the kernels' t, rounded inwards and clamped to CBVH_T_LIMIT on
- * the caller's ray and on the kernels'. t on the caller's ray is the kernels' t times *scale. A direction
- * whose largest component lies in [2^-CBVH_DIR_KEEP, 2^CBVH_DIR_KEEP] keeps its scale: every t of its walk is
- * 0, at least 2^-123 or beyond CBVH_T_LIMIT (no hit) already. */
+/* The ray the kernels walk (see CBVH_DIR_EXPONENT) from a valid ray: the caller's own when sanitizing
+ * changes nothing, else *clean; clean's [tmin, tmax] is always set: the caller's range in the kernels' t,
+ * rounded inwards and clamped to CBVH_T_LIMIT. The caller's t is the kernels' times *scale. A direction
+ * whose largest component lies in [2^-CBVH_DIR_KEEP, 2^CBVH_DIR_KEEP] keeps its scale. */
 #define CBVH_DIR_KEEP 20
 static inline const cbvh_ray *cbvh_ray_sanitize(const cbvh_ray *ray, cbvh_ray *clean, double *scale)
 {
@@ -228,10 +208,8 @@ static inline const cbvh_ray *cbvh_ray_sanitize(const cbvh_ray *ray, cbvh_ray *c
     clean->tmin = ray->tmin;
     clean->tmax = ray->tmax < CBVH_T_LIMIT ? ray->tmax : CBVH_T_LIMIT;
     *scale = 1.0;
-    /* flush: big times 2^-60, rounded only where big is below 2^-66; a component below it becomes 0 of
-     * its sign */
+    /* a component below big * CBVH_DIR_FLUSH becomes 0 of its sign */
 #ifdef CBVH_HAVE_SIMD
-    /* the same on three lanes: the largest |d| in every lane, the kept components by one compare */
     const __m128 sign = _mm_set1_ps(-0.0f), dv = cbvh_load3(d), mag = _mm_andnot_ps(sign, dv);
     const __m128 most = _mm_max_ps(_mm_max_ps(mag, _mm_shuffle_ps(mag, mag, _MM_SHUFFLE(3, 0, 2, 1))),
                                    _mm_shuffle_ps(mag, mag, _MM_SHUFFLE(3, 1, 0, 2)));
@@ -239,8 +217,7 @@ static inline const cbvh_ray *cbvh_ray_sanitize(const cbvh_ray *ray, cbvh_ray *c
     const __m128 keep = _mm_cmpge_ps(mag, _mm_mul_ps(most, _mm_set1_ps(CBVH_DIR_FLUSH)));
     const __m128 ov = cbvh_load3(ray->org);
     const __m128 org_keep = _mm_cmpge_ps(_mm_andnot_ps(sign, ov), _mm_set1_ps(CBVH_ORIGIN_FLUSH));
-    /* unchanged: every direction component kept or zero, every origin coordinate kept or +0 (a -0 becomes
-     * +0), and the scale kept: a predictable branch, off the chain of the ray's set-up */
+    /* unchanged: every direction component kept or zero, every origin coordinate kept or +0 */
     const __m128 zero = _mm_setzero_ps();
     const int dir_same = _mm_movemask_ps(_mm_or_ps(keep, _mm_cmpeq_ps(mag, zero))) & 7;
     const int org_same =
@@ -264,8 +241,7 @@ static inline const cbvh_ray *cbvh_ray_sanitize(const cbvh_ray *ray, cbvh_ray *c
 #endif
     if (CBVH_LIKELY(big >= 0x1p-20f && big <= 0x1p20f))
         return clean;
-    /* 2^(CBVH_DIR_EXPONENT - floor(log2 big)) and its inverse from the exponent of big as a double (a float
-     * > 0 is a normal double, its biased exponent 874 to 1150) */
+    /* 2^(CBVH_DIR_EXPONENT - floor(log2 big)) and its inverse from the exponent of big as a double */
     const double wide = (double)big;
     uint64_t bits, up_bits, down_bits;
     memcpy(&bits, &wide, sizeof bits);

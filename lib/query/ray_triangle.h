@@ -10,20 +10,12 @@
 #include "query/ray_setup.h"
 #include "query/triangle_frame.h"
 
-/* Edge functions of the sheared triangle when float could not decide them:
- * one of them is 0, infinite or NaN (coordinates beyond about 1e12 relative
- * to the origin overflow coord^2 products), or their sum overflows. Returns
- * 0 on a miss, else 1 (the double edge functions are left in e[3]).
- *
- * Watertight across the two paths: rounding is monotonic, so a float edge
- * function that is finite and non-zero has the exact sign of the edge
- * function of the float sheared coordinates, and the double one below is
- * exact (a product of two floats is exact in double), so both paths decide
- * every edge the same way and two triangles sharing an edge agree whichever
- * path each takes. A vertex whose float sheared coordinates overflowed is
- * sheared in double instead; that choice depends on the vertex and the ray
- * only, and the two triangles' edge functions are then the same double
- * expression up to an exact negation, so they still agree. */
+/* Edge functions of the sheared triangle when float could not decide them (one is 0, infinite or NaN, or
+ * their sum overflows). Returns 0 on a miss, else 1 with the double edge functions in e[3]. Watertight
+ * across the two paths: a finite non-zero float edge function has the exact sign of the edge function of
+ * the float sheared coordinates, which the double one here computes exactly; a vertex whose float sheared
+ * coordinates overflowed is sheared in double, a choice that depends on the vertex and the ray only, so
+ * two triangles sharing an edge still agree. */
 CBVH_COLD static int cbvh_ray_triangle_edges_double(const struct cbvh_ray_shear *s, const cbvh_v3 vert[3],
                                                     double e[3])
 {
@@ -49,16 +41,12 @@ CBVH_COLD static int cbvh_ray_triangle_edges_double(const struct cbvh_ray_shear 
     e[2] = p[1][0] * p[0][1] - p[1][1] * p[0][0]; /* w: edge a-b */
     if ((e[0] < 0.0 || e[1] < 0.0 || e[2] < 0.0) && (e[0] > 0.0 || e[1] > 0.0 || e[2] > 0.0))
         return 0;
-    /* An edge function that is NaN here came from infinite double coordinates, which a
-     * finite file and a finite ray cannot produce; reject it rather than guess. */
+    /* NaN needs infinite double coordinates, which a finite file and ray cannot give: rejected */
     return !isnan(e[0]) && !isnan(e[1]) && !isnan(e[2]) && e[0] + e[1] + e[2] != 0.0;
 }
 
-/* t = num / den, the plane's t, clamped into the span of the vertices' projections onto the ray (proj[k]:
- * (vertex k - org) . dir, so over |dir|^2). Every point of the triangle projects onto the ray between its
- * vertices' projections, so a hit's t lies in that span. For a ray that grazes the plane, num / den is ill
- * conditioned and can land far outside it (even behind the origin); clamping keeps t on the triangle the
- * edge tests accepted. */
+/* The plane's t clamped into the span of the vertices' projections onto the ray (proj[k] = (vertex k -
+ * org) . dir), where every hit's t lies: for a grazing ray num / den is ill conditioned. */
 static inline double cbvh_plane_t_in_span(double t, const double proj[3], double dir_len2)
 {
     double lo = INFINITY, hi = -INFINITY;
@@ -72,13 +60,9 @@ static inline double cbvh_plane_t_in_span(double t, const double proj[3], double
     return t > hi ? hi : t;
 }
 
-/* t where the ray crosses the plane of the triangle v: dot(n, base - org) /
- * dot(n, dir) in the triangle's frame (triangle_frame.h, left in *f for the
- * barycentrics), all in double. Well conditioned whatever the triangle's
- * shape (the interpolated t of the original test loses accuracy as 1/area on
- * slivers), and without overflow for any float coordinates. Only triangles
- * that passed the edge tests get here. Returns 0 when the ray lies in the
- * plane (t undefined). */
+/* t where the ray crosses the plane of the triangle v: dot(n, base - org) / dot(n, dir) in the triangle's
+ * frame (triangle_frame.h, left in *f), in double: well conditioned on slivers, no overflow. Returns 0 when
+ * the ray lies in the plane. */
 CBVH_KERNEL int cbvh_plane_t(const struct cbvh_ray_shear *restrict s, const cbvh_v3 v[3],
                              struct cbvh_triangle_frame *restrict f, double *t)
 {
@@ -90,10 +74,8 @@ CBVH_KERNEL int cbvh_plane_t(const struct cbvh_ray_shear *restrict s, const cbvh
     const double proj[3] = {v3_dot(v3_sub(v[0], org), dir), v3_dot(v3_sub(v[1], org), dir),
                             v3_dot(v3_sub(v[2], org), dir)};
     double tp = cbvh_plane_t_in_span(num / den, proj, v3_len2(dir));
-    /* Nor does it leave the triangle's bounding box where the line crosses it (slabs in double). A grazing
-     * ray's t could otherwise fall before the entry of the box, and so of every node box holding the
-     * triangle (they are conservative), and a walk that drops nodes entered past its best t so far would
-     * drop this hit while another visiting order finds it (fuzzing: sorted and stackless disagreed). */
+    /* Nor does it leave the line's interval in the triangle's bounding box (slabs in double), so it never
+     * falls before the entry of a node box holding the triangle, whatever the visit order. */
     double enter = -INFINITY, leave = INFINITY;
     /* the coordinates in an array, indexed by axis (v3_get's choice of member compiles to branches) */
     const double coord[3][3] = {{v[0].x, v[1].x, v[2].x}, {v[0].y, v[1].y, v[2].y}, {v[0].z, v[1].z, v[2].z}};
@@ -118,10 +100,8 @@ CBVH_KERNEL int cbvh_plane_t(const struct cbvh_ray_shear *restrict s, const cbvh
     return 1;
 }
 
-/* The barycentrics (weights of the ends of e1 and e2) of the boundary point
- * nearest to base + w (w = x e1 + y e2 with (x, y) outside the triangle):
- * the nearest of the three edges' clamped projections, measured in space (a
- * barycentric shift along a long edge of a sliver would move the point far). */
+/* The barycentrics of the boundary point nearest to base + w ((x, y) outside the triangle): the nearest of
+ * the three edges' clamped projections, measured in space. */
 CBVH_COLD static void cbvh_barycentrics_to_boundary(const struct cbvh_triangle_frame *f, cbvh_v3 w, double *x,
                                                     double *y)
 {
@@ -143,14 +123,9 @@ CBVH_COLD static void cbvh_barycentrics_to_boundary(const struct cbvh_triangle_f
     }
 }
 
-/* Barycentrics (u: weight of b, v: weight of c) of the point at t on the
- * ray, which lies in the triangle's plane, from the triangle's frame f (as
- * cbvh_plane_t left it; base: its base vertex) in double: errors relative to
- * the edge lengths, not to the area (the sheared edge functions, products of
- * coordinates relative to the origin, cancel on slivers and put the
- * barycentric point far from the hit: finding F6). Only for accepted hits, so
- * out of line: one copy serves every walk instance. edge: the sheared edge
- * functions (u, v, w scaled). */
+/* Barycentrics (u: weight of b, v: weight of c) of the point at t on the ray from the triangle's frame f
+ * (as cbvh_plane_t left it) in double, errors relative to the edge lengths, not the area. Out of line: only
+ * accepted hits. edge: the sheared edge functions, for an underflowed frame. */
 CBVH_NOINLINE void cbvh_plane_barycentrics(const struct cbvh_ray_shear *restrict s,
                                            const struct cbvh_triangle_frame *restrict f, cbvh_v3 base,
                                            double t, const double edge[3], float *u, float *v)
@@ -159,9 +134,7 @@ CBVH_NOINLINE void cbvh_plane_barycentrics(const struct cbvh_ray_shear *restrict
     double x, y;
     cbvh_triangle_frame_barycentrics(f, w, &x, &y);
     if (isfinite(x) && isfinite(y)) {
-        /* Into the closed triangle: the edge tests accept a ray up to float
-         * precision outside it, where the exact point has a barycentric below
-         * 0; then the nearest boundary point. */
+        /* into the closed triangle: the edge tests accept up to float precision outside it */
         if (!(x >= 0.0 && y >= 0.0 && x + y <= 1.0))
             cbvh_barycentrics_to_boundary(f, w, &x, &y);
         cbvh_frame_uv(f->base, x, y, u, v);
@@ -174,12 +147,9 @@ CBVH_NOINLINE void cbvh_plane_barycentrics(const struct cbvh_ray_shear *restrict
 }
 
 #if defined(__AVX2__)
-/* The AVX2 walks' copy of cbvh_plane_t and cbvh_plane_barycentrics (and the triangle frame they share) on
- * vectors (x, y, z, 0): lane for lane the same double operations in the same order, each dot product
- * summed as (x + y) + z as v3_dot does, and MINPD / MAXPD where cbvh_dmin / cbvh_dmax stand (a < b ? a :
- * b, a > b ? a : b), so every result is the scalar code's bit for bit (the build contracts no
- * multiply-add; test_raycast compares the kernels' t, u and v for equality), in about half the instructions
- * of the scalar code, which GCC keeps scalar. */
+/* The AVX2 walks' cbvh_plane_t and cbvh_plane_barycentrics on vectors (x, y, z, 0): the same double
+ * operations in the same order (dot products as (x + y) + z, MINPD / MAXPD for cbvh_dmin / cbvh_dmax), so
+ * every result is the scalar code's bit for bit (test_raycast compares them). */
 typedef __m256d cbvh_v4d;
 
 static inline cbvh_v4d v4d_of(cbvh_v3 a)
@@ -331,18 +301,11 @@ CBVH_KERNEL int cbvh_ray_triangle_decide(const struct cbvh_ray_shear *restrict s
     return 1;
 }
 
-/* Tests the ray (sheared by s) against triangle (a, b, c). Returns 1 when it
- * hits at t in [tmin, tmax] and writes t and, when want_uv (a caller's
- * constant, or what it knows it needs: an any-hit walk without a hit filter
- * does not), the barycentrics u (weight of b) and v (weight of c).
- * Watertight: a ray through a shared edge or vertex hits
- * at least one of the triangles sharing it, because each edge function's sign
- * is the exact sign for the float sheared coordinates, which both triangles
- * compute identically (see cbvh_ray_triangle_edges_double), and the sign test
- * accepts 0 on either side. A ray in the triangle's plane misses, as does a
- * degenerate triangle. Both windings are hit. The hit/miss decision is the
- * edge tests'; t comes from the plane (cbvh_plane_t), rounded to float, and
- * u, v from the hit point (cbvh_plane_barycentrics). */
+/* Tests the ray (sheared by s) against triangle (a, b, c). Returns 1 when it hits at t in [tmin, tmax] and
+ * writes t and, when want_uv, the barycentrics u (weight of b) and v (weight of c). Watertight: a ray
+ * through a shared edge or vertex hits at least one of the triangles sharing it (each edge function's sign
+ * is exact for the float sheared coordinates, and 0 is accepted on either side). A ray in the plane and a
+ * degenerate triangle miss; both windings hit. t comes from the plane (cbvh_plane_t), rounded to float. */
 CBVH_KERNEL int cbvh_ray_triangle(const struct cbvh_ray_shear *restrict s, const float *restrict a,
                                   const float *restrict b, const float *restrict c, float tmin, float tmax,
                                   const int want_uv, float *t_out, float *u_out, float *v_out)
@@ -361,13 +324,8 @@ CBVH_KERNEL int cbvh_ray_triangle(const struct cbvh_ray_shear *restrict s, const
     const float u = cx * by - cy * bx;
     const float v = ax * cy - ay * cx;
     const float w = bx * ay - by * ax;
-    /* Finite float edge functions have exact signs (see above): two of
-     * opposite sign are a miss whatever the third is. An infinite or NaN one
-     * may come from a sheared coordinate that overflowed, whose sign means
-     * nothing (finding F8: a vertex - origin difference past FLT_MAX turned
-     * a hit into two opposite infinities); it makes the sum non-finite, and
-     * the double path decides. So does a sum that overflows: the rest of the
-     * test must never see signs the first test skipped. */
+    /* Finite float edge functions have exact signs: two of opposite sign are a miss. A non-finite one (an
+     * overflowed sheared coordinate, whose sign means nothing) or sum leaves it to the double path. */
     const int finite = fabsf(u + v + w) <= FLT_MAX;
     if (finite && (u < 0.0f || v < 0.0f || w < 0.0f) && (u > 0.0f || v > 0.0f || w > 0.0f))
         return 0;

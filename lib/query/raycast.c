@@ -56,10 +56,6 @@ CBVH_API int cbvh_occluded(const cbvh_file *file, const cbvh_ray *ray, cbvh_trav
     return cbvh_any(file, &ctx, traversal, stats);
 }
 
-/* ------------------------------------------------------------------ */
-/* Raycasts with options                                               */
-/* ------------------------------------------------------------------ */
-
 #define QUERY_OPTIONS_SIZE_MIN CBVH_STRUCT_SIZE_MIN(cbvh_query_options, traversal)
 
 static void query_options_defaults(cbvh_query_options *o)
@@ -185,31 +181,43 @@ static int place_ray(const struct cbvh_placement *p, const cbvh_ray *world, cbvh
     return cbvh_all_finite(local->org, 3) && cbvh_all_finite(local->dir, 3);
 }
 
-/* Checks the arguments of a query with options and prepares its ray (in the mesh's frame) and gate; *walk
- * says whether there is anything to walk (cbvh_ray_prepare, which counts into stats). */
-static cbvh_result query_prepare(const cbvh_file *file, const cbvh_ray *world,
-                                 const cbvh_query_options *options, cbvh_query_options *o,
-                                 struct cbvh_ray_ctx *ctx, struct cbvh_hit_gate *gate,
-                                 cbvh_query_stats *stats, int *walk)
+/* A query with options: the closest hit into *hit or, hit NULL, occlusion into *occluded, the ray taken into
+ * the mesh's frame and walked with the options' gate (without culling or filter every hit counts: the plain
+ * walk; a transform only rotates the answer). */
+static cbvh_result query_with(const cbvh_file *file, const cbvh_ray *world, const cbvh_query_options *options,
+                              cbvh_hit_record *hit, int *occluded, cbvh_query_stats *stats)
 {
-    if (cbvh_query_options_read(options, o) != CBVH_OK)
+    cbvh_query_options o;
+    if (cbvh_query_options_read(options, &o) != CBVH_OK)
         return CBVH_ERROR_INVALID_ARGUMENT;
     cbvh_ray local;
     const cbvh_ray *ray = world;
     struct cbvh_placement placement;
     const struct cbvh_placement *p; /* NULL by default, and for a caller whose struct ends before transform */
-    if (!cbvh_placement_of_option(o->transform, &placement, &p) ||
+    if (!cbvh_placement_of_option(o.transform, &placement, &p) ||
         (p && (!world || !place_ray(p, world, &local))))
         return CBVH_ERROR_INVALID_ARGUMENT;
     if (p)
         ray = &local;
     if (!file || !ray || !cbvh_ray_valid(ray))
         return CBVH_ERROR_INVALID_ARGUMENT;
-    *walk = cbvh_ray_prepare(ctx, ray, file, stats ? &stats->nodes_visited : NULL);
-    cbvh_hit_gate_init(gate, o->cull, o->filter, o->filter_user, p ? p->rotation : NULL, ray->dir,
-                       &ctx->t_frame);
-    /* without culling or filter every hit counts: the plain walk (a transform only rotates the answer) */
-    ctx->gate = o->cull != CBVH_CULL_NONE || o->filter ? gate : NULL;
+    struct cbvh_ray_ctx ctx;
+    struct cbvh_hit_gate gate;
+    const int walk = cbvh_ray_prepare(&ctx, ray, file, stats ? &stats->nodes_visited : NULL);
+    cbvh_hit_gate_init(&gate, o.cull, o.filter, o.filter_user, p ? p->rotation : NULL, ray->dir,
+                       &ctx.t_frame);
+    ctx.gate = o.cull != CBVH_CULL_NONE || o.filter ? &gate : NULL;
+    if (occluded) {
+        *occluded = walk && cbvh_any(file, &ctx, o.traversal, stats);
+        return CBVH_OK;
+    }
+    struct cbvh_best_hit best = {UINT32_MAX, 0.0f, 0.0f, 0.0f};
+    if (walk)
+        cbvh_closest(file, &ctx, o.traversal, &best, stats);
+    if (best.tri != UINT32_MAX) {
+        cbvh_hit_record_fill(file, best.tri, &ctx.t_frame, best.t, best.u, best.v, gate.dir, hit);
+        record_place(&gate, hit);
+    }
     return CBVH_OK;
 }
 
@@ -221,21 +229,7 @@ CBVH_API cbvh_result cbvh_raycast_with(const cbvh_file *file, const cbvh_ray *ra
         return CBVH_ERROR_INVALID_ARGUMENT;
     memset(hit, 0, sizeof *hit);
     hit->tri = CBVH_NO_HIT;
-    cbvh_query_options o;
-    struct cbvh_ray_ctx ctx;
-    struct cbvh_hit_gate gate;
-    int walk;
-    const cbvh_result r = query_prepare(file, ray, options, &o, &ctx, &gate, stats, &walk);
-    if (r != CBVH_OK)
-        return r;
-    struct cbvh_best_hit best = {UINT32_MAX, 0.0f, 0.0f, 0.0f};
-    if (walk)
-        cbvh_closest(file, &ctx, o.traversal, &best, stats);
-    if (best.tri != UINT32_MAX) {
-        cbvh_hit_record_fill(file, best.tri, &ctx.t_frame, best.t, best.u, best.v, gate.dir, hit);
-        record_place(&gate, hit);
-    }
-    return CBVH_OK;
+    return query_with(file, ray, options, hit, NULL, stats);
 }
 
 CBVH_API cbvh_result cbvh_occluded_with(const cbvh_file *file, const cbvh_ray *ray,
@@ -245,13 +239,5 @@ CBVH_API cbvh_result cbvh_occluded_with(const cbvh_file *file, const cbvh_ray *r
     if (!occluded)
         return CBVH_ERROR_INVALID_ARGUMENT;
     *occluded = 0;
-    cbvh_query_options o;
-    struct cbvh_ray_ctx ctx;
-    struct cbvh_hit_gate gate;
-    int walk;
-    const cbvh_result r = query_prepare(file, ray, options, &o, &ctx, &gate, stats, &walk);
-    if (r != CBVH_OK)
-        return r;
-    *occluded = walk && cbvh_any(file, &ctx, o.traversal, stats);
-    return CBVH_OK;
+    return query_with(file, ray, options, NULL, occluded, stats);
 }

@@ -1,12 +1,13 @@
 /* raycast_walks.c: the library's named instances of the traversal core (walk.h), one per mode, layout and
- * kernel. */
+ * kernel, and the binary layout's stackless walk over escape links. */
 #ifdef HAVE_CONFIG_H
 #include "config.h"
 #endif
 
+#include "layout/binary.h"
+#include "query/ray_box.h"
 #include "query/raycast.h"
 #include "query/walk.h"
-#include "query/walk_instances.h"
 
 #ifdef CBVH_HAVE_AVX2
 #define WALK_AVX2_CALL(name)                                                                                 \
@@ -16,14 +17,9 @@
 #define WALK_AVX2_CALL(name)
 #endif
 
-/* The walks of one mode: in the wide layout (every choice a constant but the scalar switch of the SSE2
- * instance, a predictable branch rather than doubling its code; the AVX2 instance in its own file) and
- * in the binary layout, each a function of its own with the traversal core inlined, so a caller's frame
- * holds one walk's stack (about 3 KiB), not the sum of every instance's (with all of them inlined into
- * it, cbvh_closest's frame was 11.6 KiB; -fstack-usage); the call costs one jump per ray. The kernel is
- * chosen before either wide instance is entered, so the AVX2 walk never runs under the SSE2 one's frame
- * (3.2 KiB and six saved registers a ray when the choice was made inside it). walk_##name walks the
- * whole tree for the file's layout. */
+/* The walks of one mode, each a function of its own with the traversal core inlined, so a caller's frame
+ * holds one walk's stack: wide (the SSE2 instance reads `scalar` at run time; the AVX2 one, in its own
+ * file, is chosen before either is entered) and binary. walk_##name walks the whole tree. */
 #define WALK_INSTANCE(name, order_, any_)                                                                    \
     CBVH_NOINLINE int walk_##name##_wide4(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray,         \
                                           cbvh_ref start, const int scalar, struct cbvh_best_hit *best,      \
@@ -55,6 +51,64 @@ CBVH_WALK_INSTANCES(WALK_INSTANCE)
 #undef WALK_INSTANCE
 #undef WALK_AVX2_CALL
 
+/* The stackless walk's leaf step, out of line to keep the node loop's registers. */
+CBVH_NOINLINE int stackless_leaf(const struct cbvh_file *f, uint32_t word, const struct cbvh_ray_ctx *ray,
+                                 const int any, const int near, float *tmax, struct cbvh_best_hit *best)
+{
+    return cbvh_leaf_visit(f, cbvh_leaf_first(word), cbvh_leaf_count(word), ray, any, 0, near, tmax, best);
+}
+
+/* The binary layout's stackless walk: i = hit ? i + 1 : escape(i) (a leaf's escape is i + 1) until the
+ * end of the array. Every step goes forward (the loader checked the links), so the walk ends; the order is
+ * the fixed depth-first one. */
+CBVH_KERNEL int stackless_walk(const struct cbvh_file *restrict f, const struct cbvh_ray_ctx *restrict ray,
+                               const int any, struct cbvh_best_hit *restrict best,
+                               cbvh_query_stats *restrict stats)
+{
+    const cbvh_node *restrict nodes = cbvh_binary_nodes(f);
+    const uint32_t end = f->info.node_count;
+    struct cbvh_box_ray box;
+    cbvh_box_ray_init(&box, f->grid_origin, f->grid_scale, ray->shear.org, ray->rcp, ray->octant);
+    const float tmin = ray->tmin;
+    float tmax = ray->tmax;
+    uint64_t visited = 0, tested = 0;
+    int hit = 0;
+    uint32_t i = 0;
+
+    while (i < end) {
+        const uint32_t word = nodes[i].word;
+        float entry;
+        visited++;
+        if (!cbvh_box_ray_test(&box, f, CBVH_LAYOUT_BINARY, i, tmin, tmax, &entry)) {
+            i += cbvh_node_span(word);
+            continue;
+        }
+        if (cbvh_node_is_leaf(word)) {
+            tested += cbvh_leaf_count(word);
+            if (stackless_leaf(f, word, ray, any, entry <= tmin, &tmax, best)) {
+                hit = 1;
+                break;
+            }
+        }
+        i++;
+    }
+    if (stats)
+        cbvh_stats_add(stats, visited, tested);
+    return hit;
+}
+
+CBVH_NOINLINE void closest_stackless(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray,
+                                     struct cbvh_best_hit *best, cbvh_query_stats *stats)
+{
+    stackless_walk(f, ray, 0, best, stats);
+}
+
+CBVH_NOINLINE int any_stackless(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray,
+                                cbvh_query_stats *stats)
+{
+    return stackless_walk(f, ray, 1, NULL, stats);
+}
+
 /* The wide layout has no escape links: its stackless request walks sorted (the same answer). */
 void cbvh_closest(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray, cbvh_traversal traversal,
                   struct cbvh_best_hit *best, cbvh_query_stats *stats)
@@ -72,7 +126,7 @@ void cbvh_closest(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray, cbv
         break;
     case CBVH_TRAVERSAL_STACKLESS:
         if (f->layout == CBVH_LAYOUT_BINARY) {
-            cbvh_closest_stackless(f, ray, best, stats);
+            closest_stackless(f, ray, best, stats);
             break;
         }
         /* fall through */
@@ -94,7 +148,7 @@ int cbvh_any(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray, cbvh_tra
         return walk_any_distance(f, ray, NULL, stats);
     case CBVH_TRAVERSAL_STACKLESS:
         if (f->layout == CBVH_LAYOUT_BINARY)
-            return cbvh_any_stackless(f, ray, stats);
+            return any_stackless(f, ray, stats);
         /* fall through */
     default:
         return walk_any_sorted(f, ray, NULL, stats);

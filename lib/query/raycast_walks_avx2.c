@@ -10,12 +10,8 @@
 #endif
 
 #include "query/walk.h"
-#include "query/walk_instances.h"
 
-/* The traversal core of walk.h as every other instance has it: only the instruction set differs, so
- * the leaf filter (leaf.h, lanes.h) tests eight triangles at once, and the rest is the same code in VEX
- * encoding. The answers are the other kernels' bit for bit: the filter only rules out lanes, and the
- * exact test decides the others in the same order. */
+/* The same instances as raycast_walks.c's: the answers are the other kernels' bit for bit. */
 #define WALK_AVX2(name, order_, any_)                                                                        \
     int cbvh_walk_##name##_wide4_avx2(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray,             \
                                       cbvh_ref start, struct cbvh_best_hit *best, cbvh_query_stats *stats)   \

@@ -1,5 +1,4 @@
-/* stream.c: batched ray streams: one traversal per batch of same-octant rays, a ray list per child entered.
- */
+/* stream.c: ray streams: batches of same-octant rays, interleaved walks, or single rays, by window. */
 #ifdef HAVE_CONFIG_H
 #include "config.h"
 #endif
@@ -11,20 +10,15 @@
 #include "query/stream.h"
 #include "query/stream_walk.h"
 
-/* Rays are grouped by octant within windows of this many input rays per batch ray (8: one batch an
- * octant), so a batch shares one sort-byte mask and one near/far plane selection. */
+/* Rays are grouped by octant within windows of this many input rays per batch ray. */
 #define CBVH_STREAM_WINDOW_PER_RAY 8u
 
-/* The interleaved walks keep slot k's ray in the batch's ctx[k] and ray_index[k]: a batch that runs (the
- * stack's, or the caller's scratch for more) has room for every slot. */
+/* The interleaved walks keep slot k's ray in the batch's ctx[k] and ray_index[k]. */
 _Static_assert(CBVH_STREAM_STACK_BATCH >= CBVH_STREAM_WALKS && CBVH_STREAM_WALKS >= CBVH_STREAM_STACK_WALKS &&
                    CBVH_STREAM_WALKS <= 32u,
                "a batch holds the interleaved walks' rays, and a word their bits");
 
-/* Entries of the walk's stack of ray lists per batch ray: the root's list and its children's take 5 a ray
- * (the wide layout's four lists, each with room for every ray, above the root's), and the lists of the
- * pending children below shrink fast on incoherent rays; a node whose lists would not fit sends its rays
- * down the single-ray walk. */
+/* Entries of the walk's stack of ray lists per batch ray (the root's and its children's take 5). */
 #define STREAM_LIST_PER_RAY 8u
 
 /* Bytes a batch ray takes in the block (the window's octant bytes included), and the alignment slack. */
@@ -42,8 +36,7 @@ STREAM_BATCH_INSTANCE(stream_binary_any, CBVH_LAYOUT_BINARY, 1)
 STREAM_INTERLEAVE_INSTANCE(stream_interleave_closest, 0)
 STREAM_INTERLEAVE_INSTANCE(stream_interleave_any, 1)
 
-/* The batch walk for the file's layout, on the single-ray walks' kernel (raycast.h) with SIMD node tests:
- * with AVX2, AVX2 leaves and the node test in AVX2's encoding. */
+/* The batch walk for the file's layout, on the single-ray walks' kernel (with SIMD node tests). */
 static void batch_walk(const struct cbvh_file *f, struct cbvh_stream_batch *b, uint32_t octant,
                        cbvh_stream_node_fn node_test, int any, int counting, uint8_t *occluded,
                        uint64_t *visited, uint64_t *tested)
@@ -63,8 +56,8 @@ static void batch_walk(const struct cbvh_file *f, struct cbvh_stream_batch *b, u
                                                           visited, tested);
 }
 
-/* Rays walked interleaved (wide layout), closest hit into hits or, hits NULL, any hit into occluded, on
- * the single-ray walks' kernel (raycast.h): scalar also with the streams' scalar node kernel. */
+/* Rays walked interleaved (hits NULL: any hit), on the single-ray walks' kernel (scalar also with the
+ * scalar node kernel). */
 static void interleave(const struct cbvh_file *f, struct cbvh_stream_batch *b, const cbvh_ray *rays,
                        size_t count, cbvh_hit *hits, uint8_t *occluded, cbvh_stream_node_fn node_test,
                        int counting, uint64_t *visited, uint64_t *tested)
@@ -82,9 +75,7 @@ static void interleave(const struct cbvh_file *f, struct cbvh_stream_batch *b, c
 }
 
 /* Whether the rays of a window are coherent: of up to 64 pairs of consecutive rays spread over it, at least
- * half point within about 8 degrees of each other (a camera's rays in pixel or tile order, parallel rays),
- * so that a batch shares its nodes between them; else (rays in all directions, rays from points spread over
- * the mesh) each ray soon walks alone. Pairs with an invalid or zero direction count as apart. */
+ * half point within about 8 degrees of each other (invalid or zero directions count as apart). */
 #define STREAM_COHERENCE_PAIRS 64u
 int cbvh_stream_window_coherent(const cbvh_ray *rays, uint32_t n)
 {
@@ -152,8 +143,7 @@ static uint32_t batch_carve(struct cbvh_stream_batch *b, uint8_t **octant, void 
         return 0;
     size_t n = (size - STREAM_SLACK - STREAM_WALKS_BYTES(walks)) / STREAM_RAY_BYTES;
     n = n < CBVH_STREAM_MAX_BATCH ? n : CBVH_STREAM_MAX_BATCH;
-    /* the walks first (their states hold SIMD vectors), then box_ray: 16-byte aligned for SSE2 loads (32
-     * kept) */
+    /* the walks first (their states hold SIMD vectors), then box_ray, both 32-byte aligned */
     uintptr_t p = ((uintptr_t)mem + 31u) & ~(uintptr_t)31u;
     b->walks = (struct cbvh_stream_walk *)p;
     b->walk_count = walks;
@@ -180,8 +170,7 @@ static uint32_t batch_carve(struct cbvh_stream_batch *b, uint8_t **octant, void 
     return b->capacity;
 }
 
-/* The count rays one at a time on the single-ray walk (an incoherent window on a mesh in the caches, where
- * the batch's bookkeeping costs more than its few shared node visits save). */
+/* The count rays one at a time on the single-ray walk. */
 static void stream_single_rays(const struct cbvh_file *f, const cbvh_ray *rays, size_t count, cbvh_hit *hits,
                                uint8_t *occluded, uint64_t *visited, uint64_t *tested)
 {
@@ -191,10 +180,9 @@ static void stream_single_rays(const struct cbvh_file *f, const cbvh_ray *rays, 
             stream_solo_ray(f, &ctx, hits ? &hits[i] : NULL, hits ? NULL : &occluded[i], visited, tested);
 }
 
-/* Splits the stream into windows, each window into same-octant batches of the batch's capacity. By the way
- * cbvh_stream_way_for chooses, a window of incoherent rays walks them alone instead: interleaved on a
- * wide-layout mesh that does not stay in the caches, one at a time on a mesh in the caches with a batch
- * small for the mesh. Exactly one of hits / occluded is given. Invalid rays are misses. */
+/* Splits the stream into windows, each into same-octant batches, or (cbvh_stream_way_for) walks an
+ * incoherent window's rays interleaved or one at a time. Exactly one of hits / occluded is given. Invalid
+ * rays are misses. */
 static void stream_run(const struct cbvh_file *f, const cbvh_ray *rays, size_t count, cbvh_hit *hits,
                        uint8_t *occluded, cbvh_query_stats *stats, struct cbvh_stream_batch *restrict batch,
                        uint8_t *restrict octant)
@@ -220,7 +208,6 @@ static void stream_run(const struct cbvh_file *f, const cbvh_ray *rays, size_t c
         }
         uint32_t present = 0; /* octants that occur in the window */
         for (uint32_t j = 0; j < window; j++) {
-            /* the octant alone here; each ray begins (stream_ray_begin) when its octant's turn comes */
             const size_t r = start + j;
             octant[j] = cbvh_ray_valid(&rays[r]) ? (uint8_t)cbvh_ray_octant(&rays[r]) : UINT8_MAX;
             if (octant[j] != UINT8_MAX)
@@ -250,8 +237,8 @@ static void stream_run(const struct cbvh_file *f, const cbvh_ray *rays, size_t c
     }
 }
 
-/* The stream in a batch of CBVH_STREAM_STACK_BATCH rays and CBVH_STREAM_STACK_WALKS walk slots on this
- * frame: a function of its own, so that a caller with scratch for more does not reserve it too. */
+/* The stream in a batch on this frame: a function of its own, so a caller with scratch does not reserve it.
+ */
 CBVH_NOINLINE void stream_on_stack(const struct cbvh_file *f, const cbvh_ray *rays, size_t count,
                                    cbvh_hit *hits, uint8_t *occluded, cbvh_query_stats *stats)
 {
@@ -263,9 +250,8 @@ CBVH_NOINLINE void stream_on_stack(const struct cbvh_file *f, const cbvh_ray *ra
     stream_run(f, rays, count, hits, occluded, stats, &batch, octant);
 }
 
-/* The stream (closest hits into hits, or, hits NULL, occlusion into occluded; neither: nothing to do) in
- * the caller's scratch when it holds more rays than the stack batch, else on the stack. No file or no rays:
- * every answer a miss. */
+/* The stream (closest hits into hits, or occlusion into occluded) in the caller's scratch when it holds more
+ * rays than the stack batch, else on the stack. No file or no rays: every answer a miss. */
 static void stream_query(const struct cbvh_file *f, const cbvh_ray *rays, size_t count, cbvh_hit *hits,
                          uint8_t *occluded, cbvh_query_stats *stats, void *scratch, size_t scratch_size)
 {

@@ -9,8 +9,7 @@
 #include "query/ray_setup.h"
 #include "query/walk.h"
 
-/* One ray as the box test reads it: 32 bytes, so SSE2 loads a ray in two
- * vectors, then broadcasts each field to the lanes of the node's children. */
+/* One ray as the box test reads it: 32 bytes, two SSE2 loads. */
 enum {
     CBVH_LANE_OX,
     CBVH_LANE_OY,
@@ -22,30 +21,26 @@ enum {
     CBVH_LANE_TMAX
 };
 
-/* Rays per batch when the stream runs on its own stack (cbvh_raycast_stream; cbvh.h gives the stack use).
- * Caller scratch (cbvh_raycast_stream_scratch) takes up to CBVH_STREAM_MAX_BATCH,
- * the most a 16-bit ray list numbers. */
+/* Rays per batch on the stream's own stack, and at most in caller scratch (16-bit ray lists). */
 #define CBVH_STREAM_STACK_BATCH 24u
 #define CBVH_STREAM_MAX_BATCH 4096u
 
 /* The most children a node test takes (CBVH_TREE_WIDTH): one SSE2 vector of boxes per ray. */
 #define CBVH_STREAM_LANES 4u
 
-/* Rays an interleaved stream walks at once (stream_walk.h's stream_interleave): in the caller's scratch,
- * and in the stream's own stack (stream.c), where fewer fit. */
+/* Rays an interleaved stream walks at once: in the caller's scratch, and on the stream's own stack. */
 #define CBVH_STREAM_WALKS 8u
 #define CBVH_STREAM_STACK_WALKS 4u
 
-/* A ray's single-ray walk in progress (walk.h) and its best hit: a slot of the interleaved walks, or (the
- * first slot) a batch ray finishing a subtree alone (stream_walk.h). */
+/* A ray's single-ray walk in progress and its best hit: a slot of the interleaved walks, or (the first) a
+ * batch ray finishing a subtree alone. */
 struct cbvh_stream_walk {
     struct cbvh_walk_state walk;
     struct cbvh_best_hit best;
     cbvh_ref fetched; /* the leaf whose vertices were last requested (stream_walk.h) */
 };
 
-/* Up to `capacity` rays of one octant, so the sort byte orders the whole batch. Its arrays lie in one
- * block (the stream's stack or the caller's scratch), cut by stream.c. */
+/* Up to `capacity` rays of one octant, in one block cut by stream.c. */
 struct cbvh_stream_batch {
     float (*box_ray)[8];      /* CBVH_LANE_*, 32-byte aligned; TMAX shrinks with hits, -1 once occluded */
     struct cbvh_ray_ctx *ctx; /* the prepared rays (triangle test, walks alone) */
@@ -60,16 +55,15 @@ struct cbvh_stream_batch {
     uint32_t count, capacity;
 };
 
-/* The boxes of a node's children as the batch's octant tests them, dequantized once per batch visit:
- * plane[p][k] is plane p (near x, y, z, far x, y, z) of child k, the children in visit order. */
+/* A node's child boxes dequantized once per batch visit: plane[p][k] is plane p (near x, y, z, far x, y,
+ * z for the batch's octant) of child k. */
 struct cbvh_stream_boxes {
     _Alignas(16) float plane[6][CBVH_STREAM_LANES];
     uint32_t count; /* children, at most CBVH_STREAM_LANES; the planes of the other lanes are 0 */
 };
 
-/* Where a node test puts child k's rays: the j-th ray entering box k goes to ray[k][j], its entry distance
- * to entry[k][j]. Each list has room for every tested ray; lanes past the boxes' count point to one
- * writable element each (a kernel may store there unconditionally, never advancing). */
+/* Where a node test puts the j-th ray entering box k (ray[k][j], entry[k][j]); each list has room for every
+ * ray, and lanes past the boxes' count point to one writable element each. */
 struct cbvh_stream_lists {
     uint16_t *ray[CBVH_STREAM_LANES];
     float *entry[CBVH_STREAM_LANES];
@@ -88,18 +82,15 @@ CBVH_STREAM_NODE_KERNEL(cbvh_stream_node_scalar);
 CBVH_STREAM_NODE_KERNEL(cbvh_stream_node_sse2);
 #endif
 #ifdef CBVH_HAVE_AVX2
-/* The SSE2 kernel in AVX2's encoding, for the AVX2 stream walks (stream_avx2.c): called from AVX code, the
- * SSE2 encoding would run with the upper halves of the vector registers left dirty (GCC does not clear
- * them there), which stalls every SSE2 instruction on some CPUs. */
+/* The SSE2 kernel in AVX2's encoding for the AVX2 stream walks (SSE2 code after AVX stalls on some CPUs). */
 CBVH_STREAM_NODE_KERNEL(cbvh_stream_node_avx2);
 #endif
 
 /* The streams' node kernel: the best this build has (kernel_choice.c), or a test hook's (test_hooks.h). */
 cbvh_stream_node_fn cbvh_stream_node_kernel(void);
 
-/* How the streams walk a window of rays: in batches; interleaved (stream_walk.h's stream_interleave, wide
- * layout); or by window, by the rays' coherence (cbvh_stream_window_coherent): coherent ones in batches, the
- * others interleaved (BY_WINDOW, wide layout) or one at a time on the single-ray walk (BY_WINDOW_SINGLE). */
+/* How the streams walk a window of rays: in batches; interleaved (wide layout); or by the window's
+ * coherence, coherent ones in batches, the others interleaved (BY_WINDOW) or one at a time (_SINGLE). */
 enum cbvh_stream_way {
     CBVH_STREAM_BATCHED,
     CBVH_STREAM_INTERLEAVED,
@@ -107,12 +98,10 @@ enum cbvh_stream_way {
     CBVH_STREAM_BY_WINDOW_SINGLE
 };
 
-/* A mesh in the caches has its incoherent rays batched (wide layout) when it has at most this many triangles
- * a ray of the batch (kernel_choice.c's cbvh_stream_way_for). */
+/* A mesh in the caches batches its incoherent rays (wide layout) at most this many triangles a batch ray. */
 #define CBVH_STREAM_SHARED_TRIANGLES_PER_RAY 8u
 
-/* The way of f's streams in batches of batch_capacity rays: by the mesh and the batch (kernel_choice.c),
- * or by a test hook's setting. */
+/* The way of f's streams in batches of batch_capacity rays (or a test hook's). */
 enum cbvh_stream_way cbvh_stream_way_for(const struct cbvh_file *f, uint32_t batch_capacity);
 
 /* Whether the n rays of a window look coherent (stream.c: then they are batched). */

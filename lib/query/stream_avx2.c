@@ -9,17 +9,15 @@
 #error "stream_avx2.c is compiled with AVX2, BMI1, BMI2 and FMA enabled (configure and CMake add the flags)"
 #endif
 
-#include "query/stream_node_simd.h"
 #include "query/stream_walk.h"
 
-/* The streams' node test (stream_node_simd.h) in this file's encoding. */
+/* The streams' node test (stream_walk.h's stream_node_simd) in this file's encoding. */
 CBVH_STREAM_NODE_KERNEL(cbvh_stream_node_avx2)
 {
     stream_node_simd(batch, rays, n, boxes, out, count);
 }
 
-/* stream.c's wide instances in this file's instruction set: only the leaves' filter width differs
- * (lanes.h), and the answers are the same bit for bit. */
+/* stream.c's wide instances in this file's instruction set: the same answers bit for bit. */
 STREAM_BATCH_INSTANCE(stream_closest, CBVH_LAYOUT_WIDE4, 0)
 STREAM_BATCH_INSTANCE(stream_any, CBVH_LAYOUT_WIDE4, 1)
 STREAM_INTERLEAVE_INSTANCE(interleave_closest, 0)

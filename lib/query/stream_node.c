@@ -1,13 +1,10 @@
-/* stream_node.c: the batch node tests, scalar and SSE2 (stream_node_simd.h); kernel_choice.c picks one. */
+/* stream_node.c: the batch node tests, scalar and SSE2 (stream_walk.h's stream_node_simd); kernel_choice.c
+ * picks one. */
 #ifdef HAVE_CONFIG_H
 #include "config.h"
 #endif
 
-#include "query/ray_box.h"
-#include "query/stream.h"
-#ifdef CBVH_HAVE_SIMD
-#include "query/stream_node_simd.h"
-#endif
+#include "query/stream_walk.h"
 
 CBVH_STREAM_NODE_KERNEL(cbvh_stream_node_scalar)
 {

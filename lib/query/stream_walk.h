@@ -1,5 +1,5 @@
-/* stream_walk.h: the batch walk of the streams (stream.c), in a header so that the AVX2 build of the walks
- * compiles it too. */
+/* stream_walk.h: the streams' batch and interleaved walks and node test, built by stream.c and, for AVX2,
+ * stream_avx2.c. */
 #ifndef CBVH_QUERY_STREAM_WALK_H
 #define CBVH_QUERY_STREAM_WALK_H
 
@@ -9,13 +9,67 @@
 #include "query/raycast.h"
 #include "query/stream.h"
 
-/* A batch node with at most this many live rays hands each of them to the single-ray walk (stream_tail,
- * below): below it the batch would mostly carry one ray per node, paying the partition and stack
- * bookkeeping without sharing any node fetch. */
+#ifdef CBVH_HAVE_SIMD
+/* Ray r, which enters the boxes of `mask` (bit k: box k) at entry[k], goes on those lists. Every lane
+ * stores and only the entered lists advance: no branch on the mask, which is as random as the rays. Written
+ * out lane by lane, so the counts stay in registers. */
+static inline void node_append(const struct cbvh_stream_lists *restrict out, uint16_t r, uint32_t mask,
+                               const float entry[CBVH_STREAM_LANES], uint32_t c[CBVH_STREAM_LANES])
+{
+    out->ray[0][c[0]] = r;
+    out->entry[0][c[0]] = entry[0];
+    c[0] += mask & 1u;
+    out->ray[1][c[1]] = r;
+    out->entry[1][c[1]] = entry[1];
+    c[1] += mask >> 1 & 1u;
+    out->ray[2][c[2]] = r;
+    out->entry[2][c[2]] = entry[2];
+    c[2] += mask >> 2 & 1u;
+    out->ray[3][c[3]] = r;
+    out->entry[3][c[3]] = entry[3];
+    c[3] += mask >> 3 & 1u;
+}
+
+/* The batch node test (CBVH_STREAM_NODE_KERNEL) in SIMD, compiled in SSE2's encoding by stream.c and in
+ * AVX2's by stream_avx2.c: lane for lane ray_box.h's slab test (MAXPS and MINPS ignore a NaN distance as
+ * its compares do), each ray against the four boxes at once. */
+CBVH_FORCE_INLINE void stream_node_simd(const struct cbvh_stream_batch *restrict batch,
+                                        const uint16_t *restrict rays, uint32_t n,
+                                        const struct cbvh_stream_boxes *restrict boxes,
+                                        const struct cbvh_stream_lists *restrict out,
+                                        uint32_t count[CBVH_STREAM_LANES])
+{
+    __m128 plane[6];
+    for (uint32_t p = 0; p < 6; p++)
+        plane[p] = _mm_load_ps(boxes->plane[p]);
+    const uint32_t lanes = (1u << boxes->count) - 1u;
+    uint32_t c[CBVH_STREAM_LANES] = {0, 0, 0, 0};
+    for (uint32_t j = 0; j < n; j++) {
+        const uint16_t r = rays[j];
+        const __m128 o = _mm_load_ps(&batch->box_ray[r][0]), d = _mm_load_ps(&batch->box_ray[r][4]);
+        const __m128 ox = CBVH_LANE(o, 0), oy = CBVH_LANE(o, 1), oz = CBVH_LANE(o, 2), rx = CBVH_LANE(d, 0),
+                     ry = CBVH_LANE(d, 1), rz = CBVH_LANE(d, 2);
+        __m128 tnear = CBVH_LANE(o, 3), tfar = CBVH_LANE(d, 3);
+        tnear = _mm_max_ps(_mm_mul_ps(_mm_sub_ps(plane[0], ox), rx), tnear);
+        tnear = _mm_max_ps(_mm_mul_ps(_mm_sub_ps(plane[1], oy), ry), tnear);
+        tnear = _mm_max_ps(_mm_mul_ps(_mm_sub_ps(plane[2], oz), rz), tnear);
+        tfar = _mm_min_ps(_mm_mul_ps(_mm_sub_ps(plane[3], ox), rx), tfar);
+        tfar = _mm_min_ps(_mm_mul_ps(_mm_sub_ps(plane[4], oy), ry), tfar);
+        tfar = _mm_min_ps(_mm_mul_ps(_mm_sub_ps(plane[5], oz), rz), tfar);
+        _Alignas(16) float entry[CBVH_STREAM_LANES];
+        _mm_store_ps(entry, tnear);
+        const uint32_t mask =
+            (uint32_t)_mm_movemask_ps(_mm_cmple_ps(tnear, _mm_mul_ps(tfar, _mm_set1_ps(CBVH_BOX_PAD))));
+        node_append(out, r, mask & lanes, entry, c);
+    }
+    memcpy(count, c, sizeof c);
+}
+#endif
+
+/* A batch node with at most this many live rays hands each to the single-ray walk (stream_tail). */
 #define CBVH_STREAM_SOLO 4
 
-/* The walk mode of a ray walked alone (a batch ray's tail, an interleaved walk): sorted, and the stream's
- * query kind and kernel (scalar with the scalar node kernel). */
+/* The walk mode of a ray walked alone (a batch ray's tail, an interleaved walk). */
 static inline struct cbvh_walk_mode stream_alone_mode(int any, int scalar)
 {
     const struct cbvh_walk_mode mode = {.order = CBVH_WALK_SORTED, .any = any, .scalar = scalar};
@@ -45,10 +99,8 @@ CBVH_KERNEL void stream_take(struct cbvh_stream_batch *restrict b, uint32_t r, u
     }
 }
 
-/* Ray r of the batch finishes the subtree of node `root` (whose box the batch tested) alone: the single-ray
- * walk (walk.h) in the batch's first walk slot, from the ray's current tmax and best hit, which its hit
- * then updates. The single-ray walk has the batch's triangle test and tie rule, so the answer does not
- * depend on where the batch hands a ray over. */
+/* Ray r of the batch finishes the subtree `root` (whose box the batch tested) alone: the single-ray walk in
+ * the batch's first walk slot, from the ray's current tmax and best hit (same test and tie rule). */
 CBVH_KERNEL void stream_tail(const struct cbvh_file *restrict f, const uint32_t layout,
                              struct cbvh_stream_batch *restrict b, const struct cbvh_walk_mode mode,
                              int counting, uint32_t r, cbvh_ref root, uint8_t *restrict occluded,
@@ -68,12 +120,9 @@ CBVH_KERNEL void stream_tail(const struct cbvh_file *restrict f, const uint32_t 
     *tested += t->walk.tested;
 }
 
-/* The live rays live[0, m) against the leaf's triangles [tri0, tri0 + count). With SIMD the leaf is
- * gathered once per batch visit, CBVH_LANES triangles a group (leaf.h), and each ray runs the SIMD
- * filter on it, the scalar test deciding only the lanes it keeps: the gather, most of a single ray's
- * leaf cost, is shared by the batch. Without, triangles outside and rays inside, each triangle fetched
- * once. Each ray meets its triangles in index order either way, and the tie rule makes its answer the
- * single-ray walk's. Expanded triangles (cbvh_file_expand_triangles) are read in place instead. */
+/* The live rays live[0, m) against the leaf's triangles [tri0, tri0 + count): with SIMD the leaf gathered
+ * once per batch visit (leaf.h) and filtered per ray, else each triangle fetched once for every ray; each
+ * ray meets its triangles in index order either way. */
 CBVH_KERNEL void stream_leaf(const struct cbvh_file *f, struct cbvh_stream_batch *restrict b,
                              const uint16_t *restrict live, uint32_t m, uint32_t tri0, uint32_t count,
                              const int any, int simd, uint8_t *restrict occluded)
@@ -98,9 +147,7 @@ CBVH_KERNEL void stream_leaf(const struct cbvh_file *f, struct cbvh_stream_batch
                 float edge[3][CBVH_LANES];
                 uint32_t within;
                 const float *box_ray = b->box_ray[r];
-                /* an occlusion: the filter's t test on the ray's range, a lane it accepts ends the ray
-                 * (leaf_reject_lanes); a closest hit: the plain filter (a ray's entry into the leaf is not
-                 * kept here) */
+                /* an occlusion also tests the range: a lane it accepts ends the ray */
                 const uint32_t rejected = leaf_reject_lanes(s, &q[g], any, box_ray[CBVH_LANE_TMIN],
                                                             box_ray[CBVH_LANE_TMAX], edge, &within);
                 if (any && (within & q[g].mask)) {
@@ -169,19 +216,12 @@ CBVH_KERNEL uint32_t stream_still_in_reach(const struct cbvh_stream_batch *restr
     return w;
 }
 
-/* Walks the tree once for the batch. A node's children are tested at the
- * node, each live ray against all of their boxes at once (the planes
- * dequantized once per visit), and each child entered gets the list of its
- * rays with their entry distances. The lists form a stack in
- * b->list_ray/list_entry beside the walk's stack of children: the lists of a
- * node's children replace its own, a child's above its later siblings', so
- * popping a child frees everything above its list. A child popped after some
- * ray's tmax shrank drops the rays no longer in reach, as the single-ray walk
- * drops a popped child; a list too large for what is left of the stack sends
- * its node's rays down the single-ray walk. The triangle test and the tie
- * rule are those of the single-ray walks, so every ray gets the same hit.
- * Children come through the layout interface (layout/tree.h) in the
- * precomputed order of the batch's octant. */
+/* Walks the tree once for the batch, children in the order of the batch's octant. Each live ray is tested
+ * against all of a node's child boxes at once, and each child entered gets the list of its rays with their
+ * entry distances. The lists form a stack in b->list_ray/list_entry: a node's children's lists replace its
+ * own, so popping a child frees everything above its list. A child popped after some ray's tmax shrank
+ * drops the rays no longer in reach; a node whose lists would not fit sends its rays down the single-ray
+ * walk. The triangle test and the tie rule are the single-ray walks', so every ray gets the same hit. */
 CBVH_KERNEL void stream_walk(const struct cbvh_file *restrict f, const uint32_t layout,
                              struct cbvh_stream_batch *restrict b, uint32_t octant,
                              cbvh_stream_node_fn node_test, const int any, int counting,
@@ -207,9 +247,8 @@ CBVH_KERNEL void stream_walk(const struct cbvh_file *restrict f, const uint32_t 
     uint32_t sp = 0, count[CBVH_STREAM_LANES];
     uint64_t nv = 0, nt = 0;
 
-    /* The root's list: every ray, through the root box when the layout has one. The children's order: the
-     * batch octant's, nearest first, but farthest first for an any-hit batch whose rays mostly start inside
-     * the mesh's bounds (their any_flip: the single-ray walk's rule, walk.h) */
+    /* The root's list: every ray, through the root box when the layout has one. Farthest first for an
+     * any-hit batch whose rays mostly start inside the mesh's bounds (any_flip, walk.h) */
     uint32_t inside = 0;
     for (uint32_t j = 0; j < b->count; j++) {
         list_ray[j] = (uint16_t)j;
@@ -239,8 +278,7 @@ CBVH_KERNEL void stream_walk(const struct cbvh_file *restrict f, const uint32_t 
             nt += (uint64_t)n * tri_count;
             stream_leaf(f, b, list_ray + start, n, tri0, tri_count, any, simd_leaves, occluded);
         } else if (n <= CBVH_STREAM_SOLO || top + CBVH_TREE_WIDTH * n > b->list_capacity) {
-            /* Too few rays left to share the nodes below, or no room for their lists: each finishes the
-             * subtree on its own, with the single-ray walk and its current tmax. */
+            /* too few rays to share the nodes below, or no room for their lists: each walks alone */
             for (uint32_t j = 0; j < n; j++)
                 stream_tail(f, layout, b, stream_alone_mode(any, !simd_leaves), counting, list_ray[start + j],
                             r, occluded, &nv, &nt);
@@ -254,8 +292,7 @@ CBVH_KERNEL void stream_walk(const struct cbvh_file *restrict f, const uint32_t 
             }
             node_test(b, list_ray + start, n, &boxes, &lists, count);
             nv += (uint64_t)n * k;
-            /* close up the lists over the node's own, now done with, farthest first, and push the children
-             * entered */
+            /* close up the lists over the node's own, farthest first, and push the children entered */
             uint32_t end = start;
             for (uint32_t j = k; j-- > 0;) {
                 if (count[j] == 0)
@@ -303,10 +340,9 @@ CBVH_KERNEL void stream_solo_ray(const struct cbvh_file *f, const struct cbvh_ra
     *tested += stats.triangles_tested;
 }
 
-/* Ray i of the stream begins: its answer is set to a miss (hits[i], or occluded[i] when hits is NULL) and
- * it is prepared into *ctx. Returns 1 when it is to be walked; 0 when it is done already: an invalid ray,
- * one that misses the mesh's top box, or one walked whole by stream_solo_ray (box_halve: the batch's shared
- * boxes do not serve it). */
+/* Ray i of the stream begins: its answer set to a miss and it is prepared into *ctx. Returns 1 when it is to
+ * be walked; 0 when it is done (invalid, missing the top box, or walked whole by stream_solo_ray: box_halve,
+ * which the batch's shared boxes do not serve). */
 CBVH_KERNEL int stream_ray_begin(const struct cbvh_file *restrict f, const cbvh_ray *restrict rays, size_t i,
                                  struct cbvh_ray_ctx *restrict ctx, cbvh_hit *restrict hits,
                                  uint8_t *restrict occluded, uint64_t *restrict visited,
@@ -324,10 +360,8 @@ CBVH_KERNEL int stream_ray_begin(const struct cbvh_file *restrict f, const cbvh_
     return 0;
 }
 
-/* Whether slot t's walk goes to a leaf whose vertices it has not requested yet (wide layout). Then they
- * are requested now: a leaf's vertices, numbered in leaf order, lie close together, so the line of its
- * first triangle's first vertex and the next; and the leaf is tested at the slot's next turn, after the
- * other slots' steps, rather than waiting for them. */
+/* Whether slot t's walk goes to a leaf whose vertices it has not requested yet (wide layout): then two lines
+ * from its first vertex are requested now, and the leaf is tested at the slot's next turn. */
 CBVH_KERNEL int stream_request_leaf(const struct cbvh_file *restrict f, struct cbvh_stream_walk *restrict t)
 {
     if (!cbvh_w4_ref_is_leaf(t->walk.r) || t->fetched == t->walk.r)
@@ -361,13 +395,10 @@ CBVH_KERNEL int stream_interleave_start(const struct cbvh_file *restrict f,
     return 1;
 }
 
-/* The streams' other way, on the wide layout (stream.c chooses it for a mesh that does not stay in the
- * caches): no batch, the rays walked b->walk_count at a time by the single-ray walk, one step (a node or a
- * leaf) each in turn, in the batch's walk slots (with b->ctx[k] and b->ray_index[k] for slot k); a ray that
- * ends hands its slot to the next. Each ray's walk is a chain of dependent fetches and tests that mostly
- * waits on memory there, and the CPU overlaps the chains of the slots' rays. A closest-hit walk requests a
- * leaf's vertices a turn before its test (occlusion walks do not: they stop at their first hit and do not
- * pay for it). Closest hit (`any` clear) into hits, any hit into occluded (hits NULL); the single-ray
+/* The interleaved walks (wide layout): the rays walked b->walk_count at a time by the single-ray walk, one
+ * step each in turn in the batch's walk slots (b->ctx[k], b->ray_index[k] for slot k), so the CPU overlaps
+ * their chains of dependent loads; a ray that ends hands its slot to the next. A closest-hit walk requests a
+ * leaf's vertices a turn before its test. Closest hit into hits, any hit into occluded; the single-ray
  * walk's answers. */
 CBVH_KERNEL void stream_interleave(const struct cbvh_file *restrict f, struct cbvh_stream_batch *restrict b,
                                    const cbvh_ray *restrict rays, size_t count, const int any,
@@ -406,8 +437,7 @@ CBVH_KERNEL void stream_interleave(const struct cbvh_file *restrict f, struct cb
 }
 
 /* The batch walk and the interleaved walks as functions of their own per layout and query kind, in the
- * instruction set of the file that instantiates them (stream.c, stream_avx2.c): a frame holds one walk's
- * stack, not the sum of all (-fstack-usage). */
+ * instruction set of the file that instantiates them (stream.c, stream_avx2.c). */
 #define STREAM_BATCH_INSTANCE(name, layout_, any_)                                                           \
     CBVH_NOINLINE void name(const struct cbvh_file *f, struct cbvh_stream_batch *b, uint32_t octant,         \
                             cbvh_stream_node_fn node_test, int counting, uint8_t *occluded,                  \
@@ -424,9 +454,8 @@ CBVH_KERNEL void stream_interleave(const struct cbvh_file *restrict f, struct cb
     }
 
 #ifdef CBVH_HAVE_AVX2
-/* The wide layout's batch walk (any: any hit) and interleaved walks (hits NULL: any hit) compiled for AVX2
- * (stream_avx2.c), for CPUs that have it: eight-lane leaf filters, and the batch's node test in AVX2's
- * encoding; arguments as stream_walk's and stream_interleave's. */
+/* The wide layout's batch walk and interleaved walks (hits NULL: any hit) compiled for AVX2 (stream_avx2.c);
+ * arguments as stream_walk's and stream_interleave's. */
 void cbvh_stream_wide4_avx2(const struct cbvh_file *f, struct cbvh_stream_batch *b, uint32_t octant, int any,
                             int counting, uint8_t *occluded, uint64_t *visited, uint64_t *tested);
 void cbvh_stream_interleave_avx2(const struct cbvh_file *f, struct cbvh_stream_batch *b, const cbvh_ray *rays,

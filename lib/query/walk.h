@@ -19,18 +19,12 @@ enum cbvh_walk_order {
     CBVH_WALK_DISTANCE  /* by box entry distance, computed at run time */
 };
 
-/* A walk's variant, a compile-time constant in each instance (the kernel is
- * force-inlined into its callers, so every instance loses what its mode
- * switches off), but for `scalar` in the wide layout's. Named instances live
- * in raycast_walks.c. A ray's box_halve (ray_setup.h) is read at run time by
- * every walk: it changes only the set-up of the box test. */
+/* A walk's variant: a constant in each instance (raycast_walks.c), which keeps only its own code, but for
+ * `scalar` in the wide layout's SSE2 instances (kernel_choice.c), read at run time. */
 struct cbvh_walk_mode {
     enum cbvh_walk_order order;
     int any;    /* any hit: stop at the first triangle hit */
-    int scalar; /* no SIMD: the children one box at a time, and each leaf triangle without the
-                 * filter (the fallback, and its test); the wide layout's SSE2 instances read it at run
-                 * time (kernel_choice.c), a predictable branch, rather than doubling their
-                 * code */
+    int scalar; /* no SIMD: child boxes one at a time, leaf triangles without the filter */
 };
 
 /* Box `box` against the ray: quantized from the file, or float_boxes[6 box ...]. */
@@ -60,27 +54,16 @@ CBVH_KERNEL uint32_t walk_order_pair(const enum cbvh_walk_order order, int secon
     return 2;
 }
 
-/* The ray as the wide layout's SIMD box test reads it, set up once per walk rather than rebroadcast at
- * every node. Without SIMD it is empty and unused.
+/* The ray as the wide layout's SIMD box test reads it, set up once per walk (empty without SIMD).
  *
- * Plane k of a node at grid coordinate q is, along the ray, T = (P - org) / dir with P =
- * cbvh_dequantize(q): the box test of ray_box.h computes ((origin + q * scale) - org) * rcp, four
- * roundings on a dependent chain. The affine test computes q * a + b instead, a = scale * rcp and b =
- * (origin - org) * rcp set up per ray, with b lowered by `pad` for near planes and raised by it for far
- * planes, so that the near distances never exceed and the far ones never fall short of T: the test
- * stays conservative (it enters every box the exact test enters), two operations a plane shorter, and
- * with nine constants rather than twelve. Per axis, with u = 2^-24, S = 65535 |scale| (the largest
- * |q * scale|), M the largest |P| (max(|origin|, |origin + S|) up to a rounding) and D = |origin -
- * org|: the products and sums of the affine form are each off by at most u of their operands, P by u (S
- * + M) from origin + q scale, and 1 / dir by u from rcp, which sums (first order) to at most 4.1 u |rcp|
- * (S + D + M); rounding b -/+ pad and the final sum adds 1.1 u |rcp| (S + 2 D) + 2.1 u pad. pad = 16 u
- * |rcp| (S + D + M) + 2^-120 covers both with a factor of 3 to spare (and the underflow of products
- * below FLT_MIN, at most 2^-150 each). The affine test needs every quantity finite and far from
- * overflow: |rcp| (S + D + M) <= 2^100 on each axis, and no halved axis (ray_setup.h's box_halve). A
- * ray that does not meet it (a zero or tiny direction component: rcp infinite or huge; coordinates near
- * FLT_MAX) takes the exact test, on origin, scale, org and rcp: `exact`. For each of the six planes the
- * test uses (near x, y, z, far x, y, z; plane j is on axis j % 3): its byte offset in a node (layout/
- * wide4.h's plane index k). */
+ * The affine test: a plane at grid coordinate q is at T = (cbvh_dequantize(q) - org) * rcp along the ray;
+ * it computes q * a + b, a = scale * rcp, b = (origin - org) * rcp, with b lowered by `pad` for near planes
+ * and raised by it for far ones, so it enters every box the exact test enters. Per axis, with u = 2^-24,
+ * S = 65535 |scale|, M the largest |plane| and D = |origin - org|, the affine form is off by at most
+ * 4.1 u |rcp| (S + D + M) + 1.1 u |rcp| (S + 2 D) + 2.1 u pad (first order); pad = 16 u |rcp| (S + D + M)
+ * + 2^-120 covers that three times over, and underflow. It needs |rcp| (S + D + M) <= 2^100 on each axis
+ * and no halved axis (box_halve); any other ray takes the exact test (`exact`) on `box`. offset: the byte
+ * offsets in a node of the six planes used (near x, y, z, far x, y, z; plane j on axis j % 3). */
 struct cbvh_w4_simd_ray {
 #ifdef CBVH_HAVE_SIMD
     __m128 a[3], near_b[3], far_b[3]; /* the affine test's, per axis, in all four lanes */
@@ -97,8 +80,7 @@ struct cbvh_w4_simd_ray {
 /* Lane k of v in all four lanes. */
 #define CBVH_LANE(v, k) _mm_shuffle_ps((v), (v), _MM_SHUFFLE(k, k, k, k))
 
-/* Per octant, the byte offsets in a node of the six planes the test uses (struct cbvh_w4_simd_ray): a
- * table read by pointer rather than six offsets stored per ray (a ray's set-up is bound by its stores). */
+/* Per octant, the byte offsets in a node of the six planes the test uses (struct cbvh_w4_simd_ray). */
 #define W4_PLANE_OFFSETS(o)                                                                                  \
     {                                                                                                        \
         CBVH_W4_PLANE_OFFSET(CBVH_SLAB_NEAR(o, 0), 0), CBVH_W4_PLANE_OFFSET(CBVH_SLAB_NEAR(o, 1), 0),        \
@@ -111,17 +93,14 @@ static const uint8_t walk_w4_plane_offsets[8][6] = {
     W4_PLANE_OFFSETS(0u), W4_PLANE_OFFSETS(1u), W4_PLANE_OFFSETS(2u), W4_PLANE_OFFSETS(3u),
     W4_PLANE_OFFSETS(4u), W4_PLANE_OFFSETS(5u), W4_PLANE_OFFSETS(6u), W4_PLANE_OFFSETS(7u)};
 #undef W4_PLANE_OFFSETS
-#endif
 
-/* Sets up w for the ray (origin org, reciprocal rcp, octant) against the grid (grid_origin, grid_scale);
- * `box`: where the exact test finds the box ray, which the caller fills when w->exact says the test takes
- * it (the affine test needs only what is here: box_halve, which halves the box ray, makes it exact). */
+/* Sets up w for the ray (origin org, reciprocal rcp, octant) against the grid; `box`: the exact test's box
+ * ray, which the caller fills when w->exact is set (box_halve sets it). */
 CBVH_KERNEL void walk_w4_simd_ray_init(struct cbvh_w4_simd_ray *w, const struct cbvh_box_ray *restrict box,
                                        const float grid_origin[3], const float grid_scale[3],
                                        const float org_in[3], const float rcp_in[3], uint32_t octant,
                                        uint32_t box_halve, float tmin)
 {
-#ifdef CBVH_HAVE_SIMD
     const __m128 origin = cbvh_load3(grid_origin), scale = cbvh_load3(grid_scale);
     const __m128 org = cbvh_load3(org_in), rcp = cbvh_load3(rcp_in);
     const __m128 sign = _mm_set1_ps(-0.0f);
@@ -149,23 +128,10 @@ CBVH_KERNEL void walk_w4_simd_ray_init(struct cbvh_w4_simd_ray *w, const struct 
     w->box = box;
     w->offset = walk_w4_plane_offsets[octant & 7u];
     w->tmin = _mm_set1_ps(tmin);
-#else
-    (void)box;
-    (void)grid_origin;
-    (void)grid_scale;
-    (void)org_in;
-    (void)rcp_in;
-    (void)octant;
-    (void)box_halve;
-    (void)tmin;
-    w->unused = 0;
-#endif
 }
 
-#ifdef CBVH_HAVE_SIMD
-/* q a + b in four lanes, the affine test's plane distance: one fused multiply-add in the files compiled for
- * AVX2, which have FMA too (one rounding: within the product's and the sum's that the pad allows for), else
- * the product and the sum. */
+/* q a + b in four lanes: a fused multiply-add where the file is built with FMA (one rounding, within the
+ * pad), else the product and the sum. */
 #if defined(__FMA__) || (defined(_MSC_VER) && defined(__AVX2__))
 #define CBVH_AFFINE4(q, a, b) _mm_fmadd_ps((q), (a), (b))
 #else
@@ -193,11 +159,9 @@ CBVH_KERNEL __m128 walk_w4_plane_distance(const uint8_t *restrict node,
                       _mm_set1_ps(b->rcp[a]));
 }
 
-/* The slab test of ray_box.h on the four slots at once. The exact form: lane for lane the same
- * operations in the same order: MAXPS(a, b) is `a > b ? a : b` and MINPS(a, b) is `a < b ? a : b` (b
- * when either is NaN), so a NaN distance is ignored as in the scalar test. The affine form (struct
- * cbvh_w4_simd_ray), which every ray that can takes: every quantity finite, no padding of tfar. Returns
- * the hit bits (bit s: slot s) and each slot's entry distance. */
+/* The slab test on the four slots at once: the affine form (struct cbvh_w4_simd_ray) where it serves, else
+ * ray_box.h's lane for lane (MAXPS and MINPS ignore a NaN distance as its compares do). Returns the hit
+ * bits (bit s: slot s) and each slot's entry distance. */
 CBVH_KERNEL uint32_t walk_w4_test_sse2(const uint8_t *restrict node,
                                        const struct cbvh_w4_simd_ray *restrict w, float tmax,
                                        float entry[CBVH_W4_WIDTH])
@@ -228,16 +192,9 @@ CBVH_KERNEL uint32_t walk_w4_test_sse2(const uint8_t *restrict node,
 }
 #endif
 
-/* A wide node's children lie together: its inner children are consecutive nodes from its first child, one
- * cache line each, and its leaves' triangles consecutive from its first triangle. Requested as soon as the
- * node is read, the four lines from the first child's and the lines of its leaves' triangle entries
- * arrive while the node's boxes are tested, not after: the walk goes down one of them next, mostly, and
- * pops another soon. Whatever the node holds (lines past its inner children or its leaves, or past the
- * arrays, are requested and not read: a prefetch never faults), and not the child popped next once the
- * test chose it: no instruction waits for the test, and the line is there whichever child comes next.
- * This pays on meshes whose nodes and triangles do not stay in the caches (docs/PERFORMANCE.md). A node's
- * leaves hold at most 4 x 8 triangles, whose LOCAL8 blocks (28 bytes for 8) take at most 140 bytes: three
- * lines from the first entry hold them but for the tail of the largest. */
+/* Requests a wide node's four child nodes (consecutive from its first child) and the first lines of its
+ * leaves' triangle entries while its boxes are tested, whichever it holds (a prefetch never faults). A
+ * node's leaves hold at most 32 LOCAL8 triangles (140 bytes): three lines hold all but the largest. */
 #define CBVH_W4_LEAF_ENTRY_LINES 3u
 CBVH_KERNEL void walk_w4_prefetch_children(const struct cbvh_file *restrict f, const uint8_t *restrict node)
 {
@@ -253,11 +210,8 @@ CBVH_KERNEL void walk_w4_prefetch_children(const struct cbvh_file *restrict f, c
         CBVH_PREFETCH((const void *)(entries + 64u * k));
 }
 
-/* On a mesh whose vertices do not stay in the caches (struct cbvh_file's vertices_far), the leaf a walk
- * goes to next has three lines of vertices requested as soon as the node chose it, from its first
- * triangle's entry (cbvh_vertex_hint: a LOCAL8 block's base), which the node's own request
- * (walk_w4_prefetch_children) has mostly brought by then: the leaf's decode and its vertex loads then
- * wait less. A node next (no leaf) requests the lines of triangle 0's, without a branch on which it is. */
+/* Requests three lines of vertices of the leaf `next` from its first triangle's entry (cbvh_vertex_hint),
+ * for meshes with vertices_far; a node next requests triangle 0's, without a branch. */
 CBVH_KERNEL void walk_w4_prefetch_leaf_vertices(const struct cbvh_file *restrict f, cbvh_ref next)
 {
     const uint32_t k = next & CBVH_W4_FIRST_MASK & (0u - (next >> 31));
@@ -275,8 +229,7 @@ struct cbvh_walk_entry {
 };
 
 #ifdef CBVH_HAVE_SIMD
-/* Bit s of a 4-bit mask into bit 0 of byte s: the shifts by 0, 7, 14 and 21 of the multiplier put bit s at
- * bit 8 s (and the others where the mask clears them, without carries). */
+/* Bit s of a 4-bit mask into bit 0 of byte s (the multiplier shifts bit s to bit 8 s, no carries). */
 static inline uint32_t walk_w4_bits_to_bytes(uint32_t mask4)
 {
     return mask4 * 0x00204081u & 0x01010101u;
@@ -293,11 +246,8 @@ CBVH_KERNEL __m128i walk_w4_byte_lanes(uint32_t x)
 #endif
 }
 
-/* The references of a node's four slots at once, lane s for slot s: cbvh_w4_child_ref of each used slot
- * (unused slots: a value to ignore), without a branch on which are leaves. In the bytes of a word, one a
- * slot: each leaf's triangle count and each internal slot's 1; multiplied by 0x01010100, byte s holds the
- * sum over the slots before s (at most 3 x 8 triangles: no carry), slot s's offset from the node's first
- * triangle or first child. */
+/* cbvh_w4_child_ref of the four slots at once, lane s for slot s (unused slots: a value to ignore), with no
+ * branch on which are leaves: byte s of a count word times 0x01010100 sums the slots before s. */
 CBVH_KERNEL __m128i walk_w4_refs(const uint8_t *restrict node, uint64_t meta)
 {
     const uint32_t m = (uint32_t)meta;
@@ -319,12 +269,10 @@ CBVH_KERNEL __m128i walk_w4_refs(const uint8_t *restrict node, uint64_t meta)
     return _mm_or_si128(_mm_and_si128(is_inner, inner_ref), _mm_andnot_si128(is_inner, leaf_ref));
 }
 
-/* The SIMD walks' step down the wide layout, in the node's order for the ray's octant or in slot order
- * (cbvh_wide4_descents): node r's children against the ray; the first one it enters into *next, the
- * others onto the stack, the last deepest. Always three entries are stored (those above the new top are
- * dead), and every slot's reference is made at once (walk_w4_refs): no branch on how many children the
- * ray enters nor on which are leaves, which are as unpredictable as the ray. Returns 0, changing
- * nothing, when the ray enters none. *boxes_tested, unless NULL, grows by the boxes tested. */
+/* The SIMD walks' step down the wide layout, in the node's order for the octant or slot order
+ * (cbvh_wide4_descents): the first child the ray enters into *next, the others onto the stack, the last
+ * deepest. Three entries are always stored (those above the new top dead): no branch on how many are
+ * entered. Returns 0, changing nothing, when none is. *boxes_tested, unless NULL, grows by those tested. */
 CBVH_KERNEL int walk_w4_descend(const struct cbvh_file *restrict f, cbvh_ref r,
                                 const struct cbvh_w4_simd_ray *restrict w, const int sorted, uint32_t octant,
                                 float tmax, struct cbvh_walk_entry *restrict stack, uint32_t *restrict sp,
@@ -336,7 +284,7 @@ CBVH_KERNEL int walk_w4_descend(const struct cbvh_file *restrict f, cbvh_ref r,
     const uint32_t used = cbvh_w4_used(meta);
     _Alignas(16) float e[CBVH_W4_WIDTH];
     walk_w4_prefetch_children(f, node);
-    if (boxes_tested) /* NULL when the caller wants no statistics: a predictable branch for a table lookup */
+    if (boxes_tested)
         *boxes_tested += cbvh_w4_popcount(used);
     const uint32_t hits = walk_w4_test_sse2(node, w, tmax, e) & used;
     if (!hits)
@@ -372,11 +320,7 @@ CBVH_KERNEL int walk_w4_descend(const struct cbvh_file *restrict f, cbvh_ref r,
 }
 #endif
 
-/* walk_children_hit for the wide layout: the used slots' boxes against the
- * ray (four at once with SIMD, or one at a time for float boxes and the
- * scalar mode), the hit ones in the node's order for the ray's octant, slot
- * order, or by entry distance. The SIMD walks in the node's or slot order
- * take walk_w4_descend instead. */
+/* walk_children_hit for the wide layout (the SIMD walks in the node's or slot order take walk_w4_descend). */
 CBVH_KERNEL uint32_t walk_w4_children_hit(const struct cbvh_file *restrict f, cbvh_ref r,
                                           const struct cbvh_box_ray *restrict box,
                                           const struct cbvh_w4_simd_ray *restrict w,
@@ -441,10 +385,8 @@ CBVH_KERNEL uint32_t walk_w4_children_hit(const struct cbvh_file *restrict f, cb
     return n;
 }
 
-/* The children of r whose boxes the ray enters within [tmin, tmax], in visit
- * order, with their entry distances; *boxes_tested grows by the boxes tested.
- * Returns how many. Binary layout: the two children's boxes are tested first,
- * and the sort byte is read only when both are hit. Wide layout: above. */
+/* The children of r whose boxes the ray enters within [tmin, tmax], in visit order, with their entry
+ * distances; returns how many. *boxes_tested grows by the boxes tested. */
 CBVH_KERNEL uint32_t walk_children_hit(const struct cbvh_file *restrict f, const uint32_t layout, cbvh_ref r,
                                        const struct cbvh_box_ray *restrict box,
                                        const struct cbvh_w4_simd_ray *restrict w,
@@ -471,8 +413,7 @@ CBVH_KERNEL uint32_t walk_children_hit(const struct cbvh_file *restrict f, const
 }
 
 /* A walk in progress: the ray's box test set up, the stack of children still to visit, and the node or
- * leaf visited next. The single-ray walk keeps one on its frame; the streams' tails (stream_walk.h) keep
- * a few and step them in turn, so that one ray's chain of dependent loads runs while another's waits. */
+ * leaf visited next. */
 struct cbvh_walk_state {
     struct cbvh_box_ray box;
     struct cbvh_w4_simd_ray w;
@@ -505,19 +446,18 @@ CBVH_KERNEL int walk_reads_box_ray(const uint32_t layout, const struct cbvh_walk
 }
 
 /* Sets up a walk in `mode` of the subtree `root`, whose box the caller tested (or root_box, tested here
- * when not CBVH_NO_BOX), for the ray up to `tmax` (its own, or less: a best hit the caller has). Returns 0
- * when the ray misses root_box: nothing to walk. float_boxes: as cbvh_walk's. */
+ * when not CBVH_NO_BOX), for the ray up to `tmax`. Returns 0 when the ray misses root_box. */
 CBVH_KERNEL int cbvh_walk_begin(const struct cbvh_file *restrict f, const uint32_t layout,
                                 const struct cbvh_ray_ctx *restrict ray, const struct cbvh_walk_mode mode,
                                 cbvh_ref root, uint32_t root_box, const float *restrict float_boxes,
                                 float tmax, struct cbvh_walk_state *restrict st)
 {
-    /* set for every layout: the binary layout's instances never read it (the compiler drops the set-up),
-     * and a walk whose layout is a run-time value (cbvh report's) would otherwise look to the compiler as if
-     * it might read it unset */
+    /* set for every layout (unread by the binary layout's instances: the compiler drops it) */
+#ifdef CBVH_HAVE_SIMD
     walk_w4_simd_ray_init(&st->w, &st->box, f->grid_origin, f->grid_scale, ray->shear.org, ray->rcp,
                           ray->octant, float_boxes ? 0u : ray->box_halve, ray->tmin);
-    /* only where it is read (the root box's test reads it too): a ray's set-up is bound by its stores */
+#endif
+    /* only where it is read: a ray's set-up is bound by its stores */
     if (root_box != CBVH_NO_BOX || walk_reads_box_ray(layout, mode, float_boxes, &st->w)) {
         cbvh_box_ray_init(&st->box, f->grid_origin, f->grid_scale, ray->shear.org, ray->rcp, ray->octant);
         if (ray->box_halve && !float_boxes)
@@ -536,11 +476,9 @@ CBVH_KERNEL int cbvh_walk_begin(const struct cbvh_file *restrict f, const uint32
     return walk_box_test(&st->box, f, layout, float_boxes, root_box, ray->tmin, tmax, &entry);
 }
 
-/* A shape query's policies for the walk (sweeps and overlaps, shape_walk.h): its node test, `enter` for
- * each child box or, when not NULL, `enter4` for four wide slots at once, children in the order of
- * `octant`; its leaf test, `leaf`, with `query` the callbacks' state; `limit`, when not NULL, its best
- * contact so far, which the walk reads after each leaf as its reach (a sweep's keys are slab entry
- * distances); NULL (an overlap) drops nothing. */
+/* A shape query's policies (sweeps and overlaps, shape_walk.h): `enter` for each child box or `enter4` for
+ * four wide slots at once, children in the order of `octant`; `leaf` with `query` the callbacks' state;
+ * `limit`, when not NULL, its best contact so far, read after each leaf as the walk's reach. */
 struct cbvh_shape_policy {
     cbvh_shape_enter_fn enter;
     cbvh_shape_enter4_fn enter4;
@@ -564,8 +502,7 @@ CBVH_KERNEL void walk_enter_children(struct cbvh_walk_state *restrict st, const 
     st->r_entry = e[0];
 }
 
-/* A wide node is one cache line: the farther children a walk pushed start arriving now, and a leaf's
- * triangle entries (its vertices need those first). */
+/* Requests the wide nodes and leaf triangle entries of the children c[1..n) a walk pushed. */
 CBVH_KERNEL void walk_prefetch_pushed(const struct cbvh_file *restrict f, const uint32_t layout,
                                       const cbvh_ref *c, uint32_t n)
 {
@@ -588,9 +525,7 @@ CBVH_KERNEL int walk_ray_node(const struct cbvh_file *restrict f, const uint32_t
                               struct cbvh_walk_state *restrict st)
 {
     (void)count; /* read by the SIMD step only */
-    /* the children's order: nearest first, but an any-hit walk from among the triangles goes farthest
-     * first (ray->any_flip), where most occluders are, not around its start, where a ray leaving a surface
-     * passes the surface's neighbours, which it would test first */
+    /* nearest first, but an any-hit walk from among the triangles farthest first (ray->any_flip) */
     const uint32_t octant = ray->octant ^ (mode.any ? ray->any_flip : 0u);
 #ifdef CBVH_HAVE_SIMD
     if (layout == CBVH_LAYOUT_WIDE4 && !float_boxes && !mode.scalar && mode.order != CBVH_WALK_DISTANCE)
@@ -638,19 +573,12 @@ CBVH_KERNEL int walk_pop(struct cbvh_walk_state *restrict st, const int bounded)
     return 1;
 }
 
-/* One step of the walk skeleton, which every query over the tree takes but the binary layout's stackless
- * walk (raycast_stackless.c) and the streams' batch walk (stream_walk.h): the node st->r's children
- * against the query (the nearest entered is the next step's, the others go onto the stack, the farthest
- * deepest), or the leaf st->r's triangles, then the next reference off the stack still in reach. The
- * query is a ray (`ray`, in `mode`, with float_boxes as cbvh_walk's), or a shape (`shape` not NULL: ray,
- * mode, float_boxes, count and best are not read), a constant at every call, so each instance keeps only
- * its own tests. A node's children are tested at the node, so a missed child is never pushed, and the
- * farther ones are pushed with their entry distances: one popped after the query's reach (st->tmax)
- * became shorter than that is dropped without a second box test. The loader checked depth <=
- * CBVH_MAX_DEPTH, and a walk pushes at most CBVH_TREE_WIDTH - 1 references per level, so the stack cannot
- * overflow (walk_w4_descend's dead stores above the top included). Closest hit: best and st->tmax follow
- * each closer hit. `count`: whether st->visited counts the boxes tested (statistics; st->tested always
- * counts). */
+/* One step of the walk skeleton, which every tree query takes but the stackless walk (raycast_walks.c) and
+ * the streams' batch walk (stream_walk.h): node st->r's entered children (the nearest next, the others onto
+ * the stack with their entry distances), or leaf st->r's triangles; then the next reference off the stack
+ * still within st->tmax. The query is a ray (`ray` in `mode`) or, `shape` not NULL, a shape (ray, mode,
+ * float_boxes, count and best unread). The loader checked depth <= CBVH_MAX_DEPTH, so the stack cannot
+ * overflow. Closest hit: best and st->tmax follow each closer hit. `count`: whether st->visited counts. */
 CBVH_KERNEL enum cbvh_walk_step_result
 cbvh_walk_step(const struct cbvh_file *restrict f, const uint32_t layout,
                const struct cbvh_ray_ctx *restrict ray, const struct cbvh_walk_mode mode,
@@ -679,12 +607,9 @@ cbvh_walk_step(const struct cbvh_file *restrict f, const uint32_t layout,
     return walk_pop(st, !shape || shape->limit) ? CBVH_WALK_MORE : CBVH_WALK_DONE;
 }
 
-/* The walk: cbvh_walk_step until the walk is over. It covers the subtree of `root`, whose box the caller
- * tested (or root_box, tested here when not CBVH_NO_BOX). The result: any hit: 1 when a triangle occludes
- * the ray; closest: 0, with best filled. Counters go to stats when not NULL (a few adds per node).
- * float_boxes: NULL for the file's quantized boxes (every library walk, where the constant folds the choice
- * away); else six floats per box id (min xyz, max xyz), for tools that measure another box precision on the
- * same tree and the same walk (cbvh report's exact reference, whose rays have no box_halve). */
+/* The walk of the subtree `root` (root_box as cbvh_walk_begin's): any hit: 1 when a triangle occludes the
+ * ray; closest: 0, with best filled. Counters go to stats when not NULL. float_boxes: NULL for the file's
+ * quantized boxes, else six floats per box id (min xyz, max xyz; cbvh report's exact reference). */
 CBVH_KERNEL int cbvh_walk(const struct cbvh_file *restrict f, const uint32_t layout,
                           const struct cbvh_ray_ctx *restrict ray, cbvh_ref root, uint32_t root_box,
                           const struct cbvh_walk_mode mode, const float *restrict float_boxes,
@@ -701,11 +626,8 @@ CBVH_KERNEL int cbvh_walk(const struct cbvh_file *restrict f, const uint32_t lay
     return step == CBVH_WALK_HIT;
 }
 
-/* A shape query's walk (sweeps and overlaps) on the skeleton: the subtrees whose boxes `enter` accepts (or
- * `enter4`, when not NULL, four wide slots at once: the same test), children in the precomputed order of
- * `octant` (CBVH_NO_OCTANT: stored order, which for the binary layout is the file's depth-first order),
- * leaves to `leaf`; `limit` and the keys as struct cbvh_shape_policy's. Force-inlined so each query's
- * callbacks are direct calls; `layout` is read at run time (a sweep's cost is in its triangle tests). */
+/* A shape query's walk on the skeleton, with the policies of struct cbvh_shape_policy (octant
+ * CBVH_NO_OCTANT: stored order). Force-inlined so each query's callbacks are direct calls. */
 CBVH_KERNEL void cbvh_shape_walk(const struct cbvh_file *f, const uint32_t layout, uint32_t octant,
                                  cbvh_shape_enter_fn enter, cbvh_shape_enter4_fn enter4,
                                  cbvh_shape_leaf_fn leaf, void *query, const float *limit)
@@ -730,5 +652,25 @@ CBVH_KERNEL void cbvh_shape_walk(const struct cbvh_file *f, const uint32_t layou
     while (cbvh_walk_step(f, layout, NULL, unread, NULL, 0, &shape, &st, NULL) == CBVH_WALK_MORE)
         ;
 }
+
+/* X(name, order, any) for each walk mode the library instantiates (raycast_walks.c, and for AVX2
+ * raycast_walks_avx2.c): its order and whether it stops at the first hit. */
+#define CBVH_WALK_INSTANCES(X)                                                                               \
+    X(closest_sorted, CBVH_WALK_SORTED, 0)                                                                   \
+    X(closest_unsorted, CBVH_WALK_UNSORTED, 0)                                                               \
+    X(closest_distance, CBVH_WALK_DISTANCE, 0)                                                               \
+    X(any_sorted, CBVH_WALK_SORTED, 1)                                                                       \
+    X(any_unsorted, CBVH_WALK_UNSORTED, 1)                                                                   \
+    X(any_distance, CBVH_WALK_DISTANCE, 1)
+
+#ifdef CBVH_HAVE_AVX2
+/* The wide layout's instances compiled for AVX2, for CPUs that have it (the caller checks): cbvh_walk on
+ * the subtree `start`, whose box the caller tested. */
+#define CBVH_WALK_AVX2_DECLARE(name, order, any)                                                             \
+    int cbvh_walk_##name##_wide4_avx2(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray,             \
+                                      cbvh_ref start, struct cbvh_best_hit *best, cbvh_query_stats *stats);
+CBVH_WALK_INSTANCES(CBVH_WALK_AVX2_DECLARE)
+#undef CBVH_WALK_AVX2_DECLARE
+#endif
 
 #endif
