@@ -340,13 +340,8 @@ CBVH_KERNEL void leaf_group_lanes(const struct cbvh_file *restrict f, const stru
 
 /* Of `candidates` (lanes whose float edge functions u, v, w are finite, of one sign, sum det), the bits
  * whose t the exact test (cbvh_ray_triangle_decide) would find outside [tmin, tmax] for sure; *within: those
- * it would find inside. px, py, pz: the sheared vertices as leaf_reject_rows has them.
- *
- * t here is Woop's float interpolation (u z0 + v z1 + w z2) / det / dir[kz]. With R the largest |sheared x
- * or y|, Zabs the largest |z| and u = 2^-24, each edge function is off by at most E = 2^-20 R (R + Zabs)
- * (first order), so a lane with |u|, |v|, |w| > 4 E crosses strictly inside the triangle, where the exact t
- * is the plane's t* (rounded); the float t is off from t* by 3 E Zspan / |det| + 9 u Zabs (times
- * 1/|dir[kz]|). The margin is four times that plus FLT_MIN; every other lane is left to the exact test. */
+ * it would find inside. px, py, pz: the sheared vertices as leaf_reject_rows has them. t is Woop's float
+ * interpolation, with a margin docs/EXACTNESS.md derives; lanes near an edge go to the exact test. */
 CBVH_KERNEL uint32_t leaf_outside_lanes(const struct cbvh_ray_shear *restrict s, const cbvh_lanes px[3],
                                         const cbvh_lanes py[3], const cbvh_lanes pz[3], cbvh_lanes u,
                                         cbvh_lanes v, cbvh_lanes w, cbvh_lanes det, uint32_t candidates,

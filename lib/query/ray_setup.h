@@ -75,14 +75,11 @@ struct cbvh_ray_shear {
 /* A validated ray, ready for traversal. */
 struct cbvh_ray_ctx {
     struct cbvh_ray_shear shear;
-    float rcp[3];     /* 1/dir: 0 and -0 give +inf and -inf, which the box test handles */
-    float tmin, tmax; /* tmax clamped to CBVH_T_LIMIT: an overflowed t never counts as a hit, and the
-                       * box test's padded tmax stays finite, so a box at infinity is never entered */
+    float rcp[3];                /* 1/dir: 0 and -0 give +inf and -inf, which the box test handles */
+    float tmin, tmax;            /* tmax clamped to CBVH_T_LIMIT, so a padded tmax stays finite */
     struct cbvh_t_frame t_frame; /* the kernels' t and [tmin, tmax] on the caller's ray */
-    uint32_t box_halve;          /* bit a: a plane - org difference on axis a can overflow (coordinates past
-                                  * FLT_MAX / 2), so the box test runs on that axis at half scale (ray_box.h) */
-    uint32_t octant;   /* bit a set when rcp[a] has its sign bit set (so -0 counts as negative): selects
-                        * the precomputed child order (layout/tree.h) */
+    uint32_t box_halve;          /* bit a: the box test runs at half scale on axis a (ray_box.h) */
+    uint32_t octant;             /* bit a: rcp[a]'s sign bit (-0 counts as negative) */
     uint32_t any_flip; /* 7 when the origin lies inside the mesh's bounds (cbvh_ray_prepare), else 0: an
                         * any-hit walk takes the child order of octant ^ any_flip (walk.h) */
     const struct cbvh_hit_gate *gate; /* NULL, or a query's culling and hit filter (leaf.h) */
@@ -162,8 +159,7 @@ static inline int cbvh_all_finite(const float *v, int n)
     return 1;
 }
 
-/* 1 when the ray is valid (cbvh.h: finite org and dir, dir not all zero,
- * 0 <= tmin <= tmax, tmax finite or +inf), else 0. */
+/* 1 when the ray is valid (finite org and dir, dir not zero, 0 <= tmin <= tmax, tmax finite or +inf). */
 static inline int cbvh_ray_valid(const cbvh_ray *ray)
 {
 #ifdef CBVH_HAVE_SIMD

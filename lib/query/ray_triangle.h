@@ -269,8 +269,7 @@ CBVH_KERNEL int cbvh_ray_triangle_decide(const struct cbvh_ray_shear *restrict s
                                          float u, float v, float w, float tmin, float tmax, const int want_uv,
                                          float *t_out, float *u_out, float *v_out)
 {
-    /* All non-zero and finite (so of one sign, with a finite sum): decided.
-     * Otherwise (an edge through the origin, an overflow) decide in double. */
+    /* all non-zero with a finite sum: decided; otherwise (0, an overflow) decided in double */
     double e[3] = {u, v, w};
     if (!CBVH_LIKELY(fabsf(u + v + w) <= FLT_MAX && u != 0.0f && v != 0.0f && w != 0.0f) &&
         !cbvh_ray_triangle_edges_double(s, vert, e))

@@ -23,12 +23,10 @@ enum cbvh_walk_kernel {
     CBVH_WALK_KERNEL_BEST,   /* the fastest the build and the CPU have: AVX2, else SSE2, else scalar */
     CBVH_WALK_KERNEL_SCALAR, /* child boxes and leaf triangles one at a time (builds without SIMD) */
     CBVH_WALK_KERNEL_SSE2,   /* four child boxes at once, leaf triangles through a four-lane filter */
-    CBVH_WALK_KERNEL_AVX2    /* SSE2's node test, leaf triangles eight lanes at a time (raycast_walks_avx2.c;
-                              * CPUs with AVX2, BMI1, BMI2 and FMA) */
+    CBVH_WALK_KERNEL_AVX2    /* leaf triangles eight lanes at a time (CPUs with AVX2, BMI1, BMI2 and FMA) */
 };
 
-/* The wide layout's walk kernel (enum cbvh_walk_kernel) once chosen (kernel_choice.c): 0 (BEST) until the
- * first walk chooses it; in the tests' build, also what a test hook (test_hooks.h) set. */
+/* The wide layout's walk kernel once chosen (kernel_choice.c, or a test hook): BEST until the first walk. */
 extern atomic_int cbvh_walk_kernel_chosen;
 
 /* Chooses the best kernel the build and the CPU have for the wide layout's walks, and returns it. */

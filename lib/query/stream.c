@@ -237,8 +237,7 @@ static void stream_run(const struct cbvh_file *f, const cbvh_ray *rays, size_t c
     }
 }
 
-/* The stream in a batch on this frame: a function of its own, so a caller with scratch does not reserve it.
- */
+/* The stream in a batch on this frame, a function of its own so a caller with scratch does not reserve it. */
 CBVH_NOINLINE void stream_on_stack(const struct cbvh_file *f, const cbvh_ray *rays, size_t count,
                                    cbvh_hit *hits, uint8_t *occluded, cbvh_query_stats *stats)
 {

@@ -30,7 +30,7 @@ static inline void node_append(const struct cbvh_stream_lists *restrict out, uin
     c[3] += mask >> 3 & 1u;
 }
 
-/* The batch node test (CBVH_STREAM_NODE_KERNEL) in SIMD, compiled in SSE2's encoding by stream.c and in
+/* The batch node test (CBVH_STREAM_NODE_KERNEL) in SIMD, compiled in SSE2's encoding by stream_node.c and in
  * AVX2's by stream_avx2.c: lane for lane ray_box.h's slab test (MAXPS and MINPS ignore a NaN distance as
  * its compares do), each ray against the four boxes at once. */
 CBVH_FORCE_INLINE void stream_node_simd(const struct cbvh_stream_batch *restrict batch,

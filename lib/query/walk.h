@@ -54,16 +54,11 @@ CBVH_KERNEL uint32_t walk_order_pair(const enum cbvh_walk_order order, int secon
     return 2;
 }
 
-/* The ray as the wide layout's SIMD box test reads it, set up once per walk (empty without SIMD).
- *
- * The affine test: a plane at grid coordinate q is at T = (cbvh_dequantize(q) - org) * rcp along the ray;
- * it computes q * a + b, a = scale * rcp, b = (origin - org) * rcp, with b lowered by `pad` for near planes
- * and raised by it for far ones, so it enters every box the exact test enters. Per axis, with u = 2^-24,
- * S = 65535 |scale|, M the largest |plane| and D = |origin - org|, the affine form is off by at most
- * 4.1 u |rcp| (S + D + M) + 1.1 u |rcp| (S + 2 D) + 2.1 u pad (first order); pad = 16 u |rcp| (S + D + M)
- * + 2^-120 covers that three times over, and underflow. It needs |rcp| (S + D + M) <= 2^100 on each axis
- * and no halved axis (box_halve); any other ray takes the exact test (`exact`) on `box`. offset: the byte
- * offsets in a node of the six planes used (near x, y, z, far x, y, z; plane j on axis j % 3). */
+/* The ray as the wide layout's SIMD box test reads it, set up once per walk (empty without SIMD). The
+ * affine test computes a plane's distance as q * a + b, a = scale * rcp, b = (origin - org) * rcp, padded
+ * so that it enters every box the exact test enters (docs/EXACTNESS.md gives the bound); a ray it cannot
+ * serve takes the exact test (`exact`) on `box`. offset: the byte offsets in a node of the six planes used
+ * (near x, y, z, far x, y, z; plane j on axis j % 3). */
 struct cbvh_w4_simd_ray {
 #ifdef CBVH_HAVE_SIMD
     __m128 a[3], near_b[3], far_b[3]; /* the affine test's, per axis, in all four lanes */
@@ -426,6 +421,17 @@ struct cbvh_walk_state {
     struct cbvh_walk_entry stack[(CBVH_TREE_WIDTH - 1u) * CBVH_MAX_DEPTH + CBVH_TREE_WIDTH];
 };
 
+/* Starts st's walk at `root`, entered at `entry`, with the reach tmax and an empty stack. */
+CBVH_KERNEL void walk_state_start(struct cbvh_walk_state *st, cbvh_ref root, float entry, float tmax)
+{
+    st->sp = 0;
+    st->r = root;
+    st->r_entry = entry;
+    st->tmax = tmax;
+    st->visited = 0;
+    st->tested = 0;
+}
+
 /* What a walk step leaves: more to do, the walk over, or (any hit) a triangle occludes the ray. */
 enum cbvh_walk_step_result { CBVH_WALK_MORE, CBVH_WALK_DONE, CBVH_WALK_HIT };
 
@@ -463,12 +469,7 @@ CBVH_KERNEL int cbvh_walk_begin(const struct cbvh_file *restrict f, const uint32
         if (ray->box_halve && !float_boxes)
             cbvh_box_ray_halve(&st->box, ray->box_halve);
     }
-    st->sp = 0;
-    st->r = root;
-    st->r_entry = ray->tmin;
-    st->tmax = tmax;
-    st->visited = 0;
-    st->tested = 0;
+    walk_state_start(st, root, ray->tmin, tmax);
     if (root_box == CBVH_NO_BOX)
         return 1;
     float entry;
@@ -643,12 +644,7 @@ CBVH_KERNEL void cbvh_shape_walk(const struct cbvh_file *f, const uint32_t layou
     const struct cbvh_shape_policy shape = {enter, enter4, leaf, query, octant, limit};
     const struct cbvh_walk_mode unread = {CBVH_WALK_SORTED, 0, 0};
     struct cbvh_walk_state st;
-    st.sp = 0;
-    st.r = cbvh_tree_root(f, layout);
-    st.r_entry = 0.0f;
-    st.tmax = limit ? *limit : INFINITY;
-    st.visited = 0;
-    st.tested = 0;
+    walk_state_start(&st, cbvh_tree_root(f, layout), 0.0f, limit ? *limit : INFINITY);
     while (cbvh_walk_step(f, layout, NULL, unread, NULL, 0, &shape, &st, NULL) == CBVH_WALK_MORE)
         ;
 }
