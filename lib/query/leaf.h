@@ -184,8 +184,7 @@ static const struct leaf_local8_window leaf_local8_windows[CBVH_LOCAL8_BLOCK] = 
 #undef L8W_LANE
 #undef L8W_NEXT
 
-/* Whether the windows of a group from k stay in a LOCAL8 section of `triangles` triangles: the block after
- * k's exists. */
+/* Whether the windows of a group from k stay in a LOCAL8 section: the block after k's exists. */
 static inline int leaf_local8_window_fits(uint32_t triangles, uint32_t k)
 {
     return k / CBVH_LOCAL8_BLOCK + 1u < cbvh_local8_blocks(triangles);
@@ -251,8 +250,7 @@ leaf_group_load(const struct leaf_quad *restrict quads, const void *restrict tri
     return scratch;
 }
 
-/* A group of CBVH_LANES triangles for the ray filter: lanes 4 h .. 4 h + 3 in quad[h], triangles k + j
- * (leaf_group_lanes) for the lanes j of mask. */
+/* A group of CBVH_LANES triangles for the filter: lanes 4 h .. 4 h + 3 in quad[h], the used ones in mask. */
 #define CBVH_LEAF_QUADS (CBVH_LANES / 4u)
 struct leaf_group {
     const struct leaf_quad *quad[CBVH_LEAF_QUADS];

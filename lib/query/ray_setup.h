@@ -256,8 +256,7 @@ static inline const cbvh_ray *cbvh_ray_sanitize(const cbvh_ray *ray, cbvh_ray *c
     return clean;
 }
 
-/* Returns the ray the kernels walk (cbvh_ray_sanitize: the caller's, or *clean; its range is clean's) and
- * fills ctx but for its shear (what a box test reads) when the ray is valid (cbvh_ray_valid), else NULL. */
+/* For a valid ray, returns the ray the kernels walk (cbvh_ray_sanitize) and fills ctx but for its shear. */
 static inline const cbvh_ray *cbvh_ray_setup_boxes(struct cbvh_ray_ctx *ctx, const cbvh_ray *ray,
                                                    cbvh_ray *clean)
 {

@@ -86,8 +86,7 @@ CBVH_KERNEL int cbvh_plane_t(const struct cbvh_ray_shear *restrict s, const cbvh
         const double o = s->org[axis], inv = 1.0 / (double)s->dir[axis];
         const double small = cbvh_dmin(cbvh_dmin(p0, p1), p2), big = cbvh_dmax(cbvh_dmax(p0, p1), p2);
         const double t0 = (small - o) * inv, t1 = (big - o) * inv;
-        /* the slab's entry and exit: t0 <= t1 for inv > 0, t1 <= t0 for inv < 0 (both finite, and bit for
-         * bit the same value when equal), so min and max pick them without a branch on the sign */
+        /* the slab's entry and exit by min and max, without a branch on the sign of inv */
         const double slab_enter = cbvh_dmin(t0, t1), slab_leave = cbvh_dmax(t0, t1);
         enter = slab_enter > enter ? slab_enter : enter;
         leave = slab_leave < leave ? slab_leave : leave;
@@ -214,8 +213,7 @@ CBVH_KERNEL int cbvh_plane_t4(const struct cbvh_ray_shear *restrict s, const cbv
     const double proj[3] = {v4d_dot(_mm256_sub_pd(v[0], org), dir), v4d_dot(_mm256_sub_pd(v[1], org), dir),
                             v4d_dot(_mm256_sub_pd(v[2], org), dir)};
     double tp = cbvh_plane_t_in_span(num / den, proj, v4d_dot(dir, dir));
-    /* the slabs of all three axes at once (lane 3: 1 / 0, ignored); an axis the ray does not move along
-     * enters at -inf and leaves at +inf, which the scalar code's skip amounts to */
+    /* the slabs of all three axes at once (lane 3 ignored); a still axis spans (-inf, +inf), as skipped */
     const cbvh_v4d small = _mm256_min_pd(_mm256_min_pd(v[0], v[1]), v[2]);
     const cbvh_v4d big = _mm256_max_pd(_mm256_max_pd(v[0], v[1]), v[2]);
     const cbvh_v4d inv = _mm256_div_pd(_mm256_set1_pd(1.0), dir);
@@ -242,8 +240,7 @@ CBVH_KERNEL int cbvh_plane_t4(const struct cbvh_ray_shear *restrict s, const cbv
     return 1;
 }
 
-/* cbvh_plane_barycentrics on vectors: a point inside the closed triangle, as most are; any other, the
- * scalar code on the same frame (which finds the same x and y). */
+/* cbvh_plane_barycentrics on vectors for a point inside the closed triangle; any other, the scalar code. */
 CBVH_KERNEL void cbvh_plane_barycentrics4(const struct cbvh_ray_shear *restrict s,
                                           const struct cbvh_frame4 *restrict f, cbvh_v4d base, double t,
                                           const double edge[3], float *u, float *v)

@@ -51,8 +51,7 @@ _Static_assert(4 * CBVH_NEAR_ORIGIN_FACTOR <= (int)CBVH_FAR_FACTOR,
  * on the axes where a node plane minus the origin can overflow. */
 void cbvh_ray_place_origin(struct cbvh_ray_ctx *ctx, const cbvh_ray *ray, const struct cbvh_file *f);
 
-/* Whether the ray's origin lies in the box [lo, hi] (lane 3 of each is not looked at; the ray's tmin follows
- * its origin, so one 16-byte load reads it). */
+/* Whether the ray's origin lies in the box [lo, hi] (lane 3 is not looked at: the ray's load reads tmin). */
 static inline int cbvh_origin_in(const cbvh_ray *ray, const float lo[4], const float hi[4])
 {
 #ifdef CBVH_HAVE_SIMD

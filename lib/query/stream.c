@@ -120,8 +120,7 @@ static void batch_flush(const struct cbvh_file *f, struct cbvh_stream_batch *b, 
         return;
     if (hits) {
         batch_walk(f, b, octant, node_test, 0, counting, NULL, visited, tested);
-        /* the hits' REMAP entries (original ids), scattered over a large mesh's table: all requested
-         * before the first is read */
+        /* the hits' REMAP entries all requested before the first is read */
         for (uint32_t r = 0; f->remap && r < b->count; r++)
             if (b->best[r].tri != UINT32_MAX)
                 CBVH_PREFETCH(cbvh_remap_entry(f, b->best[r].tri));

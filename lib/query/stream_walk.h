@@ -10,9 +10,8 @@
 #include "query/stream.h"
 
 #ifdef CBVH_HAVE_SIMD
-/* Ray r, which enters the boxes of `mask` (bit k: box k) at entry[k], goes on those lists. Every lane
- * stores and only the entered lists advance: no branch on the mask, which is as random as the rays. Written
- * out lane by lane, so the counts stay in registers. */
+/* Ray r, which enters the boxes of `mask` at entry[k], goes on those lists: every lane stores, only the
+ * entered lists advance (no branch on the mask; written out so the counts stay in registers). */
 static inline void node_append(const struct cbvh_stream_lists *restrict out, uint16_t r, uint32_t mask,
                                const float entry[CBVH_STREAM_LANES], uint32_t c[CBVH_STREAM_LANES])
 {

@@ -489,8 +489,7 @@ struct cbvh_shape_policy {
     const float *limit;
 };
 
-/* Pushes the entered children c[1..n) (n >= 1) in visit order, the farthest deepest, and makes c[0] the
- * walk's next. */
+/* Pushes the entered children c[1..n) (n >= 1), the farthest deepest, and makes c[0] the walk's next. */
 CBVH_KERNEL void walk_enter_children(struct cbvh_walk_state *restrict st, const cbvh_ref *c, const float *e,
                                      uint32_t n)
 {
@@ -518,8 +517,7 @@ CBVH_KERNEL void walk_prefetch_pushed(const struct cbvh_file *restrict f, const 
     }
 }
 
-/* The ray's node test: node st->r's children it enters go onto the stack, the nearest next. Returns 0 when
- * it enters none. */
+/* The ray's node test: node st->r's entered children onto the stack, the nearest next; 0 when none. */
 CBVH_KERNEL int walk_ray_node(const struct cbvh_file *restrict f, const uint32_t layout,
                               const struct cbvh_ray_ctx *restrict ray, const struct cbvh_walk_mode mode,
                               const float *restrict float_boxes, int count,
