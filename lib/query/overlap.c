@@ -60,17 +60,39 @@ struct overlap_region {
     const struct cbvh_placement *placement;
 };
 
-static int region_triangle(const struct overlap_region *r, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c)
+/* The closest points of a ball's or capsule's core (center or segment) and a triangle, and the square of
+ * their distance: what both the exact overlap test and the contact of a round region read. */
+struct round_closest {
+    int known; /* 0 until computed */
+    cbvh_v3 on_core, on_tri;
+    double d2;
+};
+
+/* Fills *rc for the round shape s and triangle (a, b, c) unless it is known already. */
+static void round_closest_of(const struct cbvh_local_shape *s, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c,
+                             struct round_closest *rc)
+{
+    if (rc->known)
+        return;
+    rc->known = 1;
+    if (s->kind == CBVH_SHAPE_SPHERE) {
+        rc->on_core = s->p0;
+        rc->on_tri = cbvh_closest_point_triangle(s->p0, a, b, c);
+        rc->d2 = v3_len2(v3_sub(rc->on_core, rc->on_tri));
+    } else {
+        rc->d2 = cbvh_closest_segment_triangle(s->p0, s->p1, a, b, c, &rc->on_core, &rc->on_tri);
+    }
+}
+
+/* The exact overlap test of the region and triangle (a, b, c); a round region leaves its closest points in
+ * *rc for the contact. */
+static int region_triangle(const struct overlap_region *r, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c,
+                           struct round_closest *rc)
 {
     const struct cbvh_local_shape *s = &r->shape;
-    if (s->kind == CBVH_SHAPE_SPHERE) {
-        const cbvh_v3 q = cbvh_closest_point_triangle(s->p0, a, b, c);
-        return v3_len2(v3_sub(q, s->p0)) <= s->radius * s->radius;
-    }
-    if (s->kind == CBVH_SHAPE_CAPSULE) {
-        cbvh_v3 on_seg, on_tri;
-        return cbvh_closest_segment_triangle(s->p0, s->p1, a, b, c, &on_seg, &on_tri) <=
-               s->radius * s->radius;
+    if (s->kind != CBVH_SHAPE_BOX) {
+        round_closest_of(s, a, b, c, rc);
+        return rc->d2 <= s->radius * s->radius;
     }
     double t;
     return cbvh_triangle_oriented_box_sweep(a, b, c, &r->box, v3(0, 0, 0), 0.0, &t, NULL, NULL);
@@ -98,21 +120,14 @@ static void box_contact(const struct overlap_region *r, cbvh_v3 a, cbvh_v3 b, cb
  * A core that reaches the triangle (d = 0) is pushed off the triangle's plane: along the unit face normal
  * (as wound) or against it, whichever needs less, by radius plus the depth of the core's lowest end below
  * the plane; the whole core then lies at least radius above it. */
-static void round_contact(const struct cbvh_local_shape *s, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, cbvh_v3 *n,
-                          double *depth, cbvh_v3 *on_tri)
+static void round_contact(const struct cbvh_local_shape *s, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c,
+                          struct round_closest *rc, cbvh_v3 *n, double *depth, cbvh_v3 *on_tri)
 {
-    cbvh_v3 on_core;
-    double d2;
-    if (s->kind == CBVH_SHAPE_SPHERE) {
-        on_core = s->p0;
-        *on_tri = cbvh_closest_point_triangle(s->p0, a, b, c);
-        d2 = v3_len2(v3_sub(on_core, *on_tri));
-    } else {
-        d2 = cbvh_closest_segment_triangle(s->p0, s->p1, a, b, c, &on_core, on_tri);
-    }
-    const double d = sqrt(d2);
+    round_closest_of(s, a, b, c, rc);
+    *on_tri = rc->on_tri;
+    const double d = sqrt(rc->d2);
     if (d > 0.0) {
-        *n = v3_scale(v3_sub(on_core, *on_tri), 1.0 / d);
+        *n = v3_scale(v3_sub(rc->on_core, rc->on_tri), 1.0 / d);
         *depth = s->radius - d;
         return;
     }
@@ -131,14 +146,14 @@ static void round_contact(const struct cbvh_local_shape *s, cbvh_v3 a, cbvh_v3 b
 
 /* The contact of the region with a triangle it overlaps, in the world of the region's placement. */
 static void region_contact(const struct overlap_region *r, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, uint32_t tri,
-                           cbvh_contact *out)
+                           struct round_closest *rc, cbvh_contact *out)
 {
     cbvh_v3 n, point;
     double depth;
     if (r->shape.kind == CBVH_SHAPE_BOX)
         box_contact(r, a, b, c, &n, &depth, &point);
     else
-        round_contact(&r->shape, a, b, c, &n, &depth, &point);
+        round_contact(&r->shape, a, b, c, rc, &n, &depth, &point);
     if (r->placement) {
         n = cbvh_rotate(r->placement->rotation, n);
         point = cbvh_point_to_world(r->placement, point);
@@ -278,15 +293,16 @@ static uint32_t overlap_enter4(void *query, const uint8_t *node, float entry[4])
  * decide); or nothing (OVERLAP_SURE: the region surely touches it). */
 enum overlap_left { OVERLAP_CULL, OVERLAP_EXACT, OVERLAP_SURE };
 
-/* 1 when the region overlaps a triangle that has the tests `left` (not OVERLAP_SURE) to pass. */
+/* 1 when the region overlaps a triangle that has the tests `left` (not OVERLAP_SURE) to pass; the exact
+ * test of a round region leaves its closest points in *rc. */
 static int overlap_tests(const struct overlap_query *q, const float a[3], const float b[3], const float c[3],
-                         enum overlap_left left)
+                         enum overlap_left left, struct round_closest *rc)
 {
     const cbvh_v3 va = v3_from_f(a), vb = v3_from_f(b), vc = v3_from_f(c);
     const struct cbvh_local_shape *s = &q->region->shape;
     const enum cbvh_cull_verdict v =
         left == OVERLAP_EXACT ? CBVH_CULL_MAY_TOUCH : cbvh_cull_triangle(s, v3(0, 0, 0), 0.0, va, vb, vc, 1);
-    return v != CBVH_CULL_CLEAR && (v == CBVH_CULL_TOUCHES || region_triangle(q->region, va, vb, vc));
+    return v != CBVH_CULL_CLEAR && (v == CBVH_CULL_TOUCHES || region_triangle(q->region, va, vb, vc, rc));
 }
 
 /* Cooked triangle k past the walk's box test: its tests (`left`) and the report. Returns 1 when the query
@@ -294,12 +310,13 @@ static int overlap_tests(const struct overlap_query *q, const float a[3], const 
 CBVH_FORCE_INLINE int overlap_triangle(const struct overlap_query *q, uint32_t k, const float a[3],
                                        const float b[3], const float c[3], enum overlap_left left)
 {
-    if (left != OVERLAP_SURE && !overlap_tests(q, a, b, c, left))
+    struct round_closest rc = {0};
+    if (left != OVERLAP_SURE && !overlap_tests(q, a, b, c, left, &rc))
         return 0;
     const uint32_t tri = cbvh_original_id(q->f, k);
     cbvh_contact contact;
     if (q->sink->contacts && q->sink->skip == 0)
-        region_contact(q->region, v3_from_f(a), v3_from_f(b), v3_from_f(c), tri, &contact);
+        region_contact(q->region, v3_from_f(a), v3_from_f(b), v3_from_f(c), tri, &rc, &contact);
     return sink_report(q->sink, tri, &contact);
 }
 
