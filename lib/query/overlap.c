@@ -326,7 +326,9 @@ static int overlap_tests(const struct overlap_query *q, const float a[3], const 
 CBVH_FORCE_INLINE int overlap_triangle(const struct overlap_query *q, uint32_t k, const float a[3],
                                        const float b[3], const float c[3], enum overlap_left left)
 {
-    struct triangle_exact ex = {.want_contact = q->sink->contacts && q->sink->skip == 0, .known = 0};
+    struct triangle_exact ex; /* the fields past `known` are written before they are read */
+    ex.want_contact = q->sink->contacts && q->sink->skip == 0;
+    ex.known = 0;
     if (left != OVERLAP_SURE && !overlap_tests(q, a, b, c, left, &ex))
         return 0;
     const uint32_t tri = cbvh_original_id(q->f, k);
