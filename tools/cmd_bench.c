@@ -50,8 +50,9 @@ static const char usage[] =
     "Then shape queries as games ask them near a surface (shapes about 1% of the diagonal\n"
     "across, capsules along random directions): sphere, capsule, box and oriented box (turned\n"
     "by a uniform rotation) sweeps moving 1.5% of the diagonal, and sphere, capsule and box\n"
-    "overlaps, every triangle and the first hit (whether the shape touches any: each engine\n"
-    "stops at the first triangle; Bullet cannot), beside Bullet (convex casts and its\n"
+    "overlaps, every triangle with its contact (cbvh_contacts_*: depth, normal and point, as\n"
+    "the peers' narrow phases compute them) and the first hit (whether the shape touches any:\n"
+    "each engine stops at the first triangle; Bullet cannot), beside Bullet (convex casts and its\n"
     "per-triangle narrow phase, margins 0 on boxes and triangles) and Jolt (CastShape and\n"
     "CollideShape, back faces colliding, boxes of convex radius 0): microseconds per query,\n"
     "queries per second, the ratio cbvh/peer, and agreement query by query (the same first\n"
@@ -225,12 +226,6 @@ typedef struct shape_job {
 /* Shape engines                                                       */
 /* ------------------------------------------------------------------ */
 
-static int add_overlap(void *user, uint32_t tri)
-{
-    shape_answer_add(user, tri);
-    return 0;
-}
-
 /* cbvh's overlap query q, its triangles passed to callback(user, tri). */
 static void cbvh_overlap_each(const cbvh_file *f, shape_kind kind, const shape_query *q,
                               cbvh_overlap_fn callback, void *user)
@@ -246,6 +241,38 @@ static void cbvh_overlap_each(const cbvh_file *f, shape_kind kind, const shape_q
         cbvh_overlap_sphere(f, q->p0, q->size[0], callback, user, NULL, 0);
     } else {
         cbvh_overlap_capsule(f, q->p0, q->p1, q->size[0], callback, user, NULL, 0);
+    }
+}
+
+/* The page of contacts cbvh_contacts_each reads at a time. */
+#define BENCH_CONTACT_PAGE 256
+
+/* cbvh's contacts (depth, normal and point, what the peers' narrow phases compute too) with every triangle
+ * query q overlaps, read a page at a time: each contact's triangle is added to the answer a. */
+static void cbvh_contacts_each(const cbvh_file *f, shape_kind kind, const shape_query *q, shape_answer *a)
+{
+    cbvh_contact page[BENCH_CONTACT_PAGE];
+    cbvh_shape box;
+    if (kind == SHAPE_BOX) {
+        memset(&box, 0, sizeof box);
+        box.kind = CBVH_SHAPE_BOX;
+        memcpy(box.center, q->p0, sizeof box.center);
+        memcpy(box.half_extent, q->size, sizeof box.half_extent);
+        box.rotation[3] = 1.0f;
+    }
+    size_t first = 0;
+    int more = 1;
+    while (more) {
+        size_t n = 0;
+        if (kind == SHAPE_SPHERE)
+            n = cbvh_contacts_sphere(f, q->p0, q->size[0], first, page, BENCH_CONTACT_PAGE, &more);
+        else if (kind == SHAPE_CAPSULE)
+            n = cbvh_contacts_capsule(f, q->p0, q->p1, q->size[0], first, page, BENCH_CONTACT_PAGE, &more);
+        else if (cbvh_contacts_with(f, &box, NULL, first, page, BENCH_CONTACT_PAGE, &n, &more) != CBVH_OK)
+            more = 0;
+        for (size_t i = 0; i < n; i++)
+            shape_answer_add(a, page[i].tri);
+        first += n;
     }
 }
 
@@ -287,8 +314,10 @@ static void cbvh_shape_query(const cbvh_file *f, shape_kind kind, shape_question
             a->tri = h.tri;
             a->t = h.t;
         }
+    } else if (question == SHAPE_OVERLAP) {
+        cbvh_contacts_each(f, kind, q, a);
     } else {
-        cbvh_overlap_each(f, kind, q, question == SHAPE_FIRST_HIT ? first_overlap : add_overlap, a);
+        cbvh_overlap_each(f, kind, q, first_overlap, a);
     }
 }
 

@@ -17,27 +17,33 @@ static cbvh_v3 closest_point_segment(cbvh_v3 p, cbvh_v3 a, cbvh_v3 b)
 
 /* The projection when its barycentrics in the triangle's frame are in range, else the nearest of the three
  * edges' clamped projections: errors relative to the lengths, not the area, so slivers and needles keep
- * their precision (unlike Ericson's Voronoi-region form). */
-cbvh_v3 cbvh_closest_point_triangle(cbvh_v3 p, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c)
+ * their precision (unlike Ericson's Voronoi-region form). The triangle is v, f its frame
+ * (cbvh_triangle_frame_of), which a caller with several points to project computes once. */
+static cbvh_v3 closest_point_in_frame(cbvh_v3 p, const cbvh_v3 v[3], const struct cbvh_triangle_frame *f)
 {
-    const cbvh_v3 v[3] = {a, b, c};
-    struct cbvh_triangle_frame f;
-    cbvh_triangle_frame_of(v, &f);
-    if (f.nn > 0.0) {
+    if (f->nn > 0.0) {
         double x, y;
-        cbvh_triangle_frame_barycentrics(&f, v3_sub(p, v[f.base]), &x, &y);
+        cbvh_triangle_frame_barycentrics(f, v3_sub(p, v[f->base]), &x, &y);
         if (x >= 0.0 && y >= 0.0 && x + y <= 1.0)
-            return v3_madd(v3_madd(v[f.base], f.e1, x), f.e2, y);
+            return v3_madd(v3_madd(v[f->base], f->e1, x), f->e2, y);
     }
-    cbvh_v3 best = closest_point_segment(p, a, b);
+    cbvh_v3 best = closest_point_segment(p, v[0], v[1]);
     double d = v3_len2(v3_sub(p, best));
-    const cbvh_v3 q1 = closest_point_segment(p, b, c), q2 = closest_point_segment(p, c, a);
+    const cbvh_v3 q1 = closest_point_segment(p, v[1], v[2]), q2 = closest_point_segment(p, v[2], v[0]);
     const double d1 = v3_len2(v3_sub(p, q1)), d2 = v3_len2(v3_sub(p, q2));
     if (d1 < d) {
         best = q1;
         d = d1;
     }
     return d2 < d ? q2 : best;
+}
+
+cbvh_v3 cbvh_closest_point_triangle(cbvh_v3 p, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c)
+{
+    const cbvh_v3 v[3] = {a, b, c};
+    struct cbvh_triangle_frame f;
+    cbvh_triangle_frame_of(v, &f);
+    return closest_point_in_frame(p, v, &f);
 }
 
 double cbvh_closest_segments(cbvh_v3 p0, cbvh_v3 p1, cbvh_v3 q0, cbvh_v3 q1, cbvh_v3 *on_p, cbvh_v3 *on_q)
@@ -76,39 +82,40 @@ double cbvh_closest_segments(cbvh_v3 p0, cbvh_v3 p1, cbvh_v3 q0, cbvh_v3 q1, cbv
     return v3_len2(v3_sub(*on_p, *on_q));
 }
 
-/* Where segment p0-p1 crosses the triangle's plane inside the triangle, if
- * it does (non-coplanar case): the crossing's barycentrics in the triangle's
- * frame decide, and the point is built from them. */
-static int segment_crosses_triangle(cbvh_v3 p0, cbvh_v3 p1, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, cbvh_v3 *x)
+/* Where segment p0-p1 crosses the plane of triangle v (frame f) inside the triangle, if it does
+ * (non-coplanar case): the crossing's barycentrics in the triangle's frame decide, and the point is built
+ * from them. */
+static int segment_crosses_triangle(cbvh_v3 p0, cbvh_v3 p1, const cbvh_v3 v[3],
+                                    const struct cbvh_triangle_frame *f, cbvh_v3 *x)
 {
-    const cbvh_v3 v[3] = {a, b, c};
-    struct cbvh_triangle_frame f;
-    cbvh_triangle_frame_of(v, &f);
-    const cbvh_v3 o = v[f.base];
-    const double s0 = v3_dot(v3_sub(p0, o), f.n), s1 = v3_dot(v3_sub(p1, o), f.n);
-    if ((s0 > 0.0 && s1 > 0.0) || (s0 < 0.0 && s1 < 0.0) || s0 == s1 || !(f.nn > 0.0))
+    const cbvh_v3 o = v[f->base];
+    const double s0 = v3_dot(v3_sub(p0, o), f->n), s1 = v3_dot(v3_sub(p1, o), f->n);
+    if ((s0 > 0.0 && s1 > 0.0) || (s0 < 0.0 && s1 < 0.0) || s0 == s1 || !(f->nn > 0.0))
         return 0;
     const cbvh_v3 q = v3_madd(p0, v3_sub(p1, p0), s0 / (s0 - s1));
     double bx, by;
-    cbvh_triangle_frame_barycentrics(&f, v3_sub(q, o), &bx, &by);
+    cbvh_triangle_frame_barycentrics(f, v3_sub(q, o), &bx, &by);
     if (!(bx >= 0.0 && by >= 0.0 && bx + by <= 1.0))
         return 0;
-    *x = v3_madd(v3_madd(o, f.e1, bx), f.e2, by);
+    *x = v3_madd(v3_madd(o, f->e1, bx), f->e2, by);
     return 1;
 }
 
 double cbvh_closest_segment_triangle(cbvh_v3 p0, cbvh_v3 p1, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, cbvh_v3 *on_seg,
                                      cbvh_v3 *on_tri)
 {
+    const cbvh_v3 v[3] = {a, b, c};
+    struct cbvh_triangle_frame f;
+    cbvh_triangle_frame_of(v, &f);
     cbvh_v3 x;
-    if (segment_crosses_triangle(p0, p1, a, b, c, &x)) {
+    if (segment_crosses_triangle(p0, p1, v, &f, &x)) {
         *on_seg = *on_tri = x;
         return 0.0;
     }
     *on_seg = p0;
-    *on_tri = cbvh_closest_point_triangle(p0, a, b, c);
+    *on_tri = closest_point_in_frame(p0, v, &f);
     double best = v3_len2(v3_sub(*on_seg, *on_tri));
-    const cbvh_v3 q = cbvh_closest_point_triangle(p1, a, b, c);
+    const cbvh_v3 q = closest_point_in_frame(p1, v, &f);
     double d = v3_len2(v3_sub(p1, q));
     if (d < best) {
         best = d;
