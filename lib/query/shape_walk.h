@@ -131,7 +131,27 @@ CBVH_KERNEL int cbvh_shape_leaf_quads(const struct cbvh_file *f, uint32_t first,
 }
 #endif
 
-/* The children of non-leaf r the walk enters, in the order of `octant`, with their entry keys: four at once
+/* Children c[0..m) with entry keys e[0..m) (m <= CBVH_TREE_WIDTH) sorted by key, nearest first, ties kept
+ * in their order: a sweep's closest contact found early shrinks its reach before the farther subtrees, which
+ * the walk then drops unopened (the octant's precomputed order guesses from the boxes' centres only). */
+CBVH_KERNEL void cbvh_shape_sort_nearest(cbvh_ref c[CBVH_TREE_WIDTH], float e[CBVH_TREE_WIDTH], uint32_t m)
+{
+    for (uint32_t k = 1; k < m; k++) {
+        const cbvh_ref ck = c[k];
+        const float ek = e[k];
+        uint32_t j = k;
+        for (; j > 0 && e[j - 1] > ek; j--) {
+            c[j] = c[j - 1];
+            e[j] = e[j - 1];
+        }
+        c[j] = ck;
+        e[j] = ek;
+    }
+}
+
+/* The children of non-leaf r the walk enters, nearest entry key first (cbvh_shape_sort_nearest) from the
+ * order of `octant` (CBVH_NO_OCTANT: slot order, unsorted, for queries whose keys are all 0), with their
+ * entry keys: four at once
  * through `enter4` for a wide node when the query has it (and SIMD is built), else box by box through
  * `enter`, without branching on the outcome (hard to predict). Returns how many. */
 CBVH_KERNEL uint32_t cbvh_shape_children(const struct cbvh_file *f, const uint32_t layout, cbvh_ref r,
@@ -164,6 +184,7 @@ CBVH_KERNEL uint32_t cbvh_shape_children(const struct cbvh_file *f, const uint32
             in_entry[m] = e[s];
             m += hits >> s & 1u;
         }
+        cbvh_shape_sort_nearest(in, in_entry, m);
         return m;
     }
 #else
@@ -177,6 +198,8 @@ CBVH_KERNEL uint32_t cbvh_shape_children(const struct cbvh_file *f, const uint32
         in[m] = children[k].ref;
         m += enter(query, q, &in_entry[m]) != 0;
     }
+    if (octant != CBVH_NO_OCTANT)
+        cbvh_shape_sort_nearest(in, in_entry, m);
     return m;
 }
 
