@@ -105,11 +105,13 @@ static int ask_filter(const struct sweep_query *q, uint32_t k, const cbvh_v3 v[3
 }
 
 /* Cooked triangle k: its box (unless it passed sweep_box at the current limit: box_passed_at, NAN when
- * untested; the limit only shrinks), the motion's culling, the cheap tests, the sweep, and the filter when
- * its contact would win. A contact at t = 0 is beaten by none of a higher index: those are skipped. Returns
- * 1 when the filter stops the walk. */
+ * untested; the limit only shrinks), the motion's culling, the cheap tests (unless the float cull found the
+ * shape clear of it at t = 0 over a motion at least as long, clear_at_start: then they would find it
+ * CBVH_CULL_CLEAR_AT_START, or CBVH_CULL_CLEAR where the sweep finds no contact either), the sweep, and the
+ * filter when its contact would win. A contact at t = 0 is beaten by none of a higher index: those are
+ * skipped. Returns 1 when the filter stops the walk. */
 static int sweep_triangle(struct sweep_query *q, uint32_t k, const float a[3], const float b[3],
-                          const float cc[3], float box_passed_at)
+                          const float cc[3], float box_passed_at, int clear_at_start)
 {
     const struct cbvh_sweep_rules *rules = q->rules;
     if (q->best.t == 0.0 && k > q->best_tri)
@@ -124,7 +126,8 @@ static int sweep_triangle(struct sweep_query *q, uint32_t k, const float a[3], c
     if (rules && rules->cull != CBVH_CULL_NONE && culled(rules->cull, v[0], v[1], v[2], q->delta))
         return 0;
     const enum cbvh_cull_verdict cull =
-        cbvh_cull_triangle(q->bounds, v3_from_f(q->delta), q->best.t, v[0], v[1], v[2], 0);
+        clear_at_start ? CBVH_CULL_CLEAR_AT_START
+                       : cbvh_cull_triangle(q->bounds, v3_from_f(q->delta), q->best.t, v[0], v[1], v[2], 0);
     if (cull == CBVH_CULL_CLEAR)
         return 0;
     struct cbvh_sweep_contact c = {0.0, {0, 0, 0}, {0, 0, 0}, 0.0};
@@ -202,7 +205,8 @@ static uint32_t sweep_enter4(void *query, const uint8_t *node, float entry[4])
 /* Four triangles through their box test (sweep_box4: exactly the triangles sweep_box keeps with the limit
  * at the time, so sweep_triangle tests a kept one's box again only once the limit shrank) and the float
  * cull (cbvh_cull4_sweep, over the motion up to the best contact so far: limit, rounded from best.t, times
- * 1 + 2^-22 is at least best.t), the kept ones in order through the rest. */
+ * 1 + 2^-22 is at least best.t, which also tells the kept ones clear of the shape at t = 0), the kept ones
+ * in order through the rest. */
 static int sweep_quad(void *query, uint32_t k, const struct leaf_quad *t, uint32_t group)
 {
     struct sweep_query *q = query;
@@ -210,13 +214,14 @@ static int sweep_quad(void *query, uint32_t k, const struct leaf_quad *t, uint32
     uint32_t keep = sweep_box4(q, t, box_limit) & group;
     if (!keep)
         return 0;
-    keep &= cbvh_cull4_sweep(&q->cull4, t->c, box_limit * 0x1.000004p0f);
+    uint32_t clear_at_start;
+    keep &= cbvh_cull4_sweep(&q->cull4, t->c, box_limit * 0x1.000004p0f, &clear_at_start);
     for (; keep; keep &= keep - 1u) {
         const uint32_t j = cbvh_lowest_lane(keep);
         const float a[3] = {t->c[0][0][j], t->c[0][1][j], t->c[0][2][j]};
         const float b[3] = {t->c[1][0][j], t->c[1][1][j], t->c[1][2][j]};
         const float c[3] = {t->c[2][0][j], t->c[2][1][j], t->c[2][2][j]};
-        if (sweep_triangle(q, k + j, a, b, c, box_limit))
+        if (sweep_triangle(q, k + j, a, b, c, box_limit, clear_at_start >> j & 1u))
             return 1;
     }
     return 0;
@@ -235,7 +240,7 @@ static int sweep_leaf(void *query, uint32_t first, uint32_t count)
     for (uint32_t k = first; k < first + count; k++) {
         float a[3], b[3], c[3];
         cbvh_triangle_vertices(q->f, k, a, b, c);
-        if (sweep_triangle(q, k, a, b, c, NAN))
+        if (sweep_triangle(q, k, a, b, c, NAN, 0))
             return 1;
     }
     return 0;
