@@ -150,15 +150,51 @@ static void region_contact(const struct overlap_region *r, cbvh_v3 a, cbvh_v3 b,
     v3_to_f(point, out->point);
 }
 
-/* An overlap as the shape walk sees it: the region's box as a range of grid coordinates per axis. */
+/* A ball's node test: node boxes (their planes as cbvh_dequantize gives them) within the radius of its
+ * center, in float. */
+struct ball_reach {
+    float center[3]; /* the center rounded to float */
+    float reach2;    /* what the squared float distance of a box from center may reach (ball_reach_of) */
+};
+
+/* Per axis the distance of the float center from a box's planes is rounded at most by 2^-24 of itself, and
+ * the center's own rounding moves it by at most 2^-24 |center|: a box within r of the true center has a float
+ * squared distance, each of its five operations rounded by at most 2^-24 of itself, below (r + 2^-23
+ * |center|_max)^2 (1 + 2^-21), plus 2^-120 for underflow. reach2 is that bound with room to spare (the
+ * exact tests' own rounding, 2^-50 of r^2, included): rounded up, and infinite when it leaves float. */
+static void ball_reach_of(const struct cbvh_local_shape *s, struct ball_reach *b)
+{
+    v3_to_f(s->p0, b->center);
+    const double reach = s->radius + 0x1p-23 * cull_max_abs(s->p0);
+    const double reach2 = reach * reach * (1.0 + 0x1p-19) + 0x1p-120;
+    b->reach2 = reach2 < 0x1p127 ? (float)reach2 * (1.0f + 0x1p-22f) : INFINITY;
+}
+
+/* The squared float distance of b's center from the box [lo, hi] (per axis: how far outside it lies). */
+static inline float ball_distance2(const struct ball_reach *b, const float lo[3], const float hi[3])
+{
+    float d2 = 0.0f;
+    for (int a = 0; a < 3; a++) {
+        const float below = lo[a] - b->center[a], above = b->center[a] - hi[a];
+        const float d = cull_maxf(cull_maxf(below, above), 0.0f);
+        d2 = d2 + d * d;
+    }
+    return d2;
+}
+
+/* An overlap as the shape walk sees it: the region's box as a range of grid coordinates per axis, and for a
+ * ball its reach (ball: 1). */
 struct overlap_query {
     const struct cbvh_file *f;
     const struct overlap_region *region;
     struct overlap_sink *sink;
     struct cbvh_grid_range grid;
+    int ball;
+    struct ball_reach reach;
 #ifdef CBVH_HAVE_SIMD
     struct cbvh_grid_range4 grid4; /* grid, as four wide slots at once test it */
     struct cbvh_cull4 cull4;
+    __m128 center4[3], reach2, origin4[3], scale4[3]; /* a ball's reach, and the file's grid, in every lane */
 #endif
 };
 
@@ -255,18 +291,51 @@ static void grid_range(const struct cbvh_file *f, const struct overlap_region *r
     }
 }
 
+/* The region's grid range meets the box, and for a ball the box lies within its reach. */
 static int overlap_enter(void *query, const uint32_t q[6], float *entry)
 {
+    const struct overlap_query *o = query;
     *entry = 0.0f;
-    return cbvh_grid_range_meets(&((const struct overlap_query *)query)->grid, q);
+    if (!cbvh_grid_range_meets(&o->grid, q))
+        return 0;
+    if (!o->ball)
+        return 1;
+    const float *origin = o->f->grid_origin, *scale = o->f->grid_scale;
+    float lo[3], hi[3];
+    for (int a = 0; a < 3; a++) {
+        lo[a] = cbvh_dequantize(q[a], origin[a], scale[a]);
+        hi[a] = cbvh_dequantize(q[3 + a], origin[a], scale[a]);
+    }
+    return ball_distance2(&o->reach, lo, hi) <= o->reach.reach2;
 }
 
 #ifdef CBVH_HAVE_SIMD
-/* overlap_enter on the four slots of a wide node at once (cbvh_grid_range4_hits). */
+/* overlap_enter on the four slots of a wide node at once (cbvh_grid_range4_hits; a ball's distance lane for
+ * lane the same float operations in the same order as ball_distance2, _mm_max_ps(a, b) being a > b ? a : b
+ * as cull_maxf). */
 static uint32_t overlap_enter4(void *query, const uint8_t *node, float entry[4])
 {
+    const struct overlap_query *q = query;
     _mm_storeu_ps(entry, _mm_setzero_ps());
-    return cbvh_grid_range4_hits(node, &((const struct overlap_query *)query)->grid4);
+    const uint32_t meets = cbvh_grid_range4_hits(node, &q->grid4);
+    if (!q->ball || !meets)
+        return meets;
+    const __m128i zero = _mm_setzero_si128();
+    __m128 d2 = _mm_setzero_ps();
+    for (uint32_t a = 0; a < 3; a++) {
+        const __m128i qlo =
+            _mm_loadl_epi64((const __m128i *)(const void *)(node + cbvh_w4_plane_offset(a, 0)));
+        const __m128i qhi =
+            _mm_loadl_epi64((const __m128i *)(const void *)(node + cbvh_w4_plane_offset(a + 3u, 0)));
+        const __m128 lo = _mm_add_ps(
+            q->origin4[a], _mm_mul_ps(_mm_cvtepi32_ps(_mm_unpacklo_epi16(qlo, zero)), q->scale4[a]));
+        const __m128 hi = _mm_add_ps(
+            q->origin4[a], _mm_mul_ps(_mm_cvtepi32_ps(_mm_unpacklo_epi16(qhi, zero)), q->scale4[a]));
+        const __m128 below = _mm_sub_ps(lo, q->center4[a]), above = _mm_sub_ps(q->center4[a], hi);
+        const __m128 d = _mm_max_ps(_mm_max_ps(below, above), _mm_setzero_ps());
+        d2 = _mm_add_ps(d2, _mm_mul_ps(d, d));
+    }
+    return meets & (uint32_t)_mm_movemask_ps(_mm_cmple_ps(d2, q->reach2));
 }
 #define OVERLAP_ENTER4 overlap_enter4
 #else
@@ -363,9 +432,20 @@ static size_t overlap_walk(const struct cbvh_file *f, const struct overlap_regio
     grid_range(f, region, &q.grid);
     if (cbvh_grid_range_empty(&q.grid))
         return sink->reported; /* no node box can meet it */
+    q.ball = region->shape.kind == CBVH_SHAPE_SPHERE;
+    if (q.ball)
+        ball_reach_of(&region->shape, &q.reach);
 #ifdef CBVH_HAVE_SIMD
     cbvh_grid_range4_of(&q.grid, &q.grid4);
     cbvh_cull4_init(&q.cull4, &region->shape, region->lo, region->hi, NULL);
+    if (q.ball) {
+        q.reach2 = _mm_set1_ps(q.reach.reach2);
+        for (int a = 0; a < 3; a++) {
+            q.center4[a] = _mm_set1_ps(q.reach.center[a]);
+            q.origin4[a] = _mm_set1_ps(f->grid_origin[a]);
+            q.scale4[a] = _mm_set1_ps(f->grid_scale[a]);
+        }
+    }
 #endif
     cbvh_shape_walk(f, f->layout, CBVH_NO_OCTANT, overlap_enter, OVERLAP_ENTER4, overlap_leaf, &q, NULL);
     return sink->reported;
