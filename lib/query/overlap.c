@@ -7,6 +7,7 @@
 
 #include "query/triangle_frame.h"
 #include "query/closest.h"
+#include "query/grown_path.h"
 #include "query/leaf.h"
 #include "query/sweep_walk.h"
 #include "query/walk.h"
@@ -182,15 +183,17 @@ static inline float ball_distance2(const struct ball_reach *b, const float lo[3]
     return d2;
 }
 
-/* An overlap as the shape walk sees it: the region's box as a range of grid coordinates per axis, and for a
- * ball its reach (ball: 1). */
+/* An overlap as the shape walk sees it: the region's box as a range of grid coordinates per axis; for a
+ * ball its reach (ball: 1), for a capsule the path of the float box around its end ball p0 to p1 (capsule:
+ * 1; capsule_path). */
 struct overlap_query {
     const struct cbvh_file *f;
     const struct overlap_region *region;
     struct overlap_sink *sink;
     struct cbvh_grid_range grid;
-    int ball;
+    int ball, capsule;
     struct ball_reach reach;
+    struct cbvh_grown_path path;
 #ifdef CBVH_HAVE_SIMD
     struct cbvh_grid_range4 grid4; /* grid, as four wide slots at once test it */
     struct cbvh_cull4 cull4;
@@ -291,13 +294,39 @@ static void grid_range(const struct cbvh_file *f, const struct overlap_region *r
     }
 }
 
-/* The region's grid range meets the box, and for a ball the box lies within its reach. */
+/* A capsule p0-p1 of radius r as the path of the float box around the ball of radius r at p0
+ * (cbvh_sweep_bounds) by delta = p1 - p0 rounded to float, its extent grown by 2^-23 |delta| (more than
+ * that rounding, which moves the path's points by at most 2^-24 |delta| per axis from the segment's): a node
+ * box holding a point within r of the segment is crossed by the path grown by the extent for t in [0, 1]. */
+static void capsule_path(const struct cbvh_file *f, const struct cbvh_local_shape *s,
+                         struct cbvh_grown_path *p)
+{
+    struct cbvh_local_shape ball = *s;
+    ball.kind = CBVH_SHAPE_SPHERE;
+    ball.p1 = ball.p0;
+    cbvh_v3 lo, hi;
+    cbvh_shape_bounds(&ball, &lo, &hi);
+    float center[3], extent[3], delta[3];
+    cbvh_sweep_bounds(lo, hi, center, extent);
+    for (int a = 0; a < 3; a++) {
+        delta[a] = (float)(v3_get(s->p1, a) - v3_get(s->p0, a));
+        extent[a] = nextafterf(extent[a] + fabsf(delta[a]) * 0x1p-23f, INFINITY);
+    }
+    cbvh_grown_path_init(p, f, center, extent, delta);
+}
+
+/* The region's grid range meets the box, for a ball the box lies within its reach, for a capsule its path
+ * crosses the box. */
 static int overlap_enter(void *query, const uint32_t q[6], float *entry)
 {
     const struct overlap_query *o = query;
     *entry = 0.0f;
     if (!cbvh_grid_range_meets(&o->grid, q))
         return 0;
+    if (o->capsule) {
+        float crossed_at;
+        return cbvh_grown_path_grid(&o->path, o->f, q, 1.0f, &crossed_at);
+    }
     if (!o->ball)
         return 1;
     const float *origin = o->f->grid_origin, *scale = o->f->grid_scale;
@@ -318,6 +347,10 @@ static uint32_t overlap_enter4(void *query, const uint8_t *node, float entry[4])
     const struct overlap_query *q = query;
     _mm_storeu_ps(entry, _mm_setzero_ps());
     const uint32_t meets = cbvh_grid_range4_hits(node, &q->grid4);
+    if (q->capsule && meets) {
+        float crossed_at[4];
+        return meets & cbvh_grown_path_node4(&q->path, node, 1.0f, crossed_at);
+    }
     if (!q->ball || !meets)
         return meets;
     const __m128i zero = _mm_setzero_si128();
@@ -382,10 +415,13 @@ static int region_meets(const struct overlap_region *r, const float lo[3], const
 #endif
 
 #ifdef CBVH_HAVE_SIMD
-/* Four triangles through the float tests (cbvh_cull4_keep), the kept ones in order through the rest. */
+/* Four triangles through the float tests (a capsule's path against their boxes, cbvh_grown_path_triangles4,
+ * then cbvh_cull4_keep), the kept ones in order through the rest. */
 CBVH_FORCE_INLINE int overlap_quad(void *query, uint32_t k, const struct leaf_quad *t, uint32_t group)
 {
     const struct overlap_query *q = query;
+    if (q->capsule && !(group &= cbvh_grown_path_triangles4(&q->path, t, 1.0f)))
+        return 0;
     uint32_t touch, keep = cbvh_cull4_keep(&q->cull4, t->c, &touch) & group;
     /* a ball's float tests leave only lanes near the radius, slivers, or odd sizes to the exact test */
     const enum overlap_left rest = q->region->shape.kind == CBVH_SHAPE_SPHERE ? OVERLAP_EXACT : OVERLAP_CULL;
@@ -419,6 +455,20 @@ static int overlap_leaf(void *query, uint32_t first, uint32_t count)
 #endif
 }
 
+/* Whether a ball's or capsule's own node tests (ball_reach, capsule_path) pay: where the mesh's leaves are
+ * small next to the shape, its reach (radius plus half the segment) squared times the triangle count at
+ * least twice the grid's diagonal squared. With larger leaves their boxes cull about what the shape's
+ * bounding box does, and the tests cost more than they save (docs/PERFORMANCE.md). Either way the answers
+ * are the same. */
+static int fine_node_tests(const struct cbvh_file *f, const struct cbvh_local_shape *s)
+{
+    double diag2 = 0.0;
+    for (int a = 0; a < 3; a++)
+        diag2 += (double)f->grid_scale[a] * f->grid_scale[a] * CBVH_Q_MAX * CBVH_Q_MAX;
+    const double reach = s->radius + 0.5 * v3_len(v3_sub(s->p1, s->p0));
+    return reach * reach * f->info.triangle_count >= 2.0 * diag2;
+}
+
 /* Stored order: the order does not matter when every overlap is reported. */
 static size_t overlap_walk(const struct cbvh_file *f, const struct overlap_region *region,
                            struct overlap_sink *sink)
@@ -432,9 +482,13 @@ static size_t overlap_walk(const struct cbvh_file *f, const struct overlap_regio
     grid_range(f, region, &q.grid);
     if (cbvh_grid_range_empty(&q.grid))
         return sink->reported; /* no node box can meet it */
-    q.ball = region->shape.kind == CBVH_SHAPE_SPHERE;
+    const int fine = fine_node_tests(f, &region->shape);
+    q.ball = fine && region->shape.kind == CBVH_SHAPE_SPHERE;
+    q.capsule = fine && region->shape.kind == CBVH_SHAPE_CAPSULE;
     if (q.ball)
         ball_reach_of(&region->shape, &q.reach);
+    if (q.capsule)
+        capsule_path(f, &region->shape, &q.path);
 #ifdef CBVH_HAVE_SIMD
     cbvh_grid_range4_of(&q.grid, &q.grid4);
     cbvh_cull4_init(&q.cull4, &region->shape, region->lo, region->hi, NULL);
