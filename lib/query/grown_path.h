@@ -14,6 +14,7 @@
 #include "layout/wide4.h"
 #include "query/leaf.h"
 #include "query/ray_box.h"
+#include "query/shape_walk.h"
 
 /* The path center + t * delta of a float box center +- extent, octant and rcp its direction's as a ray's;
  * with SIMD the same in every lane, and the file's grid. */
@@ -125,17 +126,10 @@ CBVH_FORCE_INLINE uint32_t grown_path_crossed4(__m128 tnear, __m128 tfar)
 CBVH_FORCE_INLINE uint32_t cbvh_grown_path_node4(const struct cbvh_grown_path *p, const uint8_t *node,
                                                  float limit, float entry[4])
 {
-    const __m128i zero = _mm_setzero_si128();
     __m128 tnear = _mm_setzero_ps(), tfar = _mm_set1_ps(limit);
     for (uint32_t a = 0; a < 3; a++) {
-        const __m128i qlo =
-            _mm_loadl_epi64((const __m128i *)(const void *)(node + cbvh_w4_plane_offset(a, 0)));
-        const __m128i qhi =
-            _mm_loadl_epi64((const __m128i *)(const void *)(node + cbvh_w4_plane_offset(a + 3u, 0)));
-        const __m128 lo = _mm_add_ps(
-            p->origin4[a], _mm_mul_ps(_mm_cvtepi32_ps(_mm_unpacklo_epi16(qlo, zero)), p->scale4[a]));
-        const __m128 hi = _mm_add_ps(
-            p->origin4[a], _mm_mul_ps(_mm_cvtepi32_ps(_mm_unpacklo_epi16(qhi, zero)), p->scale4[a]));
+        __m128 lo, hi;
+        cbvh_w4_planes4(node, a, p->origin4[a], p->scale4[a], &lo, &hi);
         grown_path_axis4(p, (int)a, lo, hi, &tnear, &tfar);
     }
     _mm_storeu_ps(entry, tnear);

@@ -342,28 +342,21 @@ static int overlap_enter(void *query, const uint32_t q[6], float *entry)
 /* overlap_enter on the four slots of a wide node at once (cbvh_grid_range4_hits; a ball's distance lane for
  * lane the same float operations in the same order as ball_distance2, _mm_max_ps(a, b) being a > b ? a : b
  * as cull_maxf). */
-static uint32_t overlap_enter4(void *query, const uint8_t *node, float entry[4])
+CBVH_FORCE_INLINE uint32_t overlap_enter4(void *query, const uint8_t *node, float entry[4])
 {
     const struct overlap_query *q = query;
     _mm_storeu_ps(entry, _mm_setzero_ps());
     const uint32_t meets = cbvh_grid_range4_hits(node, &q->grid4);
-    if (q->capsule && meets) {
+    if (!(q->ball | q->capsule) || !meets)
+        return meets;
+    if (q->capsule) {
         float crossed_at[4];
         return meets & cbvh_grown_path_node4(&q->path, node, 1.0f, crossed_at);
     }
-    if (!q->ball || !meets)
-        return meets;
-    const __m128i zero = _mm_setzero_si128();
     __m128 d2 = _mm_setzero_ps();
     for (uint32_t a = 0; a < 3; a++) {
-        const __m128i qlo =
-            _mm_loadl_epi64((const __m128i *)(const void *)(node + cbvh_w4_plane_offset(a, 0)));
-        const __m128i qhi =
-            _mm_loadl_epi64((const __m128i *)(const void *)(node + cbvh_w4_plane_offset(a + 3u, 0)));
-        const __m128 lo = _mm_add_ps(
-            q->origin4[a], _mm_mul_ps(_mm_cvtepi32_ps(_mm_unpacklo_epi16(qlo, zero)), q->scale4[a]));
-        const __m128 hi = _mm_add_ps(
-            q->origin4[a], _mm_mul_ps(_mm_cvtepi32_ps(_mm_unpacklo_epi16(qhi, zero)), q->scale4[a]));
+        __m128 lo, hi;
+        cbvh_w4_planes4(node, a, q->origin4[a], q->scale4[a], &lo, &hi);
         const __m128 below = _mm_sub_ps(lo, q->center4[a]), above = _mm_sub_ps(q->center4[a], hi);
         const __m128 d = _mm_max_ps(_mm_max_ps(below, above), _mm_setzero_ps());
         d2 = _mm_add_ps(d2, _mm_mul_ps(d, d));
@@ -456,17 +449,17 @@ static int overlap_leaf(void *query, uint32_t first, uint32_t count)
 }
 
 /* Whether a ball's or capsule's own node tests (ball_reach, capsule_path) pay: where the mesh's leaves are
- * small next to the shape, its reach (radius plus half the segment) squared times the triangle count at
- * least twice the grid's diagonal squared. With larger leaves their boxes cull about what the shape's
- * bounding box does, and the tests cost more than they save (docs/PERFORMANCE.md). Either way the answers
- * are the same. */
+ * small next to the shape, its reach squared (radius squared plus a quarter of the segment's length
+ * squared) times the triangle count at least the grid's diagonal squared. With larger leaves their
+ * boxes cull about what the shape's bounding box does, and the tests cost more than they save
+ * (docs/PERFORMANCE.md). Either way the answers are the same. */
 static int fine_node_tests(const struct cbvh_file *f, const struct cbvh_local_shape *s)
 {
     double diag2 = 0.0;
     for (int a = 0; a < 3; a++)
         diag2 += (double)f->grid_scale[a] * f->grid_scale[a] * CBVH_Q_MAX * CBVH_Q_MAX;
-    const double reach = s->radius + 0.5 * v3_len(v3_sub(s->p1, s->p0));
-    return reach * reach * f->info.triangle_count >= 2.0 * diag2;
+    const double reach2 = s->radius * s->radius + 0.25 * v3_len2(v3_sub(s->p1, s->p0)); /* within 2x */
+    return reach2 * f->info.triangle_count >= diag2;
 }
 
 /* Stored order: the order does not matter when every overlap is reported. */
@@ -482,7 +475,8 @@ static size_t overlap_walk(const struct cbvh_file *f, const struct overlap_regio
     grid_range(f, region, &q.grid);
     if (cbvh_grid_range_empty(&q.grid))
         return sink->reported; /* no node box can meet it */
-    const int fine = fine_node_tests(f, &region->shape);
+    const int round = region->shape.kind != CBVH_SHAPE_BOX,
+              fine = round && fine_node_tests(f, &region->shape);
     q.ball = fine && region->shape.kind == CBVH_SHAPE_SPHERE;
     q.capsule = fine && region->shape.kind == CBVH_SHAPE_CAPSULE;
     if (q.ball)

@@ -89,6 +89,20 @@ static inline uint32_t cbvh_grid_range4_hits(const uint8_t *node, const struct c
 #endif
 
 #ifdef CBVH_HAVE_SIMD
+/* The planes of axis a (0, 1, 2) of the four slots of wide node `node` (used or not), dequantized lane by
+ * lane with the same two float operations as cbvh_dequantize, origin and scale the file's grid's on that axis
+ * in every lane. */
+CBVH_FORCE_INLINE void cbvh_w4_planes4(const uint8_t *node, uint32_t a, __m128 origin, __m128 scale,
+                                       __m128 *lo, __m128 *hi)
+{
+    const __m128i zero = _mm_setzero_si128();
+    const __m128i qlo = _mm_loadl_epi64((const __m128i *)(const void *)(node + cbvh_w4_plane_offset(a, 0)));
+    const __m128i qhi =
+        _mm_loadl_epi64((const __m128i *)(const void *)(node + cbvh_w4_plane_offset(a + 3u, 0)));
+    *lo = _mm_add_ps(origin, _mm_mul_ps(_mm_cvtepi32_ps(_mm_unpacklo_epi16(qlo, zero)), scale));
+    *hi = _mm_add_ps(origin, _mm_mul_ps(_mm_cvtepi32_ps(_mm_unpacklo_epi16(qhi, zero)), scale));
+}
+
 /* A query's test of four triangles at once: cooked triangles k + j for the lanes j of `group` in q
  * (leaf_group_load; the other lanes hold other triangles, which the test must ignore). Returns 1 to end
  * the walk. */

@@ -68,9 +68,9 @@ static int ask_filter(const struct sweep_query *q, uint32_t k, const cbvh_v3 v[3
     return q->rules->filter(q->rules->user, &r);
 }
 
-/* Cooked triangle k: its box (unless it passed cbvh_grown_path_box at the current limit: box_passed_at, NAN when
- * untested; the limit only shrinks), the motion's culling, the cheap tests (unless the float cull found the
- * shape clear of it at t = 0 over a motion at least as long, clear_at_start: then they would find it
+/* Cooked triangle k: its box (unless it passed cbvh_grown_path_box at the current limit: box_passed_at, NAN
+ * when untested; the limit only shrinks), the motion's culling, the cheap tests (unless the float cull found
+ * the shape clear of it at t = 0 over a motion at least as long, clear_at_start: then they would find it
  * CBVH_CULL_CLEAR_AT_START, or CBVH_CULL_CLEAR where the sweep finds no contact either), the sweep, and the
  * filter when its contact would win. A contact at t = 0 is beaten by none of a higher index: those are
  * skipped. Returns 1 when the filter stops the walk. */
