@@ -450,7 +450,8 @@ static int overlap_leaf(void *query, uint32_t first, uint32_t count)
 
 /* Whether a ball's or capsule's own node tests (ball_reach, capsule_path) pay: where the mesh's leaves are
  * small next to the shape, its reach squared (radius squared plus a quarter of the segment's length
- * squared) times the triangle count at least the grid's diagonal squared. With larger leaves their
+ * squared) times the triangle count at least the grid's diagonal squared, four times that for a ball,
+ * whose own test culls less. With larger leaves their
  * boxes cull about what the shape's bounding box does, and the tests cost more than they save
  * (docs/PERFORMANCE.md). Either way the answers are the same. */
 static int fine_node_tests(const struct cbvh_file *f, const struct cbvh_local_shape *s)
@@ -459,7 +460,7 @@ static int fine_node_tests(const struct cbvh_file *f, const struct cbvh_local_sh
     for (int a = 0; a < 3; a++)
         diag2 += (double)f->grid_scale[a] * f->grid_scale[a] * CBVH_Q_MAX * CBVH_Q_MAX;
     const double reach2 = s->radius * s->radius + 0.25 * v3_len2(v3_sub(s->p1, s->p0)); /* within 2x */
-    return reach2 * f->info.triangle_count >= diag2;
+    return reach2 * f->info.triangle_count >= (s->kind == CBVH_SHAPE_SPHERE ? 4.0 : 1.0) * diag2;
 }
 
 /* Stored order: the order does not matter when every overlap is reported. */
