@@ -51,10 +51,10 @@ static size_t overlap_from(const ref_fixture *fx, const region *g, size_t first,
     return cbvh_overlap_capsule_from(fx->file, g->p0, g->p1, g->radius, first, out, capacity, more);
 }
 
-/* The reported set holds every sure overlap and no sure miss, each once. */
-static void check_set(const ref_fixture *fx, const uint32_t *ids, size_t n, const region *g)
+/* The reported set holds every sure overlap and no sure miss (by tol), each once. */
+static void check_set_within(const ref_fixture *fx, const uint32_t *ids, size_t n, const region *g,
+                             double tol)
 {
-    const double tol = 1e-6 * fx->diag;
     uint8_t *seen = calloc(fx->id_count + 1, 1);
     assert_non_null(seen);
     for (size_t k = 0; k < n; k++) {
@@ -77,6 +77,12 @@ static void check_set(const ref_fixture *fx, const uint32_t *ids, size_t n, cons
         }
     }
     free(seen);
+}
+
+/* check_set_within at a millionth of the diagonal. */
+static void check_set(const ref_fixture *fx, const uint32_t *ids, size_t n, const region *g)
+{
+    check_set_within(fx, ids, n, g, 1e-6 * fx->diag);
 }
 
 static int count_calls(void *user, uint32_t tri)
@@ -192,6 +198,108 @@ static void test_overlaps(void **state)
         run_overlaps(&fx, (int)test_reps(300), 50 + (uint64_t)m);
         ref_fixture_close(&fx);
         scene_free(&s);
+    }
+}
+
+/* Balls that reach a vertex from the corner of its box (the center off the vertex by the same amount on
+ * every axis, so the node boxes' corners lie as far from it as the vertex), and capsules square to an axis
+ * off the vertex along it, their float radius the distance of the vertex rounded up: the node tests (a
+ * ball's float distance to the node boxes, a capsule's path through them grown by its radius) must keep
+ * them, far from the origin too. Every triangle the double reference finds within the radius by
+ * more than its own rounding is reported, in the whole query and as its first hit. */
+static void test_grazing_rounds(void **state)
+{
+    (void)state;
+    for (int m = 0; m < 3; m++) {
+        scene s;
+        ref_fixture fx;
+        if (m < 2) {
+            assert_true(
+                scene_sphere(&s, 3000, (float[3]){m ? 3000.0f : 0.0f, m ? -1000.0f : 0.0f, 500.0f}, 1.0f));
+            assert_int_equal(ref_fixture_open(&fx, s.positions, s.vertex_count, s.indices, s.triangle_count,
+                                              test_options()),
+                             CBVH_OK);
+        } else {
+            /* triangles along the diagonal, each from its box's lowest corner to its highest, far from the
+             * origin: the corners of many node boxes are vertices */
+            enum { DIAGONAL = 300 };
+            static float positions[DIAGONAL * 9];
+            static uint32_t indices[DIAGONAL * 3];
+            for (uint32_t i = 0; i < DIAGONAL; i++) {
+                const float o = 1000.0f + 2.0f * (float)i;
+                const float v[9] = {o, o, o, o + 1.0f, o + 1.0f, o + 1.0f, o + 1.0f, o, o + 0.5f};
+                memcpy(positions + 9 * i, v, sizeof v);
+                for (uint32_t j = 0; j < 3; j++)
+                    indices[3 * i + j] = 3 * i + j;
+            }
+            memset(&s, 0, sizeof s);
+            assert_int_equal(
+                ref_fixture_open(&fx, positions, 3 * DIAGONAL, indices, DIAGONAL, test_options()), CBVH_OK);
+        }
+        uint32_t *ids = malloc(sizeof(uint32_t) * (fx.id_count + 1));
+        assert_non_null(ids);
+        uint64_t st = 70 + (uint64_t)m;
+        const int count = (int)test_reps(400);
+        int grazing = 0;
+        for (int r = 0; r < count; r++) {
+            /* the diagonal's lowest vertex lies on the grid's origin planes, exactly its boxes' corner */
+            const int lowest = m == 2 && r % 4 < 2, capsule = r % 2;
+            size_t k = (size_t)(scene_rand_unit(&st) * (double)fx.tris.count) % fx.tris.count;
+            for (size_t j = 0; lowest && j < fx.tris.count; j++)
+                if (fx.tris.v[9 * j] < fx.tris.v[9 * k])
+                    k = j;
+            const double *v = fx.tris.v + 9 * k + 3 * (size_t)(lowest ? 0 : r % (m < 2 ? 3 : 2));
+            /* the node tests of balls and capsules run for shapes large next to the leaves: every other
+             * one here is */
+            const double reach =
+                r % 8 < 4 ? rnd(&st, 1e-4, 0.05) * (m < 2 ? fx.diag : 1.0) : rnd(&st, 0.05, 0.3) * fx.diag;
+            region g;
+            memset(&g, 0, sizeof g);
+            g.kind = capsule ? CAPSULE : SPHERE;
+            /* a capsule lies square to one axis, off the vertex along it, where its box grown by the radius
+             * ends: the path test's face; its segment runs across that axis, its middle nearest */
+            const int axis = (r / 2) % 3;
+            const double turn = rnd(&st, 0.0, 6.283), length = reach * rnd(&st, 0.2, 2.0);
+            for (int a = 0; a < 3; a++) {
+                const int up =
+                    m < 2 ? r >> (a + 2) & 1 : !lowest && r % 4 >= 2; /* the diagonal's corners face out */
+                const double away = capsule ? (a == axis) * reach : reach / sqrt(3.0);
+                const double across = a == (axis + 1) % 3 ? cos(turn) : a == (axis + 2) % 3 ? sin(turn) : 0.0;
+                g.p0[a] = (float)(v[a] + (up ? away : -away) - capsule * length * across);
+                g.p1[a] = (float)(v[a] + (up ? away : -away) + capsule * length * across);
+            }
+            /* the distance of the vertex from the segment (a point for a ball), in double */
+            double d2 = 0.0, along = 0.0, len2 = 0.0;
+            for (int a = 0; a < 3; a++) {
+                along += ((double)g.p1[a] - g.p0[a]) * (v[a] - g.p0[a]);
+                len2 += ((double)g.p1[a] - g.p0[a]) * ((double)g.p1[a] - g.p0[a]);
+            }
+            const double at = len2 > 0.0 ? fmin(fmax(along / len2, 0.0), 1.0) : 0.0;
+            for (int a = 0; a < 3; a++) {
+                const double x = g.p0[a] + at * ((double)g.p1[a] - g.p0[a]) - v[a];
+                d2 += x * x;
+            }
+            g.radius = (float)sqrt(d2);
+            if ((double)g.radius < sqrt(d2))
+                g.radius = nextafterf(g.radius, INFINITY);
+            const double c[3] = {g.p0[0], g.p0[1], g.p0[2]}, c1[3] = {g.p1[0], g.p1[1], g.p1[2]};
+            /* above the reference's own rounding, a few ulps of the coordinates */
+            const double tol = 1e-14 * fx.diag + 1e-15 * fmax(fmax(fabs(c[0]), fabs(c[1])), fabs(c[2]));
+            grazing += (capsule ? ref_capsule_class(fx.tris.v + 9 * k, c, c1, g.radius, tol)
+                                : ref_sphere_class(fx.tris.v + 9 * k, c, g.radius, tol)) == 2;
+            const size_t n = overlap(&fx, &g, NULL, NULL, ids, fx.id_count);
+            check_set_within(&fx, ids, n, &g, tol);
+            uint32_t first = CBVH_NO_HIT;
+            assert_int_equal(overlap(&fx, &g, stop_at_first, &first, NULL, 0), n > 0 ? 1 : 0);
+        }
+        fprintf(stderr,
+                "grazing balls and capsules: %d of %d reach their vertex by more than the tolerance\n",
+                grazing, count);
+        assert_true(grazing > count / 4);
+        free(ids);
+        ref_fixture_close(&fx);
+        if (m < 2)
+            scene_free(&s);
     }
 }
 
@@ -496,7 +604,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_overlaps),      cmocka_unit_test(test_triangle_box_sat),
         cmocka_unit_test(test_invalid_input), cmocka_unit_test(test_sliver_overlaps),
-        cmocka_unit_test(test_contacts),
+        cmocka_unit_test(test_contacts),      cmocka_unit_test(test_grazing_rounds),
     };
     return TEST_RUN_LAYOUTS(tests, 0);
 }

@@ -7,6 +7,7 @@
 
 #include "query/triangle_frame.h"
 #include "query/closest.h"
+#include "query/grown_path.h"
 #include "query/leaf.h"
 #include "query/sweep_walk.h"
 #include "query/walk.h"
@@ -181,15 +182,53 @@ static void region_contact(const struct overlap_region *r, cbvh_v3 a, cbvh_v3 b,
     v3_to_f(point, out->point);
 }
 
-/* An overlap as the shape walk sees it: the region's box as a range of grid coordinates per axis. */
+/* A ball's node test: node boxes (their planes as cbvh_dequantize gives them) within the radius of its
+ * center, in float. */
+struct ball_reach {
+    float center[3]; /* the center rounded to float */
+    float reach2;    /* what the squared float distance of a box from center may reach (ball_reach_of) */
+};
+
+/* Per axis the distance of the float center from a box's planes is rounded at most by 2^-24 of itself, and
+ * the center's own rounding moves it by at most 2^-24 |center|: a box within r of the true center has a float
+ * squared distance, each of its five operations rounded by at most 2^-24 of itself, below (r + 2^-23
+ * |center|_max)^2 (1 + 2^-21), plus 2^-120 for underflow. reach2 is that bound with room to spare (the
+ * exact tests' own rounding, 2^-50 of r^2, included): rounded up, and infinite when it leaves float. */
+static void ball_reach_of(const struct cbvh_local_shape *s, struct ball_reach *b)
+{
+    v3_to_f(s->p0, b->center);
+    const double reach = s->radius + 0x1p-23 * cull_max_abs(s->p0);
+    const double reach2 = reach * reach * (1.0 + 0x1p-19) + 0x1p-120;
+    b->reach2 = reach2 < 0x1p127 ? (float)reach2 * (1.0f + 0x1p-22f) : INFINITY;
+}
+
+/* The squared float distance of b's center from the box [lo, hi] (per axis: how far outside it lies). */
+static inline float ball_distance2(const struct ball_reach *b, const float lo[3], const float hi[3])
+{
+    float d2 = 0.0f;
+    for (int a = 0; a < 3; a++) {
+        const float below = lo[a] - b->center[a], above = b->center[a] - hi[a];
+        const float d = cull_maxf(cull_maxf(below, above), 0.0f);
+        d2 = d2 + d * d;
+    }
+    return d2;
+}
+
+/* An overlap as the shape walk sees it: the region's box as a range of grid coordinates per axis; for a
+ * ball its reach (ball: 1), for a capsule the path of the float box around its end ball p0 to p1 (capsule:
+ * 1; capsule_path). */
 struct overlap_query {
     const struct cbvh_file *f;
     const struct overlap_region *region;
     struct overlap_sink *sink;
     struct cbvh_grid_range grid;
+    int ball, capsule;
+    struct ball_reach reach;
+    struct cbvh_grown_path path;
 #ifdef CBVH_HAVE_SIMD
     struct cbvh_grid_range4 grid4; /* grid, as four wide slots at once test it */
     struct cbvh_cull4 cull4;
+    __m128 center4[3], reach2, origin4[3], scale4[3]; /* a ball's reach, and the file's grid, in every lane */
 #endif
 };
 
@@ -286,18 +325,74 @@ static void grid_range(const struct cbvh_file *f, const struct overlap_region *r
     }
 }
 
+/* A capsule p0-p1 of radius r as the path of the float box around the ball of radius r at p0
+ * (cbvh_sweep_bounds) by delta = p1 - p0 rounded to float, its extent grown by 2^-23 |delta| (more than
+ * that rounding, which moves the path's points by at most 2^-24 |delta| per axis from the segment's): a node
+ * box holding a point within r of the segment is crossed by the path grown by the extent for t in [0, 1]. */
+static void capsule_path(const struct cbvh_file *f, const struct cbvh_local_shape *s,
+                         struct cbvh_grown_path *p)
+{
+    struct cbvh_local_shape ball = *s;
+    ball.kind = CBVH_SHAPE_SPHERE;
+    ball.p1 = ball.p0;
+    cbvh_v3 lo, hi;
+    cbvh_shape_bounds(&ball, &lo, &hi);
+    float center[3], extent[3], delta[3];
+    cbvh_sweep_bounds(lo, hi, center, extent);
+    for (int a = 0; a < 3; a++) {
+        delta[a] = (float)(v3_get(s->p1, a) - v3_get(s->p0, a));
+        extent[a] = nextafterf(extent[a] + fabsf(delta[a]) * 0x1p-23f, INFINITY);
+    }
+    cbvh_grown_path_init(p, f, center, extent, delta);
+}
+
+/* The region's grid range meets the box, for a ball the box lies within its reach, for a capsule its path
+ * crosses the box. */
 static int overlap_enter(void *query, const uint32_t q[6], float *entry)
 {
+    const struct overlap_query *o = query;
     *entry = 0.0f;
-    return cbvh_grid_range_meets(&((const struct overlap_query *)query)->grid, q);
+    if (!cbvh_grid_range_meets(&o->grid, q))
+        return 0;
+    if (o->capsule) {
+        float crossed_at;
+        return cbvh_grown_path_grid(&o->path, o->f, q, 1.0f, &crossed_at);
+    }
+    if (!o->ball)
+        return 1;
+    const float *origin = o->f->grid_origin, *scale = o->f->grid_scale;
+    float lo[3], hi[3];
+    for (int a = 0; a < 3; a++) {
+        lo[a] = cbvh_dequantize(q[a], origin[a], scale[a]);
+        hi[a] = cbvh_dequantize(q[3 + a], origin[a], scale[a]);
+    }
+    return ball_distance2(&o->reach, lo, hi) <= o->reach.reach2;
 }
 
 #ifdef CBVH_HAVE_SIMD
-/* overlap_enter on the four slots of a wide node at once (cbvh_grid_range4_hits). */
-static uint32_t overlap_enter4(void *query, const uint8_t *node, float entry[4])
+/* overlap_enter on the four slots of a wide node at once (cbvh_grid_range4_hits; a ball's distance lane for
+ * lane the same float operations in the same order as ball_distance2, _mm_max_ps(a, b) being a > b ? a : b
+ * as cull_maxf). */
+CBVH_FORCE_INLINE uint32_t overlap_enter4(void *query, const uint8_t *node, float entry[4])
 {
+    const struct overlap_query *q = query;
     _mm_storeu_ps(entry, _mm_setzero_ps());
-    return cbvh_grid_range4_hits(node, &((const struct overlap_query *)query)->grid4);
+    const uint32_t meets = cbvh_grid_range4_hits(node, &q->grid4);
+    if (!(q->ball | q->capsule) || !meets)
+        return meets;
+    if (q->capsule) {
+        float crossed_at[4];
+        return meets & cbvh_grown_path_node4(&q->path, node, 1.0f, crossed_at);
+    }
+    __m128 d2 = _mm_setzero_ps();
+    for (uint32_t a = 0; a < 3; a++) {
+        __m128 lo, hi;
+        cbvh_w4_planes4(node, a, q->origin4[a], q->scale4[a], &lo, &hi);
+        const __m128 below = _mm_sub_ps(lo, q->center4[a]), above = _mm_sub_ps(q->center4[a], hi);
+        const __m128 d = _mm_max_ps(_mm_max_ps(below, above), _mm_setzero_ps());
+        d2 = _mm_add_ps(d2, _mm_mul_ps(d, d));
+    }
+    return meets & (uint32_t)_mm_movemask_ps(_mm_cmple_ps(d2, q->reach2));
 }
 #define OVERLAP_ENTER4 overlap_enter4
 #else
@@ -348,10 +443,13 @@ static int region_meets(const struct overlap_region *r, const float lo[3], const
 #endif
 
 #ifdef CBVH_HAVE_SIMD
-/* Four triangles through the float tests (cbvh_cull4_keep), the kept ones in order through the rest. */
+/* Four triangles through the float tests (a capsule's path against their boxes, cbvh_grown_path_triangles4,
+ * then cbvh_cull4_keep), the kept ones in order through the rest. */
 CBVH_FORCE_INLINE int overlap_quad(void *query, uint32_t k, const struct leaf_quad *t, uint32_t group)
 {
     const struct overlap_query *q = query;
+    if (q->capsule && !(group &= cbvh_grown_path_triangles4(&q->path, t, 1.0f)))
+        return 0;
     uint32_t touch, keep = cbvh_cull4_keep(&q->cull4, t->c, &touch) & group;
     /* a ball's float tests leave only lanes near the radius, slivers, or odd sizes to the exact test */
     const enum overlap_left rest = q->region->shape.kind == CBVH_SHAPE_SPHERE ? OVERLAP_EXACT : OVERLAP_CULL;
@@ -385,6 +483,21 @@ static int overlap_leaf(void *query, uint32_t first, uint32_t count)
 #endif
 }
 
+/* Whether a ball's or capsule's own node tests (ball_reach, capsule_path) pay: where the mesh's leaves are
+ * small next to the shape, its reach squared (radius squared plus a quarter of the segment's length
+ * squared) times the triangle count at least the grid's diagonal squared, four times that for a ball,
+ * whose own test culls less. With larger leaves their
+ * boxes cull about what the shape's bounding box does, and the tests cost more than they save
+ * (docs/PERFORMANCE.md). Either way the answers are the same. */
+static int fine_node_tests(const struct cbvh_file *f, const struct cbvh_local_shape *s)
+{
+    double diag2 = 0.0;
+    for (int a = 0; a < 3; a++)
+        diag2 += (double)f->grid_scale[a] * f->grid_scale[a] * CBVH_Q_MAX * CBVH_Q_MAX;
+    const double reach2 = s->radius * s->radius + 0.25 * v3_len2(v3_sub(s->p1, s->p0)); /* within 2x */
+    return reach2 * f->info.triangle_count >= (s->kind == CBVH_SHAPE_SPHERE ? 4.0 : 1.0) * diag2;
+}
+
 /* Stored order: the order does not matter when every overlap is reported. */
 static size_t overlap_walk(const struct cbvh_file *f, const struct overlap_region *region,
                            struct overlap_sink *sink)
@@ -398,9 +511,25 @@ static size_t overlap_walk(const struct cbvh_file *f, const struct overlap_regio
     grid_range(f, region, &q.grid);
     if (cbvh_grid_range_empty(&q.grid))
         return sink->reported; /* no node box can meet it */
+    const int round = region->shape.kind != CBVH_SHAPE_BOX,
+              fine = round && fine_node_tests(f, &region->shape);
+    q.ball = fine && region->shape.kind == CBVH_SHAPE_SPHERE;
+    q.capsule = fine && region->shape.kind == CBVH_SHAPE_CAPSULE;
+    if (q.ball)
+        ball_reach_of(&region->shape, &q.reach);
+    if (q.capsule)
+        capsule_path(f, &region->shape, &q.path);
 #ifdef CBVH_HAVE_SIMD
     cbvh_grid_range4_of(&q.grid, &q.grid4);
     cbvh_cull4_init(&q.cull4, &region->shape, region->lo, region->hi, NULL);
+    if (q.ball) {
+        q.reach2 = _mm_set1_ps(q.reach.reach2);
+        for (int a = 0; a < 3; a++) {
+            q.center4[a] = _mm_set1_ps(q.reach.center[a]);
+            q.origin4[a] = _mm_set1_ps(f->grid_origin[a]);
+            q.scale4[a] = _mm_set1_ps(f->grid_scale[a]);
+        }
+    }
 #endif
     cbvh_shape_walk(f, f->layout, CBVH_NO_OCTANT, overlap_enter, OVERLAP_ENTER4, overlap_leaf, &q, NULL);
     return sink->reported;

@@ -397,8 +397,12 @@ CBVH_FORCE_INLINE uint32_t cbvh_cull4_keep(const struct cbvh_cull4 *w, const flo
  * or 2^-15 span^3 size: the margins are 8 and 8 times that, and 2^-14 span^2 size is 2^16 times
  * cbvh_cull_triangle's own margin. So a lane dropped here is one cbvh_cull_triangle finds clear for every
  * tmax' <= tmax (a shorter motion only moves the hull's far end inwards), and on which the exact tests find
- * no contact. */
-CBVH_FORCE_INLINE uint32_t cbvh_cull4_sweep(const struct cbvh_cull4 *w, const float quad[3][3][4], float tmax)
+ * no contact. *clear_at_start gets the lanes kept where the shape at t = 0 alone stays on one side of the
+ * plane by that margin (the same test with no motion, its size still counting the motion): there
+ * cbvh_cull_triangle finds CBVH_CULL_CLEAR_AT_START, or CBVH_CULL_CLEAR where the exact tests find no
+ * contact either, for every tmax' <= tmax. */
+CBVH_FORCE_INLINE uint32_t cbvh_cull4_sweep(const struct cbvh_cull4 *w, const float quad[3][3][4], float tmax,
+                                            uint32_t *clear_at_start)
 {
     __m128 c[3][3], w0[3], w1[3], motion[3];
     cull4_load(quad, c);
@@ -414,8 +418,11 @@ CBVH_FORCE_INLINE uint32_t cbvh_cull4_sweep(const struct cbvh_cull4 *w, const fl
     const __m128 size =
         _mm_add_ps(_mm_add_ps(_mm_add_ps(f.corner, span), w->shape_size), _mm_mul_ps(w->delta_size, t));
     const __m128 h0 = cull4_dot(n, w0), h1 = cull4_dot(n, w1), m = cull4_dot(n, motion);
-    __m128 keep = _mm_andnot_ps(cull4_apart(h0, h1, m, cull4_reach(w, n, nn), span, size),
-                                _mm_castsi128_ps(_mm_set1_epi32(-1)));
+    const __m128 reach = cull4_reach(w, n, nn);
+    __m128 keep =
+        _mm_andnot_ps(cull4_apart(h0, h1, m, reach, span, size), _mm_castsi128_ps(_mm_set1_epi32(-1)));
+    const uint32_t start_apart = (uint32_t)_mm_movemask_ps(cull4_apart(h0, h1, zero, reach, span, size));
+    *clear_at_start = start_apart & (uint32_t)_mm_movemask_ps(keep);
     if (w->box || !_mm_movemask_ps(keep))
         return (uint32_t)_mm_movemask_ps(keep);
     const __m128 margin =
@@ -440,6 +447,7 @@ CBVH_FORCE_INLINE uint32_t cbvh_cull4_sweep(const struct cbvh_cull4 *w, const fl
         outside = _mm_or_ps(outside, _mm_and_ps(_mm_cmpgt_ps(out, zero), beyond));
     }
     keep = _mm_andnot_ps(_mm_and_ps(outside, cull4_moderate(&f, size, 0x1p-4f)), keep);
+    *clear_at_start &= (uint32_t)_mm_movemask_ps(keep);
     return (uint32_t)_mm_movemask_ps(keep);
 }
 #endif

@@ -89,6 +89,20 @@ static inline uint32_t cbvh_grid_range4_hits(const uint8_t *node, const struct c
 #endif
 
 #ifdef CBVH_HAVE_SIMD
+/* The planes of axis a (0, 1, 2) of the four slots of wide node `node` (used or not), dequantized lane by
+ * lane with the same two float operations as cbvh_dequantize, origin and scale the file's grid's on that axis
+ * in every lane. */
+CBVH_FORCE_INLINE void cbvh_w4_planes4(const uint8_t *node, uint32_t a, __m128 origin, __m128 scale,
+                                       __m128 *lo, __m128 *hi)
+{
+    const __m128i zero = _mm_setzero_si128();
+    const __m128i qlo = _mm_loadl_epi64((const __m128i *)(const void *)(node + cbvh_w4_plane_offset(a, 0)));
+    const __m128i qhi =
+        _mm_loadl_epi64((const __m128i *)(const void *)(node + cbvh_w4_plane_offset(a + 3u, 0)));
+    *lo = _mm_add_ps(origin, _mm_mul_ps(_mm_cvtepi32_ps(_mm_unpacklo_epi16(qlo, zero)), scale));
+    *hi = _mm_add_ps(origin, _mm_mul_ps(_mm_cvtepi32_ps(_mm_unpacklo_epi16(qhi, zero)), scale));
+}
+
 /* A query's test of four triangles at once: cooked triangles k + j for the lanes j of `group` in q
  * (leaf_group_load; the other lanes hold other triangles, which the test must ignore). Returns 1 to end
  * the walk. */
@@ -131,7 +145,27 @@ CBVH_KERNEL int cbvh_shape_leaf_quads(const struct cbvh_file *f, uint32_t first,
 }
 #endif
 
-/* The children of non-leaf r the walk enters, in the order of `octant`, with their entry keys: four at once
+/* Children c[0..m) with entry keys e[0..m) (m <= CBVH_TREE_WIDTH) sorted by key, nearest first, ties kept
+ * in their order: a sweep's closest contact found early shrinks its reach before the farther subtrees, which
+ * the walk then drops unopened (the octant's precomputed order guesses from the boxes' centres only). */
+CBVH_KERNEL void cbvh_shape_sort_nearest(cbvh_ref c[CBVH_TREE_WIDTH], float e[CBVH_TREE_WIDTH], uint32_t m)
+{
+    for (uint32_t k = 1; k < m; k++) {
+        const cbvh_ref ck = c[k];
+        const float ek = e[k];
+        uint32_t j = k;
+        for (; j > 0 && e[j - 1] > ek; j--) {
+            c[j] = c[j - 1];
+            e[j] = e[j - 1];
+        }
+        c[j] = ck;
+        e[j] = ek;
+    }
+}
+
+/* The children of non-leaf r the walk enters, nearest entry key first (cbvh_shape_sort_nearest) from the
+ * order of `octant` (CBVH_NO_OCTANT: slot order, unsorted, for queries whose keys are all 0), with their
+ * entry keys: four at once
  * through `enter4` for a wide node when the query has it (and SIMD is built), else box by box through
  * `enter`, without branching on the outcome (hard to predict). Returns how many. */
 CBVH_KERNEL uint32_t cbvh_shape_children(const struct cbvh_file *f, const uint32_t layout, cbvh_ref r,
@@ -164,6 +198,7 @@ CBVH_KERNEL uint32_t cbvh_shape_children(const struct cbvh_file *f, const uint32
             in_entry[m] = e[s];
             m += hits >> s & 1u;
         }
+        cbvh_shape_sort_nearest(in, in_entry, m);
         return m;
     }
 #else
@@ -177,6 +212,8 @@ CBVH_KERNEL uint32_t cbvh_shape_children(const struct cbvh_file *f, const uint32
         in[m] = children[k].ref;
         m += enter(query, q, &in_entry[m]) != 0;
     }
+    if (octant != CBVH_NO_OCTANT)
+        cbvh_shape_sort_nearest(in, in_entry, m);
     return m;
 }
 

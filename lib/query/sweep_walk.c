@@ -4,6 +4,7 @@
 #include <float.h>
 #include <math.h>
 
+#include "query/grown_path.h"
 #include "query/ray_box.h"
 #include "query/raycast.h"
 #include "query/sweep_walk.h"
@@ -12,23 +13,11 @@
 #include "query/walk.h"
 #include "query/triangle_frame.h"
 
-/* x moved away from zero by 2^-22 of itself: more than the half ulp a float
- * addition may have rounded it inwards by. */
-static float outward_lo(float x)
-{
-    return x - fabsf(x) * 0x1p-22f - FLT_MIN;
-}
-static float outward_hi(float x)
-{
-    return x + fabsf(x) * 0x1p-22f + FLT_MIN;
-}
-
-/* A sweep as the shape walk sees it. */
+/* A sweep as the shape walk sees it: the path of its float box (cbvh_sweep_bounds). */
 struct sweep_query {
     const struct cbvh_file *f;
-    const float *center, *extent, *delta;
-    float rcp[3];
-    uint32_t octant;
+    const float *delta;
+    struct cbvh_grown_path path;
     cbvh_sweep_triangle_fn sweep;
     const void *shape;
     const struct cbvh_local_shape *bounds;
@@ -38,39 +27,14 @@ struct sweep_query {
     float limit; /* best.t as the box tests read it */
 #ifdef CBVH_HAVE_SIMD
     struct cbvh_cull4 cull4;
-    __m128 center4[3], extent4[3], rcp4[3]; /* sweep_box's, in every lane */
-    __m128 origin4[3], scale4[3];           /* the file's grid, in every lane */
 #endif
 };
 
-/* The box [box_lo, box_hi] grown by the shape's extent, crossed by the center's path before the best contact;
- * *entry is where the path enters it. */
-static int sweep_box(const struct sweep_query *q, const float box_lo[3], const float box_hi[3], float *entry)
-{
-    float lo[3], hi[3];
-    for (int a = 0; a < 3; a++) {
-        lo[a] = outward_lo(box_lo[a] - q->extent[a]);
-        hi[a] = outward_hi(box_hi[a] + q->extent[a]);
-    }
-    /* A zero delta gives rcp = +inf on every axis: the slab test then
-     * accepts exactly the boxes holding the center (NaNs are ignored). */
-    const uint32_t o = q->octant;
-    return cbvh_slab_test(o & 1u ? hi[0] : lo[0], o & 2u ? hi[1] : lo[1], o & 4u ? hi[2] : lo[2],
-                          o & 1u ? lo[0] : hi[0], o & 2u ? lo[1] : hi[1], o & 4u ? lo[2] : hi[2], q->center,
-                          q->rcp, 0.0f, q->limit, entry);
-}
-
-/* A node box as sweep_box sees it: dequantized on the file's grid. */
+/* A node box: the path of the shape's box crosses it before the best contact. */
 static int sweep_enter(void *query, const uint32_t grid[6], float *entry)
 {
     const struct sweep_query *q = query;
-    const float *origin = q->f->grid_origin, *scale = q->f->grid_scale;
-    float lo[3], hi[3];
-    for (int a = 0; a < 3; a++) {
-        lo[a] = cbvh_dequantize(grid[a], origin[a], scale[a]);
-        hi[a] = cbvh_dequantize(grid[3 + a], origin[a], scale[a]);
-    }
-    return sweep_box(q, lo, hi, entry);
+    return cbvh_grown_path_grid(&q->path, q->f, grid, q->limit, entry);
 }
 
 /* Culling by the motion: the sign of delta . n, n the face normal as wound; parallel or no motion keeps it.
@@ -104,12 +68,14 @@ static int ask_filter(const struct sweep_query *q, uint32_t k, const cbvh_v3 v[3
     return q->rules->filter(q->rules->user, &r);
 }
 
-/* Cooked triangle k: its box (unless it passed sweep_box at the current limit: box_passed_at, NAN when
- * untested; the limit only shrinks), the motion's culling, the cheap tests, the sweep, and the filter when
- * its contact would win. A contact at t = 0 is beaten by none of a higher index: those are skipped. Returns
- * 1 when the filter stops the walk. */
+/* Cooked triangle k: its box (unless it passed cbvh_grown_path_box at the current limit: box_passed_at, NAN
+ * when untested; the limit only shrinks), the motion's culling, the cheap tests (unless the float cull found
+ * the shape clear of it at t = 0 over a motion at least as long, clear_at_start: then they would find it
+ * CBVH_CULL_CLEAR_AT_START, or CBVH_CULL_CLEAR where the sweep finds no contact either), the sweep, and the
+ * filter when its contact would win. A contact at t = 0 is beaten by none of a higher index: those are
+ * skipped. Returns 1 when the filter stops the walk. */
 static int sweep_triangle(struct sweep_query *q, uint32_t k, const float a[3], const float b[3],
-                          const float cc[3], float box_passed_at)
+                          const float cc[3], float box_passed_at, int clear_at_start)
 {
     const struct cbvh_sweep_rules *rules = q->rules;
     if (q->best.t == 0.0 && k > q->best_tri)
@@ -117,14 +83,15 @@ static int sweep_triangle(struct sweep_query *q, uint32_t k, const float a[3], c
     if (!(q->limit == box_passed_at)) {
         float lo[3], hi[3], entry;
         cbvh_triangle_bounds(a, b, cc, lo, hi);
-        if (!sweep_box(q, lo, hi, &entry))
+        if (!cbvh_grown_path_box(&q->path, lo, hi, q->limit, &entry))
             return 0;
     }
     const cbvh_v3 v[3] = {v3_from_f(a), v3_from_f(b), v3_from_f(cc)};
     if (rules && rules->cull != CBVH_CULL_NONE && culled(rules->cull, v[0], v[1], v[2], q->delta))
         return 0;
     const enum cbvh_cull_verdict cull =
-        cbvh_cull_triangle(q->bounds, v3_from_f(q->delta), q->best.t, v[0], v[1], v[2], 0);
+        clear_at_start ? CBVH_CULL_CLEAR_AT_START
+                       : cbvh_cull_triangle(q->bounds, v3_from_f(q->delta), q->best.t, v[0], v[1], v[2], 0);
     if (cull == CBVH_CULL_CLEAR)
         return 0;
     struct cbvh_sweep_contact c = {0.0, {0, 0, 0}, {0, 0, 0}, 0.0};
@@ -141,82 +108,36 @@ static int sweep_triangle(struct sweep_query *q, uint32_t k, const float a[3], c
 }
 
 #ifdef CBVH_HAVE_SIMD
-/* x moved away from zero as outward_lo (sign -1) or outward_hi (sign 1) move it, lane by lane. */
-static inline __m128 outward4(__m128 x, float sign)
-{
-    const __m128 away = _mm_mul_ps(_mm_andnot_ps(_mm_set1_ps(-0.0f), x), _mm_set1_ps(0x1p-22f));
-    return sign < 0.0f ? _mm_sub_ps(_mm_sub_ps(x, away), _mm_set1_ps(FLT_MIN))
-                       : _mm_add_ps(_mm_add_ps(x, away), _mm_set1_ps(FLT_MIN));
-}
-
-/* sweep_box on the boxes of four triangles (cbvh_triangle_bounds), lane for lane the same float operations
- * in the same order (_mm_max_ps(a, b) is a > b ? a : b, as the slab test's selections): the lanes whose box
- * it keeps with the motion up to `limit`. */
-static uint32_t sweep_box4(const struct sweep_query *q, const struct leaf_quad *t, float limit)
-{
-    __m128 tnear = _mm_setzero_ps(), tfar = _mm_set1_ps(limit);
-    for (int a = 0; a < 3; a++) {
-        const __m128 c0 = _mm_load_ps(t->c[0][a]), c1 = _mm_load_ps(t->c[1][a]), c2 = _mm_load_ps(t->c[2][a]);
-        const __m128 lo = outward4(_mm_sub_ps(_mm_min_ps(_mm_min_ps(c0, c1), c2), q->extent4[a]), -1.0f);
-        const __m128 hi = outward4(_mm_add_ps(_mm_max_ps(_mm_max_ps(c0, c1), c2), q->extent4[a]), 1.0f);
-        const int back = q->octant >> a & 1u;
-        const __m128 tn = _mm_mul_ps(_mm_sub_ps(back ? hi : lo, q->center4[a]), q->rcp4[a]);
-        const __m128 tf = _mm_mul_ps(_mm_sub_ps(back ? lo : hi, q->center4[a]), q->rcp4[a]);
-        tnear = _mm_max_ps(tn, tnear);
-        tfar = _mm_min_ps(tf, tfar);
-    }
-    return (uint32_t)_mm_movemask_ps(_mm_cmple_ps(tnear, _mm_mul_ps(tfar, _mm_set1_ps(CBVH_BOX_PAD))));
-}
-
-/* sweep_enter on the four slots of wide node `node` at once: each plane dequantized as cbvh_dequantize does
- * it, the box grown and crossed as sweep_box does, lane for lane the same float operations in the same order
- * (_mm_max_ps(a, b) is a > b ? a : b, as the slab test's selections), so the walk enters the same boxes with
- * the same keys. */
+/* sweep_enter on the four slots of wide node `node` at once (cbvh_grown_path_node4: the same boxes with the
+ * same keys). */
 static uint32_t sweep_enter4(void *query, const uint8_t *node, float entry[4])
 {
     const struct sweep_query *q = query;
-    __m128 tnear = _mm_setzero_ps(), tfar = _mm_set1_ps(q->limit);
-    for (uint32_t a = 0; a < 3; a++) {
-        const __m128i zero = _mm_setzero_si128();
-        const __m128i qlo =
-            _mm_loadl_epi64((const __m128i *)(const void *)(node + cbvh_w4_plane_offset(a, 0)));
-        const __m128i qhi =
-            _mm_loadl_epi64((const __m128i *)(const void *)(node + cbvh_w4_plane_offset(a + 3u, 0)));
-        const __m128 plane_lo = _mm_add_ps(
-            q->origin4[a], _mm_mul_ps(_mm_cvtepi32_ps(_mm_unpacklo_epi16(qlo, zero)), q->scale4[a]));
-        const __m128 plane_hi = _mm_add_ps(
-            q->origin4[a], _mm_mul_ps(_mm_cvtepi32_ps(_mm_unpacklo_epi16(qhi, zero)), q->scale4[a]));
-        const __m128 lo = outward4(_mm_sub_ps(plane_lo, q->extent4[a]), -1.0f);
-        const __m128 hi = outward4(_mm_add_ps(plane_hi, q->extent4[a]), 1.0f);
-        const int back = q->octant >> a & 1u;
-        const __m128 tn = _mm_mul_ps(_mm_sub_ps(back ? hi : lo, q->center4[a]), q->rcp4[a]);
-        const __m128 tf = _mm_mul_ps(_mm_sub_ps(back ? lo : hi, q->center4[a]), q->rcp4[a]);
-        tnear = _mm_max_ps(tn, tnear);
-        tfar = _mm_min_ps(tf, tfar);
-    }
-    _mm_storeu_ps(entry, tnear);
-    return (uint32_t)_mm_movemask_ps(_mm_cmple_ps(tnear, _mm_mul_ps(tfar, _mm_set1_ps(CBVH_BOX_PAD))));
+    return cbvh_grown_path_node4(&q->path, node, q->limit, entry);
 }
 #define SWEEP_ENTER4 sweep_enter4
 
-/* Four triangles through their box test (sweep_box4: exactly the triangles sweep_box keeps with the limit
- * at the time, so sweep_triangle tests a kept one's box again only once the limit shrank) and the float
+/* Four triangles through their box test (cbvh_grown_path_triangles4: exactly the triangles
+ * cbvh_grown_path_box keeps with the limit at the time, so sweep_triangle tests a kept one's box again only
+ * once the limit shrank) and the float
  * cull (cbvh_cull4_sweep, over the motion up to the best contact so far: limit, rounded from best.t, times
- * 1 + 2^-22 is at least best.t), the kept ones in order through the rest. */
+ * 1 + 2^-22 is at least best.t, which also tells the kept ones clear of the shape at t = 0), the kept ones
+ * in order through the rest. */
 static int sweep_quad(void *query, uint32_t k, const struct leaf_quad *t, uint32_t group)
 {
     struct sweep_query *q = query;
     const float box_limit = q->limit;
-    uint32_t keep = sweep_box4(q, t, box_limit) & group;
+    uint32_t keep = cbvh_grown_path_triangles4(&q->path, t, box_limit) & group;
     if (!keep)
         return 0;
-    keep &= cbvh_cull4_sweep(&q->cull4, t->c, box_limit * 0x1.000004p0f);
+    uint32_t clear_at_start;
+    keep &= cbvh_cull4_sweep(&q->cull4, t->c, box_limit * 0x1.000004p0f, &clear_at_start);
     for (; keep; keep &= keep - 1u) {
         const uint32_t j = cbvh_lowest_lane(keep);
         const float a[3] = {t->c[0][0][j], t->c[0][1][j], t->c[0][2][j]};
         const float b[3] = {t->c[1][0][j], t->c[1][1][j], t->c[1][2][j]};
         const float c[3] = {t->c[2][0][j], t->c[2][1][j], t->c[2][2][j]};
-        if (sweep_triangle(q, k + j, a, b, c, box_limit))
+        if (sweep_triangle(q, k + j, a, b, c, box_limit, clear_at_start >> j & 1u))
             return 1;
     }
     return 0;
@@ -235,7 +156,7 @@ static int sweep_leaf(void *query, uint32_t first, uint32_t count)
     for (uint32_t k = first; k < first + count; k++) {
         float a[3], b[3], c[3];
         cbvh_triangle_vertices(q->f, k, a, b, c);
-        if (sweep_triangle(q, k, a, b, c, NAN))
+        if (sweep_triangle(q, k, a, b, c, NAN, 0))
             return 1;
     }
     return 0;
@@ -251,10 +172,7 @@ int cbvh_sweep_walk(const struct cbvh_file *f, const struct cbvh_local_shape *bo
     cbvh_shape_bounds(bounds, &lo, &hi);
     cbvh_sweep_bounds(lo, hi, center, extent);
     struct sweep_query q = {.f = f,
-                            .center = center,
-                            .extent = extent,
                             .delta = delta,
-                            .rcp = {1.0f / delta[0], 1.0f / delta[1], 1.0f / delta[2]},
                             .sweep = sweep,
                             .shape = shape,
                             .bounds = bounds,
@@ -262,18 +180,11 @@ int cbvh_sweep_walk(const struct cbvh_file *f, const struct cbvh_local_shape *bo
                             .best = {1.0, {0, 0, 0}, {0, 0, 0}, 0.0},
                             .best_tri = UINT32_MAX,
                             .limit = 1.0f};
-    q.octant = cbvh_octant_of(q.rcp);
+    cbvh_grown_path_init(&q.path, f, center, extent, delta);
 #ifdef CBVH_HAVE_SIMD
     cbvh_cull4_init(&q.cull4, bounds, NULL, NULL, delta);
-    for (int a = 0; a < 3; a++) {
-        q.center4[a] = _mm_set1_ps(center[a]);
-        q.extent4[a] = _mm_set1_ps(extent[a]);
-        q.rcp4[a] = _mm_set1_ps(q.rcp[a]);
-        q.origin4[a] = _mm_set1_ps(f->grid_origin[a]);
-        q.scale4[a] = _mm_set1_ps(f->grid_scale[a]);
-    }
 #endif
-    cbvh_shape_walk(f, f->layout, q.octant, sweep_enter, SWEEP_ENTER4, sweep_leaf, &q, &q.limit);
+    cbvh_shape_walk(f, f->layout, q.path.octant, sweep_enter, SWEEP_ENTER4, sweep_leaf, &q, &q.limit);
     found->tri = q.best_tri;
     found->contact = q.best;
     found->contact.normal = v3_normalize(q.best.normal);

@@ -32,7 +32,7 @@ struct cbvh_sweep_found {
  * center +- extent holding `bounds` (cbvh_shape_bounds), is crossed by the
  * point center + t * delta for t in [0, 1] (this culls exactly what the swept
  * shape cannot touch),
- * nearer child first by the sort byte of delta's octant. Each triangle reached
+ * nearest entry first (cbvh_shape_sort_nearest). Each triangle reached
  * (past rules->cull) goes to `sweep`; the earliest contact wins, ties to the
  * lower cooked index, a contact that would win asks rules->filter. rules may
  * be NULL. Returns 1 on contact; fills *found either way. */
