@@ -483,18 +483,17 @@ static int overlap_leaf(void *query, uint32_t first, uint32_t count)
 #endif
 }
 
-/* Whether a ball's or capsule's own node tests (ball_reach, capsule_path) pay: where the mesh's leaves are
- * small next to the shape, its reach squared (radius squared plus a quarter of the segment's length
- * squared) times the triangle count at least the grid's diagonal squared, four times that for a ball,
- * whose own test culls less. With larger leaves their
- * boxes cull about what the shape's bounding box does, and the tests cost more than they save
- * (docs/PERFORMANCE.md). Either way the answers are the same. */
+/* Whether a ball's or capsule's own node tests (ball_reach, capsule_path) run, beside the bounding box's:
+ * when the shape is large next to the mesh's leaves, i.e. its reach squared (radius squared plus a quarter
+ * of the segment's length squared) times the triangle count is at least the grid's diagonal squared (four
+ * times that for a ball). docs/PERFORMANCE.md gives the measurements behind the threshold. Either way the
+ * answers are the same. */
 static int fine_node_tests(const struct cbvh_file *f, const struct cbvh_local_shape *s)
 {
     double diag2 = 0.0;
     for (int a = 0; a < 3; a++)
         diag2 += (double)f->grid_scale[a] * f->grid_scale[a] * CBVH_Q_MAX * CBVH_Q_MAX;
-    const double reach2 = s->radius * s->radius + 0.25 * v3_len2(v3_sub(s->p1, s->p0)); /* within 2x */
+    const double reach2 = s->radius * s->radius + 0.25 * v3_len2(v3_sub(s->p1, s->p0));
     return reach2 * f->info.triangle_count >= (s->kind == CBVH_SHAPE_SPHERE ? 4.0 : 1.0) * diag2;
 }
 
