@@ -97,6 +97,7 @@ static int box_touches(const struct overlap_region *r, cbvh_v3 a, cbvh_v3 b, cbv
     if (!ex->want_contact)
         return cbvh_triangle_oriented_box_sweep(a, b, c, &r->box, v3(0, 0, 0), 0.0, &t, NULL, NULL);
     ex->depth = 0.0;
+    ex->n = v3(0, 0, 1); /* what a contact reads should the test, run for it alone, find no overlap */
     ex->known = cbvh_triangle_oriented_box_sweep(a, b, c, &r->box, v3(0, 0, 0), 0.0, &t, &ex->n, &ex->depth);
     return ex->known;
 }
