@@ -11,6 +11,17 @@
 
 #define BENCH_MAX_THREADS 256
 
+static volatile unsigned bench_evict_sink;
+
+/* Reads one byte of every cache line of buf[0..size). */
+static void bench_evict(const unsigned char *buf, size_t size)
+{
+    unsigned sum = 0;
+    for (size_t i = 0; i < size; i += 64)
+        sum += buf[i];
+    bench_evict_sink = sum;
+}
+
 typedef struct slice {
     const bench_job *job;
     size_t begin, end;
@@ -123,6 +134,10 @@ int bench_time_in_turns(const bench_job *const *jobs, int n, unsigned threads, u
     const size_t slices = threads > 1u || fewest / BENCH_SLICE_QUERIES < 1 ? 1
                           : fewest / BENCH_SLICE_QUERIES > BENCH_SLICES    ? BENCH_SLICES
                                                                            : fewest / BENCH_SLICE_QUERIES;
+    /* written once, so that its pages are the process's own rather than the shared zero page */
+    unsigned char *evict = slices > 1u ? malloc(BENCH_EVICT_BYTES) : NULL;
+    if (evict)
+        memset(evict, 1, BENCH_EVICT_BYTES);
     int status = 0;
     for (unsigned r = 0; r < reps && status == 0; r++) {
         for (int k = 0; k < n; k++)
@@ -132,9 +147,11 @@ int bench_time_in_turns(const bench_job *const *jobs, int n, unsigned threads, u
                 const size_t k = (j + i) % (size_t)n, timed = (i + k) % slices;
                 if (round[k] < 0.0)
                     continue;
-                /* another slice first, untimed (half a slice left 5-12% of the gap that the job before it
-                 * made on the 871K-triangle dragon) */
+                /* the caches emptied of every structure, then another slice first, untimed: each job's timed
+                 * slice finds its own structure as far as one slice brings it back, after any job */
                 const bench_job *job = jobs[k];
+                if (evict)
+                    bench_evict(evict, BENCH_EVICT_BYTES);
                 bench_job part = *job;
                 const size_t warm = (timed + slices / 2u) % slices;
                 part.first = job->first + job->count * warm / slices;
@@ -157,6 +174,7 @@ int bench_time_in_turns(const bench_job *const *jobs, int n, unsigned threads, u
     }
     for (int k = 0; k < n && status == 0; k++)
         seconds[k] = bench_median(times + (size_t)k * reps, runs[k]);
+    free(evict);
     free(times);
     return status;
 }

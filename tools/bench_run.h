@@ -43,8 +43,9 @@ double bench_run_once(const bench_job *job, unsigned threads, cbvh_query_stats *
 
 /* Times *jobs[0..n) in turns on `threads` threads: up to `reps` rounds (reps >= 1), each cutting every job's
  * queries into the same slices (up to BENCH_SLICES, of at least BENCH_SLICE_QUERIES queries; one, the whole
- * job, on more than one thread) and running the jobs in turn slice by slice, each first on another slice
- * untimed (its own structure back in the caches after the job before it), then on its timed slice; job k
+ * job, on more than one thread) and running the jobs in turn slice by slice, each after reading
+ * BENCH_EVICT_BYTES of other memory (caches holding no job's structure), first on another slice untimed
+ * (its own structure back in the caches), then on its timed slice; job k
  * times slice i + k, so that two jobs in a row never run the same queries (a traversal after another of the
  * same file on the same rays finds them in the caches). A job leaves the rounds once its rounds took `budget`
  * seconds (0: no limit). seconds[k] receives the median of job k's rounds, runs[k] their number. The jobs so
@@ -52,6 +53,8 @@ double bench_run_once(const bench_job *job, unsigned threads, cbvh_query_stats *
  * them, and their ratios hold. Returns 0, -1 when a thread cannot be started, -2 out of memory. */
 #define BENCH_SLICE_QUERIES 1024u
 #define BENCH_SLICES 16u
+/* More memory than a last-level cache holds. */
+#define BENCH_EVICT_BYTES ((size_t)64 << 20)
 int bench_time_in_turns(const bench_job *const *jobs, int n, unsigned threads, unsigned reps, double budget,
                         double *seconds, unsigned *runs);
 
