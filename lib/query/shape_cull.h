@@ -9,16 +9,8 @@
 
 #include "query/shape.h"
 
-/* Plain compares (one instruction each), not fmin/fmax, which GCC leaves as calls into libm; the values are
- * never NaN. */
-static inline double cull_max(double x, double y)
-{
-    return x > y ? x : y;
-}
-static inline double cull_min(double x, double y)
-{
-    return x < y ? x : y;
-}
+/* Plain compares (one instruction each), not fminf/fmaxf, which GCC leaves as calls into libm; the values
+ * are never NaN. */
 static inline float cull_maxf(float x, float y)
 {
     return x > y ? x : y;
@@ -29,7 +21,7 @@ static inline float cull_minf(float x, float y)
 }
 static inline double cull_max_abs(cbvh_v3 v)
 {
-    return cull_max(cull_max(fabs(v.x), fabs(v.y)), fabs(v.z));
+    return cbvh_dmax(cbvh_dmax(fabs(v.x), fabs(v.y)), fabs(v.z));
 }
 
 /* The box [lo, hi] of a triangle's float vertices, exact: a walk's node test on it culls the triangle as it
@@ -89,12 +81,12 @@ static inline enum cbvh_cull_verdict cbvh_cull_triangle(const struct cbvh_local_
 {
     const cbvh_v3 e1 = v3_sub(b, a), e2 = v3_sub(c, a), n = v3_cross(e1, e2), motion = v3_scale(delta, tmax);
     const double s0 = v3_dot(n, v3_sub(s->p0, a)), s1 = v3_dot(n, v3_sub(s->p1, a)), m = v3_dot(n, motion);
-    const double lo = cull_min(s0, s1), hi = cull_max(s0, s1);
-    const double span = cull_max(cull_max_abs(e1), cull_max_abs(e2));
-    const double size = cull_max_abs(a) + span + cull_max(cull_max_abs(s->p0), cull_max_abs(s->p1)) +
+    const double lo = cbvh_dmin(s0, s1), hi = cbvh_dmax(s0, s1);
+    const double span = cbvh_dmax(cull_max_abs(e1), cull_max_abs(e2));
+    const double size = cull_max_abs(a) + span + cbvh_dmax(cull_max_abs(s->p0), cull_max_abs(s->p1)) +
                         cull_max_abs(motion) + s->radius + s->half.x + s->half.y + s->half.z;
     const double gap = cull_reach_along(s, n) + 0x1p-30 * span * span * size;
-    if (lo + cull_min(m, 0.0) > gap || hi + cull_max(m, 0.0) < -gap)
+    if (lo + cbvh_dmin(m, 0.0) > gap || hi + cbvh_dmax(m, 0.0) < -gap)
         return CBVH_CULL_CLEAR;
     if (lo > gap || hi < -gap)
         return CBVH_CULL_CLEAR_AT_START;
@@ -166,7 +158,7 @@ static inline void cbvh_cull4_init(struct cbvh_cull4 *w, const struct cbvh_local
             w->axes[i][a] = _mm_set1_ps(s->rotated ? (float)s->axes[a][i] : (float)(a == i));
     }
     w->radius = _mm_set1_ps((float)s->radius);
-    w->shape_size = _mm_set1_ps((float)(cull_max(cull_max_abs(s->p0), cull_max_abs(s->p1)) + s->radius +
+    w->shape_size = _mm_set1_ps((float)(cbvh_dmax(cull_max_abs(s->p0), cull_max_abs(s->p1)) + s->radius +
                                         s->half.x + s->half.y + s->half.z));
     w->box = s->kind == CBVH_SHAPE_BOX;
     w->capsule = s->kind == CBVH_SHAPE_CAPSULE;

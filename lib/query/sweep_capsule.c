@@ -22,14 +22,14 @@ CBVH_FORCE_INLINE int capsule_slab(const struct capsule_shape *s, const cbvh_v3 
     const double d0 = v3_dot(u, w[0]), d1 = v3_dot(u, w[1]), d2 = v3_dot(u, w[2]);
     const double along = -v3_dot(u, s->axis), speed = v3_dot(u, s->delta);
     const double grow = s->radius * v3_len(u) + 0x1p-30 * size * (fabs(u.x) + fabs(u.y) + fabs(u.z));
-    const double lo = cull_min(cull_min(d0, d1), d2) + cull_min(along, 0.0) - grow;
-    const double hi = cull_max(cull_max(d0, d1), d2) + cull_max(along, 0.0) + grow;
+    const double lo = cbvh_dmin(cbvh_dmin(d0, d1), d2) + cbvh_dmin(along, 0.0) - grow;
+    const double hi = cbvh_dmax(cbvh_dmax(d0, d1), d2) + cbvh_dmax(along, 0.0) + grow;
     if (speed == 0.0)
         return !(lo > 0.0 || hi < 0.0);
     const double inv = 1.0 / speed, enter = (speed > 0.0 ? lo : hi) * inv,
                  leave = (speed > 0.0 ? hi : lo) * inv;
-    *t0 = cull_max(*t0, enter);
-    *t1 = cull_min(*t1, leave);
+    *t0 = cbvh_dmax(*t0, enter);
+    *t1 = cbvh_dmin(*t1, leave);
     return !(*t0 > *t1);
 }
 
@@ -52,7 +52,7 @@ static int capsule_slabs(const struct capsule_shape *s, cbvh_v3 a, cbvh_v3 b, cb
     const cbvh_v3 e[3] = {v3_sub(b, a), v3_sub(c, b), v3_sub(a, c)},
                   w[3] = {v3_sub(a, s->p0), v3_sub(b, s->p0), v3_sub(c, s->p0)};
     const cbvh_v3 n = v3_cross(e[0], v3_scale(e[2], -1.0));
-    const double span = cull_max(cull_max_abs(e[0]), cull_max_abs(e[2])), span2 = span * span;
+    const double span = cbvh_dmax(cull_max_abs(e[0]), cull_max_abs(e[2])), span2 = span * span;
     const double size = cull_max_abs(a) + span + s->core_size + cull_max_abs(v3_scale(s->delta, tmax));
     *t_lo = 0.0;
     if (!(v3_len2(n) >= 0x1p-20 * span2 * span2 && span >= 0x1p-160 && size <= 0x1p160))
@@ -160,7 +160,7 @@ int cbvh_sweep_capsule_shape(const struct cbvh_file *f, const struct cbvh_local_
                                     shape->radius,
                                     v3_sub(shape->p1, shape->p0),
                                     v3_scale(d, -1.0),
-                                    cull_max(cull_max_abs(shape->p0), cull_max_abs(shape->p1)) +
+                                    cbvh_dmax(cull_max_abs(shape->p0), cull_max_abs(shape->p1)) +
                                         shape->radius};
     return cbvh_sweep_walk(f, shape, delta, capsule_triangle, &s, rules, found);
 }
