@@ -56,11 +56,10 @@ int cbvh_shape_to_mesh(const cbvh_shape *in, const struct cbvh_placement *p, str
         else if (!cbvh_rotation_of_quaternion(q, turn))
             return 0;
         out->rotated = !zero || p != NULL;
-        /* column j: the box's axis j, taken by R^T from the world into the mesh's frame */
-        for (int j = 0; j < 3; j++) {
-            const cbvh_v3 axis = v3(turn[0][j], turn[1][j], turn[2][j]);
-            const cbvh_v3 local = p ? cbvh_rotate_back(p->rotation, axis) : axis;
-            out->axes[0][j] = local.x, out->axes[1][j] = local.y, out->axes[2][j] = local.z;
+        memcpy(out->axes, turn, sizeof turn);
+        for (int j = 0; p && j < 3; j++) { /* column j, the box's axis j, by R^T into the mesh's frame */
+            const cbvh_v3 axis = cbvh_rotate_back(p->rotation, v3(turn[0][j], turn[1][j], turn[2][j]));
+            out->axes[0][j] = axis.x, out->axes[1][j] = axis.y, out->axes[2][j] = axis.z;
         }
         break;
     }

@@ -97,12 +97,8 @@ CBVH_FORCE_INLINE int cbvh_enter_face(cbvh_v3 o, cbvh_v3 d, cbvh_v3 base, cbvh_v
     const double tt = (dist - r) / -speed;
     if (!(tt <= tmax))
         return 0;
-    /* Entry point projected onto the piece's plane, in (e1, e2) coordinates:
-     * w = aa e1 + bb e2 gives aa = (w x e2).cross / |cross|^2 and bb =
-     * (e1 x w).cross / |cross|^2, whose errors scale with the edge lengths.
-     * (The Gram-matrix solve, det = |e1|^2 |e2|^2 - (e1.e2)^2, cancels
-     * catastrophically on a sliver: finding F4 put the contact at the
-     * midpoint of a long edge, 3 radii from the sphere.) */
+    /* Entry point projected onto the piece's plane, in (e1, e2) coordinates, as
+     * cbvh_triangle_frame_barycentrics computes them (triangle_frame.h says why). */
     const cbvh_v3 w = v3_madd(v3_sub(v3_madd(o, d, tt), base), n, -r);
     const double aa = v3_dot(v3_cross(w, e2), cross) / cc, bb = v3_dot(v3_cross(e1, w), cross) / cc;
     if (aa < 0.0 || bb < 0.0 || (parallelogram ? (aa > 1.0 || bb > 1.0) : aa + bb > 1.0))
