@@ -451,14 +451,37 @@ CBVH_KERNEL void stream_interleave(const struct cbvh_file *restrict f, struct cb
     {                                                                                                        \
         stream_interleave(f, b, rays, count, any_, hits, occluded, scalar, counting, visited, tested);       \
     }
+/* Both query kinds' instances, and `name` (with `linkage`) that picks one: the batch walk's with
+ * stream_walk's arguments (any hit when `any`), the interleaved walks' with stream_interleave's (any hit when
+ * hits is NULL). */
+#define STREAM_BATCH_INSTANCES(linkage, name, layout_)                                                       \
+    STREAM_BATCH_INSTANCE(name##_closest, layout_, 0)                                                        \
+    STREAM_BATCH_INSTANCE(name##_any, layout_, 1)                                                            \
+    linkage void name(const struct cbvh_file *f, struct cbvh_stream_batch *b, uint32_t octant,               \
+                      cbvh_stream_node_fn node_test, int any, int counting, uint8_t *occluded,               \
+                      uint64_t *visited, uint64_t *tested)                                                   \
+    {                                                                                                        \
+        (any ? name##_any : name##_closest)(f, b, octant, node_test, counting, occluded, visited, tested);   \
+    }
+#define STREAM_INTERLEAVE_INSTANCES(linkage, name)                                                           \
+    STREAM_INTERLEAVE_INSTANCE(name##_closest, 0)                                                            \
+    STREAM_INTERLEAVE_INSTANCE(name##_any, 1)                                                                \
+    linkage void name(const struct cbvh_file *f, struct cbvh_stream_batch *b, const cbvh_ray *rays,          \
+                      size_t count, cbvh_hit *hits, uint8_t *occluded, int scalar, int counting,             \
+                      uint64_t *visited, uint64_t *tested)                                                   \
+    {                                                                                                        \
+        (hits ? name##_closest : name##_any)(f, b, rays, count, hits, occluded, scalar, counting, visited,   \
+                                             tested);                                                        \
+    }
 
 #ifdef CBVH_HAVE_AVX2
-/* The wide layout's batch walk and interleaved walks (hits NULL: any hit) compiled for AVX2 (stream_avx2.c);
- * arguments as stream_walk's and stream_interleave's. */
-void cbvh_stream_wide4_avx2(const struct cbvh_file *f, struct cbvh_stream_batch *b, uint32_t octant, int any,
-                            int counting, uint8_t *occluded, uint64_t *visited, uint64_t *tested);
+/* The wide layout's walks compiled for AVX2 (stream_avx2.c), as STREAM_BATCH_INSTANCES' and
+ * STREAM_INTERLEAVE_INSTANCES' `name`. */
+void cbvh_stream_wide4_avx2(const struct cbvh_file *f, struct cbvh_stream_batch *b, uint32_t octant,
+                            cbvh_stream_node_fn node_test, int any, int counting, uint8_t *occluded,
+                            uint64_t *visited, uint64_t *tested);
 void cbvh_stream_interleave_avx2(const struct cbvh_file *f, struct cbvh_stream_batch *b, const cbvh_ray *rays,
-                                 size_t count, cbvh_hit *hits, uint8_t *occluded, int counting,
+                                 size_t count, cbvh_hit *hits, uint8_t *occluded, int scalar, int counting,
                                  uint64_t *visited, uint64_t *tested);
 #endif
 
