@@ -45,8 +45,12 @@ static inline int cbvh_grid_range_empty(const struct cbvh_grid_range *g)
 static inline void cbvh_shape_box_coords(const struct cbvh_file *f, const uint32_t layout, uint32_t box,
                                          uint32_t q[6])
 {
-    for (uint32_t k = 0; k < 6; k++)
-        q[k] = cbvh_tree_box_coord(f, layout, box, k);
+    q[0] = cbvh_tree_box_coord(f, layout, box, 0);
+    q[1] = cbvh_tree_box_coord(f, layout, box, 1);
+    q[2] = cbvh_tree_box_coord(f, layout, box, 2);
+    q[3] = cbvh_tree_box_coord(f, layout, box, 3);
+    q[4] = cbvh_tree_box_coord(f, layout, box, 4);
+    q[5] = cbvh_tree_box_coord(f, layout, box, 5);
 }
 
 #ifdef CBVH_HAVE_SIMD

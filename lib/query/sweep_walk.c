@@ -194,7 +194,7 @@ void cbvh_sweep_bounds(cbvh_v3 lo, cbvh_v3 hi, float center[3], float extent[3])
     for (int a = 0; a < 3; a++) {
         const double l = v3_get(lo, a), h = v3_get(hi, a);
         center[a] = (float)(0.5 * (l + h));
-        const double e = cbvh_dmax(h - center[a], center[a] - l);
+        const double above = h - center[a], below = center[a] - l, e = above > below ? above : below;
         float ef = (float)e;
         if ((double)ef < e)
             ef = nextafterf(ef, INFINITY);
