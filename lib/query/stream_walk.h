@@ -11,22 +11,16 @@
 
 #ifdef CBVH_HAVE_SIMD
 /* Ray r, which enters the boxes of `mask` at entry[k], goes on those lists: every lane stores, only the
- * entered lists advance (no branch on the mask; written out so the counts stay in registers). */
+ * entered lists advance (no branch on the mask; unrolled so the counts stay in registers). */
 static inline void node_append(const struct cbvh_stream_lists *restrict out, uint16_t r, uint32_t mask,
                                const float entry[CBVH_STREAM_LANES], uint32_t c[CBVH_STREAM_LANES])
 {
-    out->ray[0][c[0]] = r;
-    out->entry[0][c[0]] = entry[0];
-    c[0] += mask & 1u;
-    out->ray[1][c[1]] = r;
-    out->entry[1][c[1]] = entry[1];
-    c[1] += mask >> 1 & 1u;
-    out->ray[2][c[2]] = r;
-    out->entry[2][c[2]] = entry[2];
-    c[2] += mask >> 2 & 1u;
-    out->ray[3][c[3]] = r;
-    out->entry[3][c[3]] = entry[3];
-    c[3] += mask >> 3 & 1u;
+    CBVH_UNROLL(4)
+    for (uint32_t k = 0; k < CBVH_STREAM_LANES; k++) {
+        out->ray[k][c[k]] = r;
+        out->entry[k][c[k]] = entry[k];
+        c[k] += mask >> k & 1u;
+    }
 }
 
 /* The batch node test (CBVH_STREAM_NODE_KERNEL) in SIMD, compiled in SSE2's encoding by stream_node.c and in

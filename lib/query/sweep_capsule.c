@@ -96,8 +96,7 @@ static int capsule_triangle(const void *shape, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, 
         if (v3_len2(away) > 0.0) {
             out->normal = v3_normalize(away);
             out->depth = r - v3_len(away);
-        } else { /* the axis reaches the triangle: lift its lower end radius above the plane along the normal
-                  */
+        } else { /* the axis reaches the triangle: its lower end lifted r above the plane along the normal */
             out->normal = cbvh_fallback_normal(a, b, c, s->delta);
             const double h0 = v3_dot(v3_sub(s->p0, on_tri), out->normal);
             out->depth = r - fmin(h0, v3_dot(v3_sub(s->p1, on_tri), out->normal));
@@ -114,35 +113,23 @@ static int capsule_triangle(const void *shape, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, 
     const double h0 = v3_dot(normal, v3_sub(s->p0, a)), h1 = v3_dot(normal, v3_sub(s->p1, a));
     if (((h0 > 0.0 && h1 > 0.0) || (h0 < 0.0 && h1 < 0.0)) &&
         cbvh_enter_face(fabs(h0) <= fabs(h1) ? s->p0 : s->p1, s->delta, a, e1, e2, 0, r, tmax, &t, &n, &alpha,
-                        &beta)) {
-        out->t = t;
-        out->normal = r > 0.0 ? n : cbvh_fallback_normal(a, b, c, s->delta);
-        out->point = v3_madd(v3_madd(a, e1, alpha), e2, beta);
-        return 1;
-    }
+                        &beta))
+        return cbvh_sweep_take(out, &tmax, t, r > 0.0 ? n : cbvh_fallback_normal(a, b, c, s->delta),
+                               v3_madd(v3_madd(a, e1, alpha), e2, beta));
     for (int e = 0; e < 2; e++) {
         if (cbvh_sweep_ball_triangle(e ? s->p1 : s->p0, s->delta, r, a, b, c, tmax, out)) {
             tmax = out->t;
             found = 1;
         }
     }
-    for (int k = 0; k < 3 && r > 0.0; k++) {
-        if (cbvh_enter_cylinder(v[k], back, s->p0, s->p1, r, tmax, &t, &n, &alpha)) {
-            out->t = tmax = t;
-            out->point = v[k];
-            out->normal = v3_scale(n, -1.0); /* n points from the capsule axis to the vertex */
-            found = 1;
-        }
-    }
+    for (int k = 0; k < 3 && r > 0.0; k++) /* n points from the capsule axis to the vertex */
+        if (cbvh_enter_cylinder(v[k], back, s->p0, s->p1, r, tmax, &t, &n, &alpha))
+            found = cbvh_sweep_take(out, &tmax, t, v3_scale(n, -1.0), v[k]);
     for (int e = 0; e < 3; e++) {
         const cbvh_v3 q0 = v[e], q1 = v[e == 2 ? 0 : e + 1];
         if (cbvh_enter_face(s->p0, s->delta, q0, v3_sub(q1, q0), v3_scale(axis, -1.0), 1, r, tmax, &t, &n,
-                            &alpha, &beta)) {
-            out->t = tmax = t;
-            out->point = v3_madd(q0, v3_sub(q1, q0), alpha);
-            out->normal = n;
-            found = 1;
-        }
+                            &alpha, &beta))
+            found = cbvh_sweep_take(out, &tmax, t, n, v3_madd(q0, v3_sub(q1, q0), alpha));
     }
     if (found && r == 0.0) /* touching with no thickness: the face normal against the motion */
         out->normal = cbvh_fallback_normal(a, b, c, s->delta);

@@ -110,6 +110,17 @@ CBVH_FORCE_INLINE int cbvh_enter_face(cbvh_v3 o, cbvh_v3 d, cbvh_v3 base, cbvh_v
     return 1;
 }
 
+/* Makes the contact at t (normal, point on the triangle) *out and t the reach of the tests after it;
+ * returns 1. */
+CBVH_FORCE_INLINE int cbvh_sweep_take(struct cbvh_sweep_contact *out, double *tmax, double t, cbvh_v3 normal,
+                                      cbvh_v3 point)
+{
+    out->t = *tmax = t;
+    out->normal = normal;
+    out->point = point;
+    return 1;
+}
+
 /* A ball of radius r >= 0 centred at o moving by d, which does not overlap
  * triangle (a, b, c) at t = 0: first contact with t <= tmax over face, edges
  * and vertices (the face only when r = 0). Returns 1 and fills *out (point
@@ -121,30 +132,17 @@ CBVH_FORCE_INLINE int cbvh_sweep_ball_triangle(cbvh_v3 o, cbvh_v3 d, double r, c
     cbvh_v3 n;
     double t, s, u;
     int found = 0;
-    if (cbvh_enter_face(o, d, a, v3_sub(b, a), v3_sub(c, a), 0, r, tmax, &t, &n, &s, &u)) {
-        out->t = tmax = t;
-        out->normal = n;
-        out->point = v3_madd(v3_madd(a, v3_sub(b, a), s), v3_sub(c, a), u);
-        found = 1;
-    }
+    if (cbvh_enter_face(o, d, a, v3_sub(b, a), v3_sub(c, a), 0, r, tmax, &t, &n, &s, &u))
+        found = cbvh_sweep_take(out, &tmax, t, n, v3_madd(v3_madd(a, v3_sub(b, a), s), v3_sub(c, a), u));
     /* With r = 0 the cylinders and balls have no volume: the face alone is hit. */
     for (int e = 0; e < 3 && r > 0.0; e++) {
         const cbvh_v3 p = v[e], q = v[e == 2 ? 0 : e + 1];
-        if (cbvh_enter_cylinder(o, d, p, q, r, tmax, &t, &n, &s) && t <= tmax) {
-            out->t = tmax = t;
-            out->normal = n;
-            out->point = v3_madd(p, v3_sub(q, p), s);
-            found = 1;
-        }
+        if (cbvh_enter_cylinder(o, d, p, q, r, tmax, &t, &n, &s) && t <= tmax)
+            found = cbvh_sweep_take(out, &tmax, t, n, v3_madd(p, v3_sub(q, p), s));
     }
-    for (int k = 0; k < 3 && r > 0.0; k++) {
-        if (cbvh_enter_ball(o, d, v[k], r, tmax, &t, &n) && t <= tmax) {
-            out->t = tmax = t;
-            out->normal = n;
-            out->point = v[k];
-            found = 1;
-        }
-    }
+    for (int k = 0; k < 3 && r > 0.0; k++)
+        if (cbvh_enter_ball(o, d, v[k], r, tmax, &t, &n) && t <= tmax)
+            found = cbvh_sweep_take(out, &tmax, t, n, v[k]);
     return found;
 }
 

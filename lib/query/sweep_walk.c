@@ -47,8 +47,8 @@ static int culled(cbvh_cull cull, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, const float d
 
 /* The filter's verdict on cooked triangle k, whose contact would win: its record with the barycentrics of
  * the contact point (in the triangle's best-conditioned frame, as the hit records' normals). */
-static int ask_filter(const struct sweep_query *q, uint32_t k, const cbvh_v3 v[3],
-                      const struct cbvh_sweep_contact *c)
+CBVH_COLD static int ask_filter(const struct sweep_query *q, uint32_t k, const cbvh_v3 v[3],
+                                const struct cbvh_sweep_contact *c)
 {
     struct cbvh_triangle_frame fr;
     cbvh_triangle_frame_of(v, &fr);
