@@ -29,18 +29,6 @@ static inline int cbvh_placement_of_option(const cbvh_transform *t, struct cbvh_
     return !t || cbvh_placement_of(t, storage);
 }
 
-/* m * v and m^T * v. */
-static inline cbvh_v3 cbvh_rotate(const double m[3][3], cbvh_v3 v)
-{
-    return v3(m[0][0] * v.x + m[0][1] * v.y + m[0][2] * v.z, m[1][0] * v.x + m[1][1] * v.y + m[1][2] * v.z,
-              m[2][0] * v.x + m[2][1] * v.y + m[2][2] * v.z);
-}
-static inline cbvh_v3 cbvh_rotate_back(const double m[3][3], cbvh_v3 v)
-{
-    return v3(m[0][0] * v.x + m[1][0] * v.y + m[2][0] * v.z, m[0][1] * v.x + m[1][1] * v.y + m[2][1] * v.z,
-              m[0][2] * v.x + m[1][2] * v.y + m[2][2] * v.z);
-}
-
 /* A world point or displacement in the mesh's frame, and a mesh point back in the world. */
 static inline cbvh_v3 cbvh_vector_to_mesh(const struct cbvh_placement *p, cbvh_v3 world)
 {

@@ -28,14 +28,6 @@ static void identity(double m[3][3])
             m[i][j] = i == j;
 }
 
-/* c = a * b */
-static void matrix_product(const double a[3][3], const double b[3][3], double c[3][3])
-{
-    for (int i = 0; i < 3; i++)
-        for (int j = 0; j < 3; j++)
-            c[i][j] = a[i][0] * b[0][j] + a[i][1] * b[1][j] + a[i][2] * b[2][j];
-}
-
 int cbvh_shape_to_mesh(const cbvh_shape *in, const struct cbvh_placement *p, struct cbvh_local_shape *out)
 {
     memset(out, 0, sizeof *out);
@@ -44,13 +36,11 @@ int cbvh_shape_to_mesh(const cbvh_shape *in, const struct cbvh_placement *p, str
     const double scale = p ? p->scale : 1.0;
     const float *a = in->center, *b = in->center;
     switch (in->kind) {
-    case CBVH_SHAPE_SPHERE:
-        if (!isfinite(in->radius) || !(in->radius >= 0.0f) || !to_float(in->radius / scale, &out->radius))
-            return 0;
-        break;
     case CBVH_SHAPE_CAPSULE:
         a = in->p0;
         b = in->p1;
+        /* fall through */
+    case CBVH_SHAPE_SPHERE:
         if (!isfinite(in->radius) || !(in->radius >= 0.0f) || !to_float(in->radius / scale, &out->radius))
             return 0;
         break;
@@ -66,14 +56,10 @@ int cbvh_shape_to_mesh(const cbvh_shape *in, const struct cbvh_placement *p, str
         else if (!cbvh_rotation_of_quaternion(q, turn))
             return 0;
         out->rotated = !zero || p != NULL;
-        if (p) {
-            double back[3][3]; /* R^T: the world's axes in the mesh's frame */
-            for (int i = 0; i < 3; i++)
-                for (int j = 0; j < 3; j++)
-                    back[i][j] = p->rotation[j][i];
-            matrix_product(back, turn, out->axes);
-        } else {
-            memcpy(out->axes, turn, sizeof turn);
+        memcpy(out->axes, turn, sizeof turn);
+        for (int j = 0; p && j < 3; j++) { /* column j, the box's axis j, by R^T into the mesh's frame */
+            const cbvh_v3 axis = cbvh_rotate_back(p->rotation, v3(turn[0][j], turn[1][j], turn[2][j]));
+            out->axes[0][j] = axis.x, out->axes[1][j] = axis.y, out->axes[2][j] = axis.z;
         }
         break;
     }
@@ -98,10 +84,8 @@ void cbvh_shape_bounds(const struct cbvh_local_shape *s, cbvh_v3 *lo, cbvh_v3 *h
         if (s->rotated) /* the rounding of the sums above, and of the axes themselves */
             reach = v3_scale(reach, 1.0 + 0x1p-40);
     }
-    /* plain compares, not fmin/fmax (calls into libm): the shape's values are finite */
-    const cbvh_v3 p = s->p0, q = s->p1;
-    *lo = v3_sub(v3(p.x < q.x ? p.x : q.x, p.y < q.y ? p.y : q.y, p.z < q.z ? p.z : q.z), reach);
-    *hi = v3_add(v3(p.x > q.x ? p.x : q.x, p.y > q.y ? p.y : q.y, p.z > q.z ? p.z : q.z), reach);
+    *lo = v3_sub(v3_min(s->p0, s->p1), reach);
+    *hi = v3_add(v3_max(s->p0, s->p1), reach);
 }
 
 int cbvh_shape_is_point(const struct cbvh_local_shape *s)

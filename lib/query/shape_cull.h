@@ -9,16 +9,8 @@
 
 #include "query/shape.h"
 
-/* Plain compares (one instruction each), not fmin/fmax, which GCC leaves as calls into libm; the values are
- * never NaN. */
-static inline double cull_max(double x, double y)
-{
-    return x > y ? x : y;
-}
-static inline double cull_min(double x, double y)
-{
-    return x < y ? x : y;
-}
+/* Plain compares (one instruction each), not fminf/fmaxf, which GCC leaves as calls into libm; the values
+ * are never NaN. */
 static inline float cull_maxf(float x, float y)
 {
     return x > y ? x : y;
@@ -29,7 +21,7 @@ static inline float cull_minf(float x, float y)
 }
 static inline double cull_max_abs(cbvh_v3 v)
 {
-    return cull_max(cull_max(fabs(v.x), fabs(v.y)), fabs(v.z));
+    return cbvh_dmax(cbvh_dmax(fabs(v.x), fabs(v.y)), fabs(v.z));
 }
 
 /* The box [lo, hi] of a triangle's float vertices, exact: a walk's node test on it culls the triangle as it
@@ -89,12 +81,12 @@ static inline enum cbvh_cull_verdict cbvh_cull_triangle(const struct cbvh_local_
 {
     const cbvh_v3 e1 = v3_sub(b, a), e2 = v3_sub(c, a), n = v3_cross(e1, e2), motion = v3_scale(delta, tmax);
     const double s0 = v3_dot(n, v3_sub(s->p0, a)), s1 = v3_dot(n, v3_sub(s->p1, a)), m = v3_dot(n, motion);
-    const double lo = cull_min(s0, s1), hi = cull_max(s0, s1);
-    const double span = cull_max(cull_max_abs(e1), cull_max_abs(e2));
-    const double size = cull_max_abs(a) + span + cull_max(cull_max_abs(s->p0), cull_max_abs(s->p1)) +
+    const double lo = cbvh_dmin(s0, s1), hi = cbvh_dmax(s0, s1);
+    const double span = cbvh_dmax(cull_max_abs(e1), cull_max_abs(e2));
+    const double size = cull_max_abs(a) + span + cbvh_dmax(cull_max_abs(s->p0), cull_max_abs(s->p1)) +
                         cull_max_abs(motion) + s->radius + s->half.x + s->half.y + s->half.z;
     const double gap = cull_reach_along(s, n) + 0x1p-30 * span * span * size;
-    if (lo + cull_min(m, 0.0) > gap || hi + cull_max(m, 0.0) < -gap)
+    if (lo + cbvh_dmin(m, 0.0) > gap || hi + cbvh_dmax(m, 0.0) < -gap)
         return CBVH_CULL_CLEAR;
     if (lo > gap || hi < -gap)
         return CBVH_CULL_CLEAR_AT_START;
@@ -166,7 +158,7 @@ static inline void cbvh_cull4_init(struct cbvh_cull4 *w, const struct cbvh_local
             w->axes[i][a] = _mm_set1_ps(s->rotated ? (float)s->axes[a][i] : (float)(a == i));
     }
     w->radius = _mm_set1_ps((float)s->radius);
-    w->shape_size = _mm_set1_ps((float)(cull_max(cull_max_abs(s->p0), cull_max_abs(s->p1)) + s->radius +
+    w->shape_size = _mm_set1_ps((float)(cbvh_dmax(cull_max_abs(s->p0), cull_max_abs(s->p1)) + s->radius +
                                         s->half.x + s->half.y + s->half.z));
     w->box = s->kind == CBVH_SHAPE_BOX;
     w->capsule = s->kind == CBVH_SHAPE_CAPSULE;
@@ -197,15 +189,19 @@ static inline void cull4_load(const float quad[3][3][4], __m128 c[3][3])
 
 /* What both float culls read of four triangles: the edges d[k] = c[k + 1] - c[k], the face normal
  * n = (c1 - c0) x (c2 - c0) and |n|^2, span (cbvh_cull_triangle's: the largest coordinate of c1 - c0 and
- * c2 - c0) and corner (the largest coordinate of c0). */
+ * c2 - c0), corner (the largest coordinate of c0), and the heights h0, h1 of w's core points p0, p1 over the
+ * plane times |n| (h1 = h0 but for a capsule). */
 struct cull4_frame {
-    __m128 d[3][3], n[3], nn, span, corner;
+    __m128 d[3][3], n[3], nn, span, corner, h0, h1;
 };
 
-static inline void cull4_frame_of(const __m128 c[3][3], struct cull4_frame *f)
+static inline void cull4_frame_of(const struct cbvh_cull4 *w, const __m128 c[3][3], struct cull4_frame *f)
 {
+    __m128 w0[3], w1[3];
     f->span = f->corner = _mm_setzero_ps();
     for (int a = 0; a < 3; a++) {
+        w0[a] = _mm_sub_ps(w->p0[a], c[0][a]);
+        w1[a] = _mm_sub_ps(w->p1[a], c[0][a]);
         f->d[0][a] = _mm_sub_ps(c[1][a], c[0][a]);
         f->d[1][a] = _mm_sub_ps(c[2][a], c[1][a]);
         f->d[2][a] = _mm_sub_ps(c[0][a], c[2][a]);
@@ -218,6 +214,8 @@ static inline void cull4_frame_of(const __m128 c[3][3], struct cull4_frame *f)
     f->n[1] = _mm_sub_ps(_mm_mul_ps(e1[2], e2[0]), _mm_mul_ps(e1[0], e2[2]));
     f->n[2] = _mm_sub_ps(_mm_mul_ps(e1[0], e2[1]), _mm_mul_ps(e1[1], e2[0]));
     f->nn = cull4_dot(f->n, f->n);
+    f->h0 = cull4_dot(f->n, w0);
+    f->h1 = w->capsule ? cull4_dot(f->n, w1) : f->h0; /* a ball's p1 is p0 */
 }
 
 /* How far w's shape reaches along n from its core, times |n| (cull_reach_along in float). */
@@ -343,14 +341,8 @@ CBVH_FORCE_INLINE uint32_t cbvh_cull4_keep(const struct cbvh_cull4 *w, const flo
     if (!_mm_movemask_ps(in)) /* no lane's box meets the shape's: nothing to decide */
         return 0;
     struct cull4_frame f;
-    cull4_frame_of(c, &f);
-    __m128 w0[3], w1[3];
-    for (int a = 0; a < 3; a++) {
-        w0[a] = _mm_sub_ps(w->p0[a], c[0][a]);
-        w1[a] = _mm_sub_ps(w->p1[a], c[0][a]);
-    }
-    const __m128(*d)[3] = f.d, *n = f.n, nn = f.nn, span = f.span;
-    const __m128 s0 = cull4_dot(n, w0), s1 = w->capsule ? cull4_dot(n, w1) : s0; /* a ball's p1 is p0 */
+    cull4_frame_of(w, c, &f);
+    const __m128(*d)[3] = f.d, *n = f.n, nn = f.nn, span = f.span, s0 = f.h0, s1 = f.h1;
     const __m128 span2 = _mm_mul_ps(span, span);
     const __m128 size = _mm_add_ps(_mm_add_ps(f.corner, span), w->shape_size);
     const __m128 apart = cull4_apart(s0, s1, _mm_setzero_ps(), cull4_reach(w, n, nn), span, size);
@@ -404,20 +396,17 @@ CBVH_FORCE_INLINE uint32_t cbvh_cull4_keep(const struct cbvh_cull4 *w, const flo
 CBVH_FORCE_INLINE uint32_t cbvh_cull4_sweep(const struct cbvh_cull4 *w, const float quad[3][3][4], float tmax,
                                             uint32_t *clear_at_start)
 {
-    __m128 c[3][3], w0[3], w1[3], motion[3];
+    __m128 c[3][3], motion[3];
     cull4_load(quad, c);
     struct cull4_frame f;
-    cull4_frame_of(c, &f);
+    cull4_frame_of(w, c, &f);
     const __m128 t = _mm_set1_ps(tmax);
-    for (int a = 0; a < 3; a++) {
-        w0[a] = _mm_sub_ps(w->p0[a], c[0][a]);
-        w1[a] = _mm_sub_ps(w->p1[a], c[0][a]);
+    for (int a = 0; a < 3; a++)
         motion[a] = _mm_mul_ps(w->delta[a], t);
-    }
     const __m128 *n = f.n, nn = f.nn, span = f.span, zero = _mm_setzero_ps();
     const __m128 size =
         _mm_add_ps(_mm_add_ps(_mm_add_ps(f.corner, span), w->shape_size), _mm_mul_ps(w->delta_size, t));
-    const __m128 h0 = cull4_dot(n, w0), h1 = cull4_dot(n, w1), m = cull4_dot(n, motion);
+    const __m128 h0 = f.h0, h1 = f.h1, m = cull4_dot(n, motion);
     const __m128 reach = cull4_reach(w, n, nn);
     __m128 keep =
         _mm_andnot_ps(cull4_apart(h0, h1, m, reach, span, size), _mm_castsi128_ps(_mm_set1_epi32(-1)));

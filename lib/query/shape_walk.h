@@ -180,25 +180,17 @@ CBVH_KERNEL uint32_t cbvh_shape_children(const struct cbvh_file *f, const uint32
         const uint64_t meta = cbvh_w4_meta(node);
         float e[CBVH_W4_WIDTH];
         const uint32_t hits = enter4(query, node, e) & cbvh_w4_used(meta);
-        if (octant == CBVH_NO_OCTANT) { /* slot order: the references of the slots entered alone */
-            /* counted by the table: GCC would count the turns of a loop to h = 0 with a libgcc call */
-            m = cbvh_w4_popcount(hits);
-            uint32_t h = hits;
-            for (uint32_t k = 0; k < m; k++, h &= h - 1u) {
-                const uint32_t s = cbvh_lowest_lane(h);
-                in[k] = cbvh_w4_child_ref(node, meta, s);
-                in_entry[k] = e[s];
-            }
-            return m;
+        /* the slots entered in the octant's order (order 0: slot order), counted by the table */
+        const uint32_t visit =
+            cbvh_wide4_visits[octant == CBVH_NO_OCTANT ? 0u : cbvh_w4_order(meta, octant)][hits];
+        m = cbvh_w4_popcount(hits);
+        for (uint32_t k = 0; k < m; k++) {
+            const uint32_t s = visit >> (2u * k) & 3u;
+            in[k] = cbvh_w4_child_ref(node, meta, s);
+            in_entry[k] = e[s];
         }
-        const uint8_t *order = cbvh_wide4_orders[cbvh_w4_order(meta, octant)];
-        for (uint32_t k = 0; k < CBVH_W4_WIDTH; k++) {
-            const uint32_t s = order[k];
-            in[m] = cbvh_w4_child_ref(node, meta, s);
-            in_entry[m] = e[s];
-            m += hits >> s & 1u;
-        }
-        cbvh_shape_sort_nearest(in, in_entry, m);
+        if (octant != CBVH_NO_OCTANT)
+            cbvh_shape_sort_nearest(in, in_entry, m);
         return m;
     }
 #else

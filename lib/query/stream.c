@@ -9,6 +9,7 @@
 #include "query/raycast.h"
 #include "query/stream.h"
 #include "query/stream_walk.h"
+#include "query/vec3d.h"
 
 /* Rays are grouped by octant within windows of this many input rays per batch ray. */
 #define CBVH_STREAM_WINDOW_PER_RAY 8u
@@ -29,12 +30,9 @@ _Static_assert(CBVH_STREAM_STACK_BATCH >= CBVH_STREAM_WALKS && CBVH_STREAM_WALKS
 /* Bytes of a block before its rays: `walks` walk slots (stream.h), whatever the batch's size. */
 #define STREAM_WALKS_BYTES(walks) ((walks) * sizeof(struct cbvh_stream_walk))
 
-STREAM_BATCH_INSTANCE(stream_wide4_closest, CBVH_LAYOUT_WIDE4, 0)
-STREAM_BATCH_INSTANCE(stream_wide4_any, CBVH_LAYOUT_WIDE4, 1)
-STREAM_BATCH_INSTANCE(stream_binary_closest, CBVH_LAYOUT_BINARY, 0)
-STREAM_BATCH_INSTANCE(stream_binary_any, CBVH_LAYOUT_BINARY, 1)
-STREAM_INTERLEAVE_INSTANCE(stream_interleave_closest, 0)
-STREAM_INTERLEAVE_INSTANCE(stream_interleave_any, 1)
+STREAM_BATCH_INSTANCES(static, stream_wide4, CBVH_LAYOUT_WIDE4)
+STREAM_BATCH_INSTANCES(static, stream_binary, CBVH_LAYOUT_BINARY)
+STREAM_INTERLEAVE_INSTANCES(static, interleaved_walks)
 
 /* The batch walk for the file's layout, on the single-ray walks' kernel (with SIMD node tests). */
 static void batch_walk(const struct cbvh_file *f, struct cbvh_stream_batch *b, uint32_t octant,
@@ -44,16 +42,12 @@ static void batch_walk(const struct cbvh_file *f, struct cbvh_stream_batch *b, u
 #ifdef CBVH_HAVE_AVX2
     if (f->layout == CBVH_LAYOUT_WIDE4 && node_test != cbvh_stream_node_scalar &&
         cbvh_walk_kernel() == CBVH_WALK_KERNEL_AVX2) {
-        cbvh_stream_wide4_avx2(f, b, octant, any, counting, occluded, visited, tested);
+        cbvh_stream_wide4_avx2(f, b, octant, cbvh_stream_node_avx2, any, counting, occluded, visited, tested);
         return;
     }
 #endif
-    if (f->layout == CBVH_LAYOUT_WIDE4)
-        (any ? stream_wide4_any : stream_wide4_closest)(f, b, octant, node_test, counting, occluded, visited,
-                                                        tested);
-    else
-        (any ? stream_binary_any : stream_binary_closest)(f, b, octant, node_test, counting, occluded,
-                                                          visited, tested);
+    (f->layout == CBVH_LAYOUT_WIDE4 ? stream_wide4 : stream_binary)(f, b, octant, node_test, any, counting,
+                                                                    occluded, visited, tested);
 }
 
 /* Rays walked interleaved (hits NULL: any hit), on the single-ray walks' kernel (scalar also with the
@@ -66,12 +60,11 @@ static void interleave(const struct cbvh_file *f, struct cbvh_stream_batch *b, c
     const int scalar = node_test == cbvh_stream_node_scalar || kernel == CBVH_WALK_KERNEL_SCALAR;
 #ifdef CBVH_HAVE_AVX2
     if (!scalar && kernel == CBVH_WALK_KERNEL_AVX2) {
-        cbvh_stream_interleave_avx2(f, b, rays, count, hits, occluded, counting, visited, tested);
+        cbvh_stream_interleave_avx2(f, b, rays, count, hits, occluded, 0, counting, visited, tested);
         return;
     }
 #endif
-    (hits ? stream_interleave_closest : stream_interleave_any)(f, b, rays, count, hits, occluded, scalar,
-                                                               counting, visited, tested);
+    interleaved_walks(f, b, rays, count, hits, occluded, scalar, counting, visited, tested);
 }
 
 /* Whether the rays of a window are coherent: of up to 64 pairs of consecutive rays spread over it, at least
@@ -83,10 +76,8 @@ int cbvh_stream_window_coherent(const cbvh_ray *rays, uint32_t n)
     uint32_t close = 0;
     for (uint32_t p = 0; p < pairs; p++) {
         const uint32_t j = 1u + (uint32_t)((uint64_t)p * (n - 1u) / pairs);
-        const float *a = rays[j - 1u].dir, *b = rays[j].dir;
-        const double dot = (double)a[0] * b[0] + (double)a[1] * b[1] + (double)a[2] * b[2];
-        const double aa = (double)a[0] * a[0] + (double)a[1] * a[1] + (double)a[2] * a[2];
-        const double bb = (double)b[0] * b[0] + (double)b[1] * b[1] + (double)b[2] * b[2];
+        const cbvh_v3 a = v3_from_f(rays[j - 1u].dir), b = v3_from_f(rays[j].dir);
+        const double dot = v3_dot(a, b), aa = v3_len2(a), bb = v3_len2(b);
         /* cos^2 of the angle above 0.99^2, the same way round; NaN fails */
         close += dot > 0.0 && dot * dot > 0.9801 * aa * bb;
     }

@@ -11,22 +11,16 @@
 
 #ifdef CBVH_HAVE_SIMD
 /* Ray r, which enters the boxes of `mask` at entry[k], goes on those lists: every lane stores, only the
- * entered lists advance (no branch on the mask; written out so the counts stay in registers). */
+ * entered lists advance (no branch on the mask; unrolled so the counts stay in registers). */
 static inline void node_append(const struct cbvh_stream_lists *restrict out, uint16_t r, uint32_t mask,
                                const float entry[CBVH_STREAM_LANES], uint32_t c[CBVH_STREAM_LANES])
 {
-    out->ray[0][c[0]] = r;
-    out->entry[0][c[0]] = entry[0];
-    c[0] += mask & 1u;
-    out->ray[1][c[1]] = r;
-    out->entry[1][c[1]] = entry[1];
-    c[1] += mask >> 1 & 1u;
-    out->ray[2][c[2]] = r;
-    out->entry[2][c[2]] = entry[2];
-    c[2] += mask >> 2 & 1u;
-    out->ray[3][c[3]] = r;
-    out->entry[3][c[3]] = entry[3];
-    c[3] += mask >> 3 & 1u;
+    CBVH_UNROLL(4)
+    for (uint32_t k = 0; k < CBVH_STREAM_LANES; k++) {
+        out->ray[k][c[k]] = r;
+        out->entry[k][c[k]] = entry[k];
+        c[k] += mask >> k & 1u;
+    }
 }
 
 /* The batch node test (CBVH_STREAM_NODE_KERNEL) in SIMD, compiled in SSE2's encoding by stream_node.c and in
@@ -451,14 +445,37 @@ CBVH_KERNEL void stream_interleave(const struct cbvh_file *restrict f, struct cb
     {                                                                                                        \
         stream_interleave(f, b, rays, count, any_, hits, occluded, scalar, counting, visited, tested);       \
     }
+/* Both query kinds' instances, and `name` (with `linkage`) that picks one: the batch walk's with
+ * stream_walk's arguments (any hit when `any`), the interleaved walks' with stream_interleave's (any hit when
+ * hits is NULL). */
+#define STREAM_BATCH_INSTANCES(linkage, name, layout_)                                                       \
+    STREAM_BATCH_INSTANCE(name##_closest, layout_, 0)                                                        \
+    STREAM_BATCH_INSTANCE(name##_any, layout_, 1)                                                            \
+    linkage void name(const struct cbvh_file *f, struct cbvh_stream_batch *b, uint32_t octant,               \
+                      cbvh_stream_node_fn node_test, int any, int counting, uint8_t *occluded,               \
+                      uint64_t *visited, uint64_t *tested)                                                   \
+    {                                                                                                        \
+        (any ? name##_any : name##_closest)(f, b, octant, node_test, counting, occluded, visited, tested);   \
+    }
+#define STREAM_INTERLEAVE_INSTANCES(linkage, name)                                                           \
+    STREAM_INTERLEAVE_INSTANCE(name##_closest, 0)                                                            \
+    STREAM_INTERLEAVE_INSTANCE(name##_any, 1)                                                                \
+    linkage void name(const struct cbvh_file *f, struct cbvh_stream_batch *b, const cbvh_ray *rays,          \
+                      size_t count, cbvh_hit *hits, uint8_t *occluded, int scalar, int counting,             \
+                      uint64_t *visited, uint64_t *tested)                                                   \
+    {                                                                                                        \
+        (hits ? name##_closest : name##_any)(f, b, rays, count, hits, occluded, scalar, counting, visited,   \
+                                             tested);                                                        \
+    }
 
 #ifdef CBVH_HAVE_AVX2
-/* The wide layout's batch walk and interleaved walks (hits NULL: any hit) compiled for AVX2 (stream_avx2.c);
- * arguments as stream_walk's and stream_interleave's. */
-void cbvh_stream_wide4_avx2(const struct cbvh_file *f, struct cbvh_stream_batch *b, uint32_t octant, int any,
-                            int counting, uint8_t *occluded, uint64_t *visited, uint64_t *tested);
+/* The wide layout's walks compiled for AVX2 (stream_avx2.c), as STREAM_BATCH_INSTANCES' and
+ * STREAM_INTERLEAVE_INSTANCES' `name`. */
+void cbvh_stream_wide4_avx2(const struct cbvh_file *f, struct cbvh_stream_batch *b, uint32_t octant,
+                            cbvh_stream_node_fn node_test, int any, int counting, uint8_t *occluded,
+                            uint64_t *visited, uint64_t *tested);
 void cbvh_stream_interleave_avx2(const struct cbvh_file *f, struct cbvh_stream_batch *b, const cbvh_ray *rays,
-                                 size_t count, cbvh_hit *hits, uint8_t *occluded, int counting,
+                                 size_t count, cbvh_hit *hits, uint8_t *occluded, int scalar, int counting,
                                  uint64_t *visited, uint64_t *tested);
 #endif
 

@@ -1,6 +1,7 @@
 /* sweep_box.c: box sweeps (axis-aligned or oriented): exact separating-axis time of impact per triangle,
  * contact point by clipping. */
 #include <math.h>
+#include <string.h>
 
 #include "query/shape.h"
 #include "query/sweep_walk.h"
@@ -37,8 +38,6 @@ int cbvh_sweep_box_shape(const struct cbvh_file *f, const struct cbvh_local_shap
                          struct cbvh_sweep_found *found)
 {
     struct box_shape s = {{shape->p0, shape->half, shape->rotated, {{0}}}, v3_from_f(delta)};
-    for (int i = 0; i < 3; i++)
-        for (int j = 0; j < 3; j++)
-            s.box.axes[i][j] = shape->axes[i][j];
+    memcpy(s.box.axes, shape->axes, sizeof s.box.axes);
     return cbvh_sweep_walk(f, shape, delta, box_triangle, &s, rules, found);
 }

@@ -22,14 +22,14 @@ CBVH_FORCE_INLINE int capsule_slab(const struct capsule_shape *s, const cbvh_v3 
     const double d0 = v3_dot(u, w[0]), d1 = v3_dot(u, w[1]), d2 = v3_dot(u, w[2]);
     const double along = -v3_dot(u, s->axis), speed = v3_dot(u, s->delta);
     const double grow = s->radius * v3_len(u) + 0x1p-30 * size * (fabs(u.x) + fabs(u.y) + fabs(u.z));
-    const double lo = cull_min(cull_min(d0, d1), d2) + cull_min(along, 0.0) - grow;
-    const double hi = cull_max(cull_max(d0, d1), d2) + cull_max(along, 0.0) + grow;
+    const double lo = cbvh_dmin(cbvh_dmin(d0, d1), d2) + cbvh_dmin(along, 0.0) - grow;
+    const double hi = cbvh_dmax(cbvh_dmax(d0, d1), d2) + cbvh_dmax(along, 0.0) + grow;
     if (speed == 0.0)
         return !(lo > 0.0 || hi < 0.0);
     const double inv = 1.0 / speed, enter = (speed > 0.0 ? lo : hi) * inv,
                  leave = (speed > 0.0 ? hi : lo) * inv;
-    *t0 = cull_max(*t0, enter);
-    *t1 = cull_min(*t1, leave);
+    *t0 = cbvh_dmax(*t0, enter);
+    *t1 = cbvh_dmin(*t1, leave);
     return !(*t0 > *t1);
 }
 
@@ -52,7 +52,7 @@ static int capsule_slabs(const struct capsule_shape *s, cbvh_v3 a, cbvh_v3 b, cb
     const cbvh_v3 e[3] = {v3_sub(b, a), v3_sub(c, b), v3_sub(a, c)},
                   w[3] = {v3_sub(a, s->p0), v3_sub(b, s->p0), v3_sub(c, s->p0)};
     const cbvh_v3 n = v3_cross(e[0], v3_scale(e[2], -1.0));
-    const double span = cull_max(cull_max_abs(e[0]), cull_max_abs(e[2])), span2 = span * span;
+    const double span = cbvh_dmax(cull_max_abs(e[0]), cull_max_abs(e[2])), span2 = span * span;
     const double size = cull_max_abs(a) + span + s->core_size + cull_max_abs(v3_scale(s->delta, tmax));
     *t_lo = 0.0;
     if (!(v3_len2(n) >= 0x1p-20 * span2 * span2 && span >= 0x1p-160 && size <= 0x1p160))
@@ -96,8 +96,7 @@ static int capsule_triangle(const void *shape, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, 
         if (v3_len2(away) > 0.0) {
             out->normal = v3_normalize(away);
             out->depth = r - v3_len(away);
-        } else { /* the axis reaches the triangle: lift its lower end radius above the plane along the normal
-                  */
+        } else { /* the axis reaches the triangle: its lower end lifted r above the plane along the normal */
             out->normal = cbvh_fallback_normal(a, b, c, s->delta);
             const double h0 = v3_dot(v3_sub(s->p0, on_tri), out->normal);
             out->depth = r - fmin(h0, v3_dot(v3_sub(s->p1, on_tri), out->normal));
@@ -114,35 +113,23 @@ static int capsule_triangle(const void *shape, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, 
     const double h0 = v3_dot(normal, v3_sub(s->p0, a)), h1 = v3_dot(normal, v3_sub(s->p1, a));
     if (((h0 > 0.0 && h1 > 0.0) || (h0 < 0.0 && h1 < 0.0)) &&
         cbvh_enter_face(fabs(h0) <= fabs(h1) ? s->p0 : s->p1, s->delta, a, e1, e2, 0, r, tmax, &t, &n, &alpha,
-                        &beta)) {
-        out->t = t;
-        out->normal = r > 0.0 ? n : cbvh_fallback_normal(a, b, c, s->delta);
-        out->point = v3_madd(v3_madd(a, e1, alpha), e2, beta);
-        return 1;
-    }
+                        &beta))
+        return cbvh_sweep_take(out, &tmax, t, r > 0.0 ? n : cbvh_fallback_normal(a, b, c, s->delta),
+                               v3_madd(v3_madd(a, e1, alpha), e2, beta));
     for (int e = 0; e < 2; e++) {
         if (cbvh_sweep_ball_triangle(e ? s->p1 : s->p0, s->delta, r, a, b, c, tmax, out)) {
             tmax = out->t;
             found = 1;
         }
     }
-    for (int k = 0; k < 3 && r > 0.0; k++) {
-        if (cbvh_enter_cylinder(v[k], back, s->p0, s->p1, r, tmax, &t, &n, &alpha)) {
-            out->t = tmax = t;
-            out->point = v[k];
-            out->normal = v3_scale(n, -1.0); /* n points from the capsule axis to the vertex */
-            found = 1;
-        }
-    }
+    for (int k = 0; k < 3 && r > 0.0; k++) /* n points from the capsule axis to the vertex */
+        if (cbvh_enter_cylinder(v[k], back, s->p0, s->p1, r, tmax, &t, &n, &alpha))
+            found = cbvh_sweep_take(out, &tmax, t, v3_scale(n, -1.0), v[k]);
     for (int e = 0; e < 3; e++) {
         const cbvh_v3 q0 = v[e], q1 = v[e == 2 ? 0 : e + 1];
         if (cbvh_enter_face(s->p0, s->delta, q0, v3_sub(q1, q0), v3_scale(axis, -1.0), 1, r, tmax, &t, &n,
-                            &alpha, &beta)) {
-            out->t = tmax = t;
-            out->point = v3_madd(q0, v3_sub(q1, q0), alpha);
-            out->normal = n;
-            found = 1;
-        }
+                            &alpha, &beta))
+            found = cbvh_sweep_take(out, &tmax, t, n, v3_madd(q0, v3_sub(q1, q0), alpha));
     }
     if (found && r == 0.0) /* touching with no thickness: the face normal against the motion */
         out->normal = cbvh_fallback_normal(a, b, c, s->delta);
@@ -160,7 +147,7 @@ int cbvh_sweep_capsule_shape(const struct cbvh_file *f, const struct cbvh_local_
                                     shape->radius,
                                     v3_sub(shape->p1, shape->p0),
                                     v3_scale(d, -1.0),
-                                    cull_max(cull_max_abs(shape->p0), cull_max_abs(shape->p1)) +
+                                    cbvh_dmax(cull_max_abs(shape->p0), cull_max_abs(shape->p1)) +
                                         shape->radius};
     return cbvh_sweep_walk(f, shape, delta, capsule_triangle, &s, rules, found);
 }

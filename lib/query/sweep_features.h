@@ -97,12 +97,8 @@ CBVH_FORCE_INLINE int cbvh_enter_face(cbvh_v3 o, cbvh_v3 d, cbvh_v3 base, cbvh_v
     const double tt = (dist - r) / -speed;
     if (!(tt <= tmax))
         return 0;
-    /* Entry point projected onto the piece's plane, in (e1, e2) coordinates:
-     * w = aa e1 + bb e2 gives aa = (w x e2).cross / |cross|^2 and bb =
-     * (e1 x w).cross / |cross|^2, whose errors scale with the edge lengths.
-     * (The Gram-matrix solve, det = |e1|^2 |e2|^2 - (e1.e2)^2, cancels
-     * catastrophically on a sliver: finding F4 put the contact at the
-     * midpoint of a long edge, 3 radii from the sphere.) */
+    /* Entry point projected onto the piece's plane, in (e1, e2) coordinates, as
+     * cbvh_triangle_frame_barycentrics computes them (triangle_frame.h says why). */
     const cbvh_v3 w = v3_madd(v3_sub(v3_madd(o, d, tt), base), n, -r);
     const double aa = v3_dot(v3_cross(w, e2), cross) / cc, bb = v3_dot(v3_cross(e1, w), cross) / cc;
     if (aa < 0.0 || bb < 0.0 || (parallelogram ? (aa > 1.0 || bb > 1.0) : aa + bb > 1.0))
@@ -111,6 +107,17 @@ CBVH_FORCE_INLINE int cbvh_enter_face(cbvh_v3 o, cbvh_v3 d, cbvh_v3 base, cbvh_v
     *normal = n;
     *a = aa;
     *b = bb;
+    return 1;
+}
+
+/* Makes the contact at t (normal, point on the triangle) *out and t the reach of the tests after it;
+ * returns 1. */
+CBVH_FORCE_INLINE int cbvh_sweep_take(struct cbvh_sweep_contact *out, double *tmax, double t, cbvh_v3 normal,
+                                      cbvh_v3 point)
+{
+    out->t = *tmax = t;
+    out->normal = normal;
+    out->point = point;
     return 1;
 }
 
@@ -125,30 +132,17 @@ CBVH_FORCE_INLINE int cbvh_sweep_ball_triangle(cbvh_v3 o, cbvh_v3 d, double r, c
     cbvh_v3 n;
     double t, s, u;
     int found = 0;
-    if (cbvh_enter_face(o, d, a, v3_sub(b, a), v3_sub(c, a), 0, r, tmax, &t, &n, &s, &u)) {
-        out->t = tmax = t;
-        out->normal = n;
-        out->point = v3_madd(v3_madd(a, v3_sub(b, a), s), v3_sub(c, a), u);
-        found = 1;
-    }
+    if (cbvh_enter_face(o, d, a, v3_sub(b, a), v3_sub(c, a), 0, r, tmax, &t, &n, &s, &u))
+        found = cbvh_sweep_take(out, &tmax, t, n, v3_madd(v3_madd(a, v3_sub(b, a), s), v3_sub(c, a), u));
     /* With r = 0 the cylinders and balls have no volume: the face alone is hit. */
     for (int e = 0; e < 3 && r > 0.0; e++) {
         const cbvh_v3 p = v[e], q = v[e == 2 ? 0 : e + 1];
-        if (cbvh_enter_cylinder(o, d, p, q, r, tmax, &t, &n, &s) && t <= tmax) {
-            out->t = tmax = t;
-            out->normal = n;
-            out->point = v3_madd(p, v3_sub(q, p), s);
-            found = 1;
-        }
+        if (cbvh_enter_cylinder(o, d, p, q, r, tmax, &t, &n, &s) && t <= tmax)
+            found = cbvh_sweep_take(out, &tmax, t, n, v3_madd(p, v3_sub(q, p), s));
     }
-    for (int k = 0; k < 3 && r > 0.0; k++) {
-        if (cbvh_enter_ball(o, d, v[k], r, tmax, &t, &n) && t <= tmax) {
-            out->t = tmax = t;
-            out->normal = n;
-            out->point = v[k];
-            found = 1;
-        }
-    }
+    for (int k = 0; k < 3 && r > 0.0; k++)
+        if (cbvh_enter_ball(o, d, v[k], r, tmax, &t, &n) && t <= tmax)
+            found = cbvh_sweep_take(out, &tmax, t, n, v[k]);
     return found;
 }
 

@@ -47,22 +47,20 @@ static int culled(cbvh_cull cull, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, const float d
 
 /* The filter's verdict on cooked triangle k, whose contact would win: its record with the barycentrics of
  * the contact point (in the triangle's best-conditioned frame, as the hit records' normals). */
-static int ask_filter(const struct sweep_query *q, uint32_t k, const cbvh_v3 v[3],
-                      const struct cbvh_sweep_contact *c)
+CBVH_COLD static int ask_filter(const struct sweep_query *q, uint32_t k, const cbvh_v3 v[3],
+                                const struct cbvh_sweep_contact *c)
 {
     struct cbvh_triangle_frame fr;
     cbvh_triangle_frame_of(v, &fr);
-    double w[3] = {1.0, 0.0, 0.0};
+    float u = 0.0f, w = 0.0f; /* vertex 0 for a triangle of no area */
     if (fr.nn > 0.0) {
         double x, y;
         cbvh_triangle_frame_barycentrics(&fr, v3_sub(c->point, v[fr.base]), &x, &y);
-        w[fr.base] = 1.0 - x - y;
-        w[(fr.base + 1) % 3] = x;
-        w[(fr.base + 2) % 3] = y;
+        cbvh_frame_uv(fr.base, x, y, &u, &w);
     }
     cbvh_hit_record r;
     static const struct cbvh_t_frame identity = {0.0, 1.0};
-    cbvh_hit_record_fill(q->f, k, &identity, (float)c->t, (float)w[1], (float)w[2], q->delta, &r);
+    cbvh_hit_record_fill(q->f, k, &identity, (float)c->t, u, w, q->delta, &r);
     if (q->rules->placement)
         v3_to_f(cbvh_rotate(q->rules->placement->rotation, v3_from_f(r.normal)), r.normal);
     return q->rules->filter(q->rules->user, &r);

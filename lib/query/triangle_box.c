@@ -158,33 +158,20 @@ int cbvh_triangle_box_sweep(cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, cbvh_v3 center, cbv
     return 1;
 }
 
-/* Triangle and motion in the box's frame: p' = axes^T (p - center). */
-static cbvh_v3 into_box(const struct cbvh_box *box, cbvh_v3 p)
-{
-    const double(*m)[3] = box->axes;
-    return v3(m[0][0] * p.x + m[1][0] * p.y + m[2][0] * p.z, m[0][1] * p.x + m[1][1] * p.y + m[2][1] * p.z,
-              m[0][2] * p.x + m[1][2] * p.y + m[2][2] * p.z);
-}
-
-static cbvh_v3 out_of_box(const struct cbvh_box *box, cbvh_v3 p)
-{
-    const double(*m)[3] = box->axes;
-    return v3(m[0][0] * p.x + m[0][1] * p.y + m[0][2] * p.z, m[1][0] * p.x + m[1][1] * p.y + m[1][2] * p.z,
-              m[2][0] * p.x + m[2][1] * p.y + m[2][2] * p.z);
-}
-
+/* Triangle and motion in the box's frame: p' = axes^T (p - center); the normal back by axes. */
 int cbvh_triangle_oriented_box_sweep(cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, const struct cbvh_box *box,
                                      cbvh_v3 delta, double tmax, double *t, cbvh_v3 *normal, double *depth)
 {
     if (!box->rotated)
         return cbvh_triangle_box_sweep(a, b, c, box->center, box->half, delta, tmax, t, normal, depth);
+    const double(*m)[3] = box->axes;
     const cbvh_v3 o = box->center;
-    if (!cbvh_triangle_box_sweep(into_box(box, v3_sub(a, o)), into_box(box, v3_sub(b, o)),
-                                 into_box(box, v3_sub(c, o)), v3(0, 0, 0), box->half, into_box(box, delta),
-                                 tmax, t, normal, depth))
+    if (!cbvh_triangle_box_sweep(cbvh_rotate_back(m, v3_sub(a, o)), cbvh_rotate_back(m, v3_sub(b, o)),
+                                 cbvh_rotate_back(m, v3_sub(c, o)), v3(0, 0, 0), box->half,
+                                 cbvh_rotate_back(m, delta), tmax, t, normal, depth))
         return 0;
     if (normal)
-        *normal = out_of_box(box, *normal);
+        *normal = cbvh_rotate(m, *normal);
     return 1;
 }
 
@@ -212,7 +199,7 @@ cbvh_v3 cbvh_box_contact_point(cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, const struct cbv
     cbvh_v3 buf[2][12] = {{a, b, c}};
     if (turn)
         for (int k = 0; k < 3; k++)
-            buf[0][k] = into_box(box, v3_sub(buf[0][k], center));
+            buf[0][k] = cbvh_rotate_back(box->axes, v3_sub(buf[0][k], center));
     int n = 3, cur = 0;
     for (int axis = 0; axis < 3 && n > 0; axis++) {
         const double m = v3_get(mid, axis), h = v3_get(box->half, axis) + tol;
@@ -226,7 +213,7 @@ cbvh_v3 cbvh_box_contact_point(cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, const struct cbv
         for (int k = 0; k < n; k++)
             sum = v3_add(sum, buf[cur][k]);
         const cbvh_v3 mean = v3_scale(sum, 1.0 / n);
-        return turn ? v3_add(center, out_of_box(box, mean)) : mean;
+        return turn ? v3_add(center, cbvh_rotate(box->axes, mean)) : mean;
     }
     const double da = v3_dot(a, normal), db = v3_dot(b, normal), dc = v3_dot(c, normal);
     return da >= db && da >= dc ? a : db >= dc ? b : c;

@@ -65,9 +65,30 @@ static inline double cbvh_dmax(double a, double b)
 {
     return a > b ? a : b;
 }
+/* cbvh_dmin and cbvh_dmax per coordinate. */
+static inline cbvh_v3 v3_min(cbvh_v3 a, cbvh_v3 b)
+{
+    return v3(cbvh_dmin(a.x, b.x), cbvh_dmin(a.y, b.y), cbvh_dmin(a.z, b.z));
+}
+static inline cbvh_v3 v3_max(cbvh_v3 a, cbvh_v3 b)
+{
+    return v3(cbvh_dmax(a.x, b.x), cbvh_dmax(a.y, b.y), cbvh_dmax(a.z, b.z));
+}
 static inline double v3_get(cbvh_v3 a, int axis)
 {
     return axis == 0 ? a.x : axis == 1 ? a.y : a.z;
+}
+
+/* m * v and m^T * v: with m a rotation, v turned into the frame whose axes are m's columns and back. */
+static inline cbvh_v3 cbvh_rotate(const double m[3][3], cbvh_v3 v)
+{
+    return v3(m[0][0] * v.x + m[0][1] * v.y + m[0][2] * v.z, m[1][0] * v.x + m[1][1] * v.y + m[1][2] * v.z,
+              m[2][0] * v.x + m[2][1] * v.y + m[2][2] * v.z);
+}
+static inline cbvh_v3 cbvh_rotate_back(const double m[3][3], cbvh_v3 v)
+{
+    return v3(m[0][0] * v.x + m[1][0] * v.y + m[2][0] * v.z, m[0][1] * v.x + m[1][1] * v.y + m[2][1] * v.z,
+              m[0][2] * v.x + m[1][2] * v.y + m[2][2] * v.z);
 }
 
 /* a / |a|, or (0, 0, 0) when a is zero. */
