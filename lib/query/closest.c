@@ -15,18 +15,28 @@ static cbvh_v3 closest_point_segment(cbvh_v3 p, cbvh_v3 a, cbvh_v3 b)
     return len2 > 0.0 ? v3_madd(a, ab, clamp01(v3_dot(v3_sub(p, a), ab) / len2)) : a;
 }
 
-/* The projection when its barycentrics in the triangle's frame are in range, else the nearest of the three
- * edges' clamped projections: errors relative to the lengths, not the area, so slivers and needles keep
- * their precision (unlike Ericson's Voronoi-region form). The triangle is v, f its frame
- * (cbvh_triangle_frame_of), which a caller with several points to project computes once. */
+/* The projection of p onto the plane of triangle v (frame f, cbvh_triangle_frame_of) when its barycentrics
+ * in the frame are in range: 1 and the point in *q; else 0 (a degenerate triangle has no inside). */
+static int projection_inside(cbvh_v3 p, const cbvh_v3 v[3], const struct cbvh_triangle_frame *f, cbvh_v3 *q)
+{
+    if (!(f->nn > 0.0))
+        return 0;
+    double x, y;
+    cbvh_triangle_frame_barycentrics(f, v3_sub(p, v[f->base]), &x, &y);
+    if (!(x >= 0.0 && y >= 0.0 && x + y <= 1.0))
+        return 0;
+    *q = v3_madd(v3_madd(v[f->base], f->e1, x), f->e2, y);
+    return 1;
+}
+
+/* The projection when it falls inside (projection_inside), else the nearest of the three edges' clamped
+ * projections: errors relative to the lengths, not the area, so slivers and needles keep their precision
+ * (unlike Ericson's Voronoi-region form). The triangle is v, f its frame. */
 static cbvh_v3 closest_point_in_frame(cbvh_v3 p, const cbvh_v3 v[3], const struct cbvh_triangle_frame *f)
 {
-    if (f->nn > 0.0) {
-        double x, y;
-        cbvh_triangle_frame_barycentrics(f, v3_sub(p, v[f->base]), &x, &y);
-        if (x >= 0.0 && y >= 0.0 && x + y <= 1.0)
-            return v3_madd(v3_madd(v[f->base], f->e1, x), f->e2, y);
-    }
+    cbvh_v3 inside;
+    if (projection_inside(p, v, f, &inside))
+        return inside;
     cbvh_v3 best = closest_point_segment(p, v[0], v[1]);
     double d = v3_len2(v3_sub(p, best));
     const cbvh_v3 q1 = closest_point_segment(p, v[1], v[2]), q2 = closest_point_segment(p, v[2], v[0]);
@@ -112,15 +122,18 @@ double cbvh_closest_segment_triangle(cbvh_v3 p0, cbvh_v3 p1, cbvh_v3 a, cbvh_v3 
         *on_seg = *on_tri = x;
         return 0.0;
     }
+    /* An endpoint whose nearest point of the triangle lies on an edge is a pair of that edge's test below,
+     * so only the endpoints' projections inside the triangle are candidates of their own. */
+    double best = INFINITY, d;
     *on_seg = p0;
-    *on_tri = closest_point_in_frame(p0, v, &f);
-    double best = v3_len2(v3_sub(*on_seg, *on_tri));
-    const cbvh_v3 q = closest_point_in_frame(p1, v, &f);
-    double d = v3_len2(v3_sub(p1, q));
-    if (d < best) {
-        best = d;
-        *on_seg = p1;
-        *on_tri = q;
+    *on_tri = a;
+    const cbvh_v3 end[2] = {p0, p1};
+    for (int k = 0; k < 2; k++) {
+        if (projection_inside(end[k], v, &f, &x) && (d = v3_len2(v3_sub(end[k], x))) < best) {
+            best = d;
+            *on_seg = end[k];
+            *on_tri = x;
+        }
     }
     const cbvh_v3 edge[3][2] = {{a, b}, {b, c}, {c, a}};
     for (int e = 0; e < 3; e++) {
