@@ -1,4 +1,7 @@
 /* closest.c: closest points between a point, a segment and a triangle, in double precision. */
+#include "config.h"
+
+#include "common/compiler.h"
 #include "query/closest.h"
 #include "query/triangle_frame.h"
 
@@ -8,7 +11,7 @@ static double clamp01(double x)
 }
 
 /* The point of segment a-b nearest to p: a clamped projection, well conditioned for any length. */
-static cbvh_v3 closest_point_segment(cbvh_v3 p, cbvh_v3 a, cbvh_v3 b)
+CBVH_FORCE_INLINE cbvh_v3 closest_point_segment(cbvh_v3 p, cbvh_v3 a, cbvh_v3 b)
 {
     const cbvh_v3 ab = v3_sub(b, a);
     const double len2 = v3_len2(ab);
@@ -17,7 +20,7 @@ static cbvh_v3 closest_point_segment(cbvh_v3 p, cbvh_v3 a, cbvh_v3 b)
 
 /* The projection of p onto the plane of triangle v (frame f, cbvh_triangle_frame_of) when its barycentrics
  * in the frame are in range: 1 and the point in *q; else 0 (a degenerate triangle has no inside). */
-static int projection_inside(cbvh_v3 p, const cbvh_v3 v[3], const struct cbvh_triangle_frame *f, cbvh_v3 *q)
+CBVH_FORCE_INLINE int projection_inside(cbvh_v3 p, const cbvh_v3 v[3], const struct cbvh_triangle_frame *f, cbvh_v3 *q)
 {
     if (!(f->nn > 0.0))
         return 0;
@@ -32,7 +35,7 @@ static int projection_inside(cbvh_v3 p, const cbvh_v3 v[3], const struct cbvh_tr
 /* The projection when it falls inside (projection_inside), else the nearest of the three edges' clamped
  * projections: errors relative to the lengths, not the area, so slivers and needles keep their precision
  * (unlike Ericson's Voronoi-region form). The triangle is v, f its frame. */
-static cbvh_v3 closest_point_in_frame(cbvh_v3 p, const cbvh_v3 v[3], const struct cbvh_triangle_frame *f)
+CBVH_FORCE_INLINE cbvh_v3 closest_point_in_frame(cbvh_v3 p, const cbvh_v3 v[3], const struct cbvh_triangle_frame *f)
 {
     cbvh_v3 inside;
     if (projection_inside(p, v, f, &inside))
@@ -56,7 +59,9 @@ cbvh_v3 cbvh_closest_point_triangle(cbvh_v3 p, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c)
     return closest_point_in_frame(p, v, &f);
 }
 
-double cbvh_closest_segments(cbvh_v3 p0, cbvh_v3 p1, cbvh_v3 q0, cbvh_v3 q1, cbvh_v3 *on_p, cbvh_v3 *on_q)
+/* cbvh_closest_segments, inlined into the segment-triangle test's three calls. */
+CBVH_FORCE_INLINE double closest_segments(cbvh_v3 p0, cbvh_v3 p1, cbvh_v3 q0, cbvh_v3 q1, cbvh_v3 *on_p,
+                                          cbvh_v3 *on_q)
 {
     const cbvh_v3 d1 = v3_sub(p1, p0), d2 = v3_sub(q1, q0), r = v3_sub(p0, q0);
     const double a = v3_len2(d1), e = v3_len2(d2), f = v3_dot(d2, r);
@@ -92,10 +97,15 @@ double cbvh_closest_segments(cbvh_v3 p0, cbvh_v3 p1, cbvh_v3 q0, cbvh_v3 q1, cbv
     return v3_len2(v3_sub(*on_p, *on_q));
 }
 
+double cbvh_closest_segments(cbvh_v3 p0, cbvh_v3 p1, cbvh_v3 q0, cbvh_v3 q1, cbvh_v3 *on_p, cbvh_v3 *on_q)
+{
+    return closest_segments(p0, p1, q0, q1, on_p, on_q);
+}
+
 /* Where segment p0-p1 crosses the plane of triangle v (frame f) inside the triangle, if it does
  * (non-coplanar case): the crossing's barycentrics in the triangle's frame decide, and the point is built
  * from them. */
-static int segment_crosses_triangle(cbvh_v3 p0, cbvh_v3 p1, const cbvh_v3 v[3],
+CBVH_FORCE_INLINE int segment_crosses_triangle(cbvh_v3 p0, cbvh_v3 p1, const cbvh_v3 v[3],
                                     const struct cbvh_triangle_frame *f, cbvh_v3 *x)
 {
     const cbvh_v3 o = v[f->base];
@@ -138,7 +148,7 @@ double cbvh_closest_segment_triangle(cbvh_v3 p0, cbvh_v3 p1, cbvh_v3 a, cbvh_v3 
     const cbvh_v3 edge[3][2] = {{a, b}, {b, c}, {c, a}};
     for (int e = 0; e < 3; e++) {
         cbvh_v3 sp, tp;
-        d = cbvh_closest_segments(p0, p1, edge[e][0], edge[e][1], &sp, &tp);
+        d = closest_segments(p0, p1, edge[e][0], edge[e][1], &sp, &tp);
         if (d < best) {
             best = d;
             *on_seg = sp;
