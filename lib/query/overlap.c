@@ -480,8 +480,12 @@ CBVH_FORCE_INLINE int overlap_quad(void *query, uint32_t k, const struct leaf_qu
     if (q->capsule && !(group &= cbvh_grown_path_triangles4(&q->path, t, 1.0f)))
         return 0;
     uint32_t touch, keep = cbvh_cull4_keep(&q->cull4, t->c, &touch) & group;
-    /* a ball's float tests leave only lanes near the radius, slivers, or odd sizes to the exact test */
-    const enum overlap_left rest = q->region->shape.kind == CBVH_SHAPE_SPHERE ? OVERLAP_EXACT : OVERLAP_CULL;
+    /* A ball's float tests leave only lanes near the radius, slivers, or odd sizes to the exact test. So do a
+     * capsule's when contacts are wanted: the contact needs the exact test's closest points anyway. */
+    const int kind = q->region->shape.kind;
+    const enum overlap_left rest =
+        kind == CBVH_SHAPE_SPHERE || (kind == CBVH_SHAPE_CAPSULE && q->sink->contacts) ? OVERLAP_EXACT
+                                                                                       : OVERLAP_CULL;
     for (; keep; keep &= keep - 1u) {
         const uint32_t j = cbvh_lowest_lane(keep);
         const float a[3] = {t->c[0][0][j], t->c[0][1][j], t->c[0][2][j]};
