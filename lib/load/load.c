@@ -122,7 +122,8 @@ static void set_small_triangle_extent(struct cbvh_file *f)
         float v[3][3], e = 0.0f;
         cbvh_triangle_vertices(f, (uint32_t)((uint64_t)i * n / samples), v[0], v[1], v[2]);
         for (int a = 0; a < 3; a++) {
-            const float lo = fminf(fminf(v[0][a], v[1][a]), v[2][a]), hi = fmaxf(fmaxf(v[0][a], v[1][a]), v[2][a]);
+            const float lo = fminf(fminf(v[0][a], v[1][a]), v[2][a]),
+                        hi = fmaxf(fmaxf(v[0][a], v[1][a]), v[2][a]);
             e = fmaxf(e, hi - lo);
         }
         uint32_t k = i; /* insertion sort: extent[0..i] ascending */

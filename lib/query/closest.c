@@ -20,7 +20,8 @@ CBVH_FORCE_INLINE cbvh_v3 closest_point_segment(cbvh_v3 p, cbvh_v3 a, cbvh_v3 b)
 
 /* The projection of p onto the plane of triangle v (frame f, cbvh_triangle_frame_of) when its barycentrics
  * in the frame are in range: 1 and the point in *q; else 0 (a degenerate triangle has no inside). */
-CBVH_FORCE_INLINE int projection_inside(cbvh_v3 p, const cbvh_v3 v[3], const struct cbvh_triangle_frame *f, cbvh_v3 *q)
+CBVH_FORCE_INLINE int projection_inside(cbvh_v3 p, const cbvh_v3 v[3], const struct cbvh_triangle_frame *f,
+                                        cbvh_v3 *q)
 {
     if (!(f->nn > 0.0))
         return 0;
@@ -35,7 +36,8 @@ CBVH_FORCE_INLINE int projection_inside(cbvh_v3 p, const cbvh_v3 v[3], const str
 /* The projection when it falls inside (projection_inside), else the nearest of the three edges' clamped
  * projections: errors relative to the lengths, not the area, so slivers and needles keep their precision
  * (unlike Ericson's Voronoi-region form). The triangle is v, f its frame. */
-CBVH_FORCE_INLINE cbvh_v3 closest_point_in_frame(cbvh_v3 p, const cbvh_v3 v[3], const struct cbvh_triangle_frame *f)
+CBVH_FORCE_INLINE cbvh_v3 closest_point_in_frame(cbvh_v3 p, const cbvh_v3 v[3],
+                                                 const struct cbvh_triangle_frame *f)
 {
     cbvh_v3 inside;
     if (projection_inside(p, v, f, &inside))
@@ -106,7 +108,7 @@ double cbvh_closest_segments(cbvh_v3 p0, cbvh_v3 p1, cbvh_v3 q0, cbvh_v3 q1, cbv
  * (non-coplanar case): the crossing's barycentrics in the triangle's frame decide, and the point is built
  * from them. */
 CBVH_FORCE_INLINE int segment_crosses_triangle(cbvh_v3 p0, cbvh_v3 p1, const cbvh_v3 v[3],
-                                    const struct cbvh_triangle_frame *f, cbvh_v3 *x)
+                                               const struct cbvh_triangle_frame *f, cbvh_v3 *x)
 {
     const cbvh_v3 o = v[f->base];
     const double s0 = v3_dot(v3_sub(p0, o), f->n), s1 = v3_dot(v3_sub(p1, o), f->n);

@@ -224,6 +224,7 @@ struct overlap_query {
     struct overlap_sink *sink;
     struct cbvh_grid_range grid;
     int ball, capsule;
+    int exact_only;    /* the triangles the float tests keep go to the exact test alone (overlap_quad) */
     uint16_t small[3]; /* per axis, the largest extent in grid steps of a box small next to the shape */
     struct ball_reach reach;
     struct cbvh_grown_path path;
@@ -480,12 +481,7 @@ CBVH_FORCE_INLINE int overlap_quad(void *query, uint32_t k, const struct leaf_qu
     if (q->capsule && !(group &= cbvh_grown_path_triangles4(&q->path, t, 1.0f)))
         return 0;
     uint32_t touch, keep = cbvh_cull4_keep(&q->cull4, t->c, &touch) & group;
-    /* A ball's float tests leave only lanes near the radius, slivers, or odd sizes to the exact test. So do a
-     * capsule's when contacts are wanted: the contact needs the exact test's closest points anyway. */
-    const int kind = q->region->shape.kind;
-    const enum overlap_left rest =
-        kind == CBVH_SHAPE_SPHERE || (kind == CBVH_SHAPE_CAPSULE && q->sink->contacts) ? OVERLAP_EXACT
-                                                                                       : OVERLAP_CULL;
+    const enum overlap_left rest = q->exact_only ? OVERLAP_EXACT : OVERLAP_CULL;
     for (; keep; keep &= keep - 1u) {
         const uint32_t j = cbvh_lowest_lane(keep);
         const float a[3] = {t->c[0][0][j], t->c[0][1][j], t->c[0][2][j]};
@@ -564,6 +560,10 @@ static size_t overlap_walk(const struct cbvh_file *f, const struct overlap_regio
         ball_reach_of(&region->shape, &q.reach);
     if (q.capsule)
         capsule_path(f, &region->shape, &q.path);
+    /* A ball's float tests leave only lanes near the radius, slivers, or odd sizes to the exact test. So do a
+     * capsule's when contacts are wanted: the contact needs the exact test's closest points anyway. */
+    q.exact_only = region->shape.kind == CBVH_SHAPE_SPHERE ||
+                   (region->shape.kind == CBVH_SHAPE_CAPSULE && sink->contacts);
     q.small[0] = q.small[1] = q.small[2] = 0;
     if (fine)
         small_boxes(f, reach, q.small);
