@@ -12,6 +12,7 @@
 #include <cmocka.h>
 
 #include "cbvh.h"
+#include "query/closest.h"
 #include "query/triangle_box.h"
 #include "support/reference.h"
 #include "support/scene_gen.h"
@@ -599,12 +600,86 @@ static void test_sliver_overlaps(void **state)
     }
 }
 
+/* The distance of p from segment a-b (clamped projection). */
+static double point_segment_dist(cbvh_v3 p, cbvh_v3 a, cbvh_v3 b)
+{
+    const cbvh_v3 d = v3_sub(b, a);
+    const double len2 = v3_len2(d), s = len2 > 0.0 ? v3_dot(v3_sub(p, a), d) / len2 : 0.0;
+    return v3_len(v3_sub(p, v3_madd(a, d, s < 0.0 ? 0.0 : s > 1.0 ? 1.0 : s)));
+}
+
+/* cbvh_closest_segment_triangle against the reference's golden-section minimum, on random segments and
+ * triangles and on the cases its candidates are chosen for: a segment crossing the triangle, one parallel to
+ * it above its inside with both ends projecting outside, an end projecting inside, an end nearest an edge or
+ * a vertex, segments of no length, and triangles of no area (two equal corners, three in a row). The points
+ * it returns lie on the segment and the triangle and are as far apart as the distance it returns. */
+static void test_segment_triangle_distance(void **state)
+{
+    (void)state;
+    uint64_t st = 0x5e67e7;
+    for (int r = 0; r < 6000; r++) {
+        double tri[9], p0[3], p1[3];
+        for (int k = 0; k < 9; k++)
+            tri[k] = rnd(&st, -1.0, 1.0);
+        for (int a = 0; a < 3; a++) {
+            p0[a] = rnd(&st, -1.5, 1.5);
+            p1[a] = rnd(&st, -1.5, 1.5);
+        }
+        const int shape = r % 8;
+        if (shape == 1) /* two equal corners */
+            memcpy(tri + 6, tri + 3, 3 * sizeof(double));
+        if (shape == 2) /* three corners in a row */
+            for (int a = 0; a < 3; a++)
+                tri[6 + a] = tri[a] + 0.37 * (tri[3 + a] - tri[a]);
+        if (shape == 3) /* no length */
+            memcpy(p1, p0, sizeof p1);
+        double n[3];
+        ref_triangle_normal(tri, n);
+        const double w = rnd(&st, 0.05, 0.3), h = rnd(&st, -0.2, 0.2);
+        for (int a = 0; a < 3 && shape >= 4; a++) {
+            const double inside = (tri[a] + tri[3 + a] + tri[6 + a]) / 3.0;
+            const double edge_mid = 0.5 * (tri[a] + tri[3 + a]);
+            if (shape == 4) { /* through the inside, across the plane */
+                p0[a] = inside + n[a];
+                p1[a] = inside - 0.5 * n[a];
+            } else if (shape == 5) { /* parallel, above the inside, both ends beyond the triangle */
+                const double along = tri[3 + a] - tri[6 + a];
+                p0[a] = inside + h * n[a] - 2.0 * along;
+                p1[a] = inside + h * n[a] + 2.0 * along;
+            } else if (shape == 6) { /* one end over the inside, the other far */
+                p0[a] = inside + w * n[a];
+                p1[a] = inside + 3.0 * n[a] + (tri[3 + a] - tri[a]);
+            } else { /* one end just outside an edge */
+                p0[a] = edge_mid + 1e-9 * (edge_mid - inside) + h * 1e-6 * n[a];
+            }
+        }
+        cbvh_v3 on_seg, on_tri;
+        const double d2 = cbvh_closest_segment_triangle(
+            v3(p0[0], p0[1], p0[2]), v3(p1[0], p1[1], p1[2]), v3(tri[0], tri[1], tri[2]),
+            v3(tri[3], tri[4], tri[5]), v3(tri[6], tri[7], tri[8]), &on_seg, &on_tri);
+        const double tol = 1e-7, ref = ref_segment_triangle_dist(tri, p0, p1);
+        assert_true(fabs(sqrt(d2) - ref) <= tol);
+        assert_true(fabs(sqrt(v3_len2(v3_sub(on_seg, on_tri))) - sqrt(d2)) <= tol);
+        const double t[3] = {on_tri.x, on_tri.y, on_tri.z};
+        /* a triangle of corners in a row is the segment of its first two (the reference's plane test is
+         * undefined there) */
+        assert_true(shape == 2 ? point_segment_dist(on_tri, v3(tri[0], tri[1], tri[2]),
+                                                    v3(tri[3], tri[4], tri[5])) <= tol
+                               : sqrt(ref_point_triangle_dist2(tri, t)) <= tol);
+        assert_true(point_segment_dist(on_seg, v3(p0[0], p0[1], p0[2]), v3(p1[0], p1[1], p1[2])) <= tol);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_overlaps),      cmocka_unit_test(test_triangle_box_sat),
-        cmocka_unit_test(test_invalid_input), cmocka_unit_test(test_sliver_overlaps),
-        cmocka_unit_test(test_contacts),      cmocka_unit_test(test_grazing_rounds),
+        cmocka_unit_test(test_overlaps),
+        cmocka_unit_test(test_triangle_box_sat),
+        cmocka_unit_test(test_invalid_input),
+        cmocka_unit_test(test_sliver_overlaps),
+        cmocka_unit_test(test_contacts),
+        cmocka_unit_test(test_grazing_rounds),
+        cmocka_unit_test(test_segment_triangle_distance),
     };
     return TEST_RUN_LAYOUTS(tests, 0);
 }

@@ -23,6 +23,10 @@
  * which a ray origin is moved (CBVH_FAR_FACTOR, query/raycast.h), so rounding cannot matter. */
 #define CBVH_NEAR_ORIGIN_FACTOR 4
 
+/* The triangles struct cbvh_file's small_triangle_extent samples: enough for a steady quartile, few enough
+ * to cost a microsecond or two at open. */
+#define CBVH_EXTENT_SAMPLES 64u
+
 /* Everything here was validated by the loader: node links, leaf ranges,
  * indices and encodings are in range, so the query kernels do not check. */
 struct cbvh_file {
@@ -60,6 +64,10 @@ struct cbvh_file {
      * without one. A ray that misses it hits nothing (cbvh_ray_prepare, query/raycast.h). Set at open. */
     _Alignas(16) float top_lo[4];
     _Alignas(16) float top_hi[4];
+    /* The lower quartile of the largest axis extents of up to CBVH_EXTENT_SAMPLES triangles taken evenly by
+     * cooked index (0 without triangles): how small the leaves' triangles are, which decides whether a ball's
+     * or capsule's own node tests pay (query/overlap.c). Set at open. */
+    float small_triangle_extent;
     const void *remap;       /* cooked -> original triangle id; NULL = identity */
     uint32_t remap_encoding; /* CBVH_REMAP_* */
     const uint32_t *unmap;   /* original -> cooked id (owned, built at open when remap is present): dense,

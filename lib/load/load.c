@@ -9,6 +9,7 @@
 #include "common/endian.h"
 #include "common/error.h"
 #include "layout/tree.h"
+#include "layout/triangle_encodings.h"
 #include "load/load.h"
 
 /* Where a known section's decoded bytes are: in place when raw and cbvh_in_place (the offset of a
@@ -112,6 +113,27 @@ static void set_top_box(struct cbvh_file *f)
     }
 }
 
+/* The file's small_triangle_extent (common/file.h), from its validated triangles. */
+static void set_small_triangle_extent(struct cbvh_file *f)
+{
+    float extent[CBVH_EXTENT_SAMPLES];
+    const uint32_t n = f->info.triangle_count, samples = n < CBVH_EXTENT_SAMPLES ? n : CBVH_EXTENT_SAMPLES;
+    for (uint32_t i = 0; i < samples; i++) {
+        float v[3][3], e = 0.0f;
+        cbvh_triangle_vertices(f, (uint32_t)((uint64_t)i * n / samples), v[0], v[1], v[2]);
+        for (int a = 0; a < 3; a++) {
+            const float lo = fminf(fminf(v[0][a], v[1][a]), v[2][a]),
+                        hi = fmaxf(fmaxf(v[0][a], v[1][a]), v[2][a]);
+            e = fmaxf(e, hi - lo);
+        }
+        uint32_t k = i; /* insertion sort: extent[0..i] ascending */
+        for (; k > 0 && extent[k - 1] > e; k--)
+            extent[k] = extent[k - 1];
+        extent[k] = e;
+    }
+    f->small_triangle_extent = samples ? extent[samples / 4] : 0.0f;
+}
+
 cbvh_result cbvh_load(struct cbvh_file *f, cbvh_error *err)
 {
     if (!cbvh_host_is_little_endian())
@@ -125,7 +147,9 @@ cbvh_result cbvh_load(struct cbvh_file *f, cbvh_error *err)
         r = place_sections(f, &map, err);
     if (r == CBVH_OK)
         r = cbvh_check_sections(f, &map, err);
-    if (r == CBVH_OK)
+    if (r == CBVH_OK) {
         set_top_box(f);
+        set_small_triangle_extent(f);
+    }
     return r;
 }

@@ -1,4 +1,7 @@
 /* closest.c: closest points between a point, a segment and a triangle, in double precision. */
+#include "config.h"
+
+#include "common/compiler.h"
 #include "query/closest.h"
 #include "query/triangle_frame.h"
 
@@ -8,25 +11,37 @@ static double clamp01(double x)
 }
 
 /* The point of segment a-b nearest to p: a clamped projection, well conditioned for any length. */
-static cbvh_v3 closest_point_segment(cbvh_v3 p, cbvh_v3 a, cbvh_v3 b)
+CBVH_FORCE_INLINE cbvh_v3 closest_point_segment(cbvh_v3 p, cbvh_v3 a, cbvh_v3 b)
 {
     const cbvh_v3 ab = v3_sub(b, a);
     const double len2 = v3_len2(ab);
     return len2 > 0.0 ? v3_madd(a, ab, clamp01(v3_dot(v3_sub(p, a), ab) / len2)) : a;
 }
 
-/* The projection when its barycentrics in the triangle's frame are in range, else the nearest of the three
- * edges' clamped projections: errors relative to the lengths, not the area, so slivers and needles keep
- * their precision (unlike Ericson's Voronoi-region form). The triangle is v, f its frame
- * (cbvh_triangle_frame_of), which a caller with several points to project computes once. */
-static cbvh_v3 closest_point_in_frame(cbvh_v3 p, const cbvh_v3 v[3], const struct cbvh_triangle_frame *f)
+/* The projection of p onto the plane of triangle v (frame f, cbvh_triangle_frame_of) when its barycentrics
+ * in the frame are in range: 1 and the point in *q; else 0 (a degenerate triangle has no inside). */
+CBVH_FORCE_INLINE int projection_inside(cbvh_v3 p, const cbvh_v3 v[3], const struct cbvh_triangle_frame *f,
+                                        cbvh_v3 *q)
 {
-    if (f->nn > 0.0) {
-        double x, y;
-        cbvh_triangle_frame_barycentrics(f, v3_sub(p, v[f->base]), &x, &y);
-        if (x >= 0.0 && y >= 0.0 && x + y <= 1.0)
-            return v3_madd(v3_madd(v[f->base], f->e1, x), f->e2, y);
-    }
+    if (!(f->nn > 0.0))
+        return 0;
+    double x, y;
+    cbvh_triangle_frame_barycentrics(f, v3_sub(p, v[f->base]), &x, &y);
+    if (!(x >= 0.0 && y >= 0.0 && x + y <= 1.0))
+        return 0;
+    *q = v3_madd(v3_madd(v[f->base], f->e1, x), f->e2, y);
+    return 1;
+}
+
+/* The projection when it falls inside (projection_inside), else the nearest of the three edges' clamped
+ * projections: errors relative to the lengths, not the area, so slivers and needles keep their precision
+ * (unlike Ericson's Voronoi-region form). The triangle is v, f its frame. */
+CBVH_FORCE_INLINE cbvh_v3 closest_point_in_frame(cbvh_v3 p, const cbvh_v3 v[3],
+                                                 const struct cbvh_triangle_frame *f)
+{
+    cbvh_v3 inside;
+    if (projection_inside(p, v, f, &inside))
+        return inside;
     cbvh_v3 best = closest_point_segment(p, v[0], v[1]);
     double d = v3_len2(v3_sub(p, best));
     const cbvh_v3 q1 = closest_point_segment(p, v[1], v[2]), q2 = closest_point_segment(p, v[2], v[0]);
@@ -46,7 +61,9 @@ cbvh_v3 cbvh_closest_point_triangle(cbvh_v3 p, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c)
     return closest_point_in_frame(p, v, &f);
 }
 
-double cbvh_closest_segments(cbvh_v3 p0, cbvh_v3 p1, cbvh_v3 q0, cbvh_v3 q1, cbvh_v3 *on_p, cbvh_v3 *on_q)
+/* cbvh_closest_segments, inlined into the segment-triangle test's three calls. */
+CBVH_FORCE_INLINE double closest_segments(cbvh_v3 p0, cbvh_v3 p1, cbvh_v3 q0, cbvh_v3 q1, cbvh_v3 *on_p,
+                                          cbvh_v3 *on_q)
 {
     const cbvh_v3 d1 = v3_sub(p1, p0), d2 = v3_sub(q1, q0), r = v3_sub(p0, q0);
     const double a = v3_len2(d1), e = v3_len2(d2), f = v3_dot(d2, r);
@@ -82,11 +99,16 @@ double cbvh_closest_segments(cbvh_v3 p0, cbvh_v3 p1, cbvh_v3 q0, cbvh_v3 q1, cbv
     return v3_len2(v3_sub(*on_p, *on_q));
 }
 
+double cbvh_closest_segments(cbvh_v3 p0, cbvh_v3 p1, cbvh_v3 q0, cbvh_v3 q1, cbvh_v3 *on_p, cbvh_v3 *on_q)
+{
+    return closest_segments(p0, p1, q0, q1, on_p, on_q);
+}
+
 /* Where segment p0-p1 crosses the plane of triangle v (frame f) inside the triangle, if it does
  * (non-coplanar case): the crossing's barycentrics in the triangle's frame decide, and the point is built
  * from them. */
-static int segment_crosses_triangle(cbvh_v3 p0, cbvh_v3 p1, const cbvh_v3 v[3],
-                                    const struct cbvh_triangle_frame *f, cbvh_v3 *x)
+CBVH_FORCE_INLINE int segment_crosses_triangle(cbvh_v3 p0, cbvh_v3 p1, const cbvh_v3 v[3],
+                                               const struct cbvh_triangle_frame *f, cbvh_v3 *x)
 {
     const cbvh_v3 o = v[f->base];
     const double s0 = v3_dot(v3_sub(p0, o), f->n), s1 = v3_dot(v3_sub(p1, o), f->n);
@@ -112,20 +134,23 @@ double cbvh_closest_segment_triangle(cbvh_v3 p0, cbvh_v3 p1, cbvh_v3 a, cbvh_v3 
         *on_seg = *on_tri = x;
         return 0.0;
     }
+    /* An endpoint whose nearest point of the triangle lies on an edge is a pair of that edge's test below,
+     * so only the endpoints' projections inside the triangle are candidates of their own. */
+    double best = INFINITY, d;
     *on_seg = p0;
-    *on_tri = closest_point_in_frame(p0, v, &f);
-    double best = v3_len2(v3_sub(*on_seg, *on_tri));
-    const cbvh_v3 q = closest_point_in_frame(p1, v, &f);
-    double d = v3_len2(v3_sub(p1, q));
-    if (d < best) {
-        best = d;
-        *on_seg = p1;
-        *on_tri = q;
+    *on_tri = a;
+    const cbvh_v3 end[2] = {p0, p1};
+    for (int k = 0; k < 2; k++) {
+        if (projection_inside(end[k], v, &f, &x) && (d = v3_len2(v3_sub(end[k], x))) < best) {
+            best = d;
+            *on_seg = end[k];
+            *on_tri = x;
+        }
     }
     const cbvh_v3 edge[3][2] = {{a, b}, {b, c}, {c, a}};
     for (int e = 0; e < 3; e++) {
         cbvh_v3 sp, tp;
-        d = cbvh_closest_segments(p0, p1, edge[e][0], edge[e][1], &sp, &tp);
+        d = closest_segments(p0, p1, edge[e][0], edge[e][1], &sp, &tp);
         if (d < best) {
             best = d;
             *on_seg = sp;

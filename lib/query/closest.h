@@ -15,9 +15,10 @@ cbvh_v3 cbvh_closest_point_triangle(cbvh_v3 p, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c);
 double cbvh_closest_segments(cbvh_v3 p0, cbvh_v3 p1, cbvh_v3 q0, cbvh_v3 q1, cbvh_v3 *on_p, cbvh_v3 *on_q);
 
 /* Closest points of segment p0-p1 and triangle (a, b, c): 0 when the segment
- * crosses the triangle, else the nearest of endpoint-to-triangle and
- * segment-to-edge pairs (a positive minimum is always attained by one of
- * them). Returns the squared distance. */
+ * crosses the triangle, else the nearest of the pairs an endpoint makes with
+ * its projection inside the triangle and of the segment-to-edge pairs (a
+ * minimum with the triangle's point on no edge has an endpoint's projection
+ * there, so one of them always attains it). Returns the squared distance. */
 double cbvh_closest_segment_triangle(cbvh_v3 p0, cbvh_v3 p1, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, cbvh_v3 *on_seg,
                                      cbvh_v3 *on_tri);
 

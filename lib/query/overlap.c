@@ -224,9 +224,12 @@ struct overlap_query {
     struct overlap_sink *sink;
     struct cbvh_grid_range grid;
     int ball, capsule;
+    int exact_only;    /* the triangles the float tests keep go to the exact test alone (overlap_quad) */
+    uint16_t small[3]; /* per axis, the largest extent in grid steps of a box small next to the shape */
     struct ball_reach reach;
     struct cbvh_grown_path path;
 #ifdef CBVH_HAVE_SIMD
+    __m128i small4[3];             /* small, in every 16-bit lane */
     struct cbvh_grid_range4 grid4; /* grid, as four wide slots at once test it */
     struct cbvh_cull4 cull4;
     __m128 center4[3], reach2, origin4[3], scale4[3]; /* a ball's reach, and the file's grid, in every lane */
@@ -347,14 +350,23 @@ static void capsule_path(const struct cbvh_file *f, const struct cbvh_local_shap
     cbvh_grown_path_init(p, f, center, extent, delta);
 }
 
+/* 1 when the box of grid coordinates q (q[0..2] its minimum, q[3..5] its maximum) is small next to the
+ * region's ball or capsule (struct overlap_query's small). */
+static int box_small(const struct overlap_query *o, const uint32_t q[6])
+{
+    return q[3] - q[0] <= o->small[0] && q[4] - q[1] <= o->small[1] && q[5] - q[2] <= o->small[2];
+}
+
 /* The region's grid range meets the box, for a ball the box lies within its reach, for a capsule its path
- * crosses the box. */
+ * crosses the box (when the box is small: box_small). */
 static int overlap_enter(void *query, const uint32_t q[6], float *entry)
 {
     const struct overlap_query *o = query;
     *entry = 0.0f;
     if (!cbvh_grid_range_meets(&o->grid, q))
         return 0;
+    if ((o->ball | o->capsule) && !box_small(o, q))
+        return 1;
     if (o->capsule) {
         float crossed_at;
         return cbvh_grown_path_grid(&o->path, o->f, q, 1.0f, &crossed_at);
@@ -371,6 +383,23 @@ static int overlap_enter(void *query, const uint32_t q[6], float *entry)
 }
 
 #ifdef CBVH_HAVE_SIMD
+/* box_small on the four slots of wide node `node` at once: bit s for slot s (used or not); x <= y for
+ * unsigned 16-bit x, y exactly when the saturated x - y is 0. */
+static inline uint32_t slots_small4(const uint8_t *node, const __m128i small4[3])
+{
+    const __m128i zero = _mm_setzero_si128();
+    __m128i small = _mm_set1_epi16(-1);
+    for (uint32_t a = 0; a < 3; a++) {
+        const __m128i qmin =
+            _mm_loadl_epi64((const __m128i *)(const void *)(node + cbvh_w4_plane_offset(a, 0)));
+        const __m128i qmax =
+            _mm_loadl_epi64((const __m128i *)(const void *)(node + cbvh_w4_plane_offset(3u + a, 0)));
+        const __m128i extent = _mm_subs_epu16(qmax, qmin);
+        small = _mm_and_si128(small, _mm_cmpeq_epi16(_mm_subs_epu16(extent, small4[a]), zero));
+    }
+    return (uint32_t)_mm_movemask_epi8(_mm_packs_epi16(small, small)) & 0xFu;
+}
+
 /* overlap_enter on the four slots of a wide node at once (cbvh_grid_range4_hits; a ball's distance lane for
  * lane the same float operations in the same order as ball_distance2, _mm_max_ps(a, b) being a > b ? a : b
  * as cull_maxf). */
@@ -379,7 +408,7 @@ CBVH_FORCE_INLINE uint32_t overlap_enter4(void *query, const uint8_t *node, floa
     const struct overlap_query *q = query;
     _mm_storeu_ps(entry, _mm_setzero_ps());
     const uint32_t meets = cbvh_grid_range4_hits(node, &q->grid4);
-    if (!(q->ball | q->capsule) || !meets)
+    if (!(q->ball | q->capsule) || !(meets & slots_small4(node, q->small4)))
         return meets;
     if (q->capsule) {
         float crossed_at[4];
@@ -452,8 +481,7 @@ CBVH_FORCE_INLINE int overlap_quad(void *query, uint32_t k, const struct leaf_qu
     if (q->capsule && !(group &= cbvh_grown_path_triangles4(&q->path, t, 1.0f)))
         return 0;
     uint32_t touch, keep = cbvh_cull4_keep(&q->cull4, t->c, &touch) & group;
-    /* a ball's float tests leave only lanes near the radius, slivers, or odd sizes to the exact test */
-    const enum overlap_left rest = q->region->shape.kind == CBVH_SHAPE_SPHERE ? OVERLAP_EXACT : OVERLAP_CULL;
+    const enum overlap_left rest = q->exact_only ? OVERLAP_EXACT : OVERLAP_CULL;
     for (; keep; keep &= keep - 1u) {
         const uint32_t j = cbvh_lowest_lane(keep);
         const float a[3] = {t->c[0][0][j], t->c[0][1][j], t->c[0][2][j]};
@@ -484,25 +512,38 @@ static int overlap_leaf(void *query, uint32_t first, uint32_t count)
 #endif
 }
 
-/* Whether a ball's or capsule's own node tests (ball_reach, capsule_path) run, beside the bounding box's:
- * when the shape is large next to the mesh's leaves, i.e. its reach squared (radius squared plus a quarter
- * of the segment's length squared) times the triangle count is at least the grid's diagonal squared (four
- * times that for a ball). docs/PERFORMANCE.md gives the measurements behind the threshold. Either way the
- * answers are the same. */
-static int fine_node_tests(const struct cbvh_file *f, const struct cbvh_local_shape *s)
+/* How far a ball or capsule reaches for the rules below: its radius plus a quarter of its segment. */
+static double round_reach(const struct cbvh_local_shape *s)
 {
-    double diag2 = 0.0;
-    for (int a = 0; a < 3; a++)
-        diag2 += (double)f->grid_scale[a] * f->grid_scale[a] * CBVH_Q_MAX * CBVH_Q_MAX;
-    const double reach2 = s->radius * s->radius + 0.25 * v3_len2(v3_sub(s->p1, s->p0));
-    return reach2 * f->info.triangle_count >= (s->kind == CBVH_SHAPE_SPHERE ? 4.0 : 1.0) * diag2;
+    return s->radius + 0.25 * v3_len(v3_sub(s->p1, s->p0));
+}
+
+/* Whether a ball's or capsule's own node tests (ball_reach, capsule_path) may run beside the bounding box's,
+ * and a capsule's path test of the leaves' triangles: when the shape reaches FINE_REACH times the mesh's
+ * small triangles' size (struct cbvh_file's small_triangle_extent) or more. Among smaller leaves the tests
+ * cull boxes and triangles in the corners of the bounding box; among larger ones they cost without culling.
+ * docs/PERFORMANCE.md gives the measurements behind the factors. Either way the answers are the same. */
+#define FINE_REACH 1.25
+
+/* The largest box extent, per axis in grid steps, that the node tests then take (box_small): SMALL_BOX_REACH
+ * times the reach. A box much larger than the shape that meets its bounding box nearly always meets the
+ * shape too: the test would cost without culling. */
+#define SMALL_BOX_REACH 2.0
+
+static void small_boxes(const struct cbvh_file *f, double reach, uint16_t small[3])
+{
+    for (int a = 0; a < 3; a++) {
+        const double steps =
+            f->grid_scale[a] > 0.0f ? SMALL_BOX_REACH * reach / f->grid_scale[a] : (double)CBVH_Q_MAX;
+        small[a] = (uint16_t)(steps < CBVH_Q_MAX ? steps : CBVH_Q_MAX);
+    }
 }
 
 /* Stored order: the order does not matter when every overlap is reported. */
 static size_t overlap_walk(const struct cbvh_file *f, const struct overlap_region *region,
                            struct overlap_sink *sink)
 {
-    struct overlap_query q; /* not cleared: every field is set below */
+    struct overlap_query q; /* not cleared: every field the walk reads is set below */
     q.f = f;
     q.region = region;
     q.sink = sink;
@@ -511,15 +552,25 @@ static size_t overlap_walk(const struct cbvh_file *f, const struct overlap_regio
     grid_range(f, region, &q.grid);
     if (cbvh_grid_range_empty(&q.grid))
         return sink->reported; /* no node box can meet it */
-    const int round = region->shape.kind != CBVH_SHAPE_BOX,
-              fine = round && fine_node_tests(f, &region->shape);
+    const double reach = region->shape.kind == CBVH_SHAPE_BOX ? 0.0 : round_reach(&region->shape);
+    const int fine = reach > 0.0 && reach >= FINE_REACH * f->small_triangle_extent;
     q.ball = fine && region->shape.kind == CBVH_SHAPE_SPHERE;
     q.capsule = fine && region->shape.kind == CBVH_SHAPE_CAPSULE;
     if (q.ball)
         ball_reach_of(&region->shape, &q.reach);
     if (q.capsule)
         capsule_path(f, &region->shape, &q.path);
+    /* A ball's float tests leave only lanes near the radius, slivers, or odd sizes to the exact test. So do a
+     * capsule's when contacts are wanted: the contact needs the exact test's closest points anyway. */
+    q.exact_only = region->shape.kind == CBVH_SHAPE_SPHERE ||
+                   (region->shape.kind == CBVH_SHAPE_CAPSULE && sink->contacts);
+    q.small[0] = q.small[1] = q.small[2] = 0;
+    if (fine)
+        small_boxes(f, reach, q.small);
 #ifdef CBVH_HAVE_SIMD
+    if (fine)
+        for (int a = 0; a < 3; a++)
+            q.small4[a] = _mm_set1_epi16((short)q.small[a]);
     cbvh_grid_range4_of(&q.grid, &q.grid4);
     cbvh_cull4_init(&q.cull4, &region->shape, region->lo, region->hi, NULL);
     if (q.ball) {
