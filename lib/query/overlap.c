@@ -544,6 +544,7 @@ static size_t overlap_walk(const struct cbvh_file *f, const struct overlap_regio
                            struct overlap_sink *sink)
 {
     struct overlap_query q; /* not cleared: every field the walk reads is set below */
+    cbvh_vector_state_clear();
     q.f = f;
     q.region = region;
     q.sink = sink;

@@ -9,6 +9,7 @@
     "raycast_walks_avx2.c is compiled with AVX2, BMI1, BMI2 and FMA enabled (configure and CMake add the flags)"
 #endif
 
+#include "query/raycast.h"
 #include "query/walk.h"
 
 /* The same instances as raycast_walks.c's: the answers are the other kernels' bit for bit. */
@@ -21,4 +22,9 @@
     }
 CBVH_WALK_INSTANCES(WALK_AVX2)
 #undef WALK_AVX2
+
+void cbvh_vector_upper_clear_avx2(void)
+{
+    _mm256_zeroupper();
+}
 #endif

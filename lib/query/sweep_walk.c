@@ -165,6 +165,7 @@ int cbvh_sweep_walk(const struct cbvh_file *f, const struct cbvh_local_shape *bo
                     cbvh_sweep_triangle_fn sweep, const void *shape, const struct cbvh_sweep_rules *rules,
                     struct cbvh_sweep_found *found)
 {
+    cbvh_vector_state_clear();
     cbvh_v3 lo, hi;
     float center[3], extent[3];
     cbvh_shape_bounds(bounds, &lo, &hi);
