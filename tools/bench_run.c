@@ -12,13 +12,20 @@
 #define BENCH_MAX_THREADS 256
 
 static volatile unsigned bench_evict_sink;
+static unsigned char bench_evict_buffer[BENCH_EVICT_BYTES];
+static int bench_evict_written;
 
-/* Reads one byte of every cache line of buf[0..size). */
-static void bench_evict(const unsigned char *buf, size_t size)
+/* Reads one byte of every cache line of BENCH_EVICT_BYTES of memory no job uses. The first call writes it,
+ * so that its pages are the process's own rather than the shared zero page. Called on one thread. */
+static void bench_evict(void)
 {
+    if (!bench_evict_written) {
+        memset(bench_evict_buffer, 1, sizeof bench_evict_buffer);
+        bench_evict_written = 1;
+    }
     unsigned sum = 0;
-    for (size_t i = 0; i < size; i += 64)
-        sum += buf[i];
+    for (size_t i = 0; i < sizeof bench_evict_buffer; i += 64)
+        sum += bench_evict_buffer[i];
     bench_evict_sink = sum;
 }
 
@@ -134,10 +141,6 @@ int bench_time_in_turns(const bench_job *const *jobs, int n, unsigned threads, u
     const size_t slices = threads > 1u || fewest / BENCH_SLICE_QUERIES < 1 ? 1
                           : fewest / BENCH_SLICE_QUERIES > BENCH_SLICES    ? BENCH_SLICES
                                                                            : fewest / BENCH_SLICE_QUERIES;
-    /* written once, so that its pages are the process's own rather than the shared zero page */
-    unsigned char *evict = slices > 1u ? malloc(BENCH_EVICT_BYTES) : NULL;
-    if (evict)
-        memset(evict, 1, BENCH_EVICT_BYTES);
     int status = 0;
     for (unsigned r = 0; r < reps && status == 0; r++) {
         for (int k = 0; k < n; k++)
@@ -150,8 +153,8 @@ int bench_time_in_turns(const bench_job *const *jobs, int n, unsigned threads, u
                 /* the caches emptied of every structure, then another slice first, untimed: each job's timed
                  * slice finds its own structure as far as one slice brings it back, after any job */
                 const bench_job *job = jobs[k];
-                if (evict)
-                    bench_evict(evict, BENCH_EVICT_BYTES);
+                if (slices > 1u)
+                    bench_evict();
                 bench_job part = *job;
                 const size_t warm = (timed + slices / 2u) % slices;
                 part.first = job->first + job->count * warm / slices;
@@ -174,7 +177,6 @@ int bench_time_in_turns(const bench_job *const *jobs, int n, unsigned threads, u
     }
     for (int k = 0; k < n && status == 0; k++)
         seconds[k] = bench_median(times + (size_t)k * reps, runs[k]);
-    free(evict);
     free(times);
     return status;
 }
