@@ -661,12 +661,35 @@ static void test_segment_triangle_distance(void **state)
         assert_true(fabs(sqrt(d2) - ref) <= tol);
         assert_true(fabs(sqrt(v3_len2(v3_sub(on_seg, on_tri))) - sqrt(d2)) <= tol);
         const double t[3] = {on_tri.x, on_tri.y, on_tri.z};
-        /* a triangle of corners in a row is the segment of its first two (the reference's plane test is
-         * undefined there) */
-        assert_true(shape == 2 ? point_segment_dist(on_tri, v3(tri[0], tri[1], tri[2]),
-                                                    v3(tri[3], tri[4], tri[5])) <= tol
-                               : sqrt(ref_point_triangle_dist2(tri, t)) <= tol);
+        assert_true(sqrt(ref_point_triangle_dist2(tri, t)) <= tol);
+        if (shape == 2) /* corners in a row: the triangle is the segment of its first two */
+            assert_true(point_segment_dist(on_tri, v3(tri[0], tri[1], tri[2]), v3(tri[3], tri[4], tri[5])) <=
+                        tol);
         assert_true(point_segment_dist(on_seg, v3(p0[0], p0[1], p0[2]), v3(p1[0], p1[1], p1[2])) <= tol);
+    }
+}
+
+/* The reference's point-triangle distance on triangles whose corners lie in a row (up to rounding): the
+ * distance to the segment they span, whatever way the rounding tilts the plane. */
+static void test_reference_point_distance_in_a_row(void **state)
+{
+    (void)state;
+    uint64_t st = 0x12a0;
+    for (int r = 0; r < 20000; r++) {
+        double tri[9], p[3];
+        const double at = rnd(&st, 0.05, 0.95);
+        for (int a = 0; a < 3; a++) {
+            tri[a] = rnd(&st, -1.0, 1.0);
+            tri[3 + a] = rnd(&st, -1.0, 1.0);
+            tri[6 + a] = tri[a] + at * (tri[3 + a] - tri[a]);
+            p[a] = rnd(&st, -1.5, 1.5);
+        }
+        const double on = rnd(&st, -0.2, 1.2), off = r % 2 ? 0.0 : rnd(&st, 0.0, 1e-6);
+        for (int a = 0; a < 3 && r % 4 < 2; a++) /* on or next to the segment */
+            p[a] = tri[a] + on * (tri[3 + a] - tri[a]) + off * p[a];
+        const double to_segment = point_segment_dist(v3(p[0], p[1], p[2]), v3(tri[0], tri[1], tri[2]),
+                                                     v3(tri[3], tri[4], tri[5]));
+        assert_true(fabs(sqrt(ref_point_triangle_dist2(tri, p)) - to_segment) <= 1e-9);
     }
 }
 
@@ -680,6 +703,7 @@ int main(void)
         cmocka_unit_test(test_contacts),
         cmocka_unit_test(test_grazing_rounds),
         cmocka_unit_test(test_segment_triangle_distance),
+        cmocka_unit_test(test_reference_point_distance_in_a_row),
     };
     return TEST_RUN_LAYOUTS(tests, 0);
 }

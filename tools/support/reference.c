@@ -238,44 +238,60 @@ static double point_segment_dist2(const double *p, const double *a, const double
     return dot3(r, r);
 }
 
-double ref_point_triangle_dist2(const double tri[9], const double p[3])
+/* Squared distance from p to the nearest of tri's three edge segments. */
+static double point_edges_dist2(const double tri[9], const double p[3])
 {
-    double n[3], ap[3];
-    ref_triangle_normal(tri, n);
-    const double nn = dot3(n, n);
-    if (nn > 0.0) {
-        sub3(p, tri, ap);
-        const double h = dot3(ap, n) / nn; /* p minus h*n lies in the plane */
-        double q[3], x[3], y[3], c[3];
-        int inside = 1;
-        for (int k = 0; k < 3; k++)
-            q[k] = p[k] - h * n[k];
-        for (int k = 0; k < 3 && inside; k++) {
-            const double *a = tri + 3 * k, *b = tri + 3 * ((k + 1) % 3);
-            sub3(b, a, x);
-            sub3(q, a, y);
-            cross3(x, y, c);
-            inside = dot3(c, n) >= 0.0;
-        }
-        /* A point of the triangle lies in its bounding box. On a needle the
-         * long edges' directions carry more rounding than the needle's angle,
-         * and the edge tests above can accept a projection far beyond its tip
-         * (finding F5): the box, exact, refuses it. */
-        double mag = 0.0; /* q carries rounding relative to p's and the vertices' magnitudes */
-        for (int k = 0; k < 3; k++)
-            mag = fmax(mag, fmax(fabs(p[k]), fmax(fabs(tri[k]), fmax(fabs(tri[3 + k]), fabs(tri[6 + k])))));
-        for (int k = 0; k < 3 && inside; k++) {
-            const double lo = fmin(tri[k], fmin(tri[3 + k], tri[6 + k])),
-                         hi = fmax(tri[k], fmax(tri[3 + k], tri[6 + k]));
-            inside = q[k] >= lo - 1e-9 * mag && q[k] <= hi + 1e-9 * mag;
-        }
-        if (inside)
-            return h * h * nn;
-    }
     double best = INFINITY;
     for (int k = 0; k < 3; k++)
         best = fmin(best, point_segment_dist2(p, tri + 3 * k, tri + 3 * ((k + 1) % 3)));
     return best;
+}
+
+double ref_point_triangle_dist2(const double tri[9], const double p[3])
+{
+    const double edges = point_edges_dist2(tri, p);
+    double n[3], ap[3];
+    ref_triangle_normal(tri, n);
+    const double nn = dot3(n, n);
+    if (!(nn > 0.0))
+        return edges;
+    sub3(p, tri, ap);
+    const double h = dot3(ap, n) / nn; /* p minus h*n lies in the plane */
+    double q[3], x[3], y[3], c[3];
+    int inside = 1;
+    for (int k = 0; k < 3; k++)
+        q[k] = p[k] - h * n[k];
+    for (int k = 0; k < 3 && inside; k++) {
+        const double *a = tri + 3 * k, *b = tri + 3 * ((k + 1) % 3);
+        sub3(b, a, x);
+        sub3(q, a, y);
+        cross3(x, y, c);
+        inside = dot3(c, n) >= 0.0;
+    }
+    /* A point of the triangle lies in its bounding box. On a needle the
+     * long edges' directions carry more rounding than the needle's angle,
+     * and the edge tests above can accept a projection far beyond its tip
+     * (finding F5): the box, exact, refuses it. */
+    double mag = 0.0; /* q carries rounding relative to p's and the vertices' magnitudes */
+    for (int k = 0; k < 3; k++)
+        mag = fmax(mag, fmax(fabs(p[k]), fmax(fabs(tri[k]), fmax(fabs(tri[3 + k]), fabs(tri[6 + k])))));
+    for (int k = 0; k < 3 && inside; k++) {
+        const double lo = fmin(tri[k], fmin(tri[3 + k], tri[6 + k])),
+                     hi = fmax(tri[k], fmax(tri[3 + k], tri[6 + k]));
+        inside = q[k] >= lo - 1e-9 * mag && q[k] <= hi + 1e-9 * mag;
+    }
+    /* A point of the triangle lies within half its width (|n| over its longest edge) of an edge. With
+     * corners in a row n is rounding alone, points anywhere, and the tests above can accept a q off the
+     * triangle (it lies in a plane through the corners' line, so it would understate the distance): the
+     * width, that rounding's size, refuses it. */
+    double longest2 = 0.0;
+    for (int k = 0; k < 3; k++) {
+        sub3(tri + 3 * ((k + 1) % 3), tri + 3 * k, x);
+        longest2 = fmax(longest2, dot3(x, x));
+    }
+    if (inside && sqrt(point_edges_dist2(tri, q)) > 0.5 * sqrt(nn / longest2) + 1e-9 * mag)
+        inside = 0;
+    return inside ? fmin(edges, h * h * nn) : edges;
 }
 
 /* Minimum of a convex function on [lo, hi] by golden-section search. */
