@@ -17,6 +17,7 @@
 #include <cmocka.h>
 
 #include "cbvh.h"
+#include "fuzz/le_bytes.h"
 #include "support/counting_alloc.h"
 #include "support/test_os.h"
 #include "common/endian.h"
@@ -175,10 +176,6 @@ static uint32_t test_crc32(const uint8_t *p, size_t n)
     return c ^ 0xFFFFFFFFu;
 }
 
-static uint16_t rd16(const uint8_t *p)
-{
-    return (uint16_t)(p[0] | p[1] << 8);
-}
 
 typedef struct parsed {
     uint32_t section_count, tri_count, vert_count, node_count, depth, max_leaf, orig_count;
@@ -301,8 +298,8 @@ static void parse(const uint8_t *b, size_t size, parsed *p)
     for (uint32_t i = 0; i < p->node_count; i++) {
         const uint8_t *n = data[1] + 16 * (size_t)i;
         for (int k = 0; k < 3; k++) {
-            p->nodes[i].qmin[k] = rd16(n + 2 * k);
-            p->nodes[i].qmax[k] = rd16(n + 6 + 2 * k);
+            p->nodes[i].qmin[k] = (uint16_t)le_get_u16(n + 2 * k);
+            p->nodes[i].qmax[k] = (uint16_t)le_get_u16(n + 6 + 2 * k);
             assert_true(p->nodes[i].qmin[k] <= p->nodes[i].qmax[k]);
         }
         p->nodes[i].word = cbvh_read_u32(n + 12);
@@ -319,9 +316,9 @@ static void parse(const uint8_t *b, size_t size, parsed *p)
         const uint8_t *e = data[2] + tri_elem[tri_enc] * (tri_enc == 4 ? t / 8u : t);
         uint32_t *o = p->tris + 3 * (size_t)t;
         if (tri_enc == 0) {
-            o[0] = rd16(e);
-            o[1] = rd16(e + 2);
-            o[2] = rd16(e + 4);
+            o[0] = (uint16_t)le_get_u16(e);
+            o[1] = (uint16_t)le_get_u16(e + 2);
+            o[2] = (uint16_t)le_get_u16(e + 4);
         } else if (tri_enc == 1) {
             o[0] = cbvh_read_u32(e);
             o[1] = cbvh_read_u32(e + 4);
@@ -335,9 +332,9 @@ static void parse(const uint8_t *b, size_t size, parsed *p)
         } else {
             int64_t base = cbvh_read_u32(e);
             o[0] = (uint32_t)base;
-            o[1] = (uint32_t)(base + (int16_t)rd16(e + 4));
-            o[2] = (uint32_t)(base + (int16_t)rd16(e + 6));
-            assert_true(base + (int16_t)rd16(e + 4) >= 0 && base + (int16_t)rd16(e + 6) >= 0);
+            o[1] = (uint32_t)(base + (int16_t)(uint16_t)le_get_u16(e + 4));
+            o[2] = (uint32_t)(base + (int16_t)(uint16_t)le_get_u16(e + 6));
+            assert_true(base + (int16_t)(uint16_t)le_get_u16(e + 4) >= 0 && base + (int16_t)(uint16_t)le_get_u16(e + 6) >= 0);
         }
         for (int c = 0; c < 3; c++)
             assert_true(o[c] < p->vert_count);
@@ -359,7 +356,7 @@ static void parse(const uint8_t *b, size_t size, parsed *p)
         p->qverts = calloc(3 * (size_t)p->vert_count, sizeof(uint16_t));
     for (size_t i = 0; i < 3 * (size_t)p->vert_count; i++) {
         if (p->encoding[3]) {
-            p->qverts[i] = rd16(data[3] + 2 * i);
+            p->qverts[i] = (uint16_t)le_get_u16(data[3] + 2 * i);
             p->verts[i] = cbvh_dequantize(p->qverts[i], p->origin[i % 3], p->scale[i % 3]);
         } else {
             p->verts[i] = cbvh_read_f32(data[3] + 4 * i);
@@ -375,8 +372,8 @@ static void parse(const uint8_t *b, size_t size, parsed *p)
         uint8_t *seen = calloc(p->orig_count, 1);
         for (uint32_t t = 0; t < p->tri_count; t++) {
             const uint8_t *e = data[4] + width * (size_t)t;
-            p->remap[t] = width == 2   ? rd16(e)
-                          : width == 3 ? rd16(e) | (uint32_t)e[2] << 16
+            p->remap[t] = width == 2   ? (uint16_t)le_get_u16(e)
+                          : width == 3 ? (uint16_t)le_get_u16(e) | (uint32_t)e[2] << 16
                                        : cbvh_read_u32(e);
             assert_true(p->remap[t] < p->orig_count);
             assert_int_equal(seen[p->remap[t]], 0);
@@ -395,7 +392,7 @@ static void parse(const uint8_t *b, size_t size, parsed *p)
         p->mats = calloc(p->tri_count, sizeof(uint32_t));
         for (uint32_t t = 0; t < p->tri_count; t++) {
             const uint8_t *e = data[5] + mat_elem[p->encoding[5]] * t;
-            p->mats[t] = p->encoding[5] == 0 ? e[0] : p->encoding[5] == 1 ? rd16(e) : cbvh_read_u32(e);
+            p->mats[t] = p->encoding[5] == 0 ? e[0] : p->encoding[5] == 1 ? (uint16_t)le_get_u16(e) : cbvh_read_u32(e);
         }
     }
     /* MATERIAL_NAMES: u32 count, (u32 id, u32 offset) each, NUL-terminated names tiling the rest in (id,

@@ -17,6 +17,7 @@
 #include "cbvh.h"
 #include "fuzz/file_edit.h"
 #include "fuzz/fuzz_support.h"
+#include "fuzz/le_bytes.h"
 #include "support/scene_gen.h"
 #include "support/test_os.h"
 
@@ -51,24 +52,6 @@ typedef struct tally {
 } tally;
 static tally totals;
 
-static uint32_t rd32(const uint8_t *p)
-{
-    return (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24;
-}
-static uint64_t rd64(const uint8_t *p)
-{
-    return (uint64_t)rd32(p) | (uint64_t)rd32(p + 4) << 32;
-}
-static void wr32(uint8_t *p, uint32_t v)
-{
-    for (int i = 0; i < 4; i++)
-        p[i] = (uint8_t)(v >> (8 * i));
-}
-static void wr64(uint8_t *p, uint64_t v)
-{
-    wr32(p, (uint32_t)v);
-    wr32(p + 4, (uint32_t)(v >> 32));
-}
 
 /* A watchdog turns a hang into a failure; Windows has no alarm(), so there a hang shows as the run's timeout.
  */
@@ -256,8 +239,8 @@ static void test_truncation(void **state)
  * 24..63, bytes 59..63) only order the visit and are valid while every index is below 24. */
 static int expected_wide4_node(const uint8_t *orig, const uint8_t *mut, size_t at)
 {
-    const uint64_t meta = rd64(mut + 56);
-    if (at < 48 && !(rd64(orig + 56) >> (16 + at % 8 / 2) & 1u))
+    const uint64_t meta = le_get_u64(mut + 56);
+    if (at < 48 && !(le_get_u64(orig + 56) >> (16 + at % 8 / 2) & 1u))
         return CBVH_ERROR_CORRUPT;
     if (at >= 48 && at < 56)
         return CBVH_ERROR_CORRUPT;
@@ -273,9 +256,9 @@ static int expected_wide4_node(const uint8_t *orig, const uint8_t *mut, size_t a
  * (queries still checked), else the one result code it must give. */
 static int expected_code(const uint8_t *orig, const uint8_t *mut, size_t pos)
 {
-    uint32_t count = rd32(orig + HDR_SECTION_COUNT);
+    uint32_t count = le_get_u32(orig + HDR_SECTION_COUNT);
     if (pos >= HDR_VERSION && pos < HDR_VERSION + 4) {
-        uint32_t v = rd32(mut + HDR_VERSION);
+        uint32_t v = le_get_u32(mut + HDR_VERSION);
         return v == 0 ? CBVH_ERROR_CORRUPT : v > 1 ? CBVH_ERROR_UNSUPPORTED : -1;
     }
     if (pos >= HDR_COMPAT && pos < HDR_COMPAT + 4)
@@ -284,7 +267,7 @@ static int expected_code(const uint8_t *orig, const uint8_t *mut, size_t pos)
         /* bits this reader does not know are unsupported; the wide4 depth-first bit
          * (CBVH_INCOMPAT_W4_DEPTH_FIRST) changes how the leaves must tile the triangles: a tree whose two
          * orders differ turns corrupt */
-        if (rd32(mut + HDR_INCOMPAT) & ~0x2u)
+        if (le_get_u32(mut + HDR_INCOMPAT) & ~0x2u)
             return CBVH_ERROR_UNSUPPORTED;
         return -1;
     }
@@ -294,16 +277,16 @@ static int expected_code(const uint8_t *orig, const uint8_t *mut, size_t pos)
         size_t field = (pos - TABLE) % ENTRY;
         const uint8_t *e = mut + TABLE + (pos - TABLE) / ENTRY * ENTRY;
         const int ancillary =
-            (rd32(e) & 0x80000000u) != 0; /* skipped when its codec or encoding is unknown */
-        if (field >= E_CODEC && field < E_CODEC + 4 && rd32(e + E_CODEC) > 1)
+            (le_get_u32(e) & 0x80000000u) != 0; /* skipped when its codec or encoding is unknown */
+        if (field >= E_CODEC && field < E_CODEC + 4 && le_get_u32(e + E_CODEC) > 1)
             return ancillary ? CBVH_OK : CBVH_ERROR_UNSUPPORTED;
-        if (field < 4 && !ancillary && rd32(e) > 5)
+        if (field < 4 && !ancillary && le_get_u32(e) > 5)
             return CBVH_ERROR_UNSUPPORTED;
         if (field >= E_ENCODING) {
             /* encodings per type 1..5 (NODES: binary, wide4; TRIANGLES: u16, u32, DELTA16, LOCAL8 = 4, 3 is
              * reserved; REMAP: u16, u32, u24; MATERIALS: u8, u16, u32, uniform) */
             static const uint32_t known[6] = {0, 2, 5, 2, 3, 4};
-            uint32_t type = rd32(e), enc = rd32(e + E_ENCODING);
+            uint32_t type = le_get_u32(e), enc = le_get_u32(e + E_ENCODING);
             if (type >= 1 && type <= 5 && (enc >= known[type] || (type == 2 && enc == 3)))
                 return CBVH_ERROR_UNSUPPORTED;
             if (type == CBVH_SECTION_MATERIAL_NAMES && enc >= 1)
@@ -311,17 +294,17 @@ static int expected_code(const uint8_t *orig, const uint8_t *mut, size_t pos)
         }
         return -1;
     }
-    uint64_t noff = rd64(orig + TABLE + E_OFFSET), nend = noff + rd64(orig + TABLE + E_STORED);
-    if (rd32(orig + TABLE + E_TYPE) != 1 || rd32(orig + TABLE + E_CODEC) != 0 || pos < noff || pos >= nend)
+    uint64_t noff = le_get_u64(orig + TABLE + E_OFFSET), nend = noff + le_get_u64(orig + TABLE + E_STORED);
+    if (le_get_u32(orig + TABLE + E_TYPE) != 1 || le_get_u32(orig + TABLE + E_CODEC) != 0 || pos < noff || pos >= nend)
         return -1;
-    if (rd32(orig + TABLE + E_ENCODING) == 1) {
+    if (le_get_u32(orig + TABLE + E_ENCODING) == 1) {
         size_t node = (size_t)(noff + (pos - noff) / 64 * 64);
         return expected_wide4_node(orig + node, mut + node, (size_t)(pos - noff) % 64);
     }
     /* the sort byte (bits 23..30) of an internal node changes only the visit order */
     if ((pos - noff) % 16 >= 12) {
         size_t word_at = (size_t)(noff + (pos - noff) / 16 * 16 + 12);
-        uint32_t before = rd32(orig + word_at), after = rd32(mut + word_at);
+        uint32_t before = le_get_u32(orig + word_at), after = le_get_u32(mut + word_at);
         if (!(before & 0x80000000u) && ((before ^ after) & ~0x7F800000u) == 0)
             return CBVH_OK;
     }
@@ -366,17 +349,17 @@ static void test_byte_changes(void **state)
     (void)state;
     for (int i = 0; i < SAMPLE_COUNT; i++) {
         const sample *s = &samples[i];
-        uint32_t count = rd32(s->bytes + HDR_SECTION_COUNT);
+        uint32_t count = le_get_u32(s->bytes + HDR_SECTION_COUNT);
         tally as_is = {0}, repaired = {0}, as_is_s = {0}, repaired_s = {0};
         size_t table_end = TABLE + (size_t)count * ENTRY;
         flip_range(s, 0, table_end, 0, &as_is, &repaired);
         /* padding after the table */
-        size_t first = (size_t)rd64(s->bytes + TABLE + E_OFFSET);
+        size_t first = (size_t)le_get_u64(s->bytes + TABLE + E_OFFSET);
         flip_range(s, table_end, first, 0, &as_is, &repaired);
         for (uint32_t k = 0; k < count; k++) {
             const uint8_t *e = s->bytes + TABLE + (size_t)k * ENTRY;
-            size_t off = (size_t)rd64(e + E_OFFSET), stored = (size_t)rd64(e + E_STORED);
-            int nodes = rd32(e + E_TYPE) == 1;
+            size_t off = (size_t)le_get_u64(e + E_OFFSET), stored = (size_t)le_get_u64(e + E_STORED);
+            int nodes = le_get_u32(e + E_TYPE) == 1;
             flip_range(s, off, off + stored, nodes ? 0 : 4096, nodes ? &as_is : &as_is_s,
                        nodes ? &repaired : &repaired_s);
         }
@@ -432,7 +415,7 @@ static void edit_overlap(uint8_t *b, size_t *n, void *arg)
 {
     (void)n;
     int k = *(int *)arg; /* section k+1 starts where section k does */
-    wr64(b + TABLE + (k + 1) * ENTRY + E_OFFSET, rd64(b + TABLE + k * ENTRY + E_OFFSET));
+    le_put_u64(b + TABLE + (k + 1) * ENTRY + E_OFFSET, le_get_u64(b + TABLE + k * ENTRY + E_OFFSET));
 }
 
 static void edit_overlap_by_64(uint8_t *b, size_t *n, void *arg)
@@ -440,7 +423,7 @@ static void edit_overlap_by_64(uint8_t *b, size_t *n, void *arg)
     (void)n;
     int k = *(int *)arg; /* section k+1 starts 64 bytes early, inside section k */
     uint8_t *e = b + TABLE + (k + 1) * ENTRY;
-    wr64(e + E_OFFSET, rd64(e + E_OFFSET) - 64);
+    le_put_u64(e + E_OFFSET, le_get_u64(e + E_OFFSET) - 64);
 }
 
 typedef struct past_end {
@@ -453,17 +436,17 @@ static void edit_past_end(uint8_t *b, size_t *n, void *arg)
     const past_end *p = arg;
     uint8_t *e = b + TABLE + p->entry * ENTRY;
     if (p->offset != UINT64_MAX)
-        wr64(e + E_OFFSET, p->offset);
+        le_put_u64(e + E_OFFSET, p->offset);
     if (p->stored != UINT64_MAX)
-        wr64(e + E_STORED, p->stored);
+        le_put_u64(e + E_STORED, p->stored);
     if (p->size != UINT64_MAX)
-        wr64(e + E_SIZE, p->size);
+        le_put_u64(e + E_SIZE, p->size);
 }
 
 static void edit_count(uint8_t *b, size_t *n, void *arg)
 {
     (void)n;
-    wr32(b + HDR_SECTION_COUNT, *(uint32_t *)arg);
+    le_put_u32(b + HDR_SECTION_COUNT, *(uint32_t *)arg);
 }
 
 static void edit_append(uint8_t *b, size_t *n, void *arg)
@@ -479,7 +462,7 @@ static void test_structure(void **state)
     for (int i = 0; i < SAMPLE_COUNT; i++) {
         const sample *s = &samples[i];
         tally t = {0}, benign = {0};
-        int count = (int)rd32(s->bytes + HDR_SECTION_COUNT);
+        int count = (int)le_get_u32(s->bytes + HDR_SECTION_COUNT);
         for (int k = 0; k + 1 < count; k++) {
             assert_int_equal(open_table_edit(s, &t, edit_swap_entries, &k), CBVH_ERROR_CORRUPT);
             assert_int_equal(open_table_edit(s, &t, edit_overlap, &k), CBVH_ERROR_CORRUPT);
@@ -494,7 +477,7 @@ static void test_structure(void **state)
                 past_end p2 = {k, UINT64_MAX, big[j], UINT64_MAX};          /* runs past the end */
                 past_end p3 = {k, UINT64_MAX, big[j], big[j]};              /* runs past, sizes agree */
                 past_end p4 = {k, UINT64_MAX, UINT64_MAX, big[j]};          /* declared size huge */
-                if (p1.offset != rd64(s->bytes + TABLE + (size_t)k * ENTRY + E_OFFSET)) /* else no change */
+                if (p1.offset != le_get_u64(s->bytes + TABLE + (size_t)k * ENTRY + E_OFFSET)) /* else no change */
                     assert_int_equal(open_table_edit(s, &t, edit_past_end, &p1), CBVH_ERROR_CORRUPT);
                 assert_int_equal(open_table_edit(s, &t, edit_past_end, &p2), CBVH_ERROR_CORRUPT);
                 assert_int_equal(open_table_edit(s, &t, edit_past_end, &p3), CBVH_ERROR_CORRUPT);
@@ -564,13 +547,13 @@ static void test_structure(void **state)
         /* payload damage with valid checksums: a vertex index out of range,
          * a repeated remap value, a NaN vertex, a leaf past the triangles */
         int ti = edit_find(&e, 2), ri = edit_find(&e, 4), vi = edit_find(&e, 3), ni = edit_find(&e, 1);
-        uint32_t vcount = rd32(e.header + 36), tcount = rd32(e.header + 32);
+        uint32_t vcount = le_get_u32(e.header + 36), tcount = le_get_u32(e.header + 32);
         uint8_t saved[16];
         /* the first index (u16), or the first block's base (LOCAL8), made vertex_count */
         assert_true(e.s[ti].encoding == 0 || e.s[ti].encoding == 4); /* u16 or LOCAL8 for this small mesh */
         const size_t index_bytes = e.s[ti].encoding == 0 ? 2 : 4;
         memcpy(saved, e.s[ti].data, index_bytes);
-        wr32(saved + 8, vcount);
+        le_put_u32(saved + 8, vcount);
         memcpy(e.s[ti].data, saved + 8, index_bytes);
         assert_int_equal(open_edit(&e, &t, NULL, NULL), CBVH_ERROR_CORRUPT);
         memcpy(e.s[ti].data, saved, index_bytes);
@@ -582,36 +565,36 @@ static void test_structure(void **state)
         }
         if (e.s[vi].encoding == 0) {
             memcpy(saved, e.s[vi].data + 4, 4);
-            wr32(e.s[vi].data + 4, 0x7FC00000u);
+            le_put_u32(e.s[vi].data + 4, 0x7FC00000u);
             assert_int_equal(open_edit(&e, &t, NULL, NULL), CBVH_ERROR_CORRUPT);
             memcpy(e.s[vi].data + 4, saved, 4);
         }
-        for (uint32_t n = 0; e.s[ni].encoding == 1 && n < rd32(e.header + 40); n++) {
+        for (uint32_t n = 0; e.s[ni].encoding == 1 && n < le_get_u32(e.header + 40); n++) {
             uint8_t *node = e.s[ni].data + 64 * n; /* wide4: the first node with a leaf slot */
-            const uint64_t meta = rd64(node + 56);
-            const uint32_t first_triangle = rd32(node + 52),
+            const uint64_t meta = le_get_u64(node + 56);
+            const uint32_t first_triangle = le_get_u32(node + 52),
                            leaves = (uint32_t)(meta >> 16 & ~(meta >> 20)) & 15u;
             if (!leaves)
                 continue;
             const int slot = leaves & 1u ? 0 : leaves & 2u ? 1 : leaves & 4u ? 2 : 3;
-            wr32(node + 52, tcount + 1); /* first triangle past the end */
+            le_put_u32(node + 52, tcount + 1); /* first triangle past the end */
             assert_int_equal(open_edit(&e, &t, NULL, NULL), CBVH_ERROR_CORRUPT);
-            wr32(node + 52, first_triangle);
-            wr64(node + 56, meta | 7ull << 4 * slot); /* 8 triangles: more than max_leaf_size 4 */
+            le_put_u32(node + 52, first_triangle);
+            le_put_u64(node + 56, meta | 7ull << 4 * slot); /* 8 triangles: more than max_leaf_size 4 */
             assert_int_equal(open_edit(&e, &t, NULL, NULL), CBVH_ERROR_CORRUPT);
-            wr64(node + 56, meta);
+            le_put_u64(node + 56, meta);
             break;
         }
-        for (uint32_t n = 0; e.s[ni].encoding == 0 && n < rd32(e.header + 40); n++) {
+        for (uint32_t n = 0; e.s[ni].encoding == 0 && n < le_get_u32(e.header + 40); n++) {
             uint8_t *w = e.s[ni].data + 16 * n + 12;
-            uint32_t word = rd32(w);
+            uint32_t word = le_get_u32(w);
             if (!(word & 0x80000000u))
                 continue;
-            wr32(w, (word & ~0x7FFFFFFu) | (tcount + 1)); /* first triangle past the end */
+            le_put_u32(w, (word & ~0x7FFFFFFu) | (tcount + 1)); /* first triangle past the end */
             assert_int_equal(open_edit(&e, &t, NULL, NULL), CBVH_ERROR_CORRUPT);
-            wr32(w, word | 0x78000000u); /* 16 triangles: more than max_leaf_size */
+            le_put_u32(w, word | 0x78000000u); /* 16 triangles: more than max_leaf_size */
             assert_int_equal(open_edit(&e, &t, NULL, NULL), CBVH_ERROR_CORRUPT);
-            wr32(w, word);
+            le_put_u32(w, word);
             break;
         }
         /* a zlib stream that inflates to more, or less, than declared */

@@ -6,25 +6,8 @@
 
 #include "file_edit.h"
 #include "fuzz_support.h"
+#include "le_bytes.h"
 
-static uint32_t rd32(const uint8_t *p)
-{
-    return (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24;
-}
-static uint64_t rd64(const uint8_t *p)
-{
-    return (uint64_t)rd32(p) | (uint64_t)rd32(p + 4) << 32;
-}
-static void wr32(uint8_t *p, uint32_t v)
-{
-    for (int i = 0; i < 4; i++)
-        p[i] = (uint8_t)(v >> (8 * i));
-}
-static void wr64(uint8_t *p, uint64_t v)
-{
-    wr32(p, (uint32_t)v);
-    wr32(p + 4, (uint32_t)(v >> 32));
-}
 
 int edit_parse(edit_file *e, const uint8_t *bytes, size_t size)
 {
@@ -32,16 +15,16 @@ int edit_parse(edit_file *e, const uint8_t *bytes, size_t size)
     if (size < 128)
         return 0;
     memcpy(e->header, bytes, 128);
-    e->count = rd32(bytes + 24);
+    e->count = le_get_u32(bytes + 24);
     if (e->count > 16 || 128 + 40 * (size_t)e->count > size)
         return 0;
     for (uint32_t i = 0; i < e->count; i++) {
         const uint8_t *t = bytes + 128 + 40 * i;
-        uint64_t off = rd64(t + 8), stored = rd64(t + 16), full = rd64(t + 24);
+        uint64_t off = le_get_u64(t + 8), stored = le_get_u64(t + 16), full = le_get_u64(t + 24);
         edit_section *s = &e->s[i];
-        s->type = rd32(t);
-        s->codec = rd32(t + 4);
-        s->encoding = rd32(t + 36);
+        s->type = le_get_u32(t);
+        s->codec = le_get_u32(t + 4);
+        s->encoding = le_get_u32(t + 36);
         if (off > size || stored > size - off || full > (1u << 30))
             goto fail;
         s->size = (size_t)full;
@@ -89,16 +72,16 @@ uint8_t *edit_build(const edit_file *e, size_t *size)
     if (!out)
         fuzz_fail("edit_build: out of memory");
     memcpy(out, e->header, 128);
-    wr32(out + 24, e->count);
+    le_put_u32(out + 24, e->count);
     size_t off = (128 + 40 * (size_t)e->count + 63) & ~(size_t)63;
     for (uint32_t i = 0; i < e->count; i++) {
         uint8_t *t = out + 128 + 40 * i;
-        wr32(t, e->s[i].type);
-        wr32(t + 4, e->s[i].codec);
-        wr64(t + 8, off);
-        wr64(t + 16, stored_size[i]);
-        wr64(t + 24, e->s[i].size);
-        wr32(t + 36, e->s[i].encoding);
+        le_put_u32(t, e->s[i].type);
+        le_put_u32(t + 4, e->s[i].codec);
+        le_put_u64(t + 8, off);
+        le_put_u64(t + 16, stored_size[i]);
+        le_put_u64(t + 24, e->s[i].size);
+        le_put_u32(t + 36, e->s[i].encoding);
         memcpy(out + off, stored[i], stored_size[i]);
         off = (off + stored_size[i] + 63) & ~(size_t)63;
         if (e->s[i].codec == 1)

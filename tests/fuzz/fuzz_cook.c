@@ -9,6 +9,7 @@
 
 #include "cbvh.h"
 #include "fuzz_support.h"
+#include "le_bytes.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 
@@ -31,13 +32,6 @@ typedef struct decoded {
     cbvh_mesh mesh;
 } decoded;
 
-static float read_f32(const uint8_t *p)
-{
-    uint32_t u = (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24;
-    float f;
-    memcpy(&f, &u, 4);
-    return f;
-}
 
 static int decode(decoded *d, const uint8_t *data, size_t size)
 {
@@ -57,7 +51,7 @@ static int decode(decoded *d, const uint8_t *data, size_t size)
     if (flags & 32) {
         if (size < 8)
             return 0;
-        float scale = ldexpf(1.0f, (int)data[3] - 128), offset = read_f32(data + 4);
+        float scale = ldexpf(1.0f, (int)data[3] - 128), offset = le_get_f32(data + 4);
         pos = 8;
         if (size - pos < 3 * nv)
             nv = (size - pos) / 3;
@@ -69,7 +63,7 @@ static int decode(decoded *d, const uint8_t *data, size_t size)
             nv = (size - pos) / 12;
         for (size_t v = 0; v < nv; v++)
             for (int a = 0; a < 3; a++, pos += 4)
-                d->positions[v * stride + a] = read_f32(data + pos);
+                d->positions[v * stride + a] = le_get_f32(data + pos);
     }
     size_t per = (flags & 16) ? 4 : 3, nt = (size - pos) / per;
     if (nt > 8192)

@@ -8,6 +8,7 @@
 #include <zlib.h>
 
 #include "fuzz_support.h"
+#include "le_bytes.h"
 #include "support/test_os.h"
 
 /* Header and table offsets, as in lib/common/format.h (the harness stays
@@ -63,24 +64,6 @@ void guard_release(guard_buffer *g)
     memset(g, 0, sizeof *g);
 }
 
-static uint32_t get_u32(const uint8_t *p)
-{
-    return (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24;
-}
-static uint64_t get_u64(const uint8_t *p)
-{
-    return (uint64_t)get_u32(p) | (uint64_t)get_u32(p + 4) << 32;
-}
-static void put_u32(uint8_t *p, uint32_t v)
-{
-    for (int i = 0; i < 4; i++)
-        p[i] = (uint8_t)(v >> (8 * i));
-}
-static void put_u64(uint8_t *p, uint64_t v)
-{
-    put_u32(p, (uint32_t)v);
-    put_u32(p + 4, (uint32_t)(v >> 32));
-}
 
 static uint32_t crc_of(const uint8_t *p, uint64_t n)
 {
@@ -98,20 +81,20 @@ void fuzz_repair_checksums(uint8_t *bytes, size_t size)
 {
     if (size < HDR_SIZE)
         return;
-    put_u64(bytes + HDR_FILE_SIZE, size);
-    uint32_t count = get_u32(bytes + HDR_SECTION_COUNT);
+    le_put_u64(bytes + HDR_FILE_SIZE, size);
+    uint32_t count = le_get_u32(bytes + HDR_SECTION_COUNT);
     if (count > MAX_SECTIONS)
         count = MAX_SECTIONS;
     if ((size - HDR_SIZE) / ENTRY_SIZE < count)
         count = (uint32_t)((size - HDR_SIZE) / ENTRY_SIZE);
     for (uint32_t i = 0; i < count; i++) {
         uint8_t *e = bytes + HDR_SIZE + (size_t)i * ENTRY_SIZE;
-        uint64_t off = get_u64(e + ENTRY_OFFSET), stored = get_u64(e + ENTRY_STORED);
+        uint64_t off = le_get_u64(e + ENTRY_OFFSET), stored = le_get_u64(e + ENTRY_STORED);
         if (off <= size && stored <= size - off)
-            put_u32(e + ENTRY_CRC, crc_of(bytes + off, stored));
+            le_put_u32(e + ENTRY_CRC, crc_of(bytes + off, stored));
     }
-    put_u32(bytes + HDR_TABLE_CRC, crc_of(bytes + HDR_SIZE, (uint64_t)count * ENTRY_SIZE));
-    put_u32(bytes + HDR_CRC, crc_of(bytes, HDR_CRC));
+    le_put_u32(bytes + HDR_TABLE_CRC, crc_of(bytes + HDR_SIZE, (uint64_t)count * ENTRY_SIZE));
+    le_put_u32(bytes + HDR_CRC, crc_of(bytes, HDR_CRC));
 }
 
 void fuzz_check_error(cbvh_result r, const cbvh_error *err)
@@ -740,7 +723,7 @@ size_t fuzz_check_queries(const cbvh_file *f, const uint8_t *bytes, size_t size,
     c.strict = strict;
     c.rng = seed;
     cbvh_file_get_info(f, &c.info, sizeof c.info);
-    c.original_count = size >= 56 ? get_u32(bytes + HDR_ORIGINAL_TRIS) : c.info.triangle_count;
+    c.original_count = size >= 56 ? le_get_u32(bytes + HDR_ORIGINAL_TRIS) : c.info.triangle_count;
     FUZZ_CHECK(c.original_count >= c.info.triangle_count, "original count %u below the triangle count %u",
                c.original_count, c.info.triangle_count);
     for (int a = 0; a < 3; a++)

@@ -8,6 +8,7 @@
 
 #include "cbvh.h"
 #include "file_edit.h"
+#include "le_bytes.h"
 #include "support/scene_gen.h"
 #include "support/test_os.h"
 
@@ -66,20 +67,6 @@ static void write_cooked(const scene *s, cbvh_layout layout, int quantized, int 
     free(file);
 }
 
-static void put16(uint8_t *p, uint32_t v)
-{
-    p[0] = (uint8_t)v;
-    p[1] = (uint8_t)(v >> 8);
-}
-static void put32(uint8_t *p, uint32_t v)
-{
-    for (int i = 0; i < 4; i++)
-        p[i] = (uint8_t)(v >> (8 * i));
-}
-static uint32_t get16(const uint8_t *p)
-{
-    return (uint32_t)p[0] | (uint32_t)p[1] << 8;
-}
 
 /* Re-encodes a u16 TRIANGLES (and REMAP) section of a raw file as `tris`
  * (1 = u32, 2 = DELTA16) and REMAP as u32, then writes it. */
@@ -96,16 +83,16 @@ static void write_transcoded(const uint8_t *file, size_t size, int tris, int rem
         size_t n = e.s[ti].size / 6;
         uint8_t *d = calloc(n, tris == 1 ? 12 : 8);
         for (size_t t = 0; t < n; t++) {
-            uint32_t i0 = get16(e.s[ti].data + 6 * t), i1 = get16(e.s[ti].data + 6 * t + 2),
-                     i2 = get16(e.s[ti].data + 6 * t + 4);
+            uint32_t i0 = le_get_u16(e.s[ti].data + 6 * t), i1 = le_get_u16(e.s[ti].data + 6 * t + 2),
+                     i2 = le_get_u16(e.s[ti].data + 6 * t + 4);
             if (tris == 1) {
-                put32(d + 12 * t, i0);
-                put32(d + 12 * t + 4, i1);
-                put32(d + 12 * t + 8, i2);
+                le_put_u32(d + 12 * t, i0);
+                le_put_u32(d + 12 * t + 4, i1);
+                le_put_u32(d + 12 * t + 8, i2);
             } else {
-                put32(d + 8 * t, i0);
-                put16(d + 8 * t + 4, (uint32_t)(int32_t)(i1 - i0));
-                put16(d + 8 * t + 6, (uint32_t)(int32_t)(i2 - i0));
+                le_put_u32(d + 8 * t, i0);
+                le_put_u16(d + 8 * t + 4, (uint32_t)(int32_t)(i1 - i0));
+                le_put_u16(d + 8 * t + 6, (uint32_t)(int32_t)(i2 - i0));
             }
         }
         edit_replace(&e, ti, d, n * (tris == 1 ? 12 : 8), (uint32_t)tris);
@@ -114,7 +101,7 @@ static void write_transcoded(const uint8_t *file, size_t size, int tris, int rem
         size_t n = e.s[ri].size / 2;
         uint8_t *d = malloc(4 * n);
         for (size_t t = 0; t < n; t++)
-            put32(d + 4 * t, get16(e.s[ri].data + 2 * t));
+            le_put_u32(d + 4 * t, le_get_u16(e.s[ri].data + 2 * t));
         edit_replace(&e, ri, d, 4 * n, 1);
     }
     for (uint32_t i = 0; i < e.count; i++)
