@@ -580,5 +580,5 @@ int main(void)
         cmocka_unit_test(test_needle_capsules),
         cmocka_unit_test(test_grazing_capsules),
     };
-    return TEST_RUN_LAYOUTS(tests, 0);
+    return TEST_RUN_LAYOUTS(tests, 1);
 }
