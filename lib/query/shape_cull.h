@@ -162,17 +162,17 @@ static inline void cbvh_cull4_init(struct cbvh_cull4 *w, const struct cbvh_local
     w->capsule = s->kind == CBVH_SHAPE_CAPSULE;
 }
 
-static inline cbvh_lanes cull4_abs(cbvh_lanes x)
+CBVH_FORCE_INLINE cbvh_lanes cull4_abs(cbvh_lanes x)
 {
     return lanes_andnot(lanes_set1(-0.0f), x);
 }
-static inline cbvh_lanes cull4_dot(const cbvh_lanes a[3], const cbvh_lanes b[3])
+CBVH_FORCE_INLINE cbvh_lanes cull4_dot(const cbvh_lanes a[3], const cbvh_lanes b[3])
 {
     return lanes_add(lanes_add(lanes_mul(a[0], b[0]), lanes_mul(a[1], b[1])), lanes_mul(a[2], b[2]));
 }
 
 /* w ? a : b, lane by lane (SSE2 has no blend). */
-static inline cbvh_lanes cull4_select(cbvh_lanes w, cbvh_lanes a, cbvh_lanes b)
+CBVH_FORCE_INLINE cbvh_lanes cull4_select(cbvh_lanes w, cbvh_lanes a, cbvh_lanes b)
 {
     return lanes_or(lanes_and(w, a), lanes_andnot(w, b));
 }
@@ -185,7 +185,8 @@ struct cull4_frame {
     cbvh_lanes d[3][3], n[3], nn, span, corner, h0, h1;
 };
 
-static inline void cull4_frame_of(const struct cbvh_cull4 *w, const cbvh_lanes c[3][3], struct cull4_frame *f)
+CBVH_FORCE_INLINE void cull4_frame_of(const struct cbvh_cull4 *w, const cbvh_lanes c[3][3],
+                                      struct cull4_frame *f)
 {
     cbvh_lanes w0[3], w1[3];
     f->span = f->corner = lanes_zero();
@@ -209,7 +210,7 @@ static inline void cull4_frame_of(const struct cbvh_cull4 *w, const cbvh_lanes c
 }
 
 /* How far w's shape reaches along n from its core, times |n| (cull_reach_along in float). */
-static inline cbvh_lanes cull4_reach(const struct cbvh_cull4 *w, const cbvh_lanes n[3], cbvh_lanes nn)
+CBVH_FORCE_INLINE cbvh_lanes cull4_reach(const struct cbvh_cull4 *w, const cbvh_lanes n[3], cbvh_lanes nn)
 {
     if (!w->box)
         return lanes_mul(w->radius, lanes_sqrt(nn));
@@ -221,7 +222,7 @@ static inline cbvh_lanes cull4_reach(const struct cbvh_cull4 *w, const cbvh_lane
 /* The lanes of a triangle of moderate size (cbvh_cull_keep_lanes's bounds: 2^-20 <= span, size <= 2^20) with
  * |n|^2 >= sliver span^4: far from a sliver with sliver = 1/16, where the float tests of edges and distances
  * hold their margins; not quite a sliver with sliver = 2^-20, where the tests that read no normal do. */
-static inline cbvh_lanes cull4_moderate(const struct cull4_frame *f, cbvh_lanes size, float sliver)
+CBVH_FORCE_INLINE cbvh_lanes cull4_moderate(const struct cull4_frame *f, cbvh_lanes size, float sliver)
 {
     const cbvh_lanes span2 = lanes_mul(f->span, f->span);
     const cbvh_lanes sized =
@@ -232,8 +233,8 @@ static inline cbvh_lanes cull4_moderate(const struct cull4_frame *f, cbvh_lanes 
 /* The lanes where the shape, its core's points at heights h0 and h1 (times |n|) over the plane, moved by
  * up to motion m (its height change, times |n|), stays on one side of the plane by more than its reach
  * plus the margin 2^-14 span^2 size, on triangles with span at least 2^-30 (cbvh_cull_keep_lanes). */
-static inline cbvh_lanes cull4_apart(cbvh_lanes h0, cbvh_lanes h1, cbvh_lanes m, cbvh_lanes reach,
-                                     cbvh_lanes span, cbvh_lanes size)
+CBVH_FORCE_INLINE cbvh_lanes cull4_apart(cbvh_lanes h0, cbvh_lanes h1, cbvh_lanes m, cbvh_lanes reach,
+                                         cbvh_lanes span, cbvh_lanes size)
 {
     const cbvh_lanes zero = lanes_zero();
     const cbvh_lanes margin = lanes_mul(lanes_mul(lanes_set1(0x1p-14f), lanes_mul(span, span)), size);

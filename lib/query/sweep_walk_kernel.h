@@ -76,8 +76,8 @@ CBVH_COLD static int ask_filter(const struct sweep_query *q, uint32_t k, const c
  * CBVH_CULL_CLEAR_AT_START, or CBVH_CULL_CLEAR where the sweep finds no contact either), the sweep, and the
  * filter when its contact would win. A contact at t = 0 is beaten by none of a higher index: those are
  * skipped. Returns 1 when the filter stops the walk. */
-static int sweep_triangle(struct sweep_query *q, uint32_t k, const float a[3], const float b[3],
-                          const float cc[3], float box_passed_at, int clear_at_start)
+CBVH_FORCE_INLINE int sweep_triangle(struct sweep_query *q, uint32_t k, const float a[3], const float b[3],
+                                     const float cc[3], float box_passed_at, int clear_at_start)
 {
     const struct cbvh_sweep_rules *rules = q->rules;
     if (q->best.t == 0.0 && k > q->best_tri)
@@ -124,7 +124,7 @@ static uint32_t sweep_enter4(void *query, const uint8_t *node, float entry[4])
  * (cbvh_cull_sweep_lanes, over the motion up to the best contact so far: limit, rounded from best.t, times
  * 1 + 2^-22 is at least best.t, which also tells the kept ones clear of the shape at t = 0), the kept ones
  * in order through the rest. */
-CBVH_FORCE_INLINE int sweep_group(struct sweep_query *q, uint32_t k, const struct leaf_group *g)
+CBVH_NOINLINE int sweep_group(struct sweep_query *q, uint32_t k, const struct leaf_group *g)
 {
     const float box_limit = q->limit;
     const struct leaf_quad *lo = g->quad[0], *hi = g->quad[CBVH_LEAF_QUADS - 1u];
