@@ -595,8 +595,9 @@ static void test_kernels_agree(void **state)
             random_sweep(&fx, &st, (ref_shape_kind)(r % 3), &rs, delta);
             cbvh_shape s;
             memset(&s, 0, sizeof s);
-            s.kind = rs.kind == REF_SPHERE ? CBVH_SHAPE_SPHERE : rs.kind == REF_CAPSULE ? CBVH_SHAPE_CAPSULE
-                                                                                         : CBVH_SHAPE_BOX;
+            s.kind = rs.kind == REF_SPHERE    ? CBVH_SHAPE_SPHERE
+                     : rs.kind == REF_CAPSULE ? CBVH_SHAPE_CAPSULE
+                                              : CBVH_SHAPE_BOX;
             for (int a = 0; a < 3; a++) {
                 s.center[a] = s.p0[a] = (float)rs.p0[a];
                 s.p1[a] = (float)rs.p1[a];

@@ -45,17 +45,6 @@ static inline int cbvh_walk_kernel(void)
 void cbvh_vector_upper_clear_avx2(void);
 #endif
 
-/* Called before a query's SSE2 code (the shape queries): a caller's AVX code can leave the upper halves of
- * the vector registers in use, and until they are cleared the CPU slows every SSE instruction; cleared on
- * CPUs the AVX2 kernel runs on, a no-op elsewhere. */
-static inline void cbvh_vector_state_clear(void)
-{
-#ifdef CBVH_HAVE_AVX2
-    if (cbvh_walk_kernel() == CBVH_WALK_KERNEL_AVX2)
-        cbvh_vector_upper_clear_avx2();
-#endif
-}
-
 /* An origin farther than this many times the mesh's extent from its bounds is moved next to them, so that
  * coordinates relative to it keep their precision at the mesh. */
 #define CBVH_FAR_FACTOR 16.0f

@@ -13,6 +13,7 @@
 #include "query/raycast.h"
 #include "query/shape.h"
 #include "query/shape_cull.h"
+#include "query/shape_leaf.h"
 #include "query/sweep_walk.h"
 #include "query/triangle_frame.h"
 #include "query/walk.h"
@@ -124,65 +125,31 @@ static uint32_t sweep_enter4(void *query, const uint8_t *node, float entry[4])
  * (cbvh_cull_sweep_lanes, over the motion up to the best contact so far: limit, rounded from best.t, times
  * 1 + 2^-22 is at least best.t, which also tells the kept ones clear of the shape at t = 0), the kept ones
  * in order through the rest. */
-CBVH_NOINLINE int sweep_group(struct sweep_query *q, uint32_t k, const struct leaf_group *g)
+CBVH_NOINLINE int sweep_group(void *query, uint32_t k, const struct leaf_group *g)
 {
+    struct sweep_query *q = query;
     const float box_limit = q->limit;
-    const struct leaf_quad *lo = g->quad[0], *hi = g->quad[CBVH_LEAF_QUADS - 1u];
-    (void)hi;
     cbvh_lanes c[3][3];
-    for (int v = 0; v < 3; v++)
-        for (int a = 0; a < 3; a++)
-            c[v][a] = lanes_load_halves(lo->c[v][a], hi->c[v][a]);
+    cbvh_group_corners(g, c);
     uint32_t keep = cbvh_grown_path_triangle_lanes(&q->path, c, box_limit) & g->mask;
     if (!keep)
         return 0;
     uint32_t clear_at_start;
     keep &= cbvh_cull_sweep_lanes(&q->cull, c, box_limit * 0x1.000004p0f, &clear_at_start);
     for (; keep; keep &= keep - 1u) {
-        const uint32_t j = lanes_lowest(keep), i = j % 4u;
-        const struct leaf_quad *t = g->quad[j / 4u];
-        const float a[3] = {t->c[0][0][i], t->c[0][1][i], t->c[0][2][i]};
-        const float b[3] = {t->c[1][0][i], t->c[1][1][i], t->c[1][2][i]};
-        const float cc[3] = {t->c[2][0][i], t->c[2][1][i], t->c[2][2][i]};
+        const uint32_t j = lanes_lowest(keep);
+        float a[3], b[3], cc[3];
+        cbvh_group_triangle(g, j, a, b, cc);
         if (sweep_triangle(q, k + j, a, b, cc, box_limit, clear_at_start >> j & 1u))
             return 1;
     }
     return 0;
 }
 
-/* The leaf's triangles [first, end) CBVH_LANES at a time (leaf_group_lanes), the encodings given as
- * constants or run-time values (sweep_leaf_lanes). */
-CBVH_FORCE_INLINE int sweep_leaf_lanes_as(struct sweep_query *q, uint32_t first, uint32_t end,
-                                          const int tri_enc, const int vert_enc)
-{
-    const struct cbvh_file *f = q->f;
-    const struct leaf_quad *quads = (const struct leaf_quad *)f->quads;
-    for (uint32_t k = leaf_groups_begin(quads, first); k < end; k += CBVH_LANES) {
-        struct leaf_quad scratch[CBVH_LEAF_QUADS];
-        struct leaf_group g;
-        leaf_group_lanes(f, quads, tri_enc, vert_enc, f->grid_origin, f->grid_scale, first, end, k, scratch,
-                         &g);
-        if (sweep_group(q, k, &g))
-            return 1;
-    }
-    return 0;
-}
-
-/* The leaf's triangles through sweep_group: the encodings the cooker writes for lossless files (LOCAL8 or
- * U16 indices, float vertices) get loops of their own, as the ray leaves do (cbvh_leaf_visit). */
+/* The leaf's triangles a group at a time through sweep_group. */
 static int sweep_leaf_lanes(void *query, uint32_t first, uint32_t count)
 {
-    struct sweep_query *q = query;
-    const struct cbvh_file *f = q->f;
-    const uint32_t end = first + count;
-    switch (f->triangle_encoding << 1 | f->vertex_encoding) {
-    case CBVH_TRIS_LOCAL8 << 1 | CBVH_VERTS_F32:
-        return sweep_leaf_lanes_as(q, first, end, CBVH_TRIS_LOCAL8, CBVH_VERTS_F32);
-    case CBVH_TRIS_U16 << 1 | CBVH_VERTS_F32:
-        return sweep_leaf_lanes_as(q, first, end, CBVH_TRIS_U16, CBVH_VERTS_F32);
-    default:
-        return sweep_leaf_lanes_as(q, first, end, (int)f->triangle_encoding, (int)f->vertex_encoding);
-    }
+    return cbvh_shape_leaf_groups(((const struct sweep_query *)query)->f, first, count, sweep_group, query);
 }
 #endif
 
