@@ -145,16 +145,6 @@ CBVH_FORCE_INLINE uint32_t cbvh_grown_path_triangle_lanes(const struct cbvh_grow
     return grown_path_crossed(tnear, tfar);
 }
 
-/* cbvh_grown_path_triangle_lanes on the four triangles of t (bits 0-3). */
-CBVH_FORCE_INLINE uint32_t cbvh_grown_path_triangles4(const struct cbvh_grown_path *p,
-                                                      const struct leaf_quad *t, float limit)
-{
-    cbvh_lanes c[3][3];
-    for (int v = 0; v < 3; v++)
-        for (int a = 0; a < 3; a++)
-            c[v][a] = lanes_from4(_mm_load_ps(t->c[v][a]));
-    return cbvh_grown_path_triangle_lanes(p, c, limit) & 0xFu;
-}
 #endif
 
 #endif

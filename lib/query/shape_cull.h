@@ -430,19 +430,6 @@ CBVH_FORCE_INLINE uint32_t cbvh_cull_sweep_lanes(const struct cbvh_cull4 *w, con
     return (uint32_t)lanes_bits(keep);
 }
 
-/* cbvh_cull_keep_lanes on the four triangles of a leaf_quad (quad[v][axis], 16-byte aligned, a lane each:
- * leaf_gather4): bits 0-3, in *touch too. */
-CBVH_FORCE_INLINE uint32_t cbvh_cull4_keep(const struct cbvh_cull4 *w, const float quad[3][3][4],
-                                           uint32_t *touch)
-{
-    cbvh_lanes c[3][3];
-    for (int v = 0; v < 3; v++)
-        for (int a = 0; a < 3; a++)
-            c[v][a] = lanes_from4(_mm_load_ps(quad[v][a]));
-    const uint32_t keep = cbvh_cull_keep_lanes(w, c, touch) & 0xFu;
-    *touch &= 0xFu;
-    return keep;
-}
 #endif
 
 #endif
