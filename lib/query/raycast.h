@@ -18,7 +18,9 @@ void cbvh_closest(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray, cbv
 int cbvh_any(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray, cbvh_traversal traversal,
              cbvh_query_stats *stats);
 
-/* The wide layout's walk kernels (the binary layout has one, scalar). */
+/* The wide layout's walk kernels (the binary layout has one, scalar). The shape queries follow the choice
+ * on either layout: sweeps (sweep_walk.c) one leaf triangle at a time with SCALAR, CBVH_LANES a vector
+ * otherwise; overlaps and contacts (overlap.c) four with SCALAR and SSE2, eight with AVX2. */
 enum cbvh_walk_kernel {
     CBVH_WALK_KERNEL_BEST,   /* the fastest the build and the CPU have: AVX2, else SSE2, else scalar */
     CBVH_WALK_KERNEL_SCALAR, /* child boxes and leaf triangles one at a time (builds without SIMD) */
