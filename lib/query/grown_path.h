@@ -12,6 +12,7 @@
 #include "query/leaf.h"
 #include "query/ray_box.h"
 #include "query/shape_walk.h"
+#include "query/vec3d.h"
 
 /* The path center + t * delta of a float box center +- extent, octant and rcp its direction's as a ray's;
  * with SIMD the same in every lane (CBVH_LANES), and the file's grid in four. */
@@ -23,6 +24,20 @@ struct cbvh_grown_path {
     __m128 origin4[3], scale4[3]; /* for the four slots of a wide node */
 #endif
 };
+
+/* The float box center +- extent that surely holds the double box [lo, hi]. */
+static inline void cbvh_sweep_bounds(cbvh_v3 lo, cbvh_v3 hi, float center[3], float extent[3])
+{
+    for (int a = 0; a < 3; a++) {
+        const double l = v3_get(lo, a), h = v3_get(hi, a);
+        center[a] = (float)(0.5 * (l + h));
+        const double above = h - center[a], below = center[a] - l, e = above > below ? above : below;
+        float ef = (float)e;
+        if ((double)ef < e)
+            ef = nextafterf(ef, INFINITY);
+        extent[a] = ef;
+    }
+}
 
 static inline void cbvh_grown_path_init(struct cbvh_grown_path *p, const struct cbvh_file *f,
                                         const float center[3], const float extent[3], const float delta[3])

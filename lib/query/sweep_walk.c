@@ -44,19 +44,6 @@ int cbvh_sweep_walk(const struct cbvh_file *f, const struct cbvh_local_shape *bo
     }
 }
 
-void cbvh_sweep_bounds(cbvh_v3 lo, cbvh_v3 hi, float center[3], float extent[3])
-{
-    for (int a = 0; a < 3; a++) {
-        const double l = v3_get(lo, a), h = v3_get(hi, a);
-        center[a] = (float)(0.5 * (l + h));
-        const double above = h - center[a], below = center[a] - l, e = above > below ? above : below;
-        float ef = (float)e;
-        if ((double)ef < e)
-            ef = nextafterf(ef, INFINITY);
-        extent[a] = ef;
-    }
-}
-
 int cbvh_sweep_as_ray(const struct cbvh_file *f, const float center[3], const float delta[3],
                       const struct cbvh_sweep_rules *rules, struct cbvh_sweep_found *found)
 {

@@ -48,9 +48,6 @@ int cbvh_sweep_walk_avx2(const struct cbvh_file *f, const struct cbvh_local_shap
                          const struct cbvh_sweep_rules *rules, struct cbvh_sweep_found *found);
 #endif
 
-/* The float box center +- extent that surely holds the double box [lo, hi]. */
-void cbvh_sweep_bounds(cbvh_v3 lo, cbvh_v3 hi, float center[3], float extent[3]);
-
 /* A zero-size shape: the sweep is the ray center + t * delta, t in [0, 1],
  * answered by the ray kernel so that it agrees with cbvh_raycast exactly
  * (same triangle, same t), under the rules' culling and filter; the normal is
