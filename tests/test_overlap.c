@@ -693,6 +693,85 @@ static void test_reference_point_distance_in_a_row(void **state)
     }
 }
 
+/* Every walk kernel the build and the CPU have (SSE2: four leaf triangles a vector; AVX2: eight; the scalar
+ * kernel's overlaps are SSE2's) reports the same triangles, in the same order, with the same contacts bit
+ * for bit, for balls, capsules, aligned and oriented boxes from a tenth of a triangle's size to many
+ * triangles' (so that both the float tests of the leaves and the fine node tests run), so that a float test
+ * dropping a triangle the exact test would keep changes an answer against the other kernel's. */
+static void test_kernels_agree(void **state)
+{
+    (void)state;
+    enum { CAP = 4096 };
+    static cbvh_contact first[CAP], again[CAP];
+    static uint32_t first_ids[CAP], again_ids[CAP];
+    const int before = test_kernel_now;
+    static const int kernels[] = {TEST_KERNEL_SSE2, TEST_KERNEL_AVX2};
+    long compared = 0, reported = 0, runs = 0;
+    for (int m = 0; m < 3; m++) {
+        scene sc;
+        ref_fixture fx;
+        if (m == 0)
+            assert_true(scene_sphere(&sc, 4000, (float[3]){0.25f, 0.5f, -1.0f}, 1.0f));
+        else if (m == 1)
+            assert_true(scene_terrain(&sc, 4000, 40.0f));
+        else
+            assert_true(scene_soup(&sc, 3000, 0.1f, 19));
+        assert_int_equal(ref_fixture_open(&fx, sc.positions, sc.vertex_count, sc.indices, sc.triangle_count,
+                                          test_options()),
+                         CBVH_OK);
+        uint64_t st = 7000 + (uint64_t)m;
+        for (long r = 0; r < test_reps(240); r++) {
+            const size_t k = (size_t)(scene_rand_unit(&st) * (double)fx.tris.count);
+            const double *tri = fx.tris.v + 9 * k;
+            const double size = fx.diag * exp(rnd(&st, log(2e-4), log(0.1)));
+            cbvh_shape s;
+            memset(&s, 0, sizeof s);
+            s.kind = (cbvh_shape_kind)(r % 3);
+            for (int a = 0; a < 3; a++) {
+                const double at = (tri[a] + tri[3 + a] + tri[6 + a]) / 3.0 + rnd(&st, -size, size);
+                s.center[a] = s.p0[a] = (float)at;
+                s.p1[a] = (float)(at + rnd(&st, -size, size));
+                s.half_extent[a] = (float)rnd(&st, 0.2 * size, size);
+                s.rotation[a] = r % 6 == 5 ? (float)rnd(&st, -1.0, 1.0) : 0.0f; /* every other box turned */
+            }
+            s.rotation[3] = r % 6 == 5 ? (float)rnd(&st, -1.0, 1.0) : 0.0f;
+            s.radius = (float)size;
+            size_t n_first = 0, n_ids = 0;
+            int have = 0;
+            for (size_t q = 0; q < sizeof kernels / sizeof kernels[0]; q++) {
+                if (!test_set_kernel(kernels[q]))
+                    continue;
+                size_t n = 0, ids = 0;
+                int more = 0;
+                assert_int_equal(
+                    cbvh_contacts_with(fx.file, &s, NULL, 0, have ? again : first, CAP, &n, &more), CBVH_OK);
+                assert_false(more);
+                assert_int_equal(
+                    cbvh_overlap_with(fx.file, &s, NULL, 0, have ? again_ids : first_ids, CAP, &ids, &more),
+                    CBVH_OK);
+                if (have++) {
+                    assert_int_equal(n, n_first);
+                    assert_int_equal(ids, n_ids);
+                    assert_memory_equal(again, first, n * sizeof first[0]);
+                    assert_memory_equal(again_ids, first_ids, ids * sizeof first_ids[0]);
+                    compared++;
+                } else {
+                    n_first = n;
+                    n_ids = ids;
+                }
+            }
+            runs++;
+            reported += (long)n_first;
+        }
+        ref_fixture_close(&fx);
+        scene_free(&sc);
+    }
+    test_set_kernel(before);
+    fprintf(stderr, "test_overlap: kernels agree on %ld queries (%ld contacts), %ld comparisons\n", runs,
+            reported, compared);
+    assert_true(reported >= test_least(1000));
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -704,6 +783,7 @@ int main(void)
         cmocka_unit_test(test_grazing_rounds),
         cmocka_unit_test(test_segment_triangle_distance),
         cmocka_unit_test(test_reference_point_distance_in_a_row),
+        cmocka_unit_test(test_kernels_agree),
     };
-    return TEST_RUN_LAYOUTS(tests, 0);
+    return TEST_RUN_LAYOUTS(tests, 1);
 }

@@ -6,26 +6,38 @@
 #include <float.h>
 #include <math.h>
 
-#ifdef CBVH_HAVE_SIMD
-#include <emmintrin.h>
-#endif
-
 #include "common/file.h"
 #include "layout/wide4.h"
+#include "query/lanes.h"
 #include "query/leaf.h"
 #include "query/ray_box.h"
 #include "query/shape_walk.h"
+#include "query/vec3d.h"
 
 /* The path center + t * delta of a float box center +- extent, octant and rcp its direction's as a ray's;
- * with SIMD the same in every lane, and the file's grid. */
+ * with SIMD the same in every lane (CBVH_LANES), and the file's grid in four. */
 struct cbvh_grown_path {
     float center[3], extent[3], rcp[3];
     uint32_t octant;
 #ifdef CBVH_HAVE_SIMD
-    __m128 center4[3], extent4[3], rcp4[3];
-    __m128 origin4[3], scale4[3];
+    cbvh_lanes center_lanes[3], extent_lanes[3], rcp_lanes[3];
+    __m128 origin4[3], scale4[3]; /* for the four slots of a wide node */
 #endif
 };
+
+/* The float box center +- extent that surely holds the double box [lo, hi]. */
+static inline void cbvh_sweep_bounds(cbvh_v3 lo, cbvh_v3 hi, float center[3], float extent[3])
+{
+    for (int a = 0; a < 3; a++) {
+        const double l = v3_get(lo, a), h = v3_get(hi, a);
+        center[a] = (float)(0.5 * (l + h));
+        const double above = h - center[a], below = center[a] - l, e = above > below ? above : below;
+        float ef = (float)e;
+        if ((double)ef < e)
+            ef = nextafterf(ef, INFINITY);
+        extent[a] = ef;
+    }
+}
 
 static inline void cbvh_grown_path_init(struct cbvh_grown_path *p, const struct cbvh_file *f,
                                         const float center[3], const float extent[3], const float delta[3])
@@ -38,9 +50,9 @@ static inline void cbvh_grown_path_init(struct cbvh_grown_path *p, const struct 
     p->octant = cbvh_octant_of(p->rcp);
 #ifdef CBVH_HAVE_SIMD
     for (int a = 0; a < 3; a++) {
-        p->center4[a] = _mm_set1_ps(center[a]);
-        p->extent4[a] = _mm_set1_ps(extent[a]);
-        p->rcp4[a] = _mm_set1_ps(p->rcp[a]);
+        p->center_lanes[a] = lanes_set1(center[a]);
+        p->extent_lanes[a] = lanes_set1(extent[a]);
+        p->rcp_lanes[a] = lanes_set1(p->rcp[a]);
         p->origin4[a] = _mm_set1_ps(f->grid_origin[a]);
         p->scale4[a] = _mm_set1_ps(f->grid_scale[a]);
     }
@@ -93,32 +105,32 @@ static inline int cbvh_grown_path_grid(const struct cbvh_grown_path *p, const st
 
 #ifdef CBVH_HAVE_SIMD
 /* x moved away from zero as cbvh_outward_lo (sign -1) or cbvh_outward_hi (sign 1) move it, lane by lane. */
-static inline __m128 grown_path_outward4(__m128 x, float sign)
+CBVH_FORCE_INLINE cbvh_lanes grown_path_outward(cbvh_lanes x, float sign)
 {
-    const __m128 away = _mm_mul_ps(_mm_andnot_ps(_mm_set1_ps(-0.0f), x), _mm_set1_ps(0x1p-22f));
-    return sign < 0.0f ? _mm_sub_ps(_mm_sub_ps(x, away), _mm_set1_ps(FLT_MIN))
-                       : _mm_add_ps(_mm_add_ps(x, away), _mm_set1_ps(FLT_MIN));
+    const cbvh_lanes away = lanes_mul(lanes_andnot(lanes_set1(-0.0f), x), lanes_set1(0x1p-22f));
+    return sign < 0.0f ? lanes_sub(lanes_sub(x, away), lanes_set1(FLT_MIN))
+                       : lanes_add(lanes_add(x, away), lanes_set1(FLT_MIN));
 }
 
-/* One axis of cbvh_grown_path_box on four boxes [lo, hi] (a lane each), lane for lane the same float
- * operations in the same order (_mm_max_ps(a, b) is a > b ? a : b, as the slab test's selections):
+/* One axis of cbvh_grown_path_box on CBVH_LANES boxes [lo, hi] (a lane each), lane for lane the same float
+ * operations in the same order (lanes_max(a, b) is a > b ? a : b, as the slab test's selections):
  * *tnear and *tfar narrowed to the times the path spends in the grown slabs. */
-CBVH_FORCE_INLINE void grown_path_axis4(const struct cbvh_grown_path *p, int a, __m128 box_lo, __m128 box_hi,
-                                        __m128 *tnear, __m128 *tfar)
+CBVH_FORCE_INLINE void grown_path_axis(const struct cbvh_grown_path *p, int a, cbvh_lanes box_lo,
+                                       cbvh_lanes box_hi, cbvh_lanes *tnear, cbvh_lanes *tfar)
 {
-    const __m128 lo = grown_path_outward4(_mm_sub_ps(box_lo, p->extent4[a]), -1.0f);
-    const __m128 hi = grown_path_outward4(_mm_add_ps(box_hi, p->extent4[a]), 1.0f);
+    const cbvh_lanes lo = grown_path_outward(lanes_sub(box_lo, p->extent_lanes[a]), -1.0f);
+    const cbvh_lanes hi = grown_path_outward(lanes_add(box_hi, p->extent_lanes[a]), 1.0f);
     const int back = p->octant >> a & 1u;
-    const __m128 tn = _mm_mul_ps(_mm_sub_ps(back ? hi : lo, p->center4[a]), p->rcp4[a]);
-    const __m128 tf = _mm_mul_ps(_mm_sub_ps(back ? lo : hi, p->center4[a]), p->rcp4[a]);
-    *tnear = _mm_max_ps(tn, *tnear);
-    *tfar = _mm_min_ps(tf, *tfar);
+    const cbvh_lanes tn = lanes_mul(lanes_sub(back ? hi : lo, p->center_lanes[a]), p->rcp_lanes[a]);
+    const cbvh_lanes tf = lanes_mul(lanes_sub(back ? lo : hi, p->center_lanes[a]), p->rcp_lanes[a]);
+    *tnear = lanes_max(tn, *tnear);
+    *tfar = lanes_min(tf, *tfar);
 }
 
 /* The lanes whose grown box the path crosses, from the narrowed times. */
-CBVH_FORCE_INLINE uint32_t grown_path_crossed4(__m128 tnear, __m128 tfar)
+CBVH_FORCE_INLINE uint32_t grown_path_crossed(cbvh_lanes tnear, cbvh_lanes tfar)
 {
-    return (uint32_t)_mm_movemask_ps(_mm_cmple_ps(tnear, _mm_mul_ps(tfar, _mm_set1_ps(CBVH_BOX_PAD))));
+    return (uint32_t)lanes_bits(lanes_le(tnear, lanes_mul(tfar, lanes_set1(CBVH_BOX_PAD))));
 }
 
 /* cbvh_grown_path_grid on the four slots of wide node `node` at once, each plane dequantized as
@@ -126,28 +138,28 @@ CBVH_FORCE_INLINE uint32_t grown_path_crossed4(__m128 tnear, __m128 tfar)
 CBVH_FORCE_INLINE uint32_t cbvh_grown_path_node4(const struct cbvh_grown_path *p, const uint8_t *node,
                                                  float limit, float entry[4])
 {
-    __m128 tnear = _mm_setzero_ps(), tfar = _mm_set1_ps(limit);
+    cbvh_lanes tnear = lanes_zero(), tfar = lanes_set1(limit);
     for (uint32_t a = 0; a < 3; a++) {
         __m128 lo, hi;
         cbvh_w4_planes4(node, a, p->origin4[a], p->scale4[a], &lo, &hi);
-        grown_path_axis4(p, (int)a, lo, hi, &tnear, &tfar);
+        grown_path_axis(p, (int)a, lanes_from4(lo), lanes_from4(hi), &tnear, &tfar);
     }
-    _mm_storeu_ps(entry, tnear);
-    return grown_path_crossed4(tnear, tfar);
+    _mm_storeu_ps(entry, lanes_low4(tnear));
+    return grown_path_crossed(tnear, tfar) & 0xFu;
 }
 
-/* cbvh_grown_path_box on the boxes of four triangles (cbvh_triangle_bounds: exact), lane by lane. */
-CBVH_FORCE_INLINE uint32_t cbvh_grown_path_triangles4(const struct cbvh_grown_path *p,
-                                                      const struct leaf_quad *t, float limit)
+/* cbvh_grown_path_box on the boxes of CBVH_LANES triangles, corners c[v][axis] (cbvh_triangle_bounds:
+ * exact), lane by lane. */
+CBVH_FORCE_INLINE uint32_t cbvh_grown_path_triangle_lanes(const struct cbvh_grown_path *p,
+                                                          const cbvh_lanes c[3][3], float limit)
 {
-    __m128 tnear = _mm_setzero_ps(), tfar = _mm_set1_ps(limit);
-    for (int a = 0; a < 3; a++) {
-        const __m128 c0 = _mm_load_ps(t->c[0][a]), c1 = _mm_load_ps(t->c[1][a]), c2 = _mm_load_ps(t->c[2][a]);
-        grown_path_axis4(p, a, _mm_min_ps(_mm_min_ps(c0, c1), c2), _mm_max_ps(_mm_max_ps(c0, c1), c2), &tnear,
-                         &tfar);
-    }
-    return grown_path_crossed4(tnear, tfar);
+    cbvh_lanes tnear = lanes_zero(), tfar = lanes_set1(limit);
+    for (int a = 0; a < 3; a++)
+        grown_path_axis(p, a, lanes_min(lanes_min(c[0][a], c[1][a]), c[2][a]),
+                        lanes_max(lanes_max(c[0][a], c[1][a]), c[2][a]), &tnear, &tfar);
+    return grown_path_crossed(tnear, tfar);
 }
+
 #endif
 
 #endif

@@ -26,6 +26,12 @@ typedef __m256 cbvh_lanes;
 #define lanes_ge(a, b) _mm256_cmp_ps((a), (b), _CMP_GE_OS)
 #define lanes_bits _mm256_movemask_ps
 #define lanes_store _mm256_storeu_ps
+#define lanes_sqrt _mm256_sqrt_ps
+/* Every bit set in every lane: the mask of all lanes. */
+#define lanes_all() _mm256_castsi256_ps(_mm256_set1_epi32(-1))
+/* Four floats in lanes 0-3, zeros in 4-7 (for tests of a wide node's four slots), and lanes 0-3 back. */
+#define lanes_from4 _mm256_zextps128_ps256
+#define lanes_low4 _mm256_castps256_ps128
 /* Lanes 0-3 from lo, 4-7 from hi, each four 16-byte aligned floats. */
 #define lanes_load_halves(lo, hi)                                                                            \
     _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_load_ps(lo)), _mm_load_ps(hi), 1)
@@ -51,6 +57,10 @@ typedef __m128 cbvh_lanes;
 #define lanes_ge _mm_cmpge_ps
 #define lanes_bits _mm_movemask_ps
 #define lanes_store _mm_storeu_ps
+#define lanes_sqrt _mm_sqrt_ps
+#define lanes_all() _mm_castsi128_ps(_mm_set1_epi32(-1))
+#define lanes_from4(x) (x)
+#define lanes_low4(x) (x)
 #define lanes_load_halves(lo, hi) _mm_load_ps(lo)
 #define lanes_lowest(mask) cbvh_lowest_lane(mask)
 #endif

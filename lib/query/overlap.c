@@ -1,5 +1,6 @@
 /* overlap.c: box (axis-aligned or oriented), sphere and capsule overlap and contact queries: the shape walk
- * (shape_walk.h), exact per-triangle tests, callback and/or output array. */
+ * (shape_walk.h), exact per-triangle tests, callback and/or output array. overlap_avx2.c compiles the walk
+ * and its tests again for AVX2 (CBVH_OVERLAP_AVX2: the walk alone, no public functions). */
 #include "config.h"
 
 #include <math.h>
@@ -14,6 +15,7 @@
 #include "query/raycast.h"
 #include "query/shape.h"
 #include "query/shape_cull.h"
+#include "query/shape_leaf.h"
 #include "query/triangle_box.h"
 
 /* Where overlapping triangles go. */
@@ -60,6 +62,13 @@ struct overlap_region {
     struct cbvh_box box;
     const struct cbvh_placement *placement;
 };
+
+#ifdef CBVH_HAVE_AVX2
+/* The overlap walk compiled for AVX2 (overlap_avx2.c), eight leaf triangles a vector through the float
+ * tests, for CPUs that have it (the caller checks). Returns sink->reported. */
+size_t cbvh_overlap_walk_avx2(const struct cbvh_file *f, const struct overlap_region *region,
+                              struct overlap_sink *sink);
+#endif
 
 /* What the exact overlap test of a triangle found that its contact reads too: for a ball or capsule the
  * closest points of its core (center or segment) and the triangle and the square of their distance; for
@@ -473,20 +482,22 @@ static int region_meets(const struct overlap_region *r, const float lo[3], const
 #endif
 
 #ifdef CBVH_HAVE_SIMD
-/* Four triangles through the float tests (a capsule's path against their boxes, cbvh_grown_path_triangles4,
- * then cbvh_cull4_keep), the kept ones in order through the rest. */
-CBVH_FORCE_INLINE int overlap_quad(void *query, uint32_t k, const struct leaf_quad *t, uint32_t group)
+/* The CBVH_LANES triangles of group g through the float tests (a capsule's path against their boxes,
+ * cbvh_grown_path_triangle_lanes, then cbvh_cull_keep_lanes), the kept ones in order through the rest. */
+CBVH_FORCE_INLINE int overlap_group(void *query, uint32_t k, const struct leaf_group *g)
 {
     const struct overlap_query *q = query;
-    if (q->capsule && !(group &= cbvh_grown_path_triangles4(&q->path, t, 1.0f)))
+    cbvh_lanes corners[3][3];
+    cbvh_group_corners(g, corners);
+    uint32_t group = g->mask;
+    if (q->capsule && !(group &= cbvh_grown_path_triangle_lanes(&q->path, corners, 1.0f)))
         return 0;
-    uint32_t touch, keep = cbvh_cull4_keep(&q->cull4, t->c, &touch) & group;
+    uint32_t touch, keep = cbvh_cull_keep_lanes(&q->cull4, corners, &touch) & group;
     const enum overlap_left rest = q->exact_only ? OVERLAP_EXACT : OVERLAP_CULL;
     for (; keep; keep &= keep - 1u) {
-        const uint32_t j = cbvh_lowest_lane(keep);
-        const float a[3] = {t->c[0][0][j], t->c[0][1][j], t->c[0][2][j]};
-        const float b[3] = {t->c[1][0][j], t->c[1][1][j], t->c[1][2][j]};
-        const float c[3] = {t->c[2][0][j], t->c[2][1][j], t->c[2][2][j]};
+        const uint32_t j = lanes_lowest(keep);
+        float a[3], b[3], c[3];
+        cbvh_group_triangle(g, j, a, b, c);
         if (overlap_triangle(q, k + j, a, b, c, touch >> j & 1u ? OVERLAP_SURE : rest))
             return 1;
     }
@@ -494,11 +505,12 @@ CBVH_FORCE_INLINE int overlap_quad(void *query, uint32_t k, const struct leaf_qu
 }
 #endif
 
-/* With SIMD, four triangles at a time (overlap_quad); else one at a time through the box test. */
+/* With SIMD, CBVH_LANES triangles at a time (overlap_group); else one at a time through the box test. */
 static int overlap_leaf(void *query, uint32_t first, uint32_t count)
 {
 #ifdef CBVH_HAVE_SIMD
-    return cbvh_shape_leaf_quads(((const struct overlap_query *)query)->f, first, count, overlap_quad, query);
+    return cbvh_shape_leaf_groups(((const struct overlap_query *)query)->f, first, count, overlap_group,
+                                  query);
 #else
     const struct overlap_query *q = query;
     for (uint32_t k = first; k < first + count; k++) {
@@ -539,12 +551,12 @@ static void small_boxes(const struct cbvh_file *f, double reach, uint16_t small[
     }
 }
 
-/* Stored order: the order does not matter when every overlap is reported. */
-static size_t overlap_walk(const struct cbvh_file *f, const struct overlap_region *region,
-                           struct overlap_sink *sink)
+/* Stored order: the order does not matter when every overlap is reported. Compiled once per instruction set
+ * (overlap_walk). */
+CBVH_FORCE_INLINE size_t overlap_walk_kernel(const struct cbvh_file *f, const struct overlap_region *region,
+                                             struct overlap_sink *sink)
 {
     struct overlap_query q; /* not cleared: every field the walk reads is set below */
-    cbvh_vector_state_clear();
     q.f = f;
     q.region = region;
     q.sink = sink;
@@ -585,6 +597,28 @@ static size_t overlap_walk(const struct cbvh_file *f, const struct overlap_regio
 #endif
     cbvh_shape_walk(f, f->layout, CBVH_NO_OCTANT, overlap_enter, OVERLAP_ENTER4, overlap_leaf, &q, NULL);
     return sink->reported;
+}
+
+#ifdef CBVH_OVERLAP_AVX2
+/* overlap_avx2.c's instance: its exact tests are this file's, in AVX2's encoding too; the upper halves of
+ * the vector registers, which a caller's AVX code may have left in use, are cleared first all the same. */
+size_t cbvh_overlap_walk_avx2(const struct cbvh_file *f, const struct overlap_region *region,
+                              struct overlap_sink *sink)
+{
+    _mm256_zeroupper();
+    return overlap_walk_kernel(f, region, sink);
+}
+#else
+/* The walk in the instruction set of the kernel chosen for the rays (cbvh_walk_kernel): AVX2's instance
+ * where it runs, else this file's (SSE2, or scalar without SIMD). */
+static size_t overlap_walk(const struct cbvh_file *f, const struct overlap_region *region,
+                           struct overlap_sink *sink)
+{
+#ifdef CBVH_HAVE_AVX2
+    if (cbvh_walk_kernel() == CBVH_WALK_KERNEL_AVX2)
+        return cbvh_overlap_walk_avx2(f, region, sink);
+#endif
+    return overlap_walk_kernel(f, region, sink);
 }
 
 /* The region of a box query; 0 for an invalid box. */
@@ -779,3 +813,4 @@ CBVH_API cbvh_result cbvh_contacts_with(const cbvh_file *file, const cbvh_shape 
 {
     return paged_with(file, shape, options, first, NULL, out, capacity, count, more);
 }
+#endif

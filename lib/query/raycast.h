@@ -18,7 +18,9 @@ void cbvh_closest(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray, cbv
 int cbvh_any(const struct cbvh_file *f, const struct cbvh_ray_ctx *ray, cbvh_traversal traversal,
              cbvh_query_stats *stats);
 
-/* The wide layout's walk kernels (the binary layout has one, scalar). */
+/* The wide layout's walk kernels (the binary layout has one, scalar). The shape queries follow the choice
+ * on either layout: sweeps (sweep_walk.c) one leaf triangle at a time with SCALAR, CBVH_LANES a vector
+ * otherwise; overlaps and contacts (overlap.c) four with SCALAR and SSE2, eight with AVX2. */
 enum cbvh_walk_kernel {
     CBVH_WALK_KERNEL_BEST,   /* the fastest the build and the CPU have: AVX2, else SSE2, else scalar */
     CBVH_WALK_KERNEL_SCALAR, /* child boxes and leaf triangles one at a time (builds without SIMD) */
@@ -44,17 +46,6 @@ static inline int cbvh_walk_kernel(void)
 /* VZEROUPPER (raycast_walks_avx2.c): for CPUs the AVX2 kernel runs on. */
 void cbvh_vector_upper_clear_avx2(void);
 #endif
-
-/* Called before a query's SSE2 code (the shape queries): a caller's AVX code can leave the upper halves of
- * the vector registers in use, and until they are cleared the CPU slows every SSE instruction; cleared on
- * CPUs the AVX2 kernel runs on, a no-op elsewhere. */
-static inline void cbvh_vector_state_clear(void)
-{
-#ifdef CBVH_HAVE_AVX2
-    if (cbvh_walk_kernel() == CBVH_WALK_KERNEL_AVX2)
-        cbvh_vector_upper_clear_avx2();
-#endif
-}
 
 /* An origin farther than this many times the mesh's extent from its bounds is moved next to them, so that
  * coordinates relative to it keep their precision at the mesh. */

@@ -3,10 +3,7 @@
 #ifndef CBVH_QUERY_SHAPE_CULL_H
 #define CBVH_QUERY_SHAPE_CULL_H
 
-#ifdef CBVH_HAVE_SIMD
-#include <emmintrin.h>
-#endif
-
+#include "query/lanes.h"
 #include "query/shape.h"
 
 /* Plain compares (one instruction each), not fminf/fmaxf, which GCC leaves as calls into libm; the values
@@ -123,13 +120,14 @@ static inline enum cbvh_cull_verdict cbvh_cull_triangle(const struct cbvh_local_
 }
 
 #ifdef CBVH_HAVE_SIMD
-/* A still shape and the float box around it, in every lane, for cbvh_cull4_keep. */
+/* A shape, still with the float box around it or swept, in every lane (CBVH_LANES: 4, or 8 in the files
+ * compiled for AVX2), for the float culls below. */
 struct cbvh_cull4 {
-    __m128 lo[3], hi[3]; /* the box around a still shape (cbvh_cull4_keep) */
-    __m128 p0[3], p1[3];
-    __m128 radius, half[3], axes[3][3]; /* axes[i]: the box's axis i (the identity unless rotated) */
-    __m128 shape_size;                  /* the shape's part of cbvh_cull_triangle's size */
-    __m128 delta[3], delta_size;        /* a swept shape's motion, its largest coordinate (sweeps) */
+    cbvh_lanes lo[3], hi[3]; /* the box around a still shape (cbvh_cull_keep_lanes) */
+    cbvh_lanes p0[3], p1[3];
+    cbvh_lanes radius, half[3], axes[3][3]; /* axes[i]: the box's axis i (the identity unless rotated) */
+    cbvh_lanes shape_size;                  /* the shape's part of cbvh_cull_triangle's size */
+    cbvh_lanes delta[3], delta_size;        /* a swept shape's motion, its largest coordinate (sweeps) */
     int box, capsule;
 };
 
@@ -140,116 +138,110 @@ static inline void cbvh_cull4_init(struct cbvh_cull4 *w, const struct cbvh_local
     const double p[2][3] = {{s->p0.x, s->p0.y, s->p0.z}, {s->p1.x, s->p1.y, s->p1.z}};
     const double half[3] = {s->half.x, s->half.y, s->half.z};
     if (delta) {
-        w->delta_size = _mm_set1_ps(cull_maxf(cull_maxf(fabsf(delta[0]), fabsf(delta[1])), fabsf(delta[2])));
+        w->delta_size = lanes_set1(cull_maxf(cull_maxf(fabsf(delta[0]), fabsf(delta[1])), fabsf(delta[2])));
         for (int a = 0; a < 3; a++)
-            w->delta[a] = _mm_set1_ps(delta[a]);
+            w->delta[a] = lanes_set1(delta[a]);
     }
     for (int a = 0; a < 3; a++) {
         if (lo) {
-            w->lo[a] = _mm_set1_ps(lo[a]);
-            w->hi[a] = _mm_set1_ps(hi[a]);
+            w->lo[a] = lanes_set1(lo[a]);
+            w->hi[a] = lanes_set1(hi[a]);
         }
-        w->p0[a] = _mm_set1_ps((float)p[0][a]);
-        w->p1[a] = _mm_set1_ps((float)p[1][a]);
+        w->p0[a] = lanes_set1((float)p[0][a]);
+        w->p1[a] = lanes_set1((float)p[1][a]);
         if (s->kind != CBVH_SHAPE_BOX) /* read for boxes only */
             continue;
-        w->half[a] = _mm_set1_ps((float)half[a]);
+        w->half[a] = lanes_set1((float)half[a]);
         for (int i = 0; i < 3; i++)
-            w->axes[i][a] = _mm_set1_ps(s->rotated ? (float)s->axes[a][i] : (float)(a == i));
+            w->axes[i][a] = lanes_set1(s->rotated ? (float)s->axes[a][i] : (float)(a == i));
     }
-    w->radius = _mm_set1_ps((float)s->radius);
-    w->shape_size = _mm_set1_ps((float)(cbvh_dmax(cull_max_abs(s->p0), cull_max_abs(s->p1)) + s->radius +
-                                        s->half.x + s->half.y + s->half.z));
+    w->radius = lanes_set1((float)s->radius);
+    w->shape_size = lanes_set1((float)(cbvh_dmax(cull_max_abs(s->p0), cull_max_abs(s->p1)) + s->radius +
+                                       s->half.x + s->half.y + s->half.z));
     w->box = s->kind == CBVH_SHAPE_BOX;
     w->capsule = s->kind == CBVH_SHAPE_CAPSULE;
 }
 
-static inline __m128 cull4_abs(__m128 x)
+CBVH_FORCE_INLINE cbvh_lanes cull4_abs(cbvh_lanes x)
 {
-    return _mm_andnot_ps(_mm_set1_ps(-0.0f), x);
+    return lanes_andnot(lanes_set1(-0.0f), x);
 }
-static inline __m128 cull4_dot(const __m128 a[3], const __m128 b[3])
+CBVH_FORCE_INLINE cbvh_lanes cull4_dot(const cbvh_lanes a[3], const cbvh_lanes b[3])
 {
-    return _mm_add_ps(_mm_add_ps(_mm_mul_ps(a[0], b[0]), _mm_mul_ps(a[1], b[1])), _mm_mul_ps(a[2], b[2]));
+    return lanes_add(lanes_add(lanes_mul(a[0], b[0]), lanes_mul(a[1], b[1])), lanes_mul(a[2], b[2]));
 }
 
 /* w ? a : b, lane by lane (SSE2 has no blend). */
-static inline __m128 cull4_select(__m128 w, __m128 a, __m128 b)
+CBVH_FORCE_INLINE cbvh_lanes cull4_select(cbvh_lanes w, cbvh_lanes a, cbvh_lanes b)
 {
-    return _mm_or_ps(_mm_and_ps(w, a), _mm_andnot_ps(w, b));
+    return lanes_or(lanes_and(w, a), lanes_andnot(w, b));
 }
 
-/* Four triangles' corners c[v][axis] from leaf_gather4's floats (16-byte aligned). */
-static inline void cull4_load(const float quad[3][3][4], __m128 c[3][3])
-{
-    for (int v = 0; v < 3; v++)
-        for (int a = 0; a < 3; a++)
-            c[v][a] = _mm_load_ps(quad[v][a]);
-}
-
-/* What both float culls read of four triangles: the edges d[k] = c[k + 1] - c[k], the face normal
+/* What both float culls read of CBVH_LANES triangles: the edges d[k] = c[k + 1] - c[k], the face normal
  * n = (c1 - c0) x (c2 - c0) and |n|^2, span (cbvh_cull_triangle's: the largest coordinate of c1 - c0 and
  * c2 - c0), corner (the largest coordinate of c0), and the heights h0, h1 of w's core points p0, p1 over the
  * plane times |n| (h1 = h0 but for a capsule). */
 struct cull4_frame {
-    __m128 d[3][3], n[3], nn, span, corner, h0, h1;
+    cbvh_lanes d[3][3], n[3], nn, span, corner, h0, h1;
 };
 
-static inline void cull4_frame_of(const struct cbvh_cull4 *w, const __m128 c[3][3], struct cull4_frame *f)
+CBVH_FORCE_INLINE void cull4_frame_of(const struct cbvh_cull4 *w, const cbvh_lanes c[3][3],
+                                      struct cull4_frame *f)
 {
-    __m128 w0[3], w1[3];
-    f->span = f->corner = _mm_setzero_ps();
+    cbvh_lanes w0[3], w1[3];
+    f->span = f->corner = lanes_zero();
     for (int a = 0; a < 3; a++) {
-        w0[a] = _mm_sub_ps(w->p0[a], c[0][a]);
-        w1[a] = _mm_sub_ps(w->p1[a], c[0][a]);
-        f->d[0][a] = _mm_sub_ps(c[1][a], c[0][a]);
-        f->d[1][a] = _mm_sub_ps(c[2][a], c[1][a]);
-        f->d[2][a] = _mm_sub_ps(c[0][a], c[2][a]);
-        f->span = _mm_max_ps(f->span, _mm_max_ps(cull4_abs(f->d[0][a]), cull4_abs(f->d[2][a])));
-        f->corner = _mm_max_ps(f->corner, cull4_abs(c[0][a]));
+        w0[a] = lanes_sub(w->p0[a], c[0][a]);
+        w1[a] = lanes_sub(w->p1[a], c[0][a]);
+        f->d[0][a] = lanes_sub(c[1][a], c[0][a]);
+        f->d[1][a] = lanes_sub(c[2][a], c[1][a]);
+        f->d[2][a] = lanes_sub(c[0][a], c[2][a]);
+        f->span = lanes_max(f->span, lanes_max(cull4_abs(f->d[0][a]), cull4_abs(f->d[2][a])));
+        f->corner = lanes_max(f->corner, cull4_abs(c[0][a]));
     }
-    const __m128 *e1 = f->d[0], e2[3] = {_mm_sub_ps(c[2][0], c[0][0]), _mm_sub_ps(c[2][1], c[0][1]),
-                                         _mm_sub_ps(c[2][2], c[0][2])};
-    f->n[0] = _mm_sub_ps(_mm_mul_ps(e1[1], e2[2]), _mm_mul_ps(e1[2], e2[1]));
-    f->n[1] = _mm_sub_ps(_mm_mul_ps(e1[2], e2[0]), _mm_mul_ps(e1[0], e2[2]));
-    f->n[2] = _mm_sub_ps(_mm_mul_ps(e1[0], e2[1]), _mm_mul_ps(e1[1], e2[0]));
+    const cbvh_lanes *e1 = f->d[0], e2[3] = {lanes_sub(c[2][0], c[0][0]), lanes_sub(c[2][1], c[0][1]),
+                                             lanes_sub(c[2][2], c[0][2])};
+    f->n[0] = lanes_sub(lanes_mul(e1[1], e2[2]), lanes_mul(e1[2], e2[1]));
+    f->n[1] = lanes_sub(lanes_mul(e1[2], e2[0]), lanes_mul(e1[0], e2[2]));
+    f->n[2] = lanes_sub(lanes_mul(e1[0], e2[1]), lanes_mul(e1[1], e2[0]));
     f->nn = cull4_dot(f->n, f->n);
     f->h0 = cull4_dot(f->n, w0);
     f->h1 = w->capsule ? cull4_dot(f->n, w1) : f->h0; /* a ball's p1 is p0 */
 }
 
 /* How far w's shape reaches along n from its core, times |n| (cull_reach_along in float). */
-static inline __m128 cull4_reach(const struct cbvh_cull4 *w, const __m128 n[3], __m128 nn)
+CBVH_FORCE_INLINE cbvh_lanes cull4_reach(const struct cbvh_cull4 *w, const cbvh_lanes n[3], cbvh_lanes nn)
 {
     if (!w->box)
-        return _mm_mul_ps(w->radius, _mm_sqrt_ps(nn));
-    return _mm_add_ps(_mm_add_ps(_mm_mul_ps(w->half[0], cull4_abs(cull4_dot(n, w->axes[0]))),
-                                 _mm_mul_ps(w->half[1], cull4_abs(cull4_dot(n, w->axes[1])))),
-                      _mm_mul_ps(w->half[2], cull4_abs(cull4_dot(n, w->axes[2]))));
+        return lanes_mul(w->radius, lanes_sqrt(nn));
+    return lanes_add(lanes_add(lanes_mul(w->half[0], cull4_abs(cull4_dot(n, w->axes[0]))),
+                               lanes_mul(w->half[1], cull4_abs(cull4_dot(n, w->axes[1])))),
+                     lanes_mul(w->half[2], cull4_abs(cull4_dot(n, w->axes[2]))));
 }
 
-/* The lanes of a triangle of moderate size (cbvh_cull4_keep's bounds: 2^-20 <= span, size <= 2^20) with
+/* The lanes of a triangle of moderate size (cbvh_cull_keep_lanes's bounds: 2^-20 <= span, size <= 2^20) with
  * |n|^2 >= sliver span^4: far from a sliver with sliver = 1/16, where the float tests of edges and distances
  * hold their margins; not quite a sliver with sliver = 2^-20, where the tests that read no normal do. */
-static inline __m128 cull4_moderate(const struct cull4_frame *f, __m128 size, float sliver)
+CBVH_FORCE_INLINE cbvh_lanes cull4_moderate(const struct cull4_frame *f, cbvh_lanes size, float sliver)
 {
-    const __m128 span2 = _mm_mul_ps(f->span, f->span);
-    const __m128 sized =
-        _mm_and_ps(_mm_cmpge_ps(f->span, _mm_set1_ps(0x1p-20f)), _mm_cmple_ps(size, _mm_set1_ps(0x1p20f)));
-    return _mm_and_ps(sized, _mm_cmpge_ps(f->nn, _mm_mul_ps(_mm_set1_ps(sliver), _mm_mul_ps(span2, span2))));
+    const cbvh_lanes span2 = lanes_mul(f->span, f->span);
+    const cbvh_lanes sized =
+        lanes_and(lanes_ge(f->span, lanes_set1(0x1p-20f)), lanes_le(size, lanes_set1(0x1p20f)));
+    return lanes_and(sized, lanes_ge(f->nn, lanes_mul(lanes_set1(sliver), lanes_mul(span2, span2))));
 }
 
 /* The lanes where the shape, its core's points at heights h0 and h1 (times |n|) over the plane, moved by
  * up to motion m (its height change, times |n|), stays on one side of the plane by more than its reach
- * plus the margin 2^-14 span^2 size, on triangles with span at least 2^-30 (cbvh_cull4_keep). */
-static inline __m128 cull4_apart(__m128 h0, __m128 h1, __m128 m, __m128 reach, __m128 span, __m128 size)
+ * plus the margin 2^-14 span^2 size, on triangles with span at least 2^-30 (cbvh_cull_keep_lanes). */
+CBVH_FORCE_INLINE cbvh_lanes cull4_apart(cbvh_lanes h0, cbvh_lanes h1, cbvh_lanes m, cbvh_lanes reach,
+                                         cbvh_lanes span, cbvh_lanes size)
 {
-    const __m128 zero = _mm_setzero_ps();
-    const __m128 margin = _mm_mul_ps(_mm_mul_ps(_mm_set1_ps(0x1p-14f), _mm_mul_ps(span, span)), size);
-    const __m128 gap = _mm_add_ps(reach, margin), low = _mm_add_ps(_mm_min_ps(h0, h1), _mm_min_ps(m, zero));
-    const __m128 high = _mm_add_ps(_mm_max_ps(h0, h1), _mm_max_ps(m, zero));
-    const __m128 above = _mm_cmpgt_ps(low, gap), below = _mm_cmplt_ps(high, _mm_sub_ps(zero, gap));
-    return _mm_and_ps(_mm_cmpge_ps(span, _mm_set1_ps(0x1p-30f)), _mm_or_ps(above, below));
+    const cbvh_lanes zero = lanes_zero();
+    const cbvh_lanes margin = lanes_mul(lanes_mul(lanes_set1(0x1p-14f), lanes_mul(span, span)), size);
+    const cbvh_lanes gap = lanes_add(reach, margin), low = lanes_add(lanes_min(h0, h1), lanes_min(m, zero));
+    const cbvh_lanes high = lanes_add(lanes_max(h0, h1), lanes_max(m, zero));
+    const cbvh_lanes above = lanes_gt(low, gap), below = lanes_lt(high, lanes_sub(zero, gap));
+    return lanes_and(lanes_ge(span, lanes_set1(0x1p-30f)), lanes_or(above, below));
 }
 
 /* The lanes where end point p (height h over the plane, times |n|) lies within sqrt(reach2) of an edge;
@@ -259,63 +251,65 @@ static inline __m128 cull4_apart(__m128 h0, __m128 h1, __m128 m, __m128 reach, _
  * edge k by more than the radius r, the margin; *far the lanes where p lies outside an edge by the margin and
  * farther than sqrt(far2) from all three: its projection then lies out of the triangle, whose nearest point
  * to p is on an edge, farther than sqrt(far2). */
-CBVH_FORCE_INLINE __m128 cull4_end_touches(const __m128 c[3][3], const __m128 d[3][3], const __m128 dd[3],
-                                           const __m128 n[3], const __m128 nn, const __m128 p[3], __m128 h,
-                                           __m128 r, __m128 reach2, __m128 far2, __m128 margin,
-                                           __m128 outside[3], __m128 *inside_plane, __m128 *far)
+CBVH_FORCE_INLINE cbvh_lanes cull4_end_touches(const cbvh_lanes c[3][3], const cbvh_lanes d[3][3],
+                                               const cbvh_lanes dd[3], const cbvh_lanes n[3],
+                                               const cbvh_lanes nn, const cbvh_lanes p[3], cbvh_lanes h,
+                                               cbvh_lanes r, cbvh_lanes reach2, cbvh_lanes far2,
+                                               cbvh_lanes margin, cbvh_lanes outside[3],
+                                               cbvh_lanes *inside_plane, cbvh_lanes *far)
 {
-    __m128 w[3][3], w2[3];
+    cbvh_lanes w[3][3], w2[3];
     for (int k = 0; k < 3; k++) {
         for (int a = 0; a < 3; a++)
-            w[k][a] = _mm_sub_ps(p[a], c[k][a]);
+            w[k][a] = lanes_sub(p[a], c[k][a]);
         w2[k] = cull4_dot(w[k], w[k]);
     }
     /* a vertex is a point of every edge through it: the edges' tests need their lines only where p projects
      * inside the segment (0 < t < |d|^2), and all three vertices far where every edge is */
-    __m128 inside = _mm_cmple_ps(_mm_mul_ps(h, h), _mm_mul_ps(reach2, nn)), off = _mm_setzero_ps();
-    __m128 near = _mm_or_ps(_mm_or_ps(_mm_cmple_ps(w2[0], reach2), _mm_cmple_ps(w2[1], reach2)),
-                            _mm_cmple_ps(w2[2], reach2));
-    __m128 clear = _mm_and_ps(_mm_and_ps(_mm_cmpgt_ps(w2[0], far2), _mm_cmpgt_ps(w2[1], far2)),
-                              _mm_cmpgt_ps(w2[2], far2));
-    const __m128 minus_margin = _mm_sub_ps(_mm_setzero_ps(), margin);
+    cbvh_lanes inside = lanes_le(lanes_mul(h, h), lanes_mul(reach2, nn)), off = lanes_zero();
+    cbvh_lanes near =
+        lanes_or(lanes_or(lanes_le(w2[0], reach2), lanes_le(w2[1], reach2)), lanes_le(w2[2], reach2));
+    cbvh_lanes clear =
+        lanes_and(lanes_and(lanes_gt(w2[0], far2), lanes_gt(w2[1], far2)), lanes_gt(w2[2], far2));
+    const cbvh_lanes minus_margin = lanes_sub(lanes_zero(), margin);
     for (int k = 0; k < 3; k++) {
-        const __m128 *dk = d[k], *wk = w[k];
-        const __m128 x[3] = {_mm_sub_ps(_mm_mul_ps(dk[1], wk[2]), _mm_mul_ps(dk[2], wk[1])),
-                             _mm_sub_ps(_mm_mul_ps(dk[2], wk[0]), _mm_mul_ps(dk[0], wk[2])),
-                             _mm_sub_ps(_mm_mul_ps(dk[0], wk[1]), _mm_mul_ps(dk[1], wk[0]))};
-        const __m128 t = cull4_dot(wk, dk), xx = cull4_dot(x, x);
-        const __m128 mid = _mm_and_ps(_mm_cmpgt_ps(t, _mm_setzero_ps()), _mm_cmplt_ps(t, dd[k]));
-        const __m128 line = _mm_cmple_ps(xx, _mm_mul_ps(reach2, dd[k]));
-        const __m128 far_line = _mm_cmpgt_ps(xx, _mm_mul_ps(far2, dd[k]));
-        const __m128 e = cull4_dot(x, n), out_of = _mm_cmplt_ps(e, minus_margin); /* -e - margin > 0 */
-        inside = _mm_and_ps(inside, _mm_cmpge_ps(e, margin));
-        near = _mm_or_ps(near, _mm_and_ps(mid, line));
-        clear = _mm_andnot_ps(_mm_andnot_ps(far_line, mid), clear);
-        off = _mm_or_ps(off, out_of);
+        const cbvh_lanes *dk = d[k], *wk = w[k];
+        const cbvh_lanes x[3] = {lanes_sub(lanes_mul(dk[1], wk[2]), lanes_mul(dk[2], wk[1])),
+                                 lanes_sub(lanes_mul(dk[2], wk[0]), lanes_mul(dk[0], wk[2])),
+                                 lanes_sub(lanes_mul(dk[0], wk[1]), lanes_mul(dk[1], wk[0]))};
+        const cbvh_lanes t = cull4_dot(wk, dk), xx = cull4_dot(x, x);
+        const cbvh_lanes mid = lanes_and(lanes_gt(t, lanes_zero()), lanes_lt(t, dd[k]));
+        const cbvh_lanes line = lanes_le(xx, lanes_mul(reach2, dd[k]));
+        const cbvh_lanes far_line = lanes_gt(xx, lanes_mul(far2, dd[k]));
+        const cbvh_lanes e = cull4_dot(x, n), out_of = lanes_lt(e, minus_margin); /* -e - margin > 0 */
+        inside = lanes_and(inside, lanes_ge(e, margin));
+        near = lanes_or(near, lanes_and(mid, line));
+        clear = lanes_andnot(lanes_andnot(far_line, mid), clear);
+        off = lanes_or(off, out_of);
         if (outside) {
-            const __m128 out = _mm_sub_ps(_mm_sub_ps(_mm_setzero_ps(), e), margin);
-            const __m128 out_r2 = _mm_mul_ps(_mm_mul_ps(r, r), _mm_mul_ps(nn, dd[k]));
-            const __m128 beyond = _mm_cmpgt_ps(_mm_mul_ps(out, out), out_r2);
-            outside[k] = _mm_and_ps(outside[k], _mm_and_ps(out_of, beyond));
+            const cbvh_lanes out = lanes_sub(lanes_sub(lanes_zero(), e), margin);
+            const cbvh_lanes out_r2 = lanes_mul(lanes_mul(r, r), lanes_mul(nn, dd[k]));
+            const cbvh_lanes beyond = lanes_gt(lanes_mul(out, out), out_r2);
+            outside[k] = lanes_and(outside[k], lanes_and(out_of, beyond));
         }
     }
-    *far = _mm_and_ps(off, clear);
+    *far = lanes_and(off, clear);
     *inside_plane = inside;
     return near;
 }
 
-/* Four triangles (quad[v][axis], 16-byte aligned, a lane each: leaf_gather4) against the still shape of w, in
- * float. Returns the lanes to test further: those whose box meets w's box (the walk's node test, exact) and
- * whose plane does not keep the shape on one side (cbvh_cull_triangle's plane test with the margin 2^-14
- * span^2 size, 10 times this test's error bound in float, when span is at least 2^-30, far from underflow; a
- * coordinate near overflow makes the margin infinite or a distance NaN, and keeps the lane). A lane dropped
- * here is one cbvh_cull_triangle, and the exact tests, would drop. *touch gets the kept lanes where a ball or
- * capsule surely touches the triangle, by cbvh_cull_triangle's still tests in float, on a triangle of
- * moderate size (2^-20 <= span, size <= 2^20, so nothing overflows or leaves the normal range): an end within
- * the radius less 2^-13 size of the plane where it projects into the triangle, each edge function at least
- * 2^-12 span^3 size, on a triangle far from a sliver (|n|^2 >= span^4 / 16), or of an edge, on one no sliver
- * by cbvh_cull_triangle's bound (|n|^2 >= 2^-20 span^4). There too a lane is dropped, for a capsule, when
- * both ends lie outside one edge by more than the radius, that margin, far from a sliver, and, for a ball, no
+/* CBVH_LANES triangles (corners c[v][axis], a lane each) against the still shape of w, in float. Returns the
+ * lanes to test further: those whose box meets w's box (the walk's node test, exact) and whose plane does not
+ * keep the shape on one side (cbvh_cull_triangle's plane test with the margin 2^-14 span^2 size, 10 times
+ * this test's error bound in float, when span is at least 2^-30, far from underflow; a coordinate near
+ * overflow makes the margin infinite or a distance NaN, and keeps the lane). A lane dropped here is one
+ * cbvh_cull_triangle, and the exact tests, would drop. *touch gets the kept lanes where a ball or capsule
+ * surely touches the triangle, by cbvh_cull_triangle's still tests in float, on a triangle of moderate size
+ * (2^-20 <= span, size <= 2^20, so nothing overflows or leaves the normal range): an end within the radius
+ * less 2^-13 size of the plane where it projects into the triangle, each edge function at least 2^-12 span^3
+ * size, on a triangle far from a sliver (|n|^2 >= span^4 / 16), or of an edge, on one no sliver by
+ * cbvh_cull_triangle's bound (|n|^2 >= 2^-20 span^4). There too a lane is dropped, for a capsule, when both
+ * ends lie outside one edge by more than the radius, that margin, far from a sliver, and, for a ball, no
  * sliver, when its center lies outside an edge by the edge functions' margin and farther than the radius plus
  * 2^-13 size from every edge (cull4_end_touches' *far: it drops what the capsule's test would for a ball, but
  * for a band 2^-13 size wide, at less cost). These margins are 4 to 8 times the float error of distances and
@@ -326,61 +320,59 @@ CBVH_FORCE_INLINE __m128 cull4_end_touches(const __m128 c[3][3], const __m128 d[
  * product, not of |n|) moves the point they take for the projection by less than 2^-18 size, and the signs
  * they read off the edge functions are those of the float tests. Only the plane's distance and the distance
  * outside an edge divide by |n|, hence the stricter bound there. */
-CBVH_FORCE_INLINE uint32_t cbvh_cull4_keep(const struct cbvh_cull4 *w, const float quad[3][3][4],
-                                           uint32_t *touch)
+CBVH_FORCE_INLINE uint32_t cbvh_cull_keep_lanes(const struct cbvh_cull4 *w, const cbvh_lanes c[3][3],
+                                                uint32_t *touch)
 {
-    __m128 c[3][3];
-    cull4_load(quad, c);
-    __m128 in = _mm_castsi128_ps(_mm_set1_epi32(-1));
+    cbvh_lanes in = lanes_all();
     for (int a = 0; a < 3; a++) {
-        const __m128 lo = _mm_min_ps(_mm_min_ps(c[0][a], c[1][a]), c[2][a]);
-        const __m128 hi = _mm_max_ps(_mm_max_ps(c[0][a], c[1][a]), c[2][a]);
-        in = _mm_and_ps(in, _mm_and_ps(_mm_cmple_ps(lo, w->hi[a]), _mm_cmpge_ps(hi, w->lo[a])));
+        const cbvh_lanes lo = lanes_min(lanes_min(c[0][a], c[1][a]), c[2][a]);
+        const cbvh_lanes hi = lanes_max(lanes_max(c[0][a], c[1][a]), c[2][a]);
+        in = lanes_and(in, lanes_and(lanes_le(lo, w->hi[a]), lanes_ge(hi, w->lo[a])));
     }
     *touch = 0;
-    if (!_mm_movemask_ps(in)) /* no lane's box meets the shape's: nothing to decide */
+    if (!lanes_bits(in)) /* no lane's box meets the shape's: nothing to decide */
         return 0;
     struct cull4_frame f;
     cull4_frame_of(w, c, &f);
-    const __m128(*d)[3] = f.d, *n = f.n, nn = f.nn, span = f.span, s0 = f.h0, s1 = f.h1;
-    const __m128 span2 = _mm_mul_ps(span, span);
-    const __m128 size = _mm_add_ps(_mm_add_ps(f.corner, span), w->shape_size);
-    const __m128 apart = cull4_apart(s0, s1, _mm_setzero_ps(), cull4_reach(w, n, nn), span, size);
-    __m128 keep = _mm_andnot_ps(apart, in);
-    if (w->box || !_mm_movemask_ps(keep))
-        return (uint32_t)_mm_movemask_ps(keep);
-    const __m128 moderate = cull4_moderate(&f, size, 0x1p-4f), fair = cull4_moderate(&f, size, 0x1p-20f);
-    const __m128 reach_in = _mm_sub_ps(w->radius, _mm_mul_ps(_mm_set1_ps(0x1p-13f), size));
-    const __m128 reaches = _mm_cmpgt_ps(reach_in, _mm_setzero_ps()); /* else no point is near enough */
-    const __m128 reach2 = cull4_select(reaches, _mm_mul_ps(reach_in, reach_in), _mm_set1_ps(-1.0f));
-    const __m128 reach_out = _mm_add_ps(w->radius, _mm_mul_ps(_mm_set1_ps(0x1p-13f), size));
-    const __m128 far2 = _mm_mul_ps(reach_out, reach_out);
-    const __m128 margin = _mm_mul_ps(_mm_mul_ps(_mm_set1_ps(0x1p-12f), _mm_mul_ps(span2, span)), size);
-    const __m128 dd[3] = {cull4_dot(d[0], d[0]), cull4_dot(d[1], d[1]), cull4_dot(d[2], d[2])};
-    __m128 outside[3] = {moderate, moderate, moderate};
-    const __m128 r = w->radius;
-    __m128 far, far1, inside, inside1, near, clear; /* clear: the lanes dropped */
+    const cbvh_lanes(*d)[3] = f.d, *n = f.n, nn = f.nn, span = f.span, s0 = f.h0, s1 = f.h1;
+    const cbvh_lanes span2 = lanes_mul(span, span);
+    const cbvh_lanes size = lanes_add(lanes_add(f.corner, span), w->shape_size);
+    const cbvh_lanes apart = cull4_apart(s0, s1, lanes_zero(), cull4_reach(w, n, nn), span, size);
+    cbvh_lanes keep = lanes_andnot(apart, in);
+    if (w->box || !lanes_bits(keep))
+        return (uint32_t)lanes_bits(keep);
+    const cbvh_lanes moderate = cull4_moderate(&f, size, 0x1p-4f), fair = cull4_moderate(&f, size, 0x1p-20f);
+    const cbvh_lanes reach_in = lanes_sub(w->radius, lanes_mul(lanes_set1(0x1p-13f), size));
+    const cbvh_lanes reaches = lanes_gt(reach_in, lanes_zero()); /* else no point is near enough */
+    const cbvh_lanes reach2 = cull4_select(reaches, lanes_mul(reach_in, reach_in), lanes_set1(-1.0f));
+    const cbvh_lanes reach_out = lanes_add(w->radius, lanes_mul(lanes_set1(0x1p-13f), size));
+    const cbvh_lanes far2 = lanes_mul(reach_out, reach_out);
+    const cbvh_lanes margin = lanes_mul(lanes_mul(lanes_set1(0x1p-12f), lanes_mul(span2, span)), size);
+    const cbvh_lanes dd[3] = {cull4_dot(d[0], d[0]), cull4_dot(d[1], d[1]), cull4_dot(d[2], d[2])};
+    cbvh_lanes outside[3] = {moderate, moderate, moderate};
+    const cbvh_lanes r = w->radius;
+    cbvh_lanes far, far1, inside, inside1, near, clear; /* clear: the lanes dropped */
     if (w->capsule) {
         near = cull4_end_touches(c, d, dd, n, nn, w->p0, s0, r, reach2, far2, margin, outside, &inside, &far);
-        near = _mm_or_ps(near, cull4_end_touches(c, d, dd, n, nn, w->p1, s1, r, reach2, far2, margin, outside,
-                                                 &inside1, &far1));
-        inside = _mm_or_ps(inside, inside1);
-        clear = _mm_or_ps(_mm_or_ps(outside[0], outside[1]), outside[2]);
+        near = lanes_or(near, cull4_end_touches(c, d, dd, n, nn, w->p1, s1, r, reach2, far2, margin, outside,
+                                                &inside1, &far1));
+        inside = lanes_or(inside, inside1);
+        clear = lanes_or(lanes_or(outside[0], outside[1]), outside[2]);
     } else {
         near = cull4_end_touches(c, d, dd, n, nn, w->p0, s0, r, reach2, far2, margin, NULL, &inside, &far);
-        clear = _mm_and_ps(far, fair);
+        clear = lanes_and(far, fair);
     }
-    keep = _mm_andnot_ps(clear, keep);
-    const __m128 sure = _mm_or_ps(_mm_and_ps(inside, moderate), _mm_and_ps(near, fair));
-    *touch = (uint32_t)_mm_movemask_ps(_mm_and_ps(sure, keep));
-    return (uint32_t)_mm_movemask_ps(keep);
+    keep = lanes_andnot(clear, keep);
+    const cbvh_lanes sure = lanes_or(lanes_and(inside, moderate), lanes_and(near, fair));
+    *touch = (uint32_t)lanes_bits(lanes_and(sure, keep));
+    return (uint32_t)lanes_bits(keep);
 }
 
-/* Four triangles (as for cbvh_cull4_keep) against w's shape moved by t * delta for t in [0, tmax] (w from
- * cbvh_cull4_init with delta), in float. Returns the lanes to test further: those whose plane does not keep
- * the swept shape on one side (cbvh_cull_triangle's plane test, CBVH_CULL_CLEAR, with its motion: the hull
- * of the core's points at t = 0 and t = tmax grown by the reach) with the margin 2^-14 span^2 size, size
- * now counting the motion's largest coordinate too; and, for a ball or capsule on a triangle of moderate
+/* CBVH_LANES triangles (as for cbvh_cull_keep_lanes) against w's shape moved by t * delta for t in [0, tmax]
+ * (w from cbvh_cull4_init with delta), in float. Returns the lanes to test further: those whose plane does
+ * not keep the swept shape on one side (cbvh_cull_triangle's plane test, CBVH_CULL_CLEAR, with its motion:
+ * the hull of the core's points at t = 0 and t = tmax grown by the reach) with the margin 2^-14 span^2 size,
+ * size now counting the motion's largest coordinate too; and, for a ball or capsule on a triangle of moderate
  * size far from a sliver (cull4_moderate), those where the core's points at t = 0 and at t = tmax all lie
  * outside one edge by more than the radius plus the margin 2^-12 span^3 size in the edge function (the
  * function is linear, so the whole swept core does: the swept shape stays beyond the plane through that
@@ -393,52 +385,51 @@ CBVH_FORCE_INLINE uint32_t cbvh_cull4_keep(const struct cbvh_cull4 *w, const flo
  * plane by that margin (the same test with no motion, its size still counting the motion): there
  * cbvh_cull_triangle finds CBVH_CULL_CLEAR_AT_START, or CBVH_CULL_CLEAR where the exact tests find no
  * contact either, for every tmax' <= tmax. */
-CBVH_FORCE_INLINE uint32_t cbvh_cull4_sweep(const struct cbvh_cull4 *w, const float quad[3][3][4], float tmax,
-                                            uint32_t *clear_at_start)
+CBVH_FORCE_INLINE uint32_t cbvh_cull_sweep_lanes(const struct cbvh_cull4 *w, const cbvh_lanes c[3][3],
+                                                 float tmax, uint32_t *clear_at_start)
 {
-    __m128 c[3][3], motion[3];
-    cull4_load(quad, c);
+    cbvh_lanes motion[3];
     struct cull4_frame f;
     cull4_frame_of(w, c, &f);
-    const __m128 t = _mm_set1_ps(tmax);
+    const cbvh_lanes t = lanes_set1(tmax);
     for (int a = 0; a < 3; a++)
-        motion[a] = _mm_mul_ps(w->delta[a], t);
-    const __m128 *n = f.n, nn = f.nn, span = f.span, zero = _mm_setzero_ps();
-    const __m128 size =
-        _mm_add_ps(_mm_add_ps(_mm_add_ps(f.corner, span), w->shape_size), _mm_mul_ps(w->delta_size, t));
-    const __m128 h0 = f.h0, h1 = f.h1, m = cull4_dot(n, motion);
-    const __m128 reach = cull4_reach(w, n, nn);
-    __m128 keep =
-        _mm_andnot_ps(cull4_apart(h0, h1, m, reach, span, size), _mm_castsi128_ps(_mm_set1_epi32(-1)));
-    const uint32_t start_apart = (uint32_t)_mm_movemask_ps(cull4_apart(h0, h1, zero, reach, span, size));
-    *clear_at_start = start_apart & (uint32_t)_mm_movemask_ps(keep);
-    if (w->box || !_mm_movemask_ps(keep))
-        return (uint32_t)_mm_movemask_ps(keep);
-    const __m128 margin =
-        _mm_mul_ps(_mm_mul_ps(_mm_set1_ps(0x1p-12f), _mm_mul_ps(_mm_mul_ps(span, span), span)), size);
-    const __m128 r2nn = _mm_mul_ps(_mm_mul_ps(w->radius, w->radius), nn);
-    __m128 outside = zero;
+        motion[a] = lanes_mul(w->delta[a], t);
+    const cbvh_lanes *n = f.n, nn = f.nn, span = f.span, zero = lanes_zero();
+    const cbvh_lanes size =
+        lanes_add(lanes_add(lanes_add(f.corner, span), w->shape_size), lanes_mul(w->delta_size, t));
+    const cbvh_lanes h0 = f.h0, h1 = f.h1, m = cull4_dot(n, motion);
+    const cbvh_lanes reach = cull4_reach(w, n, nn);
+    cbvh_lanes keep = lanes_andnot(cull4_apart(h0, h1, m, reach, span, size), lanes_all());
+    const uint32_t start_apart = (uint32_t)lanes_bits(cull4_apart(h0, h1, zero, reach, span, size));
+    *clear_at_start = start_apart & (uint32_t)lanes_bits(keep);
+    if (w->box || !lanes_bits(keep))
+        return (uint32_t)lanes_bits(keep);
+    const cbvh_lanes margin =
+        lanes_mul(lanes_mul(lanes_set1(0x1p-12f), lanes_mul(lanes_mul(span, span), span)), size);
+    const cbvh_lanes r2nn = lanes_mul(lanes_mul(w->radius, w->radius), nn);
+    cbvh_lanes outside = zero;
     for (int k = 0; k < 3; k++) {
         /* edge k's function at p, (d[k] x (p - c[k])) . n, is g . (p - c[k]) with g = n x d[k] */
-        const __m128 *dk = f.d[k];
-        const __m128 g[3] = {_mm_sub_ps(_mm_mul_ps(n[1], dk[2]), _mm_mul_ps(n[2], dk[1])),
-                             _mm_sub_ps(_mm_mul_ps(n[2], dk[0]), _mm_mul_ps(n[0], dk[2])),
-                             _mm_sub_ps(_mm_mul_ps(n[0], dk[1]), _mm_mul_ps(n[1], dk[0]))};
-        __m128 v0[3], v1[3];
+        const cbvh_lanes *dk = f.d[k];
+        const cbvh_lanes g[3] = {lanes_sub(lanes_mul(n[1], dk[2]), lanes_mul(n[2], dk[1])),
+                                 lanes_sub(lanes_mul(n[2], dk[0]), lanes_mul(n[0], dk[2])),
+                                 lanes_sub(lanes_mul(n[0], dk[1]), lanes_mul(n[1], dk[0]))};
+        cbvh_lanes v0[3], v1[3];
         for (int a = 0; a < 3; a++) {
-            v0[a] = _mm_sub_ps(w->p0[a], c[k][a]);
-            v1[a] = _mm_sub_ps(w->p1[a], c[k][a]);
+            v0[a] = lanes_sub(w->p0[a], c[k][a]);
+            v1[a] = lanes_sub(w->p1[a], c[k][a]);
         }
-        const __m128 moved = _mm_max_ps(cull4_dot(g, motion), zero);
-        const __m128 e = _mm_add_ps(_mm_max_ps(cull4_dot(g, v0), cull4_dot(g, v1)), moved);
-        const __m128 out = _mm_sub_ps(_mm_sub_ps(zero, e), margin);
-        const __m128 beyond = _mm_cmpgt_ps(_mm_mul_ps(out, out), _mm_mul_ps(r2nn, cull4_dot(dk, dk)));
-        outside = _mm_or_ps(outside, _mm_and_ps(_mm_cmpgt_ps(out, zero), beyond));
+        const cbvh_lanes moved = lanes_max(cull4_dot(g, motion), zero);
+        const cbvh_lanes e = lanes_add(lanes_max(cull4_dot(g, v0), cull4_dot(g, v1)), moved);
+        const cbvh_lanes out = lanes_sub(lanes_sub(zero, e), margin);
+        const cbvh_lanes beyond = lanes_gt(lanes_mul(out, out), lanes_mul(r2nn, cull4_dot(dk, dk)));
+        outside = lanes_or(outside, lanes_and(lanes_gt(out, zero), beyond));
     }
-    keep = _mm_andnot_ps(_mm_and_ps(outside, cull4_moderate(&f, size, 0x1p-4f)), keep);
-    *clear_at_start &= (uint32_t)_mm_movemask_ps(keep);
-    return (uint32_t)_mm_movemask_ps(keep);
+    keep = lanes_andnot(lanes_and(outside, cull4_moderate(&f, size, 0x1p-4f)), keep);
+    *clear_at_start &= (uint32_t)lanes_bits(keep);
+    return (uint32_t)lanes_bits(keep);
 }
+
 #endif
 
 #endif

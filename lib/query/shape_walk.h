@@ -102,47 +102,6 @@ CBVH_FORCE_INLINE void cbvh_w4_planes4(const uint8_t *node, uint32_t a, __m128 o
     *lo = _mm_add_ps(origin, _mm_mul_ps(_mm_cvtepi32_ps(_mm_unpacklo_epi16(qlo, zero)), scale));
     *hi = _mm_add_ps(origin, _mm_mul_ps(_mm_cvtepi32_ps(_mm_unpacklo_epi16(qhi, zero)), scale));
 }
-
-/* A query's test of four triangles at once: cooked triangles k + j for the lanes j of `group` in q
- * (leaf_group_load; the other lanes hold other triangles, which the test must ignore). Returns 1 to end
- * the walk. */
-typedef int (*cbvh_shape_quad_fn)(void *query, uint32_t k, const struct leaf_quad *q, uint32_t group);
-
-/* The leaf's cooked triangles [first, first + count) to `test`, four at a time, with the file's encodings
- * as constants or run-time values (cbvh_shape_leaf_quads). Returns 1 when `test` ended the walk. */
-CBVH_KERNEL int shape_leaf_quads_as(const struct cbvh_file *f, uint32_t first, uint32_t count,
-                                    cbvh_shape_quad_fn test, void *query, const int tri_enc,
-                                    const int vert_enc)
-{
-    const struct leaf_quad *quads = (const struct leaf_quad *)f->quads;
-    const uint32_t end = first + count;
-    for (uint32_t k = leaf_groups_begin(quads, first); k < end; k += 4) {
-        uint32_t group;
-        struct leaf_quad scratch;
-        const struct leaf_quad *q =
-            leaf_group_load(quads, f->triangles, tri_enc, f->vertices, vert_enc, f->grid_origin,
-                            f->grid_scale, first, end, k, &scratch, &group);
-        if (test(query, k, q, group))
-            return 1;
-    }
-    return 0;
-}
-
-/* The leaf's triangles four at a time to `test`: the encodings the cooker writes for lossless files (LOCAL8
- * or U16 indices, float vertices) get loops of their own, as the ray leaves do (cbvh_leaf_visit). */
-CBVH_KERNEL int cbvh_shape_leaf_quads(const struct cbvh_file *f, uint32_t first, uint32_t count,
-                                      cbvh_shape_quad_fn test, void *query)
-{
-    switch (f->triangle_encoding << 1 | f->vertex_encoding) {
-    case CBVH_TRIS_LOCAL8 << 1 | CBVH_VERTS_F32:
-        return shape_leaf_quads_as(f, first, count, test, query, CBVH_TRIS_LOCAL8, CBVH_VERTS_F32);
-    case CBVH_TRIS_U16 << 1 | CBVH_VERTS_F32:
-        return shape_leaf_quads_as(f, first, count, test, query, CBVH_TRIS_U16, CBVH_VERTS_F32);
-    default:
-        return shape_leaf_quads_as(f, first, count, test, query, (int)f->triangle_encoding,
-                                   (int)f->vertex_encoding);
-    }
-}
 #endif
 
 /* Children c[0..m) with entry keys e[0..m) (m <= CBVH_TREE_WIDTH) sorted by key, nearest first, ties kept

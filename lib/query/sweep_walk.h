@@ -41,8 +41,12 @@ int cbvh_sweep_walk(const struct cbvh_file *f, const struct cbvh_local_shape *bo
                     cbvh_sweep_triangle_fn sweep, const void *shape, const struct cbvh_sweep_rules *rules,
                     struct cbvh_sweep_found *found);
 
-/* The float box center +- extent that surely holds the double box [lo, hi]. */
-void cbvh_sweep_bounds(cbvh_v3 lo, cbvh_v3 hi, float center[3], float extent[3]);
+#ifdef CBVH_HAVE_AVX2
+/* cbvh_sweep_walk's AVX2 instance (sweep_walk_avx2.c), for CPUs that have it (the caller checks). */
+int cbvh_sweep_walk_avx2(const struct cbvh_file *f, const struct cbvh_local_shape *bounds,
+                         const float delta[3], cbvh_sweep_triangle_fn sweep, const void *shape,
+                         const struct cbvh_sweep_rules *rules, struct cbvh_sweep_found *found);
+#endif
 
 /* A zero-size shape: the sweep is the ray center + t * delta, t in [0, 1],
  * answered by the ray kernel so that it agrees with cbvh_raycast exactly
