@@ -111,10 +111,6 @@ static void batch_flush(const struct cbvh_file *f, struct cbvh_stream_batch *b, 
         return;
     if (hits) {
         batch_walk(f, b, octant, node_test, 0, counting, NULL, visited, tested);
-        /* the hits' REMAP entries all requested before the first is read */
-        for (uint32_t r = 0; f->remap && r < b->count; r++)
-            if (b->best[r].tri != UINT32_MAX)
-                CBVH_PREFETCH(cbvh_remap_entry(f, b->best[r].tri));
         for (uint32_t r = 0; r < b->count; r++)
             cbvh_hit_output(f, &b->best[r], &b->ctx[r].t_frame, &hits[b->ray_index[r]]);
     } else {
