@@ -408,54 +408,50 @@ CBVH_KERNEL void stream_interleave(const struct cbvh_file *restrict f, struct cb
     *tested += nt;
 }
 
-/* The batch walk and the interleaved walks as functions of their own per layout and query kind, in the
- * instruction set of the file that instantiates them (stream.c, stream_avx2.c). */
-#define STREAM_BATCH_INSTANCE(name, layout_, any_)                                                           \
-    CBVH_NOINLINE void name(const struct cbvh_file *f, struct cbvh_stream_batch *b, uint32_t octant,         \
-                            cbvh_stream_node_fn node_test, int counting, uint8_t *occluded,                  \
-                            uint64_t *visited, uint64_t *tested)                                             \
+/* The batch walk (on layout_) and the interleaved walks (wide layout) of one query kind, as functions of
+ * their own in the instruction set of the file that instantiates them (stream.c, stream_avx2.c). */
+#define STREAM_KIND_INSTANCES(name, layout_, any_)                                                           \
+    CBVH_NOINLINE void name##_batch(const struct cbvh_file *f, struct cbvh_stream_batch *b, uint32_t octant, \
+                                    cbvh_stream_node_fn node_test, int counting, uint8_t *occluded,          \
+                                    uint64_t *visited, uint64_t *tested)                                     \
     {                                                                                                        \
         stream_walk(f, layout_, b, octant, node_test, any_, counting, occluded, visited, tested);            \
-    }
-#define STREAM_INTERLEAVE_INSTANCE(name, any_)                                                               \
-    CBVH_NOINLINE void name(const struct cbvh_file *f, struct cbvh_stream_batch *b, const cbvh_ray *rays,    \
-                            size_t count, cbvh_hit *hits, uint8_t *occluded, int scalar, int counting,       \
-                            uint64_t *visited, uint64_t *tested)                                             \
+    }                                                                                                        \
+    CBVH_NOINLINE void name##_interleave(                                                                    \
+        const struct cbvh_file *f, struct cbvh_stream_batch *b, const cbvh_ray *rays, size_t count,          \
+        cbvh_hit *hits, uint8_t *occluded, int scalar, int counting, uint64_t *visited, uint64_t *tested)    \
     {                                                                                                        \
         stream_interleave(f, b, rays, count, any_, hits, occluded, scalar, counting, visited, tested);       \
     }
-/* Both query kinds' instances, and `name` (with `linkage`) that picks one: the batch walk's with
- * stream_walk's arguments (any hit when `any`), the interleaved walks' with stream_interleave's (any hit when
- * hits is NULL). */
-#define STREAM_BATCH_INSTANCES(linkage, name, layout_)                                                       \
-    STREAM_BATCH_INSTANCE(name##_closest, layout_, 0)                                                        \
-    STREAM_BATCH_INSTANCE(name##_any, layout_, 1)                                                            \
-    linkage void name(const struct cbvh_file *f, struct cbvh_stream_batch *b, uint32_t octant,               \
-                      cbvh_stream_node_fn node_test, int any, int counting, uint8_t *occluded,               \
-                      uint64_t *visited, uint64_t *tested)                                                   \
+/* Both query kinds' instances, and name##_batch and name##_interleave (with `linkage`) that pick one: the
+ * batch walk with stream_walk's arguments (any hit when `any`), the interleaved walks with
+ * stream_interleave's (any hit when hits is NULL). */
+#define STREAM_INSTANCES(linkage, name, layout_)                                                             \
+    STREAM_KIND_INSTANCES(name##_closest, layout_, 0)                                                        \
+    STREAM_KIND_INSTANCES(name##_any, layout_, 1)                                                            \
+    linkage void name##_batch(const struct cbvh_file *f, struct cbvh_stream_batch *b, uint32_t octant,       \
+                              cbvh_stream_node_fn node_test, int any, int counting, uint8_t *occluded,       \
+                              uint64_t *visited, uint64_t *tested)                                           \
     {                                                                                                        \
-        (any ? name##_any : name##_closest)(f, b, octant, node_test, counting, occluded, visited, tested);   \
-    }
-#define STREAM_INTERLEAVE_INSTANCES(linkage, name)                                                           \
-    STREAM_INTERLEAVE_INSTANCE(name##_closest, 0)                                                            \
-    STREAM_INTERLEAVE_INSTANCE(name##_any, 1)                                                                \
-    linkage void name(const struct cbvh_file *f, struct cbvh_stream_batch *b, const cbvh_ray *rays,          \
-                      size_t count, cbvh_hit *hits, uint8_t *occluded, int scalar, int counting,             \
-                      uint64_t *visited, uint64_t *tested)                                                   \
+        (any ? name##_any_batch : name##_closest_batch)(f, b, octant, node_test, counting, occluded,         \
+                                                        visited, tested);                                    \
+    }                                                                                                        \
+    linkage void name##_interleave(const struct cbvh_file *f, struct cbvh_stream_batch *b,                   \
+                                   const cbvh_ray *rays, size_t count, cbvh_hit *hits, uint8_t *occluded,    \
+                                   int scalar, int counting, uint64_t *visited, uint64_t *tested)            \
     {                                                                                                        \
-        (hits ? name##_closest : name##_any)(f, b, rays, count, hits, occluded, scalar, counting, visited,   \
-                                             tested);                                                        \
+        (hits ? name##_closest_interleave : name##_any_interleave)(f, b, rays, count, hits, occluded,        \
+                                                                   scalar, counting, visited, tested);       \
     }
 
 #ifdef CBVH_HAVE_AVX2
-/* The wide layout's walks compiled for AVX2 (stream_avx2.c), as STREAM_BATCH_INSTANCES' and
- * STREAM_INTERLEAVE_INSTANCES' `name`. */
-void cbvh_stream_wide4_avx2(const struct cbvh_file *f, struct cbvh_stream_batch *b, uint32_t octant,
-                            cbvh_stream_node_fn node_test, int any, int counting, uint8_t *occluded,
-                            uint64_t *visited, uint64_t *tested);
-void cbvh_stream_interleave_avx2(const struct cbvh_file *f, struct cbvh_stream_batch *b, const cbvh_ray *rays,
-                                 size_t count, cbvh_hit *hits, uint8_t *occluded, int scalar, int counting,
-                                 uint64_t *visited, uint64_t *tested);
+/* The wide layout's walks compiled for AVX2 (stream_avx2.c): STREAM_INSTANCES' pickers. */
+void cbvh_stream_wide4_avx2_batch(const struct cbvh_file *f, struct cbvh_stream_batch *b, uint32_t octant,
+                                  cbvh_stream_node_fn node_test, int any, int counting, uint8_t *occluded,
+                                  uint64_t *visited, uint64_t *tested);
+void cbvh_stream_wide4_avx2_interleave(const struct cbvh_file *f, struct cbvh_stream_batch *b,
+                                       const cbvh_ray *rays, size_t count, cbvh_hit *hits, uint8_t *occluded,
+                                       int scalar, int counting, uint64_t *visited, uint64_t *tested);
 #endif
 
 #endif
