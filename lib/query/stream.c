@@ -30,8 +30,8 @@ _Static_assert(CBVH_STREAM_STACK_BATCH >= CBVH_STREAM_WALKS && CBVH_STREAM_WALKS
 /* Bytes of a block before its rays: `walks` walk slots (stream.h), whatever the batch's size. */
 #define STREAM_WALKS_BYTES(walks) ((walks) * sizeof(struct cbvh_stream_walk))
 
-STREAM_INSTANCES(static inline, stream_wide4, CBVH_LAYOUT_WIDE4)
-STREAM_INSTANCES(static inline, stream_binary, CBVH_LAYOUT_BINARY)
+STREAM_INSTANCES(CBVH_NOINLINE, stream_wide4, CBVH_LAYOUT_WIDE4)
+STREAM_INSTANCES(CBVH_NOINLINE, stream_binary, CBVH_LAYOUT_BINARY)
 
 /* The batch walk for the file's layout, on the single-ray walks' kernel (with SIMD node tests). */
 static void batch_walk(const struct cbvh_file *f, struct cbvh_stream_batch *b, uint32_t octant,
