@@ -125,12 +125,14 @@ CBVH_KERNEL void stream_leaf(const struct cbvh_file *f, struct cbvh_stream_batch
         for (uint32_t j = 0; j < m; j++) {
             const uint32_t r = live[j];
             const struct cbvh_ray_shear *s = &b->ctx[r].shear;
+            float *box_ray = b->box_ray[r];
+            const float tmin = box_ray[CBVH_LANE_TMIN];
+            struct cbvh_best_hit *best = &b->best[r];
             for (uint32_t g = 0; g < groups; g++) {
                 struct leaf_rows rows;
                 leaf_group_rows(s, &q[g], &rows);
                 if (leaf_rows_visit(f, s, &rows, &q[g], 0, NULL, NULL, q[g].mask, group_first[g], NULL, any,
-                                    any, !any, b->box_ray[r][CBVH_LANE_TMIN], &b->box_ray[r][CBVH_LANE_TMAX],
-                                    &b->best[r])) {
+                                    any, !any, tmin, &box_ray[CBVH_LANE_TMAX], best)) {
                     stream_occlude(b, r, occluded);
                     break;
                 }
