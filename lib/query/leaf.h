@@ -393,7 +393,7 @@ CBVH_KERNEL void leaf_group_rows(const struct cbvh_ray_shear *restrict s, const 
 /* The first test of cbvh_ray_triangle on the CBVH_LANES triangles of rows at once, lane for lane the same
  * float operations (the build contracts no multiply-add), the edge functions left in edge[e][j]. Returns
  * the lanes it rejects for sure and, when `ranged`, those outside [tmin, tmax] for sure
- * (leaf_outside_lanes, which fills *within; else 0); the exact test (leaf_lane_test) decides every other
+ * (leaf_outside_lanes, which fills *within; else 0); the exact test (leaf_rows_visit) decides every other
  * lane as the scalar test would, so answers do not depend on the filter. */
 CBVH_KERNEL uint32_t leaf_reject_rows(const struct cbvh_ray_shear *restrict s,
                                       const struct leaf_rows *restrict rows, const int ranged, float tmin,
@@ -443,23 +443,38 @@ CBVH_KERNEL void leaf_group_vertices(const struct leaf_group *restrict g, uint32
         vert[c] = v3(q->c[c][0][i], q->c[c][1][i], q->c[c][2][i]);
 }
 
-/* leaf_reject_rows on group g. */
-CBVH_KERNEL uint32_t leaf_reject_lanes(const struct cbvh_ray_shear *restrict s,
-                                       const struct leaf_group *restrict g, const int ranged, float tmin,
-                                       float tmax, float edge[3][CBVH_LANES], uint32_t *restrict within)
+/* Triangles k + j (lanes j of `mask`, their filter rows in rows) against the ray: leaf_reject_rows (`ranged`
+ * as it says), then the exact test (cbvh_ray_triangle_decide) on the lanes it keeps, lowest first, each hit
+ * offered to leaf_take. Vertices for the exact test: group g's, or (`direct`) the float vertices
+ * verts[id[v][j]]. An occlusion (any hit without a gate) also ends at a lane the filter finds within the
+ * range. Returns 1 when the ray's walk stops (leaf_take). */
+CBVH_KERNEL int leaf_rows_visit(const struct cbvh_file *restrict f, const struct cbvh_ray_shear *restrict s,
+                                const struct leaf_rows *restrict rows, const struct leaf_group *restrict g,
+                                const int direct, const float *restrict verts,
+                                const uint32_t (*id)[CBVH_LANES], uint32_t mask, uint32_t k,
+                                const struct cbvh_hit_gate *gate, const int ranged, const int any,
+                                const int want_uv, float tmin, float *restrict best_t,
+                                struct cbvh_best_hit *restrict best)
 {
-    struct leaf_rows rows;
-    leaf_group_rows(s, g, &rows);
-    return leaf_reject_rows(s, &rows, ranged, tmin, tmax, edge, within);
-}
-
-/* The exact test of lane j, which the filter kept: cbvh_ray_triangle_decide on its vertices and edges. */
-CBVH_KERNEL int leaf_lane_test(const struct cbvh_ray_shear *restrict s, const cbvh_v3 vert[3],
-                               const float edge[3][CBVH_LANES], uint32_t j, float tmin, float tmax,
-                               const int want_uv, float *t, float *u, float *v)
-{
-    return cbvh_ray_triangle_decide(s, vert, edge[0][j], edge[1][j], edge[2][j], tmin, tmax, want_uv, t, u,
-                                    v);
+    float edge[3][CBVH_LANES], t, u, v;
+    uint32_t within;
+    const uint32_t rejected = leaf_reject_rows(s, rows, ranged, tmin, *best_t, edge, &within);
+    if (any && !gate && (within & mask))
+        return 1;
+    for (uint32_t kept = ~rejected & mask; kept; kept &= kept - 1u) {
+        const uint32_t j = lanes_lowest(kept);
+        cbvh_v3 vert[3];
+        if (direct)
+            for (uint32_t c = 0; c < 3; c++)
+                vert[c] = v3_from_f(verts + 3u * (size_t)id[c][j]);
+        else
+            leaf_group_vertices(g, j, vert);
+        if (cbvh_ray_triangle_decide(s, vert, edge[0][j], edge[1][j], edge[2][j], tmin, *best_t, want_uv, &t,
+                                     &u, &v) &&
+            leaf_take(f, gate, k + j, t, u, v, any, best_t, best))
+            return 1;
+    }
+    return 0;
 }
 #endif
 
@@ -493,6 +508,7 @@ CBVH_KERNEL int leaf_loop(const struct cbvh_file *restrict f, uint32_t first, ui
         _Alignas(32) uint32_t id[3][CBVH_LANES];
 #else
         const int direct = 0;
+        const uint32_t(*id)[CBVH_LANES] = NULL;
 #endif
         for (uint32_t k = direct ? first : leaf_groups_begin(quads, first); k < end; k += CBVH_LANES) {
             struct leaf_quad scratch[CBVH_LEAF_QUADS];
@@ -513,27 +529,9 @@ CBVH_KERNEL int leaf_loop(const struct cbvh_file *restrict f, uint32_t first, ui
                 leaf_group_lanes(f, quads, tri_enc, vert_enc, origin, scale, first, end, k, scratch, &g);
                 leaf_group_rows(s, &g, &rows);
             }
-            float edge[3][CBVH_LANES];
-            uint32_t within;
-            const uint32_t rejected =
-                leaf_reject_rows(s, &rows, near || occlusion, tmin, best_t, edge, &within);
-            if (occlusion && (within & g.mask))
+            if (leaf_rows_visit(f, s, &rows, &g, direct, (const float *)verts, id, g.mask, k, gate,
+                                near || occlusion, any, want_uv, tmin, &best_t, best))
                 return 1;
-            /* the lanes the filter keeps, lowest first */
-            for (uint32_t kept = ~rejected & g.mask; kept; kept &= kept - 1u) {
-                const uint32_t j = lanes_lowest(kept);
-                cbvh_v3 vert[3];
-#if defined(__AVX2__)
-                if (direct)
-                    for (uint32_t c = 0; c < 3; c++)
-                        vert[c] = v3_from_f((const float *)verts + 3u * (size_t)id[c][j]);
-                else
-#endif
-                    leaf_group_vertices(&g, j, vert);
-                if (leaf_lane_test(s, vert, edge, j, tmin, best_t, want_uv, &t, &u, &v) &&
-                    leaf_take(f, gate, k + j, t, u, v, any, &best_t, best))
-                    return 1;
-            }
         }
         *tmax = best_t;
         return 0;

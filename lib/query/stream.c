@@ -30,9 +30,8 @@ _Static_assert(CBVH_STREAM_STACK_BATCH >= CBVH_STREAM_WALKS && CBVH_STREAM_WALKS
 /* Bytes of a block before its rays: `walks` walk slots (stream.h), whatever the batch's size. */
 #define STREAM_WALKS_BYTES(walks) ((walks) * sizeof(struct cbvh_stream_walk))
 
-STREAM_BATCH_INSTANCES(static, stream_wide4, CBVH_LAYOUT_WIDE4)
-STREAM_BATCH_INSTANCES(static, stream_binary, CBVH_LAYOUT_BINARY)
-STREAM_INTERLEAVE_INSTANCES(static, interleaved_walks)
+STREAM_INSTANCES(CBVH_NOINLINE, stream_wide4, CBVH_LAYOUT_WIDE4)
+STREAM_INSTANCES(CBVH_NOINLINE, stream_binary, CBVH_LAYOUT_BINARY)
 
 /* The batch walk for the file's layout, on the single-ray walks' kernel (with SIMD node tests). */
 static void batch_walk(const struct cbvh_file *f, struct cbvh_stream_batch *b, uint32_t octant,
@@ -42,12 +41,13 @@ static void batch_walk(const struct cbvh_file *f, struct cbvh_stream_batch *b, u
 #ifdef CBVH_HAVE_AVX2
     if (f->layout == CBVH_LAYOUT_WIDE4 && node_test != cbvh_stream_node_scalar &&
         cbvh_walk_kernel() == CBVH_WALK_KERNEL_AVX2) {
-        cbvh_stream_wide4_avx2(f, b, octant, cbvh_stream_node_avx2, any, counting, occluded, visited, tested);
+        cbvh_stream_wide4_avx2_batch(f, b, octant, cbvh_stream_node_avx2, any, counting, occluded, visited,
+                                     tested);
         return;
     }
 #endif
-    (f->layout == CBVH_LAYOUT_WIDE4 ? stream_wide4 : stream_binary)(f, b, octant, node_test, any, counting,
-                                                                    occluded, visited, tested);
+    (f->layout == CBVH_LAYOUT_WIDE4 ? stream_wide4_batch : stream_binary_batch)(
+        f, b, octant, node_test, any, counting, occluded, visited, tested);
 }
 
 /* Rays walked interleaved (hits NULL: any hit), on the single-ray walks' kernel (scalar also with the
@@ -60,11 +60,11 @@ static void interleave(const struct cbvh_file *f, struct cbvh_stream_batch *b, c
     const int scalar = node_test == cbvh_stream_node_scalar || kernel == CBVH_WALK_KERNEL_SCALAR;
 #ifdef CBVH_HAVE_AVX2
     if (!scalar && kernel == CBVH_WALK_KERNEL_AVX2) {
-        cbvh_stream_interleave_avx2(f, b, rays, count, hits, occluded, 0, counting, visited, tested);
+        cbvh_stream_wide4_avx2_interleave(f, b, rays, count, hits, occluded, 0, counting, visited, tested);
         return;
     }
 #endif
-    interleaved_walks(f, b, rays, count, hits, occluded, scalar, counting, visited, tested);
+    stream_wide4_interleave(f, b, rays, count, hits, occluded, scalar, counting, visited, tested);
 }
 
 /* Whether the rays of a window are coherent: of up to 64 pairs of consecutive rays spread over it, at least
@@ -111,10 +111,6 @@ static void batch_flush(const struct cbvh_file *f, struct cbvh_stream_batch *b, 
         return;
     if (hits) {
         batch_walk(f, b, octant, node_test, 0, counting, NULL, visited, tested);
-        /* the hits' REMAP entries all requested before the first is read */
-        for (uint32_t r = 0; f->remap && r < b->count; r++)
-            if (b->best[r].tri != UINT32_MAX)
-                CBVH_PREFETCH(cbvh_remap_entry(f, b->best[r].tri));
         for (uint32_t r = 0; r < b->count; r++)
             cbvh_hit_output(f, &b->best[r], &b->ctx[r].t_frame, &hits[b->ray_index[r]]);
     } else {

@@ -51,7 +51,7 @@ struct cbvh_stream_batch {
     struct cbvh_stream_walk *walks; /* walk_count slots */
     uint32_t walk_count;
     uint32_t list_capacity; /* entries in list_ray and list_entry */
-    uint32_t shrinks;       /* times a ray's TMAX shrank: a list made since is still exact */
+    uint32_t shrinks;       /* changes whenever a ray's TMAX may shrink: a list made at its value is exact */
     uint32_t count, capacity;
 };
 

@@ -18,6 +18,5 @@ CBVH_STREAM_NODE_KERNEL(cbvh_stream_node_avx2)
 }
 
 /* stream.c's wide instances in this file's instruction set: the same answers bit for bit. */
-STREAM_BATCH_INSTANCES(, cbvh_stream_wide4_avx2, CBVH_LAYOUT_WIDE4)
-STREAM_INTERLEAVE_INSTANCES(, cbvh_stream_interleave_avx2)
+STREAM_INSTANCES(, cbvh_stream_wide4_avx2, CBVH_LAYOUT_WIDE4)
 #endif

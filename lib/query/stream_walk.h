@@ -69,27 +69,12 @@ static inline struct cbvh_walk_mode stream_alone_mode(int any, int scalar)
     return mode;
 }
 
-/* Ray r of the batch, whose test of triangle k found `hit` at t (u, v): an occlusion, or a closer best
- * hit (a hit no better than the ray's best changes nothing). */
-CBVH_KERNEL void stream_take(struct cbvh_stream_batch *restrict b, uint32_t r, uint32_t k, int hit, float t,
-                             float u, float v, int any, uint8_t *restrict occluded)
+/* Ray r of the batch is occluded: a negative TMAX fails every later box and triangle test. */
+CBVH_KERNEL void stream_occlude(struct cbvh_stream_batch *restrict b, uint32_t r, uint8_t *restrict occluded)
 {
-    if (!hit)
-        return;
-    float *box_ray = b->box_ray[r];
-    if (any) {
-        /* Occluded: a negative tmax fails every later box and triangle test. */
-        occluded[b->ray_index[r]] = 1;
-        box_ray[CBVH_LANE_TMAX] = -1.0f;
-        b->shrinks++;
-    } else if (cbvh_hit_better(t, k, box_ray[CBVH_LANE_TMAX], b->best[r].tri)) {
-        box_ray[CBVH_LANE_TMAX] = t;
-        b->shrinks++;
-        b->best[r].tri = k;
-        b->best[r].t = t;
-        b->best[r].u = u;
-        b->best[r].v = v;
-    }
+    occluded[b->ray_index[r]] = 1;
+    b->box_ray[r][CBVH_LANE_TMAX] = -1.0f;
+    b->shrinks++;
 }
 
 /* Ray r of the batch finishes the subtree `root` (whose box the batch tested) alone: the single-ray walk in
@@ -107,20 +92,24 @@ CBVH_KERNEL void stream_tail(const struct cbvh_file *restrict f, const uint32_t 
     do
         step = cbvh_walk_step(f, layout, &b->ctx[r], mode, NULL, counting, NULL, &t->walk, &t->best);
     while (step == CBVH_WALK_MORE);
-    stream_take(b, r, t->best.tri, step == CBVH_WALK_HIT || (!mode.any && t->best.tri != UINT32_MAX),
-                t->best.t, t->best.u, t->best.v, mode.any, occluded);
+    if (mode.any && step == CBVH_WALK_HIT) {
+        stream_occlude(b, r, occluded);
+    } else if (!mode.any && t->best.tri != b->best[r].tri) {
+        b->best[r] = t->best;
+        b->box_ray[r][CBVH_LANE_TMAX] = t->walk.tmax;
+        b->shrinks++;
+    }
     *visited += t->walk.visited;
     *tested += t->walk.tested;
 }
 
-/* The live rays live[0, m) against the leaf's triangles [tri0, tri0 + count): with SIMD the leaf gathered
- * once per batch visit (leaf.h) and filtered per ray, else each triangle fetched once for every ray; each
- * ray meets its triangles in index order either way. */
+/* The live rays live[0, m) against the leaf's triangles [tri0, tri0 + count), as the single-ray walk's leaf
+ * (leaf.h) tests them: with SIMD the leaf gathered once per batch visit and filtered per ray
+ * (leaf_rows_visit), else each triangle fetched once for every ray. */
 CBVH_KERNEL void stream_leaf(const struct cbvh_file *f, struct cbvh_stream_batch *restrict b,
                              const uint16_t *restrict live, uint32_t m, uint32_t tri0, uint32_t count,
                              const int any, int simd, uint8_t *restrict occluded)
 {
-    float a[3], v1[3], v2[3];
 #ifdef CBVH_HAVE_SIMD
     if (simd && count > 1) {
         struct leaf_quad scratch[CBVH_LEAF_GROUPS][CBVH_LEAF_QUADS];
@@ -136,46 +125,38 @@ CBVH_KERNEL void stream_leaf(const struct cbvh_file *f, struct cbvh_stream_batch
         for (uint32_t j = 0; j < m; j++) {
             const uint32_t r = live[j];
             const struct cbvh_ray_shear *s = &b->ctx[r].shear;
+            float *box_ray = b->box_ray[r];
+            const float tmin = box_ray[CBVH_LANE_TMIN];
+            struct cbvh_best_hit *best = &b->best[r];
             for (uint32_t g = 0; g < groups; g++) {
-                float edge[3][CBVH_LANES];
-                uint32_t within;
-                const float *box_ray = b->box_ray[r];
-                /* an occlusion also tests the range: a lane it accepts ends the ray */
-                const uint32_t rejected = leaf_reject_lanes(s, &q[g], any, box_ray[CBVH_LANE_TMIN],
-                                                            box_ray[CBVH_LANE_TMAX], edge, &within);
-                if (any && (within & q[g].mask)) {
-                    stream_take(b, r, group_first[g] + lanes_lowest(within & q[g].mask), 1, 0.0f, 0.0f, 0.0f,
-                                any, occluded);
+                struct leaf_rows rows;
+                leaf_group_rows(s, &q[g], &rows);
+                if (leaf_rows_visit(f, s, &rows, &q[g], 0, NULL, NULL, q[g].mask, group_first[g], NULL, any,
+                                    any, !any, tmin, &box_ray[CBVH_LANE_TMAX], best)) {
+                    stream_occlude(b, r, occluded);
                     break;
-                }
-                /* the lanes the filter keeps, lowest first */
-                for (uint32_t kept = ~rejected & q[g].mask; kept; kept &= kept - 1u) {
-                    const uint32_t lane = lanes_lowest(kept);
-                    float t, u, v;
-                    cbvh_v3 vert[3];
-                    leaf_group_vertices(&q[g], lane, vert);
-                    const int hit = leaf_lane_test(s, vert, edge, lane, box_ray[CBVH_LANE_TMIN],
-                                                   box_ray[CBVH_LANE_TMAX], !any, &t, &u, &v);
-                    stream_take(b, r, group_first[g] + lane, hit, t, u, v, any, occluded);
                 }
             }
         }
+        b->shrinks += !any;
         return;
     }
 #else
     (void)simd;
 #endif
+    float a[3], v1[3], v2[3];
     for (uint32_t k = tri0; k < tri0 + count; k++) {
         cbvh_triangle_vertices(f, k, a, v1, v2);
         for (uint32_t j = 0; j < m; j++) {
             const uint32_t r = live[j];
-            const float *box_ray = b->box_ray[r];
-            float t, u, v;
-            const int hit = cbvh_ray_triangle(&b->ctx[r].shear, a, v1, v2, box_ray[CBVH_LANE_TMIN],
-                                              box_ray[CBVH_LANE_TMAX], !any, &t, &u, &v);
-            stream_take(b, r, k, hit, t, u, v, any, occluded);
+            float *box_ray = b->box_ray[r], t, u, v;
+            if (cbvh_ray_triangle(&b->ctx[r].shear, a, v1, v2, box_ray[CBVH_LANE_TMIN],
+                                  box_ray[CBVH_LANE_TMAX], !any, &t, &u, &v) &&
+                leaf_take(f, NULL, k, t, u, v, any, &box_ray[CBVH_LANE_TMAX], &b->best[r]))
+                stream_occlude(b, r, occluded);
         }
     }
+    b->shrinks += !any;
 }
 
 /* The boxes of children c[0, k) for the batch's octant (`sel`), dequantized with the arithmetic of
@@ -230,7 +211,7 @@ CBVH_KERNEL void stream_walk(const struct cbvh_file *restrict f, const uint32_t 
         cbvh_ref ref;
         uint32_t start; /* its list: list_ray[start, start + count) */
         uint16_t count;
-        uint16_t shrinks; /* b->shrinks when the list was made (mod 2^16: a wrap costs a recheck skipped) */
+        uint16_t shrinks; /* b->shrinks at the list's making (mod 2^16: a wrap skips a recheck only) */
     } stack[(CBVH_TREE_WIDTH - 1u) * CBVH_MAX_DEPTH + 1u];
     uint16_t sink_ray;
     float sink_entry;
@@ -429,54 +410,50 @@ CBVH_KERNEL void stream_interleave(const struct cbvh_file *restrict f, struct cb
     *tested += nt;
 }
 
-/* The batch walk and the interleaved walks as functions of their own per layout and query kind, in the
- * instruction set of the file that instantiates them (stream.c, stream_avx2.c). */
-#define STREAM_BATCH_INSTANCE(name, layout_, any_)                                                           \
-    CBVH_NOINLINE void name(const struct cbvh_file *f, struct cbvh_stream_batch *b, uint32_t octant,         \
-                            cbvh_stream_node_fn node_test, int counting, uint8_t *occluded,                  \
-                            uint64_t *visited, uint64_t *tested)                                             \
+/* The batch walk (on layout_) and the interleaved walks (wide layout) of one query kind, as functions of
+ * their own in the instruction set of the file that instantiates them (stream.c, stream_avx2.c). */
+#define STREAM_KIND_INSTANCES(name, layout_, any_)                                                           \
+    CBVH_NOINLINE void name##_batch(const struct cbvh_file *f, struct cbvh_stream_batch *b, uint32_t octant, \
+                                    cbvh_stream_node_fn node_test, int counting, uint8_t *occluded,          \
+                                    uint64_t *visited, uint64_t *tested)                                     \
     {                                                                                                        \
         stream_walk(f, layout_, b, octant, node_test, any_, counting, occluded, visited, tested);            \
-    }
-#define STREAM_INTERLEAVE_INSTANCE(name, any_)                                                               \
-    CBVH_NOINLINE void name(const struct cbvh_file *f, struct cbvh_stream_batch *b, const cbvh_ray *rays,    \
-                            size_t count, cbvh_hit *hits, uint8_t *occluded, int scalar, int counting,       \
-                            uint64_t *visited, uint64_t *tested)                                             \
+    }                                                                                                        \
+    CBVH_NOINLINE void name##_interleave(                                                                    \
+        const struct cbvh_file *f, struct cbvh_stream_batch *b, const cbvh_ray *rays, size_t count,          \
+        cbvh_hit *hits, uint8_t *occluded, int scalar, int counting, uint64_t *visited, uint64_t *tested)    \
     {                                                                                                        \
         stream_interleave(f, b, rays, count, any_, hits, occluded, scalar, counting, visited, tested);       \
     }
-/* Both query kinds' instances, and `name` (with `linkage`) that picks one: the batch walk's with
- * stream_walk's arguments (any hit when `any`), the interleaved walks' with stream_interleave's (any hit when
- * hits is NULL). */
-#define STREAM_BATCH_INSTANCES(linkage, name, layout_)                                                       \
-    STREAM_BATCH_INSTANCE(name##_closest, layout_, 0)                                                        \
-    STREAM_BATCH_INSTANCE(name##_any, layout_, 1)                                                            \
-    linkage void name(const struct cbvh_file *f, struct cbvh_stream_batch *b, uint32_t octant,               \
-                      cbvh_stream_node_fn node_test, int any, int counting, uint8_t *occluded,               \
-                      uint64_t *visited, uint64_t *tested)                                                   \
+/* Both query kinds' instances, and name##_batch and name##_interleave (with `linkage`) that pick one: the
+ * batch walk with stream_walk's arguments (any hit when `any`), the interleaved walks with
+ * stream_interleave's (any hit when hits is NULL). */
+#define STREAM_INSTANCES(linkage, name, layout_)                                                             \
+    STREAM_KIND_INSTANCES(name##_closest, layout_, 0)                                                        \
+    STREAM_KIND_INSTANCES(name##_any, layout_, 1)                                                            \
+    linkage void name##_batch(const struct cbvh_file *f, struct cbvh_stream_batch *b, uint32_t octant,       \
+                              cbvh_stream_node_fn node_test, int any, int counting, uint8_t *occluded,       \
+                              uint64_t *visited, uint64_t *tested)                                           \
     {                                                                                                        \
-        (any ? name##_any : name##_closest)(f, b, octant, node_test, counting, occluded, visited, tested);   \
-    }
-#define STREAM_INTERLEAVE_INSTANCES(linkage, name)                                                           \
-    STREAM_INTERLEAVE_INSTANCE(name##_closest, 0)                                                            \
-    STREAM_INTERLEAVE_INSTANCE(name##_any, 1)                                                                \
-    linkage void name(const struct cbvh_file *f, struct cbvh_stream_batch *b, const cbvh_ray *rays,          \
-                      size_t count, cbvh_hit *hits, uint8_t *occluded, int scalar, int counting,             \
-                      uint64_t *visited, uint64_t *tested)                                                   \
+        (any ? name##_any_batch : name##_closest_batch)(f, b, octant, node_test, counting, occluded,         \
+                                                        visited, tested);                                    \
+    }                                                                                                        \
+    linkage void name##_interleave(const struct cbvh_file *f, struct cbvh_stream_batch *b,                   \
+                                   const cbvh_ray *rays, size_t count, cbvh_hit *hits, uint8_t *occluded,    \
+                                   int scalar, int counting, uint64_t *visited, uint64_t *tested)            \
     {                                                                                                        \
-        (hits ? name##_closest : name##_any)(f, b, rays, count, hits, occluded, scalar, counting, visited,   \
-                                             tested);                                                        \
+        (hits ? name##_closest_interleave : name##_any_interleave)(f, b, rays, count, hits, occluded,        \
+                                                                   scalar, counting, visited, tested);       \
     }
 
 #ifdef CBVH_HAVE_AVX2
-/* The wide layout's walks compiled for AVX2 (stream_avx2.c), as STREAM_BATCH_INSTANCES' and
- * STREAM_INTERLEAVE_INSTANCES' `name`. */
-void cbvh_stream_wide4_avx2(const struct cbvh_file *f, struct cbvh_stream_batch *b, uint32_t octant,
-                            cbvh_stream_node_fn node_test, int any, int counting, uint8_t *occluded,
-                            uint64_t *visited, uint64_t *tested);
-void cbvh_stream_interleave_avx2(const struct cbvh_file *f, struct cbvh_stream_batch *b, const cbvh_ray *rays,
-                                 size_t count, cbvh_hit *hits, uint8_t *occluded, int scalar, int counting,
-                                 uint64_t *visited, uint64_t *tested);
+/* The wide layout's walks compiled for AVX2 (stream_avx2.c): STREAM_INSTANCES' pickers. */
+void cbvh_stream_wide4_avx2_batch(const struct cbvh_file *f, struct cbvh_stream_batch *b, uint32_t octant,
+                                  cbvh_stream_node_fn node_test, int any, int counting, uint8_t *occluded,
+                                  uint64_t *visited, uint64_t *tested);
+void cbvh_stream_wide4_avx2_interleave(const struct cbvh_file *f, struct cbvh_stream_batch *b,
+                                       const cbvh_ray *rays, size_t count, cbvh_hit *hits, uint8_t *occluded,
+                                       int scalar, int counting, uint64_t *visited, uint64_t *tested);
 #endif
 
 #endif
