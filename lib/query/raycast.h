@@ -42,11 +42,6 @@ static inline int cbvh_walk_kernel(void)
     return CBVH_LIKELY(chosen != CBVH_WALK_KERNEL_BEST) ? chosen : cbvh_walk_kernel_choose_best();
 }
 
-#ifdef CBVH_HAVE_AVX2
-/* VZEROUPPER (raycast_walks_avx2.c): for CPUs the AVX2 kernel runs on. */
-void cbvh_vector_upper_clear_avx2(void);
-#endif
-
 /* An origin farther than this many times the mesh's extent from its bounds is moved next to them, so that
  * coordinates relative to it keep their precision at the mesh. */
 #define CBVH_FAR_FACTOR 16.0f

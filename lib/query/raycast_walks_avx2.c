@@ -22,9 +22,4 @@
     }
 CBVH_WALK_INSTANCES(WALK_AVX2)
 #undef WALK_AVX2
-
-void cbvh_vector_upper_clear_avx2(void)
-{
-    _mm256_zeroupper();
-}
 #endif
