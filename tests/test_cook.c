@@ -176,7 +176,6 @@ static uint32_t test_crc32(const uint8_t *p, size_t n)
     return c ^ 0xFFFFFFFFu;
 }
 
-
 typedef struct parsed {
     uint32_t section_count, tri_count, vert_count, node_count, depth, max_leaf, orig_count;
     float origin[3], scale[3], bmin[3], bmax[3];
@@ -334,7 +333,8 @@ static void parse(const uint8_t *b, size_t size, parsed *p)
             o[0] = (uint32_t)base;
             o[1] = (uint32_t)(base + (int16_t)(uint16_t)le_get_u16(e + 4));
             o[2] = (uint32_t)(base + (int16_t)(uint16_t)le_get_u16(e + 6));
-            assert_true(base + (int16_t)(uint16_t)le_get_u16(e + 4) >= 0 && base + (int16_t)(uint16_t)le_get_u16(e + 6) >= 0);
+            assert_true(base + (int16_t)(uint16_t)le_get_u16(e + 4) >= 0 &&
+                        base + (int16_t)(uint16_t)le_get_u16(e + 6) >= 0);
         }
         for (int c = 0; c < 3; c++)
             assert_true(o[c] < p->vert_count);
@@ -392,7 +392,9 @@ static void parse(const uint8_t *b, size_t size, parsed *p)
         p->mats = calloc(p->tri_count, sizeof(uint32_t));
         for (uint32_t t = 0; t < p->tri_count; t++) {
             const uint8_t *e = data[5] + mat_elem[p->encoding[5]] * t;
-            p->mats[t] = p->encoding[5] == 0 ? e[0] : p->encoding[5] == 1 ? (uint16_t)le_get_u16(e) : cbvh_read_u32(e);
+            p->mats[t] = p->encoding[5] == 0   ? e[0]
+                         : p->encoding[5] == 1 ? (uint16_t)le_get_u16(e)
+                                               : cbvh_read_u32(e);
         }
     }
     /* MATERIAL_NAMES: u32 count, (u32 id, u32 offset) each, NUL-terminated names tiling the rest in (id,

@@ -52,7 +52,6 @@ typedef struct tally {
 } tally;
 static tally totals;
 
-
 /* A watchdog turns a hang into a failure; Windows has no alarm(), so there a hang shows as the run's timeout.
  */
 #ifdef SIGALRM
@@ -295,7 +294,8 @@ static int expected_code(const uint8_t *orig, const uint8_t *mut, size_t pos)
         return -1;
     }
     uint64_t noff = le_get_u64(orig + TABLE + E_OFFSET), nend = noff + le_get_u64(orig + TABLE + E_STORED);
-    if (le_get_u32(orig + TABLE + E_TYPE) != 1 || le_get_u32(orig + TABLE + E_CODEC) != 0 || pos < noff || pos >= nend)
+    if (le_get_u32(orig + TABLE + E_TYPE) != 1 || le_get_u32(orig + TABLE + E_CODEC) != 0 || pos < noff ||
+        pos >= nend)
         return -1;
     if (le_get_u32(orig + TABLE + E_ENCODING) == 1) {
         size_t node = (size_t)(noff + (pos - noff) / 64 * 64);
@@ -477,7 +477,8 @@ static void test_structure(void **state)
                 past_end p2 = {k, UINT64_MAX, big[j], UINT64_MAX};          /* runs past the end */
                 past_end p3 = {k, UINT64_MAX, big[j], big[j]};              /* runs past, sizes agree */
                 past_end p4 = {k, UINT64_MAX, UINT64_MAX, big[j]};          /* declared size huge */
-                if (p1.offset != le_get_u64(s->bytes + TABLE + (size_t)k * ENTRY + E_OFFSET)) /* else no change */
+                if (p1.offset !=
+                    le_get_u64(s->bytes + TABLE + (size_t)k * ENTRY + E_OFFSET)) /* else no change */
                     assert_int_equal(open_table_edit(s, &t, edit_past_end, &p1), CBVH_ERROR_CORRUPT);
                 assert_int_equal(open_table_edit(s, &t, edit_past_end, &p2), CBVH_ERROR_CORRUPT);
                 assert_int_equal(open_table_edit(s, &t, edit_past_end, &p3), CBVH_ERROR_CORRUPT);

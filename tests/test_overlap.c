@@ -687,8 +687,8 @@ static void test_reference_point_distance_in_a_row(void **state)
         const double on = rnd(&st, -0.2, 1.2), off = r % 2 ? 0.0 : rnd(&st, 0.0, 1e-6);
         for (int a = 0; a < 3 && r % 4 < 2; a++) /* on or next to the segment */
             p[a] = tri[a] + on * (tri[3 + a] - tri[a]) + off * p[a];
-        const double to_segment = point_segment_dist(v3(p[0], p[1], p[2]), v3(tri[0], tri[1], tri[2]),
-                                                     v3(tri[3], tri[4], tri[5]));
+        const double to_segment =
+            point_segment_dist(v3(p[0], p[1], p[2]), v3(tri[0], tri[1], tri[2]), v3(tri[3], tri[4], tri[5]));
         assert_true(fabs(sqrt(ref_point_triangle_dist2(tri, p)) - to_segment) <= 1e-9);
     }
 }

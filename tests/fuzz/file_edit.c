@@ -8,7 +8,6 @@
 #include "fuzz_support.h"
 #include "le_bytes.h"
 
-
 int edit_parse(edit_file *e, const uint8_t *bytes, size_t size)
 {
     memset(e, 0, sizeof *e);

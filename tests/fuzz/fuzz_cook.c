@@ -32,7 +32,6 @@ typedef struct decoded {
     cbvh_mesh mesh;
 } decoded;
 
-
 static int decode(decoded *d, const uint8_t *data, size_t size)
 {
     static const int levels[4] = {0, 1, 6, 9};

@@ -64,7 +64,6 @@ void guard_release(guard_buffer *g)
     memset(g, 0, sizeof *g);
 }
 
-
 static uint32_t crc_of(const uint8_t *p, uint64_t n)
 {
     uLong c = crc32(0L, Z_NULL, 0);

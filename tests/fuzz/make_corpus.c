@@ -67,7 +67,6 @@ static void write_cooked(const scene *s, cbvh_layout layout, int quantized, int 
     free(file);
 }
 
-
 /* Re-encodes a u16 TRIANGLES (and REMAP) section of a raw file as `tris`
  * (1 = u32, 2 = DELTA16) and REMAP as u32, then writes it. */
 static void write_transcoded(const uint8_t *file, size_t size, int tris, int remap32, int zlib,
