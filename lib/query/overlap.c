@@ -390,10 +390,8 @@ static inline uint32_t slots_small4(const uint8_t *node, const __m128i small4[3]
     const __m128i zero = _mm_setzero_si128();
     __m128i small = _mm_set1_epi16(-1);
     for (uint32_t a = 0; a < 3; a++) {
-        const __m128i qmin =
-            _mm_loadl_epi64((const __m128i *)(const void *)(node + cbvh_w4_plane_offset(a, 0)));
-        const __m128i qmax =
-            _mm_loadl_epi64((const __m128i *)(const void *)(node + cbvh_w4_plane_offset(3u + a, 0)));
+        __m128i qmin, qmax;
+        cbvh_w4_grid_planes4(node, a, &qmin, &qmax);
         const __m128i extent = _mm_subs_epu16(qmax, qmin);
         small = _mm_and_si128(small, _mm_cmpeq_epi16(_mm_subs_epu16(extent, small4[a]), zero));
     }
