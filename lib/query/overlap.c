@@ -125,9 +125,12 @@ static void box_contact(const struct overlap_region *r, cbvh_v3 a, cbvh_v3 b, cb
     }
     *n = ex->n;
     *depth = ex->depth;
+    /* No operand of the maxima is NaN (finite half extents; lengths of differences of finite vertices, at
+     * most infinite), so cbvh_dmax gives what fmax, a call into libm, gives. */
     const cbvh_v3 o = r->box.center, h = r->box.half;
-    const double size = fmax(fmax(h.x, h.y), h.z) + fmax(v3_len(v3_sub(b, a)), v3_len(v3_sub(c, a))) +
-                        fabs(o.x) + fabs(o.y) + fabs(o.z);
+    const double size = cbvh_dmax(cbvh_dmax(h.x, h.y), h.z) +
+                        cbvh_dmax(v3_len(v3_sub(b, a)), v3_len(v3_sub(c, a))) + fabs(o.x) + fabs(o.y) +
+                        fabs(o.z);
     *point = cbvh_box_contact_point(a, b, c, &r->box, o, *n, 1e-6 * size);
 }
 
