@@ -227,7 +227,6 @@ struct overlap_query {
     struct overlap_sink *sink;
     struct cbvh_grid_range grid;
     int ball, capsule;
-    int exact_only;    /* the triangles the float tests keep go to the exact test alone (overlap_quad) */
     uint16_t small[3]; /* per axis, the largest extent in grid steps of a box small next to the shape */
     struct ball_reach reach;
     struct cbvh_grown_path path;
@@ -431,8 +430,9 @@ CBVH_FORCE_INLINE uint32_t overlap_enter4(void *query, const uint8_t *node, floa
 #endif
 
 /* What a triangle past the walk's box test has left to pass: the cheap tests in double, then the exact test
- * (OVERLAP_CULL); the exact test alone (OVERLAP_EXACT: the float tests left nothing the cheap tests would
- * decide); or nothing (OVERLAP_SURE: the region surely touches it). */
+ * (OVERLAP_CULL: without SIMD); the exact test alone (OVERLAP_EXACT: past the float tests, cbvh_cull4_keep,
+ * which leave the cheap tests too little to decide for them to pay, on every shape); or nothing
+ * (OVERLAP_SURE: the region surely touches it). */
 enum overlap_left { OVERLAP_CULL, OVERLAP_EXACT, OVERLAP_SURE };
 
 /* 1 when the region overlaps a triangle that has the tests `left` (not OVERLAP_SURE) to pass; the exact
@@ -475,20 +475,19 @@ static int region_meets(const struct overlap_region *r, const float lo[3], const
 
 #ifdef CBVH_HAVE_SIMD
 /* Four triangles through the float tests (a capsule's path against their boxes, cbvh_grown_path_triangles4,
- * then cbvh_cull4_keep), the kept ones in order through the rest. */
+ * then cbvh_cull4_keep), the kept ones in order through the exact test unless surely touching. */
 CBVH_FORCE_INLINE int overlap_quad(void *query, uint32_t k, const struct leaf_quad *t, uint32_t group)
 {
     const struct overlap_query *q = query;
     if (q->capsule && !(group &= cbvh_grown_path_triangles4(&q->path, t, 1.0f)))
         return 0;
     uint32_t touch, keep = cbvh_cull4_keep(&q->cull4, t->c, &touch) & group;
-    const enum overlap_left rest = q->exact_only ? OVERLAP_EXACT : OVERLAP_CULL;
     for (; keep; keep &= keep - 1u) {
         const uint32_t j = cbvh_lowest_lane(keep);
         const float a[3] = {t->c[0][0][j], t->c[0][1][j], t->c[0][2][j]};
         const float b[3] = {t->c[1][0][j], t->c[1][1][j], t->c[1][2][j]};
         const float c[3] = {t->c[2][0][j], t->c[2][1][j], t->c[2][2][j]};
-        if (overlap_triangle(q, k + j, a, b, c, touch >> j & 1u ? OVERLAP_SURE : rest))
+        if (overlap_triangle(q, k + j, a, b, c, touch >> j & 1u ? OVERLAP_SURE : OVERLAP_EXACT))
             return 1;
     }
     return 0;
@@ -562,10 +561,6 @@ static size_t overlap_walk(const struct cbvh_file *f, const struct overlap_regio
         ball_reach_of(&region->shape, &q.reach);
     if (q.capsule)
         capsule_path(f, &region->shape, &q.path);
-    /* A ball's float tests leave only lanes near the radius, slivers, or odd sizes to the exact test. So do a
-     * capsule's when contacts are wanted: the contact needs the exact test's closest points anyway. */
-    q.exact_only = region->shape.kind == CBVH_SHAPE_SPHERE ||
-                   (region->shape.kind == CBVH_SHAPE_CAPSULE && sink->contacts);
     q.small[0] = q.small[1] = q.small[2] = 0;
     if (fine)
         small_boxes(f, reach, q.small);
