@@ -235,6 +235,8 @@ struct overlap_query {
     struct cbvh_grid_range4 grid4; /* grid, as four wide slots at once test it */
     struct cbvh_cull4 cull4;
     __m128 center4[3], reach2, origin4[3], scale4[3]; /* a ball's reach, and the file's grid, in every lane */
+    int inner;                       /* an axis-aligned box's inner box is not empty (box_inner_of) */
+    __m128 inner_lo[3], inner_hi[3]; /* the inner box, in every lane */
 #endif
 };
 
@@ -474,6 +476,43 @@ static int region_meets(const struct overlap_region *r, const float lo[3], const
 #endif
 
 #ifdef CBVH_HAVE_SIMD
+/* The box a triangle surely overlaps the region's axis-aligned box when a vertex lies in it: the region's
+ * [lo, hi] shrunk by m = 2^-19 s + 2^-100, s the largest |lo| or |hi|, rounded to float (by at most 2^-25 s).
+ * Those bounds lie at most 2^-21 |x| + 2^-126 outside the exact box (shape_region; cbvh_overlap_box's are
+ * the box), so such a vertex lies inside the exact box by more than 2^-20 s on every axis, hence by 2^-20 s
+ * |u|_1 on any axis u of the exact separating-axis test, whose rounding of the vertex's projection and of
+ * the box's radius is below 2^-48 s |u|_1 (every coordinate relative to the box's center is at most s):
+ * no axis separates them, and the exact test finds what this finds. 0 when the inner box is empty. */
+static int box_inner_of(const struct overlap_region *r, float lo[3], float hi[3])
+{
+    double s = 0.0;
+    for (int a = 0; a < 3; a++)
+        s = cbvh_dmax(s, cbvh_dmax(fabs(r->lo[a]), fabs(r->hi[a])));
+    const double m = 0x1p-19 * s + 0x1p-100;
+    int empty = 0;
+    for (int a = 0; a < 3; a++) {
+        lo[a] = (float)(r->lo[a] + m);
+        hi[a] = (float)(r->hi[a] - m);
+        empty |= !(lo[a] <= hi[a]);
+    }
+    return !empty;
+}
+
+/* The lanes with a vertex in the inner box (box_inner_of): those triangles surely overlap the region. */
+CBVH_FORCE_INLINE uint32_t inner_vertex4(const struct overlap_query *q, const struct leaf_quad *t)
+{
+    __m128 any = _mm_setzero_ps();
+    for (int k = 0; k < 3; k++) {
+        __m128 in = _mm_castsi128_ps(_mm_set1_epi32(-1));
+        for (int a = 0; a < 3; a++) {
+            const __m128 x = _mm_load_ps(t->c[k][a]);
+            in = _mm_and_ps(in, _mm_and_ps(_mm_cmpge_ps(x, q->inner_lo[a]), _mm_cmple_ps(x, q->inner_hi[a])));
+        }
+        any = _mm_or_ps(any, in);
+    }
+    return (uint32_t)_mm_movemask_ps(any);
+}
+
 /* Four triangles through the float tests (a capsule's path against their boxes, cbvh_grown_path_triangles4,
  * then cbvh_cull4_keep), the kept ones in order through the exact test unless surely touching. */
 CBVH_FORCE_INLINE int overlap_quad(void *query, uint32_t k, const struct leaf_quad *t, uint32_t group)
@@ -482,6 +521,8 @@ CBVH_FORCE_INLINE int overlap_quad(void *query, uint32_t k, const struct leaf_qu
     if (q->capsule && !(group &= cbvh_grown_path_triangles4(&q->path, t, 1.0f)))
         return 0;
     uint32_t touch, keep = cbvh_cull4_keep(&q->cull4, t->c, &touch) & group;
+    if (q->inner && (keep & ~touch))
+        touch |= inner_vertex4(q, t);
     for (; keep; keep &= keep - 1u) {
         const uint32_t j = cbvh_lowest_lane(keep);
         const float a[3] = {t->c[0][0][j], t->c[0][1][j], t->c[0][2][j]};
@@ -570,6 +611,14 @@ static size_t overlap_walk(const struct cbvh_file *f, const struct overlap_regio
             q.small4[a] = _mm_set1_epi16((short)q.small[a]);
     cbvh_grid_range4_of(&q.grid, &q.grid4);
     cbvh_cull4_init(&q.cull4, &region->shape, region->lo, region->hi, NULL);
+    float inner_lo[3], inner_hi[3];
+    q.inner = region->shape.kind == CBVH_SHAPE_BOX && !region->box.rotated &&
+              box_inner_of(region, inner_lo, inner_hi);
+    if (q.inner)
+        for (int a = 0; a < 3; a++) {
+            q.inner_lo[a] = _mm_set1_ps(inner_lo[a]);
+            q.inner_hi[a] = _mm_set1_ps(inner_hi[a]);
+        }
     if (q.ball) {
         q.reach2 = _mm_set1_ps(q.reach.reach2);
         for (int a = 0; a < 3; a++) {
