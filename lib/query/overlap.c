@@ -612,7 +612,8 @@ static size_t overlap_walk(const struct cbvh_file *f, const struct overlap_regio
     cbvh_grid_range4_of(&q.grid, &q.grid4);
     cbvh_cull4_init(&q.cull4, &region->shape, region->lo, region->hi, NULL);
     float inner_lo[3], inner_hi[3];
-    q.inner = region->shape.kind == CBVH_SHAPE_BOX && !region->box.rotated &&
+    /* not for contacts: their box test runs for the contact anyway */
+    q.inner = region->shape.kind == CBVH_SHAPE_BOX && !region->box.rotated && !sink->contacts &&
               box_inner_of(region, inner_lo, inner_hi);
     if (q.inner)
         for (int a = 0; a < 3; a++) {
