@@ -772,6 +772,113 @@ static void test_kernels_agree(void **state)
     assert_true(reported >= test_least(1000));
 }
 
+/* Triangles with one vertex at a face of an axis-aligned box, on it or off it by 0 to 2^16 ulps of the face's
+ * coordinate (around the margin of the walk's float test of vertices in the box), the other two farther out
+ * through that face: the triangle meets the closed box exactly when that vertex lies on the face's inner side
+ * or on it. And triangles across an edge of the box, beyond the plane x_a + x_b = 2 e + d (vertices
+ * (e + d, e), (e, e + d) and (e + 2d, e + 2d) on axes a, b, e the edge's coordinate on both, d from 1 to 2^15
+ * ulps of e): their boxes meet the box and two vertices lie within d of it, yet they miss it.
+ * cbvh_overlap_box and cbvh_overlap_with (an unturned box, whose float bounds the walk widens) against those
+ * rules, near the origin and far from it. */
+static void test_box_vertex_at_faces(void **state)
+{
+    (void)state;
+    enum { FACES = 1200, N = FACES + 600 };
+    static float positions[N * 9];
+    static uint32_t indices[N * 3];
+    static const double origins[3] = {0.0, 1000.0, -3e5};
+    for (int o = 0; o < 3; o++) {
+        const double base = origins[o], ext = o == 2 ? 40.0 : 2.0;
+        float lo[3], hi[3];
+        for (int a = 0; a < 3; a++) {
+            lo[a] = (float)(base - 0.5 * ext + 0.1 * a);
+            hi[a] = (float)(base + 0.5 * ext + 0.1 * a);
+        }
+        uint8_t expect[N];
+        uint64_t st = 77 + (uint64_t)o;
+        for (int i = FACES; i < N; i++) { /* across the edge of axes a and b at their high faces */
+            const int a = i % 3, b = (a + 1) % 3, c = 3 - a - b, steps = 1 + (i / 3) % 16;
+            const float ea = hi[a], eb = hi[b];
+            float xa = ea, xb = eb;
+            for (int k = 0; k < 1 << (steps - 1) && (double)xa - ea < 0.1 * ext; k++) {
+                xa = nextafterf(xa, INFINITY);
+                xb = nextafterf(xb, INFINITY);
+            }
+            const double z = lo[c] + (0.25 + 0.5 * scene_rand_unit(&st)) * (hi[c] - lo[c]);
+            float v[3][3];
+            v[0][a] = xa, v[0][b] = eb, v[0][c] = (float)z;
+            v[1][a] = ea, v[1][b] = xb, v[1][c] = (float)z;
+            v[2][a] = (float)(2.0 * xa - ea), v[2][b] = (float)(2.0 * xb - eb),
+            v[2][c] = (float)(z + 0.1 * ext);
+            memcpy(positions + 9 * i, v, sizeof v);
+            for (int j = 0; j < 3; j++)
+                indices[3 * i + j] = 3 * (uint32_t)i + (uint32_t)j;
+            expect[i] = 0;
+        }
+        for (int i = 0; i < FACES; i++) {
+            const int a = i % 3, high = (i / 3) % 2, out = (i / 6) % 2, steps = (i / 12) % 17;
+            const float face = high ? hi[a] : lo[a];
+            const float outward = high ? INFINITY : -INFINITY;
+            float x =
+                face; /* 0, 1, 2, 4, ... 2^15 ulps off the face, out or in, at most a tenth of the box */
+            for (int k = 0; k < (steps == 0 ? 0 : 1 << (steps - 1)) && fabs((double)x - face) < 0.1 * ext;
+                 k++)
+                x = nextafterf(x, out ? outward : -outward);
+            float v[3][3];
+            for (int b = 0; b < 3; b++) {
+                const double inner = lo[b] + (0.25 + 0.5 * scene_rand_unit(&st)) * (hi[b] - lo[b]);
+                v[0][b] = b == a ? x : (float)inner;
+                for (int j = 1; j < 3; j++)
+                    v[j][b] =
+                        b == a ? (float)(x + (high ? 1.0 : -1.0) * (0.2 + 0.3 * scene_rand_unit(&st)) * ext)
+                               : (float)(inner + rnd(&st, -0.2, 0.2) * ext);
+            }
+            memcpy(positions + 9 * i, v, sizeof v);
+            for (int j = 0; j < 3; j++)
+                indices[3 * i + j] = 3 * (uint32_t)i + (uint32_t)j;
+            expect[i] = high ? x <= face : x >= face;
+        }
+        ref_fixture fx;
+        assert_int_equal(ref_fixture_open(&fx, positions, 3 * N, indices, N, test_options()), CBVH_OK);
+        assert_int_equal(fx.tris.count, N);
+        static uint32_t ids[N + 1];
+        cbvh_shape box;
+        memset(&box, 0, sizeof box);
+        box.kind = CBVH_SHAPE_BOX;
+        box.rotation[3] = 1.0f;
+        for (int a = 0; a < 3; a++) {
+            box.center[a] = (float)(0.5 * ((double)lo[a] + hi[a]));
+            box.half_extent[a] = (float)(0.5 * ((double)hi[a] - lo[a]));
+        }
+        for (int api = 0; api < 2; api++) {
+            size_t n = 0;
+            if (api == 0) {
+                n = cbvh_overlap_box(fx.file, lo, hi, NULL, NULL, ids, N + 1);
+            } else { /* the exact box is center +- half extent, in double */
+                assert_int_equal(cbvh_overlap_with(fx.file, &box, NULL, 0, ids, N + 1, &n, NULL), CBVH_OK);
+                for (int i = 0; i < FACES; i++) {
+                    const int a = i % 3, high = (i / 3) % 2;
+                    const double x = positions[9 * i + a];
+                    const double c = box.center[a], h = box.half_extent[a];
+                    expect[i] = high ? x <= c + h : x >= c - h;
+                }
+            }
+            uint8_t got[N] = {0};
+            for (size_t k = 0; k < n; k++) {
+                assert_true(ids[k] < N && !got[ids[k]]);
+                got[ids[k]] = 1;
+            }
+            for (int i = 0; i < N; i++)
+                if (got[i] != expect[i]) {
+                    fprintf(stderr, "box vertex at faces: origin %g api %d tri %d got %d expected %d\n", base,
+                            api, i, got[i], expect[i]);
+                    fail();
+                }
+        }
+        ref_fixture_close(&fx);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -784,6 +891,7 @@ int main(void)
         cmocka_unit_test(test_segment_triangle_distance),
         cmocka_unit_test(test_reference_point_distance_in_a_row),
         cmocka_unit_test(test_kernels_agree),
+        cmocka_unit_test(test_box_vertex_at_faces),
     };
     return TEST_RUN_LAYOUTS(tests, 1);
 }

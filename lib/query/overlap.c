@@ -134,9 +134,12 @@ static void box_contact(const struct overlap_region *r, cbvh_v3 a, cbvh_v3 b, cb
     }
     *n = ex->n;
     *depth = ex->depth;
+    /* No operand of the maxima is NaN (finite half extents; lengths of differences of finite vertices, at
+     * most infinite), so cbvh_dmax gives what fmax, a call into libm, gives. */
     const cbvh_v3 o = r->box.center, h = r->box.half;
-    const double size = fmax(fmax(h.x, h.y), h.z) + fmax(v3_len(v3_sub(b, a)), v3_len(v3_sub(c, a))) +
-                        fabs(o.x) + fabs(o.y) + fabs(o.z);
+    const double size = cbvh_dmax(cbvh_dmax(h.x, h.y), h.z) +
+                        cbvh_dmax(v3_len(v3_sub(b, a)), v3_len(v3_sub(c, a))) + fabs(o.x) + fabs(o.y) +
+                        fabs(o.z);
     *point = cbvh_box_contact_point(a, b, c, &r->box, o, *n, 1e-6 * size);
 }
 
@@ -233,7 +236,6 @@ struct overlap_query {
     struct overlap_sink *sink;
     struct cbvh_grid_range grid;
     int ball, capsule;
-    int exact_only;    /* the triangles the float tests keep go to the exact test alone (overlap_quad) */
     uint16_t small[3]; /* per axis, the largest extent in grid steps of a box small next to the shape */
     struct ball_reach reach;
     struct cbvh_grown_path path;
@@ -242,6 +244,8 @@ struct overlap_query {
     struct cbvh_grid_range4 grid4; /* grid, as four wide slots at once test it */
     struct cbvh_cull4 cull4;
     __m128 center4[3], reach2, origin4[3], scale4[3]; /* a ball's reach, and the file's grid, in every lane */
+    int inner;                           /* an axis-aligned box's inner box is not empty (box_inner_of) */
+    cbvh_lanes inner_lo[3], inner_hi[3]; /* the inner box, in every lane */
 #endif
 };
 
@@ -399,10 +403,8 @@ static inline uint32_t slots_small4(const uint8_t *node, const __m128i small4[3]
     const __m128i zero = _mm_setzero_si128();
     __m128i small = _mm_set1_epi16(-1);
     for (uint32_t a = 0; a < 3; a++) {
-        const __m128i qmin =
-            _mm_loadl_epi64((const __m128i *)(const void *)(node + cbvh_w4_plane_offset(a, 0)));
-        const __m128i qmax =
-            _mm_loadl_epi64((const __m128i *)(const void *)(node + cbvh_w4_plane_offset(3u + a, 0)));
+        __m128i qmin, qmax;
+        cbvh_w4_grid_planes4(node, a, &qmin, &qmax);
         const __m128i extent = _mm_subs_epu16(qmax, qmin);
         small = _mm_and_si128(small, _mm_cmpeq_epi16(_mm_subs_epu16(extent, small4[a]), zero));
     }
@@ -439,8 +441,9 @@ CBVH_FORCE_INLINE uint32_t overlap_enter4(void *query, const uint8_t *node, floa
 #endif
 
 /* What a triangle past the walk's box test has left to pass: the cheap tests in double, then the exact test
- * (OVERLAP_CULL); the exact test alone (OVERLAP_EXACT: the float tests left nothing the cheap tests would
- * decide); or nothing (OVERLAP_SURE: the region surely touches it). */
+ * (OVERLAP_CULL: without SIMD); the exact test alone (OVERLAP_EXACT: past the float tests, cbvh_cull_keep_lanes,
+ * which leave the cheap tests too little to decide for them to pay, on every shape); or nothing
+ * (OVERLAP_SURE: the region surely touches it). */
 enum overlap_left { OVERLAP_CULL, OVERLAP_EXACT, OVERLAP_SURE };
 
 /* 1 when the region overlaps a triangle that has the tests `left` (not OVERLAP_SURE) to pass; the exact
@@ -482,8 +485,46 @@ static int region_meets(const struct overlap_region *r, const float lo[3], const
 #endif
 
 #ifdef CBVH_HAVE_SIMD
+/* The box a triangle surely overlaps the region's axis-aligned box when a vertex lies in it: the region's
+ * [lo, hi] shrunk by m = 2^-19 s + 2^-100, s the largest |lo| or |hi|, rounded to float (by at most 2^-25 s).
+ * Those bounds lie at most 2^-21 |x| + 2^-126 outside the exact box (shape_region; cbvh_overlap_box's are
+ * the box), so such a vertex lies inside the exact box by more than 2^-20 s on every axis, hence by 2^-20 s
+ * |u|_1 on any axis u of the exact separating-axis test, whose rounding of the vertex's projection and of
+ * the box's radius is below 2^-48 s |u|_1 (every coordinate relative to the box's center is at most s):
+ * no axis separates them, and the exact test finds what this finds. 0 when the inner box is empty. */
+static int box_inner_of(const struct overlap_region *r, float lo[3], float hi[3])
+{
+    double s = 0.0;
+    for (int a = 0; a < 3; a++)
+        s = cbvh_dmax(s, cbvh_dmax(fabs(r->lo[a]), fabs(r->hi[a])));
+    const double m = 0x1p-19 * s + 0x1p-100;
+    int empty = 0;
+    for (int a = 0; a < 3; a++) {
+        lo[a] = (float)(r->lo[a] + m);
+        hi[a] = (float)(r->hi[a] - m);
+        empty |= !(lo[a] <= hi[a]);
+    }
+    return !empty;
+}
+
+/* The lanes of corners with a vertex in the inner box (box_inner_of): those triangles surely overlap the
+ * region. */
+CBVH_FORCE_INLINE uint32_t inner_vertex_lanes(const struct overlap_query *q, const cbvh_lanes corners[3][3])
+{
+    cbvh_lanes any = lanes_zero();
+    for (int k = 0; k < 3; k++) {
+        cbvh_lanes in = lanes_and(lanes_ge(corners[k][0], q->inner_lo[0]), lanes_le(corners[k][0], q->inner_hi[0]));
+        for (int a = 1; a < 3; a++)
+            in = lanes_and(in, lanes_and(lanes_ge(corners[k][a], q->inner_lo[a]),
+                                         lanes_le(corners[k][a], q->inner_hi[a])));
+        any = lanes_or(any, in);
+    }
+    return (uint32_t)lanes_bits(any);
+}
+
 /* The CBVH_LANES triangles of group g through the float tests (a capsule's path against their boxes,
- * cbvh_grown_path_triangle_lanes, then cbvh_cull_keep_lanes), the kept ones in order through the rest. */
+ * cbvh_grown_path_triangle_lanes, then cbvh_cull_keep_lanes; an axis-aligned box's inner-vertex test), the
+ * kept ones in order through the exact test unless surely touching. */
 CBVH_FORCE_INLINE int overlap_group(void *query, uint32_t k, const struct leaf_group *g)
 {
     const struct overlap_query *q = query;
@@ -493,12 +534,13 @@ CBVH_FORCE_INLINE int overlap_group(void *query, uint32_t k, const struct leaf_g
     if (q->capsule && !(group &= cbvh_grown_path_triangle_lanes(&q->path, corners, 1.0f)))
         return 0;
     uint32_t touch, keep = cbvh_cull_keep_lanes(&q->cull4, corners, &touch) & group;
-    const enum overlap_left rest = q->exact_only ? OVERLAP_EXACT : OVERLAP_CULL;
+    if (q->inner && (keep & ~touch))
+        touch |= inner_vertex_lanes(q, corners);
     for (; keep; keep &= keep - 1u) {
         const uint32_t j = lanes_lowest(keep);
         float a[3], b[3], c[3];
         cbvh_group_triangle(g, j, a, b, c);
-        if (overlap_triangle(q, k + j, a, b, c, touch >> j & 1u ? OVERLAP_SURE : rest))
+        if (overlap_triangle(q, k + j, a, b, c, touch >> j & 1u ? OVERLAP_SURE : OVERLAP_EXACT))
             return 1;
     }
     return 0;
@@ -573,10 +615,6 @@ CBVH_FORCE_INLINE size_t overlap_walk_kernel(const struct cbvh_file *f, const st
         ball_reach_of(&region->shape, &q.reach);
     if (q.capsule)
         capsule_path(f, &region->shape, &q.path);
-    /* A ball's float tests leave only lanes near the radius, slivers, or odd sizes to the exact test. So do a
-     * capsule's when contacts are wanted: the contact needs the exact test's closest points anyway. */
-    q.exact_only = region->shape.kind == CBVH_SHAPE_SPHERE ||
-                   (region->shape.kind == CBVH_SHAPE_CAPSULE && sink->contacts);
     q.small[0] = q.small[1] = q.small[2] = 0;
     if (fine)
         small_boxes(f, reach, q.small);
@@ -586,6 +624,15 @@ CBVH_FORCE_INLINE size_t overlap_walk_kernel(const struct cbvh_file *f, const st
             q.small4[a] = _mm_set1_epi16((short)q.small[a]);
     cbvh_grid_range4_of(&q.grid, &q.grid4);
     cbvh_cull4_init(&q.cull4, &region->shape, region->lo, region->hi, NULL);
+    float inner_lo[3], inner_hi[3];
+    /* not for contacts: their box test runs for the contact anyway */
+    q.inner = region->shape.kind == CBVH_SHAPE_BOX && !region->box.rotated && !sink->contacts &&
+              box_inner_of(region, inner_lo, inner_hi);
+    if (q.inner)
+        for (int a = 0; a < 3; a++) {
+            q.inner_lo[a] = lanes_set1(inner_lo[a]);
+            q.inner_hi[a] = lanes_set1(inner_hi[a]);
+        }
     if (q.ball) {
         q.reach2 = _mm_set1_ps(q.reach.reach2);
         for (int a = 0; a < 3; a++) {

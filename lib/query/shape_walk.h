@@ -54,6 +54,15 @@ static inline void cbvh_shape_box_coords(const struct cbvh_file *f, const uint32
 }
 
 #ifdef CBVH_HAVE_SIMD
+/* The grid coordinates of axis a's (0, 1, 2) min and max planes of the four slots of wide node `node` (used
+ * or not), unsigned 16-bit in the low four lanes: a node's plane k of all four slots is one 8-byte load
+ * (layout/wide4.h). */
+CBVH_FORCE_INLINE void cbvh_w4_grid_planes4(const uint8_t *node, uint32_t a, __m128i *qmin, __m128i *qmax)
+{
+    *qmin = _mm_loadl_epi64((const __m128i *)(const void *)(node + cbvh_w4_plane_offset(a, 0)));
+    *qmax = _mm_loadl_epi64((const __m128i *)(const void *)(node + cbvh_w4_plane_offset(3u + a, 0)));
+}
+
 /* A non-empty grid range as the four-slot test reads it: per axis, lo and hi (clamped into 16 bits, which
  * changes no answer once the range is not empty) in every 16-bit lane. */
 struct cbvh_grid_range4 {
@@ -70,17 +79,14 @@ static inline void cbvh_grid_range4_of(const struct cbvh_grid_range *g, struct c
 }
 
 /* cbvh_grid_range_meets on the four slots of wide node `node` at once: bit s for slot s (used or not).
- * x <= y for unsigned 16-bit x, y exactly when the saturated x - y is 0; a node's plane k of all four slots
- * is one 8-byte load (layout/wide4.h). */
+ * x <= y for unsigned 16-bit x, y exactly when the saturated x - y is 0. */
 static inline uint32_t cbvh_grid_range4_hits(const uint8_t *node, const struct cbvh_grid_range4 *w)
 {
     const __m128i zero = _mm_setzero_si128();
     __m128i in = _mm_set1_epi16(-1);
     for (uint32_t a = 0; a < 3; a++) {
-        const __m128i qmin =
-            _mm_loadl_epi64((const __m128i *)(const void *)(node + cbvh_w4_plane_offset(a, 0)));
-        const __m128i qmax =
-            _mm_loadl_epi64((const __m128i *)(const void *)(node + cbvh_w4_plane_offset(3u + a, 0)));
+        __m128i qmin, qmax;
+        cbvh_w4_grid_planes4(node, a, &qmin, &qmax);
         in = _mm_and_si128(in, _mm_cmpeq_epi16(_mm_subs_epu16(qmin, w->hi[a]), zero));
         in = _mm_and_si128(in, _mm_cmpeq_epi16(_mm_subs_epu16(w->lo[a], qmax), zero));
     }
@@ -96,9 +102,8 @@ CBVH_FORCE_INLINE void cbvh_w4_planes4(const uint8_t *node, uint32_t a, __m128 o
                                        __m128 *lo, __m128 *hi)
 {
     const __m128i zero = _mm_setzero_si128();
-    const __m128i qlo = _mm_loadl_epi64((const __m128i *)(const void *)(node + cbvh_w4_plane_offset(a, 0)));
-    const __m128i qhi =
-        _mm_loadl_epi64((const __m128i *)(const void *)(node + cbvh_w4_plane_offset(a + 3u, 0)));
+    __m128i qlo, qhi;
+    cbvh_w4_grid_planes4(node, a, &qlo, &qhi);
     *lo = _mm_add_ps(origin, _mm_mul_ps(_mm_cvtepi32_ps(_mm_unpacklo_epi16(qlo, zero)), scale));
     *hi = _mm_add_ps(origin, _mm_mul_ps(_mm_cvtepi32_ps(_mm_unpacklo_epi16(qhi, zero)), scale));
 }
