@@ -441,9 +441,9 @@ CBVH_FORCE_INLINE uint32_t overlap_enter4(void *query, const uint8_t *node, floa
 #endif
 
 /* What a triangle past the walk's box test has left to pass: the cheap tests in double, then the exact test
- * (OVERLAP_CULL: without SIMD); the exact test alone (OVERLAP_EXACT: past the float tests, cbvh_cull_keep_lanes,
- * which leave the cheap tests too little to decide for them to pay, on every shape); or nothing
- * (OVERLAP_SURE: the region surely touches it). */
+ * (OVERLAP_CULL: without SIMD); the exact test alone (OVERLAP_EXACT: past the float tests,
+ * cbvh_cull_keep_lanes, which leave the cheap tests too little to decide for them to pay, on every shape); or
+ * nothing (OVERLAP_SURE: the region surely touches it). */
 enum overlap_left { OVERLAP_CULL, OVERLAP_EXACT, OVERLAP_SURE };
 
 /* 1 when the region overlaps a triangle that has the tests `left` (not OVERLAP_SURE) to pass; the exact
@@ -513,7 +513,8 @@ CBVH_FORCE_INLINE uint32_t inner_vertex_lanes(const struct overlap_query *q, con
 {
     cbvh_lanes any = lanes_zero();
     for (int k = 0; k < 3; k++) {
-        cbvh_lanes in = lanes_and(lanes_ge(corners[k][0], q->inner_lo[0]), lanes_le(corners[k][0], q->inner_hi[0]));
+        cbvh_lanes in =
+            lanes_and(lanes_ge(corners[k][0], q->inner_lo[0]), lanes_le(corners[k][0], q->inner_hi[0]));
         for (int a = 1; a < 3; a++)
             in = lanes_and(in, lanes_and(lanes_ge(corners[k][a], q->inner_lo[a]),
                                          lanes_le(corners[k][a], q->inner_hi[a])));
