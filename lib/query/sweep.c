@@ -16,11 +16,7 @@ static int sweep_local(const struct cbvh_file *f, const struct cbvh_local_shape 
         v3_to_f(s->p0, at);
         return cbvh_sweep_as_ray(f, at, delta, rules, found);
     }
-    if (s->kind == CBVH_SHAPE_SPHERE)
-        return cbvh_sweep_sphere_shape(f, s, delta, rules, found);
-    if (s->kind == CBVH_SHAPE_CAPSULE)
-        return cbvh_sweep_capsule_shape(f, s, delta, rules, found);
-    return cbvh_sweep_box_shape(f, s, delta, rules, found);
+    return cbvh_sweep_walk(f, s, delta, rules, found);
 }
 
 /* A sweep without options: invalid input (see cbvh.h; shape NULL for a NULL argument) is a miss. */

@@ -1,5 +1,5 @@
-/* sweep_walk.c: the tree walk shared by the sphere, capsule and box sweeps (its scalar and SSE2 instances,
- * and the choice of kernel), and their common helpers. */
+/* sweep_walk.c: the sphere, capsule and box sweeps' tree walk with their exact triangle tests (its scalar
+ * and SSE2 instances, and the choice of kernel), and the sweep of a point. */
 #include "config.h"
 
 #include <float.h>
@@ -9,38 +9,37 @@
 #include "query/sweep_walk_kernel.h"
 
 static int sweep_walk_scalar(const struct cbvh_file *f, const struct cbvh_local_shape *bounds,
-                             const float delta[3], cbvh_sweep_triangle_fn sweep, const void *shape,
-                             const struct cbvh_sweep_rules *rules, struct cbvh_sweep_found *found)
+                             const float delta[3], const struct cbvh_sweep_rules *rules,
+                             struct cbvh_sweep_found *found)
 {
-    return sweep_walk_kernel(f, bounds, delta, sweep, shape, rules, found, 0);
+    return sweep_walk_kernel(f, bounds, delta, rules, found, 0);
 }
 
 #ifdef CBVH_HAVE_SIMD
 static int sweep_walk_sse2(const struct cbvh_file *f, const struct cbvh_local_shape *bounds,
-                           const float delta[3], cbvh_sweep_triangle_fn sweep, const void *shape,
-                           const struct cbvh_sweep_rules *rules, struct cbvh_sweep_found *found)
+                           const float delta[3], const struct cbvh_sweep_rules *rules,
+                           struct cbvh_sweep_found *found)
 {
-    return sweep_walk_kernel(f, bounds, delta, sweep, shape, rules, found, 1);
+    return sweep_walk_kernel(f, bounds, delta, rules, found, 1);
 }
 #endif
 
 /* The instance of the walk kernel chosen for the rays (cbvh_walk_kernel), whatever the layout: the scalar
  * one takes triangles one at a time, the others CBVH_LANES at a time. */
-int cbvh_sweep_walk(const struct cbvh_file *f, const struct cbvh_local_shape *bounds, const float delta[3],
-                    cbvh_sweep_triangle_fn sweep, const void *shape, const struct cbvh_sweep_rules *rules,
-                    struct cbvh_sweep_found *found)
+int cbvh_sweep_walk(const struct cbvh_file *f, const struct cbvh_local_shape *shape, const float delta[3],
+                    const struct cbvh_sweep_rules *rules, struct cbvh_sweep_found *found)
 {
     switch (cbvh_walk_kernel()) {
 #ifdef CBVH_HAVE_AVX2
     case CBVH_WALK_KERNEL_AVX2:
-        return cbvh_sweep_walk_avx2(f, bounds, delta, sweep, shape, rules, found);
+        return cbvh_sweep_walk_avx2(f, shape, delta, rules, found);
 #endif
 #ifdef CBVH_HAVE_SIMD
     case CBVH_WALK_KERNEL_SSE2:
-        return sweep_walk_sse2(f, bounds, delta, sweep, shape, rules, found);
+        return sweep_walk_sse2(f, shape, delta, rules, found);
 #endif
     default:
-        return sweep_walk_scalar(f, bounds, delta, sweep, shape, rules, found);
+        return sweep_walk_scalar(f, shape, delta, rules, found);
     }
 }
 

@@ -6,13 +6,6 @@
 #include "query/placement.h"
 #include "query/sweep_features.h"
 
-/* Sweeps one triangle: first contact with t in [0, tmax] (t = 0 when the shape
- * already overlaps the triangle). clear_at_start: 1 when the shape at t = 0 is
- * known clear of the triangle (cbvh_cull_triangle), so a kernel may skip
- * its overlap test. Returns 1 and fills *out on contact. */
-typedef int (*cbvh_sweep_triangle_fn)(const void *shape, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, double tmax,
-                                      int clear_at_start, struct cbvh_sweep_contact *out);
-
 /* What a sweep with options leaves out (cbvh_sweep_with): culling by the motion, the caller's filter (its
  * records in the world of `placement` when not NULL). */
 struct cbvh_sweep_rules {
@@ -28,24 +21,23 @@ struct cbvh_sweep_found {
     struct cbvh_sweep_contact contact;
 };
 
-/* Walks the nodes whose box, grown by the extent of a float box
- * center +- extent holding `bounds` (cbvh_shape_bounds), is crossed by the
- * point center + t * delta for t in [0, 1] (this culls exactly what the swept
- * shape cannot touch),
- * nearest entry first (cbvh_shape_sort_nearest). Each triangle reached
- * (past rules->cull) goes to `sweep`; the earliest contact wins, ties to the
- * lower cooked index, a contact that would win asks rules->filter. rules may
- * be NULL. Returns 1 on contact; fills *found either way. */
+/* Sweeps `shape` (a sphere, capsule or box of some size) by delta with its kind's exact test of each
+ * triangle (sweep_sphere.h, sweep_capsule.h, sweep_box.h), walking the nodes whose box, grown by the extent
+ * of a float box center +- extent holding the shape (cbvh_shape_bounds), is crossed by the point
+ * center + t * delta for t in [0, 1] (this culls exactly what the swept shape cannot touch), nearest entry
+ * first (cbvh_shape_sort_nearest), in the walk kernel chosen for the rays (cbvh_walk_kernel). Each
+ * triangle reached (past rules->cull) is tested; the earliest contact wins, ties to the lower cooked
+ * index, a contact that would win asks rules->filter. rules may be NULL. Returns 1 on contact; fills
+ * *found either way. */
 struct cbvh_local_shape;
-int cbvh_sweep_walk(const struct cbvh_file *f, const struct cbvh_local_shape *bounds, const float delta[3],
-                    cbvh_sweep_triangle_fn sweep, const void *shape, const struct cbvh_sweep_rules *rules,
-                    struct cbvh_sweep_found *found);
+int cbvh_sweep_walk(const struct cbvh_file *f, const struct cbvh_local_shape *shape, const float delta[3],
+                    const struct cbvh_sweep_rules *rules, struct cbvh_sweep_found *found);
 
 #ifdef CBVH_HAVE_AVX2
 /* cbvh_sweep_walk's AVX2 instance (sweep_walk_avx2.c), for CPUs that have it (the caller checks). */
-int cbvh_sweep_walk_avx2(const struct cbvh_file *f, const struct cbvh_local_shape *bounds,
-                         const float delta[3], cbvh_sweep_triangle_fn sweep, const void *shape,
-                         const struct cbvh_sweep_rules *rules, struct cbvh_sweep_found *found);
+int cbvh_sweep_walk_avx2(const struct cbvh_file *f, const struct cbvh_local_shape *shape,
+                         const float delta[3], const struct cbvh_sweep_rules *rules,
+                         struct cbvh_sweep_found *found);
 #endif
 
 /* A zero-size shape: the sweep is the ray center + t * delta, t in [0, 1],
@@ -54,14 +46,5 @@ int cbvh_sweep_walk_avx2(const struct cbvh_file *f, const struct cbvh_local_shap
  * the face normal against delta. Returns 1 on contact; fills *found either way. */
 int cbvh_sweep_as_ray(const struct cbvh_file *f, const float center[3], const float delta[3],
                       const struct cbvh_sweep_rules *rules, struct cbvh_sweep_found *found);
-
-/* The sweep of each shape kind, in the mesh's frame (shape.h), by a delta of floats. */
-int cbvh_sweep_sphere_shape(const struct cbvh_file *f, const struct cbvh_local_shape *s, const float delta[3],
-                            const struct cbvh_sweep_rules *rules, struct cbvh_sweep_found *found);
-int cbvh_sweep_capsule_shape(const struct cbvh_file *f, const struct cbvh_local_shape *s,
-                             const float delta[3], const struct cbvh_sweep_rules *rules,
-                             struct cbvh_sweep_found *found);
-int cbvh_sweep_box_shape(const struct cbvh_file *f, const struct cbvh_local_shape *s, const float delta[3],
-                         const struct cbvh_sweep_rules *rules, struct cbvh_sweep_found *found);
 
 #endif

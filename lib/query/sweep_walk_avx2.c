@@ -1,5 +1,5 @@
-/* sweep_walk_avx2.c: the sweeps' tree walk compiled for AVX2, eight leaf triangles a vector through the float
- * culls. */
+/* sweep_walk_avx2.c: the sweeps' tree walk and the shapes' exact triangle tests compiled for AVX2, eight
+ * leaf triangles a vector through the float culls. */
 #ifdef HAVE_CONFIG_H
 #include "config.h"
 #endif
@@ -12,13 +12,14 @@
 
 #include "query/sweep_walk_kernel.h"
 
-/* The exact tests it calls are SSE2 code: the upper halves of the vector registers, which a caller's AVX code
- * may have left in use, are cleared first (the compiler clears them again after its own 256-bit code). */
-int cbvh_sweep_walk_avx2(const struct cbvh_file *f, const struct cbvh_local_shape *bounds,
-                         const float delta[3], cbvh_sweep_triangle_fn sweep, const void *shape,
-                         const struct cbvh_sweep_rules *rules, struct cbvh_sweep_found *found)
+/* Some of the functions the exact tests call (closest.c, triangle_box.c) are SSE2 code: the upper halves of
+ * the vector registers, which a caller's AVX code may have left in use, are cleared first (the compiler
+ * clears them again after its own 256-bit code). */
+int cbvh_sweep_walk_avx2(const struct cbvh_file *f, const struct cbvh_local_shape *shape,
+                         const float delta[3], const struct cbvh_sweep_rules *rules,
+                         struct cbvh_sweep_found *found)
 {
     _mm256_zeroupper();
-    return sweep_walk_kernel(f, bounds, delta, sweep, shape, rules, found, 1);
+    return sweep_walk_kernel(f, shape, delta, rules, found, 1);
 }
 #endif

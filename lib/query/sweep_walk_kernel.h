@@ -1,5 +1,6 @@
-/* sweep_walk_kernel.h: the sweeps' tree walk, node and leaf tests, compiled once per instruction set
- * (sweep_walk.c: scalar and SSE2; sweep_walk_avx2.c: AVX2). Include it in one .c file each. */
+/* sweep_walk_kernel.h: the sweeps' tree walk, node and leaf tests and the shapes' exact triangle tests,
+ * compiled once per instruction set (sweep_walk.c: scalar and SSE2; sweep_walk_avx2.c: AVX2). Include it in
+ * one .c file each. */
 #ifndef CBVH_QUERY_SWEEP_WALK_KERNEL_H
 #define CBVH_QUERY_SWEEP_WALK_KERNEL_H
 
@@ -14,17 +15,24 @@
 #include "query/shape.h"
 #include "query/shape_cull.h"
 #include "query/shape_leaf.h"
+#include "query/sweep_box.h"
+#include "query/sweep_capsule.h"
+#include "query/sweep_sphere.h"
 #include "query/sweep_walk.h"
 #include "query/triangle_frame.h"
 #include "query/walk.h"
 
-/* A sweep as the shape walk sees it: the path of its float box (cbvh_sweep_bounds). */
+/* A sweep as the shape walk sees it: the path of its float box (cbvh_sweep_bounds), and the shape as its
+ * kind's exact test takes it (bounds->kind says which). */
 struct sweep_query {
     const struct cbvh_file *f;
     const float *delta;
     struct cbvh_grown_path path;
-    cbvh_sweep_triangle_fn sweep;
-    const void *shape;
+    union {
+        struct sphere_shape sphere;
+        struct capsule_shape capsule;
+        struct box_shape box;
+    } shape;
     const struct cbvh_local_shape *bounds;
     const struct cbvh_sweep_rules *rules;
     struct cbvh_sweep_contact best;
@@ -48,6 +56,23 @@ static int culled(cbvh_cull cull, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, const float d
 {
     const double s = v3_dot(v3_cross(v3_sub(b, a), v3_sub(c, a)), v3_from_f(delta));
     return (cull == CBVH_CULL_BACK && s > 0.0) || (cull == CBVH_CULL_FRONT && s < 0.0);
+}
+
+/* Sweeps one triangle with the shape's exact test, called directly so that it compiles in the walk's
+ * instruction set and may inline: first contact with t in [0, tmax] (t = 0 when the shape already overlaps
+ * the triangle). clear_at_start: 1 when the shape at t = 0 is known clear of the triangle
+ * (cbvh_cull_triangle), so a test may skip its overlap test. Returns 1 and fills *out on contact. */
+CBVH_FORCE_INLINE int sweep_shape_triangle(const struct sweep_query *q, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c,
+                                           double tmax, int clear_at_start, struct cbvh_sweep_contact *out)
+{
+    switch (q->bounds->kind) {
+    case CBVH_SHAPE_SPHERE:
+        return sphere_triangle(&q->shape.sphere, a, b, c, tmax, clear_at_start, out);
+    case CBVH_SHAPE_CAPSULE:
+        return capsule_triangle(&q->shape.capsule, a, b, c, tmax, clear_at_start, out);
+    default:
+        return box_triangle(&q->shape.box, a, b, c, tmax, clear_at_start, out);
+    }
 }
 
 /* The filter's verdict on cooked triangle k, whose contact would win: its record with the barycentrics of
@@ -98,7 +123,7 @@ CBVH_FORCE_INLINE int sweep_triangle(struct sweep_query *q, uint32_t k, const fl
     if (cull == CBVH_CULL_CLEAR)
         return 0;
     struct cbvh_sweep_contact c = {0.0, {0, 0, 0}, {0, 0, 0}, 0.0};
-    if (!q->sweep(q->shape, v[0], v[1], v[2], q->best.t, cull == CBVH_CULL_CLEAR_AT_START, &c) ||
+    if (!sweep_shape_triangle(q, v[0], v[1], v[2], q->best.t, cull == CBVH_CULL_CLEAR_AT_START, &c) ||
         !(c.t < q->best.t || (c.t == q->best.t && k < q->best_tri)))
         return 0;
     const int verdict = rules && rules->filter ? ask_filter(q, k, v, &c) : CBVH_FILTER_ACCEPT;
@@ -170,9 +195,8 @@ static int sweep_leaf_one(void *query, uint32_t first, uint32_t count)
  * slots four at once and leaf triangles CBVH_LANES at a time through the float culls; else one at a time.
  * The answers are the same either way, bit for bit. */
 CBVH_FORCE_INLINE int sweep_walk_kernel(const struct cbvh_file *f, const struct cbvh_local_shape *bounds,
-                                        const float delta[3], cbvh_sweep_triangle_fn sweep, const void *shape,
-                                        const struct cbvh_sweep_rules *rules, struct cbvh_sweep_found *found,
-                                        const int lanes)
+                                        const float delta[3], const struct cbvh_sweep_rules *rules,
+                                        struct cbvh_sweep_found *found, const int lanes)
 {
     cbvh_v3 lo, hi;
     float center[3], extent[3];
@@ -180,13 +204,17 @@ CBVH_FORCE_INLINE int sweep_walk_kernel(const struct cbvh_file *f, const struct 
     cbvh_sweep_bounds(lo, hi, center, extent);
     struct sweep_query q = {.f = f,
                             .delta = delta,
-                            .sweep = sweep,
-                            .shape = shape,
                             .bounds = bounds,
                             .rules = rules,
                             .best = {1.0, {0, 0, 0}, {0, 0, 0}, 0.0},
                             .best_tri = UINT32_MAX,
                             .limit = 1.0f};
+    if (bounds->kind == CBVH_SHAPE_SPHERE)
+        sphere_shape_init(&q.shape.sphere, bounds, delta);
+    else if (bounds->kind == CBVH_SHAPE_CAPSULE)
+        capsule_shape_init(&q.shape.capsule, bounds, delta);
+    else
+        box_shape_init(&q.shape.box, bounds, delta);
     cbvh_grown_path_init(&q.path, f, center, extent, delta);
 #ifdef CBVH_HAVE_SIMD
     if (lanes) {

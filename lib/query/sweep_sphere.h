@@ -1,22 +1,32 @@
-/* sweep_sphere.c: sphere sweeps: exact first contact with each triangle's face plane, edge cylinders and
- * vertex balls. */
+/* sweep_sphere.h: the sphere sweep's exact test of one triangle: first contact with its face plane, edge
+ * cylinders and vertex balls. Only for sweep_walk_kernel.h, which compiles it once per instruction set. */
+#ifndef CBVH_QUERY_SWEEP_SPHERE_H
+#define CBVH_QUERY_SWEEP_SPHERE_H
+
 #include "query/closest.h"
 #include "query/shape.h"
-#include "query/sweep_walk.h"
+#include "query/sweep_features.h"
 
 struct sphere_shape {
     cbvh_v3 center, delta;
     double radius;
 };
 
+static inline void sphere_shape_init(struct sphere_shape *s, const struct cbvh_local_shape *shape,
+                                     const float delta[3])
+{
+    s->center = shape->p0;
+    s->delta = v3_from_f(delta);
+    s->radius = shape->radius;
+}
+
 /* Overlap at the start is t = 0 with the triangle's point nearest the center
  * and the normal from it to the center (cbvh_fallback_normal when the center
  * lies on the triangle), depth radius - distance along it. Otherwise the first
  * entry of the center into the triangle grown by the radius (sweep_features.h). */
-static int sphere_triangle(const void *shape, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, double tmax,
-                           int clear_at_start, struct cbvh_sweep_contact *out)
+static inline int sphere_triangle(const struct sphere_shape *s, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, double tmax,
+                                  int clear_at_start, struct cbvh_sweep_contact *out)
 {
-    const struct sphere_shape *s = shape;
     if (clear_at_start)
         return cbvh_sweep_ball_triangle(s->center, s->delta, s->radius, a, b, c, tmax, out);
     const cbvh_v3 q = cbvh_closest_point_triangle(s->center, a, b, c);
@@ -31,10 +41,4 @@ static int sphere_triangle(const void *shape, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, d
     return cbvh_sweep_ball_triangle(s->center, s->delta, s->radius, a, b, c, tmax, out);
 }
 
-int cbvh_sweep_sphere_shape(const struct cbvh_file *f, const struct cbvh_local_shape *shape,
-                            const float delta[3], const struct cbvh_sweep_rules *rules,
-                            struct cbvh_sweep_found *found)
-{
-    const struct sphere_shape s = {shape->p0, v3_from_f(delta), shape->radius};
-    return cbvh_sweep_walk(f, shape, delta, sphere_triangle, &s, rules, found);
-}
+#endif

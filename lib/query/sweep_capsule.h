@@ -1,10 +1,16 @@
-/* sweep_capsule.c: capsule sweeps, exact: end balls, triangle vertices against the capsule side, edges
- * against the segment. */
+/* sweep_capsule.h: the capsule sweep's exact test of one triangle: end balls, triangle vertices against the
+ * capsule side, edges against the segment. Only for sweep_walk_kernel.h, which compiles it once per
+ * instruction set. */
+#ifndef CBVH_QUERY_SWEEP_CAPSULE_H
+#define CBVH_QUERY_SWEEP_CAPSULE_H
+
+#include <math.h>
+
 #include "common/compiler.h"
 #include "query/closest.h"
 #include "query/shape.h"
 #include "query/shape_cull.h"
-#include "query/sweep_walk.h"
+#include "query/sweep_features.h"
 
 struct capsule_shape {
     cbvh_v3 p0, p1, delta;
@@ -46,8 +52,8 @@ CBVH_FORCE_INLINE int capsule_slab(const struct capsule_shape *s, const cbvh_v3 
  * (|n|^2 < 2^-20 span^4), on a triangle of extreme size (span below 2^-160 or size beyond 2^160, where the
  * products could underflow or overflow) it returns 1 with *t_lo 0; a NaN from any product keeps the
  * triangle too. */
-static int capsule_slabs(const struct capsule_shape *s, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, double tmax,
-                         double *t_lo)
+static inline int capsule_slabs(const struct capsule_shape *s, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, double tmax,
+                                double *t_lo)
 {
     const cbvh_v3 e[3] = {v3_sub(b, a), v3_sub(c, b), v3_sub(a, c)},
                   w[3] = {v3_sub(a, s->p0), v3_sub(b, s->p0), v3_sub(c, s->p0)};
@@ -78,10 +84,9 @@ static int capsule_slabs(const struct capsule_shape *s, cbvh_v3 a, cbvh_v3 b, cb
  * each edge E of T against S: the point p0 + t*delta entering the
  * parallelogram E - (S - p0) grown by r. With r = 0 the balls and cylinders
  * have no volume and the faces alone bound the swept prism. */
-static int capsule_triangle(const void *shape, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, double tmax,
-                            int clear_at_start, struct cbvh_sweep_contact *out)
+static inline int capsule_triangle(const struct capsule_shape *s, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c,
+                                   double tmax, int clear_at_start, struct cbvh_sweep_contact *out)
 {
-    const struct capsule_shape *s = shape;
     const double r = s->radius;
     cbvh_v3 on_seg, on_tri, n;
     double t_lo;
@@ -136,18 +141,17 @@ static int capsule_triangle(const void *shape, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, 
     return found;
 }
 
-int cbvh_sweep_capsule_shape(const struct cbvh_file *f, const struct cbvh_local_shape *shape,
-                             const float delta[3], const struct cbvh_sweep_rules *rules,
-                             struct cbvh_sweep_found *found)
+static inline void capsule_shape_init(struct capsule_shape *s, const struct cbvh_local_shape *shape,
+                                      const float delta[3])
 {
     const cbvh_v3 d = v3_from_f(delta);
-    const struct capsule_shape s = {shape->p0,
-                                    shape->p1,
-                                    d,
-                                    shape->radius,
-                                    v3_sub(shape->p1, shape->p0),
-                                    v3_scale(d, -1.0),
-                                    cbvh_dmax(cull_max_abs(shape->p0), cull_max_abs(shape->p1)) +
-                                        shape->radius};
-    return cbvh_sweep_walk(f, shape, delta, capsule_triangle, &s, rules, found);
+    *s = (struct capsule_shape){shape->p0,
+                                shape->p1,
+                                d,
+                                shape->radius,
+                                v3_sub(shape->p1, shape->p0),
+                                v3_scale(d, -1.0),
+                                cbvh_dmax(cull_max_abs(shape->p0), cull_max_abs(shape->p1)) + shape->radius};
 }
+
+#endif
