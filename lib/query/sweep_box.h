@@ -9,7 +9,7 @@
 
 #include "query/shape.h"
 #include "query/sweep_features.h"
-#include "query/triangle_box.h"
+#include "query/triangle_box_kernel.h"
 
 struct box_shape {
     struct cbvh_box box;
@@ -23,7 +23,7 @@ static inline int box_triangle(const struct box_shape *s, cbvh_v3 a, cbvh_v3 b, 
     (void)clear_at_start;
     double t, depth = 0.0;
     cbvh_v3 n;
-    if (!cbvh_triangle_oriented_box_sweep(a, b, c, &s->box, s->delta, tmax, &t, &n, &depth))
+    if (!triangle_oriented_box_sweep(a, b, c, &s->box, s->delta, tmax, &t, &n, &depth))
         return 0;
     const cbvh_v3 at = v3_madd(s->box.center, s->delta, t), half = s->box.half;
     /* Finite and >= 0 (the half extents are, the vertices and the motion are floats): cbvh_dmax is fmax. */
@@ -32,7 +32,7 @@ static inline int box_triangle(const struct box_shape *s, cbvh_v3 a, cbvh_v3 b, 
                         fabs(at.z);
     out->t = t;
     out->normal = n;
-    out->point = cbvh_box_contact_point(a, b, c, &s->box, at, n, 1e-6 * size);
+    out->point = box_contact_point(a, b, c, &s->box, at, n, 1e-6 * size);
     out->depth = depth;
     return 1;
 }
