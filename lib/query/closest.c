@@ -11,12 +11,13 @@ cbvh_v3 cbvh_closest_point_triangle(cbvh_v3 p, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c)
     return cbvh_closest_point_in_triangle(p, v);
 }
 
-/* cbvh_closest_segments, inlined into the segment-triangle test's three calls. */
-CBVH_FORCE_INLINE double closest_segments(cbvh_v3 p0, cbvh_v3 p1, cbvh_v3 q0, cbvh_v3 q1, cbvh_v3 *on_p,
-                                          cbvh_v3 *on_q)
+/* cbvh_closest_segments, inlined into the segment-triangle test's three calls, which know d1 = p1 - p0 and
+ * d2 = q1 - q0 and their squared lengths a and e already. */
+CBVH_FORCE_INLINE double closest_segments_known(cbvh_v3 p0, cbvh_v3 d1, double a, cbvh_v3 q0, cbvh_v3 d2,
+                                                double e, cbvh_v3 *on_p, cbvh_v3 *on_q)
 {
-    const cbvh_v3 d1 = v3_sub(p1, p0), d2 = v3_sub(q1, q0), r = v3_sub(p0, q0);
-    const double a = v3_len2(d1), e = v3_len2(d2), f = v3_dot(d2, r);
+    const cbvh_v3 r = v3_sub(p0, q0);
+    const double f = v3_dot(d2, r);
     double s, t;
     if (a <= 0.0 && e <= 0.0) {
         s = t = 0.0;
@@ -51,7 +52,8 @@ CBVH_FORCE_INLINE double closest_segments(cbvh_v3 p0, cbvh_v3 p1, cbvh_v3 q0, cb
 
 double cbvh_closest_segments(cbvh_v3 p0, cbvh_v3 p1, cbvh_v3 q0, cbvh_v3 q1, cbvh_v3 *on_p, cbvh_v3 *on_q)
 {
-    return closest_segments(p0, p1, q0, q1, on_p, on_q);
+    const cbvh_v3 d1 = v3_sub(p1, p0), d2 = v3_sub(q1, q0);
+    return closest_segments_known(p0, d1, v3_len2(d1), q0, d2, v3_len2(d2), on_p, on_q);
 }
 
 /* Where segment p0-p1 crosses the plane of triangle v (frame f) inside the triangle, if it does
@@ -73,12 +75,13 @@ CBVH_FORCE_INLINE int segment_crosses_triangle(cbvh_v3 p0, cbvh_v3 p1, const cbv
     return 1;
 }
 
-double cbvh_closest_segment_triangle(cbvh_v3 p0, cbvh_v3 p1, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, cbvh_v3 *on_seg,
-                                     cbvh_v3 *on_tri)
+double cbvh_closest_segment_triangle_of(cbvh_v3 p0, cbvh_v3 p1, const cbvh_v3 v[3], cbvh_v3 *on_seg,
+                                        cbvh_v3 *on_tri)
 {
-    const cbvh_v3 v[3] = {a, b, c};
+    struct cbvh_triangle_edges e;
     struct cbvh_triangle_frame f;
-    cbvh_triangle_frame_of(v, &f);
+    cbvh_triangle_edges_of(v, &e);
+    cbvh_triangle_frame_of_edges(v, &e, &f);
     cbvh_v3 x;
     if (segment_crosses_triangle(p0, p1, v, &f, &x)) {
         *on_seg = *on_tri = x;
@@ -88,20 +91,22 @@ double cbvh_closest_segment_triangle(cbvh_v3 p0, cbvh_v3 p1, cbvh_v3 a, cbvh_v3 
      * so only the endpoints' projections inside the triangle are candidates of their own. */
     double best = INFINITY, d;
     *on_seg = p0;
-    *on_tri = a;
-    const cbvh_v3 end[2] = {p0, p1};
+    *on_tri = v[0];
     for (int k = 0; k < 2; k++) {
-        if (cbvh_projection_inside(v3_sub(end[k], v[f.base]), v, &f, &x) &&
-            (d = v3_len2(v3_sub(end[k], x))) < best) {
+        const cbvh_v3 end = k ? p1 : p0;
+        if (cbvh_projection_inside(v3_sub(end, v[f.base]), v, &f, &x) &&
+            (d = v3_len2(v3_sub(end, x))) < best) {
             best = d;
-            *on_seg = end[k];
+            *on_seg = end;
             *on_tri = x;
         }
     }
-    const cbvh_v3 edge[3][2] = {{a, b}, {b, c}, {c, a}};
-    for (int e = 0; e < 3; e++) {
+    const cbvh_v3 d1 = v3_sub(p1, p0);
+    const double a = v3_len2(d1);
+    for (int k = 0; k < 3; k++) {
+        const int opposite = cbvh_frame_vertex(k, 2); /* edge v[k] to v[k + 1] is e.edge[k + 2] */
         cbvh_v3 sp, tp;
-        d = closest_segments(p0, p1, edge[e][0], edge[e][1], &sp, &tp);
+        d = closest_segments_known(p0, d1, a, v[k], e.edge[opposite], e.len2[opposite], &sp, &tp);
         if (d < best) {
             best = d;
             *on_seg = sp;
@@ -109,4 +114,11 @@ double cbvh_closest_segment_triangle(cbvh_v3 p0, cbvh_v3 p1, cbvh_v3 a, cbvh_v3 
         }
     }
     return best;
+}
+
+double cbvh_closest_segment_triangle(cbvh_v3 p0, cbvh_v3 p1, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, cbvh_v3 *on_seg,
+                                     cbvh_v3 *on_tri)
+{
+    const cbvh_v3 v[3] = {a, b, c};
+    return cbvh_closest_segment_triangle_of(p0, p1, v, on_seg, on_tri);
 }

@@ -79,4 +79,8 @@ double cbvh_closest_segments(cbvh_v3 p0, cbvh_v3 p1, cbvh_v3 q0, cbvh_v3 q1, cbv
 double cbvh_closest_segment_triangle(cbvh_v3 p0, cbvh_v3 p1, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, cbvh_v3 *on_seg,
                                      cbvh_v3 *on_tri);
 
+/* cbvh_closest_segment_triangle of triangle v. */
+double cbvh_closest_segment_triangle_of(cbvh_v3 p0, cbvh_v3 p1, const cbvh_v3 v[3], cbvh_v3 *on_seg,
+                                        cbvh_v3 *on_tri);
+
 #endif

@@ -92,7 +92,7 @@ static void round_closest_of(const struct cbvh_local_shape *s, const cbvh_v3 v[3
         ex->on_tri = cbvh_closest_point_in_triangle(s->p0, v);
         ex->d2 = v3_len2(v3_sub(ex->on_core, ex->on_tri));
     } else {
-        ex->d2 = cbvh_closest_segment_triangle(s->p0, s->p1, v[0], v[1], v[2], &ex->on_core, &ex->on_tri);
+        ex->d2 = cbvh_closest_segment_triangle_of(s->p0, s->p1, v, &ex->on_core, &ex->on_tri);
     }
 }
 
