@@ -537,6 +537,34 @@ static void test_contacts(void **state)
     scene_free(&s);
 }
 
+/* A ball's or capsule's core in the plane of an axis-aligned triangle gets the triangle's unit normal as
+ * wound, (0, 0, 1) to the bit: no component a negative zero (which a frame edge taken as the negated
+ * opposite edge, (-0, 1, -0) for (0, 1, 0), would give), the point the core's own. */
+static void test_contact_normal_in_plane(void **state)
+{
+    (void)state;
+    const float positions[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+    const uint32_t indices[3] = {0, 1, 2};
+    ref_fixture fx;
+    assert_int_equal(ref_fixture_open(&fx, positions, 3, indices, 1, test_options()), CBVH_OK);
+    const float center[3] = {0.25f, 0.25f, 0.0f}, below[3] = {0.25f, 0.25f, -0.0625f},
+                above[3] = {0.25f, 0.25f, 0.0625f};
+    for (int capsule = 0; capsule < 2; capsule++) {
+        cbvh_contact c;
+        const size_t n = capsule ? cbvh_contacts_capsule(fx.file, below, above, 0.125f, 0, &c, 1, NULL)
+                                 : cbvh_contacts_sphere(fx.file, center, 0.125f, 0, &c, 1, NULL);
+        assert_int_equal(n, 1);
+        const uint32_t want[3] = {0u, 0u, 0x3f800000u}; /* +0, +0, 1 */
+        for (int a = 0; a < 3; a++) {
+            uint32_t bits;
+            memcpy(&bits, &c.normal[a], sizeof bits);
+            assert_int_equal(bits, want[a]);
+            assert_true(c.point[a] == center[a]);
+        }
+    }
+    ref_fixture_close(&fx);
+}
+
 /* Finding F4 addendum (notes/findings.md): a sphere overlap missed a sliver
  * of aspect 8e9 whose long edge passes 2.0 from the center of a sphere of
  * radius 3.26e8 (the float-era closest point lost every digit). The
@@ -887,6 +915,7 @@ int main(void)
         cmocka_unit_test(test_invalid_input),
         cmocka_unit_test(test_sliver_overlaps),
         cmocka_unit_test(test_contacts),
+        cmocka_unit_test(test_contact_normal_in_plane),
         cmocka_unit_test(test_grazing_rounds),
         cmocka_unit_test(test_segment_triangle_distance),
         cmocka_unit_test(test_reference_point_distance_in_a_row),

@@ -5,92 +5,43 @@
 #include "query/closest.h"
 #include "query/triangle_frame.h"
 
-static double clamp01(double x)
-{
-    return x < 0.0 ? 0.0 : x > 1.0 ? 1.0 : x;
-}
-
-/* The point of segment a-b nearest to p: a clamped projection, well conditioned for any length. */
-CBVH_FORCE_INLINE cbvh_v3 closest_point_segment(cbvh_v3 p, cbvh_v3 a, cbvh_v3 b)
-{
-    const cbvh_v3 ab = v3_sub(b, a);
-    const double len2 = v3_len2(ab);
-    return len2 > 0.0 ? v3_madd(a, ab, clamp01(v3_dot(v3_sub(p, a), ab) / len2)) : a;
-}
-
-/* The projection of p onto the plane of triangle v (frame f, cbvh_triangle_frame_of) when its barycentrics
- * in the frame are in range: 1 and the point in *q; else 0 (a degenerate triangle has no inside). */
-CBVH_FORCE_INLINE int projection_inside(cbvh_v3 p, const cbvh_v3 v[3], const struct cbvh_triangle_frame *f,
-                                        cbvh_v3 *q)
-{
-    if (!(f->nn > 0.0))
-        return 0;
-    double x, y;
-    cbvh_triangle_frame_barycentrics(f, v3_sub(p, v[f->base]), &x, &y);
-    if (!(x >= 0.0 && y >= 0.0 && x + y <= 1.0))
-        return 0;
-    *q = v3_madd(v3_madd(v[f->base], f->e1, x), f->e2, y);
-    return 1;
-}
-
-/* The projection when it falls inside (projection_inside), else the nearest of the three edges' clamped
- * projections: errors relative to the lengths, not the area, so slivers and needles keep their precision
- * (unlike Ericson's Voronoi-region form). The triangle is v, f its frame. */
-CBVH_FORCE_INLINE cbvh_v3 closest_point_in_frame(cbvh_v3 p, const cbvh_v3 v[3],
-                                                 const struct cbvh_triangle_frame *f)
-{
-    cbvh_v3 inside;
-    if (projection_inside(p, v, f, &inside))
-        return inside;
-    cbvh_v3 best = closest_point_segment(p, v[0], v[1]);
-    double d = v3_len2(v3_sub(p, best));
-    const cbvh_v3 q1 = closest_point_segment(p, v[1], v[2]), q2 = closest_point_segment(p, v[2], v[0]);
-    const double d1 = v3_len2(v3_sub(p, q1)), d2 = v3_len2(v3_sub(p, q2));
-    if (d1 < d) {
-        best = q1;
-        d = d1;
-    }
-    return d2 < d ? q2 : best;
-}
-
 cbvh_v3 cbvh_closest_point_triangle(cbvh_v3 p, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c)
 {
     const cbvh_v3 v[3] = {a, b, c};
-    struct cbvh_triangle_frame f;
-    cbvh_triangle_frame_of(v, &f);
-    return closest_point_in_frame(p, v, &f);
+    return cbvh_closest_point_in_triangle(p, v);
 }
 
-/* cbvh_closest_segments, inlined into the segment-triangle test's three calls. */
-CBVH_FORCE_INLINE double closest_segments(cbvh_v3 p0, cbvh_v3 p1, cbvh_v3 q0, cbvh_v3 q1, cbvh_v3 *on_p,
-                                          cbvh_v3 *on_q)
+/* cbvh_closest_segments, inlined into the segment-triangle test's three calls, which know d1 = p1 - p0 and
+ * d2 = q1 - q0 and their squared lengths a and e already. */
+CBVH_FORCE_INLINE double closest_segments_known(cbvh_v3 p0, cbvh_v3 d1, double a, cbvh_v3 q0, cbvh_v3 d2,
+                                                double e, cbvh_v3 *on_p, cbvh_v3 *on_q)
 {
-    const cbvh_v3 d1 = v3_sub(p1, p0), d2 = v3_sub(q1, q0), r = v3_sub(p0, q0);
-    const double a = v3_len2(d1), e = v3_len2(d2), f = v3_dot(d2, r);
+    const cbvh_v3 r = v3_sub(p0, q0);
+    const double f = v3_dot(d2, r);
     double s, t;
     if (a <= 0.0 && e <= 0.0) {
         s = t = 0.0;
     } else if (a <= 0.0) {
         s = 0.0;
-        t = clamp01(f / e);
+        t = cbvh_clamp01(f / e);
     } else {
         const double c = v3_dot(d1, r);
         if (e <= 0.0) {
             t = 0.0;
-            s = clamp01(-c / a);
+            s = cbvh_clamp01(-c / a);
         } else {
             /* Ericson's a e - b^2 and b f - c e as |d1 x d2|^2 and (d1 x d2).(d2 x r): no cancellation */
             const double b = v3_dot(d1, d2);
             const cbvh_v3 n = v3_cross(d1, d2);
             const double denom = v3_len2(n);
-            s = denom > 0.0 ? clamp01(v3_dot(n, v3_cross(d2, r)) / denom) : 0.0;
+            s = denom > 0.0 ? cbvh_clamp01(v3_dot(n, v3_cross(d2, r)) / denom) : 0.0;
             t = (b * s + f) / e;
             if (t < 0.0) {
                 t = 0.0;
-                s = clamp01(-c / a);
+                s = cbvh_clamp01(-c / a);
             } else if (t > 1.0) {
                 t = 1.0;
-                s = clamp01((b - c) / a);
+                s = cbvh_clamp01((b - c) / a);
             }
         }
     }
@@ -101,7 +52,8 @@ CBVH_FORCE_INLINE double closest_segments(cbvh_v3 p0, cbvh_v3 p1, cbvh_v3 q0, cb
 
 double cbvh_closest_segments(cbvh_v3 p0, cbvh_v3 p1, cbvh_v3 q0, cbvh_v3 q1, cbvh_v3 *on_p, cbvh_v3 *on_q)
 {
-    return closest_segments(p0, p1, q0, q1, on_p, on_q);
+    const cbvh_v3 d1 = v3_sub(p1, p0), d2 = v3_sub(q1, q0);
+    return closest_segments_known(p0, d1, v3_len2(d1), q0, d2, v3_len2(d2), on_p, on_q);
 }
 
 /* Where segment p0-p1 crosses the plane of triangle v (frame f) inside the triangle, if it does
@@ -123,12 +75,13 @@ CBVH_FORCE_INLINE int segment_crosses_triangle(cbvh_v3 p0, cbvh_v3 p1, const cbv
     return 1;
 }
 
-double cbvh_closest_segment_triangle(cbvh_v3 p0, cbvh_v3 p1, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, cbvh_v3 *on_seg,
-                                     cbvh_v3 *on_tri)
+double cbvh_closest_segment_triangle_of(cbvh_v3 p0, cbvh_v3 p1, const cbvh_v3 v[3], cbvh_v3 *on_seg,
+                                        cbvh_v3 *on_tri)
 {
-    const cbvh_v3 v[3] = {a, b, c};
+    struct cbvh_triangle_edges e;
     struct cbvh_triangle_frame f;
-    cbvh_triangle_frame_of(v, &f);
+    cbvh_triangle_edges_of(v, &e);
+    cbvh_triangle_frame_of_edges(v, &e, &f);
     cbvh_v3 x;
     if (segment_crosses_triangle(p0, p1, v, &f, &x)) {
         *on_seg = *on_tri = x;
@@ -138,19 +91,22 @@ double cbvh_closest_segment_triangle(cbvh_v3 p0, cbvh_v3 p1, cbvh_v3 a, cbvh_v3 
      * so only the endpoints' projections inside the triangle are candidates of their own. */
     double best = INFINITY, d;
     *on_seg = p0;
-    *on_tri = a;
-    const cbvh_v3 end[2] = {p0, p1};
+    *on_tri = v[0];
     for (int k = 0; k < 2; k++) {
-        if (projection_inside(end[k], v, &f, &x) && (d = v3_len2(v3_sub(end[k], x))) < best) {
+        const cbvh_v3 end = k ? p1 : p0;
+        if (cbvh_projection_inside(v3_sub(end, v[f.base]), v, &f, &x) &&
+            (d = v3_len2(v3_sub(end, x))) < best) {
             best = d;
-            *on_seg = end[k];
+            *on_seg = end;
             *on_tri = x;
         }
     }
-    const cbvh_v3 edge[3][2] = {{a, b}, {b, c}, {c, a}};
-    for (int e = 0; e < 3; e++) {
+    const cbvh_v3 d1 = v3_sub(p1, p0);
+    const double a = v3_len2(d1);
+    for (int k = 0; k < 3; k++) {
+        const int opposite = cbvh_frame_vertex(k, 2); /* edge v[k] to v[k + 1] is e.edge[k + 2] */
         cbvh_v3 sp, tp;
-        d = closest_segments(p0, p1, edge[e][0], edge[e][1], &sp, &tp);
+        d = closest_segments_known(p0, d1, a, v[k], e.edge[opposite], e.len2[opposite], &sp, &tp);
         if (d < best) {
             best = d;
             *on_seg = sp;
@@ -158,4 +114,11 @@ double cbvh_closest_segment_triangle(cbvh_v3 p0, cbvh_v3 p1, cbvh_v3 a, cbvh_v3 
         }
     }
     return best;
+}
+
+double cbvh_closest_segment_triangle(cbvh_v3 p0, cbvh_v3 p1, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, cbvh_v3 *on_seg,
+                                     cbvh_v3 *on_tri)
+{
+    const cbvh_v3 v[3] = {a, b, c};
+    return cbvh_closest_segment_triangle_of(p0, p1, v, on_seg, on_tri);
 }

@@ -81,19 +81,18 @@ struct triangle_exact {
     double d2, depth;
 };
 
-/* Fills ex's closest points for the round shape s and triangle (a, b, c) unless they are known already. */
-static void round_closest_of(const struct cbvh_local_shape *s, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c,
-                             struct triangle_exact *ex)
+/* Fills ex's closest points for the round shape s and triangle v unless they are known already. */
+static void round_closest_of(const struct cbvh_local_shape *s, const cbvh_v3 v[3], struct triangle_exact *ex)
 {
     if (ex->known)
         return;
     ex->known = 1;
     if (s->kind == CBVH_SHAPE_SPHERE) {
         ex->on_core = s->p0;
-        ex->on_tri = cbvh_closest_point_triangle(s->p0, a, b, c);
+        ex->on_tri = cbvh_closest_point_in_triangle(s->p0, v);
         ex->d2 = v3_len2(v3_sub(ex->on_core, ex->on_tri));
     } else {
-        ex->d2 = cbvh_closest_segment_triangle(s->p0, s->p1, a, b, c, &ex->on_core, &ex->on_tri);
+        ex->d2 = cbvh_closest_segment_triangle_of(s->p0, s->p1, v, &ex->on_core, &ex->on_tri);
     }
 }
 
@@ -118,7 +117,8 @@ static int region_triangle(const struct overlap_region *r, cbvh_v3 a, cbvh_v3 b,
     const struct cbvh_local_shape *s = &r->shape;
     if (s->kind == CBVH_SHAPE_BOX)
         return box_touches(r, a, b, c, ex);
-    round_closest_of(s, a, b, c, ex);
+    const cbvh_v3 v[3] = {a, b, c};
+    round_closest_of(s, v, ex);
     return ex->d2 <= s->radius * s->radius;
 }
 
@@ -143,17 +143,17 @@ static void box_contact(const struct overlap_region *r, cbvh_v3 a, cbvh_v3 b, cb
     *point = cbvh_box_contact_point(a, b, c, &r->box, o, *n, 1e-6 * size);
 }
 
-/* The contact of a ball or capsule region with a triangle it overlaps (double precision): on the closest
+/* The contact of a ball or capsule region with triangle v it overlaps (double precision): on the closest
  * points of core (center, segment) and triangle at distance d > 0, the normal from the triangle's point to
  * the core's and depth radius - d: moving the shape by depth along it leaves exactly the radius between
  * them, and, the normal being the separating axis of two convex sets, every other pair at least as far.
  * A core that reaches the triangle (d = 0) is pushed off the triangle's plane: along the unit face normal
  * (as wound) or against it, whichever needs less, by radius plus the depth of the core's lowest end below
  * the plane; the whole core then lies at least radius above it. */
-static void round_contact(const struct cbvh_local_shape *s, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c,
-                          struct triangle_exact *ex, cbvh_v3 *n, double *depth, cbvh_v3 *on_tri)
+static void round_contact(const struct cbvh_local_shape *s, const cbvh_v3 v[3], struct triangle_exact *ex,
+                          cbvh_v3 *n, double *depth, cbvh_v3 *on_tri)
 {
-    round_closest_of(s, a, b, c, ex);
+    round_closest_of(s, v, ex);
     *on_tri = ex->on_tri;
     const double d = sqrt(ex->d2);
     if (d > 0.0) {
@@ -161,7 +161,6 @@ static void round_contact(const struct cbvh_local_shape *s, cbvh_v3 a, cbvh_v3 b
         *depth = s->radius - d;
         return;
     }
-    const cbvh_v3 v[3] = {a, b, c};
     struct cbvh_triangle_frame f;
     cbvh_triangle_frame_of(v, &f);
     *n = v3_scale(f.n, 1.0 / sqrt(f.nn)); /* a file's triangles have a non-zero area */
@@ -174,16 +173,16 @@ static void round_contact(const struct cbvh_local_shape *s, cbvh_v3 a, cbvh_v3 b
     }
 }
 
-/* The contact of the region with a triangle it overlaps, in the world of the region's placement. */
-static void region_contact(const struct overlap_region *r, cbvh_v3 a, cbvh_v3 b, cbvh_v3 c, uint32_t tri,
+/* The contact of the region with triangle v it overlaps, in the world of the region's placement. */
+static void region_contact(const struct overlap_region *r, const cbvh_v3 v[3], uint32_t tri,
                            struct triangle_exact *ex, cbvh_contact *out)
 {
     cbvh_v3 n, point;
     double depth;
     if (r->shape.kind == CBVH_SHAPE_BOX)
-        box_contact(r, a, b, c, ex, &n, &depth, &point);
+        box_contact(r, v[0], v[1], v[2], ex, &n, &depth, &point);
     else
-        round_contact(&r->shape, a, b, c, ex, &n, &depth, &point);
+        round_contact(&r->shape, v, ex, &n, &depth, &point);
     if (r->placement) {
         n = cbvh_rotate(r->placement->rotation, n);
         point = cbvh_point_to_world(r->placement, point);
@@ -470,8 +469,10 @@ CBVH_FORCE_INLINE int overlap_triangle(const struct overlap_query *q, uint32_t k
         return 0;
     const uint32_t tri = cbvh_original_id(q->f, k);
     cbvh_contact contact;
-    if (ex.want_contact)
-        region_contact(q->region, v3_from_f(a), v3_from_f(b), v3_from_f(c), tri, &ex, &contact);
+    if (ex.want_contact) {
+        const cbvh_v3 v[3] = {v3_from_f(a), v3_from_f(b), v3_from_f(c)};
+        region_contact(q->region, v, tri, &ex, &contact);
+    }
     return sink_report(q->sink, tri, &contact);
 }
 

@@ -14,11 +14,6 @@ struct cbvh_triangle_frame {
     double nn; /* |n|^2: 0 for a degenerate triangle (or when it underflows) */
 };
 
-/* The shorter edges give the accurate normal: on a needle whose long edges
- * differ by less than their rounding (findings F5 and F9: two vertices
- * 1e-16 apart, the third at distance 3), differences taken from the far
- * vertex lose the short edge, and n points anywhere. Ties (and NaN lengths
- * of overflowing edges) keep vertex 0. */
 /* Vertex base + k (k = 1, 2) in cyclic order: (base + k) % 3 without a division. */
 static inline int cbvh_frame_vertex(int base, int k)
 {
@@ -26,16 +21,45 @@ static inline int cbvh_frame_vertex(int base, int k)
     return i >= 3 ? i - 3 : i;
 }
 
-static inline void cbvh_triangle_frame_of(const cbvh_v3 v[3], struct cbvh_triangle_frame *f)
+/* The triangle's edges in cyclic order, edge[i] = v[i + 2] - v[i + 1] (the edge opposite vertex i), and
+ * their squared lengths: what the frame's choice of base computes, for callers that use them again. */
+struct cbvh_triangle_edges {
+    cbvh_v3 edge[3];
+    double len2[3];
+};
+
+static inline void cbvh_triangle_edges_of(const cbvh_v3 v[3], struct cbvh_triangle_edges *e)
 {
-    const double len0 = v3_len2(v3_sub(v[2], v[1])), len1 = v3_len2(v3_sub(v[0], v[2])),
-                 len2 = v3_len2(v3_sub(v[1], v[0]));
+    e->edge[0] = v3_sub(v[2], v[1]);
+    e->edge[1] = v3_sub(v[0], v[2]);
+    e->edge[2] = v3_sub(v[1], v[0]);
+    for (int i = 0; i < 3; i++)
+        e->len2[i] = v3_len2(e->edge[i]);
+}
+
+/* The frame of triangle v from its edges e (cbvh_triangle_edges_of). The shorter edges give the accurate
+ * normal: on a needle whose long edges differ by less than their rounding (findings F5 and F9: two vertices
+ * 1e-16 apart, the third at distance 3), differences taken from the far
+ * vertex lose the short edge, and n points anywhere. Ties (and NaN lengths
+ * of overflowing edges) keep vertex 0. e1 is the edge opposite vertex base + 2, the same difference; e2 is
+ * taken anew, as the negated opposite edge may differ from it in the sign of a zero. */
+static inline void cbvh_triangle_frame_of_edges(const cbvh_v3 v[3], const struct cbvh_triangle_edges *e,
+                                                struct cbvh_triangle_frame *f)
+{
+    const double len0 = e->len2[0], len1 = e->len2[1], len2 = e->len2[2];
     const int base = len1 > len0 ? (len2 > len1 ? 2 : 1) : (len2 > len0 ? 2 : 0);
     f->base = base;
-    f->e1 = v3_sub(v[cbvh_frame_vertex(base, 1)], v[base]);
+    f->e1 = e->edge[cbvh_frame_vertex(base, 2)];
     f->e2 = v3_sub(v[cbvh_frame_vertex(base, 2)], v[base]);
     f->n = v3_cross(f->e1, f->e2);
     f->nn = v3_len2(f->n);
+}
+
+static inline void cbvh_triangle_frame_of(const cbvh_v3 v[3], struct cbvh_triangle_frame *f)
+{
+    struct cbvh_triangle_edges e;
+    cbvh_triangle_edges_of(v, &e);
+    cbvh_triangle_frame_of_edges(v, &e, f);
 }
 
 /* Barycentrics (x, y) of base + w projected onto the plane, with
