@@ -577,11 +577,7 @@ static void test_kernels_agree(void **state)
     (void)state;
     const int before = test_kernel_now;
     static const int kernels[] = {TEST_KERNEL_SCALAR, TEST_KERNEL_SSE2, TEST_KERNEL_AVX2};
-    int available = 0;
-    for (size_t k = 0; k < sizeof kernels / sizeof kernels[0]; k++)
-        available += test_set_kernel(kernels[k]);
-    test_set_kernel(before);
-    if (available < 2) {
+    if (test_kernels_available(kernels, sizeof kernels / sizeof kernels[0]) < 2) {
         fprintf(stderr, "test_sweep: one walk kernel in this build and CPU, nothing to compare\n");
         skip();
     }

@@ -441,8 +441,8 @@ CBVH_FORCE_INLINE uint32_t overlap_enter4(void *query, const uint8_t *node, floa
 
 /* What a triangle past the walk's box test has left to pass: the cheap tests in double, then the exact test
  * (OVERLAP_CULL: without SIMD); the exact test alone (OVERLAP_EXACT: past the float tests,
- * cbvh_cull_keep_lanes, which leave the cheap tests too little to decide for them to pay, on every shape); or
- * nothing (OVERLAP_SURE: the region surely touches it). */
+ * cbvh_cull_keep_lanes, which decide what the cheap tests would); or nothing (OVERLAP_SURE: the region surely
+ * touches it). */
 enum overlap_left { OVERLAP_CULL, OVERLAP_EXACT, OVERLAP_SURE };
 
 /* 1 when the region overlaps a triangle that has the tests `left` (not OVERLAP_SURE) to pass; the exact

@@ -34,6 +34,17 @@ static inline int test_set_kernel(int kernel)
     return kernel == TEST_KERNEL_BEST || chosen == kernel;
 }
 
+/* How many of kernels[0..n) the build and the CPU have; the kernel test_set_kernel last set is set again. */
+static inline int test_kernels_available(const int *kernels, size_t n)
+{
+    const int before = test_kernel_now;
+    int available = 0;
+    for (size_t k = 0; k < n; k++)
+        available += test_set_kernel(kernels[k]);
+    test_set_kernel(before);
+    return available;
+}
+
 /* CBVH_TEST_REPS: the percentage of their random queries the property tests run (default 100; 10 to 100,
  * a smaller one is 10; anything else, 100). tests/sanitize.sh and tests/mingw_wine.sh set 10, quickstart's
  * distcheck 25: there the point is what the sanitizers, Windows and the tarball see on every path (every
